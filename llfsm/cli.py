@@ -1,0 +1,320 @@
+"""The `llfsm` command.
+
+Each command imports what it needs when it runs: `llfsm run` must start fast and never load
+the compiler's libraries when its cached modules are fresh.  Every failure the user can cause
+ends in a one-line-per-problem message and an exit status (1 or 2), never a traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+from typing import NoReturn
+
+import click
+
+from . import __version__
+
+EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
+
+
+def fail(message: str, status: int = EXIT_USAGE) -> NoReturn:
+    click.echo(f"llfsm: {message}", err=True)
+    sys.exit(status)
+
+
+class Duration(click.ParamType):
+    """Seconds (`0.5`) or a number with a unit (`500ms`, `2s`), as nanoseconds."""
+
+    name = "duration"
+
+    def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> int:
+        if isinstance(value, int):
+            return value
+        from .runtime.clock import parse_duration
+
+        try:
+            return parse_duration(str(value))
+        except ValueError as e:
+            self.fail(str(e), param, ctx)
+
+
+DURATION = Duration()
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="llfsm")
+def cli() -> None:
+    """Logic-labelled finite-state machines: check, build and run them."""
+
+
+# -- check -------------------------------------------------------------------------------------
+
+
+def _existing(paths: tuple[str, ...]) -> list[Path]:
+    out = []
+    for p in paths:
+        path = Path(p)
+        if not path.exists():
+            fail(f"{p}: no such file or directory")
+        if not path.is_dir():
+            fail(f"{p}: not a machine directory or a folder of machines")
+        out.append(path)
+    return out
+
+
+@cli.command()
+@click.argument("paths", nargs=-1, required=True)
+@click.option("--format", "fmt", type=click.Choice(["text", "json", "github", "sarif"]), default="text",
+              show_default=True, help="Output format of the diagnostics.")
+@click.option("--strict", is_flag=True, help="Warnings fail the check too (exit 1).")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the report to FILE instead of stdout.")
+@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+def check(paths: tuple[str, ...], fmt: str, strict: bool, output: str | None, quiet: bool) -> None:
+    """Validate machine directories without running any of their code.
+
+    A PATH is a NAME.machine directory or a folder searched for them.  Exit status: 0 clean
+    (warnings allowed unless --strict), 1 problems found, 2 bad usage.
+    """
+    from .check import check_paths, find_machines
+    from .diagnostics import Severity, render
+
+    roots = _existing(paths)
+    if not any(find_machines(r) for r in roots):
+        fail(f"no NAME.machine directories found in {', '.join(paths)}")
+    results = check_paths(roots)
+    diags = [d for r in results for d in r.diagnostics]
+    text = render(diags, fmt, __version__)
+    if output:
+        from .compiler.build import write_atomic
+
+        write_atomic(Path(output), text)
+    else:
+        click.echo(text, nl=False)
+    errors = sum(d.severity is Severity.ERROR for d in diags)
+    warnings = len(diags) - errors
+    if not quiet:
+        click.echo(f"checked {len(results)} machine(s): {errors} error(s), {warnings} warning(s)", err=True)
+    sys.exit(EXIT_ERRORS if errors or (strict and warnings) else EXIT_OK)
+
+
+# -- build -------------------------------------------------------------------------------------
+
+
+@cli.command()
+@click.argument("paths", nargs=-1)
+@click.option("-o", "--output", "out", type=click.Path(file_okay=False), default="build/llfsm", show_default=True,
+              help="Folder that receives NAME.py for each machine.")
+@click.option("--force", is_flag=True, help="Rewrite modules even when they are up to date.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
+def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
+    """Compile machines into importable modules (incremental; atomic writes).
+
+    With no PATH, every machine below the current folder (e.g. a package root) is built.
+    """
+    from .check import find_machines
+    from .compiler.build import build_machine
+    from .diagnostics import format_text
+
+    roots = _existing(paths) if paths else [Path(".")]
+    machines = [m for r in roots for m in find_machines(r)]
+    if not machines:
+        fail(f"no NAME.machine directories found in {', '.join(paths) or 'the current folder'}")
+    names: dict[str, Path] = {}
+    for m in machines:
+        name = m.name.removesuffix(".machine")
+        if name in names:
+            fail(f"{m} and {names[name]} would both be built as {name}.py")
+        names[name] = m
+    out_dir = Path(out)
+    failed = 0
+    for i, path in enumerate(machines, 1):
+        outcome = build_machine(path, out_dir, force=force)
+        if outcome.status == "failed":
+            failed += 1
+            click.echo(format_text(outcome.diagnostics), nl=False, err=True)
+        if not quiet:
+            where = f" -> {outcome.module}" if outcome.module else ""
+            click.echo(f"[{i}/{len(machines)}] {outcome.name}: {outcome.status}{where}", err=True)
+    sys.exit(EXIT_ERRORS if failed else EXIT_OK)
+
+
+# -- run ---------------------------------------------------------------------------------------
+
+
+@cli.command()
+@click.argument("targets", nargs=-1, required=True)
+@click.option("-v", "--verbose", is_flag=True, help="clfsm's trace on stderr: a line before each ringlet that enters a state.")
+@click.option("--trace", "trace_file", type=click.Path(dir_okay=False), help="Write every event to FILE.jsonl.")
+@click.option("--clock", type=click.Choice(["wall", "sim"]), default="wall", show_default=True,
+              help="wall: real time; sim: virtual time, reproducible byte for byte.")
+@click.option("--period", type=DURATION, help="Round period (time-triggered); sim default 1ms.")
+@click.option("--idle", type=DURATION, default="10ms", show_default=True,
+              help="Wall clock: sleep after a round in which no transition fired.")
+@click.option("--duration", type=DURATION, help="End the run after this much run time.")
+@click.option("--grace", type=DURATION, default="1s", show_default=True,
+              help="After Ctrl-C/SIGTERM, keep running rounds this long so machines can reach END.")
+@click.option("--suspended", "suspended", multiple=True, metavar="MACHINE", help="Load MACHINE suspended.")
+@click.option("--keep-accepting", is_flag=True, help="Keep machines loaded in accepting states.")
+def run(targets: tuple[str, ...], verbose: bool, trace_file: str | None, clock: str, period: int | None,
+        idle: int, duration: int | None, grace: int, suspended: tuple[str, ...], keep_accepting: bool) -> None:
+    """Run an arrangement of machines, round-robin, in command-line order.
+
+    A TARGET is a NAME.machine directory (compiled into a cache), a built module, or PKG/NAME
+    of an installed package.  Exit status: 0 normal end, 1 an exception in machine code,
+    2 bad arguments or a machine that fails validation.
+    """
+    from .runtime import Arrangement, SimClock, Tracer, UnknownMachineError, WallClock, signals_handled
+    from .targets import InvalidMachine, MachineLoadError, TargetError, load
+
+    if period is not None and period <= 0:
+        fail("--period must be greater than 0")
+    classes = []
+    for t in targets:
+        try:
+            classes.append(load(t))
+        except TargetError as e:
+            fail(str(e))
+        except InvalidMachine as e:
+            from .diagnostics import format_text
+
+            click.echo(format_text(e.diagnostics), nl=False, err=True)
+            fail(f"{t}: the machine has errors; nothing was run")
+        except MachineLoadError as e:
+            click.echo(e.report.format(), nl=False, err=True)
+            sys.exit(EXIT_ERRORS)
+    the_clock = SimClock(period or 1_000_000) if clock == "sim" else WallClock(idle, period)
+    trace_out = None
+    if trace_file:
+        try:
+            trace_out = open(trace_file, "w", encoding="utf-8")  # noqa: SIM115 (closed after the run)
+        except OSError as e:
+            fail(f"--trace {trace_file}: {e.strerror}")
+    tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None
+    try:
+        try:
+            arr = Arrangement(classes, clock=the_clock, keep_accepting=keep_accepting, tracer=tracer,
+                              suspended=suspended)
+        except (UnknownMachineError, ValueError) as e:
+            fail(str(e).strip("'\""))
+        except Exception as exc:  # a variable initialiser raised: machine code
+            from .runtime import report_for
+
+            rep = report_for(exc)
+            if rep is None:
+                raise
+            click.echo(rep.format(), nl=False, err=True)
+            sys.exit(EXIT_ERRORS)
+        with signals_handled(arr):
+            result = arr.run(duration, grace)
+    finally:
+        if trace_out is not None:
+            trace_out.close()
+    sys.stdout.flush()
+    if result.error is not None:
+        click.echo(result.error.format(), nl=False, err=True)
+    sys.exit(result.status)
+
+
+# -- new ---------------------------------------------------------------------------------------
+
+
+@cli.group()
+def new() -> None:
+    """Create a machine or a colcon package from a skeleton."""
+
+
+@new.command("machine")
+@click.argument("name")
+@click.option("-d", "--dir", "directory", type=click.Path(file_okay=False), default=".", show_default=True,
+              help="Folder to create NAME.machine in.")
+@click.option("--description", default=None, help="One line saying what the machine does.")
+def new_machine(name: str, directory: str, description: str | None) -> None:
+    """A valid machine skeleton: INITIAL -> END."""
+    from .scaffold import ScaffoldError, create_machine
+
+    try:
+        path = create_machine(Path(directory), name, description)
+    except ScaffoldError as e:
+        fail(str(e))
+    click.echo(f"created {path}")
+
+
+# -- graph, schema -------------------------------------------------------------------------------
+
+
+@cli.command()
+@click.argument("path", type=click.Path())
+@click.option("--format", "fmt", type=click.Choice(["mermaid", "dot", "svg", "png"]), default="mermaid",
+              show_default=True)
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE (needed for png).")
+def graph(path: str, fmt: str, output: str | None) -> None:
+    """The machine's diagram, guards on the arrows."""
+    from .check import check_machine
+    from .diagnostics import Severity, format_text
+    from .graph import GraphError, dot, mermaid, render_image
+
+    p = Path(path)
+    if not p.is_dir():
+        fail(f"{path}: not a machine directory")
+    result = check_machine(p)
+    blocking = [d for d in result.diagnostics if d.severity is Severity.ERROR and d.code in {
+        "LF001", "LF002", "LF003", "LF004", "LF005"}]
+    if result.machine is None or blocking:
+        click.echo(format_text(result.diagnostics), nl=False, err=True)
+        sys.exit(EXIT_ERRORS)
+    m = result.machine
+    try:
+        data: bytes = mermaid(m).encode() if fmt == "mermaid" else dot(m).encode() if fmt == "dot" else render_image(m, fmt)
+    except GraphError as e:
+        fail(str(e), EXIT_ERRORS)
+    if output:
+        from .compiler.build import write_atomic_bytes
+
+        write_atomic_bytes(Path(output), data)
+    elif fmt == "png":
+        fail("--format png writes binary data: give -o FILE.png")
+    else:
+        sys.stdout.write(data.decode())
+
+
+@cli.command()
+def schema() -> None:
+    """JSON Schema of machine.yaml."""
+    import json
+
+    from .model import MachineYaml
+
+    click.echo(json.dumps(MachineYaml.model_json_schema(), indent=2))
+
+
+def main() -> None:
+    """Entry point: turns what escapes the commands into a message and a status, not a traceback."""
+    try:
+        cli.main(prog_name="llfsm", standalone_mode=False)
+    except click.exceptions.Exit as e:
+        sys.exit(e.exit_code)
+    except click.ClickException as e:
+        e.show()
+        sys.exit(EXIT_USAGE)
+    except click.exceptions.Abort:
+        sys.exit(130)
+    except BrokenPipeError:
+        # stdout was closed early (`llfsm run ... | head -1`): end quietly
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        sys.exit(EXIT_OK)
+    except KeyboardInterrupt:
+        sys.exit(130)
+    except SystemExit:
+        raise
+    except Exception as exc:  # an llfsm bug: say so plainly
+        if os.environ.get("LLFSM_DEBUG"):
+            raise
+        click.echo(f"llfsm: internal error: {type(exc).__name__}: {exc} (set LLFSM_DEBUG=1 for a traceback)", err=True)
+        sys.exit(70)
+
+
+if __name__ == "__main__":
+    main()

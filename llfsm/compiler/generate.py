@@ -1,0 +1,276 @@
+"""Code generation: a checked machine becomes the source of one readable Python module.
+
+The template is templates/machine.py.j2; this module prepares what it renders (user code with
+bare names rewritten, guards, pointers back to the user's files) and verifies the result
+compiles, so that a mistake surfaces at build time rather than at run time.
+"""
+
+from __future__ import annotations
+
+import ast
+import io
+import json
+import linecache
+import os
+import tokenize
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+import jinja2
+
+from .. import __version__
+from ..check import MachineCheck
+from ..diagnostics import Diagnostic, diag
+from ..model import Code, Machine, State
+from ..runtime.errors import map_line
+from ..runtime.machine import MACROS
+from .rewrite import Edit, apply, find, name_map
+
+TEMPLATES = Path(__file__).resolve().parent.parent / "templates"
+
+
+# -- text helpers ------------------------------------------------------------------------------
+
+
+def _string_continuation_lines(text: str) -> set[int]:
+    """Lines (1-based) that start inside a multi-line string: indenting them would change it."""
+    out: set[int] = set()
+    try:
+        for tok in tokenize.generate_tokens(io.StringIO(text).readline):
+            if (tok.type == tokenize.STRING and tok.end[0] > tok.start[0]) or (tok.type == getattr(tokenize, "FSTRING_MIDDLE", -1) and tok.end[0] > tok.start[0]):
+                out.update(range(tok.start[0] + 1, tok.end[0] + 1))
+    except (tokenize.TokenError, SyntaxError):
+        pass
+    return out
+
+
+def indent_code(text: str, width: int) -> str:
+    prefix = " " * width
+    keep = _string_continuation_lines(text)
+    lines = text.split("\n")
+    return "\n".join(
+        line if (i + 1 in keep or not line.strip()) else prefix + line for i, line in enumerate(lines)
+    )
+
+
+def _py(value: object) -> str:
+    """A Python literal for a value: strings through repr, so no name or text can inject code."""
+    if isinstance(value, list | tuple):
+        inner = ", ".join(_py(v) for v in value)
+        return f"({inner},)" if len(value) == 1 else f"({inner})"
+    if isinstance(value, frozenset | set):
+        return "{" + ", ".join(_py(v) for v in sorted(value)) + "}" if value else "()"
+    return repr(value)
+
+
+def _doc(text: str) -> str:
+    """Text safe inside a triple-quoted docstring, on one line."""
+    text = " ".join(text.split())
+    return text.replace("\\", "\\\\").replace('"""', '\\"\\"\\"').rstrip('"') or "A machine."
+
+
+@cache
+def _env() -> jinja2.Environment:
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(TEMPLATES)),
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        undefined=jinja2.StrictUndefined,
+        autoescape=False,
+    )
+    env.filters["py"] = _py
+    env.filters["code"] = indent_code
+    return env
+
+
+def class_name(machine: str) -> str:
+    camel = "".join(p[:1].upper() + p[1:] for p in machine.split("_") if p)
+    return (camel or "M") + "Machine"
+
+
+# -- the view the template renders -------------------------------------------------------------
+
+
+@dataclass
+class Block:
+    """User code ready for the template: rewritten, trimmed, with the pointer to its first line."""
+
+    pointer: str
+    text: str
+
+
+@dataclass
+class GuardView:
+    index: int
+    target: int
+    target_name: str
+    pointer: str
+    text: str
+    multiline: bool
+    to_suspend: bool
+
+
+@dataclass
+class StateView:
+    name: str
+    accepting: bool
+    is_suspend: bool
+    doc: str | None
+    entry: Block | None
+    internal: Block | None
+    exit: Block | None
+    guards: list[GuardView] = field(default_factory=list)
+    hooks: list[tuple[str, Block]] = field(default_factory=list)
+
+    @property
+    def has_on_suspend(self) -> bool:
+        return any(h == "on_suspend" for h, _ in self.hooks)
+
+    @property
+    def has_on_resume(self) -> bool:
+        return any(h == "on_resume" for h, _ in self.hooks)
+
+
+def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Edit] | None = None) -> Block | None:
+    if not tree.body:
+        return None  # empty, or only comments: costs nothing at run time
+    edits, _bad = find(tree, mapping)
+    text = apply(code.text, edits + (extra or []))
+    lines = text.split("\n")
+    first = 0
+    while first < len(lines) and not lines[first].strip():
+        first += 1
+    body = "\n".join(lines[first:]).rstrip()
+    return Block(pointer=f"{code.file}:{first + 1}", text=body)
+
+
+def _guard_view(code: Code, tree: ast.Module, mapping: dict[str, str], index: int, target: int,
+                target_name: str, to_suspend: bool) -> GuardView:
+    block = _block(code, tree, mapping)
+    assert block is not None  # the checker guarantees one expression
+    has_comment = any(
+        t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline)
+    )
+    multiline = "\n" in block.text or has_comment
+    return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend)
+
+
+def _variables_block(code: Code, tree: ast.Module, mapping: dict[str, str]) -> Block | None:
+    """Variables.py as `self.name: type = value` lines, kept line for line; no value means None."""
+    extra: list[Edit] = []
+    for stmt in tree.body:
+        if isinstance(stmt, ast.AnnAssign) and stmt.value is None:
+            extra.append(Edit(stmt.end_lineno or stmt.lineno, stmt.end_col_offset or 0,
+                              stmt.end_col_offset or 0, " = None"))
+    return _block(code, tree, mapping, extra)
+
+
+class CompileError(Exception):
+    """The generated module does not compile: reported against the user's file."""
+
+    def __init__(self, diagnostics: list[Diagnostic]) -> None:
+        super().__init__("; ".join(d.message for d in diagnostics))
+        self.diagnostics = diagnostics
+
+
+def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
+    """Source of the module for a machine that passed `check` (no errors)."""
+    m = checked.machine
+    assert m is not None and checked.ok, "compile only machines that check clean"
+    trees = checked.read.trees
+    mvars = [v.name for v in m.variables]
+    names = [s.name for s in m.states]
+    index = {n: i for i, n in enumerate(names)}
+    susp = index[m.suspended]
+
+    def view(s: State) -> StateView:
+        mapping = name_map(mvars, s.name, [v.name for v in s.variables], MACROS)
+
+        def sec(name: str) -> Block | None:
+            code = s.sections.get(name)
+            return _block(code, trees[code.file], mapping) if code is not None else None
+
+        sv = StateView(
+            name=s.name,
+            accepting=s.accepting,
+            is_suspend=index[s.name] == susp,
+            doc=None,
+            entry=sec("OnEntry"),
+            internal=sec("Internal"),
+            exit=sec("OnExit"),
+        )
+        if not sv.is_suspend:
+            targets = ", ".join(t.target for t in s.transitions) or "none: accepting"
+            sv.doc = f"Ringlet of {s.name} (transitions to {targets})."
+        for t in s.transitions:
+            assert t.guard is not None
+            sv.guards.append(_guard_view(t.guard, trees[t.guard.file], mapping, t.index, index[t.target],
+                                         t.target, index[t.target] == susp))
+        if sv.exit is not None:
+            sv.hooks.append(("on_exit", sv.exit))
+        for hook, secname in (("on_suspend", "OnSuspend"), ("on_resume", "OnResume")):
+            b = sec(secname)
+            if b is not None:
+                sv.hooks.append((hook, b))
+        return sv
+
+    includes = None
+    if m.includes is not None and trees.get("Includes.py") is not None:
+        includes = _block(m.includes, trees["Includes.py"], {})
+    variables = None
+    if m.variables_file is not None and "Variables.py" in trees:
+        variables = _variables_block(m.variables_file, trees["Variables.py"], name_map(mvars, None, [], MACROS))
+    state_variables = []
+    for s in m.states:
+        code = s.variables_file
+        if code is not None and code.file in trees:
+            svars = [v.name for v in s.variables]
+            b = _variables_block(code, trees[code.file], name_map(mvars, s.name, svars, MACROS))
+            if b is not None:
+                state_variables.append(b)
+
+    source_dir = os.path.abspath(m.path)
+    views = [view(s) for s in m.states]
+    ctx = {
+        "version": __version__,
+        "fingerprint": fingerprint,
+        "m": {
+            "name": m.name,
+            "dirname": _doc(m.path.name),
+            "class_name": class_name(m.name),
+            "docstring": _doc(f"{m.name}: {m.description}" if m.description else f"The machine {m.name}."),
+            "class_doc": _doc(m.description or f"The machine {m.name}."),
+            "state_names": tuple(names),
+            "initial": index[m.initial],
+            "suspended": susp,
+            "accepting": frozenset(i for i, s in enumerate(m.states) if s.accepting and i != susp),
+            "source_dir": source_dir,
+            "source_dir_json": json.dumps(source_dir)[1:-1],
+            "includes": includes,
+            "variables": variables,
+            "state_variables": state_variables,
+            "states": views,
+            "ringlets": [f"ringlet_{v.name}" for v in views],
+            "on_suspend": [f"on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
+            "on_resume": [f"on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
+        },
+    }
+    source = _env().get_template("machine.py.j2").render(ctx)
+    _verify(source, m)
+    return source
+
+
+def _verify(source: str, m: Machine) -> None:
+    """Compile (never run) the generated text, so a mistake surfaces at build time, not at run time."""
+    try:
+        compile(source, f"<{m.name}>", "exec", dont_inherit=True)
+    except SyntaxError as e:
+        lines = source.split("\n")
+        fake = f"<llfsm-verify-{m.name}>"
+        linecache.cache[fake] = (len(source), None, [ln + "\n" for ln in lines], fake)
+        mapped = map_line(fake, e.lineno or 1)
+        del linecache.cache[fake]
+        file, line = mapped if mapped else ("machine.yaml", 1)
+        raise CompileError([diag("LF030", m.path / file, line, 1, f"cannot be compiled: {e.msg}")]) from None

@@ -1,0 +1,226 @@
+"""Rewrite bare names in machine code into attributes of the machine: `count += 1` becomes
+`self.count += 1`, `after_ms(500)` becomes `self.after_ms(500)`.
+
+An `ast` visitor finds the names (with scoping: a lambda parameter or a comprehension variable
+called `count` is not the machine variable); the edits are then applied to the source text at
+the exact positions `ast` reports.  Editing the text rather than unparsing the tree keeps the
+user's comments and layout, and keeps every line where it was, which is what lets a run-time
+error point back at the user's own line.
+
+Machine variables keep their meaning inside nested functions and lambdas (as members do in a
+C++ lambda capturing `this`): `def on_pose(msg): x = msg.x` sets the machine variable x.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+
+_SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
+_COMPS = (ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp)
+
+
+@dataclass(frozen=True)
+class Edit:
+    line: int  # 1-based
+    start: int  # UTF-8 byte offsets on that line
+    end: int
+    text: str
+
+
+@dataclass(frozen=True)
+class BadBinding:
+    """A machine variable bound in a way that cannot become `self.name` (`:=`, import, def...)."""
+
+    name: str
+    how: str
+    line: int
+    col: int  # byte offset
+
+
+def _params(args: ast.arguments) -> set[str]:
+    names = {a.arg for a in args.posonlyargs + args.args + args.kwonlyargs}
+    if args.vararg:
+        names.add(args.vararg.arg)
+    if args.kwarg:
+        names.add(args.kwarg.arg)
+    return names
+
+
+def _targets(node: ast.AST) -> set[str]:
+    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+
+
+class _Finder(ast.NodeVisitor):
+    def __init__(self, mapping: Mapping[str, str]) -> None:
+        self.mapping = mapping
+        self.shadow: list[frozenset[str]] = [frozenset()]
+        self.edits: list[Edit] = []
+        self.bad: list[BadBinding] = []
+
+    def _hidden(self, name: str) -> bool:
+        return name in self.shadow[-1]
+
+    def _with(self, names: set[str]) -> None:
+        self.shadow.append(self.shadow[-1] | names)
+
+    def visit_Name(self, node: ast.Name) -> None:
+        attr = self.mapping.get(node.id)
+        if attr is not None and not self._hidden(node.id):
+            self.edits.append(Edit(node.lineno, node.col_offset, node.end_col_offset or node.col_offset, attr))
+
+    def _bind(self, name: str | None, how: str, node: ast.AST) -> None:
+        if name and name in self.mapping and not self._hidden(name):
+            self.bad.append(BadBinding(name, how, node.lineno, node.col_offset))  # type: ignore[attr-defined]
+
+    def _function(self, node: ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) -> None:
+        for d in getattr(node, "decorator_list", []):
+            self.visit(d)
+        for d in node.args.defaults + [d for d in node.args.kw_defaults if d is not None]:
+            self.visit(d)
+        if not isinstance(node, ast.Lambda):
+            self._bind(node.name, "def", node)
+            for a in node.args.posonlyargs + node.args.args + node.args.kwonlyargs:
+                if a.annotation:
+                    self.visit(a.annotation)
+            if node.returns:
+                self.visit(node.returns)
+        self._with(_params(node.args))
+        body = node.body if isinstance(node.body, list) else [node.body]
+        for stmt in body:
+            self.visit(stmt)
+        self.shadow.pop()
+
+    visit_FunctionDef = visit_AsyncFunctionDef = visit_Lambda = _function  # type: ignore[assignment]
+
+    def _comprehension(self, node: ast.ListComp | ast.SetComp | ast.GeneratorExp | ast.DictComp) -> None:
+        gens = node.generators
+        self.visit(gens[0].iter)  # evaluated in the enclosing scope
+        bound: set[str] = set()
+        for i, g in enumerate(gens):
+            bound |= _targets(g.target)
+            self._with(bound)
+            if i:
+                self.visit(g.iter)
+            for cond in g.ifs:
+                self.visit(cond)
+            self.shadow.pop()
+        self._with(bound)
+        if isinstance(node, ast.DictComp):
+            self.visit(node.key)
+            self.visit(node.value)
+        else:
+            self.visit(node.elt)
+        self.shadow.pop()
+
+    visit_ListComp = visit_SetComp = visit_GeneratorExp = visit_DictComp = _comprehension  # type: ignore[assignment]
+
+    def visit_ClassDef(self, node: ast.ClassDef) -> None:
+        self._bind(node.name, "class", node)
+        for d in node.decorator_list + node.bases + [k.value for k in node.keywords]:
+            self.visit(d)
+        own = set()
+        for stmt in node.body:  # names assigned in a class body are class attributes
+            if isinstance(stmt, ast.Assign | ast.AnnAssign | ast.AugAssign):
+                tgts = stmt.targets if isinstance(stmt, ast.Assign) else [stmt.target]
+                for t in tgts:
+                    own |= _targets(t)
+            elif isinstance(stmt, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+                own.add(stmt.name)
+        self._with(own)
+        for stmt in node.body:
+            self.visit(stmt)
+        self.shadow.pop()
+
+    def visit_NamedExpr(self, node: ast.NamedExpr) -> None:
+        self._bind(node.target.id, ":=", node.target)
+        self.visit(node.value)
+
+    def visit_ExceptHandler(self, node: ast.ExceptHandler) -> None:
+        self._bind(node.name, "except ... as", node)
+        self.generic_visit(node)
+
+    def visit_Import(self, node: ast.Import | ast.ImportFrom) -> None:
+        for a in node.names:
+            self._bind((a.asname or a.name).split(".")[0], "import", node)
+
+    visit_ImportFrom = visit_Import  # type: ignore[assignment]
+
+    def visit_MatchAs(self, node: ast.MatchAs) -> None:
+        self._bind(node.name, "a match pattern", node)
+        self.generic_visit(node)
+
+    def visit_MatchStar(self, node: ast.MatchStar) -> None:
+        self._bind(node.name, "a match pattern", node)
+
+    def visit_MatchMapping(self, node: ast.MatchMapping) -> None:
+        self._bind(node.rest, "a match pattern", node)
+        self.generic_visit(node)
+
+
+def attribute_of(state: str, variable: str) -> str:
+    """The machine attribute holding variable `variable` of state `state`."""
+    return f"{state}__{variable}"
+
+
+def name_map(machine_vars: list[str], state: str | None, state_vars: list[str], macros: frozenset[str]) -> dict[str, str]:
+    """Bare name -> replacement in the code of `state` (None: machine-level code)."""
+    m = {name: f"self.{name}" for name in macros}
+    m.update({v: f"self.{v}" for v in machine_vars})
+    if state is not None:
+        m.update({v: f"self.{attribute_of(state, v)}" for v in state_vars})
+    return m
+
+
+def find(tree: ast.AST, mapping: Mapping[str, str]) -> tuple[list[Edit], list[BadBinding]]:
+    """Where `tree` uses a name of `mapping` (bare name -> replacement text)."""
+    f = _Finder(mapping)
+    f.visit(tree)
+    return f.edits, f.bad
+
+
+def apply(text: str, edits: list[Edit]) -> str:
+    """Apply edits (positions in UTF-8 bytes, as ast reports them) to `text`, keeping its lines."""
+    if not edits:
+        return text
+    lines = text.splitlines(keepends=True)
+    by_line: dict[int, list[Edit]] = {}
+    for e in edits:
+        by_line.setdefault(e.line, []).append(e)
+    for ln, es in by_line.items():
+        raw = lines[ln - 1].encode("utf-8")
+        for e in sorted(es, key=lambda e: e.start, reverse=True):
+            raw = raw[: e.start] + e.text.encode("utf-8") + raw[e.end :]
+        lines[ln - 1] = raw.decode("utf-8")
+    return "".join(lines)
+
+
+def rewrite(text: str, mapping: Mapping[str, str], tree: ast.AST | None = None) -> str:
+    tree = tree if tree is not None else ast.parse(text)
+    edits, _ = find(tree, mapping)
+    return apply(text, edits)
+
+
+def assigned_names(tree: ast.AST) -> Iterator[tuple[str, ast.AST]]:
+    """Every name a piece of code binds, in any scope (for the undefined-name warning)."""
+    for n in ast.walk(tree):
+        if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store | ast.Del):
+            yield n.id, n
+        elif isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            yield n.name, n
+            if not isinstance(n, ast.ClassDef):
+                for p in _params(n.args):
+                    yield p, n
+        elif isinstance(n, ast.Lambda):
+            for p in _params(n.args):
+                yield p, n
+        elif isinstance(n, ast.alias):
+            yield (n.asname or n.name).split(".")[0], n
+        elif (isinstance(n, ast.ExceptHandler) and n.name) or (isinstance(n, ast.MatchAs | ast.MatchStar) and n.name):
+            yield n.name, n
+        elif isinstance(n, ast.MatchMapping) and n.rest:
+            yield n.rest, n
+        elif isinstance(n, ast.Global | ast.Nonlocal):
+            for name in n.names:
+                yield name, n

@@ -1,0 +1,201 @@
+"""Diagnostics: the stable rule catalogue and the four output formats of `llfsm check`.
+
+Codes never change meaning once published: CI configurations and suppressions refer to them.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable
+from dataclasses import dataclass
+from enum import StrEnum
+from pathlib import Path
+
+
+class Severity(StrEnum):
+    ERROR = "error"
+    WARNING = "warning"
+
+
+@dataclass(frozen=True)
+class Rule:
+    code: str
+    severity: Severity
+    name: str
+    summary: str
+
+
+def _r(code: str, sev: Severity, name: str, summary: str) -> Rule:
+    return Rule(code, sev, name, summary)
+
+
+E, W = Severity.ERROR, Severity.WARNING
+
+#: Every rule llfsm checks.  docs/rules.md is generated from (and tested against) this table.
+RULES: dict[str, Rule] = {
+    r.code: r
+    for r in [
+        _r("LF001", E, "missing-machine-yaml", "The machine directory has no machine.yaml."),
+        _r("LF002", E, "unreadable-file", "A file cannot be read as UTF-8 text within the size limit."),
+        _r("LF003", E, "yaml-syntax", "machine.yaml is not valid YAML."),
+        _r("LF004", E, "yaml-structure", "machine.yaml is not a mapping with a `states` list of the documented form."),
+        _r("LF005", E, "yaml-alias", "machine.yaml uses anchors or aliases (refused: alias bombs)."),
+        _r("LF006", E, "not-a-machine", "The path is not a machine directory."),
+        _r("LF010", E, "invalid-machine-name", "The machine name is not an identifier, or is a Python keyword."),
+        _r("LF011", E, "invalid-state-name", "A state name is not an identifier, or is a Python keyword."),
+        _r("LF012", E, "duplicate-state", "Two states have the same name."),
+        _r("LF013", E, "reserved-name", "A name is reserved by llfsm (self, the macros, `_llfsm*`)."),
+        _r("LF020", E, "unknown-target", "A transition names a state that does not exist."),
+        _r("LF021", E, "unknown-initial", "`initial` names a state that does not exist."),
+        _r("LF022", E, "unknown-suspended", "`suspended` names a state that does not exist."),
+        _r("LF023", E, "missing-guard", "A transition has no State_S_Transition_N.expr file."),
+        _r("LF024", E, "guard-not-expression", "A guard file is not exactly one Python expression."),
+        _r("LF030", E, "syntax-error", "A code file is not valid Python."),
+        _r("LF031", E, "includes-not-imports", "Includes.py holds something other than imports."),
+        _r("LF032", E, "bad-variable", "A variables file holds something other than `name: type = value` lines."),
+        _r("LF033", E, "shadowed-variable", "A state variable has the name of a machine variable."),
+        _r("LF034", E, "global-nonlocal", "`global` or `nonlocal` in machine code."),
+        _r("LF035", E, "duplicate-variable", "A variable is declared twice."),
+        _r("LF036", E, "return-in-section", "`return`, `yield` or `await` at the top level of a section."),
+        _r("LF038", E, "bad-binding", "A machine variable is bound by `:=`, import, def, class, except-as or match."),
+        _r("LF037", E, "unsafe-path", "A file is a symlink leading out of the machine directory."),
+        _r("LF101", W, "orphan-file", "A code file belongs to a state or transition that does not exist."),
+        _r("LF102", W, "unreachable-state", "No path of transitions leads from the initial state to this state."),
+        _r("LF103", W, "guard-always-false", "A guard is the constant False: the transition never fires."),
+        _r("LF104", W, "unreachable-transition", "An earlier guard of the state is the constant True."),
+        _r("LF105", W, "undefined-name", "A name is neither a variable, an import, a builtin, a macro nor assigned."),
+        _r("LF106", W, "undeclared-dependency", "Machine code imports messages of a package package.xml does not declare."),
+    ]
+}
+
+
+@dataclass(frozen=True)
+class Diagnostic:
+    code: str
+    file: str
+    line: int
+    column: int
+    message: str
+
+    @property
+    def severity(self) -> Severity:
+        return RULES[self.code].severity
+
+    @property
+    def rule(self) -> Rule:
+        return RULES[self.code]
+
+    def sort_key(self) -> tuple[str, int, int, str, str]:
+        return (self.file, self.line, self.column, self.code, self.message)
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "code": self.code,
+            "severity": str(self.severity),
+            "file": self.file,
+            "line": self.line,
+            "column": self.column,
+            "message": self.message,
+        }
+
+
+def diag(code: str, file: str | Path, line: int, column: int, message: str) -> Diagnostic:
+    """Build a diagnostic, keeping messages on one line whatever the input held."""
+    if code not in RULES:
+        raise KeyError(code)
+    message = " ".join(message.split())
+    return Diagnostic(code, str(file), max(line, 1), max(column, 1), message)
+
+
+FORMATS = ("text", "json", "github", "sarif")
+
+
+def format_text(diags: Iterable[Diagnostic]) -> str:
+    return "".join(
+        f"{d.file}:{d.line}:{d.column}: {d.code} {d.severity}: {d.message}\n" for d in diags
+    )
+
+
+def format_json(diags: Iterable[Diagnostic]) -> str:
+    return json.dumps([d.as_dict() for d in diags], indent=2) + "\n"
+
+
+def _gh_escape(value: str, prop: bool = False) -> str:
+    value = value.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
+    if prop:
+        value = value.replace(":", "%3A").replace(",", "%2C")
+    return value
+
+
+def format_github(diags: Iterable[Diagnostic]) -> str:
+    """GitHub Actions workflow commands: each diagnostic becomes an annotation on the PR."""
+    out = []
+    for d in diags:
+        kind = "error" if d.severity is Severity.ERROR else "warning"
+        out.append(
+            f"::{kind} file={_gh_escape(d.file, True)},line={d.line},col={d.column},"
+            f"title={_gh_escape(d.code, True)}::{_gh_escape(d.message)}\n"
+        )
+    return "".join(out)
+
+
+def format_sarif(diags: Iterable[Diagnostic], version: str) -> str:
+    diags = list(diags)
+    used = sorted({d.code for d in diags})
+    rules = [
+        {
+            "id": code,
+            "name": RULES[code].name,
+            "shortDescription": {"text": RULES[code].summary},
+            "defaultConfiguration": {"level": str(RULES[code].severity)},
+            "helpUri": f"https://llfsm.invalid/docs/rules#{code.lower()}",
+        }
+        for code in used
+    ]
+    results = [
+        {
+            "ruleId": d.code,
+            "ruleIndex": used.index(d.code),
+            "level": str(d.severity),
+            "message": {"text": d.message},
+            "locations": [
+                {
+                    "physicalLocation": {
+                        "artifactLocation": {"uri": Path(d.file).as_posix()},
+                        "region": {"startLine": d.line, "startColumn": d.column},
+                    }
+                }
+            ],
+        }
+        for d in diags
+    ]
+    doc = {
+        "$schema": "https://json.schemastore.org/sarif-2.1.0.json",
+        "version": "2.1.0",
+        "runs": [
+            {
+                "tool": {
+                    "driver": {
+                        "name": "llfsm",
+                        "version": version,
+                        "informationUri": "https://llfsm.invalid/",
+                        "rules": rules,
+                    }
+                },
+                "results": results,
+            }
+        ],
+    }
+    return json.dumps(doc, indent=2) + "\n"
+
+
+def render(diags: Iterable[Diagnostic], fmt: str, version: str) -> str:
+    if fmt == "text":
+        return format_text(diags)
+    if fmt == "json":
+        return format_json(diags)
+    if fmt == "github":
+        return format_github(diags)
+    if fmt == "sarif":
+        return format_sarif(diags, version)
+    raise ValueError(fmt)

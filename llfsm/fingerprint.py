@@ -1,0 +1,56 @@
+"""Content fingerprints for incremental builds.
+
+Deliberately light (hashlib and os only): `llfsm run DIR.machine` calls it to decide whether
+the cached module is fresh, and must not import the compiler to find out that it is.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from functools import cache
+from pathlib import Path
+
+from . import __version__
+
+HEADER_KEY = "# Fingerprint: "
+_PKG = Path(__file__).parent
+
+
+@cache
+def compiler_id() -> str:
+    """Changes whenever anything that shapes generated code changes: version, templates, compiler."""
+    h = hashlib.sha256(__version__.encode())
+    for p in sorted((_PKG / "templates").glob("machine*.j2")) + sorted((_PKG / "compiler").glob("*.py")):
+        h.update(p.name.encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def machine_fingerprint(path: Path) -> str:
+    """Hash of every regular file of a machine directory (names and bytes) and the compiler id."""
+    h = hashlib.sha256(compiler_id().encode())
+    h.update(os.fsencode(os.path.abspath(path)))
+    for name in sorted(os.listdir(path)):
+        if name.startswith("."):
+            continue
+        p = path / name
+        if not p.is_file():
+            continue
+        data = p.read_bytes()
+        h.update(b"\0%s\0%d\0" % (os.fsencode(name), len(data)))
+        h.update(data)
+    return h.hexdigest()
+
+
+def module_fingerprint(module: Path) -> str | None:
+    """The fingerprint recorded in a generated module's header, if it has one."""
+    try:
+        with open(module, encoding="utf-8", errors="replace") as f:
+            for _ in range(5):
+                line = f.readline()
+                if line.startswith(HEADER_KEY):
+                    return line[len(HEADER_KEY):].strip()
+    except OSError:
+        return None
+    return None

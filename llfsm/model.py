@@ -1,0 +1,145 @@
+"""The in-memory form of a machine directory.
+
+Every element keeps the file and line it came from, so that any later stage (checker,
+compiler, run-time error reports) can point the user at what they wrote rather than at
+something llfsm generated.  The model is plain data: building it never runs user code.
+"""
+
+from __future__ import annotations
+
+import keyword
+import re
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field
+
+NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+#: The five code sections a state may have, in the order they are documented.
+SECTIONS = ("OnEntry", "OnExit", "Internal", "OnSuspend", "OnResume")
+
+#: Name of the implicit suspend state when a machine declares none.
+IMPLICIT_SUSPENDED = "SUSPENDED"
+
+
+def is_valid_name(name: str) -> bool:
+    """Machine, state and variable names share one rule: a Python identifier, not a keyword."""
+    return bool(NAME_RE.match(name)) and not keyword.iskeyword(name)
+
+
+class Loc(BaseModel):
+    """A position in a file of the machine directory (1-based line and column)."""
+
+    model_config = ConfigDict(frozen=True)
+
+    file: str
+    line: int = 1
+    column: int = 1
+
+
+class Variable(BaseModel):
+    """`count: int = 0` in Variables.py or State_S_Variables.py."""
+
+    name: str
+    annotation: str
+    initial: str | None = None  # source text of the initialiser, None when omitted
+    loc: Loc
+
+
+class Code(BaseModel):
+    """One code file: a section of a state, Includes.py, or a guard expression."""
+
+    file: str  # the file name inside the machine directory, e.g. State_PUBLISH_OnEntry.py
+    text: str
+    loc: Loc
+
+    @property
+    def is_empty(self) -> bool:
+        return not self.text.strip()
+
+
+class Transition(BaseModel):
+    index: int
+    target: str
+    guard: Code | None = None  # None when the .expr file is missing (a check error)
+    loc: Loc  # where the target is named in machine.yaml
+
+
+class State(BaseModel):
+    name: str
+    transitions: list[Transition] = Field(default_factory=list)
+    sections: dict[str, Code] = Field(default_factory=dict)  # only the non-missing ones
+    variables: list[Variable] = Field(default_factory=list)
+    variables_file: Code | None = None  # State_S_Variables.py as written
+    loc: Loc
+    implicit: bool = False  # the implicit suspend state added by llfsm
+
+    @property
+    def accepting(self) -> bool:
+        return not self.transitions
+
+
+class Machine(BaseModel):
+    """A whole machine directory.  `path` is the directory as the user named it."""
+
+    name: str
+    path: Path
+    description: str | None = None
+    initial: str
+    suspended: str
+    states: list[State]
+    includes: Code | None = None
+    variables: list[Variable] = Field(default_factory=list)
+    variables_file: Code | None = None  # Variables.py as written
+    initial_loc: Loc = Loc(file="machine.yaml")
+    suspended_loc: Loc = Loc(file="machine.yaml")
+
+    def state(self, name: str) -> State:
+        for s in self.states:
+            if s.name == name:
+                return s
+        raise KeyError(name)
+
+    def index_of(self, name: str) -> int:
+        for i, s in enumerate(self.states):
+            if s.name == name:
+                return i
+        raise KeyError(name)
+
+
+class MachineYaml(BaseModel):
+    """The schema of machine.yaml, as published by `llfsm schema`.
+
+    The reader validates by hand (to report each problem with its YAML line); this model is
+    the single description of the format that the JSON Schema is generated from.
+    """
+
+    model_config = ConfigDict(extra="forbid", title="machine.yaml")
+
+    description: str | None = Field(None, description="One line saying what the machine does.")
+    initial: str | None = Field(
+        None, description="Name of the initial state; default: the first state.", pattern=NAME_RE.pattern[:-2] + "$"
+    )
+    suspended: str | None = Field(
+        None,
+        description="Name of the suspend state; default: a state named SUSPENDED if present, "
+        "else an implicit empty one.",
+        pattern=NAME_RE.pattern[:-2] + "$",
+    )
+    states: list[YamlState] = Field(
+        ..., min_length=1, description="The states, in order; the order is the state index."
+    )
+
+
+class YamlState(BaseModel):
+    model_config = ConfigDict(extra="forbid", title="state")
+
+    name: str = Field(..., pattern=NAME_RE.pattern[:-2] + "$", description="State name.")
+    transitions: list[str] = Field(
+        default_factory=list,
+        description="Target states in priority order; position N is guarded by "
+        "State_<name>_Transition_N.expr.  No transitions: an accepting state.",
+    )
+
+
+MachineYaml.model_rebuild()

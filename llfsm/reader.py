@@ -1,0 +1,388 @@
+"""Read a machine directory into a `Machine` model, with a diagnostic for what cannot be read.
+
+The reader looks at bytes, YAML nodes and `ast` trees only; it never imports or runs user code,
+because `llfsm check` runs on untrusted pull requests.  Whatever it is given (binary files,
+alias bombs, deep nesting, symlinks out of the directory), it returns diagnostics, never raises.
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from .diagnostics import Diagnostic, diag
+from .model import (
+    IMPLICIT_SUSPENDED,
+    SECTIONS,
+    Code,
+    Loc,
+    Machine,
+    State,
+    Transition,
+    Variable,
+)
+
+MAX_FILE_BYTES = 1 << 20  # 1 MiB: no hand-written state section comes near this
+MAX_YAML_DEPTH = 32
+MACHINE_SUFFIX = ".machine"
+
+SECTION_RE = re.compile(r"State_(?P<state>.+)_(?P<kind>" + "|".join(SECTIONS) + r"|Variables)\.py\Z")
+GUARD_RE = re.compile(r"State_(?P<state>.+)_Transition_(?P<n>[0-9]+)\.expr\Z")
+
+
+@dataclass
+class ReadResult:
+    """What the reader could make of a directory.  `machine` is None when machine.yaml is unusable."""
+
+    path: Path
+    machine: Machine | None
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    trees: dict[str, ast.Module] = field(default_factory=dict)  # file name -> parsed code
+    orphans: list[str] = field(default_factory=list)  # state code files matching no state
+
+
+def machine_name_of(path: Path) -> str:
+    name = path.name
+    return name[: -len(MACHINE_SUFFIX)] if name.endswith(MACHINE_SUFFIX) else name
+
+
+class _Reader:
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.real = path.resolve()
+        self.diags: list[Diagnostic] = []
+        self.trees: dict[str, ast.Module] = {}
+
+    # -- files ---------------------------------------------------------------------------
+    def where(self, name: str) -> str:
+        return str(self.path / name)
+
+    def report(self, code: str, name: str, line: int, col: int, msg: str) -> None:
+        self.diags.append(diag(code, self.where(name), line, col, msg))
+
+    def read(self, name: str) -> str | None:
+        """The text of a file of the machine directory, or None (with a diagnostic) if unusable."""
+        p = self.path / name
+        try:
+            if p.is_symlink():
+                target = p.resolve()
+                if not target.is_relative_to(self.real):
+                    self.report("LF037", name, 1, 1, f"{name} is a symlink leading out of the machine directory; refused")
+                    return None
+            with open(p, "rb") as f:
+                data = f.read(MAX_FILE_BYTES + 1)
+        except OSError as e:
+            self.report("LF002", name, 1, 1, f"cannot read {name}: {e.strerror or e}")
+            return None
+        if len(data) > MAX_FILE_BYTES:
+            self.report("LF002", name, 1, 1, f"{name} is larger than {MAX_FILE_BYTES // 1024} KiB; refused")
+            return None
+        if b"\0" in data:
+            self.report("LF002", name, 1, 1, f"{name} is a binary file (it contains NUL bytes)")
+            return None
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as e:
+            line = data[: e.start].count(b"\n") + 1
+            self.report("LF002", name, line, 1, f"{name} is not UTF-8 text (byte {e.start})")
+            return None
+        return text.removeprefix("\ufeff")
+
+    # -- python --------------------------------------------------------------------------
+    def parse(self, name: str, text: str) -> ast.Module | None:
+        try:
+            tree = ast.parse(text, filename=name)
+        except SyntaxError as e:
+            line = e.lineno or 1
+            col = _char_col(text, line, (e.offset or 1) - 1, is_bytes=False) if e.offset else 1
+            self.report("LF030", name, line, col, f"syntax error: {e.msg}")
+            return None
+        except (RecursionError, MemoryError, ValueError) as e:
+            self.report("LF030", name, 1, 1, f"cannot parse {name}: {type(e).__name__}")
+            return None
+        self.trees[name] = tree
+        return tree
+
+    def code(self, name: str, text: str) -> Code:
+        return Code(file=name, text=text, loc=Loc(file=name))
+
+    def variables(self, name: str) -> tuple[list[Variable], Code | None]:
+        text = self.read(name)
+        if text is None:
+            return [], None
+        tree = self.parse(name, text)
+        if tree is None:
+            return [], None
+        out: list[Variable] = []
+        for stmt in tree.body:
+            if (
+                isinstance(stmt, ast.AnnAssign)
+                and isinstance(stmt.target, ast.Name)
+                and stmt.simple
+            ):
+                ann = ast.get_source_segment(text, stmt.annotation) or ast.unparse(stmt.annotation)
+                init = None
+                if stmt.value is not None:
+                    init = ast.get_source_segment(text, stmt.value) or ast.unparse(stmt.value)
+                out.append(
+                    Variable(
+                        name=stmt.target.id,
+                        annotation=ann,
+                        initial=init,
+                        loc=Loc(file=name, line=stmt.lineno, column=_node_col(text, stmt)),
+                    )
+                )
+            else:
+                what = _describe(stmt)
+                self.report(
+                    "LF032", name, stmt.lineno, _node_col(text, stmt),
+                    f"{what} in {name}: only annotated assignments such as `count: int = 0` are allowed",
+                )
+        return out, self.code(name, text)
+
+    # -- yaml ----------------------------------------------------------------------------
+    def yaml_tree(self, text: str) -> yaml.Node | None:
+        name = "machine.yaml"
+        depth = 0
+        try:
+            for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+                if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
+                    m = ev.start_mark
+                    self.report("LF005", name, m.line + 1, m.column + 1,
+                                "anchors and aliases are not allowed in machine.yaml")
+                    return None
+                if isinstance(ev, yaml.CollectionStartEvent):
+                    depth += 1
+                    if depth > MAX_YAML_DEPTH:
+                        m = ev.start_mark
+                        self.report("LF004", name, m.line + 1, m.column + 1,
+                                    f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels")
+                        return None
+                elif isinstance(ev, yaml.CollectionEndEvent):
+                    depth -= 1
+            node = yaml.compose(text, Loader=yaml.SafeLoader)
+        except yaml.MarkedYAMLError as e:
+            m = e.problem_mark or e.context_mark
+            line, col = (m.line + 1, m.column + 1) if m else (1, 1)
+            self.report("LF003", name, line, col, f"invalid YAML: {e.problem or e.context}")
+            return None
+        except (yaml.YAMLError, RecursionError) as e:
+            self.report("LF003", name, 1, 1, f"invalid YAML: {type(e).__name__}")
+            return None
+        return node
+
+    def structure_error(self, node: yaml.Node | None, msg: str) -> None:
+        line, col = (node.start_mark.line + 1, node.start_mark.column + 1) if node is not None else (1, 1)
+        self.report("LF004", "machine.yaml", line, col, msg)
+
+    def mapping(self, node: yaml.Node, what: str, keys: tuple[str, ...]) -> dict[str, yaml.Node] | None:
+        if not isinstance(node, yaml.MappingNode):
+            self.structure_error(node, f"{what} must be a mapping")
+            return None
+        out: dict[str, yaml.Node] = {}
+        for k, v in node.value:
+            if not isinstance(k, yaml.ScalarNode):
+                self.structure_error(k, f"keys of {what} must be plain words")
+                continue
+            if k.value not in keys:
+                self.structure_error(k, f"unknown key `{k.value}` in {what} (expected one of: {', '.join(keys)})")
+                continue
+            if k.value in out:
+                self.structure_error(k, f"duplicate key `{k.value}` in {what}")
+                continue
+            out[k.value] = v
+        return out
+
+    def scalar(self, node: yaml.Node | None, what: str) -> str | None:
+        """The text of a scalar as written (so `ON` stays the name ON); None for null or missing."""
+        if node is None:
+            return None
+        if not isinstance(node, yaml.ScalarNode):
+            self.structure_error(node, f"{what} must be a single word, not a {_kind(node)}")
+            return None
+        if node.tag == "tag:yaml.org,2002:null" and node.style is None:
+            return None
+        return str(node.value)
+
+    # -- the whole directory ---------------------------------------------------------------
+    def run(self) -> ReadResult:
+        name = machine_name_of(self.path)
+        result = ReadResult(self.path, None, self.diags, self.trees)
+        if not (self.path / "machine.yaml").exists() and not (self.path / "machine.yaml").is_symlink():
+            self.report("LF001", "machine.yaml", 1, 1, f"{self.path} has no machine.yaml")
+            return result
+        text = self.read("machine.yaml")
+        if text is None:
+            return result
+        if not text.strip():
+            self.structure_error(None, "machine.yaml is empty: it needs at least a `states` list")
+            return result
+        root = self.yaml_tree(text)
+        if root is None:
+            return result
+        top = self.mapping(root, "machine.yaml", ("description", "initial", "suspended", "states"))
+        if top is None:
+            return result
+        states_node = top.get("states")
+        if states_node is None:
+            self.structure_error(root, "machine.yaml has no `states` list")
+            return result
+        if not isinstance(states_node, yaml.SequenceNode) or not states_node.value:
+            self.structure_error(states_node, "`states` must be a non-empty list of states")
+            return result
+
+        try:
+            entries = sorted(os.listdir(self.path))
+        except OSError as e:
+            self.report("LF002", ".", 1, 1, f"cannot list {self.path}: {e.strerror or e}")
+            return result
+        entry_set = set(entries)
+
+        states: list[State] = []
+        for snode in states_node.value:
+            fields = self.mapping(snode, "a state", ("name", "transitions"))
+            if fields is None:
+                continue
+            sname = self.scalar(fields.get("name"), "a state name")
+            if sname is None:
+                self.structure_error(snode, "every state needs a `name`")
+                continue
+            sloc = _mark_loc(fields["name"])
+            targets: list[tuple[str, Loc]] = []
+            tnode = fields.get("transitions")
+            if tnode is not None and not (isinstance(tnode, yaml.ScalarNode) and tnode.tag.endswith("null")):
+                if not isinstance(tnode, yaml.SequenceNode):
+                    self.structure_error(tnode, f"`transitions` of {sname} must be a list of state names")
+                else:
+                    for t in tnode.value:
+                        tname = self.scalar(t, "a transition target")
+                        if tname is not None:
+                            targets.append((tname, _mark_loc(t)))
+            states.append(self.state(sname, sloc, targets, entry_set))
+
+        if not states:
+            return result
+        names = [s.name for s in states]
+        initial = self.scalar(top.get("initial"), "`initial`") or names[0]
+        suspended = self.scalar(top.get("suspended"), "`suspended`")
+        if suspended is None:
+            suspended = IMPLICIT_SUSPENDED
+            if IMPLICIT_SUSPENDED not in names:
+                states.append(State(name=IMPLICIT_SUSPENDED, loc=Loc(file="machine.yaml"), implicit=True))
+        description = None
+        if "description" in top:
+            d = top["description"]
+            description = d.value if isinstance(d, yaml.ScalarNode) else None
+            if description is None:
+                self.structure_error(d, "`description` must be text")
+
+        includes = None
+        if "Includes.py" in entry_set:
+            itext = self.read("Includes.py")
+            if itext is not None:
+                includes = self.code("Includes.py", itext)
+                self.parse("Includes.py", itext)
+        variables, variables_file = self.variables("Variables.py") if "Variables.py" in entry_set else ([], None)
+
+        known = {s.name for s in states}
+        for e in entries:
+            m = SECTION_RE.match(e) or GUARD_RE.match(e)
+            if m and m["state"] not in known:
+                result.orphans.append(e)
+            elif m and "n" in m.groupdict():
+                st = next(s for s in states if s.name == m["state"])
+                if e not in {f"State_{st.name}_Transition_{t.index}.expr" for t in st.transitions}:
+                    result.orphans.append(e)
+
+        result.machine = Machine(
+            name=name,
+            path=self.path,
+            description=description,
+            initial=initial,
+            suspended=suspended,
+            states=states,
+            includes=includes,
+            variables=variables,
+            variables_file=variables_file,
+            initial_loc=_mark_loc(top["initial"]) if "initial" in top else Loc(file="machine.yaml"),
+            suspended_loc=_mark_loc(top["suspended"]) if "suspended" in top else Loc(file="machine.yaml"),
+        )
+        return result
+
+    def state(self, name: str, loc: Loc, targets: list[tuple[str, Loc]], entries: set[str]) -> State:
+        sections: dict[str, Code] = {}
+        for sec in SECTIONS:
+            fname = f"State_{name}_{sec}.py"
+            if fname in entries:
+                text = self.read(fname)
+                if text is not None:
+                    sections[sec] = self.code(fname, text)
+                    self.parse(fname, text)
+        variables: list[Variable] = []
+        variables_file = None
+        vname = f"State_{name}_Variables.py"
+        if vname in entries:
+            variables, variables_file = self.variables(vname)
+        transitions = []
+        for i, (target, tloc) in enumerate(targets):
+            gname = f"State_{name}_Transition_{i}.expr"
+            guard = None
+            if gname in entries:
+                text = self.read(gname)
+                if text is not None:
+                    guard = self.code(gname, text)
+                    self.parse(gname, text)
+            transitions.append(Transition(index=i, target=target, guard=guard, loc=tloc))
+        return State(name=name, transitions=transitions, sections=sections, variables=variables,
+                     variables_file=variables_file, loc=loc)
+
+
+def read_machine(path: str | Path) -> ReadResult:
+    """Read one machine directory.  Never raises for anything the directory holds."""
+    return _Reader(Path(path)).run()
+
+
+# -- helpers ---------------------------------------------------------------------------------
+
+
+def _mark_loc(node: yaml.Node) -> Loc:
+    return Loc(file="machine.yaml", line=node.start_mark.line + 1, column=node.start_mark.column + 1)
+
+
+def _kind(node: yaml.Node) -> str:
+    return {"MappingNode": "mapping", "SequenceNode": "list"}.get(type(node).__name__, "value")
+
+
+def _char_col(text: str, line: int, offset: int, is_bytes: bool = True) -> int:
+    """1-based character column of a 0-based offset on a 1-based line (ast offsets are UTF-8 bytes)."""
+    lines = text.splitlines()
+    if not 1 <= line <= len(lines):
+        return offset + 1
+    src = lines[line - 1]
+    if is_bytes:
+        return len(src.encode("utf-8")[:offset].decode("utf-8", "replace")) + 1
+    return offset + 1
+
+
+def _node_col(text: str, node: ast.AST) -> int:
+    return _char_col(text, node.lineno, node.col_offset)  # type: ignore[attr-defined]
+
+
+def node_col(text: str, node: ast.AST) -> int:
+    """Public form of `_node_col` for the checker."""
+    return _node_col(text, node)
+
+
+def _describe(stmt: ast.stmt) -> str:
+    if isinstance(stmt, ast.Assign):
+        return "an assignment without a type (write `name: type = value`)"
+    if isinstance(stmt, ast.AnnAssign):
+        return "an annotated assignment to something other than a plain name"
+    if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant) and isinstance(stmt.value.value, str):
+        return "a string"
+    return f"a `{type(stmt).__name__.lower()}` statement"

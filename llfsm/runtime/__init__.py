@@ -1,0 +1,32 @@
+"""What generated machine modules import, and what `llfsm run` drives.
+
+This package must stay light: it imports nothing from the compiler side (pydantic, yaml,
+jinja2), so that running a machine does not pay for compiling one.
+"""
+
+from .clock import Clock, SimClock, WallClock, parse_duration
+from .context import RunContext, current
+from .errors import ErrorReport, report_for
+from .machine import FINISHED, MACROS, RESERVED, Machine, UnknownMachineError
+from .scheduler import Arrangement, RunResult, signals_handled
+from .trace import Tracer
+
+__all__ = [
+    "FINISHED",
+    "MACROS",
+    "RESERVED",
+    "Arrangement",
+    "Clock",
+    "ErrorReport",
+    "Machine",
+    "RunContext",
+    "RunResult",
+    "SimClock",
+    "Tracer",
+    "UnknownMachineError",
+    "WallClock",
+    "current",
+    "parse_duration",
+    "report_for",
+    "signals_handled",
+]

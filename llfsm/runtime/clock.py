@@ -1,0 +1,94 @@
+"""Run clocks.  Time is integer nanoseconds since the start of the run, so that timer
+comparisons are exact and a simulated run is reproducible byte for byte."""
+
+from __future__ import annotations
+
+import time
+
+
+def parse_duration(text: str) -> int:
+    """`0.5`, `500ms`, `2s`, `250us`, `1min` -> nanoseconds.  Bare numbers are seconds."""
+    t = text.strip().lower()
+    units = (("ns", 1), ("us", 1_000), ("µs", 1_000), ("ms", 1_000_000), ("min", 60_000_000_000),
+             ("s", 1_000_000_000))
+    scale = 1_000_000_000
+    for suffix, mult in units:
+        if t.endswith(suffix):
+            t, scale = t[: -len(suffix)].strip(), mult
+            break
+    try:
+        value = float(t)
+    except ValueError:
+        raise ValueError(f"not a duration: {text!r} (use seconds such as 0.5, or 500ms, 2s)") from None
+    if not value >= 0 or value == float("inf"):
+        raise ValueError(f"not a duration: {text!r} (must be a finite value >= 0)")
+    return round(value * scale)
+
+
+class Clock:
+    """`now` is read by machines (after_ms) and the bus; the scheduler moves it between rounds."""
+
+    kind = "abstract"
+    now: int = 0
+
+    def advance(self, fired: bool) -> None:
+        raise NotImplementedError
+
+    def sleep_until(self, t: int) -> None:
+        """Block until run time t (the bus waits this way inside spin calls)."""
+        raise NotImplementedError
+
+
+class SimClock(Clock):
+    """Virtual time from 0, advanced by `period` after each round, never sleeping."""
+
+    kind = "sim"
+
+    def __init__(self, period_ns: int = 1_000_000) -> None:
+        if period_ns <= 0:
+            raise ValueError("the sim clock needs a period > 0")
+        self.now = 0
+        self.period = period_ns
+
+    def advance(self, fired: bool) -> None:
+        self.now += self.period
+
+    def sleep_until(self, t: int) -> None:
+        if t > self.now:
+            self.now = t
+
+
+class WallClock(Clock):
+    """Real time.  Rounds run back to back, sleeping `idle` after a round where nothing fired;
+    with a `period`, a round starts every period instead (time-triggered)."""
+
+    kind = "wall"
+
+    def __init__(self, idle_ns: int = 10_000_000, period_ns: int | None = None) -> None:
+        self._start = time.monotonic_ns()
+        self.now = 0
+        self.idle = idle_ns
+        self.period = period_ns
+        self._next = period_ns or 0
+
+    def read(self) -> int:
+        return time.monotonic_ns() - self._start
+
+    def advance(self, fired: bool) -> None:
+        if self.period:
+            now = self.read()
+            if now < self._next:
+                time.sleep((self._next - now) / 1e9)
+            self._next += self.period
+            # a round that overran does not make the next ones run back to back forever
+            if self._next < self.read():
+                self._next = self.read() + self.period
+        elif not fired and self.idle:
+            time.sleep(self.idle / 1e9)
+        self.now = self.read()
+
+    def sleep_until(self, t: int) -> None:
+        now = self.read()
+        if t > now:
+            time.sleep((t - now) / 1e9)
+        self.now = self.read()

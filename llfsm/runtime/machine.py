@@ -1,0 +1,123 @@
+"""The base class of every compiled machine, and the clfsm macros machine code calls.
+
+A compiled machine is a subclass with one method per state (its ringlet).  The scheduler calls
+`RINGLETS[state](machine)`; the method runs OnEntry if the state was just entered, evaluates
+the guards in order, and either fires one (running OnExit and moving to the target) or runs
+Internal.  It returns the index of the transition that fired, None if none did, or FINISHED in
+an accepting state.  Everything here is kept small because it sits on the hot path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, ClassVar
+
+if TYPE_CHECKING:
+    from .scheduler import Arrangement
+
+#: Returned by the ringlet of an accepting state: the machine has finished.
+FINISHED = -1
+
+# Control commands a machine can have pending (SPEC section 2, step 1).
+SUSPEND, RESUME, RESTART = "suspend", "resume", "restart"
+
+Ringlet = Callable[["Machine"], int | None]
+Hook = Callable[["Machine"], None] | None
+
+
+class UnknownMachineError(LookupError):
+    """A macro named a machine that is not part of the arrangement."""
+
+
+class Machine:
+    """Base of generated machines.  Class attributes are filled in by the generated subclass."""
+
+    NAME: ClassVar[str] = ""
+    STATES: ClassVar[tuple[str, ...]] = ()
+    INITIAL: ClassVar[int] = 0
+    SUSPENDED: ClassVar[int] = 0
+    ACCEPTING: ClassVar[frozenset[int]] = frozenset()
+    RINGLETS: ClassVar[tuple[Ringlet, ...]] = ()
+    ON_SUSPEND: ClassVar[tuple[Hook, ...]] = ()
+    ON_RESUME: ClassVar[tuple[Hook, ...]] = ()
+    #: The machine directory the class was compiled from.
+    SOURCE_DIR: ClassVar[str] = ""
+
+    def __init__(self, arrangement: Arrangement, machine_id: int = 0) -> None:
+        self._arr = arrangement
+        self._clock = arrangement.clock
+        self._id = machine_id
+        self._state = self.INITIAL
+        self._entered = True  # the initial state counts as entered
+        self._t0 = 0  # run-clock time (ns) the current state was entered
+        self._pending: str | None = None
+        self._suspended = False
+        self._resume_to: int | None = None
+        self._finished = False
+
+    # -- the clfsm macros (CLMacros.h), in scope in every section and guard -----------------
+    def after(self, s: float) -> bool:
+        """More than `s` seconds of run time have passed since this state was entered."""
+        return self._clock.now - self._t0 > s * 1_000_000_000
+
+    def after_ms(self, ms: float) -> bool:
+        return self._clock.now - self._t0 > ms * 1_000_000
+
+    def after_us(self, us: float) -> bool:
+        return self._clock.now - self._t0 > us * 1_000
+
+    def state_name(self) -> str:
+        return self.STATES[self._state]
+
+    def machine_name(self) -> str:
+        return self.NAME
+
+    def machine_id(self) -> int:
+        return self._id
+
+    def suspend(self, name: str) -> None:
+        self._arr.command(name, SUSPEND)
+
+    def resume(self, name: str) -> None:
+        self._arr.command(name, RESUME)
+
+    def restart(self, name: str) -> None:
+        self._arr.command(name, RESTART)
+
+    def suspend_self(self) -> None:
+        self._pending = SUSPEND
+
+    def is_suspended(self, name: str) -> bool:
+        return self._arr.machine(name)._suspended
+
+    def is_running(self, name: str) -> bool:
+        m = self._arr.machine(name)
+        return not (m._suspended or m._finished)
+
+    def state_name_of(self, name: str) -> str:
+        m = self._arr.machine(name)
+        return m.STATES[m._state]
+
+    # -- used by generated code on rare paths ------------------------------------------------
+    def _enter_suspend_state(self) -> None:
+        """A transition targeted the suspend state: the machine is now suspended.
+
+        There is no remembered state, so a later resume goes to the initial state.
+        """
+        self._arr.suspend_now(self, remember=None)
+
+
+#: Names generated code and the runtime use on a machine instance: user variables must not
+#: take them (checked by `llfsm check`, rule LF013).
+RESERVED = frozenset(
+    {"self"}
+    | {n for n in vars(Machine) if not n.startswith("__")}
+    | {"_arr", "_clock", "_id", "_state", "_entered", "_t0", "_pending", "_suspended",
+       "_resume_to", "_finished"}
+)
+
+#: The macros: bare names in machine code that the compiler turns into `self.<name>`.
+MACROS = frozenset(
+    {"after", "after_ms", "after_us", "state_name", "machine_name", "machine_id", "suspend",
+     "resume", "restart", "suspend_self", "is_suspended", "is_running", "state_name_of"}
+)

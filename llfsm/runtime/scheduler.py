@@ -1,0 +1,270 @@
+"""The ringlet scheduler: one thread runs an arrangement of machines round-robin (SPEC §2).
+
+Two loops do the same thing: `_round` is the fast path (no hooks beyond what the semantics
+need), `_traced_round` also reports entries and transitions for `-v` and `--trace`.  Keeping
+them apart means an untraced run pays nothing for tracing.
+"""
+
+from __future__ import annotations
+
+import signal
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+from .clock import Clock, SimClock
+from .context import RunContext, activate
+from .errors import ErrorReport, report_for
+from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
+from .trace import Tracer
+
+FOREVER = 1 << 62
+
+#: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
+EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+
+@dataclass
+class RunResult:
+    reason: str  # finished | suspended | duration | interrupted | killed | error
+    rounds: int
+    time_ns: int
+    status: int
+    error: ErrorReport | None = None
+
+
+class Arrangement:
+    """Machines in load order, the clock they share, and the round-robin that runs them."""
+
+    def __init__(
+        self,
+        classes: Sequence[type[Machine]],
+        *,
+        clock: Clock | None = None,
+        context: RunContext | None = None,
+        keep_accepting: bool = False,
+        tracer: Tracer | None = None,
+        suspended: Sequence[str] = (),
+    ) -> None:
+        self.ctx = context if context is not None else RunContext(clock or SimClock())
+        self.clock = self.ctx.clock
+        self.ctx.extras["arrangement"] = self
+        self.keep_accepting = keep_accepting
+        self.tracer = tracer
+        self.machines: list[Machine] = []
+        self.by_name: dict[str, Machine] = {}
+        self._dirty = True
+        self._interrupts = 0
+        self._signal: int | None = None
+        self._grace_end: int | None = None
+        self.rounds = 0
+        names = [c.NAME for c in classes]
+        for n in names:
+            if names.count(n) > 1:
+                raise ValueError(f"machine {n} is loaded twice; an arrangement addresses machines by name")
+        for n in suspended:
+            if n not in names:
+                raise UnknownMachineError(f"--suspended {n}: no machine named {n} is loaded")
+        prev = activate(self.ctx)
+        try:
+            for i, cls in enumerate(classes):
+                m = cls(self, i)  # runs the variable initialisers: user code
+                self.machines.append(m)
+                self.by_name[m.NAME] = m
+        finally:
+            activate(prev)
+        for n in suspended:
+            m = self.by_name[n]
+            m._state, m._suspended, m._entered = m.SUSPENDED, True, True
+            m._resume_to = None
+        self._live: list[Machine] = list(self.machines)
+
+    # -- what machines call --------------------------------------------------------------
+    def machine(self, name: str) -> Machine:
+        try:
+            return self.by_name[name]
+        except (KeyError, TypeError):
+            loaded = ", ".join(self.by_name) or "none"
+            raise UnknownMachineError(f"no machine named {name!r} is loaded (loaded: {loaded})") from None
+
+    def command(self, name: str, cmd: str) -> None:
+        """Schedule a control command; it is applied at the start of the target's next ringlet."""
+        m = self.machine(name)
+        if m._finished:
+            if cmd != RESTART:
+                return  # a finished machine cannot be suspended or resumed
+            m._finished = False  # restart brings a finished machine back
+        m._pending = cmd  # a later command replaces an earlier pending one
+        self._dirty = True
+
+    def suspend_now(self, m: Machine, remember: int | None) -> None:
+        """Move `m` to its suspend state and run that state's OnEntry (no OnExit anywhere)."""
+        m._resume_to = remember
+        m._state = m.SUSPENDED
+        m._suspended = True
+        m._entered = True
+        if self.tracer is not None:
+            self.tracer.command("suspend", m, m.SUSPENDED)
+            self.tracer.entry(m, m.SUSPENDED)
+        m.RINGLETS[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
+        self._dirty = True
+
+    # -- control commands -------------------------------------------------------------------
+    def _apply(self, m: Machine) -> bool:
+        """Apply m's pending command; True if the ringlet goes on (step 2), False if it ends."""
+        cmd, m._pending = m._pending, None
+        self._dirty = True
+        tr = self.tracer
+        if cmd == SUSPEND:
+            if not m._suspended:
+                hook = m.ON_SUSPEND[m._state]
+                if hook is not None:
+                    hook(m)
+                self.suspend_now(m, remember=m._state)
+            return False
+        if cmd == RESUME:
+            if not m._suspended:
+                return True  # nothing to resume: an ordinary ringlet
+            hook = m.ON_RESUME[m.SUSPENDED]
+            if hook is not None:
+                hook(m)
+            target = m.INITIAL if m._resume_to is None else m._resume_to
+            m._state, m._suspended, m._resume_to = target, False, None
+            hook = m.ON_RESUME[target]
+            if hook is not None:
+                hook(m)
+            m._entered = True
+            if tr is not None:
+                tr.command("resume", m, target)
+            return True
+        # RESTART
+        m._state, m._suspended, m._resume_to, m._entered = m.INITIAL, False, None, True
+        if tr is not None:
+            tr.command("restart", m, m.INITIAL)
+        return True
+
+    def _finish(self, m: Machine) -> None:
+        m._finished = True
+        m._suspended = False
+        self._dirty = True
+
+    # -- rounds ----------------------------------------------------------------------------
+    def _round(self, live: list[Machine]) -> bool:
+        fired = False
+        for m in live:
+            if m._pending is not None:
+                fired = True
+                if not self._apply(m):
+                    continue
+            elif m._suspended:
+                continue
+            r = m.RINGLETS[m._state](m)
+            if r is not None:
+                if r >= 0:
+                    fired = True
+                elif not self.keep_accepting:
+                    self._finish(m)
+        return fired
+
+    def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
+        fired = False
+        for m in live:
+            if m._pending is not None:
+                fired = True
+                if not self._apply(m):
+                    continue
+            elif m._suspended:
+                continue
+            s = m._state
+            if m._entered:
+                tr.entry(m, s)
+            r = m.RINGLETS[s](m)
+            if r is not None:
+                if r >= 0:
+                    fired = True
+                    tr.transition(m, s, m._state, r)
+                elif not self.keep_accepting:
+                    tr.finish(m)
+                    self._finish(m)
+        return fired
+
+    def interrupt(self, signum: int = signal.SIGINT) -> None:
+        """Ctrl-C / SIGTERM: `ros.ok()` turns false, rounds go on for the grace time; twice: stop."""
+        self._interrupts += 1
+        self._signal = signum if self._signal is None else self._signal
+        self.ctx.interrupted = True
+
+    def run(self, duration_ns: int | None = None, grace_ns: int = 1_000_000_000) -> RunResult:
+        """Run rounds until the run ends (SPEC §2); machine exceptions become an error report."""
+        prev = activate(self.ctx)
+        try:
+            return self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
+        except BrokenPipeError:
+            raise
+        except Exception as exc:
+            rep = report_for(exc)
+            if rep is None:
+                raise
+            if self.tracer is not None:
+                self.tracer.error(None, rep.as_dict())
+            return RunResult("error", self.rounds, self.clock.now, EXIT_ERROR, rep)
+        finally:
+            try:
+                for fn in self.ctx.at_end:
+                    fn()
+            finally:
+                if self.tracer is not None:
+                    self.tracer.close()
+                activate(prev)
+
+    def _run(self, end: int, grace: int) -> RunResult:
+        clock, ctx, tr = self.clock, self.ctx, self.tracer
+        hooks = ctx.between_rounds
+        live = self._live
+        while True:
+            now = clock.now
+            if self._dirty:
+                self._dirty = False
+                live = self._live = [m for m in self.machines if not m._finished]
+                if not live:
+                    return self._result("finished", EXIT_OK)
+                if all(m._suspended and m._pending is None for m in live):
+                    return self._result("suspended", EXIT_OK)
+            if now >= end:
+                return self._result("duration", EXIT_OK)
+            if self._interrupts:
+                status = EXIT_SIGNAL.get(self._signal or signal.SIGINT, 130)
+                if self._interrupts > 1:
+                    return self._result("killed", status)
+                if self._grace_end is None:
+                    self._grace_end = now + grace
+                elif now >= self._grace_end:
+                    return self._result("interrupted", status)
+            ctx.round = self.rounds
+            if tr is None:
+                fired = self._round(live)
+            else:
+                tr.round, tr.now = self.rounds, now
+                fired = self._traced_round(live, tr)
+            self.rounds += 1
+            clock.advance(fired)
+            for h in hooks:
+                h()
+
+    def _result(self, reason: str, status: int) -> RunResult:
+        return RunResult(reason, self.rounds, self.clock.now, status)
+
+
+@contextmanager
+def signals_handled(arr: Arrangement) -> Iterator[None]:
+    """Route SIGINT/SIGTERM to the arrangement for the duration of a run."""
+    def handler(signum: int, _frame: object) -> None:
+        arr.interrupt(signum)
+
+    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)

@@ -1,0 +1,56 @@
+"""Tracing: clfsm's `-v` lines and the `--trace FILE.jsonl` event log.
+
+Only the instrumented scheduler loop calls a tracer, so a run without `-v`/`--trace` pays
+nothing for this module.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import IO, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .machine import Machine
+
+
+class Tracer:
+    def __init__(self, verbose: IO[str] | None = None, jsonl: IO[str] | None = None) -> None:
+        self.verbose = verbose
+        self.jsonl = jsonl
+        self.round = 0
+        self.now = 0
+
+    def _event(self, kind: str, m: Machine, **fields: object) -> None:
+        if self.jsonl is not None:
+            rec = {"t": self.now / 1e9, "round": self.round, "event": kind,
+                   "machine": m.NAME, "id": m._id, **fields}
+            self.jsonl.write(json.dumps(rec) + "\n")
+
+    def entry(self, m: Machine, state: int) -> None:
+        """Before the ringlet that enters `state` (clfsm prints here with -v)."""
+        if self.verbose is not None:
+            line = "m%3d s%3d - %-20.20s - %s\n" % (m._id, state, m.NAME, m.STATES[state])  # noqa: UP031 (clfsm format)
+            self.verbose.write(line)
+            self.verbose.flush()
+        self._event("entry", m, state=m.STATES[state])
+
+    def transition(self, m: Machine, source: int, target: int, index: int) -> None:
+        self._event("transition", m, source=m.STATES[source], target=m.STATES[target], index=index)
+
+    def command(self, kind: str, m: Machine, state: int) -> None:
+        self._event(kind, m, state=m.STATES[state])
+
+    def finish(self, m: Machine) -> None:
+        self._event("finish", m, state=m.STATES[m._state])
+
+    def error(self, m: Machine | None, report: dict[str, object]) -> None:
+        if self.jsonl is not None:
+            rec = {"t": self.now / 1e9, "round": self.round, "event": "error", **report}
+            if m is not None:
+                rec.setdefault("machine", m.NAME)
+                rec.setdefault("id", m._id)
+            self.jsonl.write(json.dumps(rec) + "\n")
+
+    def close(self) -> None:
+        if self.jsonl is not None:
+            self.jsonl.flush()

@@ -1,0 +1,145 @@
+"""Resolve what `llfsm run` is given into machine classes.
+
+A target is a machine directory (compiled into a cache, never into the source tree), a built
+module (`build/ping.py`), or `PKG/NAME` of a package installed by colcon (found through
+AMENT_PREFIX_PATH).  The compiler is imported only when a cached module is missing or stale,
+so a warm start pays for hashing the machine's files and nothing more.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from .diagnostics import Diagnostic
+from .fingerprint import machine_fingerprint, module_fingerprint
+from .runtime.errors import ErrorReport, report_for
+from .runtime.machine import Machine
+
+MACHINE_SUFFIX = ".machine"
+
+
+class TargetError(Exception):
+    """A target that cannot be found or is not something llfsm can run (exit status 2)."""
+
+
+class InvalidMachine(Exception):
+    """A machine directory that fails validation (exit status 2), with its diagnostics."""
+
+    def __init__(self, diagnostics: list[Diagnostic]) -> None:
+        super().__init__(f"{len(diagnostics)} problem(s)")
+        self.diagnostics = diagnostics
+
+
+class MachineLoadError(Exception):
+    """Machine code raised while its module was imported (a bad include): exit status 1."""
+
+    def __init__(self, report: ErrorReport) -> None:
+        super().__init__(report.exception)
+        self.report = report
+
+
+def cache_root() -> Path:
+    env = os.environ.get("LLFSM_CACHE_DIR")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "llfsm"
+
+
+def _writable(p: Path) -> Path:
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        if os.access(p, os.W_OK):
+            return p
+    except OSError:
+        pass
+    return Path(tempfile.gettempdir()) / f"llfsm-cache-{os.getuid()}"
+
+
+def compiled_module_for(machine_dir: Path) -> Path:
+    """The cached module of a machine directory, compiled first if missing or stale."""
+    key = hashlib.sha256(os.fsencode(machine_dir.resolve())).hexdigest()[:16]
+    out = _writable(cache_root() / key)
+    name = machine_dir.name[: -len(MACHINE_SUFFIX)] if machine_dir.name.endswith(MACHINE_SUFFIX) else machine_dir.name
+    module = out / f"{name}.py"
+    try:
+        fresh = module_fingerprint(module) == machine_fingerprint(machine_dir)
+    except OSError:
+        fresh = False
+    if fresh:
+        return module
+    from .compiler.build import build_machine  # only now: the compiler is not needed to run
+
+    outcome = build_machine(machine_dir, out)
+    if outcome.status == "failed" or outcome.module is None:
+        raise InvalidMachine(outcome.diagnostics)
+    return outcome.module
+
+
+def find_installed(spec: str) -> Path:
+    """`PKG/NAME` -> the machine installed by colcon under some prefix of AMENT_PREFIX_PATH."""
+    pkg, _, name = spec.partition("/")
+    prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    for prefix in prefixes:
+        share = Path(prefix) / "share" / pkg
+        for candidate in (share / "llfsm" / f"{name}.py", share / "machine" / f"{name}{MACHINE_SUFFIX}"):
+            if candidate.exists():
+                return candidate
+    where = "AMENT_PREFIX_PATH is not set: did you `source install/setup.bash`?" if not prefixes else (
+        f"searched {', '.join(prefixes)}")
+    raise TargetError(f"{spec}: no installed machine {name!r} in package {pkg!r} ({where})")
+
+
+def resolve(target: str) -> Path:
+    """The module file to load for a target."""
+    p = Path(target)
+    if p.is_dir():
+        if p.name.endswith(MACHINE_SUFFIX) or (p / "machine.yaml").exists():
+            return compiled_module_for(p)
+        raise TargetError(f"{target}: a directory, but not a NAME.machine directory")
+    if p.is_file():
+        if p.suffix == ".py":
+            return p
+        raise TargetError(f"{target}: not a machine directory or a built module (.py)")
+    if target.count("/") == 1 and not target.startswith((".", "/")) and not target.endswith(".py"):
+        found = find_installed(target)
+        return compiled_module_for(found) if found.is_dir() else found
+    raise TargetError(f"{target}: no such machine directory, module or installed PKG/NAME")
+
+
+def load_class(module_path: Path) -> type[Machine]:
+    """Import a built module and return its machine class."""
+    key = hashlib.sha256(os.fsencode(module_path.resolve())).hexdigest()[:10]
+    mod_name = f"llfsm_machine_{module_path.stem}_{key}"
+    spec = importlib.util.spec_from_file_location(mod_name, module_path)
+    if spec is None or spec.loader is None:
+        raise TargetError(f"{module_path}: cannot be imported")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[mod_name] = module
+    try:
+        spec.loader.exec_module(module)
+    except SyntaxError as e:
+        sys.modules.pop(mod_name, None)
+        raise TargetError(f"{module_path}:{e.lineno}: not a valid module: {e.msg}") from None
+    except Exception as exc:
+        sys.modules.pop(mod_name, None)
+        rep = report_for(exc)
+        if rep is None:
+            raise TargetError(f"{module_path}: import failed: {type(exc).__name__}: {exc}") from None
+        raise MachineLoadError(rep) from None
+    classes = [
+        v for v in vars(module).values()
+        if isinstance(v, type) and issubclass(v, Machine) and v is not Machine and v.__module__ == mod_name
+    ]
+    if len(classes) != 1:
+        raise TargetError(f"{module_path}: not an llfsm machine module (found {len(classes)} machine classes)")
+    return classes[0]
+
+
+def load(target: str) -> type[Machine]:
+    return load_class(resolve(target))

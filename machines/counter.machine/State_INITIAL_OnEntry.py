@@ -1,0 +1,1 @@
+print(f"{machine_name()} starts, counting to {limit}")

@@ -1,0 +1,2 @@
+count: int = 0  # how many times COUNT was entered
+limit: int = 5
