@@ -22,8 +22,21 @@ from .runtime.machine import MACROS, RESERVED
 
 BUILTINS = frozenset(dir(builtins))
 #: Folders never searched for machines: VCS data, caches, and colcon's own output.
-SKIP_DIRS = frozenset({".git", ".hg", ".svn", "__pycache__", "node_modules", ".venv", "venv",
-                       ".tox", ".mypy_cache", ".ruff_cache", ".pytest_cache"})
+SKIP_DIRS = frozenset(
+    {
+        ".git",
+        ".hg",
+        ".svn",
+        "__pycache__",
+        "node_modules",
+        ".venv",
+        "venv",
+        ".tox",
+        ".mypy_cache",
+        ".ruff_cache",
+        ".pytest_cache",
+    }
+)
 COLCON_OUTPUT = frozenset({"build", "install", "log"})
 GENERATED_PREFIXES = ("ringlet_", "on_exit_", "on_suspend_", "on_resume_")
 
@@ -108,11 +121,17 @@ class _Checker:
     def run(self) -> None:
         name = machine_name_of(self.path)
         if not self.path.name.endswith(MACHINE_SUFFIX):
-            self.add("LF010", "machine.yaml", 1, 1,
-                     f"the directory {self.path.name!r} must be named NAME.machine (NAME is the machine's name)")
+            self.add(
+                "LF010",
+                "machine.yaml",
+                1,
+                1,
+                f"the directory {self.path.name!r} must be named NAME.machine (NAME is the machine's name)",
+            )
         elif not is_valid_name(name):
-            self.add("LF010", "machine.yaml", 1, 1,
-                     f"machine name {name!r} must be a Python identifier and not a keyword")
+            self.add(
+                "LF010", "machine.yaml", 1, 1, f"machine name {name!r} must be a Python identifier and not a keyword"
+            )
         m = self.r.machine
         if m is None:
             return
@@ -122,7 +141,9 @@ class _Checker:
         for s in m.states:
             self.code_of(m, s)
         for orphan in self.r.read.orphans:
-            self.add("LF101", orphan, 1, 1, f"{orphan} belongs to no state or transition of machine.yaml; it is ignored")
+            self.add(
+                "LF101", orphan, 1, 1, f"{orphan} belongs to no state or transition of machine.yaml; it is ignored"
+            )
         self.reachability(m)
 
     def states(self, m: Machine) -> None:
@@ -150,8 +171,13 @@ class _Checker:
         fname = f"State_{s.name}_Transition_{index}.expr"
         if code is None:
             if fname not in self.r.read.trees and not any(d.file.endswith(fname) for d in self.r.diagnostics):
-                self.add("LF023", "machine.yaml", s.transitions[index].loc.line, s.transitions[index].loc.column,
-                         f"transition {index} of {s.name} has no guard file {fname}")
+                self.add(
+                    "LF023",
+                    "machine.yaml",
+                    s.transitions[index].loc.line,
+                    s.transitions[index].loc.column,
+                    f"transition {index} of {s.name} has no guard file {fname}",
+                )
             return
         tree = self.r.read.trees.get(fname)
         if tree is None:
@@ -169,9 +195,14 @@ class _Checker:
                 self.add("LF103", fname, 1, 1, f"guard {fname} is always false: transition {index} never fires")
             else:
                 for later in s.transitions[index + 1 :]:
-                    self.add("LF104", "machine.yaml", later.loc.line, later.loc.column,
-                             f"transition {later.index} of {s.name} is never evaluated: "
-                             f"transition {index} before it is always true")
+                    self.add(
+                        "LF104",
+                        "machine.yaml",
+                        later.loc.line,
+                        later.loc.column,
+                        f"transition {later.index} of {s.name} is never evaluated: "
+                        f"transition {index} before it is always true",
+                    )
 
     # -- python code ------------------------------------------------------------------------
     def includes(self, m: Machine) -> None:
@@ -181,13 +212,25 @@ class _Checker:
         for stmt in tree.body:
             col = node_col(m.includes.text, stmt)
             if not isinstance(stmt, ast.Import | ast.ImportFrom):
-                self.add("LF031", "Includes.py", stmt.lineno, col,
-                         f"Includes.py may hold only imports, not a `{type(stmt).__name__.lower()}` statement")
+                self.add(
+                    "LF031",
+                    "Includes.py",
+                    stmt.lineno,
+                    col,
+                    f"Includes.py may hold only imports, not a `{type(stmt).__name__.lower()}` statement",
+                )
             elif isinstance(stmt, ast.ImportFrom) and stmt.module == "__future__":
-                self.add("LF031", "Includes.py", stmt.lineno, col, "`from __future__` imports are added by llfsm itself")
+                self.add(
+                    "LF031", "Includes.py", stmt.lineno, col, "`from __future__` imports are added by llfsm itself"
+                )
             elif isinstance(stmt, ast.ImportFrom) and stmt.level:
-                self.add("LF031", "Includes.py", stmt.lineno, col,
-                         "relative imports cannot work in a compiled machine; import by absolute name")
+                self.add(
+                    "LF031",
+                    "Includes.py",
+                    stmt.lineno,
+                    col,
+                    "relative imports cannot work in a compiled machine; import by absolute name",
+                )
 
     def imported_names(self) -> set[str] | None:
         """Names Includes.py binds; None if it star-imports (then any name may exist)."""
@@ -213,8 +256,12 @@ class _Checker:
                 self.at("LF035", v.loc, f"machine variable {v.name} is declared twice")
             machine_vars[v.name] = v
             if v.name in state_attrs:
-                self.at("LF013", v.loc, f"machine variable {v.name} collides with variable "
-                        f"{v.name.split('__', 1)[1]} of state {state_attrs[v.name]}; rename one")
+                self.at(
+                    "LF013",
+                    v.loc,
+                    f"machine variable {v.name} collides with variable "
+                    f"{v.name.split('__', 1)[1]} of state {state_attrs[v.name]}; rename one",
+                )
         for s in m.states:
             seen: set[str] = set()
             for v in s.variables:
@@ -223,7 +270,9 @@ class _Checker:
                     self.at("LF035", v.loc, f"variable {v.name} of state {s.name} is declared twice")
                 seen.add(v.name)
                 if v.name in machine_vars:
-                    self.at("LF033", v.loc, f"state variable {v.name} of {s.name} shadows the machine variable {v.name}")
+                    self.at(
+                        "LF033", v.loc, f"state variable {v.name} of {s.name} shadows the machine variable {v.name}"
+                    )
         # initialisers are code too: machine-level code sees only machine variables
         for fname, tree in self.r.read.trees.items():
             if fname == "Variables.py" or fname.endswith("_Variables.py"):
@@ -231,8 +280,12 @@ class _Checker:
                 self.no_escape(text, None, tree, top_only=False)
 
     def reserved(self, name: str, loc: object, generated: set[str]) -> None:
-        if name in RESERVED or name in MACROS or name.startswith("_llfsm") or name in generated or (
-            name.startswith("__") and name.endswith("__")
+        if (
+            name in RESERVED
+            or name in MACROS
+            or name.startswith("_llfsm")
+            or name in generated
+            or (name.startswith("__") and name.endswith("__"))
         ):
             what = "an llfsm macro" if name in MACROS else "reserved by llfsm"
             self.at("LF013", loc, f"variable name {name!r} is {what}; choose another name")
@@ -258,17 +311,32 @@ class _Checker:
 
     def bad_binding(self, code: Code, b: BadBinding) -> None:
         kind = "macro" if b.name in MACROS else "variable"
-        self.add("LF038", code.file, b.line, _col(code.text, b.line, b.col),
-                 f"{b.how} cannot bind the machine {kind} {b.name}; use a plain assignment or another name")
+        self.add(
+            "LF038",
+            code.file,
+            b.line,
+            _col(code.text, b.line, b.col),
+            f"{b.how} cannot bind the machine {kind} {b.name}; use a plain assignment or another name",
+        )
 
     def assigned_reserved(self, code: Code, tree: ast.AST) -> None:
         for n in ast.walk(tree):
             if (isinstance(n, ast.Name) and n.id == "self") or (isinstance(n, ast.Name) and n.id.startswith("_llfsm")):
-                self.add("LF013", code.file, n.lineno, node_col(code.text, n),
-                         f"`{n.id}` is reserved by llfsm in machine code")
+                self.add(
+                    "LF013",
+                    code.file,
+                    n.lineno,
+                    node_col(code.text, n),
+                    f"`{n.id}` is reserved by llfsm in machine code",
+                )
             elif isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store | ast.Del) and n.id in MACROS:
-                self.add("LF013", code.file, n.lineno, node_col(code.text, n),
-                         f"`{n.id}` is an llfsm macro and cannot be assigned")
+                self.add(
+                    "LF013",
+                    code.file,
+                    n.lineno,
+                    node_col(code.text, n),
+                    f"`{n.id}` is an llfsm macro and cannot be assigned",
+                )
 
     def no_escape(self, fname: str, text: str | None, tree: ast.AST, top_only: bool) -> None:
         """global/nonlocal anywhere; return/yield/await outside a nested function."""
@@ -281,13 +349,24 @@ class _Checker:
             for child in ast.iter_child_nodes(node):
                 if isinstance(child, ast.Global | ast.Nonlocal):
                     kw = "global" if isinstance(child, ast.Global) else "nonlocal"
-                    self.add("LF034", fname, child.lineno, col(child),
-                             f"`{kw}` is not allowed in machine code: machine variables are used by their bare names")
+                    self.add(
+                        "LF034",
+                        fname,
+                        child.lineno,
+                        col(child),
+                        f"`{kw}` is not allowed in machine code: machine variables are used by their bare names",
+                    )
                 elif not nested and isinstance(child, ast.Return | ast.Yield | ast.YieldFrom | ast.Await):
-                    kw = {ast.Return: "return", ast.Yield: "yield", ast.YieldFrom: "yield", ast.Await: "await"}[type(child)]
-                    self.add("LF036", fname, child.lineno, col(child),
-                             f"`{kw}` is not allowed at the top level of {fname}: a section runs inside the "
-                             "state's ringlet")
+                    kw = {ast.Return: "return", ast.Yield: "yield", ast.YieldFrom: "yield", ast.Await: "await"}[
+                        type(child)
+                    ]
+                    self.add(
+                        "LF036",
+                        fname,
+                        child.lineno,
+                        col(child),
+                        f"`{kw}` is not allowed at the top level of {fname}: a section runs inside the state's ringlet",
+                    )
                 inner = nested or isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda | ast.ClassDef)
                 walk(child, inner)
 
@@ -297,12 +376,23 @@ class _Checker:
         bound = {name for name, _ in assigned_names(tree)}
         reported: set[str] = set()
         for n in ast.walk(tree):
-            if (isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load) and n.id not in known
-                    and n.id not in bound and n.id not in BUILTINS and n.id not in reported):
+            if (
+                isinstance(n, ast.Name)
+                and isinstance(n.ctx, ast.Load)
+                and n.id not in known
+                and n.id not in bound
+                and n.id not in BUILTINS
+                and n.id not in reported
+            ):
                 reported.add(n.id)
-                self.add("LF105", code.file, n.lineno, node_col(code.text, n),
-                         f"name {n.id!r} is not a variable of this machine or state, an import, a builtin "
-                         "or a macro, and is not assigned in this file")
+                self.add(
+                    "LF105",
+                    code.file,
+                    n.lineno,
+                    node_col(code.text, n),
+                    f"name {n.id!r} is not a variable of this machine or state, an import, a builtin "
+                    "or a macro, and is not assigned in this file",
+                )
 
     # -- graph ---------------------------------------------------------------------------------
     def reachability(self, m: Machine) -> None:

@@ -66,8 +66,14 @@ def _existing(paths: tuple[str, ...]) -> list[Path]:
 
 @cli.command()
 @click.argument("paths", nargs=-1, required=True)
-@click.option("--format", "fmt", type=click.Choice(["text", "json", "github", "sarif"]), default="text",
-              show_default=True, help="Output format of the diagnostics.")
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["text", "json", "github", "sarif"]),
+    default="text",
+    show_default=True,
+    help="Output format of the diagnostics.",
+)
 @click.option("--strict", is_flag=True, help="Warnings fail the check too (exit 1).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the report to FILE instead of stdout.")
 @click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
@@ -104,8 +110,15 @@ def check(paths: tuple[str, ...], fmt: str, strict: bool, output: str | None, qu
 
 @cli.command()
 @click.argument("paths", nargs=-1)
-@click.option("-o", "--output", "out", type=click.Path(file_okay=False), default="build/llfsm", show_default=True,
-              help="Folder that receives NAME.py for each machine.")
+@click.option(
+    "-o",
+    "--output",
+    "out",
+    type=click.Path(file_okay=False),
+    default="build/llfsm",
+    show_default=True,
+    help="Folder that receives NAME.py for each machine.",
+)
 @click.option("--force", is_flag=True, help="Rewrite modules even when they are up to date.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
 def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
@@ -145,20 +158,47 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
 
 @cli.command()
 @click.argument("targets", nargs=-1, required=True)
-@click.option("-v", "--verbose", is_flag=True, help="clfsm's trace on stderr: a line before each ringlet that enters a state.")
+@click.option(
+    "-v", "--verbose", is_flag=True, help="clfsm's trace on stderr: a line before each ringlet that enters a state."
+)
 @click.option("--trace", "trace_file", type=click.Path(dir_okay=False), help="Write every event to FILE.jsonl.")
-@click.option("--clock", type=click.Choice(["wall", "sim"]), default="wall", show_default=True,
-              help="wall: real time; sim: virtual time, reproducible byte for byte.")
+@click.option(
+    "--clock",
+    type=click.Choice(["wall", "sim"]),
+    default="wall",
+    show_default=True,
+    help="wall: real time; sim: virtual time, reproducible byte for byte.",
+)
 @click.option("--period", type=DURATION, help="Round period (time-triggered); sim default 1ms.")
-@click.option("--idle", type=DURATION, default="10ms", show_default=True,
-              help="Wall clock: sleep after a round in which no transition fired.")
+@click.option(
+    "--idle",
+    type=DURATION,
+    default="10ms",
+    show_default=True,
+    help="Wall clock: sleep after a round in which no transition fired.",
+)
 @click.option("--duration", type=DURATION, help="End the run after this much run time.")
-@click.option("--grace", type=DURATION, default="1s", show_default=True,
-              help="After Ctrl-C/SIGTERM, keep running rounds this long so machines can reach END.")
+@click.option(
+    "--grace",
+    type=DURATION,
+    default="1s",
+    show_default=True,
+    help="After Ctrl-C/SIGTERM, keep running rounds this long so machines can reach END.",
+)
 @click.option("--suspended", "suspended", multiple=True, metavar="MACHINE", help="Load MACHINE suspended.")
 @click.option("--keep-accepting", is_flag=True, help="Keep machines loaded in accepting states.")
-def run(targets: tuple[str, ...], verbose: bool, trace_file: str | None, clock: str, period: int | None,
-        idle: int, duration: int | None, grace: int, suspended: tuple[str, ...], keep_accepting: bool) -> None:
+def run(
+    targets: tuple[str, ...],
+    verbose: bool,
+    trace_file: str | None,
+    clock: str,
+    period: int | None,
+    idle: int,
+    duration: int | None,
+    grace: int,
+    suspended: tuple[str, ...],
+    keep_accepting: bool,
+) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
     A TARGET is a NAME.machine directory (compiled into a cache), a built module, or PKG/NAME
@@ -194,8 +234,9 @@ def run(targets: tuple[str, ...], verbose: bool, trace_file: str | None, clock: 
     tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None
     try:
         try:
-            arr = Arrangement(classes, clock=the_clock, keep_accepting=keep_accepting, tracer=tracer,
-                              suspended=suspended)
+            arr = Arrangement(
+                classes, clock=the_clock, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended
+            )
         except (UnknownMachineError, ValueError) as e:
             fail(str(e).strip("'\""))
         except Exception as exc:  # a variable initialiser raised: machine code
@@ -206,6 +247,10 @@ def run(targets: tuple[str, ...], verbose: bool, trace_file: str | None, clock: 
                 raise
             click.echo(rep.format(), nl=False, err=True)
             sys.exit(EXIT_ERRORS)
+        arr.on_interrupt = lambda grace: click.echo(
+            f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish (interrupt again to stop now)",
+            err=True,
+        )
         with signals_handled(arr):
             result = arr.run(duration, grace)
     finally:
@@ -227,8 +272,15 @@ def new() -> None:
 
 @new.command("machine")
 @click.argument("name")
-@click.option("-d", "--dir", "directory", type=click.Path(file_okay=False), default=".", show_default=True,
-              help="Folder to create NAME.machine in.")
+@click.option(
+    "-d",
+    "--dir",
+    "directory",
+    type=click.Path(file_okay=False),
+    default=".",
+    show_default=True,
+    help="Folder to create NAME.machine in.",
+)
 @click.option("--description", default=None, help="One line saying what the machine does.")
 def new_machine(name: str, directory: str, description: str | None) -> None:
     """A valid machine skeleton: INITIAL -> END."""
@@ -246,8 +298,9 @@ def new_machine(name: str, directory: str, description: str | None) -> None:
 
 @cli.command()
 @click.argument("path", type=click.Path())
-@click.option("--format", "fmt", type=click.Choice(["mermaid", "dot", "svg", "png"]), default="mermaid",
-              show_default=True)
+@click.option(
+    "--format", "fmt", type=click.Choice(["mermaid", "dot", "svg", "png"]), default="mermaid", show_default=True
+)
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE (needed for png).")
 def graph(path: str, fmt: str, output: str | None) -> None:
     """The machine's diagram, guards on the arrows."""
@@ -259,14 +312,19 @@ def graph(path: str, fmt: str, output: str | None) -> None:
     if not p.is_dir():
         fail(f"{path}: not a machine directory")
     result = check_machine(p)
-    blocking = [d for d in result.diagnostics if d.severity is Severity.ERROR and d.code in {
-        "LF001", "LF002", "LF003", "LF004", "LF005"}]
+    blocking = [
+        d
+        for d in result.diagnostics
+        if d.severity is Severity.ERROR and d.code in {"LF001", "LF002", "LF003", "LF004", "LF005"}
+    ]
     if result.machine is None or blocking:
         click.echo(format_text(result.diagnostics), nl=False, err=True)
         sys.exit(EXIT_ERRORS)
     m = result.machine
     try:
-        data: bytes = mermaid(m).encode() if fmt == "mermaid" else dot(m).encode() if fmt == "dot" else render_image(m, fmt)
+        data: bytes = (
+            mermaid(m).encode() if fmt == "mermaid" else dot(m).encode() if fmt == "dot" else render_image(m, fmt)
+        )
     except GraphError as e:
         fail(str(e), EXIT_ERRORS)
     if output:

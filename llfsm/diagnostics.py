@@ -64,7 +64,12 @@ RULES: dict[str, Rule] = {
         _r("LF103", W, "guard-always-false", "A guard is the constant False: the transition never fires."),
         _r("LF104", W, "unreachable-transition", "An earlier guard of the state is the constant True."),
         _r("LF105", W, "undefined-name", "A name is neither a variable, an import, a builtin, a macro nor assigned."),
-        _r("LF106", W, "undeclared-dependency", "Machine code imports messages of a package package.xml does not declare."),
+        _r(
+            "LF106",
+            W,
+            "undeclared-dependency",
+            "Machine code imports messages of a package package.xml does not declare.",
+        ),
     ]
 }
 
@@ -111,9 +116,7 @@ FORMATS = ("text", "json", "github", "sarif")
 
 
 def format_text(diags: Iterable[Diagnostic]) -> str:
-    return "".join(
-        f"{d.file}:{d.line}:{d.column}: {d.code} {d.severity}: {d.message}\n" for d in diags
-    )
+    return "".join(f"{d.file}:{d.line}:{d.column}: {d.code} {d.severity}: {d.message}\n" for d in diags)
 
 
 def format_json(diags: Iterable[Diagnostic]) -> str:

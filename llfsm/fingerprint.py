@@ -50,7 +50,7 @@ def module_fingerprint(module: Path) -> str | None:
             for _ in range(5):
                 line = f.readline()
                 if line.startswith(HEADER_KEY):
-                    return line[len(HEADER_KEY):].strip()
+                    return line[len(HEADER_KEY) :].strip()
     except OSError:
         return None
     return None

@@ -41,9 +41,14 @@ def _dot_str(text: str) -> str:
 
 
 def dot(m: Machine) -> str:
-    out = [f"digraph {_dot_str(m.name)} {{", "    rankdir=LR;", '    node [shape=box, style=rounded, fontname="Helvetica"];',
-           '    edge [fontname="Helvetica", fontsize=10];', '    __start [shape=point, label=""];',
-           f"    __start -> {_dot_str(m.initial)};"]
+    out = [
+        f"digraph {_dot_str(m.name)} {{",
+        "    rankdir=LR;",
+        '    node [shape=box, style=rounded, fontname="Helvetica"];',
+        '    edge [fontname="Helvetica", fontsize=10];',
+        '    __start [shape=point, label=""];',
+        f"    __start -> {_dot_str(m.initial)};",
+    ]
     for s in m.states:
         if s.implicit:
             continue
@@ -61,8 +66,10 @@ def render_image(m: Machine, fmt: str) -> bytes:
     """SVG or PNG through Graphviz's `dot`, when it is installed."""
     exe = shutil.which("dot")
     if exe is None:
-        raise GraphError(f"--format {fmt} needs Graphviz's `dot` program, which is not installed "
-                         "(e.g. `apt install graphviz`); --format mermaid and --format dot work without it")
+        raise GraphError(
+            f"--format {fmt} needs Graphviz's `dot` program, which is not installed "
+            "(e.g. `apt install graphviz`); --format mermaid and --format dot work without it"
+        )
     proc = subprocess.run([exe, f"-T{fmt}"], input=dot(m).encode(), capture_output=True, timeout=60)
     if proc.returncode != 0:
         raise GraphError(f"dot failed: {proc.stderr.decode(errors='replace').strip()}")

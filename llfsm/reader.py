@@ -72,7 +72,9 @@ class _Reader:
             if p.is_symlink():
                 target = p.resolve()
                 if not target.is_relative_to(self.real):
-                    self.report("LF037", name, 1, 1, f"{name} is a symlink leading out of the machine directory; refused")
+                    self.report(
+                        "LF037", name, 1, 1, f"{name} is a symlink leading out of the machine directory; refused"
+                    )
                     return None
             with open(p, "rb") as f:
                 data = f.read(MAX_FILE_BYTES + 1)
@@ -120,11 +122,7 @@ class _Reader:
             return [], None
         out: list[Variable] = []
         for stmt in tree.body:
-            if (
-                isinstance(stmt, ast.AnnAssign)
-                and isinstance(stmt.target, ast.Name)
-                and stmt.simple
-            ):
+            if isinstance(stmt, ast.AnnAssign) and isinstance(stmt.target, ast.Name) and stmt.simple:
                 ann = ast.get_source_segment(text, stmt.annotation) or ast.unparse(stmt.annotation)
                 init = None
                 if stmt.value is not None:
@@ -140,7 +138,10 @@ class _Reader:
             else:
                 what = _describe(stmt)
                 self.report(
-                    "LF032", name, stmt.lineno, _node_col(text, stmt),
+                    "LF032",
+                    name,
+                    stmt.lineno,
+                    _node_col(text, stmt),
                     f"{what} in {name}: only annotated assignments such as `count: int = 0` are allowed",
                 )
         return out, self.code(name, text)
@@ -153,15 +154,21 @@ class _Reader:
             for ev in yaml.parse(text, Loader=yaml.SafeLoader):
                 if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
                     m = ev.start_mark
-                    self.report("LF005", name, m.line + 1, m.column + 1,
-                                "anchors and aliases are not allowed in machine.yaml")
+                    self.report(
+                        "LF005", name, m.line + 1, m.column + 1, "anchors and aliases are not allowed in machine.yaml"
+                    )
                     return None
                 if isinstance(ev, yaml.CollectionStartEvent):
                     depth += 1
                     if depth > MAX_YAML_DEPTH:
                         m = ev.start_mark
-                        self.report("LF004", name, m.line + 1, m.column + 1,
-                                    f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels")
+                        self.report(
+                            "LF004",
+                            name,
+                            m.line + 1,
+                            m.column + 1,
+                            f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels",
+                        )
                         return None
                 elif isinstance(ev, yaml.CollectionEndEvent):
                     depth -= 1
@@ -273,7 +280,9 @@ class _Reader:
         if suspended is None:
             suspended = IMPLICIT_SUSPENDED
             if IMPLICIT_SUSPENDED not in names:
-                states.append(State(name=IMPLICIT_SUSPENDED, loc=Loc(file="machine.yaml"), implicit=True))
+                # not declared, but its State_SUSPENDED_* files (OnEntry, OnResume...) still count
+                implicit = self.state(IMPLICIT_SUSPENDED, Loc(file="machine.yaml"), [], entry_set)
+                states.append(implicit.model_copy(update={"implicit": True}))
         description = None
         if "description" in top:
             d = top["description"]
@@ -338,8 +347,14 @@ class _Reader:
                     guard = self.code(gname, text)
                     self.parse(gname, text)
             transitions.append(Transition(index=i, target=target, guard=guard, loc=tloc))
-        return State(name=name, transitions=transitions, sections=sections, variables=variables,
-                     variables_file=variables_file, loc=loc)
+        return State(
+            name=name,
+            transitions=transitions,
+            sections=sections,
+            variables=variables,
+            variables_file=variables_file,
+            loc=loc,
+        )
 
 
 def read_machine(path: str | Path) -> ReadResult:

@@ -17,8 +17,12 @@ class ScaffoldError(Exception):
 
 
 def _env(folder: str) -> jinja2.Environment:
-    return jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES / folder)), keep_trailing_newline=True,
-                              undefined=jinja2.StrictUndefined, autoescape=False)
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(TEMPLATES / folder)),
+        keep_trailing_newline=True,
+        undefined=jinja2.StrictUndefined,
+        autoescape=False,
+    )
 
 
 def _yaml_text(text: str) -> str:
@@ -31,8 +35,10 @@ def _yaml_text(text: str) -> str:
 def create_machine(directory: Path, name: str, description: str | None = None) -> Path:
     """Write NAME.machine with a valid INITIAL -> END skeleton; never overwrites anything."""
     if not is_valid_name(name):
-        raise ScaffoldError(f"{name!r} is not a valid machine name: use letters, digits and _, not starting "
-                            "with a digit, and not a Python keyword")
+        raise ScaffoldError(
+            f"{name!r} is not a valid machine name: use letters, digits and _, not starting "
+            "with a digit, and not a Python keyword"
+        )
     target = directory / f"{name}.machine"
     if target.exists():
         raise ScaffoldError(f"{target} already exists; nothing was written")
@@ -40,7 +46,8 @@ def create_machine(directory: Path, name: str, description: str | None = None) -
     files = {}
     for tpl in env.list_templates():
         files[tpl.removesuffix(".j2")] = env.get_template(tpl).render(
-            name=name, description=_yaml_text(description or f"The machine {name}."))
+            name=name, description=_yaml_text(description or f"The machine {name}.")
+        )
     target.mkdir(parents=True)
     for fname, text in files.items():
         write_atomic(target / fname, text)

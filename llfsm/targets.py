@@ -90,8 +90,11 @@ def find_installed(spec: str) -> Path:
         for candidate in (share / "llfsm" / f"{name}.py", share / "machine" / f"{name}{MACHINE_SUFFIX}"):
             if candidate.exists():
                 return candidate
-    where = "AMENT_PREFIX_PATH is not set: did you `source install/setup.bash`?" if not prefixes else (
-        f"searched {', '.join(prefixes)}")
+    where = (
+        "AMENT_PREFIX_PATH is not set: did you `source install/setup.bash`?"
+        if not prefixes
+        else (f"searched {', '.join(prefixes)}")
+    )
     raise TargetError(f"{spec}: no installed machine {name!r} in package {pkg!r} ({where})")
 
 
@@ -133,7 +136,8 @@ def load_class(module_path: Path) -> type[Machine]:
             raise TargetError(f"{module_path}: import failed: {type(exc).__name__}: {exc}") from None
         raise MachineLoadError(rep) from None
     classes = [
-        v for v in vars(module).values()
+        v
+        for v in vars(module).values()
         if isinstance(v, type) and issubclass(v, Machine) and v is not Machine and v.__module__ == mod_name
     ]
     if len(classes) != 1:

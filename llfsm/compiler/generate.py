@@ -38,7 +38,9 @@ def _string_continuation_lines(text: str) -> set[int]:
     out: set[int] = set()
     try:
         for tok in tokenize.generate_tokens(io.StringIO(text).readline):
-            if (tok.type == tokenize.STRING and tok.end[0] > tok.start[0]) or (tok.type == getattr(tokenize, "FSTRING_MIDDLE", -1) and tok.end[0] > tok.start[0]):
+            if (tok.type == tokenize.STRING and tok.end[0] > tok.start[0]) or (
+                tok.type == getattr(tokenize, "FSTRING_MIDDLE", -1) and tok.end[0] > tok.start[0]
+            ):
                 out.update(range(tok.start[0] + 1, tok.end[0] + 1))
     except (tokenize.TokenError, SyntaxError):
         pass
@@ -49,9 +51,7 @@ def indent_code(text: str, width: int) -> str:
     prefix = " " * width
     keep = _string_continuation_lines(text)
     lines = text.split("\n")
-    return "\n".join(
-        line if (i + 1 in keep or not line.strip()) else prefix + line for i, line in enumerate(lines)
-    )
+    return "\n".join(line if (i + 1 in keep or not line.strip()) else prefix + line for i, line in enumerate(lines))
 
 
 def _py(value: object) -> str:
@@ -111,6 +111,15 @@ class GuardView:
     multiline: bool
     to_suspend: bool
 
+    @property
+    def first_line(self) -> str:
+        return self.text.split("\n", 1)[0]
+
+    @property
+    def other_lines(self) -> str:
+        """Lines after the first: kept line for line so run-time errors map to the right line."""
+        return self.text.split("\n", 1)[1] if "\n" in self.text else ""
+
 
 @dataclass
 class StateView:
@@ -146,13 +155,12 @@ def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Ed
     return Block(pointer=f"{code.file}:{first + 1}", text=body)
 
 
-def _guard_view(code: Code, tree: ast.Module, mapping: dict[str, str], index: int, target: int,
-                target_name: str, to_suspend: bool) -> GuardView:
+def _guard_view(
+    code: Code, tree: ast.Module, mapping: dict[str, str], index: int, target: int, target_name: str, to_suspend: bool
+) -> GuardView:
     block = _block(code, tree, mapping)
     assert block is not None  # the checker guarantees one expression
-    has_comment = any(
-        t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline)
-    )
+    has_comment = any(t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline))
     multiline = "\n" in block.text or has_comment
     return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend)
 
@@ -162,8 +170,9 @@ def _variables_block(code: Code, tree: ast.Module, mapping: dict[str, str]) -> B
     extra: list[Edit] = []
     for stmt in tree.body:
         if isinstance(stmt, ast.AnnAssign) and stmt.value is None:
-            extra.append(Edit(stmt.end_lineno or stmt.lineno, stmt.end_col_offset or 0,
-                              stmt.end_col_offset or 0, " = None"))
+            extra.append(
+                Edit(stmt.end_lineno or stmt.lineno, stmt.end_col_offset or 0, stmt.end_col_offset or 0, " = None")
+            )
     return _block(code, tree, mapping, extra)
 
 
@@ -206,8 +215,11 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             sv.doc = f"Ringlet of {s.name} (transitions to {targets})."
         for t in s.transitions:
             assert t.guard is not None
-            sv.guards.append(_guard_view(t.guard, trees[t.guard.file], mapping, t.index, index[t.target],
-                                         t.target, index[t.target] == susp))
+            sv.guards.append(
+                _guard_view(
+                    t.guard, trees[t.guard.file], mapping, t.index, index[t.target], t.target, index[t.target] == susp
+                )
+            )
         if sv.exit is not None:
             sv.hooks.append(("on_exit", sv.exit))
         for hook, secname in (("on_suspend", "OnSuspend"), ("on_resume", "OnResume")):

@@ -164,7 +164,9 @@ def attribute_of(state: str, variable: str) -> str:
     return f"{state}__{variable}"
 
 
-def name_map(machine_vars: list[str], state: str | None, state_vars: list[str], macros: frozenset[str]) -> dict[str, str]:
+def name_map(
+    machine_vars: list[str], state: str | None, state_vars: list[str], macros: frozenset[str]
+) -> dict[str, str]:
     """Bare name -> replacement in the code of `state` (None: machine-level code)."""
     m = {name: f"self.{name}" for name in macros}
     m.update({v: f"self.{v}" for v in machine_vars})

@@ -9,8 +9,7 @@ import time
 def parse_duration(text: str) -> int:
     """`0.5`, `500ms`, `2s`, `250us`, `1min` -> nanoseconds.  Bare numbers are seconds."""
     t = text.strip().lower()
-    units = (("ns", 1), ("us", 1_000), ("µs", 1_000), ("ms", 1_000_000), ("min", 60_000_000_000),
-             ("s", 1_000_000_000))
+    units = (("ns", 1), ("us", 1_000), ("µs", 1_000), ("ms", 1_000_000), ("min", 60_000_000_000), ("s", 1_000_000_000))
     scale = 1_000_000_000
     for suffix, mult in units:
         if t.endswith(suffix):

@@ -112,12 +112,24 @@ class Machine:
 RESERVED = frozenset(
     {"self"}
     | {n for n in vars(Machine) if not n.startswith("__")}
-    | {"_arr", "_clock", "_id", "_state", "_entered", "_t0", "_pending", "_suspended",
-       "_resume_to", "_finished"}
+    | {"_arr", "_clock", "_id", "_state", "_entered", "_t0", "_pending", "_suspended", "_resume_to", "_finished"}
 )
 
 #: The macros: bare names in machine code that the compiler turns into `self.<name>`.
 MACROS = frozenset(
-    {"after", "after_ms", "after_us", "state_name", "machine_name", "machine_id", "suspend",
-     "resume", "restart", "suspend_self", "is_suspended", "is_running", "state_name_of"}
+    {
+        "after",
+        "after_ms",
+        "after_us",
+        "state_name",
+        "machine_name",
+        "machine_id",
+        "suspend",
+        "resume",
+        "restart",
+        "suspend_self",
+        "is_suspended",
+        "is_running",
+        "state_name_of",
+    }
 )

@@ -8,7 +8,7 @@ them apart means an untraced run pays nothing for tracing.
 from __future__ import annotations
 
 import signal
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -59,6 +59,8 @@ class Arrangement:
         self._signal: int | None = None
         self._grace_end: int | None = None
         self.rounds = 0
+        #: Told once when an interrupt takes effect (the CLI prints it for the user).
+        self.on_interrupt: Callable[[int], None] | None = None
         names = [c.NAME for c in classes]
         for n in names:
             if names.count(n) > 1:
@@ -239,6 +241,8 @@ class Arrangement:
                     return self._result("killed", status)
                 if self._grace_end is None:
                     self._grace_end = now + grace
+                    if self.on_interrupt is not None:
+                        self.on_interrupt(grace)
                 elif now >= self._grace_end:
                     return self._result("interrupted", status)
             ctx.round = self.rounds
@@ -259,6 +263,7 @@ class Arrangement:
 @contextmanager
 def signals_handled(arr: Arrangement) -> Iterator[None]:
     """Route SIGINT/SIGTERM to the arrangement for the duration of a run."""
+
     def handler(signum: int, _frame: object) -> None:
         arr.interrupt(signum)
 

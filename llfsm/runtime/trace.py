@@ -22,8 +22,7 @@ class Tracer:
 
     def _event(self, kind: str, m: Machine, **fields: object) -> None:
         if self.jsonl is not None:
-            rec = {"t": self.now / 1e9, "round": self.round, "event": kind,
-                   "machine": m.NAME, "id": m._id, **fields}
+            rec = {"t": self.now / 1e9, "round": self.round, "event": kind, "machine": m.NAME, "id": m._id, **fields}
             self.jsonl.write(json.dumps(rec) + "\n")
 
     def entry(self, m: Machine, state: int) -> None:
