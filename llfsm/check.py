@@ -306,7 +306,8 @@ class _Checker:
             for b in bad:
                 self.bad_binding(code, b)
             self.assigned_reserved(code, tree)
-            if imported is not None:
+            is_guard = code.file.endswith(".expr")
+            if imported is not None and (not is_guard or _single_expression(tree)):
                 self.undefined(code, tree, set(mapping) | imported)
 
     def bad_binding(self, code: Code, b: BadBinding) -> None:
@@ -409,6 +410,10 @@ class _Checker:
         for s in m.states:
             if s.name not in seen and s.name != m.suspended and not s.implicit:
                 self.at("LF102", s.loc, f"state {s.name} cannot be reached from the initial state {m.initial}")
+
+
+def _single_expression(tree: ast.Module) -> bool:
+    return len(tree.body) == 1 and isinstance(tree.body[0], ast.Expr)
 
 
 def _col(text: str, line: int, byte_col: int) -> int:

@@ -212,8 +212,8 @@ class _Reader:
         if not isinstance(node, yaml.ScalarNode):
             self.structure_error(node, f"{what} must be a single word, not a {_kind(node)}")
             return None
-        if node.tag == "tag:yaml.org,2002:null" and node.style is None:
-            return None
+        if node.style is None and node.value in ("", "~"):
+            return None  # `initial:` left empty means the default; `null` is a name like any other
         return str(node.value)
 
     # -- the whole directory ---------------------------------------------------------------
@@ -255,9 +255,13 @@ class _Reader:
             fields = self.mapping(snode, "a state", ("name", "transitions"))
             if fields is None:
                 continue
-            sname = self.scalar(fields.get("name"), "a state name")
-            if sname is None:
+            if "name" not in fields:
                 self.structure_error(snode, "every state needs a `name`")
+                continue
+            sname = self.scalar(fields["name"], "a state name")
+            if sname is None:
+                if isinstance(fields["name"], yaml.ScalarNode):
+                    self.structure_error(fields["name"], "a state name cannot be empty")
                 continue
             sloc = _mark_loc(fields["name"])
             targets: list[tuple[str, Loc]] = []

@@ -65,9 +65,18 @@ def _py(value: object) -> str:
 
 
 def _doc(text: str) -> str:
-    """Text safe inside a triple-quoted docstring, on one line."""
-    text = " ".join(text.split())
-    return text.replace("\\", "\\\\").replace('"""', '\\"\\"\\"').rstrip('"') or "A machine."
+    """Text safe inside a triple-quoted docstring, on one line: every quote and backslash is
+    escaped and non-printable characters are spelled out, so no description can end the string."""
+    text = " ".join(text.split()) or "A machine."
+    out = []
+    for ch in text:
+        if ch in '\\"':
+            out.append("\\" + ch)
+        elif not ch.isprintable():
+            out.append(ch.encode("unicode_escape").decode("ascii"))
+        else:
+            out.append(ch)
+    return "".join(out)
 
 
 @cache

@@ -1,0 +1,244 @@
+"""`llfsm build`, generated modules, and the smaller commands (graph, schema, new machine)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import MACHINES, REPO, llfsm, run_sim, write_machine
+
+from llfsm.compiler import build as build_mod
+from llfsm.compiler.build import build_machine
+
+
+def test_build_writes_one_module_per_machine_and_it_runs(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    r = llfsm("build", MACHINES / "counter.machine", "-o", out)
+    assert r.status == 0
+    assert r.stderr.strip() == f"[1/1] counter: compiled -> {out}/counter.py"
+    r = run_sim(out / "counter.py")
+    assert r.status == 0 and r.lines[-1] == "done"
+
+
+def test_generated_module_reads_like_hand_written_code_and_is_ruff_clean(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "ping",
+        {
+            "INITIAL": [("PING", "after_ms(10)")],
+            "PING": [("END", "count >= 3 or not ok"), ("PING", "after(0.5)")],
+            "END": None,
+        },
+        {"PING_OnEntry": "# say it\ncount += 1\nprint(f'ping {count}')\n", "PING_OnExit": "print('bye')"},
+        variables="count: int = 0\nok: bool = True\n",
+        includes="import math\n",
+    )
+    outcome = build_machine(m, tmp_path / "out")
+    text = outcome.module.read_text()  # type: ignore[union-attr]
+    assert "class PingMachine(Machine):" in text
+    assert "    def ringlet_PING(self):" in text
+    assert "            # State_PING_OnEntry.py:1\n            # say it\n            self.count += 1\n" in text
+    assert "        # State_PING_Transition_0.expr:1\n        if self.count >= 3 or not self.ok:\n" in text
+    assert "            self.on_exit_PING()\n" in text
+    assert "        # Variables.py:1\n        self.count: int = 0\n        self.ok: bool = True\n" in text
+    ruff = shutil.which("ruff", path=str(Path(sys.executable).parent)) or "ruff"
+    proc = subprocess.run(
+        [ruff, "check", "--isolated", "--select", "E,F,W", "--line-length", "120", str(outcome.module)],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stdout
+
+
+def test_generated_module_imports_only_the_runtime(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    llfsm("build", MACHINES / "counter.machine", "-o", out)
+    code = (
+        "import sys, importlib.util\n"
+        f"spec = importlib.util.spec_from_file_location('counter', {str(out / 'counter.py')!r})\n"
+        "mod = importlib.util.module_from_spec(spec); spec.loader.exec_module(mod)\n"
+        "heavy = [m for m in ('yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.check', 'click') if m in sys.modules]\n"
+        "print(heavy)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert proc.stdout.strip() == "[]", proc.stderr
+
+
+def test_warm_run_of_a_machine_directory_does_not_load_the_compiler(tmp_path: Path) -> None:
+    m = shutil.copytree(MACHINES / "counter.machine", tmp_path / "counter.machine")
+    env = dict(os.environ, LLFSM_CACHE_DIR=str(tmp_path / "cache"))
+    probe = (
+        "import atexit, sys\n"
+        "atexit.register(lambda: sys.stderr.write('HEAVY %s\\n' % sorted(m for m in ('yaml', 'jinja2', 'pydantic',"
+        " 'llfsm.compiler.generate') if m in sys.modules)))\n"
+        "from llfsm.cli import main\n"
+        f"sys.argv = ['llfsm', 'run', '--clock', 'sim', {str(m)!r}]\n"
+        "main()\n"
+    )
+    cold = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env)
+    warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env)
+    assert "HEAVY ['jinja2', 'llfsm.compiler.generate', 'pydantic', 'yaml']" in cold.stderr
+    assert "HEAVY []" in warm.stderr
+    assert warm.stdout == cold.stdout and "done" in warm.stdout
+
+
+def test_build_is_incremental(tmp_path: Path) -> None:
+    m = shutil.copytree(MACHINES / "counter.machine", tmp_path / "counter.machine")
+    out = tmp_path / "out"
+    assert build_machine(m, out).status == "compiled"
+    module = out / "counter.py"
+    before = module.stat().st_mtime_ns
+    assert build_machine(m, out).status == "unchanged"
+    assert module.stat().st_mtime_ns == before
+    (m / "State_END_OnEntry.py").write_text('print("finished")\n')
+    assert build_machine(m, out).status == "compiled"
+    assert 'print("finished")' in module.read_text()
+    assert build_machine(m, out, force=True).status == "compiled"
+
+
+def test_an_interrupted_build_leaves_no_half_written_module(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    m = shutil.copytree(MACHINES / "counter.machine", tmp_path / "counter.machine")
+    out = tmp_path / "out"
+    build_machine(m, out)
+    good = (out / "counter.py").read_text()
+    (m / "State_END_OnEntry.py").write_text('print("changed")\n')
+
+    def interrupted(src: str, dst: str) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(build_mod.os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        build_machine(m, out)
+    assert (out / "counter.py").read_text() == good
+    assert sorted(p.name for p in out.iterdir()) == ["counter.py"]
+
+
+def test_failed_build_exits_1_and_writes_nothing(tmp_path: Path) -> None:
+    m = write_machine(tmp_path, "bad", {"A": [("B", "True")]})
+    out = tmp_path / "out"
+    r = llfsm("build", m, "-o", out)
+    assert r.status == 1 and "LF020" in r.stderr and "bad: failed" in r.stderr
+    assert not out.exists() or list(out.iterdir()) == []
+
+
+def test_build_without_paths_builds_every_machine_below_the_current_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    write_machine(tmp_path / "machine", "one", {"A": None})
+    write_machine(tmp_path / "machine", "two", {"A": None})
+    monkeypatch.chdir(tmp_path)
+    r = llfsm("build")
+    assert r.status == 0
+    assert sorted(p.name for p in (tmp_path / "build" / "llfsm").iterdir()) == ["one.py", "two.py"]
+
+
+def test_hostile_text_cannot_inject_code(tmp_path: Path) -> None:
+    marker = tmp_path / "injected"
+    desc = f'x"""\nimport os; os.system("touch {marker}")\n"""'
+    m = write_machine(tmp_path / "we\"ird'dir", "m", {"A": None}, yaml_extra="description: " + json.dumps(desc))
+    r = run_sim(m)
+    assert r.status == 0, r.stderr
+    assert not marker.exists()
+    text = next((Path(os.environ["LLFSM_CACHE_DIR"])).rglob("m.py")).read_text()
+    assert '"""m: x\\"\\"\\" import os; os.system(\\"touch' in text
+
+
+def test_unicode_and_multiline_strings_survive_compilation(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "text",
+        {"A": None},
+        {"A_OnEntry": 'msg = """first\n  second"""\nprint(msg)\nprint("ünïcödé", f"{len(msg)}")\n'},
+    )
+    r = run_sim(m)
+    assert r.lines == ["first", "  second", "ünïcödé 14"]
+
+
+def test_machine_variables_inside_callbacks_lambdas_and_comprehensions(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "scopes",
+        {"A": None},
+        {
+            "A_OnEntry": (
+                "def bump(by):\n    total += by\n"
+                "bump(2)\n"
+                "add = lambda total: total + 100\n"  # a parameter named like the variable shadows it
+                "squares = [total * total for total in range(3)]\n"
+                "print(total, add(1), squares, [total for _ in range(2)])\n"
+            )
+        },
+        variables="total: int = 1\n",
+    )
+    r = run_sim(m)
+    assert r.status == 0, r.stderr
+    assert r.lines == ["3 101 [0, 1, 4] [3, 3]"]
+
+
+def test_state_variables_keep_their_values_across_entries_and_are_private(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "sv",
+        {"A": [("END", "visits == 3"), ("A", "True")], "END": None},
+        {"A_Variables": "visits: int = 0\n", "A_OnEntry": "visits += 1\nprint('visit', visits)"},
+    )
+    r = run_sim(m)
+    assert r.lines == ["visit 1", "visit 2", "visit 3"]
+
+
+# -- graph, schema, new ------------------------------------------------------------------------
+
+
+def test_graph_mermaid_and_dot_show_guards(tmp_path: Path) -> None:
+    m = MACHINES / "counter.machine"
+    r = llfsm("graph", m)
+    assert r.status == 0
+    assert r.stdout.splitlines()[:3] == [
+        "stateDiagram-v2",
+        "    %% Counts to five, one count every 200 ms, then stops.",
+        "    [*] --> INITIAL",
+    ]
+    assert "    COUNT --> END : 0. count >= limit" in r.stdout
+    assert "    END --> [*]" in r.stdout
+    r = llfsm("graph", m, "--format", "dot")
+    assert '"COUNT" -> "COUNT" [label="1. after_ms(200)"];' in r.stdout
+
+
+def test_graph_images_need_graphviz(tmp_path: Path) -> None:
+    r = llfsm("graph", MACHINES / "counter.machine", "--format", "svg", "-o", tmp_path / "g.svg")
+    if shutil.which("dot"):
+        assert r.status == 0 and (tmp_path / "g.svg").read_text().lstrip().startswith("<")
+    else:
+        assert r.status == 1 and "Graphviz" in r.stderr and not (tmp_path / "g.svg").exists()
+
+
+def test_schema_is_json_schema_of_machine_yaml() -> None:
+    r = llfsm("schema")
+    doc = json.loads(r.stdout)
+    assert doc["title"] == "machine.yaml"
+    assert doc["required"] == ["states"]
+    assert set(doc["properties"]) == {"description", "initial", "suspended", "states"}
+    assert doc["additionalProperties"] is False
+
+
+def test_new_machine_is_valid_and_runs(tmp_path: Path) -> None:
+    r = llfsm("new", "machine", "greeter", "--dir", tmp_path, "--description", 'Says "hi": twice.')
+    assert r.status == 0
+    m = tmp_path / "greeter.machine"
+    assert llfsm("check", "--strict", m).status == 0
+    run = run_sim(m)
+    assert run.status == 0 and run.lines == ["greeter: hello from INITIAL"]
+    assert llfsm("new", "machine", "greeter", "--dir", tmp_path).status == 2
+    assert llfsm("new", "machine", "no-dashes", "--dir", tmp_path).status == 2
+    assert llfsm("new", "machine", "for", "--dir", tmp_path).status == 2
+
+
+def test_readme_starts_with_the_two_setup_commands() -> None:
+    text = (REPO / "README.md").read_text()
+    head = text[: text.index("\n## ")]
+    assert "make demo" in head and "make test" in head
