@@ -9,35 +9,18 @@ from __future__ import annotations
 
 import ast
 import builtins
-import os
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .compiler.rewrite import BadBinding, assigned_names, attribute_of, find, name_map
+from .compiler.rewrite import BadBinding, attribute_of, find, name_map
 from .diagnostics import Diagnostic, Severity, diag
+from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
 from .model import Code, Machine, State, is_valid_name
-from .reader import MACHINE_SUFFIX, ReadResult, machine_name_of, node_col, read_machine
+from .reader import ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
 
 BUILTINS = frozenset(dir(builtins))
-#: Folders never searched for machines: VCS data, caches, and colcon's own output.
-SKIP_DIRS = frozenset(
-    {
-        ".git",
-        ".hg",
-        ".svn",
-        "__pycache__",
-        "node_modules",
-        ".venv",
-        "venv",
-        ".tox",
-        ".mypy_cache",
-        ".ruff_cache",
-        ".pytest_cache",
-    }
-)
-COLCON_OUTPUT = frozenset({"build", "install", "log"})
 GENERATED_PREFIXES = ("ringlet_", "on_exit_", "on_suspend_", "on_resume_")
 
 
@@ -60,34 +43,6 @@ class MachineCheck:
     @property
     def ok(self) -> bool:
         return self.machine is not None and not self.errors
-
-
-def is_machine_dir(path: Path) -> bool:
-    return path.name.endswith(MACHINE_SUFFIX) and path.is_dir()
-
-
-def find_machines(path: Path) -> list[Path]:
-    """`path` itself if it is a machine directory, else every NAME.machine folder below it.
-
-    colcon's build/, install/ and log/ beside a src/ folder are skipped: they hold copies.
-    """
-    if is_machine_dir(path) or (path / "machine.yaml").exists():
-        return [path]
-    found: list[Path] = []
-    for root, dirs, _files in os.walk(path, followlinks=False):
-        here = Path(root)
-        keep = []
-        for d in sorted(dirs):
-            if d in SKIP_DIRS or d.startswith("."):
-                continue
-            if d in COLCON_OUTPUT and (here / "src").is_dir():
-                continue
-            if d.endswith(MACHINE_SUFFIX):
-                found.append(here / d)
-                continue
-            keep.append(d)
-        dirs[:] = keep
-    return found
 
 
 def check_machine(path: str | Path) -> MachineCheck:
@@ -189,7 +144,6 @@ class _Checker:
             self.add("LF024", fname, line, col, f"guard {fname} {what}, such as `after_ms(500)`")
             return
         expr = tree.body[0].value
-        self.no_escape(fname, code.text, tree, top_only=False)
         if isinstance(expr, ast.Constant):
             if not expr.value:
                 self.add("LF103", fname, 1, 1, f"guard {fname} is always false: transition {index} never fires")
@@ -273,11 +227,10 @@ class _Checker:
                     self.at(
                         "LF033", v.loc, f"state variable {v.name} of {s.name} shadows the machine variable {v.name}"
                     )
-        # initialisers are code too: machine-level code sees only machine variables
-        for fname, tree in self.r.read.trees.items():
-            if fname == "Variables.py" or fname.endswith("_Variables.py"):
-                text = (self.path / fname).name
-                self.no_escape(text, None, tree, top_only=False)
+        # initialisers are code too
+        for code in [m.variables_file] + [s.variables_file for s in m.states]:
+            if code is not None and code.file in self.r.read.trees:
+                self.no_escape(code.file, code.text, self.r.read.trees[code.file])
 
     def reserved(self, name: str, loc: object, generated: set[str]) -> None:
         if (
@@ -295,20 +248,34 @@ class _Checker:
         svars = [v.name for v in s.variables]
         mapping = name_map(mvars, s.name, svars, MACROS)
         imported = self.imported_names()
-        files = [c for c in s.sections.values()] + [t.guard for t in s.transitions if t.guard is not None]
+        files = list(s.sections.values()) + [t.guard for t in s.transitions if t.guard is not None]
         for code in files:
             tree = self.r.read.trees.get(code.file)
             if tree is None:
                 continue
-            if code.file.endswith(".py"):
-                self.no_escape(code.file, code.text, tree, top_only=True)
-            _edits, bad = find(tree, mapping)
-            for b in bad:
-                self.bad_binding(code, b)
-            self.assigned_reserved(code, tree)
             is_guard = code.file.endswith(".expr")
+            scan = _scan(tree, mapping)
+            for node, _kind in scan.escapes:
+                self.escape(code.file, code.text, node)
+            if scan.may_bind_variable:  # rare: only then pay for the scoped walk
+                _edits, bad = find(tree, mapping)
+                for b in bad:
+                    self.bad_binding(code, b)
+            for n in scan.reserved:
+                what = "is an llfsm macro and cannot be assigned" if n.id in MACROS else "is reserved by llfsm"
+                self.add("LF013", code.file, n.lineno, node_col(code.text, n), f"`{n.id}` {what} in machine code")
             if imported is not None and (not is_guard or _single_expression(tree)):
-                self.undefined(code, tree, set(mapping) | imported)
+                known = set(mapping) | imported | scan.bound | BUILTINS
+                for name, n in scan.loads.items():
+                    if name not in known:
+                        self.add(
+                            "LF105",
+                            code.file,
+                            n.lineno,
+                            node_col(code.text, n),
+                            f"name {name!r} is not a variable of this machine or state, an import, a builtin "
+                            "or a macro, and is not assigned in this file",
+                        )
 
     def bad_binding(self, code: Code, b: BadBinding) -> None:
         kind = "macro" if b.name in MACROS else "variable"
@@ -320,80 +287,30 @@ class _Checker:
             f"{b.how} cannot bind the machine {kind} {b.name}; use a plain assignment or another name",
         )
 
-    def assigned_reserved(self, code: Code, tree: ast.AST) -> None:
-        for n in ast.walk(tree):
-            if (isinstance(n, ast.Name) and n.id == "self") or (isinstance(n, ast.Name) and n.id.startswith("_llfsm")):
-                self.add(
-                    "LF013",
-                    code.file,
-                    n.lineno,
-                    node_col(code.text, n),
-                    f"`{n.id}` is reserved by llfsm in machine code",
-                )
-            elif isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store | ast.Del) and n.id in MACROS:
-                self.add(
-                    "LF013",
-                    code.file,
-                    n.lineno,
-                    node_col(code.text, n),
-                    f"`{n.id}` is an llfsm macro and cannot be assigned",
-                )
+    def escape(self, fname: str, text: str, node: ast.AST) -> None:
+        col = node_col(text, node) if text else node.col_offset + 1  # type: ignore[attr-defined]
+        if isinstance(node, ast.Global | ast.Nonlocal):
+            kw = "global" if isinstance(node, ast.Global) else "nonlocal"
+            self.add(
+                "LF034",
+                fname,
+                node.lineno,
+                col,
+                f"`{kw}` is not allowed in machine code: machine variables are used by their bare names",
+            )
+        else:
+            kw = {ast.Return: "return", ast.Yield: "yield", ast.YieldFrom: "yield", ast.Await: "await"}[type(node)]
+            self.add(
+                "LF036",
+                fname,
+                node.lineno,
+                col,  # type: ignore[attr-defined]
+                f"`{kw}` is not allowed at the top level of {fname}: a section runs inside the state's ringlet",
+            )
 
-    def no_escape(self, fname: str, text: str | None, tree: ast.AST, top_only: bool) -> None:
-        """global/nonlocal anywhere; return/yield/await outside a nested function."""
-        text = text if text is not None else ""
-
-        def col(n: ast.AST) -> int:
-            return node_col(text, n) if text else n.col_offset + 1  # type: ignore[attr-defined]
-
-        def walk(node: ast.AST, nested: bool) -> None:
-            for child in ast.iter_child_nodes(node):
-                if isinstance(child, ast.Global | ast.Nonlocal):
-                    kw = "global" if isinstance(child, ast.Global) else "nonlocal"
-                    self.add(
-                        "LF034",
-                        fname,
-                        child.lineno,
-                        col(child),
-                        f"`{kw}` is not allowed in machine code: machine variables are used by their bare names",
-                    )
-                elif not nested and isinstance(child, ast.Return | ast.Yield | ast.YieldFrom | ast.Await):
-                    kw = {ast.Return: "return", ast.Yield: "yield", ast.YieldFrom: "yield", ast.Await: "await"}[
-                        type(child)
-                    ]
-                    self.add(
-                        "LF036",
-                        fname,
-                        child.lineno,
-                        col(child),
-                        f"`{kw}` is not allowed at the top level of {fname}: a section runs inside the state's ringlet",
-                    )
-                inner = nested or isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda | ast.ClassDef)
-                walk(child, inner)
-
-        walk(tree, False)
-
-    def undefined(self, code: Code, tree: ast.AST, known: set[str]) -> None:
-        bound = {name for name, _ in assigned_names(tree)}
-        reported: set[str] = set()
-        for n in ast.walk(tree):
-            if (
-                isinstance(n, ast.Name)
-                and isinstance(n.ctx, ast.Load)
-                and n.id not in known
-                and n.id not in bound
-                and n.id not in BUILTINS
-                and n.id not in reported
-            ):
-                reported.add(n.id)
-                self.add(
-                    "LF105",
-                    code.file,
-                    n.lineno,
-                    node_col(code.text, n),
-                    f"name {n.id!r} is not a variable of this machine or state, an import, a builtin "
-                    "or a macro, and is not assigned in this file",
-                )
+    def no_escape(self, fname: str, text: str, tree: ast.AST) -> None:
+        for node, _kind in _scan(tree, {}).escapes:
+            self.escape(fname, text, node)
 
     # -- graph ---------------------------------------------------------------------------------
     def reachability(self, m: Machine) -> None:
@@ -410,6 +327,91 @@ class _Checker:
         for s in m.states:
             if s.name not in seen and s.name != m.suspended and not s.implicit:
                 self.at("LF102", s.loc, f"state {s.name} cannot be reached from the initial state {m.initial}")
+
+
+_BINDERS = (
+    ast.NamedExpr,
+    ast.Import,
+    ast.ImportFrom,
+    ast.FunctionDef,
+    ast.AsyncFunctionDef,
+    ast.ClassDef,
+    ast.ExceptHandler,
+    ast.MatchAs,
+    ast.MatchStar,
+    ast.MatchMapping,
+)
+_NESTS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)
+_ESCAPES = (ast.Return, ast.Yield, ast.YieldFrom, ast.Await)
+
+
+@dataclass
+class _Scanned:
+    loads: dict[str, ast.Name] = field(default_factory=dict)  # first use of each name read
+    bound: set[str] = field(default_factory=set)  # every name the code binds, in any scope
+    reserved: list[ast.Name] = field(default_factory=list)  # `self`, `_llfsm*`, or a macro assigned
+    escapes: list[tuple[ast.AST, str]] = field(default_factory=list)  # global/nonlocal; top-level return...
+    may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping somewhere
+
+
+def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
+    """Everything the checker needs from a code file, in one traversal (checks run on every
+    file of every machine in CI, so this is the checker's hot path)."""
+    out = _Scanned()
+    bound = out.bound
+    stack: list[tuple[ast.AST, bool]] = [(tree, False)]
+    while stack:
+        node, nested = stack.pop()
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.Name):
+                if child.id == "self" or child.id.startswith("_llfsm"):
+                    out.reserved.append(child)
+                elif isinstance(child.ctx, ast.Load):
+                    out.loads.setdefault(child.id, child)
+                else:
+                    bound.add(child.id)
+                    if child.id in MACROS:
+                        out.reserved.append(child)
+                continue
+            if isinstance(child, ast.arg):
+                bound.add(child.arg)
+            elif isinstance(child, ast.alias):
+                bound.add((child.asname or child.name).split(".")[0])
+            elif (
+                isinstance(
+                    child,
+                    ast.FunctionDef
+                    | ast.AsyncFunctionDef
+                    | ast.ClassDef
+                    | ast.ExceptHandler
+                    | ast.MatchAs
+                    | ast.MatchStar,
+                )
+                and child.name
+            ):
+                bound.add(child.name)
+            elif isinstance(child, ast.MatchMapping) and child.rest:
+                bound.add(child.rest)
+            elif isinstance(child, ast.Global | ast.Nonlocal):
+                bound.update(child.names)
+            if isinstance(child, ast.Global | ast.Nonlocal):
+                out.escapes.append((child, "global"))
+            elif not nested and isinstance(child, _ESCAPES):
+                out.escapes.append((child, "return"))
+            if isinstance(child, _BINDERS):
+                names = (
+                    [a.asname or a.name.split(".")[0] for a in child.names]
+                    if isinstance(child, ast.Import | ast.ImportFrom)
+                    else [
+                        getattr(child, "name", None)
+                        or getattr(getattr(child, "target", None), "id", None)
+                        or getattr(child, "rest", None)
+                    ]
+                )
+                if any(n in mapping for n in names if n):
+                    out.may_bind_variable = True
+            stack.append((child, nested or isinstance(child, _NESTS)))
+    return out
 
 
 def _single_expression(tree: ast.Module) -> bool:

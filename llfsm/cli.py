@@ -126,9 +126,8 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
 
     With no PATH, every machine below the current folder (e.g. a package root) is built.
     """
-    from .check import find_machines
     from .compiler.build import build_machine
-    from .diagnostics import format_text
+    from .discover import find_machines
 
     roots = _existing(paths) if paths else [Path(".")]
     machines = [m for r in roots for m in find_machines(r)]
@@ -145,6 +144,8 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
     for i, path in enumerate(machines, 1):
         outcome = build_machine(path, out_dir, force=force)
         if outcome.status == "failed":
+            from .diagnostics import format_text
+
             failed += 1
             click.echo(format_text(outcome.diagnostics), nl=False, err=True)
         if not quiet:

@@ -16,6 +16,7 @@ from pathlib import Path
 import yaml
 
 from .diagnostics import Diagnostic, diag
+from .discover import machine_name_of
 from .model import (
     IMPLICIT_SUSPENDED,
     SECTIONS,
@@ -29,7 +30,8 @@ from .model import (
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: no hand-written state section comes near this
 MAX_YAML_DEPTH = 32
-MACHINE_SUFFIX = ".machine"
+#: libyaml's C parser when PyYAML has it (about ten times faster), else the pure-Python one.
+YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 SECTION_RE = re.compile(r"State_(?P<state>.+)_(?P<kind>" + "|".join(SECTIONS) + r"|Variables)\.py\Z")
 GUARD_RE = re.compile(r"State_(?P<state>.+)_Transition_(?P<n>[0-9]+)\.expr\Z")
@@ -44,11 +46,6 @@ class ReadResult:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     trees: dict[str, ast.Module] = field(default_factory=dict)  # file name -> parsed code
     orphans: list[str] = field(default_factory=list)  # state code files matching no state
-
-
-def machine_name_of(path: Path) -> str:
-    name = path.name
-    return name[: -len(MACHINE_SUFFIX)] if name.endswith(MACHINE_SUFFIX) else name
 
 
 class _Reader:
@@ -151,7 +148,7 @@ class _Reader:
         name = "machine.yaml"
         depth = 0
         try:
-            for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+            for ev in yaml.parse(text, Loader=YAML_LOADER):
                 if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
                     m = ev.start_mark
                     self.report(
@@ -172,7 +169,7 @@ class _Reader:
                         return None
                 elif isinstance(ev, yaml.CollectionEndEvent):
                     depth -= 1
-            node = yaml.compose(text, Loader=yaml.SafeLoader)
+            node = yaml.compose(text, Loader=YAML_LOADER)
         except yaml.MarkedYAMLError as e:
             m = e.problem_mark or e.context_mark
             line, col = (m.line + 1, m.column + 1) if m else (1, 1)
@@ -212,7 +209,7 @@ class _Reader:
         if not isinstance(node, yaml.ScalarNode):
             self.structure_error(node, f"{what} must be a single word, not a {_kind(node)}")
             return None
-        if node.style is None and node.value in ("", "~"):
+        if not node.style and node.value in ("", "~"):
             return None  # `initial:` left empty means the default; `null` is a name like any other
         return str(node.value)
 

@@ -15,12 +15,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .diagnostics import Diagnostic
+from .discover import MACHINE_SUFFIX, machine_name_of
 from .fingerprint import machine_fingerprint, module_fingerprint
 from .runtime.errors import ErrorReport, report_for
 from .runtime.machine import Machine
-
-MACHINE_SUFFIX = ".machine"
 
 
 class TargetError(Exception):
@@ -30,7 +28,7 @@ class TargetError(Exception):
 class InvalidMachine(Exception):
     """A machine directory that fails validation (exit status 2), with its diagnostics."""
 
-    def __init__(self, diagnostics: list[Diagnostic]) -> None:
+    def __init__(self, diagnostics: list) -> None:
         super().__init__(f"{len(diagnostics)} problem(s)")
         self.diagnostics = diagnostics
 
@@ -65,8 +63,7 @@ def compiled_module_for(machine_dir: Path) -> Path:
     """The cached module of a machine directory, compiled first if missing or stale."""
     key = hashlib.sha256(os.fsencode(machine_dir.resolve())).hexdigest()[:16]
     out = _writable(cache_root() / key)
-    name = machine_dir.name[: -len(MACHINE_SUFFIX)] if machine_dir.name.endswith(MACHINE_SUFFIX) else machine_dir.name
-    module = out / f"{name}.py"
+    module = out / f"{machine_name_of(machine_dir)}.py"
     try:
         fresh = module_fingerprint(module) == machine_fingerprint(machine_dir)
     except OSError:

@@ -385,8 +385,8 @@ def test_github_format(tmp_path: Path) -> None:
     bad = write_machine(tmp_path, "bad", {"INITIAL": [("NOPE", "True"), ("INITIAL", "False")]})
     lines = llfsm("check", "--format", "github", bad).stdout.splitlines()
     assert (
-        f"::error file={bad}/machine.yaml,line=3,col=19,title=LF020::transition 0 of INITIAL goes to unknown state 'NOPE'"
-        in lines
+        f"::error file={bad}/machine.yaml,line=3,col=19,title=LF020::"
+        "transition 0 of INITIAL goes to unknown state 'NOPE'" in lines
     )
     assert any(x.startswith("::warning file=") and "title=LF103" in x for x in lines)
 

@@ -7,12 +7,13 @@ import os
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ..check import check_machine
-from ..diagnostics import Diagnostic
+from ..discover import machine_name_of
 from ..fingerprint import machine_fingerprint, module_fingerprint
-from ..reader import machine_name_of
-from .generate import CompileError, compile_machine
+
+if TYPE_CHECKING:
+    from ..diagnostics import Diagnostic
 
 # -- builds ------------------------------------------------------------------------------------
 
@@ -58,6 +59,10 @@ def build_machine(path: Path, out_dir: Path, force: bool = False) -> BuildOutcom
         fp = ""
     if not force and fp and module_fingerprint(target) == fp:
         return BuildOutcome(path, target, "unchanged", name=name)
+    # only now the checker and the code generator (pydantic, yaml, jinja2): warm builds skip them
+    from ..check import check_machine
+    from .generate import CompileError, compile_machine
+
     checked = check_machine(path)
     if not checked.ok:
         return BuildOutcome(path, None, "failed", checked.diagnostics, name=name)

@@ -25,7 +25,7 @@ from ..diagnostics import Diagnostic, diag
 from ..model import Code, Machine, State
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
-from .rewrite import Edit, apply, find, name_map
+from .rewrite import Edit, apply, attribute_of, find, name_map
 
 TEMPLATES = Path(__file__).resolve().parent.parent / "templates"
 
@@ -273,6 +273,9 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             "variables": variables,
             "state_variables": state_variables,
             "states": views,
+            "slots": tuple(
+                [v.name for v in m.variables] + [attribute_of(s.name, v.name) for s in m.states for v in s.variables]
+            ),
             "ringlets": [f"ringlet_{v.name}" for v in views],
             "on_suspend": [f"on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
             "on_resume": [f"on_resume_{v.name}" if v.has_on_resume else "None" for v in views],

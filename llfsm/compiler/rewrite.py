@@ -14,7 +14,7 @@ C++ lambda capturing `this`): `def on_pose(msg): x = msg.x` sets the machine var
 from __future__ import annotations
 
 import ast
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 _SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
@@ -202,27 +202,3 @@ def rewrite(text: str, mapping: Mapping[str, str], tree: ast.AST | None = None) 
     tree = tree if tree is not None else ast.parse(text)
     edits, _ = find(tree, mapping)
     return apply(text, edits)
-
-
-def assigned_names(tree: ast.AST) -> Iterator[tuple[str, ast.AST]]:
-    """Every name a piece of code binds, in any scope (for the undefined-name warning)."""
-    for n in ast.walk(tree):
-        if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store | ast.Del):
-            yield n.id, n
-        elif isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
-            yield n.name, n
-            if not isinstance(n, ast.ClassDef):
-                for p in _params(n.args):
-                    yield p, n
-        elif isinstance(n, ast.Lambda):
-            for p in _params(n.args):
-                yield p, n
-        elif isinstance(n, ast.alias):
-            yield (n.asname or n.name).split(".")[0], n
-        elif (isinstance(n, ast.ExceptHandler) and n.name) or (isinstance(n, ast.MatchAs | ast.MatchStar) and n.name):
-            yield n.name, n
-        elif isinstance(n, ast.MatchMapping) and n.rest:
-            yield n.rest, n
-        elif isinstance(n, ast.Global | ast.Nonlocal):
-            for name in n.names:
-                yield name, n

@@ -43,6 +43,23 @@ class Machine:
     #: The machine directory the class was compiled from.
     SOURCE_DIR: ClassVar[str] = ""
 
+    # Slots make attribute access on the hot path as cheap as CPython allows; generated classes
+    # add their variables to them.
+    __slots__ = (
+        "_arr",
+        "_clock",
+        "_entered",
+        "_finished",
+        "_gate",
+        "_id",
+        "_pending",
+        "_resume_to",
+        "_ringlets",
+        "_state",
+        "_suspended",
+        "_t0",
+    )
+
     def __init__(self, arrangement: Arrangement, machine_id: int = 0) -> None:
         self._arr = arrangement
         self._clock = arrangement.clock
@@ -52,8 +69,12 @@ class Machine:
         self._t0 = 0  # run-clock time (ns) the current state was entered
         self._pending: str | None = None
         self._suspended = False
+        #: True while a command is pending or the machine is suspended: the one flag the
+        #: scheduler tests per ringlet before taking the fast path.
+        self._gate = False
         self._resume_to: int | None = None
         self._finished = False
+        self._ringlets = self.RINGLETS  # on the instance: one fast lookup per ringlet
 
     # -- the clfsm macros (CLMacros.h), in scope in every section and guard -----------------
     def after(self, s: float) -> bool:
@@ -85,7 +106,7 @@ class Machine:
         self._arr.command(name, RESTART)
 
     def suspend_self(self) -> None:
-        self._pending = SUSPEND
+        self._arr.command(self.NAME, SUSPEND)
 
     def is_suspended(self, name: str) -> bool:
         return self._arr.machine(name)._suspended
@@ -109,11 +130,7 @@ class Machine:
 
 #: Names generated code and the runtime use on a machine instance: user variables must not
 #: take them (checked by `llfsm check`, rule LF013).
-RESERVED = frozenset(
-    {"self"}
-    | {n for n in vars(Machine) if not n.startswith("__")}
-    | {"_arr", "_clock", "_id", "_state", "_entered", "_t0", "_pending", "_suspended", "_resume_to", "_finished"}
-)
+RESERVED = frozenset({"self"} | {n for n in vars(Machine) if not n.startswith("__")} | set(Machine.__slots__))
 
 #: The macros: bare names in machine code that the compiler turns into `self.<name>`.
 MACROS = frozenset(

@@ -54,7 +54,7 @@ class Arrangement:
         self.tracer = tracer
         self.machines: list[Machine] = []
         self.by_name: dict[str, Machine] = {}
-        self._dirty = True
+        self._attention = True  # something to look at before the next round
         self._interrupts = 0
         self._signal: int | None = None
         self._grace_end: int | None = None
@@ -78,7 +78,7 @@ class Arrangement:
             activate(prev)
         for n in suspended:
             m = self.by_name[n]
-            m._state, m._suspended, m._entered = m.SUSPENDED, True, True
+            m._state, m._suspended, m._gate, m._entered = m.SUSPENDED, True, True, True
             m._resume_to = None
         self._live: list[Machine] = list(self.machines)
 
@@ -98,25 +98,27 @@ class Arrangement:
                 return  # a finished machine cannot be suspended or resumed
             m._finished = False  # restart brings a finished machine back
         m._pending = cmd  # a later command replaces an earlier pending one
-        self._dirty = True
+        m._gate = True
+        self._attention = True
 
     def suspend_now(self, m: Machine, remember: int | None) -> None:
         """Move `m` to its suspend state and run that state's OnEntry (no OnExit anywhere)."""
         m._resume_to = remember
         m._state = m.SUSPENDED
-        m._suspended = True
+        m._suspended = m._gate = True
         m._entered = True
         if self.tracer is not None:
             self.tracer.command("suspend", m, m.SUSPENDED)
             self.tracer.entry(m, m.SUSPENDED)
-        m.RINGLETS[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
-        self._dirty = True
+        m._ringlets[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
+        self._attention = True
 
     # -- control commands -------------------------------------------------------------------
     def _apply(self, m: Machine) -> bool:
         """Apply m's pending command; True if the ringlet goes on (step 2), False if it ends."""
         cmd, m._pending = m._pending, None
-        self._dirty = True
+        m._gate = m._suspended
+        self._attention = True
         tr = self.tracer
         if cmd == SUSPEND:
             if not m._suspended:
@@ -132,7 +134,7 @@ class Arrangement:
             if hook is not None:
                 hook(m)
             target = m.INITIAL if m._resume_to is None else m._resume_to
-            m._state, m._suspended, m._resume_to = target, False, None
+            m._state, m._suspended, m._gate, m._resume_to = target, False, m._pending is not None, None
             hook = m.ON_RESUME[target]
             if hook is not None:
                 hook(m)
@@ -142,46 +144,42 @@ class Arrangement:
             return True
         # RESTART
         m._state, m._suspended, m._resume_to, m._entered = m.INITIAL, False, None, True
+        m._gate = m._pending is not None
         if tr is not None:
             tr.command("restart", m, m.INITIAL)
         return True
 
+    def _gated(self, m: Machine) -> bool:
+        """Slow path of a ringlet: a pending command or a suspension.  True: run the ringlet."""
+        if m._pending is not None:
+            return self._apply(m)
+        return False  # suspended, nothing pending: no ringlet
+
     def _finish(self, m: Machine) -> None:
         m._finished = True
         m._suspended = False
-        self._dirty = True
+        m._gate = m._pending is not None
+        self._attention = True
+
+    def interrupt(self, signum: int = signal.SIGINT) -> None:
+        """Ctrl-C / SIGTERM: `ros.ok()` turns false, rounds go on for the grace time; twice: stop."""
+        self._interrupts += 1
+        self._signal = signum if self._signal is None else self._signal
+        self.ctx.interrupted = True
+        self._attention = True
 
     # -- rounds ----------------------------------------------------------------------------
-    def _round(self, live: list[Machine]) -> bool:
-        fired = False
-        for m in live:
-            if m._pending is not None:
-                fired = True
-                if not self._apply(m):
-                    continue
-            elif m._suspended:
-                continue
-            r = m.RINGLETS[m._state](m)
-            if r is not None:
-                if r >= 0:
-                    fired = True
-                elif not self.keep_accepting:
-                    self._finish(m)
-        return fired
-
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
         for m in live:
-            if m._pending is not None:
+            if m._gate:
                 fired = True
-                if not self._apply(m):
+                if not self._gated(m):
                     continue
-            elif m._suspended:
-                continue
             s = m._state
             if m._entered:
                 tr.entry(m, s)
-            r = m.RINGLETS[s](m)
+            r = m._ringlets[s](m)
             if r is not None:
                 if r >= 0:
                     fired = True
@@ -191,17 +189,34 @@ class Arrangement:
                     self._finish(m)
         return fired
 
-    def interrupt(self, signum: int = signal.SIGINT) -> None:
-        """Ctrl-C / SIGTERM: `ros.ok()` turns false, rounds go on for the grace time; twice: stop."""
-        self._interrupts += 1
-        self._signal = signum if self._signal is None else self._signal
-        self.ctx.interrupted = True
+    def _attend(self, now: int, grace: int) -> RunResult | None:
+        """Whatever changed since the last round: unloads, suspensions, interrupts."""
+        self._attention = False
+        self._live = [m for m in self.machines if not m._finished]
+        if not self._live:
+            return self._result("finished", EXIT_OK)
+        if all(m._suspended and m._pending is None for m in self._live):
+            return self._result("suspended", EXIT_OK)
+        if self._interrupts:
+            self._attention = True  # keep checking the grace time every round
+            status = EXIT_SIGNAL.get(self._signal or signal.SIGINT, 130)
+            if self._interrupts > 1:
+                return self._result("killed", status)
+            if self._grace_end is None:
+                self._grace_end = now + grace
+                if self.on_interrupt is not None:
+                    self.on_interrupt(grace)
+            elif now >= self._grace_end:
+                return self._result("interrupted", status)
+        return None
 
     def run(self, duration_ns: int | None = None, grace_ns: int = 1_000_000_000) -> RunResult:
         """Run rounds until the run ends (SPEC §2); machine exceptions become an error report."""
         prev = activate(self.ctx)
         try:
-            return self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
+            result = self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
+            result.rounds = self.rounds  # the loop keeps its count in a local until it ends
+            return result
         except BrokenPipeError:
             raise
         except Exception as exc:
@@ -221,40 +236,52 @@ class Arrangement:
                 activate(prev)
 
     def _run(self, end: int, grace: int) -> RunResult:
+        """The round loop.  Deliberately flat: this is the hot path of every run."""
         clock, ctx, tr = self.clock, self.ctx, self.tracer
         hooks = ctx.between_rounds
+        keep = self.keep_accepting
+        sim = type(clock) is SimClock
+        period = clock.period if sim else 0  # type: ignore[attr-defined]
         live = self._live
-        while True:
-            now = clock.now
-            if self._dirty:
-                self._dirty = False
-                live = self._live = [m for m in self.machines if not m._finished]
-                if not live:
-                    return self._result("finished", EXIT_OK)
-                if all(m._suspended and m._pending is None for m in live):
-                    return self._result("suspended", EXIT_OK)
-            if now >= end:
-                return self._result("duration", EXIT_OK)
-            if self._interrupts:
-                status = EXIT_SIGNAL.get(self._signal or signal.SIGINT, 130)
-                if self._interrupts > 1:
-                    return self._result("killed", status)
-                if self._grace_end is None:
-                    self._grace_end = now + grace
-                    if self.on_interrupt is not None:
-                        self.on_interrupt(grace)
-                elif now >= self._grace_end:
-                    return self._result("interrupted", status)
-            ctx.round = self.rounds
-            if tr is None:
-                fired = self._round(live)
-            else:
-                tr.round, tr.now = self.rounds, now
-                fired = self._traced_round(live, tr)
-            self.rounds += 1
-            clock.advance(fired)
-            for h in hooks:
-                h()
+        rounds = self.rounds
+        try:
+            while True:
+                now = clock.now
+                if self._attention:
+                    done = self._attend(now, grace)
+                    if done is not None:
+                        return done
+                    live = self._live
+                if now >= end:
+                    return self._result("duration", EXIT_OK)
+                fired = False
+                if tr is None:
+                    for m in live:
+                        if m._gate:
+                            fired = True
+                            if not self._gated(m):
+                                continue
+                        r = m._ringlets[m._state](m)
+                        if r is not None:
+                            if r >= 0:
+                                fired = True
+                            elif not keep:
+                                self._finish(m)
+                else:
+                    tr.round, tr.now = rounds, now
+                    ctx.round = rounds
+                    fired = self._traced_round(live, tr)
+                rounds += 1
+                if sim:
+                    clock.now += period  # a spin call inside machine code may have moved it on
+                else:
+                    clock.advance(fired)
+                if hooks:
+                    ctx.round = rounds
+                    for h in hooks:
+                        h()
+        finally:
+            self.rounds = rounds
 
     def _result(self, reason: str, status: int) -> RunResult:
         return RunResult(reason, self.rounds, self.clock.now, status)

@@ -1,0 +1,315 @@
+"""llfsm benchmarks: every number is printed in a table, never asserted.
+
+    python bench/run.py              all sections, also written to bench/results.md
+    python bench/run.py toggle build one or more sections
+    python bench/run.py --quick      smaller sizes (a smoke run)
+
+The machines are shared and noisy, so comparisons are measured side by side in one process
+and reported as ratios; each rate is the best of several repeats.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from gen import write_big, write_idle, write_toggle  # noqa: E402
+
+from llfsm.runtime import Arrangement, SimClock  # noqa: E402
+from llfsm.targets import load  # noqa: E402
+
+Table = tuple[str, list[str], list[list[str]]]
+QUICK = False
+
+
+def best_rate(fn: Callable[[int], None], n: int, repeats: int = 3) -> float:
+    """Operations per second: the best of `repeats` timed runs of fn(n)."""
+    best = float("inf")
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn(n)
+        best = min(best, time.perf_counter() - t)
+    return n / best
+
+
+def fmt_rate(x: float) -> str:
+    return f"{x:,.0f}"
+
+
+def llfsm_cmd() -> list[str]:
+    exe = Path(sys.executable).parent / "llfsm"
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "llfsm.cli"]
+
+
+# -- the toggle machine against plain Python and other libraries -------------------------------
+
+
+def plain_toggle(n: int) -> None:
+    """The CPython bound: a hand-written two-state toggle, one function call per step."""
+
+    class T:
+        count = 0
+
+    t = T()
+
+    def a(t: T) -> Callable:
+        t.count += 1
+        return b
+
+    def b(t: T) -> Callable:
+        t.count += 1
+        return a
+
+    s = a
+    for _ in range(n):
+        s = s(t)
+
+
+def llfsm_runner(cls: type, machines: int = 1) -> Callable[[int], None]:
+    def run(n: int) -> None:
+        arr = Arrangement(
+            [type(f"{cls.__name__}{i}", (cls,), {"NAME": f"m{i}"}) for i in range(machines)], clock=SimClock(1)
+        )
+        arr.run(duration_ns=n // machines)
+
+    return run
+
+
+def transitions_toggle(n: int) -> None:
+    from transitions import Machine as TMachine
+
+    class Model:
+        count = 0
+
+        def inc(self) -> None:
+            self.count += 1
+
+    m = Model()
+    TMachine(
+        m,
+        states=["A", "B"],
+        initial="A",
+        transitions=[
+            {"trigger": "go", "source": "A", "dest": "B", "after": "inc"},
+            {"trigger": "go", "source": "B", "dest": "A", "after": "inc"},
+        ],
+    )
+    for _ in range(n):
+        m.go()  # type: ignore[attr-defined]
+
+
+def statemachine_toggle(n: int) -> None:
+    from statemachine import State, StateMachine
+
+    class Toggle(StateMachine):
+        a = State(initial=True)
+        b = State()
+        go = a.to(b) | b.to(a)
+
+        def __init__(self) -> None:
+            self.count = 0
+            super().__init__()
+
+        def on_enter_state(self) -> None:
+            self.count += 1
+
+    s = Toggle()
+    for _ in range(n):
+        s.go()
+
+
+SISMIC_YAML = """
+statechart:
+  name: toggle
+  preamble: count = 0
+  root state:
+    name: root
+    initial: A
+    states:
+      - name: A
+        on entry: count += 1
+        transitions:
+          - {target: B, event: go}
+      - name: B
+        on entry: count += 1
+        transitions:
+          - {target: A, event: go}
+"""
+
+
+def sismic_toggle(n: int) -> None:
+    from sismic.interpreter import Interpreter
+    from sismic.io import import_from_yaml
+
+    it = Interpreter(import_from_yaml(SISMIC_YAML))
+    it.execute_once()
+    for _ in range(n):
+        it.queue("go")
+        it.execute_once()
+
+
+def section_toggle(tmp: Path) -> list[Table]:
+    cls = load(str(write_toggle(tmp)))
+    n = 200_000 if QUICK else 1_000_000
+    base = best_rate(plain_toggle, n)
+    ours = best_rate(llfsm_runner(cls), n)
+    rows = [
+        ["plain Python (CPython bound)", fmt_rate(base), "1.00", ""],
+        ["llfsm, compiled, sim clock", fmt_rate(ours), f"{ours / base:.2f}", "≥ 0.25 (≥ 1/3 in issue 5)"],
+    ]
+    others = [
+        ("transitions", transitions_toggle, 20_000),
+        ("python-statemachine", statemachine_toggle, 5_000),
+        ("sismic", sismic_toggle, 2_000),
+    ]
+    for name, fn, m in others:
+        try:
+            rate = best_rate(fn, m // (5 if QUICK else 1))
+        except ImportError:
+            rows.append([name, "not installed (pip install -e '.[bench]')", "", ""])
+            continue
+        target = "llfsm ≥ 20x" if name == "transitions" else ""
+        rows.append([name, fmt_rate(rate), f"{rate / base:.4f}", f"llfsm is {ours / rate:,.0f}x {target}".strip()])
+    return [
+        (
+            "Fired transitions per second: two-state toggle (guards True, OnEntry count += 1)",
+            ["implementation", "transitions/s", "ratio to plain", "note / target"],
+            rows,
+        )
+    ]
+
+
+# -- start-up ------------------------------------------------------------------------------------
+
+
+def first_line_time(cmd: list[str], env: dict[str, str]) -> float:
+    t = time.perf_counter()
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env, text=True)
+    assert p.stdout is not None
+    p.stdout.readline()
+    elapsed = time.perf_counter() - t
+    p.kill()
+    p.wait()
+    return elapsed
+
+
+def section_startup(tmp: Path) -> list[Table]:
+    m = tmp / "hello.machine"
+    m.mkdir()
+    (m / "machine.yaml").write_text("states:\n  - name: INITIAL\n")
+    (m / "State_INITIAL_OnEntry.py").write_text("print('first ringlet', flush=True)\n")
+    env = dict(os.environ, LLFSM_CACHE_DIR=str(tmp / "cache"))
+    subprocess.run([*llfsm_cmd(), "build", str(m), "-o", str(tmp / "out"), "-q"], check=True, env=env)
+    reps = 5 if QUICK else 15
+    rows = []
+    bare = statistics.median(
+        first_line_time([sys.executable, "-c", "print('x', flush=True)"], env) for _ in range(reps)
+    )
+    rows.append(["python -c print (interpreter alone)", f"{bare * 1000:.0f}", ""])
+    for label, target in (
+        ("llfsm run build/hello.py", str(tmp / "out" / "hello.py")),
+        ("llfsm run hello.machine (warm cache)", str(m)),
+    ):
+        first_line_time([*llfsm_cmd(), "run", "--clock", "sim", target], env)  # warm caches
+        t = statistics.median(
+            first_line_time([*llfsm_cmd(), "run", "--clock", "sim", target], env) for _ in range(reps)
+        )
+        rows.append([label, f"{t * 1000:.0f}", "< 150"])
+    shutil.rmtree(tmp / "cache", ignore_errors=True)
+    t = first_line_time([*llfsm_cmd(), "run", "--clock", "sim", str(m)], env)
+    rows.append(["llfsm run hello.machine (cold: compiles first)", f"{t * 1000:.0f}", ""])
+    return [("`llfsm run` start-up to the first ringlet (median of runs, ms)", ["command", "ms", "target"], rows)]
+
+
+# -- check and build -----------------------------------------------------------------------------
+
+
+def timed(cmd: list[str], env: dict[str, str]) -> float:
+    t = time.perf_counter()
+    subprocess.run(cmd, check=False, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - t
+
+
+def section_build(tmp: Path, sizes: tuple[int, ...] = (100,)) -> list[Table]:
+    rows = []
+    env = dict(os.environ)
+    targets = {100: ("< 1.5", "< 3", "< 0.3"), 1000: ("< 5", "", "")}
+    for count in sizes:
+        root = tmp / f"m{count}"
+        for i in range(count):
+            write_big(root, f"machine_{i:04d}", 10)
+        out = tmp / f"out{count}"
+        check = min(timed([*llfsm_cmd(), "check", "-q", str(root)], env) for _ in range(2))
+        cold = timed([*llfsm_cmd(), "build", "-q", str(root), "-o", str(out)], env)
+        warm = min(timed([*llfsm_cmd(), "build", "-q", str(root), "-o", str(out)], env) for _ in range(3))
+        tc, tb, tw = targets.get(count, ("", "", ""))
+        rows += [
+            [f"check {count} machines", f"{check:.2f}", tc],
+            [f"cold build {count}", f"{cold:.2f}", tb],
+            [f"warm build {count} (nothing changed)", f"{warm:.2f}", tw],
+        ]
+    return [
+        (
+            "`llfsm check` and `llfsm build` of generated 10-state machines (s, whole command)",
+            ["what", "seconds", "target"],
+            rows,
+        )
+    ]
+
+
+SECTIONS: dict[str, Callable[[Path], list[Table]]] = {
+    "toggle": section_toggle,
+    "startup": section_startup,
+    "build": section_build,
+}
+
+
+def render(tables: list[Table]) -> str:
+    out = []
+    for title, header, rows in tables:
+        out.append(f"### {title}\n")
+        out.append("| " + " | ".join(header) + " |")
+        out.append("|" + "|".join("---" for _ in header) + "|")
+        out += ["| " + " | ".join(r) + " |" for r in rows]
+        out.append("")
+    return "\n".join(out)
+
+
+def main() -> None:
+    global QUICK
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("sections", nargs="*", choices=[*SECTIONS, []], help="default: all")
+    ap.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run")
+    ap.add_argument("--no-write", action="store_true", help="do not write bench/results.md")
+    args = ap.parse_args()
+    QUICK = args.quick
+    chosen = args.sections or list(SECTIONS)
+    header = (
+        f"llfsm benchmarks: Python {platform.python_version()}, {platform.machine()}, "
+        f"{os.cpu_count()} CPUs, {time.strftime('%Y-%m-%d')}{' (quick)' if QUICK else ''}\n"
+    )
+    print(header)
+    tables: list[Table] = []
+    for name in chosen:
+        with tempfile.TemporaryDirectory(prefix=f"llfsm-bench-{name}-") as tmp:
+            new = SECTIONS[name](Path(tmp))
+        print(render(new), flush=True)
+        tables += new
+    if not args.no_write and not QUICK and set(chosen) == set(SECTIONS):
+        (HERE / "results.md").write_text("# Benchmark results\n\n" + header + "\n" + render(tables))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,57 @@
+"""Finding machine directories.  Light (os and pathlib only): `llfsm build` and `llfsm run`
+use it on their fast paths, before deciding whether anything needs the compiler."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+MACHINE_SUFFIX = ".machine"
+#: Folders never searched for machines: VCS data, caches, virtual environments.
+SKIP_DIRS = frozenset(
+    {
+        ".git",
+        ".hg",
+        ".svn",
+        "__pycache__",
+        "node_modules",
+        ".venv",
+        "venv",
+        ".tox",
+        ".mypy_cache",
+        ".ruff_cache",
+        ".pytest_cache",
+    }
+)
+#: colcon's output folders, skipped when they sit beside a `src/` (they hold copies).
+COLCON_OUTPUT = frozenset({"build", "install", "log"})
+
+
+def machine_name_of(path: Path) -> str:
+    name = path.name
+    return name[: -len(MACHINE_SUFFIX)] if name.endswith(MACHINE_SUFFIX) else name
+
+
+def is_machine_dir(path: Path) -> bool:
+    return path.name.endswith(MACHINE_SUFFIX) and path.is_dir()
+
+
+def find_machines(path: Path) -> list[Path]:
+    """`path` itself if it is a machine directory, else every NAME.machine folder below it."""
+    if is_machine_dir(path) or (path / "machine.yaml").exists():
+        return [path]
+    found: list[Path] = []
+    for root, dirs, _files in os.walk(path, followlinks=False):
+        here = Path(root)
+        keep = []
+        for d in sorted(dirs):
+            if d in SKIP_DIRS or d.startswith("."):
+                continue
+            if d in COLCON_OUTPUT and (here / "src").is_dir():
+                continue
+            if d.endswith(MACHINE_SUFFIX):
+                found.append(here / d)
+                continue
+            keep.append(d)
+        dirs[:] = keep
+    return found
