@@ -25,7 +25,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from gen import write_big, write_idle, write_toggle  # noqa: E402
+from gen import write_big, write_toggle  # noqa: E402
 
 from llfsm.runtime import Arrangement, SimClock  # noqa: E402
 from llfsm.targets import load  # noqa: E402
