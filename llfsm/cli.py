@@ -10,11 +10,15 @@ from __future__ import annotations
 import os
 import sys
 from pathlib import Path
-from typing import NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
 
 from . import __version__
+
+if TYPE_CHECKING:
+    from .ros.bus import Bus
+    from .runtime import RunContext
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
 
@@ -188,6 +192,21 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
 )
 @click.option("--suspended", "suspended", multiple=True, metavar="MACHINE", help="Load MACHINE suspended.")
 @click.option("--keep-accepting", is_flag=True, help="Keep machines loaded in accepting states.")
+@click.option(
+    "--node",
+    "nodes",
+    multiple=True,
+    metavar="NAME",
+    help="Start a node beside the machines: turtlesim, turtle_sensor_poster, teleop.",
+)
+@click.option("--remap", "remaps", multiple=True, metavar="[NODE:]FROM:=TO", help="Remap a topic or service name.")
+@click.option("--param", "params", multiple=True, metavar="[NODE:]NAME:=VALUE", help="Set a node parameter.")
+@click.option("--echo", "echoes", multiple=True, metavar="TOPIC", help="Print the topic's messages as YAML.")
+@click.option(
+    "--image", type=click.Path(dir_okay=False), help="turtlesim: write the picture (.png or .svg) at the end."
+)
+@click.option("--view", is_flag=True, help="turtlesim: open a live window (needs pygame).")
+@click.option("--introspect", is_flag=True, help="At the end, print the nodes, topics and services on stderr.")
 def run(
     targets: tuple[str, ...],
     verbose: bool,
@@ -199,6 +218,13 @@ def run(
     grace: int,
     suspended: tuple[str, ...],
     keep_accepting: bool,
+    nodes: tuple[str, ...] = (),
+    remaps: tuple[str, ...] = (),
+    params: tuple[str, ...] = (),
+    echoes: tuple[str, ...] = (),
+    image: str | None = None,
+    view: bool = False,
+    introspect: bool = False,
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
@@ -206,7 +232,7 @@ def run(
     of an installed package.  Exit status: 0 normal end, 1 an exception in machine code,
     2 bad arguments or a machine that fails validation.
     """
-    from .runtime import Arrangement, SimClock, Tracer, UnknownMachineError, WallClock, signals_handled
+    from .runtime import Arrangement, RunContext, SimClock, Tracer, UnknownMachineError, WallClock, signals_handled
     from .targets import InvalidMachine, MachineLoadError, TargetError, load
 
     if period is not None and period <= 0:
@@ -226,6 +252,13 @@ def run(
             click.echo(e.report.format(), nl=False, err=True)
             sys.exit(EXIT_ERRORS)
     the_clock = SimClock(period or 1_000_000) if clock == "sim" else WallClock(idle, period)
+    ctx = RunContext(the_clock)
+    if image and not image.lower().endswith((".png", ".svg")):
+        fail(f"--image {image}: the picture is written as .png or .svg")
+    if (image or view) and "turtlesim" not in nodes:
+        fail("--image and --view draw the turtle simulator: add --node turtlesim")
+    uses_bus = bool(nodes or remaps or params or echoes or introspect)
+    bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
     trace_out = None
     if trace_file:
         try:
@@ -235,9 +268,7 @@ def run(
     tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None
     try:
         try:
-            arr = Arrangement(
-                classes, clock=the_clock, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended
-            )
+            arr = Arrangement(classes, context=ctx, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended)
         except (UnknownMachineError, ValueError) as e:
             fail(str(e).strip("'\""))
         except Exception as exc:  # a variable initialiser raised: machine code
@@ -260,7 +291,63 @@ def run(
     sys.stdout.flush()
     if result.error is not None:
         click.echo(result.error.format(), nl=False, err=True)
+    if introspect and bus is not None:
+        click.echo(_graph_text(bus.graph()), nl=False, err=True)
     sys.exit(result.status)
+
+
+def _start_bus(
+    ctx: RunContext,
+    targets: tuple[str, ...],
+    nodes: tuple[str, ...],
+    remaps: tuple[str, ...],
+    params: tuple[str, ...],
+    echoes: tuple[str, ...],
+    image: str | None,
+    view: bool,
+) -> Bus:
+    """The bus, its remaps and parameters, the --node nodes and the --echo readers, set up before
+    any machine runs, so that turtle1 exists and no message is missed."""
+    from .nodes import NodeError, NodeOptions, start
+    from .nodes.echo import echo
+    from .ros import InvalidNameError, Remap, bus_of, parse_param
+    from .runtime.context import activate
+
+    prev = activate(ctx)
+    try:
+        bus = bus_of(ctx)
+        try:
+            bus.remaps = [Remap.parse(r) for r in remaps]
+            for text in params:
+                node, name, value = parse_param(text)
+                bus.parameters[(node, name)] = value
+            for topic in echoes:
+                echo(bus, topic)
+        except (InvalidNameError, ValueError) as e:
+            fail(str(e))
+        if nodes:
+            bus.initialised = True  # the nodes are up: ros.ok() is true from the first round
+        options = NodeOptions(image=Path(image) if image else None, view=view)
+        for name in dict.fromkeys(nodes):
+            try:
+                start(name, ctx, options)
+            except NodeError as e:
+                fail(str(e))
+        return bus
+    finally:
+        activate(prev)
+
+
+def _graph_text(graph: dict[str, Any]) -> str:
+    out = ["nodes:"] + [f"  {n}" for n in graph["nodes"]] + ["topics:"]
+    for name, t in graph["topics"].items():
+        out.append(
+            f"  {name} [{t['type']}] publishers: {t['publishers']}, subscriptions: {t['subscriptions']}, "
+            f"messages: {t['messages']}"
+        )
+    out.append("services:")
+    out += [f"  {name} [{typ}]" for name, typ in graph["services"].items()]
+    return "\n".join(out) + "\n"
 
 
 # -- new ---------------------------------------------------------------------------------------

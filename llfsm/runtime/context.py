@@ -25,6 +25,9 @@ class RunContext:
         #: Free slots for the bus and nodes (`bus`, `remaps`, ...).
         self.extras: dict[str, Any] = {}
         self.round = 0
+        #: Run time at which the run will end (--duration), if any: blocking waits inside
+        #: machine code (spin calls) never wait past it.
+        self.deadline: int | None = None
 
 
 _current: RunContext | None = None

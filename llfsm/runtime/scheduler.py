@@ -213,6 +213,7 @@ class Arrangement:
     def run(self, duration_ns: int | None = None, grace_ns: int = 1_000_000_000) -> RunResult:
         """Run rounds until the run ends (SPEC §2); machine exceptions become an error report."""
         prev = activate(self.ctx)
+        self.ctx.deadline = duration_ns
         try:
             result = self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
             result.rounds = self.rounds  # the loop keeps its count in a local until it ends

@@ -1,0 +1,39 @@
+"""Nodes: Python participants on the bus beside the machines, started with `llfsm run --node NAME`.
+
+They never keep a run alive: the run ends when its machines do.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..runtime.context import RunContext
+
+#: name -> module whose `start(ctx, options)` creates the node
+REGISTRY = {
+    "turtlesim": "llfsm.nodes.turtlesim",
+    "turtle_sensor_poster": "llfsm.nodes.turtle_sensor_poster",
+    "teleop": "llfsm.nodes.teleop",
+}
+
+
+@dataclass
+class NodeOptions:
+    """What the command line passes on to nodes."""
+
+    image: Path | None = None
+    view: bool = False
+    extras: dict[str, object] = field(default_factory=dict)
+
+
+class NodeError(Exception):
+    """A node that cannot start (unknown name, missing optional dependency): exit status 2."""
+
+
+def start(name: str, ctx: RunContext, options: NodeOptions) -> object:
+    if name not in REGISTRY:
+        raise NodeError(f"--node {name}: no such node (available: {', '.join(sorted(REGISTRY))})")
+    module = importlib.import_module(REGISTRY[name])
+    return module.start(ctx, options)

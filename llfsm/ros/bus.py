@@ -1,0 +1,291 @@
+"""The in-process bus: topics, services, timers and the one executor that dispatches them.
+
+Everything runs on the scheduler's thread.  The executor runs between rounds (registered in
+the run context) and inside `spin_once` / `spin_until_future_complete`, always in the same
+order (due timers, then queued work first in, first out), so a run under the sim clock is
+reproducible byte for byte.
+
+Delivery: publishing copies the message once per reader (so a machine may keep mutating and
+re-publishing one object, as the seed machines do); a PULL reader keeps only the newest
+message; a PUSH subscription queues up to its QoS depth, dropping the oldest.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import os
+import sys
+import time
+from collections import deque
+from collections.abc import Callable
+from enum import Enum
+from typing import TYPE_CHECKING, Any
+
+from ..runtime.context import RunContext, current
+from .names import Remap
+
+if TYPE_CHECKING:
+    from ..msgs._message import Message
+    from .node import Node, Subscription, Timer
+
+
+class FutureReturnCode(Enum):
+    """What `spin_until_future_complete` returns (rclcpp's names)."""
+
+    SUCCESS = 0
+    INTERRUPTED = 1
+    TIMEOUT = 2
+
+    def __str__(self) -> str:
+        return self.name
+
+
+class Future:
+    """The result of an asynchronous service call (`client.call_async`)."""
+
+    __slots__ = ("_callbacks", "_cancelled", "_done", "_exception", "_result", "_service")
+
+    def __init__(self, service: str | None = None) -> None:
+        self._done = False
+        self._cancelled = False
+        self._result: Any = None
+        self._exception: BaseException | None = None
+        self._callbacks: list[Callable[[Future], None]] = []
+        self._service = service  # the service the request went to, if any
+
+    def done(self) -> bool:
+        return self._done
+
+    def cancelled(self) -> bool:
+        return self._cancelled
+
+    def cancel(self) -> None:
+        if not self._done:
+            self._cancelled = True
+            self._finish()
+
+    def result(self) -> Any:
+        """The response, or None while not done (rclpy's behaviour); re-raises a server error."""
+        if self._exception is not None:
+            raise self._exception
+        return self._result
+
+    def exception(self) -> BaseException | None:
+        return self._exception
+
+    def set_result(self, result: Any) -> None:
+        self._result = result
+        self._finish()
+
+    def set_exception(self, exc: BaseException) -> None:
+        self._exception = exc
+        self._finish()
+
+    def add_done_callback(self, fn: Callable[[Future], None]) -> None:
+        if self._done:
+            fn(self)
+        else:
+            self._callbacks.append(fn)
+
+    def _finish(self) -> None:
+        self._done = True
+        callbacks, self._callbacks = self._callbacks, []
+        for fn in callbacks:
+            fn(self)
+
+    def __repr__(self) -> str:
+        state = "cancelled" if self._cancelled else "done" if self._done else "pending"
+        return f"<Future {state}{' for ' + self._service if self._service else ''}>"
+
+
+class Topic:
+    """A named channel: its type and the readers attached to it."""
+
+    __slots__ = ("name", "published", "publishers", "readers", "type")
+
+    def __init__(self, name: str, type_: type[Message]) -> None:
+        self.name = name
+        self.type = type_
+        self.readers: list[Subscription] = []
+        self.publishers = 0
+        self.published = 0
+
+
+class _Request:
+    """A service request waiting for the executor."""
+
+    __slots__ = ("bus", "future", "request", "service")
+
+    def __init__(self, bus: Bus, service: str, request: Message, future: Future) -> None:
+        self.bus, self.service, self.request, self.future = bus, service, request, future
+
+    def _run(self) -> None:
+        server = self.bus.services.get(self.service)
+        if server is None or self.future.done():
+            return  # no server (any more): the future stays pending; spin_until_future_complete says TIMEOUT
+        server._serve(self.request, self.future)
+
+
+class Bus:
+    """The graph of one run: nodes, topics, services, timers and pending work."""
+
+    def __init__(self, ctx: RunContext) -> None:
+        self.ctx = ctx
+        self.clock = ctx.clock
+        self.initialised = False
+        self.shut = False
+        self.nodes: list[Node] = []
+        self.topics: dict[str, Topic] = {}
+        self.services: dict[str, Any] = {}  # name -> node.ServiceServer
+        self.clients: dict[str, int] = {}  # service name -> number of clients
+        self.timers: list[tuple[int, int, Timer]] = []  # heap of (due ns, sequence, timer)
+        self.ready: deque[Any] = deque()  # work items with a _run() method
+        self.remaps: list[Remap] = []
+        self.parameters: dict[tuple[str | None, str], Any] = {}  # (node or None, name) -> override
+        #: Called with each new topic whose name is a key here (`--echo` waits for its topic).
+        self.watchers: dict[str, list[Callable[[Topic], None]]] = {}
+        self._seq = itertools.count()
+        use_stdout = os.environ.get("RCUTILS_LOGGING_USE_STDOUT", "0") == "1"
+        self.log_stream = sys.stdout if use_stdout else sys.stderr
+        ctx.between_rounds.append(self.spin_some)
+
+    # -- lifecycle ---------------------------------------------------------------------------
+    def ok(self) -> bool:
+        return self.initialised and not self.shut and not self.ctx.interrupted
+
+    # -- topics ------------------------------------------------------------------------------
+    def topic(self, name: str, type_: type[Message], role: str) -> Topic:
+        t = self.topics.get(name)
+        if t is None:
+            t = self.topics[name] = Topic(name, type_)
+            for fn in self.watchers.pop(name, []):
+                fn(t)
+        elif t.type is not type_:
+            raise TypeError(f"cannot {role} {name} as {type_._TYPE}: the topic already carries {t.type._TYPE}")
+        return t
+
+    # -- timers ------------------------------------------------------------------------------
+    def add_timer(self, timer: Timer, due: int) -> None:
+        heapq.heappush(self.timers, (due, next(self._seq), timer))
+
+    def watch(self, name: str, fn: Callable[[Topic], None]) -> None:
+        """Call fn(topic) once the topic exists (now, if it already does)."""
+        if name in self.topics:
+            fn(self.topics[name])
+        else:
+            self.watchers.setdefault(name, []).append(fn)
+
+    def next_timer_due(self) -> int | None:
+        while self.timers and self.timers[0][2]._cancelled:
+            heapq.heappop(self.timers)
+        return self.timers[0][0] if self.timers else None
+
+    def _fire_due_timers(self, now: int) -> bool:
+        timers = self.timers
+        fired = False
+        sim = self.clock.kind == "sim"
+        while timers and timers[0][0] <= now:
+            due, _seq, timer = heapq.heappop(timers)
+            if timer._cancelled or timer._due != due:
+                continue
+            nxt = due + timer.period_ns
+            if not sim and nxt <= now:  # wall clock: skip missed periods, as rcl does
+                nxt = now + timer.period_ns - (now - due) % timer.period_ns
+            timer._due = nxt
+            heapq.heappush(timers, (nxt, next(self._seq), timer))
+            fired = True
+            timer._call()
+        return fired
+
+    # -- the executor --------------------------------------------------------------------------
+    def spin_some(self) -> None:
+        """Between rounds: due timers, then the work queued before this call (first in, first out)."""
+        if self.timers and self.timers[0][0] <= self.clock.now:
+            self._fire_due_timers(self.clock.now)
+        ready = self.ready
+        for _ in range(len(ready)):
+            ready.popleft()._run()
+
+    def spin_once(self, timeout_ns: int) -> bool:
+        """One piece of work: a due timer, or the oldest queued item; else wait up to timeout_ns
+        for the next timer (the sim clock jumps, the wall clock sleeps).  True if work ran."""
+        now = self.clock.now
+        if self.timers and self.timers[0][0] <= now:
+            return self._fire_due_timers(now)
+        if self.ready:
+            self.ready.popleft()._run()
+            return True
+        if timeout_ns <= 0:
+            return False
+        due = self.next_timer_due()
+        deadline = now + timeout_ns
+        if due is None or due > deadline:
+            self.clock.sleep_until(deadline)
+            return False
+        self.clock.sleep_until(due)
+        return self._fire_due_timers(self.clock.now)
+
+    def spin_until(self, future: Future, timeout_ns: int | None) -> FutureReturnCode:
+        deadline = None if timeout_ns is None else self.clock.now + timeout_ns
+        if self.ctx.deadline is not None:
+            deadline = self.ctx.deadline if deadline is None else min(deadline, self.ctx.deadline)
+        while True:
+            if future.done():
+                return FutureReturnCode.SUCCESS
+            if not self.ok():
+                return FutureReturnCode.INTERRUPTED
+            if future._service is not None and future._service not in self.services:
+                return FutureReturnCode.TIMEOUT  # no server: nothing in this process can answer
+            if self.timers and self.timers[0][0] <= self.clock.now:
+                self._fire_due_timers(self.clock.now)
+                continue
+            if self.ready:
+                self.ready.popleft()._run()
+                continue
+            # nothing ready: only a timer can still change anything
+            due = self.next_timer_due()
+            if due is None:
+                return FutureReturnCode.TIMEOUT  # would block forever: say so at once
+            if deadline is not None and due > deadline:
+                self.clock.sleep_until(deadline)
+                return FutureReturnCode.TIMEOUT
+            self.clock.sleep_until(due)
+
+    # -- services ----------------------------------------------------------------------------
+    def call(self, service: str, request: Message) -> Future:
+        future = Future(service)
+        self.ready.append(_Request(self, service, request, future))
+        return future
+
+    # -- logging -------------------------------------------------------------------------------
+    def stamp(self) -> tuple[int, int]:
+        """Seconds and nanoseconds for log lines: run time under the sim clock, else wall time."""
+        ns = self.clock.now if self.clock.kind == "sim" else time.time_ns()
+        return divmod(ns, 1_000_000_000)
+
+    # -- introspection ---------------------------------------------------------------------------
+    def graph(self) -> dict[str, Any]:
+        """Nodes, topics (type, publishers, subscriptions, messages) and services: for the CLI."""
+        return {
+            "nodes": sorted(n.get_fully_qualified_name() for n in self.nodes if not n._destroyed),
+            "topics": {
+                name: {
+                    "type": t.type._TYPE,
+                    "publishers": t.publishers,
+                    "subscriptions": len(t.readers),
+                    "messages": t.published,
+                }
+                for name, t in sorted(self.topics.items())
+            },
+            "services": {name: s.type._TYPE for name, s in sorted(self.services.items())},
+        }
+
+
+def bus_of(ctx: RunContext | None = None) -> Bus:
+    """The bus of the active run (made on first use)."""
+    ctx = ctx if ctx is not None else current()
+    bus = ctx.extras.get("bus")
+    if bus is None:
+        bus = ctx.extras["bus"] = Bus(ctx)
+    return bus

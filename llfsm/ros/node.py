@@ -1,0 +1,522 @@
+"""Nodes and what they create: publishers, subscriptions (PUSH and PULL), services, clients,
+timers, loggers and parameters, with rclpy's names and signatures."""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Any
+
+from ..msgs._message import Message, Service, is_message_class, is_service_class
+from .bus import Bus, Future, bus_of
+from .names import expand, normalise_namespace, remap_name, remap_node, validate_node_name
+
+
+class QoSProfile:
+    """Only the history depth matters in process; accepted wherever rclpy takes a QoS."""
+
+    def __init__(self, depth: int = 10, **_ignored: Any) -> None:
+        self.depth = depth
+
+
+def _depth(qos: int | QoSProfile, where: str) -> int:
+    depth = qos.depth if isinstance(qos, QoSProfile) else qos
+    if isinstance(depth, bool) or not isinstance(depth, int) or depth < 1:
+        raise ValueError(f"{where}: the QoS depth must be an integer >= 1, not {depth!r}")
+    return depth
+
+
+def _type_name(obj: object) -> str:
+    t = obj if isinstance(obj, type) else type(obj)
+    return getattr(t, "_TYPE", "") or t.__name__
+
+
+# -- publishers and subscriptions -----------------------------------------------------------------
+
+
+class Publisher:
+    __slots__ = ("_bus", "_destroyed", "_topic", "_type", "msg_type", "topic_name")
+
+    def __init__(self, node: Node, msg_type: type[Message], topic: str) -> None:
+        self._bus = node._bus
+        self.topic_name = node.resolve_topic_name(topic)
+        self._topic = node._bus.topic(self.topic_name, msg_type, "publish on")
+        self._topic.publishers += 1
+        self._type = self.msg_type = msg_type
+        self._destroyed = False
+
+    def publish(self, msg: Message) -> None:
+        if type(msg) is not self._type:
+            raise TypeError(
+                f"publish() on {self.topic_name}: expected a {self._type._TYPE} message, got {_type_name(msg)}"
+            )
+        topic = self._topic
+        topic.published += 1
+        for reader in topic.readers:
+            reader._deliver(msg._copy())
+
+    def get_subscription_count(self) -> int:
+        return len(self._topic.readers)
+
+    def destroy(self) -> None:
+        if not self._destroyed:
+            self._destroyed = True
+            self._topic.publishers -= 1
+
+
+class Subscription:
+    """A reader of a topic.  PUSH (with a callback): messages queue up to the QoS depth and the
+    callback runs when the executor spins.  PULL (callback None, clfsm's preferred style):
+    `latest` is the newest message, `take()` the newest one not taken yet, `count` how many came."""
+
+    __slots__ = (
+        "_bus",
+        "_destroyed",
+        "_fresh",
+        "_queue",
+        "_scheduled",
+        "_topic",
+        "callback",
+        "count",
+        "latest",
+        "msg_type",
+        "topic_name",
+    )
+
+    def __init__(
+        self, node: Node, msg_type: type[Message], topic: str, callback: Callable[[Any], Any] | None, depth: int
+    ) -> None:
+        self._bus = node._bus
+        self.topic_name = node.resolve_topic_name(topic)
+        self._topic = node._bus.topic(self.topic_name, msg_type, "subscribe to")
+        self.msg_type = msg_type
+        self.callback = callback
+        self.count = 0
+        self.latest: Any = None
+        self._fresh = False
+        self._queue: deque[Any] = deque(maxlen=depth)
+        self._scheduled = False
+        self._destroyed = False
+        self._topic.readers.append(self)
+
+    def _deliver(self, msg: Any) -> None:
+        self.latest = msg
+        self.count += 1
+        if self.callback is None:
+            self._fresh = True
+            return
+        self._queue.append(msg)  # a full queue drops its oldest message
+        if not self._scheduled:
+            self._scheduled = True
+            self._bus.ready.append(self)
+
+    def _run(self) -> None:
+        """Executor work: hand the messages queued so far to the callback, oldest first.  What
+        callbacks publish meanwhile waits for the next spin, so a callback that publishes on
+        its own topic cannot loop forever."""
+        queue = self._queue
+        self._scheduled = False
+        for _ in range(len(queue)):
+            if self._destroyed:
+                return
+            self.callback(queue.popleft())  # type: ignore[misc]
+
+    def take(self) -> Any:
+        """The newest message not taken yet, or None (PULL readers)."""
+        if self._fresh:
+            self._fresh = False
+            return self.latest
+        return None
+
+    @property
+    def is_pull(self) -> bool:
+        return self.callback is None
+
+    def destroy(self) -> None:
+        if not self._destroyed:
+            self._destroyed = True
+            self._topic.readers.remove(self)
+
+
+# -- services --------------------------------------------------------------------------------------
+
+
+class ServiceServer:
+    def __init__(self, node: Node, srv_type: type[Service], name: str, callback: Callable[[Any, Any], Any]) -> None:
+        self._bus = node._bus
+        self.srv_name = node.resolve_service_name(name)
+        if self.srv_name in self._bus.services:
+            raise ValueError(f"create_service(): {self.srv_name} already has a server; a service has exactly one")
+        self.type = srv_type
+        self.callback = callback
+        self._bus.services[self.srv_name] = self
+
+    def _serve(self, request: Message, future: Future) -> None:
+        response = self.callback(request, self.type.Response())
+        if type(response) is not self.type.Response:
+            raise TypeError(
+                f"the callback of service {self.srv_name} must return the {self.type.Response._TYPE} it was "
+                f"given (filled in), not {_type_name(response)}"
+            )
+        future.set_result(response._copy())
+
+    def destroy(self) -> None:
+        if self._bus.services.get(self.srv_name) is self:
+            del self._bus.services[self.srv_name]
+
+
+class Client:
+    def __init__(self, node: Node, srv_type: type[Service], name: str) -> None:
+        self._bus = node._bus
+        self.srv_name = node.resolve_service_name(name)
+        self.srv_type = srv_type
+
+    def service_is_ready(self) -> bool:
+        return self.srv_name in self._bus.services
+
+    def wait_for_service(self, timeout_sec: float | None = None) -> bool:
+        """True once a server exists.  Waits (the sim clock jumps) at most timeout_sec, running due
+        timers meanwhile; with no timeout it does not block: nothing else in this process could
+        create the server while this machine waits."""
+        if self.service_is_ready():
+            return True
+        if timeout_sec is None or timeout_sec <= 0:
+            return False
+        bus = self._bus
+        deadline = bus.clock.now + round(timeout_sec * 1e9)
+        while bus.clock.now < deadline:
+            bus.spin_once(deadline - bus.clock.now)
+            if self.service_is_ready():
+                return True
+        return False
+
+    def call_async(self, request: Message) -> Future:
+        if type(request) is not self.srv_type.Request:
+            raise TypeError(
+                f"call_async() on {self.srv_name}: expected a {self.srv_type.Request._TYPE}, got {_type_name(request)}"
+            )
+        return self._bus.call(self.srv_name, request._copy())
+
+    def call(self, request: Message, timeout_sec: float | None = None) -> Any:
+        """Synchronous call: spins until the response; raises TimeoutError if none can come."""
+        from .bus import FutureReturnCode
+
+        future = self.call_async(request)
+        code = self._bus.spin_until(future, None if timeout_sec is None else round(timeout_sec * 1e9))
+        if code is not FutureReturnCode.SUCCESS:
+            raise TimeoutError(f"no response from {self.srv_name} ({code.name})")
+        return future.result()
+
+    def destroy(self) -> None:
+        pass
+
+
+# -- timers ------------------------------------------------------------------------------------------
+
+
+class Timer:
+    """Calls back every period of run time; the first call is one period after creation."""
+
+    __slots__ = ("_bus", "_cancelled", "_due", "callback", "period_ns")
+
+    def __init__(self, bus: Bus, period_sec: float, callback: Callable[[], Any]) -> None:
+        if isinstance(period_sec, bool) or not isinstance(period_sec, int | float) or not period_sec > 0:
+            raise ValueError(f"create_timer(): the period must be a number of seconds > 0, not {period_sec!r}")
+        self._bus = bus
+        self.period_ns = max(1, round(period_sec * 1e9))
+        self.callback = callback
+        self._cancelled = False
+        self._due = bus.clock.now + self.period_ns
+        bus.add_timer(self, self._due)
+
+    def _call(self) -> None:
+        self.callback()
+
+    @property
+    def timer_period_ns(self) -> int:
+        return self.period_ns
+
+    def cancel(self) -> None:
+        self._cancelled = True
+
+    def is_canceled(self) -> bool:
+        return self._cancelled
+
+    def reset(self) -> None:
+        self._cancelled = False
+        self._due = self._bus.clock.now + self.period_ns
+        self._bus.add_timer(self, self._due)
+
+    def time_until_next_call(self) -> int:
+        return max(0, self._due - self._bus.clock.now)
+
+    def destroy(self) -> None:
+        self.cancel()
+
+
+# -- logging -----------------------------------------------------------------------------------------
+
+
+class LoggingSeverity(IntEnum):
+    UNSET = 0
+    DEBUG = 10
+    INFO = 20
+    WARN = 30
+    ERROR = 40
+    FATAL = 50
+
+
+class Logger:
+    """rclpy's logger: `[INFO] [seconds.nanoseconds] [name]: message`, on stderr as ROS 2 Humble
+    does (RCUTILS_LOGGING_USE_STDOUT=1 sends it to stdout).  Under the sim clock the stamp is run
+    time, so logs are reproducible too."""
+
+    def __init__(self, bus: Bus, name: str) -> None:
+        self._bus = bus
+        self.name = name
+        self.level = LoggingSeverity.INFO
+        self._once: set[tuple[str, str]] = set()
+        self._last: dict[tuple[str, str], int] = {}
+
+    def get_name(self) -> str:
+        return self.name
+
+    def set_level(self, level: LoggingSeverity | int) -> None:
+        self.level = LoggingSeverity(level)
+
+    def get_child(self, name: str) -> Logger:
+        child = Logger(self._bus, f"{self.name}.{name}")
+        child.level = self.level
+        return child
+
+    def log(
+        self,
+        message: object,
+        severity: LoggingSeverity,
+        *,
+        once: bool = False,
+        throttle_duration_sec: float | None = None,
+        skip_first: bool = False,
+    ) -> bool:
+        if severity < self.level:
+            return False
+        text = str(message)
+        key = (severity.name, text)
+        if once:
+            if key in self._once:
+                return False
+            self._once.add(key)
+        if skip_first and key not in self._last:
+            self._last[key] = self._bus.clock.now
+            return False
+        if throttle_duration_sec is not None:
+            last = self._last.get(key)
+            if last is not None and self._bus.clock.now - last < throttle_duration_sec * 1e9:
+                return False
+            self._last[key] = self._bus.clock.now
+        sec, nsec = self._bus.stamp()
+        stream = self._bus.log_stream
+        stream.write(f"[{severity.name}] [{sec}.{nsec:09d}] [{self.name}]: {text}\n")
+        stream.flush()
+        return True
+
+    def debug(self, message: object, **kw: Any) -> bool:
+        return self.log(message, LoggingSeverity.DEBUG, **kw)
+
+    def info(self, message: object, **kw: Any) -> bool:
+        return self.log(message, LoggingSeverity.INFO, **kw)
+
+    def warning(self, message: object, **kw: Any) -> bool:
+        return self.log(message, LoggingSeverity.WARN, **kw)
+
+    warn = warning
+
+    def error(self, message: object, **kw: Any) -> bool:
+        return self.log(message, LoggingSeverity.ERROR, **kw)
+
+    def fatal(self, message: object, **kw: Any) -> bool:
+        return self.log(message, LoggingSeverity.FATAL, **kw)
+
+
+# -- parameters and time --------------------------------------------------------------------------------
+
+
+@dataclass
+class Parameter:
+    name: str
+    value: Any = None
+
+    def get_parameter_value(self) -> Any:
+        return self.value
+
+
+@dataclass(frozen=True)
+class Time:
+    nanoseconds: int
+
+    def seconds_nanoseconds(self) -> tuple[int, int]:
+        return divmod(self.nanoseconds, 1_000_000_000)
+
+
+class RunClock:
+    """`node.get_clock()`: the run clock (virtual under --clock sim)."""
+
+    def __init__(self, bus: Bus) -> None:
+        self._bus = bus
+
+    def now(self) -> Time:
+        return Time(self._bus.clock.now)
+
+
+# -- the node ------------------------------------------------------------------------------------------
+
+
+class Node:
+    """A participant on the bus, as `rclpy.node.Node`.  Names follow ROS 2 rules: relative names
+    take the node's namespace, `~/x` is private to the node, and `--remap` rules apply."""
+
+    def __init__(
+        self, node_name: str, namespace: str = "", *, start_parameter_services: bool = True, **_ignored: Any
+    ) -> None:
+        bus = bus_of()
+        if not bus.initialised:
+            raise RuntimeError("call ros.init() before creating a node")
+        name, ns = remap_node(validate_node_name(node_name), normalise_namespace(namespace), bus.remaps)
+        self._bus = bus
+        self._name = name
+        self._ns = ns
+        self._destroyed = False
+        self._entities: list[Any] = []
+        self._params: dict[str, Parameter] = {}
+        logger_name = ".".join([*ns.strip("/").split("/"), name]) if ns != "/" else name
+        self._logger = Logger(bus, logger_name)
+        bus.nodes.append(self)
+
+    # names
+    def get_name(self) -> str:
+        return self._name
+
+    def get_namespace(self) -> str:
+        return self._ns
+
+    def get_fully_qualified_name(self) -> str:
+        return f"{self._ns.rstrip('/')}/{self._name}"
+
+    def resolve_topic_name(self, topic: str) -> str:
+        full = expand(topic, self._name, self._ns, "topic")
+        return remap_name(full, self._name, self._ns, self._bus.remaps, "topic")
+
+    def resolve_service_name(self, service: str) -> str:
+        full = expand(service, self._name, self._ns, "service")
+        return remap_name(full, self._name, self._ns, self._bus.remaps, "service")
+
+    # entities
+    def _check(self) -> None:
+        if self._destroyed:
+            raise RuntimeError(f"node {self.get_fully_qualified_name()} has been destroyed")
+
+    def create_publisher(
+        self, msg_type: type[Message], topic: str, qos_profile: int | QoSProfile = 10, **_ignored: Any
+    ) -> Publisher:
+        self._check()
+        if not is_message_class(msg_type):
+            raise TypeError(f"create_publisher(): msg_type must be a message class such as Twist, not {msg_type!r}")
+        _depth(qos_profile, "create_publisher()")
+        pub = Publisher(self, msg_type, topic)
+        self._entities.append(pub)
+        return pub
+
+    def create_subscription(
+        self,
+        msg_type: type[Message],
+        topic: str,
+        callback: Callable[[Any], Any] | None,
+        qos_profile: int | QoSProfile = 10,
+        **_ignored: Any,
+    ) -> Subscription:
+        self._check()
+        if not is_message_class(msg_type):
+            raise TypeError(f"create_subscription(): msg_type must be a message class such as Twist, not {msg_type!r}")
+        if callback is not None and not callable(callback):
+            raise TypeError("create_subscription(): callback must be callable, or None for a PULL reader")
+        sub = Subscription(self, msg_type, topic, callback, _depth(qos_profile, "create_subscription()"))
+        self._entities.append(sub)
+        return sub
+
+    def create_service(
+        self, srv_type: type[Service], srv_name: str, callback: Callable[[Any, Any], Any], **_ignored: Any
+    ) -> ServiceServer:
+        self._check()
+        if not is_service_class(srv_type):
+            raise TypeError(f"create_service(): srv_type must be a service class such as Spawn, not {srv_type!r}")
+        if not callable(callback):
+            raise TypeError("create_service(): callback must be callable as callback(request, response)")
+        srv = ServiceServer(self, srv_type, srv_name, callback)
+        self._entities.append(srv)
+        return srv
+
+    def create_client(self, srv_type: type[Service], srv_name: str, **_ignored: Any) -> Client:
+        self._check()
+        if not is_service_class(srv_type):
+            raise TypeError(f"create_client(): srv_type must be a service class such as Spawn, not {srv_type!r}")
+        cli = Client(self, srv_type, srv_name)
+        self._entities.append(cli)
+        return cli
+
+    def create_timer(self, timer_period_sec: float, callback: Callable[[], Any], **_ignored: Any) -> Timer:
+        self._check()
+        timer = Timer(self._bus, timer_period_sec, callback)
+        self._entities.append(timer)
+        return timer
+
+    def destroy_publisher(self, p: Publisher) -> None:
+        p.destroy()
+
+    def destroy_subscription(self, s: Subscription) -> None:
+        s.destroy()
+
+    def destroy_service(self, s: ServiceServer) -> None:
+        s.destroy()
+
+    def destroy_timer(self, t: Timer) -> None:
+        t.destroy()
+
+    def destroy_client(self, c: Client) -> None:
+        c.destroy()
+
+    def destroy_node(self) -> None:
+        for e in self._entities:
+            e.destroy()
+        self._entities.clear()
+        self._destroyed = True
+
+    # logging, time, parameters
+    def get_logger(self) -> Logger:
+        return self._logger
+
+    def get_clock(self) -> RunClock:
+        return RunClock(self._bus)
+
+    def declare_parameter(self, name: str, value: Any = None, *_args: Any, **_kw: Any) -> Parameter:
+        overrides = self._bus.parameters
+        for key in ((self._name, name), (None, name)):
+            if key in overrides:
+                value = overrides[key]
+                break
+        p = self._params[name] = Parameter(name, value)
+        return p
+
+    def has_parameter(self, name: str) -> bool:
+        return name in self._params
+
+    def get_parameter(self, name: str) -> Parameter:
+        if name not in self._params:
+            raise KeyError(f"parameter {name!r} of node {self._name} is not declared")
+        return self._params[name]
+
+    def set_parameters(self, parameters: list[Parameter]) -> list[bool]:
+        for p in parameters:
+            self._params[p.name] = Parameter(p.name, p.value)
+        return [True] * len(parameters)
