@@ -21,7 +21,7 @@ from .reader import ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
 
 BUILTINS = frozenset(dir(builtins))
-GENERATED_PREFIXES = ("ringlet_", "on_exit_", "on_suspend_", "on_resume_")
+GENERATED_PREFIXES = ("ringlet_", "on_entry_", "internal_", "on_exit_", "on_suspend_", "on_resume_")
 
 
 @dataclass
@@ -100,6 +100,30 @@ class _Checker:
                 "LF101", orphan, 1, 1, f"{orphan} belongs to no state or transition of machine.yaml; it is ignored"
             )
         self.reachability(m)
+        self.suspend_state(m)
+
+    def suspend_state(self, m: Machine) -> None:
+        """A suspended machine gets no ringlets and leaves by OnResume: some of its code never runs."""
+        s = next((s for s in m.states if s.name == m.suspended), None)
+        if s is None:
+            return
+        for t in s.transitions:
+            self.at(
+                "LF107",
+                t.loc,
+                f"transition {t.index} of the suspend state {s.name} never fires: a "
+                "suspended machine gets no ringlets; resume() or restart() moves it on",
+            )
+        for sec in ("Internal", "OnExit", "OnSuspend"):
+            if sec in s.sections and not s.sections[sec].is_empty:
+                self.add(
+                    "LF107",
+                    s.sections[sec].file,
+                    1,
+                    1,
+                    f"{sec} of the suspend state {s.name} never runs "
+                    "(a suspended machine gets no ringlets and leaves it through OnResume)",
+                )
 
     def states(self, m: Machine) -> None:
         seen: dict[str, State] = {}

@@ -399,6 +399,8 @@ def graph(path: str, fmt: str, output: str | None) -> None:
     p = Path(path)
     if not p.is_dir():
         fail(f"{path}: not a machine directory")
+    if fmt == "png" and not output:
+        fail("--format png writes binary data: give -o FILE.png")
     result = check_machine(p)
     blocking = [
         d
@@ -419,8 +421,6 @@ def graph(path: str, fmt: str, output: str | None) -> None:
         from .compiler.build import write_atomic_bytes
 
         write_atomic_bytes(Path(output), data)
-    elif fmt == "png":
-        fail("--format png writes binary data: give -o FILE.png")
     else:
         sys.stdout.write(data.decode())
 

@@ -65,6 +65,12 @@ RULES: dict[str, Rule] = {
         _r("LF104", W, "unreachable-transition", "An earlier guard of the state is the constant True."),
         _r("LF105", W, "undefined-name", "A name is neither a variable, an import, a builtin, a macro nor assigned."),
         _r(
+            "LF107",
+            W,
+            "suspend-state-code",
+            "Transitions, Internal, OnExit or OnSuspend of the suspend state never run.",
+        ),
+        _r(
             "LF106",
             W,
             "undeclared-dependency",

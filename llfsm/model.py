@@ -118,13 +118,15 @@ class MachineYaml(BaseModel):
 
     description: str | None = Field(None, description="One line saying what the machine does.")
     initial: str | None = Field(
-        None, description="Name of the initial state; default: the first state.", pattern=NAME_RE.pattern[:-2] + "$"
+        None,
+        description="Name of the initial state; default: the first state.",
+        pattern="^" + NAME_RE.pattern[:-2] + "$",
     )
     suspended: str | None = Field(
         None,
         description="Name of the suspend state; default: a state named SUSPENDED if present, "
         "else an implicit empty one.",
-        pattern=NAME_RE.pattern[:-2] + "$",
+        pattern="^" + NAME_RE.pattern[:-2] + "$",
     )
     states: list[YamlState] = Field(
         ..., min_length=1, description="The states, in order; the order is the state index."
@@ -134,7 +136,7 @@ class MachineYaml(BaseModel):
 class YamlState(BaseModel):
     model_config = ConfigDict(extra="forbid", title="state")
 
-    name: str = Field(..., pattern=NAME_RE.pattern[:-2] + "$", description="State name.")
+    name: str = Field(..., pattern="^" + NAME_RE.pattern[:-2] + "$", description="State name.")
     transitions: list[str] = Field(
         default_factory=list,
         description="Target states in priority order; position N is guarded by "

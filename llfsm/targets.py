@@ -50,13 +50,14 @@ def cache_root() -> Path:
 
 
 def _writable(p: Path) -> Path:
+    """p, or the same key under the temporary folder when the cache cannot be written."""
     try:
         p.mkdir(parents=True, exist_ok=True)
         if os.access(p, os.W_OK):
             return p
     except OSError:
         pass
-    return Path(tempfile.gettempdir()) / f"llfsm-cache-{os.getuid()}"
+    return Path(tempfile.gettempdir()) / f"llfsm-cache-{os.getuid()}" / p.name
 
 
 def compiled_module_for(machine_dir: Path) -> Path:

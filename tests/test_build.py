@@ -225,6 +225,8 @@ def test_schema_is_json_schema_of_machine_yaml() -> None:
     assert doc["required"] == ["states"]
     assert set(doc["properties"]) == {"description", "initial", "suspended", "states"}
     assert doc["additionalProperties"] is False
+    name = doc["$defs"]["YamlState"]["properties"]["name"]["pattern"]
+    assert name.startswith("^") and name.endswith("$")  # JSON Schema patterns search: anchor them
 
 
 def test_new_machine_is_valid_and_runs(tmp_path: Path) -> None:

@@ -427,3 +427,14 @@ def test_hostile_inputs_never_produce_a_traceback(tmp_path: Path) -> None:
     assert r.status == 1
     assert "Traceback" not in r.stderr
     assert "LF030" in r.stdout
+
+
+def test_LF107_code_of_the_suspend_state_that_never_runs(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "m",
+        {"INITIAL": [("END", "True")], "END": None, "SUSPENDED": [("INITIAL", "True")]},
+        {"SUSPENDED_Internal": "x = 1", "SUSPENDED_OnEntry": "y = 2", "SUSPENDED_OnResume": "z = 3"},
+    )
+    got = sorted((c, f) for c, f, *_ in codes(m))
+    assert got == [("LF107", "State_SUSPENDED_Internal.py"), ("LF107", "machine.yaml")]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -83,7 +84,8 @@ def test_exception_in_a_variable_initialiser(tmp_path: Path) -> None:
     r = run_sim(m)
     assert r.status == 1
     assert (
-        f"{m}/Variables.py:3: error: ZeroDivisionError: integer division or modulo by zero (machine faulty" in r.stderr
+        f"{m}/Variables.py:3: error: ZeroDivisionError: integer division or modulo by zero (machine faulty, Variables)"
+        in r.stderr
     )
 
 
@@ -193,3 +195,12 @@ def test_stdout_closed_early_ends_quietly(tmp_path: Path) -> None:
     proc = subprocess.run(["bash", "-o", "pipefail", "-c", cmd], capture_output=True, text=True, timeout=60, cwd=REPO)
     assert proc.stdout.startswith("line")
     assert proc.stderr == ""
+
+
+def test_error_event_in_the_trace_uses_the_same_id_key(tmp_path: Path) -> None:
+    m = write_machine(tmp_path, "faulty", {"A": None}, {"A_OnEntry": BOOM})
+    tr = tmp_path / "t.jsonl"
+    run_sim(m, "--trace", tr)
+    last = json.loads(tr.read_text().splitlines()[-1])
+    assert last["event"] == "error" and last["id"] == 0 and "machine_id" not in last
+    assert last["file"].endswith("State_A_OnEntry.py") and last["line"] == 3

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from conftest import run_sim, write_machine
+from conftest import llfsm, run_sim, write_machine
 
 
 def test_ringlet_runs_onentry_then_guards_then_onexit_and_target_entry_waits_for_next_ringlet(tmp_path: Path) -> None:
@@ -350,3 +350,55 @@ def test_trace_file_records_every_kind_of_event_with_time_and_round(tmp_path: Pa
         assert {"t", "round", "event", "machine", "id"} <= e.keys()
     sus = next(e for e in events if e["event"] == "suspend")
     assert sus["machine"] == "worker" and sus["round"] == 5 and sus["t"] == 0.005
+
+
+def test_locals_belong_to_one_section(tmp_path: Path) -> None:
+    # Internal binds `math` as a local; the guard's `math` is still the module (C++: separate functions)
+    m = write_machine(
+        tmp_path,
+        "scoped",
+        {"A": [("END", "n > 2 and math.pi > 3")], "END": None},
+        {"A_Internal": "math = 'a local of Internal'\nn += 1\nprint(math)", "A_OnEntry": "x = 1\nprint('entry', x)"},
+        variables="n: int = 0\n",
+        includes="import math\n",
+    )
+    r = run_sim(m)
+    assert r.status == 0, r.stderr
+    assert r.lines == ["entry 1"] + ["a local of Internal"] * 3
+
+
+def test_a_restart_of_a_finished_machine_is_not_undone_by_a_later_resume(tmp_path: Path) -> None:
+    once = write_machine(
+        tmp_path,
+        "once",
+        {"A": [("DONE", "True")], "DONE": None},
+        {"A_OnEntry": "print('once runs')", "DONE_Internal": "print('done')"},
+    )
+    boss = write_machine(
+        tmp_path,
+        "boss",
+        {"W": [("R", "after_ms(3)")], "R": [("END", "True")], "END": None},
+        {"R_OnEntry": "restart('once'); resume('once')\nprint('boss', is_running('once'))"},
+    )
+    tr = tmp_path / "t.jsonl"
+    r = run_sim(once, boss, "--trace", tr)
+    assert r.lines == ["once runs", "done", "boss False", "once runs", "done"]
+    events = [json.loads(x)["event"] for x in tr.read_text().splitlines() if '"once"' in x]
+    assert events.count("finish") == 2 and events.count("restart") == 1
+
+
+def test_wall_clock_sleeps_when_no_transition_fires_even_with_a_suspended_machine(tmp_path: Path) -> None:
+    from llfsm.runtime import Arrangement, WallClock
+    from llfsm.targets import load
+
+    idle = write_machine(tmp_path, "idle", {"A": [("END", "False")], "END": None})
+    sleeper = write_machine(tmp_path, "sleeper", {"A": [("END", "False")], "END": None})
+    arr = Arrangement([load(str(idle)), load(str(sleeper))], clock=WallClock(20_000_000), suspended=["sleeper"])
+    rounds = arr.run(duration_ns=200_000_000).rounds
+    assert 5 <= rounds <= 12, rounds  # ~200 ms / 20 ms; without the idle sleep: hundreds of thousands
+
+
+def test_wall_clock_period_is_time_triggered(tmp_path: Path) -> None:
+    m = write_machine(tmp_path, "tick", {"A": [("A", "True")]}, {"A_OnEntry": "print('tick')"})
+    r = llfsm("run", m, "--period", "25ms", "--duration", "200ms")
+    assert 7 <= len(r.lines) <= 9, len(r.lines)  # rounds at 0, 25, ..., 175 ms

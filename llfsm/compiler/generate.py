@@ -25,7 +25,7 @@ from ..diagnostics import Diagnostic, diag
 from ..model import Code, Machine, State
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
-from .rewrite import Edit, apply, attribute_of, find, name_map
+from .rewrite import Edit, apply, attribute_of, find, name_map, own_locals, used_names
 
 TEMPLATES = Path(__file__).resolve().parent.parent / "templates"
 
@@ -141,6 +141,11 @@ class StateView:
     exit: Block | None
     guards: list[GuardView] = field(default_factory=list)
     hooks: list[tuple[str, Block]] = field(default_factory=list)
+    #: OnEntry / Internal are inlined into the ringlet (one call per ringlet) unless one binds a
+    #: local that another part of the ringlet also uses; then it gets a method of its own, so
+    #: that its locals stay its own, as the locals of a clfsm section do.
+    entry_method: bool = False
+    internal_method: bool = False
 
     @property
     def has_on_suspend(self) -> bool:
@@ -229,6 +234,21 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
                     t.guard, trees[t.guard.file], mapping, t.index, index[t.target], t.target, index[t.target] == susp
                 )
             )
+        parts = {sec: trees[c.file] for sec, c in s.sections.items() if sec in ("OnEntry", "Internal")}
+        parts.update({f"guard{t.index}": trees[t.guard.file] for t in s.transitions if t.guard is not None})
+        for part in ("OnEntry", "Internal"):
+            if part in parts and not sv.is_suspend:
+                mine = own_locals(parts[part]) - set(mapping)
+                others = set().union(*(used_names(tr) for k, tr in parts.items() if k != part))
+                if mine & others:
+                    if part == "OnEntry":
+                        sv.entry_method = sv.entry is not None
+                    else:
+                        sv.internal_method = sv.internal is not None
+        if sv.entry_method and sv.entry is not None:
+            sv.hooks.append(("on_entry", sv.entry))
+        if sv.internal_method and sv.internal is not None:
+            sv.hooks.append(("internal", sv.internal))
         if sv.exit is not None:
             sv.hooks.append(("on_exit", sv.exit))
         for hook, secname in (("on_suspend", "OnSuspend"), ("on_resume", "OnResume")):

@@ -202,3 +202,33 @@ def rewrite(text: str, mapping: Mapping[str, str], tree: ast.AST | None = None) 
     tree = tree if tree is not None else ast.parse(text)
     edits, _ = find(tree, mapping)
     return apply(text, edits)
+
+
+def own_locals(tree: ast.AST) -> set[str]:
+    """Names a piece of code binds in its own scope: not inside nested functions, lambdas,
+    classes or comprehensions (those have scopes of their own)."""
+    out: set[str] = set()
+    stack: list[ast.AST] = [tree]
+    while stack:
+        node = stack.pop()
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.Name) and not isinstance(child.ctx, ast.Load):
+                out.add(child.id)
+            elif isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+                out.add(child.name)
+                continue
+            elif isinstance(child, ast.Lambda | ast.ListComp | ast.SetComp | ast.DictComp | ast.GeneratorExp):
+                continue
+            elif isinstance(child, ast.alias):
+                out.add((child.asname or child.name).split(".")[0])
+            elif (isinstance(child, ast.ExceptHandler) and child.name) or (
+                isinstance(child, ast.MatchAs | ast.MatchStar) and child.name
+            ):
+                out.add(child.name)
+            stack.append(child)
+    return out
+
+
+def used_names(tree: ast.AST) -> set[str]:
+    """Every bare name a piece of code mentions, in any scope."""
+    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}

@@ -58,7 +58,8 @@ class SimClock(Clock):
 
 
 class WallClock(Clock):
-    """Real time.  Rounds run back to back, sleeping `idle` after a round where nothing fired;
+    """Real time.  Rounds run back to back, sleeping `idle` after a round in which no transition
+    fired (applying a control command is not a transition);
     with a `period`, a round starts every period instead (time-triggered)."""
 
     kind = "wall"

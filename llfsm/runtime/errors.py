@@ -127,6 +127,7 @@ def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorRepor
         rep.section = fm["section"].replace("_", " ")
     else:
         rep.section = user_file.removesuffix(".py")
+        rep.state = None  # Variables.py / Includes.py belong to the machine, not to a state
     src_dir = source_dir_of(fname)
     rep.line = user_line
     if src_dir:

@@ -93,10 +93,8 @@ class Arrangement:
     def command(self, name: str, cmd: str) -> None:
         """Schedule a control command; it is applied at the start of the target's next ringlet."""
         m = self.machine(name)
-        if m._finished:
-            if cmd != RESTART:
-                return  # a finished machine cannot be suspended or resumed
-            m._finished = False  # restart brings a finished machine back
+        if m._finished and cmd != RESTART:
+            return  # a finished machine can only be restarted; it stays finished until then
         m._pending = cmd  # a later command replaces an earlier pending one
         m._gate = True
         self._attention = True
@@ -142,8 +140,9 @@ class Arrangement:
             if tr is not None:
                 tr.command("resume", m, target)
             return True
-        # RESTART
+        # RESTART (which also brings a finished machine back)
         m._state, m._suspended, m._resume_to, m._entered = m.INITIAL, False, None, True
+        m._finished = False
         m._gate = m._pending is not None
         if tr is not None:
             tr.command("restart", m, m.INITIAL)
@@ -162,7 +161,8 @@ class Arrangement:
         self._attention = True
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
-        """Ctrl-C / SIGTERM: `ros.ok()` turns false, rounds go on for the grace time; twice: stop."""
+        """Ctrl-C / SIGTERM: `ros.ok()` turns false, rounds go on for the grace time; twice: stop.
+        signum 0 is a stop asked for from inside the run (teleop's `q`): it ends with status 0."""
         self._interrupts += 1
         self._signal = signum if self._signal is None else self._signal
         self.ctx.interrupted = True
@@ -172,10 +172,8 @@ class Arrangement:
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
         for m in live:
-            if m._gate:
-                fired = True
-                if not self._gated(m):
-                    continue
+            if m._gate and not self._gated(m):
+                continue
             s = m._state
             if m._entered:
                 tr.entry(m, s)
@@ -192,14 +190,14 @@ class Arrangement:
     def _attend(self, now: int, grace: int) -> RunResult | None:
         """Whatever changed since the last round: unloads, suspensions, interrupts."""
         self._attention = False
-        self._live = [m for m in self.machines if not m._finished]
+        self._live = [m for m in self.machines if not m._finished or m._pending is not None]
         if not self._live:
             return self._result("finished", EXIT_OK)
         if all(m._suspended and m._pending is None for m in self._live):
             return self._result("suspended", EXIT_OK)
         if self._interrupts:
             self._attention = True  # keep checking the grace time every round
-            status = EXIT_SIGNAL.get(self._signal or signal.SIGINT, 130)
+            status = EXIT_SIGNAL.get(self._signal, EXIT_OK)  # signal 0: a stop asked for from inside
             if self._interrupts > 1:
                 return self._result("killed", status)
             if self._grace_end is None:
@@ -258,10 +256,8 @@ class Arrangement:
                 fired = False
                 if tr is None:
                     for m in live:
-                        if m._gate:
-                            fired = True
-                            if not self._gated(m):
-                                continue
+                        if m._gate and not self._gated(m):
+                            continue
                         r = m._ringlets[m._state](m)
                         if r is not None:
                             if r >= 0:

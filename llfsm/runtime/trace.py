@@ -7,6 +7,7 @@ nothing for this module.
 from __future__ import annotations
 
 import json
+import sys
 from typing import IO, TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -28,6 +29,7 @@ class Tracer:
     def entry(self, m: Machine, state: int) -> None:
         """Before the ringlet that enters `state` (clfsm prints here with -v)."""
         if self.verbose is not None:
+            sys.stdout.flush()  # keep machine output and trace lines in order when both share a pipe
             line = "m%3d s%3d - %-20.20s - %s\n" % (m._id, state, m.NAME, m.STATES[state])  # noqa: UP031 (clfsm format)
             self.verbose.write(line)
             self.verbose.flush()
@@ -44,7 +46,8 @@ class Tracer:
 
     def error(self, m: Machine | None, report: dict[str, object]) -> None:
         if self.jsonl is not None:
-            rec = {"t": self.now / 1e9, "round": self.round, "event": "error", **report}
+            fields = {("id" if k == "machine_id" else k): v for k, v in report.items()}
+            rec = {"t": self.now / 1e9, "round": self.round, "event": "error", **fields}
             if m is not None:
                 rec.setdefault("machine", m.NAME)
                 rec.setdefault("id", m._id)

@@ -1,0 +1,3 @@
+publisher_: ros.Publisher
+node: ros.Node
+msg: Twist

@@ -1,0 +1,1 @@
+from llfsm import ros

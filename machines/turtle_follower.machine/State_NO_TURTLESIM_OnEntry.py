@@ -1,0 +1,1 @@
+node.get_logger().error(f"cannot spawn turtle2 ({spawn_code}): run with --node turtlesim")
