@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 PIP := $(PY) -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint fuzz bench clean
+.PHONY: demo test lint fuzz bench clean msgs
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -19,8 +19,19 @@ $(VENV)/.installed-bench: $(VENV)/.installed-dev
 	$(PIP) install -e '.[dev,bench]'
 	touch $@
 
+DEMO_RUN := $(VENV)/bin/llfsm run --clock sim
+
 demo: $(VENV)/.installed
-	$(VENV)/bin/llfsm run machines/counter.machine --clock sim -v
+	@mkdir -p demo-output
+	@echo "== ros2_ping_pong: /pingpong as ros2 topic echo shows it (3 s of simulated time)"
+	$(DEMO_RUN) machines/ros2_ping_pong.machine --duration 3.5s --echo /pingpong
+	@echo "== ros2_wall_turtle_bot with turtlesim and the pose service (60 s simulated)"
+	$(DEMO_RUN) machines/ros2_wall_turtle_bot.machine --node turtlesim --node turtle_sensor_poster \
+		--duration 60s --image demo-output/wall_turtle_bot.png
+	@echo "== turtle_follower behind ros2_blind_turtle_bot (30 s simulated)"
+	$(DEMO_RUN) machines/ros2_blind_turtle_bot.machine machines/turtle_follower.machine --node turtlesim \
+		--duration 30s --image demo-output/turtle_follower.png
+	@echo "pictures: demo-output/wall_turtle_bot.png demo-output/turtle_follower.png"
 
 lint: $(VENV)/.installed-dev
 	$(VENV)/bin/ruff check llfsm tests bench
@@ -33,6 +44,9 @@ fuzz: $(VENV)/.installed-dev
 
 bench: $(VENV)/.installed-bench
 	$(PY) bench/run.py
+
+msgs: $(VENV)/.installed-dev
+	$(PY) -m llfsm.compiler.interfaces
 
 clean:
 	rm -rf $(VENV) build demo-output .pytest_cache .ruff_cache

@@ -15,7 +15,6 @@ loads rosbags, jinja2 or this file.
 from __future__ import annotations
 
 import argparse
-import hashlib
 import keyword
 import math
 import os
@@ -29,8 +28,6 @@ from pathlib import Path
 from typing import Any
 
 import jinja2
-
-from .. import __version__
 
 LLFSM_DIR = Path(__file__).resolve().parent.parent
 MSGS_DIR = LLFSM_DIR / "msgs"
@@ -286,9 +283,12 @@ def _parse_scalar(text: str, ftype: FieldType, fail: Callable[[str], Exception])
         raise fail(f"invalid bool value {text!r} (true, false, 1 or 0)")
     if base in INT_RANGES:
         try:
-            value = int(text, 0)
+            value = int(text)  # decimal, leading zeros allowed as rosidl reads them
         except ValueError:
-            raise fail(f"invalid {base} value {text!r}") from None
+            try:
+                value = int(text, 0)  # 0x1F, 0b101, 0o17
+            except ValueError:
+                raise fail(f"invalid {base} value {text!r}") from None
         lo, hi = INT_RANGES[base]
         if not lo <= value <= hi:
             raise fail(f"value {value} out of range for {base} [{lo}, {hi}]")
@@ -464,7 +464,8 @@ def check_references(package: PackageSpec, exists: Callable[[str, str], bool]) -
             pkg, _, name = f.type.base.split("/")
             if (pkg == package.name and name in own) or (pkg != package.name and exists(pkg, name)):
                 continue
-            raise InterfaceError(msg.path, f.line, f"field {f.name}: unknown message type {pkg}/msg/{name}")
+            hint = f" (did you mean {name.lower()}?)" if name.lower() in PRIMITIVES else ""
+            raise InterfaceError(msg.path, f.line, f"field {f.name}: unknown message type {pkg}/msg/{name}{hint}")
 
 
 # -- rendering ---------------------------------------------------------------------------------
@@ -492,13 +493,10 @@ def _fits(text: str, indent: int) -> bool:
     return all(indent + len(line) <= LINE_LIMIT for line in text.split("\n"))
 
 
-def _bracketed(head: str, items: list[str], tail: str, indent: int) -> str:
+def _bracketed(head: str, items: list[str], tail: str, indent: int, *, is_tuple: bool = False) -> str:
     """`head(a, b)tail` on one line if it fits, else one item a line with a trailing comma:
     the two layouts ruff keeps as they are."""
-    if len(items) == 1 and head.endswith("(") and tail.startswith(")") and " = (" in head:
-        one = f"{head}{items[0]},{tail}"  # a one-element tuple
-    else:
-        one = f"{head}{', '.join(items)}{tail}"
+    one = f"{head}{', '.join(items)}{',' if is_tuple and len(items) == 1 else ''}{tail}"
     if _fits(one, indent) or not items:
         return one
     return head + "\n" + "".join(f"    {item},\n" for item in items) + tail
@@ -561,7 +559,8 @@ def _check(t: FieldType, name: str, names: _Names, v: str) -> tuple[str | None, 
     if t.base == "float64":
         return f"{v}.__class__ is float", f"_m.check_float64({v}, self, {q})"
     if t.base == "float32":
-        return None, f"_m.check_float32({v}, self, {q})"
+        fast = f"{v}.__class__ is float and -_FLOAT32_MAX <= {v} <= _FLOAT32_MAX"
+        return fast, f"_m.check_float32({v}, self, {q})"
     if t.base in INT_RANGES:
         lo, hi = INT_RANGES[t.base]
         return f"{v}.__class__ is int and {lo} <= {v} <= {hi}", f'_m.check_int({v}, self, {q}, "{t.base}")'
@@ -613,12 +612,12 @@ def _field_view(f: FieldSpec, names: _Names) -> FieldView:
     if t.array is None and not t.is_message:
         default = f.default if f.default is not None else _scalar_default(t)
         parameter = f"{name}: {annotation} = {_literal(default)}"
-        init = f"self.{name} = {name}"
-        copy = f"new._{name} = self._{name}"
+        init = _assign(f"self.{name}", name, 8)
+        copy = _assign(f"new._{name}", f"self._{name}", 8)
     elif t.array is None:
         parameter = f"{name}: {annotation} = _DEFAULT"
         init = _assign(f"self.{name}", f"{element}() if {name} is _DEFAULT else {name}", 8)
-        copy = f"new._{name} = self._{name}._copy()"
+        copy = _assign(f"new._{name}", f"self._{name}._copy()", 8)
     else:
         parameter = f"{name}: {annotation} = _DEFAULT"
         if f.default is not None:
@@ -633,9 +632,9 @@ def _field_view(f: FieldSpec, names: _Names) -> FieldView:
         value, parts = _conditional(fresh, f"{name} is _DEFAULT", init_check)
         init = _assign(f"self._{name}", value, 8, parts)
         if t.is_message:
-            copy = f"new._{name} = [item._copy() for item in self._{name}]"
+            copy = _assign(f"new._{name}", f"[item._copy() for item in self._{name}]", 8)
         else:
-            copy = f"new._{name} = self._{name}.copy()"
+            copy = _assign(f"new._{name}", f"self._{name}.copy()", 8)
     return FieldView(name, annotation, parameter, init, setter, copy)
 
 
@@ -653,8 +652,8 @@ def _message_view(spec: MessageSpec, names: _Names) -> MessageView:
         name=spec.name,
         type_name=spec.type_name,
         constants=[(c.name, _literal(c.value)) for c in spec.constants],
-        fields_line=_bracketed("_FIELDS = (", pairs, ")", 4),
-        slots_line=_bracketed("__slots__ = (", slots, ")", 4),
+        fields_line=_bracketed("_FIELDS = (", pairs, ")", 4, is_tuple=True),
+        slots_line=_bracketed("__slots__ = (", slots, ")", 4, is_tuple=True),
         init_def=init_def,
         fields=fields,
     )
@@ -721,6 +720,7 @@ def write_atomic(path: Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
             f.write(text)
+        os.chmod(tmp, 0o644)  # mkstemp's 0600 would hide committed modules from other users
         os.replace(tmp, path)
     except BaseException:
         try:
@@ -728,17 +728,6 @@ def write_atomic(path: Path, text: str) -> None:
         except OSError:
             pass
         raise
-
-
-@cache
-def generator_id() -> str:
-    """Changes whenever anything that shapes generated message code changes."""
-    h = hashlib.sha256(__version__.encode())
-    files = [Path(__file__).resolve(), MSGS_DIR / "_message.py", *sorted(TEMPLATES.glob("msgs*.j2"))]
-    for p in files:
-        h.update(p.name.encode())
-        h.update(p.read_bytes())
-    return h.hexdigest()[:16]
 
 
 def builtin_packages() -> list[PackageSpec]:
@@ -819,6 +808,11 @@ def main(argv: list[str] | None = None) -> int:
     except InterfaceError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
+    except ModuleNotFoundError as e:
+        if e.name != "rosbags":
+            raise
+        print("error: regenerating needs rosbags (pip install 'rosbags>=0.10')", file=sys.stderr)
+        return 2
     root = LLFSM_DIR.parent
     for p in stale:
         print(f"{'stale' if args.check else 'wrote'}: {p.relative_to(root).as_posix()}")

@@ -1,0 +1,172 @@
+"""`--node turtlesim`: the turtle world of llfsm.sim on the bus, with turtlesim's names.
+
+Topics per turtle: `<turtle>/cmd_vel` (in), `<turtle>/pose` and `<turtle>/color_sensor` (out,
+every update); services `spawn`, `kill`, `clear`, `reset` and per turtle `<turtle>/set_pen`,
+`<turtle>/teleport_absolute`, `<turtle>/teleport_relative`; parameters background_r/g/b.
+The world updates every 16 ms of run time with dt = 0.016 s, as turtlesim's timer does.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..runtime.context import RunContext
+from ..sim.world import TurtleError, TurtleWorld
+from . import NodeError, NodeOptions
+
+NODE_NAME = "turtlesim"
+UPDATE_PERIOD = 0.016
+DEFAULT_BACKGROUND = (69, 86, 255)
+
+
+class _Turtle:
+    """The bus entities of one turtle, so that kill and reset can take them down again."""
+
+    def __init__(self, sim: Turtlesim, name: str) -> None:
+        from ..msgs.geometry_msgs.msg import Twist
+        from ..msgs.turtlesim.msg import Color, Pose
+        from ..msgs.turtlesim.srv import SetPen, TeleportAbsolute, TeleportRelative
+
+        node, world = sim.node, sim.world
+        self.name = name
+        self.pose_type, self.color_type = Pose, Color
+
+        def on_cmd(msg: Any) -> None:
+            world.command(name, msg.linear.x, msg.linear.y, msg.angular.z, sim.clock.now)
+
+        def set_pen(req: Any, resp: Any) -> Any:
+            world.set_pen(name, req.r, req.g, req.b, req.width, req.off)
+            return resp
+
+        def teleport_absolute(req: Any, resp: Any) -> Any:
+            world.teleport_absolute(name, req.x, req.y, req.theta)
+            return resp
+
+        def teleport_relative(req: Any, resp: Any) -> Any:
+            world.teleport_relative(name, req.linear, req.angular)
+            return resp
+
+        self.entities = [
+            node.create_subscription(Twist, f"{name}/cmd_vel", on_cmd, 1),
+            node.create_service(SetPen, f"{name}/set_pen", set_pen),
+            node.create_service(TeleportAbsolute, f"{name}/teleport_absolute", teleport_absolute),
+            node.create_service(TeleportRelative, f"{name}/teleport_relative", teleport_relative),
+        ]
+        self.pose_pub = node.create_publisher(Pose, f"{name}/pose", 10)
+        self.color_pub = node.create_publisher(Color, f"{name}/color_sensor", 10)
+        self.entities += [self.pose_pub, self.color_pub]
+
+    def publish(self, world: TurtleWorld) -> None:
+        p = world.pose(self.name)
+        self.pose_pub.publish(
+            self.pose_type(
+                x=p.x, y=p.y, theta=p.theta, linear_velocity=p.linear_velocity, angular_velocity=p.angular_velocity
+            )
+        )
+        if self.color_pub.get_subscription_count():
+            r, g, b = world.color_under(self.name)
+            self.color_pub.publish(self.color_type(r=r, g=g, b=b))
+
+    def destroy(self) -> None:
+        for e in self.entities:
+            e.destroy()
+
+
+class Turtlesim:
+    def __init__(self, ctx: RunContext, options: NodeOptions) -> None:
+        from .. import ros
+        from ..msgs.std_srvs.srv import Empty
+        from ..msgs.turtlesim.srv import Kill, Spawn
+
+        self.ctx = ctx
+        self.clock = ctx.clock
+        self.node = ros.Node(NODE_NAME)
+        self.log = self.node.get_logger()
+        self.params = [
+            self.node.declare_parameter(f"background_{c}", v) for c, v in zip("rgb", DEFAULT_BACKGROUND, strict=True)
+        ]
+        self.log.info(f"Starting turtlesim with node name {self.node.get_fully_qualified_name()}")
+        self.world = TurtleWorld(background=self._background(), log=self.log.info)
+        self.turtles: dict[str, _Turtle] = {}
+        self._sync()
+        self.node.create_service(Spawn, "spawn", self.spawn)
+        self.node.create_service(Kill, "kill", self.kill)
+        self.node.create_service(Empty, "clear", self.clear)
+        self.node.create_service(Empty, "reset", self.reset)
+        self.node.create_timer(UPDATE_PERIOD, self.update)
+        self.viewer: Any = None
+        if options.view:
+            try:
+                from ..sim.view import Viewer
+            except ImportError as e:
+                raise NodeError(str(e)) from None
+            self.viewer = Viewer(self.world)
+            ctx.at_end.append(self.viewer.close)
+        if options.image is not None:
+            image = options.image
+            ctx.at_end.append(lambda: self._write_image(image))
+
+    def _background(self) -> tuple[int, int, int]:
+        values = [p.value for p in (self.node.get_parameter(f"background_{c}") for c in "rgb")]
+        if not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in values):
+            raise NodeError(f"turtlesim: background_r/g/b must be integers 0..255, not {values}")
+        return values[0], values[1], values[2]
+
+    def _sync(self) -> None:
+        """Bring the per-turtle topics and services in line with the turtles of the world."""
+        names = set(self.world.names())
+        for gone in set(self.turtles) - names:
+            self.turtles.pop(gone).destroy()
+        for name in sorted(names - set(self.turtles)):
+            self.turtles[name] = _Turtle(self, name)
+
+    # -- services ------------------------------------------------------------------------------
+    def spawn(self, req: Any, resp: Any) -> Any:
+        try:
+            resp.name = self.world.spawn(req.x, req.y, req.theta, req.name)
+        except TurtleError as e:
+            self.log.error(str(e))
+            resp.name = ""
+        self._sync()
+        return resp
+
+    def kill(self, req: Any, resp: Any) -> Any:
+        try:
+            self.world.kill(req.name)
+        except TurtleError as e:
+            self.log.error(str(e))
+        self._sync()
+        return resp
+
+    def clear(self, req: Any, resp: Any) -> Any:
+        self.world.set_background(*self._background())
+        self.world.clear()
+        return resp
+
+    def reset(self, req: Any, resp: Any) -> Any:
+        self.world.set_background(*self._background())
+        self.world.reset()
+        self._sync()
+        return resp
+
+    # -- the 16 ms update ---------------------------------------------------------------------------
+    def update(self) -> None:
+        sense = any(t.color_pub.get_subscription_count() for t in self.turtles.values())
+        for warning in self.world.update(self.clock.now, UPDATE_PERIOD, sense=sense):
+            self.log.warning(warning)
+        for t in self.turtles.values():
+            t.publish(self.world)
+        if self.viewer is not None and not self.viewer.closed:
+            self.viewer.draw()
+
+    def _write_image(self, path: Any) -> None:
+        from ..sim.draw import render
+
+        try:
+            render(self.world, path)
+        except OSError as e:
+            self.log.error(f"--image {path}: {e.strerror or e}")
+
+
+def start(ctx: RunContext, options: NodeOptions) -> Turtlesim:
+    return Turtlesim(ctx, options)

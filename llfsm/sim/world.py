@@ -1,0 +1,569 @@
+"""The turtle world of ROS 2 turtlesim (humble), as plain Python values in and out.
+
+No bus and no message classes here: the turtlesim node turns topics and services into calls
+of `TurtleWorld` and its results back into messages.  Everything follows
+`turtlesim/src/turtle.cpp` and `turtle_frame.cpp` of ros/ros_tutorials, down to the order of
+floating-point operations, so that poses match a real turtlesim bit for bit:
+
+* Positions are kept, like turtlesim's `pos_`, in the Qt frame (metres, y pointing *down*,
+  origin top-left); the published pose flips y back (`y = height - pos_y`).  The wall warning
+  prints Qt-frame coordinates, exactly as turtlesim does.
+* The canvas is 500 x 500 px, 45 px per metre (the height of a turtle image); the world is
+  `(500 - 1) / 45` m square, computed in float32 as turtlesim does (11.088889122009277 m).
+* Service arguments that are float32 in the .srv files (spawn, teleports) are rounded to
+  float32, and the pose is rounded to float32 like the fields of `turtlesim/msg/Pose`.
+* Time `now` is the run time in integer nanoseconds (llfsm's clocks count in ns), so that the
+  1 s command timeout (`now - last_command > 1 s`, strictly) is exact.
+
+Drawing is recorded, not painted: every pen stroke is appended to a list of segments (pixel
+coordinates, colour, width) and rasterised into an RGBA image only when a colour or a picture is
+asked for, and then only the strokes added since the last time.  The path image starts
+transparent white, qRgba(255, 255, 255, 0), as in turtlesim, and the background colour is
+painted under it at display time from the current parameters.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import struct
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+__all__ = [
+    "BACKGROUND",
+    "CANVAS_PX",
+    "CENTRE",
+    "COMMAND_TIMEOUT_NS",
+    "PEN_COLOR",
+    "PEN_WIDTH",
+    "PIXELS_PER_METRE",
+    "UPDATE_DT",
+    "UPDATE_PERIOD_NS",
+    "WORLD_SIZE",
+    "Pose",
+    "Segment",
+    "TurtleError",
+    "TurtleWorld",
+    "f32",
+]
+
+_F32 = struct.Struct("<f")
+_POSE32 = struct.Struct("<5f")
+
+
+def f32(value: float) -> float:
+    """Round to float32, as storing into a `float` field or variable does in turtlesim."""
+    try:
+        rounded: float = _F32.unpack(_F32.pack(value))[0]
+    except OverflowError:
+        return math.copysign(math.inf, value)
+    return rounded
+
+
+CANVAS_PX = 500
+"""Width and height of turtlesim's window and path image, in pixels."""
+PIXELS_PER_METRE = 45.0
+"""turtlesim's `meter_`: the height of its turtle images."""
+WORLD_SIZE = f32((CANVAS_PX - 1) / PIXELS_PER_METRE)
+"""`width_in_meters_` = `(width() - 1) / meter_`, a float: 11.088889122009277."""
+CENTRE = f32(WORLD_SIZE / 2.0)
+"""Where turtle1 is spawned on start and on reset: 5.544444561004639 (x and y)."""
+UPDATE_PERIOD_NS = 16_000_000
+"""turtlesim's update timer interval (16 ms)."""
+UPDATE_DT = 0.001 * 16
+"""The dt turtlesim integrates with: `0.001 * update_timer_->interval()`."""
+COMMAND_TIMEOUT_NS = 1_000_000_000
+"""A velocity command lapses when more than this has passed since it arrived."""
+BACKGROUND = (0x45, 0x56, 0xFF)
+"""Default background_r/g/b parameters."""
+PEN_COLOR = (0xB3, 0xB8, 0xFF)
+"""Default pen colour of every new turtle."""
+PEN_WIDTH = 3
+"""Default pen width of every new turtle, in pixels."""
+
+# turtle.hpp: `#define PI 3.14159265` (not math.pi) -- theta is normalised with this value.
+_PI = 3.14159265
+_TWO_PI = 2.0 * _PI
+_TRANSPARENT = b"\xff\xff\xff\x00"
+_WALL = "Oh no! I hit the wall! (Clamping from [x=%f, y=%f])"
+_NAME_RE = re.compile(r"/?[A-Za-z_][A-Za-z0-9_]*(?:/[A-Za-z_][A-Za-z0-9_]*)*")
+
+
+class TurtleError(Exception):
+    """A request turtlesim refuses.  For spawn and kill the message is turtlesim's own ERROR log
+    line, so the node can log `str(err)` and answer as turtlesim does (spawn: empty name)."""
+
+
+class Pose(NamedTuple):
+    """The fields of turtlesim/msg/Pose, already rounded to float32 as the message holds them."""
+
+    x: float
+    y: float
+    theta: float
+    linear_velocity: float
+    angular_velocity: float
+
+
+@dataclass(frozen=True, slots=True)
+class Segment:
+    """One pen stroke in pixel coordinates (y down), drawn with a square cap like a QPen."""
+
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+    color: tuple[int, int, int]
+    width: int
+
+
+# A stored stroke: x0, y0, x1, y1 (px), RGBA bytes, width (px).  Tuples keep `update` cheap.
+_Stroke = tuple[float, float, float, float, bytes, int]
+
+
+class _Turtle:
+    """turtlesim's `Turtle`: position in the Qt frame (metres), heading, velocities, pen."""
+
+    __slots__ = (
+        "ang",
+        "last_cmd",
+        "last_stroke",
+        "lin_x",
+        "lin_y",
+        "name",
+        "orient",
+        "pen_on",
+        "pen_rgba",
+        "pen_width",
+        "qx",
+        "qy",
+        "sensed",
+        "sensed_at",
+        "teleports",
+    )
+
+    def __init__(self, name: str, qx: float, qy: float, orient: float) -> None:
+        self.name = name
+        self.qx = qx
+        self.qy = qy
+        self.orient = orient
+        self.lin_x = 0.0
+        self.lin_y = 0.0
+        self.ang = 0.0
+        self.last_cmd = 0
+        self.pen_on = True
+        self.pen_rgba = bytes((*PEN_COLOR, 255))
+        self.pen_width = PEN_WIDTH
+        # (relative, x_or_linear, y, theta): applied in order at the start of the next update.
+        self.teleports: list[tuple[bool, float, float, float]] = []
+        # Index in the stroke list of this turtle's last motion stroke (to extend straight lines).
+        self.last_stroke = -1
+        self.sensed: tuple[int, int, int] = (255, 255, 255)
+        self.sensed_at = -1
+
+
+class TurtleWorld:
+    """The state behind one turtlesim node: turtles, their pens and the path they drew.
+
+    Deterministic and single-threaded: the same calls give the same poses and pixels.  Methods
+    named after a turtlesim service behave as that service does; unknown turtles raise
+    `TurtleError` (in turtlesim their per-turtle topics and services would not exist).
+    """
+
+    width: float = WORLD_SIZE
+    height: float = WORLD_SIZE
+
+    def __init__(
+        self,
+        background: tuple[int, int, int] = BACKGROUND,
+        *,
+        log: Callable[[str], None] | None = None,
+        sensor_sees_background: bool = False,
+    ) -> None:
+        """`log` receives turtlesim's INFO lines (spawning, clearing, resetting); warnings come
+        back from `update` and errors as `TurtleError`, so nothing is logged twice.
+
+        `sensor_sees_background`: humble's path image is transparent white where nothing was
+        drawn, so its colour sensor reads (255, 255, 255) there; set this to read the background
+        colour instead (ROS 1 turtlesim painted the background into the path image)."""
+        self._log = log
+        self._sensor_sees_background = sensor_sees_background
+        self._background = _check_rgb(background, "background")
+        self._turtles: dict[str, _Turtle] = {}
+        self._order: list[_Turtle] = []  # std::map order: sorted by name
+        self._id_counter = 0
+        self._strokes: list[_Stroke] = []
+        self._raster = bytearray(_TRANSPARENT * (CANVAS_PX * CANVAS_PX))
+        self._rastered = 0  # strokes already in the raster
+        self._version = 0  # bumped by every change to the strokes
+        self._updates = 0
+        self.spawn(CENTRE, CENTRE, 0.0)
+
+    # --- parameters --------------------------------------------------------------------------
+
+    @property
+    def background(self) -> tuple[int, int, int]:
+        return self._background
+
+    def set_background(self, r: int, g: int, b: int) -> None:
+        """The background_r/g/b parameters (integers 0..255, as their descriptors say).  Humble
+        repaints with them at once; the trails stay."""
+        self._background = _check_rgb((r, g, b), "background")
+
+    # --- turtles -----------------------------------------------------------------------------
+
+    def names(self) -> list[str]:
+        """Live turtles, in turtlesim's update and paint order (sorted by name)."""
+        return [t.name for t in self._order]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._turtles
+
+    def spawn(self, x: float, y: float, theta: float, name: str = "") -> str:
+        """The `spawn` service: returns the turtle's name.  An empty name takes `turtleN` with N
+        one more than the last automatic number (skipping names in use); an existing name is
+        refused with turtlesim's error text, and turtlesim's service then answers name ''."""
+        if name:
+            if name in self._turtles:
+                raise TurtleError(f"A turtled named [{name}] already exists")
+            if not _NAME_RE.fullmatch(name):
+                raise TurtleError(f"Invalid turtle name [{name}]: its topics would not be valid ROS names")
+            real = name
+        else:
+            while True:
+                self._id_counter += 1
+                real = f"turtle{self._id_counter}"
+                if real not in self._turtles:
+                    break
+        x32, y32, a32 = f32(x), f32(y), f32(theta)
+        # QPointF(x, height_in_meters_ - y): a float subtraction, then widened to double.
+        turtle = _Turtle(real, x32, f32(f32(self.height) - y32), a32)
+        self._turtles[real] = turtle
+        self._order = sorted(self._turtles.values(), key=lambda t: t.name)
+        self._info(f"Spawning turtle [{real}] at x=[{x32:f}], y=[{y32:f}], theta=[{a32:f}]")
+        return real
+
+    def kill(self, name: str) -> None:
+        """The `kill` service.  Pending teleports die with the turtle; its trail stays."""
+        if name not in self._turtles:
+            raise TurtleError(f"Tried to kill turtle [{name}], which does not exist")
+        del self._turtles[name]
+        self._order = [t for t in self._order if t.name != name]
+
+    def clear(self) -> None:
+        """The `clear` service: wipes every trail (the background is painted from the current
+        parameters whenever the picture is drawn)."""
+        self._info("Clearing turtlesim.")
+        self._wipe()
+
+    def reset(self) -> None:
+        """The `reset` service: kills every turtle, restarts automatic names at turtle1, spawns
+        turtle1 at the centre and clears, in turtlesim's order."""
+        self._info("Resetting turtlesim.")
+        self._turtles.clear()
+        self._order = []
+        self._id_counter = 0
+        self.spawn(CENTRE, CENTRE, 0.0)
+        self._wipe()
+
+    def set_pen(self, name: str, r: int, g: int, b: int, width: int, off: int | bool) -> None:
+        """`<turtle>/set_pen`.  As turtlesim: `off` lifts the pen and keeps its old colour and
+        width; otherwise a new pen (r, g, b) whose width is `width`, or 1 px when width is 0
+        (a fresh QPen is 1 px wide)."""
+        t = self._get(name)
+        r, g, b = _check_rgb((r, g, b), "pen colour")
+        width = _check_u8(width, "pen width")
+        off = _check_u8(int(off), "off")
+        t.pen_on = not off
+        if off:
+            return
+        t.pen_rgba = bytes((r, g, b, 255))
+        t.pen_width = width if width != 0 else 1
+        t.last_stroke = -1
+
+    def teleport_absolute(self, name: str, x: float, y: float, theta: float) -> None:
+        """`<turtle>/teleport_absolute`: queued, applied at the start of the next update (then
+        the move of that update follows).  y above the top wall is clamped silently; any other
+        outside position is clamped by the update with the wall warning, as in turtlesim."""
+        self._get(name).teleports.append((False, f32(x), f32(y), f32(theta)))
+
+    def teleport_relative(self, name: str, linear: float, angular: float) -> None:
+        """`<turtle>/teleport_relative`: queued like the absolute one; turns by `angular` first,
+        then moves `linear` along the new heading."""
+        self._get(name).teleports.append((True, f32(linear), 0.0, f32(angular)))
+
+    def command(self, name: str, linear_x: float, linear_y: float, angular_z: float, now: int) -> None:
+        """A Twist on `<turtle>/cmd_vel` received at run time `now` (ns).  linear.y moves
+        sideways: humble's turtle is holonomic (the `holonomic` parameter came after humble)."""
+        t = self._get(name)
+        if not isinstance(now, int):
+            raise TypeError(f"now is the run time in integer nanoseconds, not {now!r}")
+        t.last_cmd = now
+        t.lin_x = float(linear_x)
+        t.lin_y = float(linear_y)
+        t.ang = float(angular_z)
+
+    # --- the 16 ms tick ----------------------------------------------------------------------
+
+    def update(self, now: int, dt: float = UPDATE_DT, *, sense: bool = False) -> list[str]:
+        """One tick of turtlesim's update timer at run time `now` (ns); returns the WARN lines it
+        logs.  Per turtle, in name order: pending teleports; a command older than 1 s lapses;
+        heading integrated and normalised to [-PI, PI) first, then the position moved along the
+        NEW heading; clamped to the walls; a pen stroke from the old to the new position.
+
+        `sense=True` samples each turtle's colour sensor the way turtlesim does, after the move
+        and before its own new stroke is drawn; it rasterises, so ask only when someone listens."""
+        if not isinstance(now, int):
+            raise TypeError(f"now is the run time in integer nanoseconds, not {now!r}")
+        warnings: list[str] = []
+        strokes = self._strokes
+        w = self.width
+        h = self.height
+        self._updates += 1
+        for t in self._order:
+            if t.teleports:
+                self._teleport(t)
+            if now - t.last_cmd > COMMAND_TIMEOUT_NS:
+                t.lin_x = t.lin_y = t.ang = 0.0
+            ox = t.qx
+            oy = t.qy
+            lx = t.lin_x
+            ly = t.lin_y
+            o = t.orient + t.ang * dt
+            o -= _TWO_PI * math.floor((o + _PI) / _TWO_PI)
+            t.orient = o
+            c = math.cos(o)
+            s = math.sin(o)
+            x = ox + (c * lx * dt - s * ly * dt)
+            y = oy - (c * ly * dt + s * lx * dt)
+            if x < 0 or x > w or y < 0 or y > h:
+                warnings.append(_WALL % (x, y))
+            # std::min(std::max(v, 0.0), w): NaN passes through, as in C++.
+            if x < 0.0:
+                x = 0.0
+            if w < x:
+                x = w
+            if y < 0.0:
+                y = 0.0
+            if h < y:
+                y = h
+            t.qx = x
+            t.qy = y
+            if sense:
+                t.sensed = self._pixel(x, y)
+                t.sensed_at = self._updates
+            if (x != ox or y != oy) and t.pen_on:
+                x0 = ox * PIXELS_PER_METRE
+                y0 = oy * PIXELS_PER_METRE
+                x1 = x * PIXELS_PER_METRE
+                y1 = y * PIXELS_PER_METRE
+                n = len(strokes)
+                i = t.last_stroke
+                if i == n - 1 and i >= self._rastered:
+                    # Extend this turtle's previous stroke when the new one continues it straight.
+                    p = strokes[i]
+                    if p[2] == x0 and p[3] == y0:
+                        ax = p[2] - p[0]
+                        ay = p[3] - p[1]
+                        bx = x1 - x0
+                        by = y1 - y0
+                        if ax * bx + ay * by > 0 and abs(ax * by - ay * bx) <= 1e-9 * (ax * ax + ay * ay):
+                            strokes[i] = (p[0], p[1], x1, y1, p[4], p[5])
+                            self._version += 1
+                            continue
+                strokes.append((x0, y0, x1, y1, t.pen_rgba, t.pen_width))
+                t.last_stroke = n
+                self._version += 1
+        return warnings
+
+    def _teleport(self, t: _Turtle) -> None:
+        for relative, a, b, theta in t.teleports:
+            ox, oy = t.qx, t.qy
+            if relative:
+                t.orient += theta
+                t.qx += math.cos(t.orient) * a
+                t.qy += -math.sin(t.orient) * a
+            else:
+                t.qx = a
+                t.qy = max(0.0, self.height - b)
+                t.orient = theta
+            if t.pen_on:
+                m = PIXELS_PER_METRE
+                self._strokes.append((ox * m, oy * m, t.qx * m, t.qy * m, t.pen_rgba, t.pen_width))
+                self._version += 1
+            t.last_stroke = -1
+        t.teleports.clear()
+
+    # --- what the node publishes -------------------------------------------------------------
+
+    def pose(self, name: str) -> Pose:
+        """`<turtle>/pose` as turtlesim fills it: y flipped up, theta in [-PI, PI) after any
+        update, linear_velocity = |(linear.x, linear.y)|, all rounded to float32."""
+        t = self._turtles.get(name)
+        if t is None:
+            raise TurtleError(f"There is no turtle named [{name}]")
+        lx = t.lin_x
+        ly = t.lin_y
+        values = (t.qx, self.height - t.qy, t.orient, math.sqrt(lx * lx + ly * ly), t.ang)
+        try:
+            return Pose._make(_POSE32.unpack(_POSE32.pack(*values)))
+        except OverflowError:
+            return Pose._make(map(f32, values))
+
+    def color_under(self, name: str) -> tuple[int, int, int]:
+        """`<turtle>/color_sensor`: the path image's pixel under the turtle's centre.  Right after
+        an `update(..., sense=True)` this is the sample turtlesim would publish; otherwise it is
+        read now from everything drawn so far."""
+        t = self._get(name)
+        if t.sensed_at == self._updates:
+            return t.sensed
+        return self._pixel(t.qx, t.qy)
+
+    # --- drawing -----------------------------------------------------------------------------
+
+    @property
+    def segments(self) -> list[Segment]:
+        """Every pen stroke since the last clear, in drawing order."""
+        return [Segment(s[0], s[1], s[2], s[3], (s[4][0], s[4][1], s[4][2]), s[5]) for s in self._strokes]
+
+    def turtle_pixels(self) -> list[tuple[str, float, float, float]]:
+        """(name, x px, y px, theta) of each turtle in paint order: where turtlesim draws its
+        image, centred on `pos_ * meter_` (y down)."""
+        m = PIXELS_PER_METRE
+        return [(t.name, t.qx * m, t.qy * m, t.orient) for t in self._order]
+
+    @property
+    def raster_version(self) -> int:
+        """Changes whenever the path image may have changed (for viewers that cache it)."""
+        return self._version
+
+    def path_rgba(self) -> bytes:
+        """The path image, 500 x 500 RGBA, row-major from the top-left corner; alpha 0 where
+        nothing has been drawn.  Rasterises the strokes added since the last call."""
+        self._flush()
+        return bytes(self._raster)
+
+    # --- internals ---------------------------------------------------------------------------
+
+    def _get(self, name: str) -> _Turtle:
+        t = self._turtles.get(name)
+        if t is None:
+            raise TurtleError(f"There is no turtle named [{name}]")
+        return t
+
+    def _info(self, text: str) -> None:
+        if self._log is not None:
+            self._log(text)
+
+    def _wipe(self) -> None:
+        self._strokes.clear()
+        self._raster[:] = _TRANSPARENT * (CANVAS_PX * CANVAS_PX)
+        self._rastered = 0
+        self._version += 1
+        for t in self._order:
+            t.last_stroke = -1
+
+    def _flush(self) -> None:
+        strokes = self._strokes
+        if self._rastered == len(strokes):
+            return
+        buf = self._raster
+        for i in range(self._rastered, len(strokes)):
+            _fill_stroke(buf, *strokes[i])
+        self._rastered = len(strokes)
+
+    def _pixel(self, qx: float, qy: float) -> tuple[int, int, int]:
+        """`path_image.pixel((pos_ * meter_).toPoint())`: qRound of each coordinate."""
+        fx = qx * PIXELS_PER_METRE
+        fy = qy * PIXELS_PER_METRE
+        if not (math.isfinite(fx) and math.isfinite(fy)):
+            return (0, 0, 0)
+        px = _qround(fx)
+        py = _qround(fy)
+        if not (0 <= px < CANVAS_PX and 0 <= py < CANVAS_PX):
+            return (0, 0, 0)  # QImage::pixel outside the image
+        self._flush()
+        k = (py * CANVAS_PX + px) * 4
+        raster = self._raster
+        if raster[k + 3] == 0 and self._sensor_sees_background:
+            return self._background
+        return (raster[k], raster[k + 1], raster[k + 2])
+
+
+def _qround(v: float) -> int:
+    """Qt's qRound for doubles: halves away from zero."""
+    return int(v + 0.5) if v >= 0.0 else int(v - 0.5)
+
+
+def _check_u8(value: int, what: str) -> int:
+    if isinstance(value, bool):
+        value = int(value)
+    if not isinstance(value, int) or not 0 <= value <= 255:
+        raise TurtleError(f"{what} must be an integer from 0 to 255, not {value!r}")
+    return value
+
+
+def _check_rgb(rgb: Sequence[int], what: str) -> tuple[int, int, int]:
+    if len(rgb) != 3:
+        raise TurtleError(f"{what} must be three integers (r, g, b), not {rgb!r}")
+    r, g, b = (_check_u8(v, what) for v in rgb)
+    return (r, g, b)
+
+
+def _fill_stroke(buf: bytearray, x0: float, y0: float, x1: float, y1: float, rgba: bytes, width: int) -> None:
+    """Paint one stroke as an aliased QPainter line with a square cap: the rectangle around the
+    segment, `width` wide and extended `width/2` past both ends.  A pixel is painted when its
+    centre lies inside; each pixel row is the intersection of the rectangle's two slabs."""
+    if not (math.isfinite(x0) and math.isfinite(y0) and math.isfinite(x1) and math.isfinite(y1)):
+        return
+    half = width / 2.0
+    dx = x1 - x0
+    dy = y1 - y0
+    length = math.hypot(dx, dy)
+    if length > 0.0:
+        ux = dx / length
+        uy = dy / length
+    else:  # a zero-length line still paints its square cap
+        ux, uy = 1.0, 0.0
+    cx = (x0 + x1) / 2.0
+    cy = (y0 + y1) / 2.0
+    along = length / 2.0 + half  # half extent along the line, caps included
+    # Vertical extent of the rectangle, then one span per row of pixel centres inside it.
+    ey = abs(uy) * along + abs(ux) * half
+    j0 = max(0, math.ceil(cy - ey - 0.5))
+    j1 = min(CANVAS_PX - 1, math.ceil(cy + ey - 0.5) - 1)
+    last = CANVAS_PX - 1
+    for j in range(j0, j1 + 1):
+        d = j + 0.5 - cy
+        # Slab 1: |(x - cx) * ux + d * uy| <= along.  Slab 2: |-(x - cx) * uy + d * ux| <= half.
+        xl = -math.inf
+        xr = math.inf
+        if ux != 0.0:
+            a = (-along - d * uy) / ux
+            b = (along - d * uy) / ux
+            if a > b:
+                a, b = b, a
+            xl, xr = a, b
+        elif abs(d * uy) > along:
+            continue
+        if uy != 0.0:
+            a = (half - d * ux) / -uy
+            b = (-half - d * ux) / -uy
+            if a > b:
+                a, b = b, a
+            if a > xl:
+                xl = a
+            if b < xr:
+                xr = b
+        elif abs(d * ux) > half:
+            continue
+        i0 = math.ceil(cx + xl - 0.5)
+        i1 = math.ceil(cx + xr - 0.5) - 1
+        if i0 < 0:
+            i0 = 0
+        if i1 > last:
+            i1 = last
+        if i0 <= i1:
+            base = j * CANVAS_PX
+            buf[(base + i0) * 4 : (base + i1 + 1) * 4] = rgba * (i1 - i0 + 1)
