@@ -88,7 +88,7 @@ def _display(path: str) -> str:
         rel = os.path.relpath(path)
     except ValueError:
         return path
-    return path if rel.startswith(os.pardir + os.sep + os.pardir) else rel
+    return path if rel.startswith(os.pardir) else rel  # relative only below the current folder
 
 
 def _exception_text(exc: BaseException) -> str:
