@@ -50,7 +50,7 @@ class Machine:
         "_clock",
         "_entered",
         "_finished",
-        "_gate",
+        "_held",
         "_id",
         "_pending",
         "_resume_to",
@@ -69,12 +69,13 @@ class Machine:
         self._t0 = 0  # run-clock time (ns) the current state was entered
         self._pending: str | None = None
         self._suspended = False
-        #: True while a command is pending or the machine is suspended: the one flag the
-        #: scheduler tests per ringlet before taking the fast path.
-        self._gate = False
         self._resume_to: int | None = None
         self._finished = False
-        self._ringlets = self.RINGLETS  # on the instance: one fast lookup per ringlet
+        #: What the scheduler calls, `_ringlets[_state](self)`: the state ringlets, or, while a
+        #: command is pending or the machine is suspended, `_held`, whose every entry is the
+        #: scheduler's gate.  So the round loop needs no test at all for the common case.
+        self._ringlets = self.RINGLETS
+        self._held = (arrangement._gate,) * len(self.STATES)
 
     # -- the clfsm macros (CLMacros.h), in scope in every section and guard -----------------
     def after(self, s: float) -> bool:

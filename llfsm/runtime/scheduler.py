@@ -78,8 +78,9 @@ class Arrangement:
             activate(prev)
         for n in suspended:
             m = self.by_name[n]
-            m._state, m._suspended, m._gate, m._entered = m.SUSPENDED, True, True, True
+            m._state, m._suspended, m._entered = m.SUSPENDED, True, True
             m._resume_to = None
+            m._ringlets = m._held
         self._live: list[Machine] = list(self.machines)
 
     # -- what machines call --------------------------------------------------------------
@@ -96,26 +97,26 @@ class Arrangement:
         if m._finished and cmd != RESTART:
             return  # a finished machine can only be restarted; it stays finished until then
         m._pending = cmd  # a later command replaces an earlier pending one
-        m._gate = True
+        m._ringlets = m._held
         self._attention = True
 
     def suspend_now(self, m: Machine, remember: int | None) -> None:
         """Move `m` to its suspend state and run that state's OnEntry (no OnExit anywhere)."""
         m._resume_to = remember
         m._state = m.SUSPENDED
-        m._suspended = m._gate = True
+        m._suspended = True
+        m._ringlets = m._held
         m._entered = True
         if self.tracer is not None:
             self.tracer.command("suspend", m, m.SUSPENDED)
             self.tracer.entry(m, m.SUSPENDED)
-        m._ringlets[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
+        m.RINGLETS[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
         self._attention = True
 
     # -- control commands -------------------------------------------------------------------
     def _apply(self, m: Machine) -> bool:
         """Apply m's pending command; True if the ringlet goes on (step 2), False if it ends."""
         cmd, m._pending = m._pending, None
-        m._gate = m._suspended
         self._attention = True
         tr = self.tracer
         if cmd == SUSPEND:
@@ -132,7 +133,8 @@ class Arrangement:
             if hook is not None:
                 hook(m)
             target = m.INITIAL if m._resume_to is None else m._resume_to
-            m._state, m._suspended, m._gate, m._resume_to = target, False, m._pending is not None, None
+            m._state, m._suspended, m._resume_to = target, False, None
+            _regate(m)
             hook = m.ON_RESUME[target]
             if hook is not None:
                 hook(m)
@@ -143,21 +145,23 @@ class Arrangement:
         # RESTART (which also brings a finished machine back)
         m._state, m._suspended, m._resume_to, m._entered = m.INITIAL, False, None, True
         m._finished = False
-        m._gate = m._pending is not None
+        _regate(m)
         if tr is not None:
             tr.command("restart", m, m.INITIAL)
         return True
 
-    def _gated(self, m: Machine) -> bool:
-        """Slow path of a ringlet: a pending command or a suspension.  True: run the ringlet."""
-        if m._pending is not None:
-            return self._apply(m)
-        return False  # suspended, nothing pending: no ringlet
+    def _gate(self, m: Machine) -> int | None:
+        """Stands in for the ringlet of a held machine (a command pending, or suspended): apply
+        the command, then run the real ringlet if the command lets it go on."""
+        if m._pending is None or not self._apply(m):
+            return None  # suspended: no ringlet; or the command (suspend) ended it
+        _regate(m)
+        return m.RINGLETS[m._state](m)
 
     def _finish(self, m: Machine) -> None:
         m._finished = True
         m._suspended = False
-        m._gate = m._pending is not None
+        _regate(m)
         self._attention = True
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
@@ -172,8 +176,10 @@ class Arrangement:
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
         for m in live:
-            if m._gate and not self._gated(m):
-                continue
+            if m._ringlets is m._held:
+                if m._pending is None or not self._apply(m):
+                    continue
+                _regate(m)
             s = m._state
             if m._entered:
                 tr.entry(m, s)
@@ -253,11 +259,23 @@ class Arrangement:
                     live = self._live
                 if now >= end:
                     return self._result("duration", EXIT_OK)
+                if tr is None and sim and not hooks:
+                    # the common simulated case: plain rounds back to back until something
+                    # needs attention (a command, an unload, a signal, the bus appearing)
+                    while True:
+                        for m in live:
+                            r = m._ringlets[m._state](m)
+                            if r is not None and r < 0 and not keep:
+                                self._finish(m)
+                        rounds += 1
+                        now = clock.now + period
+                        clock.now = now
+                        if self._attention or now >= end or hooks:
+                            break
+                    continue
                 fired = False
                 if tr is None:
                     for m in live:
-                        if m._gate and not self._gated(m):
-                            continue
                         r = m._ringlets[m._state](m)
                         if r is not None:
                             if r >= 0:
@@ -282,6 +300,11 @@ class Arrangement:
 
     def _result(self, reason: str, status: int) -> RunResult:
         return RunResult(reason, self.rounds, self.clock.now, status)
+
+
+def _regate(m: Machine) -> None:
+    """Point the machine's ringlet table at the gate while it is held, at its states otherwise."""
+    m._ringlets = m._held if (m._pending is not None or m._suspended) else m.RINGLETS
 
 
 @contextmanager
