@@ -205,7 +205,7 @@ def plain_arrangement(machines: int, fired: bool) -> Callable[[int], None]:
     (the toggle).  Idle: every call tests a false guard and returns."""
 
     class T:
-        __slots__ = ("count", "stop", "state")
+        __slots__ = ("count", "state", "stop")
 
         def __init__(self) -> None:
             self.count, self.stop = 0, False
@@ -245,8 +245,13 @@ def section_ringlets(tmp: Path) -> list[Table]:
             ours = best_rate(llfsm_runner(classes[:machines]), n)
             target = "≥ 1/3" if fired else "≥ 1/2"
             rows.append([kind, str(machines), fmt_rate(ours), fmt_rate(base), f"{ours / base:.2f}", target])
-    return [("Ringlets per second, sim clock: llfsm against the plain-Python bound in the same process",
-             ["kind", "machines", "llfsm /s", "plain Python /s", "ratio", "target"], rows)]
+    return [
+        (
+            "Ringlets per second, sim clock: llfsm against the plain-Python bound in the same process",
+            ["kind", "machines", "llfsm /s", "plain Python /s", "ratio", "target"],
+            rows,
+        )
+    ]
 
 
 # -- start-up ------------------------------------------------------------------------------------
@@ -327,11 +332,26 @@ def section_build(tmp: Path, sizes: tuple[int, ...] = (100,)) -> list[Table]:
     ]
 
 
+def section_soak(tmp: Path) -> list[Table]:
+    from soak import table
+
+    scale = 10 if QUICK else 1
+    rows = table(10_000_000 // scale, 1_000_000 // scale)
+    return [
+        (
+            "Soak: memory growth after a warm-up, measured with tracemalloc",
+            ["workload", "seconds (traced)", "memory growth", "peak above start", "target"],
+            rows,
+        )
+    ]
+
+
 SECTIONS: dict[str, Callable[[Path], list[Table]]] = {
     "toggle": section_toggle,
     "ringlets": section_ringlets,
     "startup": section_startup,
     "build": section_build,
+    "soak": section_soak,
 }
 
 
