@@ -305,10 +305,12 @@ def timed(cmd: list[str], env: dict[str, str]) -> float:
     return time.perf_counter() - t
 
 
-def section_build(tmp: Path, sizes: tuple[int, ...] = (100,)) -> list[Table]:
+def section_build(tmp: Path, sizes: tuple[int, ...] = (10, 100, 1000)) -> list[Table]:
     rows = []
     env = dict(os.environ)
     targets = {100: ("< 1.5", "< 3", "< 0.3"), 1000: ("< 5", "", "")}
+    if QUICK:
+        sizes = tuple(x for x in sizes if x <= 100)
     for count in sizes:
         root = tmp / f"m{count}"
         for i in range(count):
@@ -327,6 +329,110 @@ def section_build(tmp: Path, sizes: tuple[int, ...] = (100,)) -> list[Table]:
         (
             "`llfsm check` and `llfsm build` of generated 10-state machines (s, whole command)",
             ["what", "seconds", "target"],
+            rows,
+        )
+    ]
+
+
+# -- the bus and the simulator ----------------------------------------------------------------
+
+
+def section_bus(tmp: Path) -> list[Table]:
+    from llfsm import ros
+    from llfsm.msgs.geometry_msgs.msg import Twist
+    from llfsm.msgs.std_msgs.msg import String
+    from llfsm.ros.bus import bus_of
+    from llfsm.runtime import RunContext
+    from llfsm.runtime.context import activate
+
+    ctx = RunContext(SimClock())
+    prev = activate(ctx)
+    rows = []
+    try:
+        ros.init()
+        bus = bus_of(ctx)
+        node = ros.Node("bench")
+        n = 100_000 if QUICK else 500_000
+        for name, make in (("std_msgs/String", lambda: String(data="The count is 0")), ("geometry_msgs/Twist", Twist)):
+            topic = "/" + name.replace("/", "_")
+            pub = node.create_publisher(type(make()), topic, 10)
+            reader = node.create_subscription(type(make()), topic, None, 10)
+            msg = make()
+
+            def pull(k: int, pub: object = pub, reader: object = reader, msg: object = msg) -> None:
+                for _ in range(k):
+                    pub.publish(msg)  # type: ignore[attr-defined]
+                    reader.take()  # type: ignore[attr-defined]
+
+            rows.append([f"publish -> PULL take(), {name}", fmt_rate(best_rate(pull, n)), "≥ 1,000,000"])
+            topic2 = topic + "_push"
+            pub2 = node.create_publisher(type(make()), topic2, 10)
+            node.create_subscription(type(make()), topic2, lambda m: None, 10)
+
+            def push(k: int, pub2: object = pub2, msg: object = msg) -> None:
+                for _ in range(k):
+                    pub2.publish(msg)  # type: ignore[attr-defined]
+                    bus.spin_some()
+
+            rows.append([f"publish -> callback, {name}", fmt_rate(best_rate(push, n)), "≥ 300,000"])
+    finally:
+        activate(prev)
+    return [
+        (
+            "Bus messages per second (each publish copies the message for each reader)",
+            ["path", "messages/s", "target"],
+            rows,
+        )
+    ]
+
+
+def turtlesim_rtf(turtles: int, seconds: float) -> float:
+    """Real-time factor of `--node turtlesim` with moving turtles and no drawing: simulated
+    seconds per wall second, through the bus exactly as in a run (16 ms timer, pose topics)."""
+    from llfsm import ros
+    from llfsm.msgs.geometry_msgs.msg import Twist
+    from llfsm.nodes import NodeOptions
+    from llfsm.nodes.turtlesim import Turtlesim
+    from llfsm.ros.bus import bus_of
+    from llfsm.runtime import RunContext
+    from llfsm.runtime.context import activate
+
+    ctx = RunContext(SimClock())
+    prev = activate(ctx)
+    try:
+        ros.init()
+        bus = bus_of(ctx)
+        sim = Turtlesim(ctx, NodeOptions())
+        for i in range(1, turtles):
+            sim.world.spawn(1.0 + i * 0.9, 2.0, 0.0, "")
+        sim._sync()
+        driver = ros.Node("driver")
+        pubs = [driver.create_publisher(Twist, f"/{name}/cmd_vel", 1) for name in sim.world.names()]
+        cmd = Twist()
+        cmd.linear.x, cmd.angular.z = 1.0, 0.5
+        step = 16_000_000
+        t = time.perf_counter()
+        for k in range(int(seconds * 1e9) // step):
+            if k % 30 == 0:  # a command twice a second keeps every turtle moving
+                for p in pubs:
+                    p.publish(cmd)
+            ctx.clock.now += step
+            bus.spin_some()
+        return seconds / (time.perf_counter() - t)
+    finally:
+        activate(prev)
+
+
+def section_turtlesim(tmp: Path) -> list[Table]:
+    seconds = 60.0 if QUICK else 300.0
+    rows = [
+        [f"{n} turtle{'s' if n > 1 else ''}", f"{turtlesim_rtf(n, seconds):,.0f}x", "≥ 500x" if n == 1 else ""]
+        for n in (1, 10)
+    ]
+    return [
+        (
+            "turtlesim real-time factor, no drawing (simulated seconds per wall second)",
+            ["world", "real-time factor", "target"],
             rows,
         )
     ]
@@ -351,6 +457,8 @@ SECTIONS: dict[str, Callable[[Path], list[Table]]] = {
     "ringlets": section_ringlets,
     "startup": section_startup,
     "build": section_build,
+    "bus": section_bus,
+    "turtlesim": section_turtlesim,
     "soak": section_soak,
 }
 
