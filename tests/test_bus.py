@@ -68,6 +68,7 @@ def test_relative_absolute_private_names_and_namespaces(bus: Bus) -> None:
     assert n.create_publisher(String, "/chatter", 10).topic_name == "/chatter"
     assert n.create_publisher(String, "~/status", 10).topic_name == "/robot1/talker/status"
     assert n.create_publisher(String, "{node}/x", 10).topic_name == "/robot1/talker/x"
+    assert n.create_publisher(String, "{ns}/y", 10).topic_name == "/robot1/y"  # rcl: the namespace, absolute
     root = ros.Node("root")
     assert root.create_publisher(String, "turtle1/cmd_vel", 10).topic_name == "/turtle1/cmd_vel"
     assert n.create_client(Trigger, "reset").srv_name == "/robot1/reset"

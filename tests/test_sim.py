@@ -467,3 +467,11 @@ def test_update_is_fast() -> None:
         w.pose("turtle1")
     per_tick = (time.perf_counter() - start) / 2000
     assert per_tick < 30e-6  # 500x real time needs < 32 µs per 16 ms tick
+
+
+def test_numbered_turtles_are_drawn_in_different_colours() -> None:
+    from llfsm.sim.draw import turtle_color
+
+    colours = [turtle_color(f"turtle{i}") for i in range(1, 7)]
+    assert len(set(colours)) == 6
+    assert turtle_color("leader") == turtle_color("leader")

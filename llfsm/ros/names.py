@@ -85,10 +85,12 @@ def expand(name: str, node: str, namespace: str, what: str = "topic") -> str:
         if key == "node":
             return node
         if key in ("ns", "namespace"):
-            return ns.strip("/")
+            return ns  # with its leading slash, as rcl substitutes it: `{ns}/x` is absolute
         raise InvalidNameError(f"invalid {what} name {name!r}: unknown substitution {{{key}}}")
 
     out = _SUBST_RE.sub(subst, name)
+    if out.startswith("//"):
+        out = out[1:]  # `{ns}/x` in the root namespace
     if out == "~":
         out = node_fqn
     elif out.startswith("~/"):

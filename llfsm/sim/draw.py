@@ -67,8 +67,11 @@ _BODY: tuple[tuple[str, list[Point]], ...] = (
 
 
 def turtle_color(name: str) -> RGB:
-    """A shell colour per name, stable across runs, so that turtles can be told apart."""
-    return _SHELLS[zlib.crc32(name.encode()) % len(_SHELLS)]
+    """A shell colour per name, stable across runs, so that turtles can be told apart: numbered
+    turtles (turtle1, turtle2, ...) take the colours in turn, other names by hash."""
+    digits = name[len(name.rstrip("0123456789")) :]
+    index = int(digits) - 1 if digits else zlib.crc32(name.encode())
+    return _SHELLS[index % len(_SHELLS)]
 
 
 def _paints(name: str) -> dict[str, tuple[RGB, RGB | None]]:
