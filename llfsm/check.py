@@ -9,11 +9,16 @@ from __future__ import annotations
 
 import ast
 import builtins
+import io
+import os
+import tokenize
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .compiler.rewrite import BadBinding, attribute_of, find, name_map
+from .compiler.rewrite import BadBinding, attribute_of, find, name_map, source_lines
+from .deps import undeclared_dependencies
 from .diagnostics import Diagnostic, Severity, diag
 from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
 from .model import Code, Machine, State, is_valid_name
@@ -22,6 +27,9 @@ from .runtime.machine import MACROS, RESERVED
 
 BUILTINS = frozenset(dir(builtins))
 GENERATED_PREFIXES = ("ringlet_", "on_entry_", "internal_", "on_exit_", "on_suspend_", "on_resume_")
+#: Module-level names the compiled module itself uses (templates/machine.py.j2): an import in
+#: Includes.py that rebinds one would break the class the module defines.
+MODULE_NAMES = frozenset({"Machine", "super", "frozenset"})
 
 
 @dataclass
@@ -45,8 +53,14 @@ class MachineCheck:
         return self.machine is not None and not self.errors
 
 
-def check_machine(path: str | Path) -> MachineCheck:
+def check_machine(path: str | Path, within: Path | None = None) -> MachineCheck:
+    """Check one machine directory.  `within`: the folder it was found in by searching; a
+    machine directory that is a symlink leading out of that folder is refused, not read (an
+    untrusted pull request must not get `llfsm check` to read files from elsewhere)."""
     path = Path(path)
+    if within is not None and _leads_out(path, within):
+        refused = diag("LF037", path, 1, 1, f"{path.name} is a symlink leading out of {within}; refused")
+        return MachineCheck(path, ReadResult(path, None, [refused]), [refused])
     read = read_machine(path)
     result = MachineCheck(path, read, list(read.diagnostics))
     _Checker(result).run()
@@ -57,14 +71,54 @@ def check_machine(path: str | Path) -> MachineCheck:
 def check_paths(paths: Iterable[Path]) -> list[MachineCheck]:
     out = []
     for p in paths:
-        out.extend(check_machine(m) for m in find_machines(p))
+        out.extend(check_machine(m, p) for m in find_machines(p))
     return out
+
+
+def _leads_out(path: Path, root: Path) -> bool:
+    if not os.path.islink(path):
+        return False
+    return not Path(os.path.realpath(path)).is_relative_to(os.path.realpath(root))
+
+
+#: From this many machines on, `diagnose` spreads the work over worker processes.
+PARALLEL_FROM = 48
+
+
+def _diagnostics_of(path: Path, within: Path | None = None) -> list[Diagnostic]:
+    return check_machine(path, within).diagnostics
+
+
+def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[Diagnostic]]:
+    """(number of machines, their diagnostics in a stable order) for `llfsm check`.
+
+    Large trees (a monorepo of machines in CI) are checked by worker processes, one per core;
+    workers send back only diagnostics, so memory stays flat however many machines there are.
+    The order of the output never depends on the number of workers.
+    """
+    found = [(m, p) for p in paths for m in find_machines(p)]
+    machines, roots = [m for m, _ in found], [p for _, p in found]
+    if jobs is None:
+        jobs = (os.cpu_count() or 1) if len(machines) >= PARALLEL_FROM else 1
+    if jobs <= 1 or len(machines) < 2:
+        return len(machines), [d for m, p in found for d in check_machine(m, p).diagnostics]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+        chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
+        return len(machines), [d for chunk in chunks for d in chunk]
 
 
 class _Checker:
     def __init__(self, result: MachineCheck) -> None:
         self.r = result
         self.path = result.path
+        #: files the reader could not use (already reported): one set, not a scan per guard,
+        #: so that a machine.yaml with 100 000 transitions is checked in linear time
+        self.unreadable = {os.path.basename(d.file) for d in result.read.diagnostics}
+        self.always_true: set[str] = set()  # states whose LF104 warnings are already given
 
     def add(self, code: str, file: str, line: int, col: int, msg: str) -> None:
         self.r.diagnostics.append(diag(code, self.path / file, line, col, msg))
@@ -101,6 +155,7 @@ class _Checker:
             )
         self.reachability(m)
         self.suspend_state(m)
+        self.r.diagnostics.extend(undeclared_dependencies(self.path, self.r.read.trees))
 
     def suspend_state(self, m: Machine) -> None:
         """A suspended machine gets no ringlets and leaves by OnResume: some of its code never runs."""
@@ -149,7 +204,7 @@ class _Checker:
     def guard(self, s: State, index: int, code: Code | None) -> None:
         fname = f"State_{s.name}_Transition_{index}.expr"
         if code is None:
-            if fname not in self.r.read.trees and not any(d.file.endswith(fname) for d in self.r.diagnostics):
+            if fname not in self.r.read.trees and fname not in self.unreadable:
                 self.add(
                     "LF023",
                     "machine.yaml",
@@ -168,10 +223,25 @@ class _Checker:
             self.add("LF024", fname, line, col, f"guard {fname} {what}, such as `after_ms(500)`")
             return
         expr = tree.body[0].value
+        if isinstance(expr, ast.Tuple):
+            # `a, b` is always true, and `if a, b:` is not even Python
+            self.add(
+                "LF024",
+                fname,
+                expr.lineno,
+                node_col(code.text, expr),
+                f"guard {fname} is a tuple, which is always true; join conditions with `and` or `or`",
+            )
+            return
+        semicolon = _semicolon(code.text)
+        if semicolon is not None:
+            self.add("LF024", fname, *semicolon, f"guard {fname} must be one expression, without `;`")
+            return
         if isinstance(expr, ast.Constant):
             if not expr.value:
                 self.add("LF103", fname, 1, 1, f"guard {fname} is always false: transition {index} never fires")
-            else:
+            elif s.name not in self.always_true:  # the first true guard silences all later ones
+                self.always_true.add(s.name)
                 for later in s.transitions[index + 1 :]:
                     self.add(
                         "LF104",
@@ -209,6 +279,18 @@ class _Checker:
                     col,
                     "relative imports cannot work in a compiled machine; import by absolute name",
                 )
+            else:
+                for a in stmt.names:
+                    bound = (a.asname or a.name).split(".")[0]
+                    if bound in MODULE_NAMES or bound.startswith("_llfsm"):
+                        self.add(
+                            "LF013",
+                            "Includes.py",
+                            stmt.lineno,
+                            col,
+                            f"Includes.py binds `{bound}`, which the compiled module uses itself; "
+                            "import it under another name (`import x as y`)",
+                        )
 
     def imported_names(self) -> set[str] | None:
         """Names Includes.py binds; None if it star-imports (then any name may exist)."""
@@ -226,35 +308,61 @@ class _Checker:
 
     def variables(self, m: Machine) -> None:
         generated = {f"{p}{s.name}" for s in m.states for p in GENERATED_PREFIXES}
-        state_attrs = {attribute_of(s.name, v.name): s.name for s in m.states for v in s.variables}
+        state_attrs: dict[str, tuple[str, str]] = {}  # attribute -> (state, variable) it stores
         machine_vars: dict[str, object] = {}
         for v in m.variables:
             self.reserved(v.name, v.loc, generated)
             if v.name in machine_vars:
                 self.at("LF035", v.loc, f"machine variable {v.name} is declared twice")
             machine_vars[v.name] = v
-            if v.name in state_attrs:
-                self.at(
-                    "LF013",
-                    v.loc,
-                    f"machine variable {v.name} collides with variable "
-                    f"{v.name.split('__', 1)[1]} of state {state_attrs[v.name]}; rename one",
-                )
         for s in m.states:
             seen: set[str] = set()
             for v in s.variables:
                 self.reserved(v.name, v.loc, generated)
                 if v.name in seen:
                     self.at("LF035", v.loc, f"variable {v.name} of state {s.name} is declared twice")
+                    continue
                 seen.add(v.name)
                 if v.name in machine_vars:
                     self.at(
                         "LF033", v.loc, f"state variable {v.name} of {s.name} shadows the machine variable {v.name}"
                     )
+                # state variables live in attributes STATE__name: names with `__` can meet
+                attr = attribute_of(s.name, v.name)
+                clash = (
+                    f"the machine variable {attr}"
+                    if attr in machine_vars
+                    else f"variable {state_attrs[attr][1]} of state {state_attrs[attr][0]}"
+                    if attr in state_attrs
+                    else f"the method {attr} llfsm generates"
+                    if attr in generated
+                    else None
+                )
+                if clash is not None:
+                    self.at(
+                        "LF013", v.loc, f"variable {v.name} of state {s.name} is stored as {attr}, as is {clash}"
+                    )
+                elif attr.startswith("__"):
+                    self.at(
+                        "LF013",
+                        v.loc,
+                        f"variable {v.name} of state {s.name} is stored as {attr}, a name Python mangles; "
+                        "rename the state",
+                    )
+                state_attrs.setdefault(attr, (s.name, v.name))
         # initialisers are code too
         for code in [m.variables_file] + [s.variables_file for s in m.states]:
             if code is not None and code.file in self.r.read.trees:
-                self.no_escape(code.file, code.text, self.r.read.trees[code.file])
+                tree = self.r.read.trees[code.file]
+                scan = _scan(tree, {})
+                for node, _kind in scan.escapes:
+                    self.escape(code.file, code.text, node)
+                declared = {id(st.target) for st in tree.body if isinstance(st, ast.AnnAssign)}
+                for n in scan.reserved:
+                    if id(n) not in declared:  # a declared name is judged by `reserved` above
+                        self.reserved_use(code, n)
+                if not scan.escapes:
+                    self.compiles(code, tree)
 
     def reserved(self, name: str, loc: object, generated: set[str]) -> None:
         if (
@@ -262,10 +370,30 @@ class _Checker:
             or name in MACROS
             or name.startswith("_llfsm")
             or name in generated
-            or (name.startswith("__") and name.endswith("__"))
+            or name.startswith("__")  # a dunder, or a private name that Python would mangle
         ):
-            what = "an llfsm macro" if name in MACROS else "reserved by llfsm"
+            what = (
+                "an llfsm macro"
+                if name in MACROS
+                else "a private name, which Python mangles inside the compiled class"
+                if name.startswith("__") and not name.endswith("__")
+                else "reserved by llfsm"
+            )
             self.at("LF013", loc, f"variable name {name!r} is {what}; choose another name")
+
+    def reserved_use(self, code: Code, n: ast.Name) -> None:
+        what = "is an llfsm macro and cannot be assigned" if n.id in MACROS else "is reserved by llfsm"
+        self.add("LF013", code.file, n.lineno, node_col(code.text, n), f"`{n.id}` {what} in machine code")
+
+    def compiles(self, code: Code, tree: ast.Module) -> None:
+        """Compile (never run) the code where the build will put it, inside a method, so that
+        what only the compiler refuses (`break` outside a loop, `import *` in a function, 20
+        nested loops...) is an error of `check` rather than a surprise of `build`."""
+        error = _compile_error(tree, guard=code.file.endswith(".expr"))
+        if error is not None:
+            line = error.lineno or 1
+            col = _col(code.text, line, (error.offset or 1) - 1)
+            self.add("LF030", code.file, line, col, f"cannot be compiled: {error.msg}")
 
     def code_of(self, m: Machine, s: State) -> None:
         mvars = [v.name for v in m.variables]
@@ -286,8 +414,9 @@ class _Checker:
                 for b in bad:
                     self.bad_binding(code, b)
             for n in scan.reserved:
-                what = "is an llfsm macro and cannot be assigned" if n.id in MACROS else "is reserved by llfsm"
-                self.add("LF013", code.file, n.lineno, node_col(code.text, n), f"`{n.id}` {what} in machine code")
+                self.reserved_use(code, n)
+            if not scan.escapes and (not is_guard or _single_expression(tree)):
+                self.compiles(code, tree)
             if imported is not None and (not is_guard or _single_expression(tree)):
                 known = set(mapping) | imported | scan.bound | BUILTINS
                 for name, n in scan.loads.items():
@@ -331,10 +460,6 @@ class _Checker:
                 col,  # type: ignore[attr-defined]
                 f"`{kw}` is not allowed at the top level of {fname}: a section runs inside the state's ringlet",
             )
-
-    def no_escape(self, fname: str, text: str, tree: ast.AST) -> None:
-        for node, _kind in _scan(tree, {}).escapes:
-            self.escape(fname, text, node)
 
     # -- graph ---------------------------------------------------------------------------------
     def reachability(self, m: Machine) -> None:
@@ -438,12 +563,53 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
     return out
 
 
+def _located(node: ast.AST) -> ast.AST:
+    node.lineno = node.end_lineno = 1  # type: ignore[attr-defined]
+    node.col_offset = node.end_col_offset = 0  # type: ignore[attr-defined]
+    return node
+
+
+def _compile_error(tree: ast.Module, guard: bool) -> SyntaxError | None:
+    """The error `compile` gives for code placed in a method body as the generated module
+    places it (a guard as the condition of an `if`); None if it compiles."""
+    body: list[ast.stmt] = tree.body
+    if guard:
+        body = [_located(ast.If(test=tree.body[0].value, body=[_located(ast.Pass())], orelse=[]))]  # type: ignore[attr-defined]
+    args = ast.arguments(
+        posonlyargs=[], args=[_located(ast.arg(arg="self"))], kwonlyargs=[], kw_defaults=[], defaults=[]
+    )
+    method = ast.FunctionDef(name="_llfsm_check", args=args, body=body or [_located(ast.Pass())], decorator_list=[])
+    try:
+        with warnings.catch_warnings():  # `x is 1` and the like: not check's business, nor stderr's
+            warnings.simplefilter("ignore")
+            compile(ast.Module(body=[_located(method)], type_ignores=[]), "<check>", "exec", dont_inherit=True)
+    except SyntaxError as e:
+        return e
+    except (RecursionError, MemoryError, ValueError, TypeError) as e:
+        return SyntaxError(f"{type(e).__name__}")
+    return None
+
+
+def _semicolon(text: str) -> tuple[int, int] | None:
+    """(line, column) of a `;` token in a guard, if any: `x;` parses as one statement, but the
+    guard becomes the condition of an `if`, where a `;` is a syntax error."""
+    if ";" not in text:
+        return None
+    try:
+        for tok in tokenize.generate_tokens(io.StringIO(text).readline):
+            if tok.type == tokenize.OP and tok.string == ";":
+                return tok.start[0], tok.start[1] + 1
+    except (tokenize.TokenError, SyntaxError):
+        return None
+    return None
+
+
 def _single_expression(tree: ast.Module) -> bool:
     return len(tree.body) == 1 and isinstance(tree.body[0], ast.Expr)
 
 
 def _col(text: str, line: int, byte_col: int) -> int:
-    lines = text.splitlines()
+    lines = source_lines(text)
     if 1 <= line <= len(lines):
         return len(lines[line - 1].encode("utf-8")[:byte_col].decode("utf-8", "replace")) + 1
     return byte_col + 1

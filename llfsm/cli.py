@@ -47,7 +47,28 @@ class Duration(click.ParamType):
 DURATION = Duration()
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+def _quiet_broken_pipe() -> NoReturn:
+    """Our reader went away (`llfsm run ... | head -1`): end quietly, as `cat` would."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            os.dup2(devnull, stream.fileno())  # later flushes (and interpreter exit) write nowhere
+        except (OSError, ValueError):
+            pass
+    sys.exit(EXIT_OK)
+
+
+class _Group(click.Group):
+    """Handles a closed pipe before click does: click would turn it into exit status 1."""
+
+    def invoke(self, ctx: click.Context) -> object:
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError:
+            _quiet_broken_pipe()
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="llfsm")
 def cli() -> None:
     """Logic-labelled finite-state machines: check, build and run them."""
@@ -68,6 +89,19 @@ def _existing(paths: tuple[str, ...]) -> list[Path]:
     return out
 
 
+def _enclosing_machines(paths: tuple[str, ...]) -> tuple[str, ...]:
+    """A file inside a NAME.machine directory stands for that machine: pre-commit passes the
+    files that changed, and a machine is only ever checked whole."""
+    out: list[str] = []
+    for p in paths:
+        path = Path(p)
+        if path.is_file():
+            p = next((str(d) for d in path.parents if d.name.endswith(".machine") and d.is_dir()), p)
+        if p not in out:
+            out.append(p)
+    return tuple(out)
+
+
 @cli.command()
 @click.argument("paths", nargs=-1, required=True)
 @click.option(
@@ -81,20 +115,25 @@ def _existing(paths: tuple[str, ...]) -> list[Path]:
 @click.option("--strict", is_flag=True, help="Warnings fail the check too (exit 1).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the report to FILE instead of stdout.")
 @click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
-def check(paths: tuple[str, ...], fmt: str, strict: bool, output: str | None, quiet: bool) -> None:
+@click.option(
+    "-j", "--jobs", type=int, default=None, help="Worker processes (default: one per core from 48 machines on, else 1)."
+)
+def check(paths: tuple[str, ...], fmt: str, strict: bool, output: str | None, quiet: bool, jobs: int | None) -> None:
     """Validate machine directories without running any of their code.
 
-    A PATH is a NAME.machine directory or a folder searched for them.  Exit status: 0 clean
-    (warnings allowed unless --strict), 1 problems found, 2 bad usage.
+    A PATH is a NAME.machine directory, a folder searched for them, or a file inside a machine
+    directory (that machine: pre-commit passes files).  Exit status: 0 clean (warnings allowed
+    unless --strict), 1 problems found, 2 bad usage.
     """
-    from .check import check_paths, find_machines
+    from .check import diagnose
     from .diagnostics import Severity, render
 
-    roots = _existing(paths)
-    if not any(find_machines(r) for r in roots):
+    roots = _existing(_enclosing_machines(paths))
+    if jobs is not None and jobs < 1:
+        fail("--jobs must be at least 1")
+    count, diags = diagnose(roots, jobs)
+    if not count:
         fail(f"no NAME.machine directories found in {', '.join(paths)}")
-    results = check_paths(roots)
-    diags = [d for r in results for d in r.diagnostics]
     text = render(diags, fmt, __version__)
     if output:
         from .compiler.build import write_atomic
@@ -105,7 +144,7 @@ def check(paths: tuple[str, ...], fmt: str, strict: bool, output: str | None, qu
     errors = sum(d.severity is Severity.ERROR for d in diags)
     warnings = len(diags) - errors
     if not quiet:
-        click.echo(f"checked {len(results)} machine(s): {errors} error(s), {warnings} warning(s)", err=True)
+        click.echo(f"checked {count} machine(s): {errors} error(s), {warnings} warning(s)", err=True)
     sys.exit(EXIT_ERRORS if errors or (strict and warnings) else EXIT_OK)
 
 
@@ -232,11 +271,16 @@ def run(
     of an installed package.  Exit status: 0 normal end, 1 an exception in machine code,
     2 bad arguments or a machine that fails validation.
     """
-    from .runtime import Arrangement, RunContext, SimClock, Tracer, UnknownMachineError, WallClock, signals_handled
+    from .runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
     from .targets import InvalidMachine, MachineLoadError, TargetError, load
 
     if period is not None and period <= 0:
         fail("--period must be greater than 0")
+    from .msgs import add_search_path
+
+    for t in targets:  # user interfaces (PKG/msg/*.msg) beside or above the machines import too
+        for folder in list(Path(os.path.realpath(t)).parents)[:4]:  # realpath: no error on a loop
+            add_search_path(folder)
     classes = []
     for t in targets:
         try:
@@ -269,9 +313,11 @@ def run(
     try:
         try:
             arr = Arrangement(classes, context=ctx, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended)
-        except (UnknownMachineError, ValueError) as e:
-            fail(str(e).strip("'\""))
-        except Exception as exc:  # a variable initialiser raised: machine code
+        except ArrangementError as e:
+            fail(str(e))
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except BaseException as exc:  # a variable initialiser raised: machine code may raise anything
             from .runtime import report_for
 
             rep = report_for(exc)
@@ -381,6 +427,133 @@ def new_machine(name: str, directory: str, description: str | None) -> None:
     click.echo(f"created {path}")
 
 
+class _SeveralValues(click.Command):
+    """`ros2 pkg create` takes `--dependencies a b c`; a click option takes one value, so the
+    words after such an option (up to the next option) are spread into repeated options."""
+
+    several = ("--dependencies", "--machine")
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        out: list[str] = []
+        i = 0
+        while i < len(args):
+            arg = args[i]
+            out.append(arg)
+            i += 1
+            if arg == "--":
+                out += args[i:]
+                break
+            if arg in self.several:
+                first = True
+                while i < len(args) and (first or not args[i].startswith("-")):
+                    if not first:
+                        out.append(arg)
+                    out.append(args[i])
+                    first = False
+                    i += 1
+        try:
+            return super().parse_args(ctx, out)
+        except click.MissingParameter as e:
+            if e.param is not None and e.param.name == "name" and any(a in self.several for a in args):
+                raise click.UsageError(
+                    "missing NAME: put it before --dependencies and --machine, which take every word after them",
+                    ctx,
+                ) from None
+            raise
+
+
+@new.command("package", cls=_SeveralValues)
+@click.argument("name")
+@click.option(
+    "--dependencies",
+    multiple=True,
+    metavar="D...",
+    help="Packages the machines use (std_msgs geometry_msgs ...): <depend> tags in package.xml.",
+)
+@click.option(
+    "--machine",
+    "machines",
+    multiple=True,
+    metavar="M...",
+    help="Machines to create in machine/ (default: one named NAME).",
+)
+@click.option(
+    "--license",
+    "license_",
+    default="TODO: License declaration",
+    help="License in package.xml (default, as ros2 pkg create: 'TODO: License declaration'); "
+    "a warning unless an ament identifier such as Apache-2.0 or MIT.",
+)
+@click.option("--description", default=None, help="Description in package.xml.")
+@click.option("--maintainer-name", default=None, help="Maintainer (default: your user name).")
+@click.option("--maintainer-email", default=None, help="Maintainer's e-mail (default: NAME@todo.todo).")
+@click.option(
+    "--dir",
+    "--destination-directory",
+    "directory",
+    type=click.Path(file_okay=False),
+    default=".",
+    show_default=True,
+    help="Folder to create the package in: a workspace's src/.",
+)
+def new_package(
+    name: str,
+    dependencies: tuple[str, ...],
+    machines: tuple[str, ...],
+    license_: str,
+    description: str | None,
+    maintainer_name: str | None,
+    maintainer_email: str | None,
+    directory: str,
+) -> None:
+    """A ROS 2 ament_python package of machines that `colcon build` builds.
+
+    Run in a workspace's src/.  It writes NAME/package.xml (format 3), setup.py, setup.cfg,
+    resource/NAME, machine/M.machine for each machine and test/.  Then, from the workspace:
+    `colcon build`, `source install/setup.bash`, `llfsm run NAME/M`.  NAME comes before the
+    options that take several values.
+    """
+    from .scaffold import ScaffoldError, create_package
+
+    try:
+        pkg = create_package(
+            Path(directory),
+            name,
+            dependencies,
+            machines,
+            license_,
+            description,
+            maintainer_name,
+            maintainer_email,
+        )
+    except ScaffoldError as e:
+        fail(str(e))
+    # the summary ros2 pkg create prints, so the two read alike (printed once all is written)
+    click.echo("created a new package")
+    click.echo(f"package name: {name}")
+    click.echo(f"destination directory: {Path(directory).resolve()}")
+    click.echo("package format: 3")
+    click.echo("version: 0.0.0")
+    click.echo(f"description: {pkg.description}")
+    click.echo(f"maintainer: {[pkg.maintainer]}")
+    click.echo(f"licenses: {[pkg.license]}")
+    click.echo("build type: ament_python")
+    click.echo(f"dependencies: {pkg.dependencies}")
+    click.echo(f"machines: {pkg.machines}")
+    rel = Path(directory) / name
+    for f in pkg.files:
+        if not f.startswith("machine/"):
+            click.echo(f"created {rel / f}")
+    for m in pkg.machines:
+        click.echo(f"created {rel / 'machine' / (m + '.machine')}/")
+    for w in pkg.warnings:
+        click.echo(f"[WARNING]: {w}", err=True)
+    click.echo("next, from the workspace (the folder that holds src/):")
+    click.echo(f"  colcon build --packages-select {name}")
+    click.echo("  source install/setup.bash")
+    click.echo(f"  llfsm run {name}/{pkg.machines[0]}")
+
+
 # -- graph, schema -------------------------------------------------------------------------------
 
 
@@ -447,10 +620,7 @@ def main() -> None:
     except click.exceptions.Abort:
         sys.exit(130)
     except BrokenPipeError:
-        # stdout was closed early (`llfsm run ... | head -1`): end quietly
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        sys.exit(EXIT_OK)
+        _quiet_broken_pipe()
     except KeyboardInterrupt:
         sys.exit(130)
     except SystemExit:

@@ -114,15 +114,25 @@ def diag(code: str, file: str | Path, line: int, column: int, message: str) -> D
     """Build a diagnostic, keeping messages on one line whatever the input held."""
     if code not in RULES:
         raise KeyError(code)
-    message = " ".join(message.split())
+    message = shown(" ".join(message.split()))
     return Diagnostic(code, str(file), max(line, 1), max(column, 1), message)
+
+
+def shown(text: str) -> str:
+    """`text` safe to print on a terminal or in a CI log.  File names come from untrusted pull
+    requests: an escape sequence in one must not recolour, hide or forge output lines, and a
+    name that is not UTF-8 must not make printing fail.  Control characters, lone surrogates
+    and other unprintable characters are spelled out as Python escapes."""
+    if text.isprintable():
+        return text
+    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text)
 
 
 FORMATS = ("text", "json", "github", "sarif")
 
 
 def format_text(diags: Iterable[Diagnostic]) -> str:
-    return "".join(f"{d.file}:{d.line}:{d.column}: {d.code} {d.severity}: {d.message}\n" for d in diags)
+    return "".join(f"{shown(d.file)}:{d.line}:{d.column}: {d.code} {d.severity}: {d.message}\n" for d in diags)
 
 
 def format_json(diags: Iterable[Diagnostic]) -> str:
@@ -142,7 +152,7 @@ def format_github(diags: Iterable[Diagnostic]) -> str:
     for d in diags:
         kind = "error" if d.severity is Severity.ERROR else "warning"
         out.append(
-            f"::{kind} file={_gh_escape(d.file, True)},line={d.line},col={d.column},"
+            f"::{kind} file={_gh_escape(shown(d.file), True)},line={d.line},col={d.column},"
             f"title={_gh_escape(d.code, True)}::{_gh_escape(d.message)}\n"
         )
     return "".join(out)

@@ -37,21 +37,38 @@ def is_machine_dir(path: Path) -> bool:
 
 
 def find_machines(path: Path) -> list[Path]:
-    """`path` itself if it is a machine directory, else every NAME.machine folder below it."""
+    """`path` itself if it is a machine directory, else every NAME.machine folder below it, in
+    sorted order.  An explicit stack, not os.walk (which recurses once per level in Python 3.11):
+    a pull request with thousands of nested folders must not crash `llfsm check .`."""
     if is_machine_dir(path) or (path / "machine.yaml").exists():
         return [path]
     found: list[Path] = []
-    for root, dirs, _files in os.walk(path, followlinks=False):
-        here = Path(root)
-        keep = []
-        for d in sorted(dirs):
+    stack = [path]
+    while stack:
+        here = stack.pop()
+        try:
+            with os.scandir(here) as it:
+                # links to folders are listed (check refuses machines linked from outside) but
+                # never descended into, as os.walk(followlinks=False) does
+                dirs = sorted((e.name, e.is_symlink()) for e in it if _is_dir(e))
+        except OSError:
+            continue  # unreadable folders are skipped, as os.walk skips them
+        below = []
+        for d, link in dirs:
             if d in SKIP_DIRS or d.startswith("."):
                 continue
             if d in COLCON_OUTPUT and (here / "src").is_dir():
                 continue
             if d.endswith(MACHINE_SUFFIX):
                 found.append(here / d)
-                continue
-            keep.append(d)
-        dirs[:] = keep
-    return found
+            elif not link:
+                below.append(here / d)
+        stack.extend(reversed(below))  # depth first, in name order
+    return sorted(found, key=lambda p: p.parts)
+
+
+def _is_dir(entry: os.DirEntry[str]) -> bool:
+    try:
+        return entry.is_dir()
+    except OSError:  # a symlink loop
+        return False

@@ -10,11 +10,13 @@ from __future__ import annotations
 import ast
 import os
 import re
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 
+from .compiler.rewrite import source_lines
 from .diagnostics import Diagnostic, diag
 from .discover import machine_name_of
 from .model import (
@@ -30,6 +32,15 @@ from .model import (
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: no hand-written state section comes near this
 MAX_YAML_DEPTH = 32
+#: Deepest `ast` nesting accepted in a code file.  Hand-written code stays far below; the
+#: compiler's tree walks recurse, and a deeper tree would exhaust Python's stack in them.
+MAX_CODE_DEPTH = 200
+#: Open without blocking on a FIFO and without taking a terminal as controlling tty.
+_OPEN_FLAGS = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
+#: A form feed in the indentation resets CPython's column count: re-indented into a method,
+#: such a line would land at another nesting level than the one it was checked at.  (A form
+#: feed alone on its line, or before a comment, is harmless: such lines have no indentation.)
+_FORM_FEED_INDENT = re.compile(r"^[ \t]*\f[ \t\f]*[^\s#]", re.MULTILINE)
 #: libyaml's C parser when PyYAML has it (about ten times faster), else the pure-Python one.
 YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
@@ -51,7 +62,8 @@ class ReadResult:
 class _Reader:
     def __init__(self, path: Path) -> None:
         self.path = path
-        self.real = path.resolve()
+        # os.path.realpath, not Path.resolve: it never raises on a symlink loop (Python 3.11)
+        self.real = Path(os.path.realpath(path))
         self.diags: list[Diagnostic] = []
         self.trees: dict[str, ast.Module] = {}
 
@@ -64,16 +76,21 @@ class _Reader:
 
     def read(self, name: str) -> str | None:
         """The text of a file of the machine directory, or None (with a diagnostic) if unusable."""
-        p = self.path / name
+        p = os.path.join(self.path, name)  # plain strings: this runs for every file of every machine
         try:
-            if p.is_symlink():
-                target = p.resolve()
+            if os.path.islink(p):
+                target = Path(os.path.realpath(p))
                 if not target.is_relative_to(self.real):
                     self.report(
                         "LF037", name, 1, 1, f"{name} is a symlink leading out of the machine directory; refused"
                     )
                     return None
-            with open(p, "rb") as f:
+            # never block: a FIFO (or a device) where a file is expected would hang `llfsm check`
+            fd = os.open(p, _OPEN_FLAGS)
+            with os.fdopen(fd, "rb") as f:
+                if not stat.S_ISREG(os.fstat(fd).st_mode):
+                    self.report("LF002", name, 1, 1, f"{name} is not a regular file")
+                    return None
                 data = f.read(MAX_FILE_BYTES + 1)
         except OSError as e:
             self.report("LF002", name, 1, 1, f"cannot read {name}: {e.strerror or e}")
@@ -90,10 +107,16 @@ class _Reader:
             line = data[: e.start].count(b"\n") + 1
             self.report("LF002", name, line, 1, f"{name} is not UTF-8 text (byte {e.start})")
             return None
-        return text.removeprefix("\ufeff")
+        # one line ending: CPython counts \r and \r\n as line ends, and so must every later step
+        return text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n")
 
     # -- python --------------------------------------------------------------------------
     def parse(self, name: str, text: str) -> ast.Module | None:
+        ff = _FORM_FEED_INDENT.search(text)
+        if ff is not None:
+            line = text.count("\n", 0, ff.start()) + 1
+            self.report("LF030", name, line, 1, "a form feed in the indentation; put it on a line of its own")
+            return None
         try:
             tree = ast.parse(text, filename=name)
         except SyntaxError as e:
@@ -103,6 +126,16 @@ class _Reader:
             return None
         except (RecursionError, MemoryError, ValueError) as e:
             self.report("LF030", name, 1, 1, f"cannot parse {name}: {type(e).__name__}")
+            return None
+        deep = _too_deep(tree)
+        if deep is not None:
+            self.report(
+                "LF030",
+                name,
+                deep.lineno,  # type: ignore[attr-defined]
+                _node_col(text, deep),
+                f"code nested more than {MAX_CODE_DEPTH} levels deep; split it up",
+            )
             return None
         self.trees[name] = tree
         return tree
@@ -299,14 +332,18 @@ class _Reader:
                 self.parse("Includes.py", itext)
         variables, variables_file = self.variables("Variables.py") if "Variables.py" in entry_set else ([], None)
 
-        known = {s.name for s in states}
+        # transitions per state (the first of duplicates): linear in files plus transitions
+        counts: dict[str, int] = {}
+        for s in states:
+            counts.setdefault(s.name, len(s.transitions))
         for e in entries:
             m = SECTION_RE.match(e) or GUARD_RE.match(e)
-            if m and m["state"] not in known:
+            if m and m["state"] not in counts:
                 result.orphans.append(e)
             elif m and "n" in m.groupdict():
-                st = next(s for s in states if s.name == m["state"])
-                if e not in {f"State_{st.name}_Transition_{t.index}.expr" for t in st.transitions}:
+                n, count = m["n"], counts[m["state"]]
+                # `Transition_01` is no transition's file; int() of a long digit string raises
+                if (n != "0" and n.startswith("0")) or len(n) > len(str(count)) or int(n) >= count:
                     result.orphans.append(e)
 
         result.machine = Machine(
@@ -374,9 +411,20 @@ def _kind(node: yaml.Node) -> str:
     return {"MappingNode": "mapping", "SequenceNode": "list"}.get(type(node).__name__, "value")
 
 
+def _too_deep(tree: ast.AST) -> ast.AST | None:
+    """The first node nested deeper than MAX_CODE_DEPTH, found without recursion."""
+    stack = [(tree, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if depth > MAX_CODE_DEPTH and hasattr(node, "lineno"):
+            return node
+        stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
+    return None
+
+
 def _char_col(text: str, line: int, offset: int, is_bytes: bool = True) -> int:
     """1-based character column of a 0-based offset on a 1-based line (ast offsets are UTF-8 bytes)."""
-    lines = text.splitlines()
+    lines = source_lines(text)  # the lines `ast` counts: not str.splitlines, which also splits on \f
     if not 1 <= line <= len(lines):
         return offset + 1
     src = lines[line - 1]

@@ -127,7 +127,10 @@ def load_class(module_path: Path) -> type[Machine]:
     except SyntaxError as e:
         sys.modules.pop(mod_name, None)
         raise TargetError(f"{module_path}:{e.lineno}: not a valid module: {e.msg}") from None
-    except Exception as exc:
+    except (KeyboardInterrupt, SystemExit):
+        sys.modules.pop(mod_name, None)
+        raise
+    except BaseException as exc:  # an include may raise anything
         sys.modules.pop(mod_name, None)
         rep = report_for(exc)
         if rep is None:

@@ -438,3 +438,16 @@ def test_LF107_code_of_the_suspend_state_that_never_runs(tmp_path: Path) -> None
     )
     got = sorted((c, f) for c, f, *_ in codes(m))
     assert got == [("LF107", "State_SUSPENDED_Internal.py"), ("LF107", "machine.yaml")]
+
+
+def test_parallel_check_gives_the_same_output_in_the_same_order(tmp_path: Path) -> None:
+    from llfsm.check import diagnose
+
+    for i in range(12):
+        write_machine(tmp_path, f"m{i:02d}", {"INITIAL": [("NOPE" if i % 3 else "END", "x")], "END": None})
+    count, one = diagnose([tmp_path], jobs=1)
+    count2, two = diagnose([tmp_path], jobs=2)
+    assert count == count2 == 12
+    assert one == two and len(one) > 8
+    r = llfsm("check", "-j", "2", "--format", "json", tmp_path)
+    assert [d["file"] for d in json.loads(r.stdout)] == [d.file for d in one]

@@ -191,10 +191,22 @@ def test_machines_see_the_interrupt_and_finish_within_the_grace_time(tmp_path: P
 
 def test_stdout_closed_early_ends_quietly(tmp_path: Path) -> None:
     m = write_machine(tmp_path, "chatty", {"A": [("A", "True")]}, {"A_OnEntry": "print('line ' * 20)"})
-    cmd = f"{sys.executable} -m llfsm.cli run --clock sim --duration 20s {m} | head -1"
-    proc = subprocess.run(["bash", "-o", "pipefail", "-c", cmd], capture_output=True, text=True, timeout=60, cwd=REPO)
-    assert proc.stdout.startswith("line")
-    assert proc.stderr == ""
+    ping = REPO / "machines" / "ros2_ping_pong.machine"
+    llfsm_cmd = f"{sys.executable} -m llfsm.cli"
+    for cmd, first in (
+        (f"{llfsm_cmd} run --clock sim --duration 20s {m} | head -1", "line"),
+        (f"{llfsm_cmd} run --clock sim --duration 60s --echo /pingpong {ping} 2>/dev/null | head -1", "data:"),
+        (f"{llfsm_cmd} run --clock sim --duration 20s -v {m} 2>&1 >/dev/null | head -1", "m  0"),
+    ):
+        proc = subprocess.run(
+            ["bash", "-c", cmd + '; echo "status ${PIPESTATUS[0]}" >&2'],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            cwd=REPO,
+        )
+        assert proc.stdout.startswith(first), cmd
+        assert proc.stderr == "status 0\n", (cmd, proc.stderr)
 
 
 def test_error_event_in_the_trace_uses_the_same_id_key(tmp_path: Path) -> None:

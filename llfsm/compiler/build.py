@@ -3,8 +3,11 @@ the module header), and atomic writes, so an interrupted build never leaves half
 
 from __future__ import annotations
 
+import contextlib
 import os
-import tempfile
+import secrets
+import signal
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -27,22 +30,51 @@ class BuildOutcome:
     name: str = ""
 
 
+#: Signals held back while a module is written: Ctrl-C, `kill` and a closed terminal.
+_DEFERRED = frozenset(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """Hold back interrupting signals until the block ends.
+
+    A Ctrl-C (KeyboardInterrupt) can strike between any two bytecodes, and a SIGTERM with its
+    default action kills the process on the spot, either of which could leave a temporary
+    file behind.  Blocked signals stay pending and take effect as soon as the write is done.
+    """
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    # the current mask first, without changing it: an interrupt that lands between the two
+    # calls then finds nothing blocked, and the `finally` always knows what to restore
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, ())
+    try:
+        signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED)
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def write_atomic_bytes(target: Path, data: bytes) -> None:
     """Write via a temporary file in the same folder and rename: readers see old or new, never half."""
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, target)
-    except BaseException:
+    # named before it exists, so that the cleanup can remove it whenever an interrupt lands
+    tmp = target.parent / f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0)
+    with _signals_deferred():
         try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+            fd = os.open(tmp, flags, 0o666)  # the umask applies, as for any file the user writes
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, target)
+        except BaseException:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+            raise
 
 
 def write_atomic(target: Path, text: str) -> None:

@@ -10,12 +10,10 @@ from __future__ import annotations
 import ast
 import io
 import json
-import linecache
 import os
 import tokenize
 from dataclasses import dataclass, field
 from functools import cache
-from pathlib import Path
 
 import jinja2
 
@@ -26,9 +24,7 @@ from ..model import Code, Machine, State
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
 from .rewrite import Edit, apply, attribute_of, find, name_map, own_locals, used_names
-
-TEMPLATES = Path(__file__).resolve().parent.parent / "templates"
-
+from .templating import environment
 
 # -- text helpers ------------------------------------------------------------------------------
 
@@ -81,17 +77,7 @@ def _doc(text: str) -> str:
 
 @cache
 def _env() -> jinja2.Environment:
-    env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(TEMPLATES)),
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-        undefined=jinja2.StrictUndefined,
-        autoescape=False,
-    )
-    env.filters["py"] = _py
-    env.filters["code"] = indent_code
-    return env
+    return environment(py=_py, code=indent_code, pointer=_pointer)
 
 
 def class_name(machine: str) -> str:
@@ -126,8 +112,10 @@ class GuardView:
 
     @property
     def other_lines(self) -> str:
-        """Lines after the first: kept line for line so run-time errors map to the right line."""
-        return self.text.split("\n", 1)[1] if "\n" in self.text else ""
+        """Lines after the first, indented under `if (`: kept line for line so run-time errors map
+        to the right line, and indented knowing the whole guard, so a string that spans lines
+        keeps its value."""
+        return indent_code(self.text, 12).split("\n", 1)[1] if "\n" in self.text else ""
 
 
 @dataclass
@@ -286,7 +274,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             "state_names": tuple(names),
             "initial": index[m.initial],
             "suspended": susp,
-            "accepting": frozenset(i for i, s in enumerate(m.states) if s.accepting and i != susp),
+            "accepting": tuple(i for i, s in enumerate(m.states) if s.accepting and i != susp),
             "source_dir": source_dir,
             "source_dir_json": json.dumps(source_dir)[1:-1],
             "includes": includes,
@@ -301,9 +289,30 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             "on_resume": [f"on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
         },
     }
-    source = _env().get_template("machine.py.j2").render(ctx)
+    source = _with_source_map(_env().get_template("machine.py.j2").render(ctx))
     _verify(source, m)
     return source
+
+
+POINTER_MARK = "\0"  # ends a pointer line while rendering; the reader refuses NUL in user files
+
+
+def _pointer(where: str) -> str:
+    return f"# {where}{POINTER_MARK}"
+
+
+def _with_source_map(rendered: str) -> str:
+    """Replace the pointer marks with the module's source map: only lines the template wrote
+    count as pointers, never a user's comment that happens to look like one."""
+    lines = rendered.split("\n")
+    entries = []
+    for i, line in enumerate(lines):
+        if line.endswith(POINTER_MARK):
+            lines[i] = line[: -len(POINTER_MARK)]
+            file, _, src = line.strip()[2:-1].rpartition(":")
+            entries.append((i + 1, file, int(src)))
+    body = "".join(f"\n    {e!r}," for e in entries)
+    return "\n".join(lines).replace("__SOURCE_MAP__", f"({body}\n)" if entries else "()")
 
 
 def _verify(source: str, m: Machine) -> None:
@@ -311,10 +320,7 @@ def _verify(source: str, m: Machine) -> None:
     try:
         compile(source, f"<{m.name}>", "exec", dont_inherit=True)
     except SyntaxError as e:
-        lines = source.split("\n")
-        fake = f"<llfsm-verify-{m.name}>"
-        linecache.cache[fake] = (len(source), None, [ln + "\n" for ln in lines], fake)
-        mapped = map_line(fake, e.lineno or 1)
-        del linecache.cache[fake]
+        source_map = ast.literal_eval(source[source.index("_LLFSM_SOURCE_MAP = ") :].split("=", 1)[1])
+        mapped = map_line("", e.lineno or 1, source_map)
         file, line = mapped if mapped else ("machine.yaml", 1)
         raise CompileError([diag("LF030", m.path / file, line, 1, f"cannot be compiled: {e.msg}")]) from None

@@ -29,6 +29,9 @@ from typing import Any
 
 import jinja2
 
+from ..msgs._message import FLOAT32_MAX, INT_RANGES
+from .templating import environment
+
 LLFSM_DIR = Path(__file__).resolve().parent.parent
 MSGS_DIR = LLFSM_DIR / "msgs"
 SHIPPED_DIR = MSGS_DIR / "_interfaces"
@@ -48,19 +51,6 @@ FLOATS = ("float32", "float64")
 INTS = ("int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64", "byte", "char")
 STRINGS = ("string", "wstring")
 PRIMITIVES = frozenset((*FLOATS, *INTS, *STRINGS, "bool"))
-INT_RANGES = {
-    "int8": (-(2**7), 2**7 - 1),
-    "uint8": (0, 2**8 - 1),
-    "int16": (-(2**15), 2**15 - 1),
-    "uint16": (0, 2**16 - 1),
-    "int32": (-(2**31), 2**31 - 1),
-    "uint32": (0, 2**32 - 1),
-    "int64": (-(2**63), 2**63 - 1),
-    "uint64": (0, 2**64 - 1),
-    "byte": (0, 255),
-    "char": (0, 255),
-}
-FLOAT32_MAX = 3.4028234663852886e38
 # ROS 1 spellings that ROS 2 tools still accept in .msg files.
 ALIASES = {"time": "builtin_interfaces/msg/Time", "duration": "builtin_interfaces/msg/Duration"}
 
@@ -661,16 +651,7 @@ def _message_view(spec: MessageSpec, names: _Names) -> MessageView:
 
 @cache
 def _env() -> jinja2.Environment:
-    env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(TEMPLATES)),
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-        undefined=jinja2.StrictUndefined,
-        autoescape=False,
-    )
-    env.filters["py"] = _literal
-    return env
+    return environment(TEMPLATES, py=_literal)
 
 
 def render_module(package: PackageSpec, kind: str, header: list[str]) -> str:

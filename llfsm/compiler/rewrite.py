@@ -14,11 +14,29 @@ C++ lambda capturing `this`): `def on_pose(msg): x = msg.x` sets the machine var
 from __future__ import annotations
 
 import ast
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 _SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
 _COMPS = (ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp)
+_EOL = re.compile(r"\r\n|\r|\n")
+
+
+def source_lines(text: str) -> list[str]:
+    """The lines of `text` as `ast` numbers them, with their line ends.
+
+    Only \\n, \\r\\n and \\r end a line of Python source.  `str.splitlines` also splits on form
+    feeds, U+2028 and other characters that may sit in a comment or a string, and would then
+    apply an edit to the wrong line.
+    """
+    out = []
+    pos = 0
+    for m in _EOL.finditer(text):
+        out.append(text[pos : m.end()])
+        pos = m.end()
+    out.append(text[pos:])
+    return out
 
 
 @dataclass(frozen=True)
@@ -186,7 +204,7 @@ def apply(text: str, edits: list[Edit]) -> str:
     """Apply edits (positions in UTF-8 bytes, as ast reports them) to `text`, keeping its lines."""
     if not edits:
         return text
-    lines = text.splitlines(keepends=True)
+    lines = source_lines(text)
     by_line: dict[int, list[Edit]] = {}
     for e in edits:
         by_line.setdefault(e.line, []).append(e)

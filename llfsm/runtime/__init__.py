@@ -8,7 +8,7 @@ from .clock import Clock, SimClock, WallClock, parse_duration
 from .context import RunContext, current
 from .errors import ErrorReport, report_for
 from .machine import FINISHED, MACROS, RESERVED, Machine, UnknownMachineError
-from .scheduler import Arrangement, RunResult, signals_handled
+from .scheduler import Arrangement, ArrangementError, RunResult, signals_handled
 from .trace import Tracer
 
 __all__ = [
@@ -16,6 +16,7 @@ __all__ = [
     "MACROS",
     "RESERVED",
     "Arrangement",
+    "ArrangementError",
     "Clock",
     "ErrorReport",
     "Machine",

@@ -9,6 +9,8 @@ through being imported (a bad include).
 
 from __future__ import annotations
 
+import bisect
+import json
 import linecache
 import os
 import re
@@ -64,15 +66,32 @@ def is_generated(filename: str) -> bool:
 
 
 def source_dir_of(filename: str) -> str | None:
+    """The machine folder named in a generated module's header (written JSON-escaped, so that
+    any folder name fits on one comment line)."""
     for i in range(1, 6):
         m = SOURCE_RE.match(linecache.getline(filename, i).rstrip("\n"))
         if m:
-            return m["dir"]
+            try:
+                return str(json.loads(f'"{m["dir"]}"'))
+            except ValueError:
+                return m["dir"]
     return None
 
 
-def map_line(filename: str, lineno: int) -> tuple[str, int] | None:
-    """(user file, user line) for a line of a generated module, or None outside user code."""
+SourceMap = tuple[tuple[int, str, int], ...]
+
+
+def map_line(filename: str, lineno: int, source_map: SourceMap | None = None) -> tuple[str, int] | None:
+    """(user file, user line) for a line of a generated module, or None outside user code.
+
+    The module's own `_LLFSM_SOURCE_MAP` (pointer line, file, first line) is the truth; a module
+    that failed while being imported has none yet, and then the pointer comments are read."""
+    if source_map:
+        i = bisect.bisect_left(source_map, (lineno,)) - 1
+        if i < 0:
+            return None
+        pointer, file, first = source_map[i]
+        return file, first + (lineno - pointer - 1)
     for p in range(lineno - 1, 0, -1):
         text = linecache.getline(filename, p)
         if not text:
@@ -92,7 +111,11 @@ def _display(path: str) -> str:
 
 
 def _exception_text(exc: BaseException) -> str:
-    msg = str(exc)
+    """`Type: message`, whatever the exception does: machine code may raise anything."""
+    try:
+        msg = str(exc)
+    except Exception:  # a broken __str__ must not hide the report of the error itself
+        msg = "<exception str() failed>"
     return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
 
 
@@ -116,7 +139,7 @@ def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorRepor
     if m is not None:
         rep.machine, rep.machine_id = m.NAME, m._id
         rep.state = m.STATES[m._state] if 0 <= m._state < len(m.STATES) else None
-    mapped = map_line(fname, lineno)
+    mapped = map_line(fname, lineno, frame.f_globals.get("_LLFSM_SOURCE_MAP"))
     if mapped is None:
         rep.text = linecache.getline(fname, lineno).strip() or None
         return rep

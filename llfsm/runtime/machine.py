@@ -36,7 +36,7 @@ class Machine:
     STATES: ClassVar[tuple[str, ...]] = ()
     INITIAL: ClassVar[int] = 0
     SUSPENDED: ClassVar[int] = 0
-    ACCEPTING: ClassVar[frozenset[int]] = frozenset()
+    ACCEPTING: ClassVar[tuple[int, ...]] = ()
     RINGLETS: ClassVar[tuple[Ringlet, ...]] = ()
     ON_SUSPEND: ClassVar[tuple[Hook, ...]] = ()
     ON_RESUME: ClassVar[tuple[Hook, ...]] = ()
@@ -76,6 +76,10 @@ class Machine:
         #: scheduler's gate.  So the round loop needs no test at all for the common case.
         self._ringlets = self.RINGLETS
         self._held = (arrangement._gate,) * len(self.STATES)
+
+    def _initialise(self) -> None:
+        """Set the machine and state variables (generated classes override this).  Called once
+        every machine of the arrangement is known, so initialisers may use the macros."""
 
     # -- the clfsm macros (CLMacros.h), in scope in every section and guard -----------------
     def after(self, s: float) -> bool:

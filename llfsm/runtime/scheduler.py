@@ -34,6 +34,11 @@ class RunResult:
     error: ErrorReport | None = None
 
 
+class ArrangementError(ValueError):
+    """The arrangement itself is wrong (a machine loaded twice, --suspended naming a machine that
+    is not loaded): a usage error, unlike an exception raised by machine code."""
+
+
 class Arrangement:
     """Machines in load order, the clock they share, and the round-robin that runs them."""
 
@@ -64,16 +69,18 @@ class Arrangement:
         names = [c.NAME for c in classes]
         for n in names:
             if names.count(n) > 1:
-                raise ValueError(f"machine {n} is loaded twice; an arrangement addresses machines by name")
+                raise ArrangementError(f"machine {n} is loaded twice; an arrangement addresses machines by name")
         for n in suspended:
             if n not in names:
-                raise UnknownMachineError(f"--suspended {n}: no machine named {n} is loaded")
+                raise ArrangementError(f"--suspended {n}: no machine named {n} is loaded")
+        for i, cls in enumerate(classes):
+            m = cls(self, i)
+            self.machines.append(m)
+            self.by_name[m.NAME] = m
         prev = activate(self.ctx)
         try:
-            for i, cls in enumerate(classes):
-                m = cls(self, i)  # runs the variable initialisers: user code
-                self.machines.append(m)
-                self.by_name[m.NAME] = m
+            for m in self.machines:
+                m._initialise()  # the variable initialisers: user code, with every machine known
         finally:
             activate(prev)
         for n in suspended:
@@ -222,9 +229,9 @@ class Arrangement:
             result = self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
             result.rounds = self.rounds  # the loop keeps its count in a local until it ends
             return result
-        except BrokenPipeError:
+        except (BrokenPipeError, KeyboardInterrupt, SystemExit):
             raise
-        except Exception as exc:
+        except BaseException as exc:  # machine code may raise anything, e.g. asyncio.CancelledError
             rep = report_for(exc)
             if rep is None:
                 raise
