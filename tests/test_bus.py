@@ -270,7 +270,6 @@ def test_timers_run_on_the_run_clock(bus: Bus) -> None:
 def test_logger_prints_rclpy_lines_with_run_time_under_the_sim_clock(
     bus: Bus, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    bus.log_stream = __import__("sys").stderr
     n = ros.Node("ros_ping_pong", namespace="demo")
     bus.clock.now = 1_500_000_000
     n.get_logger().info("Publishing: 'The count is 0'")

@@ -53,7 +53,7 @@ _QUIET = list(HealthCheck)  # slow examples and big data are the point here
 SMALL = settings(max_examples=60, deadline=None, derandomize=True, database=None, suppress_health_check=_QUIET)
 SMALL_MUTATED = settings(SMALL, max_examples=150)
 LARGE = settings(max_examples=2000, deadline=None, suppress_health_check=_QUIET)
-LARGE_MUTATED = settings(LARGE, max_examples=5000)
+LARGE_MUTATED = settings(LARGE, max_examples=3000)
 SMALL_ARRANGEMENTS = settings(SMALL, max_examples=20)
 LARGE_ARRANGEMENTS = settings(LARGE, max_examples=1000)
 

@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import llfsm, write_machine
+from conftest import llfsm, llfsm_process, write_machine
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from strategies import _yaml_string
@@ -578,3 +578,17 @@ def test_a_deep_folder_tree_cannot_crash_the_search_for_machines(tmp_path: Path)
 def test_running_a_symlink_loop_is_a_usage_error(tmp_path: Path) -> None:
     (tmp_path / "x.machine").symlink_to("x.machine")
     assert llfsm("run", "--clock", "sim", tmp_path / "x.machine").status == 2
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="build.py/cli.py: an output that cannot be written (NAME.py is a folder, a read-only "
+    "folder) raises OSError out of build_machine: `llfsm: internal error`, exit 70. Needs a rule "
+    "code for it (docs/rules.md) or a CLI message; left for the owners of those files",
+)
+def test_an_unwritable_output_is_a_clear_failure(tmp_path: Path) -> None:
+    m = write_machine(tmp_path, "m", OK)
+    (tmp_path / "out" / "m.py").mkdir(parents=True)
+    r = llfsm_process("build", m, "-o", tmp_path / "out")
+    assert r.status == 1 and "internal error" not in r.stderr and "m.py" in r.stderr
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["m.py"]  # and no temporary file

@@ -20,7 +20,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 from enum import Enum
-from typing import TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from ..runtime.context import RunContext, current
 from .names import Remap
@@ -146,8 +146,10 @@ class Bus:
         #: Called with each new topic whose name is a key here (`--echo` waits for its topic).
         self.watchers: dict[str, list[Callable[[Topic], None]]] = {}
         self._seq = itertools.count()
-        use_stdout = os.environ.get("RCUTILS_LOGGING_USE_STDOUT", "0") == "1"
-        self.log_stream = sys.stdout if use_stdout else sys.stderr
+        self.log_to_stdout = os.environ.get("RCUTILS_LOGGING_USE_STDOUT", "0") == "1"
+        #: None: whatever sys.stderr (or sys.stdout) is when a line is logged, so that a
+        #: redirection made after the bus started is honoured.
+        self.log_stream: IO[str] | None = None
         ctx.between_rounds.append(self.spin_some)
 
     # -- lifecycle ---------------------------------------------------------------------------
@@ -259,6 +261,11 @@ class Bus:
         return future
 
     # -- logging -------------------------------------------------------------------------------
+    def log_output(self) -> IO[str]:
+        if self.log_stream is not None:
+            return self.log_stream
+        return sys.stdout if self.log_to_stdout else sys.stderr
+
     def stamp(self) -> tuple[int, int]:
         """Seconds and nanoseconds for log lines: run time under the sim clock, else wall time."""
         ns = self.clock.now if self.clock.kind == "sim" else time.time_ns()

@@ -317,7 +317,7 @@ class Logger:
                 return False
             self._last[key] = self._bus.clock.now
         sec, nsec = self._bus.stamp()
-        stream = self._bus.log_stream
+        stream = self._bus.log_output()
         stream.write(f"[{severity.name}] [{sec}.{nsec:09d}] [{self.name}]: {text}\n")
         stream.flush()
         return True
