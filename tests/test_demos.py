@@ -229,3 +229,33 @@ def test_teleop_drives_turtle1_and_can_be_remapped_to_turtle2(tmp_path: Path) ->
     ps = run("--trace", str(trace))  # q ends the run like Ctrl-C: the follower takes its END transition
     finished = [json.loads(x) for x in trace.read_text().splitlines() if '"finish"' in x]
     assert finished and finished[0]["state"] == "END" and finished[0]["t"] < 1.5
+
+
+def test_the_live_view_runs_headless(tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, SDL_VIDEODRIVER="dummy", SDL_AUDIODRIVER="dummy")
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "llfsm.cli",
+            "run",
+            "--clock",
+            "sim",
+            str(BLIND),
+            "--node",
+            "turtlesim",
+            "--view",
+            "--duration",
+            "2s",
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=60,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr
