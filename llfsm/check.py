@@ -22,7 +22,7 @@ from .deps import undeclared_dependencies
 from .diagnostics import Diagnostic, Severity, diag
 from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
 from .model import Code, Machine, State, is_valid_name
-from .reader import ReadResult, node_col, read_machine
+from .reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
 
 BUILTINS = frozenset(dir(builtins))
@@ -339,9 +339,7 @@ class _Checker:
                     else None
                 )
                 if clash is not None:
-                    self.at(
-                        "LF013", v.loc, f"variable {v.name} of state {s.name} is stored as {attr}, as is {clash}"
-                    )
+                    self.at("LF013", v.loc, f"variable {v.name} of state {s.name} is stored as {attr}, as is {clash}")
                 elif attr.startswith("__"):
                     self.at(
                         "LF013",
@@ -355,6 +353,9 @@ class _Checker:
             if code is not None and code.file in self.r.read.trees:
                 tree = self.r.read.trees[code.file]
                 scan = _scan(tree, {})
+                if scan.too_deep is not None:
+                    self.too_deep(code, scan.too_deep)
+                    continue
                 for node, _kind in scan.escapes:
                     self.escape(code.file, code.text, node)
                 declared = {id(st.target) for st in tree.body if isinstance(st, ast.AnnAssign)}
@@ -385,6 +386,11 @@ class _Checker:
         what = "is an llfsm macro and cannot be assigned" if n.id in MACROS else "is reserved by llfsm"
         self.add("LF013", code.file, n.lineno, node_col(code.text, n), f"`{n.id}` {what} in machine code")
 
+    def too_deep(self, code: Code, node: ast.AST) -> None:
+        line = getattr(node, "lineno", 1)
+        col = node_col(code.text, node) if hasattr(node, "col_offset") else 1
+        self.add("LF030", code.file, line, col, f"code nested more than {MAX_CODE_DEPTH} levels deep; split it up")
+
     def compiles(self, code: Code, tree: ast.Module) -> None:
         """Compile (never run) the code where the build will put it, inside a method, so that
         what only the compiler refuses (`break` outside a loop, `import *` in a function, 20
@@ -407,6 +413,9 @@ class _Checker:
                 continue
             is_guard = code.file.endswith(".expr")
             scan = _scan(tree, mapping)
+            if scan.too_deep is not None:
+                self.too_deep(code, scan.too_deep)
+                continue
             for node, _kind in scan.escapes:
                 self.escape(code.file, code.text, node)
             if scan.may_bind_variable:  # rare: only then pay for the scoped walk
@@ -501,6 +510,7 @@ class _Scanned:
     reserved: list[ast.Name] = field(default_factory=list)  # `self`, `_llfsm*`, or a macro assigned
     escapes: list[tuple[ast.AST, str]] = field(default_factory=list)  # global/nonlocal; top-level return...
     may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping somewhere
+    too_deep: ast.AST | None = None  # the first node nested deeper than MAX_CODE_DEPTH: stop there
 
 
 def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
@@ -508,9 +518,13 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
     file of every machine in CI, so this is the checker's hot path)."""
     out = _Scanned()
     bound = out.bound
-    stack: list[tuple[ast.AST, bool]] = [(tree, False)]
+    stack: list[tuple[ast.AST, bool, int]] = [(tree, False, 0)]
     while stack:
-        node, nested = stack.pop()
+        node, nested, depth = stack.pop()
+        if depth > MAX_CODE_DEPTH:
+            # the compiler's walks recurse: a deeper tree would exhaust Python's stack in them
+            out.too_deep = node
+            return out
         for child in ast.iter_child_nodes(node):
             if isinstance(child, ast.Name):
                 if child.id == "self" or child.id.startswith("_llfsm"):
@@ -559,7 +573,7 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
                 )
                 if any(n in mapping for n in names if n):
                     out.may_bind_variable = True
-            stack.append((child, nested or isinstance(child, _NESTS)))
+            stack.append((child, nested or isinstance(child, _NESTS), depth + 1))
     return out
 
 
