@@ -185,7 +185,13 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
     out_dir = Path(out)
     failed = 0
     for i, path in enumerate(machines, 1):
-        outcome = build_machine(path, out_dir, force=force)
+        try:
+            outcome = build_machine(path, out_dir, force=force)
+        except OSError as e:  # the output cannot be written: not the machine's fault, still a failure
+            failed += 1
+            target = out_dir / f"{path.name.removesuffix('.machine')}.py"
+            click.echo(f"llfsm: cannot write {target}: {e.strerror or e}", err=True)
+            continue
         if outcome.status == "failed":
             from .diagnostics import format_text
 

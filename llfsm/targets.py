@@ -73,7 +73,10 @@ def compiled_module_for(machine_dir: Path) -> Path:
         return module
     from .compiler.build import build_machine  # only now: the compiler is not needed to run
 
-    outcome = build_machine(machine_dir, out)
+    try:
+        outcome = build_machine(machine_dir, out)
+    except OSError as e:
+        raise TargetError(f"{machine_dir}: cannot write its compiled module into {out}: {e.strerror or e}") from None
     if outcome.status == "failed" or outcome.module is None:
         raise InvalidMachine(outcome.diagnostics)
     return outcome.module

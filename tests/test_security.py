@@ -580,12 +580,6 @@ def test_running_a_symlink_loop_is_a_usage_error(tmp_path: Path) -> None:
     assert llfsm("run", "--clock", "sim", tmp_path / "x.machine").status == 2
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="build.py/cli.py: an output that cannot be written (NAME.py is a folder, a read-only "
-    "folder) raises OSError out of build_machine: `llfsm: internal error`, exit 70. Needs a rule "
-    "code for it (docs/rules.md) or a CLI message; left for the owners of those files",
-)
 def test_an_unwritable_output_is_a_clear_failure(tmp_path: Path) -> None:
     m = write_machine(tmp_path, "m", OK)
     (tmp_path / "out" / "m.py").mkdir(parents=True)
