@@ -8,7 +8,6 @@ import shlex
 import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -227,11 +226,9 @@ def test_scaffold_check_colcon_build_source_run(tmp_path: Path) -> None:
     """
     env = {k: v for k, v in os.environ.items() if not k.startswith(("AMENT_", "COLCON_", "PYTHONPATH"))}
     env |= {"PATH": f"{VENV_BIN}{os.pathsep}{env.get('PATH', '')}", "COLCON_HOME": str(tmp_path / "colcon_home")}
-    started = time.monotonic()
     proc = subprocess.run(
         ["bash", "--noprofile", "--norc", "-c", script], cwd=ws, env=env, capture_output=True, text=True, timeout=120
     )
-    elapsed = time.monotonic() - started
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "Summary: 1 package finished" in proc.stdout
     lines = proc.stdout.splitlines()
@@ -251,7 +248,6 @@ def test_scaffold_check_colcon_build_source_run(tmp_path: Path) -> None:
         "demo_bot/hook/ament_prefix_path.dsv",
     } <= installed
     assert "class DemoBotMachine" in (share / "demo_bot" / "llfsm" / "demo_bot.py").read_text()
-    assert elapsed < 60, f"the round trip took {elapsed:.1f} s"
 
 
 def test_a_machine_with_errors_fails_the_colcon_build(tmp_path: Path) -> None:
