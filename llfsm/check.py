@@ -424,7 +424,11 @@ class _Checker:
                     self.bad_binding(code, b)
             for n in scan.reserved:
                 self.reserved_use(code, n)
-            if not scan.escapes and (not is_guard or _single_expression(tree)):
+            if (
+                not scan.escapes
+                and (not scan.plain or "__debug__" in code.text)  # `__debug__` cannot be assigned
+                and (not is_guard or _single_expression(tree))
+            ):
                 self.compiles(code, tree)
             if imported is not None and (not is_guard or _single_expression(tree)):
                 known = set(mapping) | imported | scan.bound | BUILTINS
@@ -502,6 +506,45 @@ _BINDERS = (
 _NESTS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)
 _ESCAPES = (ast.Return, ast.Yield, ast.YieldFrom, ast.Await)
 
+#: Node types that no compiler check can refuse inside a method body, whatever surrounds them
+#: (the parser has already accepted them).  A file made only of these, shallow enough that 20
+#: nested blocks are impossible, skips the bytecode compile: the compile is a third of check's
+#: time, and almost every section and guard is this simple.  The rest (break, starred targets,
+#: lambdas, async comprehensions, import *, ...) is compiled as before.
+_PLAIN: frozenset[type[ast.AST]] = frozenset(
+    {
+        ast.Expr, ast.Assign, ast.AugAssign, ast.AnnAssign, ast.If, ast.For, ast.While, ast.Pass,
+        ast.Import, ast.ImportFrom, ast.alias, ast.Assert, ast.Raise, ast.Delete, ast.With, ast.withitem,
+        ast.Try, ast.ExceptHandler, ast.BoolOp, ast.BinOp, ast.UnaryOp, ast.Compare, ast.Call,
+        ast.keyword, ast.IfExp, ast.Attribute, ast.Subscript, ast.Slice, ast.Name, ast.Constant,
+        ast.List, ast.Tuple, ast.Dict, ast.Set, ast.JoinedStr, ast.FormattedValue,
+        ast.ListComp, ast.SetComp, ast.DictComp, ast.GeneratorExp, ast.comprehension,
+        ast.Load, ast.Store, ast.Del,
+        ast.And, ast.Or, ast.Add, ast.Sub, ast.Mult, ast.MatMult, ast.Div, ast.Mod, ast.Pow, ast.LShift,
+        ast.RShift, ast.BitOr, ast.BitXor, ast.BitAnd, ast.FloorDiv, ast.Invert, ast.Not, ast.UAdd,
+        ast.USub, ast.Eq, ast.NotEq, ast.Lt, ast.LtE, ast.Gt, ast.GtE, ast.Is, ast.IsNot, ast.In,
+        ast.NotIn,
+    }
+)  # fmt: skip
+_PLAIN_DEPTH = 20  # CPython refuses more than 20 statically nested blocks
+
+
+def _plain(node: ast.AST, depth: int) -> bool:
+    """Whether `node` is in `_PLAIN` and none of its compile-time-only errors can apply."""
+    kind = type(node)
+    if kind not in _PLAIN or depth >= _PLAIN_DEPTH:
+        return False
+    if kind is ast.ImportFrom:
+        return node.module != "__future__" and all(a.name != "*" for a in node.names)  # type: ignore[attr-defined]
+    if kind is ast.Call:
+        given = [k.arg for k in node.keywords if k.arg is not None]  # type: ignore[attr-defined]
+        return len(given) == len(set(given))  # `keyword argument repeated` is the compiler's
+    if kind is ast.Try:
+        return all(h.type is not None for h in node.handlers[:-1])  # type: ignore[attr-defined]
+    if kind is ast.comprehension:
+        return not node.is_async  # type: ignore[attr-defined]
+    return True
+
 
 @dataclass
 class _Scanned:
@@ -511,6 +554,7 @@ class _Scanned:
     escapes: list[tuple[ast.AST, str]] = field(default_factory=list)  # global/nonlocal; top-level return...
     may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping somewhere
     too_deep: ast.AST | None = None  # the first node nested deeper than MAX_CODE_DEPTH: stop there
+    plain: bool = True  # only `_PLAIN` nodes: compiling to bytecode cannot fail (see `_plain`)
 
 
 def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
@@ -526,6 +570,8 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
             out.too_deep = node
             return out
         for child in ast.iter_child_nodes(node):
+            if out.plain and not _plain(child, depth):
+                out.plain = False
             if isinstance(child, ast.Name):
                 if child.id == "self" or child.id.startswith("_llfsm"):
                     out.reserved.append(child)

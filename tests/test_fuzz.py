@@ -23,9 +23,11 @@ import ast
 import atexit
 import os
 import sys
+import sysconfig
 import tempfile
 import time
 from collections import Counter
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -319,12 +321,63 @@ def test_guards_that_cannot_be_an_if_condition_are_refused(tmp_path: Path, guard
         "class K:\n    yield 1\n",
         "f = lambda: (await x)\n",
         "".join("    " * i + f"for i{i} in range(1):\n" for i in range(21)) + "    " * 21 + "pass\n",
+        "".join("    " * i + f"with open(f{i}):\n" for i in range(21)) + "    " * 21 + "pass\n",
+        "try:\n    pass\nexcept:\n    pass\nexcept ValueError:\n    pass\n",
+        "print(a=1, a=2)\n",
+        "__debug__ = 1\n",
+        "x.__debug__ = 1\n",
+        "print(__debug__=1)\n",
+        "del __debug__\n",
+        "import math as __debug__\n",
+        "*a, *b = [1, 2]\n",
+        "*a = [1]\n",
+        "from __future__ import annotations\n",
+        "y = [x async for x in range(3)]\n",
     ],
 )
 def test_what_only_the_compiler_refuses_is_a_check_error(tmp_path: Path, code: str) -> None:
     """These parse, so `check` passed them, and then `build` failed to compile the module."""
     m = write_machine(tmp_path, "m", OK_STATES, {"A_OnEntry": code})
     assert "LF030" in _codes(m)
+
+
+def _stdlib_statements(limit: int | None) -> Iterator[tuple[str, ast.Module]]:
+    """Every statement of the standard library's modules (the first `limit` files), each as
+    the code of a section: a large corpus of real Python the generators would never write."""
+    files = sorted(Path(sysconfig.get_paths()["stdlib"]).glob("*.py"))[:limit]
+    for f in files:
+        try:
+            tree = ast.parse(f.read_bytes())
+        except (SyntaxError, ValueError):
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.stmt):
+                yield f"{f.name}:{node.lineno}", ast.Module(body=[node], type_ignores=[])
+
+
+def _plain_but_refused(limit: int | None) -> tuple[int, list[str]]:
+    from llfsm.check import _compile_error, _scan
+
+    plain, refused = 0, []
+    for where, module in _stdlib_statements(limit):
+        if _scan(module, {}).plain and "__debug__" not in ast.unparse(module):
+            plain += 1
+            if _compile_error(module, guard=False) is not None:
+                refused.append(where)
+    return plain, refused
+
+
+def test_plain_code_that_check_does_not_compile_compiles() -> None:
+    """`check` skips the bytecode compile of code made only of plain statements and
+    expressions: every such statement of the standard library must compile in a method."""
+    plain, refused = _plain_but_refused(40)
+    assert plain > 5000 and refused == []
+
+
+@pytest.mark.slow
+def test_plain_code_that_check_does_not_compile_compiles_whole_stdlib() -> None:
+    plain, refused = _plain_but_refused(None)
+    assert plain > 40_000 and refused == []
 
 
 def test_code_is_compiled_where_the_module_puts_it(tmp_path: Path) -> None:
