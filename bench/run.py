@@ -51,7 +51,7 @@ def fmt_rate(x: float) -> str:
 
 def llfsm_cmd() -> list[str]:
     exe = Path(sys.executable).parent / "llfsm"
-    return [str(exe)] if exe.exists() else [sys.executable, "-m", "llfsm.cli"]
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "llfsm"]
 
 
 # -- the toggle machine against plain Python and other libraries -------------------------------

@@ -80,7 +80,7 @@ def run_sim(*args: str | os.PathLike[str]) -> Run:
 def llfsm_process(*args: str | os.PathLike[str], timeout: float = 60, **kw: object) -> Run:
     """Run the real `llfsm` entry point in a subprocess (exit codes, signals, no tracebacks)."""
     proc = subprocess.run(
-        [sys.executable, "-m", "llfsm.cli", *map(str, args)],
+        [sys.executable, "-m", "llfsm", *map(str, args)],
         capture_output=True,
         text=True,
         timeout=timeout,

@@ -195,7 +195,7 @@ def test_teleop_drives_turtle1_and_can_be_remapped_to_turtle2(tmp_path: Path) ->
                 [
                     sys.executable,
                     "-m",
-                    "llfsm.cli",
+                    "llfsm",
                     "run",
                     "--clock",
                     "sim",
@@ -241,7 +241,7 @@ def test_the_live_view_runs_headless(tmp_path: Path) -> None:
         [
             sys.executable,
             "-m",
-            "llfsm.cli",
+            "llfsm",
             "run",
             "--clock",
             "sim",

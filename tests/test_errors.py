@@ -134,7 +134,7 @@ def test_invalid_machine_exits_2_with_diagnostics(tmp_path: Path) -> None:
 def _spawn(args: list[str]) -> subprocess.Popen[str]:
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     return subprocess.Popen(
-        [sys.executable, "-m", "llfsm.cli", *args],
+        [sys.executable, "-m", "llfsm", *args],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -192,7 +192,7 @@ def test_machines_see_the_interrupt_and_finish_within_the_grace_time(tmp_path: P
 def test_stdout_closed_early_ends_quietly(tmp_path: Path) -> None:
     m = write_machine(tmp_path, "chatty", {"A": [("A", "True")]}, {"A_OnEntry": "print('line ' * 20)"})
     ping = REPO / "machines" / "ros2_ping_pong.machine"
-    llfsm_cmd = f"{sys.executable} -m llfsm.cli"
+    llfsm_cmd = f"{sys.executable} -m llfsm"
     for cmd, first in (
         (f"{llfsm_cmd} run --clock sim --duration 20s {m} | head -1", "line"),
         (f"{llfsm_cmd} run --clock sim --duration 60s --echo /pingpong {ping} 2>/dev/null | head -1", "data:"),

@@ -424,7 +424,7 @@ def test_the_hook_entry_with_file_names_as_pre_commit_passes_them(tmp_path: Path
     changed = sorted(str(p.relative_to(repo)) for p in repo.rglob("*") if p.is_file())
     passed = [f for f in changed if files.search(f)]
     assert "README.md" not in passed
-    entry = [sys.executable, "-m", "llfsm.cli", *shlex.split(str(the_hook()["entry"]))[1:]]
+    entry = [sys.executable, "-m", "llfsm", *shlex.split(str(the_hook()["entry"]))[1:]]
     proc = subprocess.run([*entry, *passed], cwd=repo, capture_output=True, text=True)
     assert proc.returncode == 1
     assert "machines/broken.machine/machine.yaml:3:19: LF020 error" in proc.stdout
@@ -448,7 +448,7 @@ def test_pre_commit_runs_the_hook(tmp_path: Path) -> None:
         pytest.skip("pre-commit needs git")
     repo = consumer_repo(tmp_path / "repo")
     hook = the_hook() | {"language": "system"}
-    hook["entry"] = " ".join([shlex.quote(sys.executable), "-m", "llfsm.cli", *shlex.split(str(hook["entry"]))[1:]])
+    hook["entry"] = " ".join([shlex.quote(sys.executable), "-m", "llfsm", *shlex.split(str(hook["entry"]))[1:]])
     (repo / ".pre-commit-config.yaml").write_text(yaml.safe_dump({"repos": [{"repo": "local", "hooks": [hook]}]}))
     env = {k: v for k, v in os.environ.items() if not k.startswith("GIT_")}
     env |= {"PRE_COMMIT_HOME": str(tmp_path / "pre-commit-home"), "HOME": str(tmp_path)}
