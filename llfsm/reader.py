@@ -136,6 +136,18 @@ class _Reader:
     def code(self, name: str, text: str) -> Code:
         return Code(file=name, text=text, loc=Loc(file=name))
 
+    def code_file(self, name: str, entries: set[str]) -> Code | None:
+        """A section, guard or includes file of the directory, parsed for the checker; None
+        when it is absent or unreadable (the reason is already reported)."""
+        if name not in entries:
+            return None
+        text = self.read(name)
+        if text is None:
+            return None
+        code = self.code(name, text)
+        self.parse(name, text)
+        return code
+
     def variables(self, name: str) -> tuple[list[Variable], Code | None]:
         text = self.read(name)
         if text is None:
@@ -317,12 +329,7 @@ class _Reader:
             if description is None:
                 self.structure_error(d, "`description` must be text")
 
-        includes = None
-        if "Includes.py" in entry_set:
-            itext = self.read("Includes.py")
-            if itext is not None:
-                includes = self.code("Includes.py", itext)
-                self.parse("Includes.py", itext)
+        includes = self.code_file("Includes.py", entry_set)
         variables, variables_file = self.variables("Variables.py") if "Variables.py" in entry_set else ([], None)
 
         # transitions per state (the first of duplicates): linear in files plus transitions
@@ -357,12 +364,9 @@ class _Reader:
     def state(self, name: str, loc: Loc, targets: list[tuple[str, Loc]], entries: set[str]) -> State:
         sections: dict[str, Code] = {}
         for sec in SECTIONS:
-            fname = f"State_{name}_{sec}.py"
-            if fname in entries:
-                text = self.read(fname)
-                if text is not None:
-                    sections[sec] = self.code(fname, text)
-                    self.parse(fname, text)
+            code = self.code_file(f"State_{name}_{sec}.py", entries)
+            if code is not None:
+                sections[sec] = code
         variables: list[Variable] = []
         variables_file = None
         vname = f"State_{name}_Variables.py"
@@ -370,13 +374,7 @@ class _Reader:
             variables, variables_file = self.variables(vname)
         transitions = []
         for i, (target, tloc) in enumerate(targets):
-            gname = f"State_{name}_Transition_{i}.expr"
-            guard = None
-            if gname in entries:
-                text = self.read(gname)
-                if text is not None:
-                    guard = self.code(gname, text)
-                    self.parse(gname, text)
+            guard = self.code_file(f"State_{name}_Transition_{i}.expr", entries)
             transitions.append(Transition(index=i, target=target, guard=guard, loc=tloc))
         return State(
             name=name,

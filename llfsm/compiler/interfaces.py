@@ -21,7 +21,7 @@ import os
 import re
 import sys
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
@@ -163,11 +163,11 @@ class PackageSpec:
 # -- parsing .msg and .srv ---------------------------------------------------------------------
 
 
-def _strip_comment(line: str) -> str:
-    """The line without its `# comment`; a # inside a quoted value is kept."""
-    quote = ""
-    escaped = False
-    for i, ch in enumerate(line):
+def _outside_quotes(text: str) -> Iterator[tuple[int, str]]:
+    """(index, character) of each character of `text` outside '...' and "..." (with \\
+    escapes); the quotes themselves are left out.  Comments and list items split there."""
+    quote, escaped = "", False
+    for i, ch in enumerate(text):
         if quote:
             if escaped:
                 escaped = False
@@ -177,9 +177,13 @@ def _strip_comment(line: str) -> str:
                 quote = ""
         elif ch in "'\"":
             quote = ch
-        elif ch == "#":
-            return line[:i]
-    return line
+        else:
+            yield i, ch
+
+
+def _strip_comment(line: str) -> str:
+    """The line without its `# comment`; a # inside a quoted value is kept."""
+    return next((line[:i] for i, ch in _outside_quotes(line) if ch == "#"), line)
 
 
 def _parse_type(token: str, package: str, local: set[str], fail: Callable[[str], Exception]) -> FieldType:
@@ -236,18 +240,9 @@ def _unquote(text: str) -> str | None:
 def _split_list(text: str) -> list[str]:
     """The items of `[a, "b, c", 3]`, quotes kept."""
     items: list[str] = []
-    quote, escaped, start = "", False, 0
-    for i, ch in enumerate(text):
-        if quote:
-            if escaped:
-                escaped = False
-            elif ch == "\\":
-                escaped = True
-            elif ch == quote:
-                quote = ""
-        elif ch in "'\"":
-            quote = ch
-        elif ch == ",":
+    start = 0
+    for i, ch in _outside_quotes(text):
+        if ch == ",":
             items.append(text[start:i].strip())
             start = i + 1
     last = text[start:].strip()
