@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 import yaml
-from conftest import MACHINES, llfsm, run_sim
+from conftest import MACHINES, llfsm, llfsm_process, run_sim
 
 PING = MACHINES / "ros2_ping_pong.machine"
 BLIND = MACHINES / "ros2_blind_turtle_bot.machine"
@@ -186,38 +186,16 @@ def test_background_parameters_reach_the_picture(tmp_path: Path) -> None:
 def test_teleop_drives_turtle1_and_can_be_remapped_to_turtle2(tmp_path: Path) -> None:
     keys = tmp_path / "keys"
     keys.write_bytes(b"\x1b[A" * 5)  # five presses of the up arrow, one read every 100 ms
-    import subprocess
-    import sys
 
     def run(*extra: str) -> list[dict]:
         with open(keys, "rb") as stdin:
-            proc = subprocess.run(
-                [
-                    sys.executable,
-                    "-m",
-                    "llfsm",
-                    "run",
-                    "--clock",
-                    "sim",
-                    str(FOLLOWER),
-                    "--node",
-                    "turtlesim",
-                    "--node",
-                    "teleop",
-                    "--duration",
-                    "5s",
-                    "--echo",
-                    "/turtle1/pose",
-                    *extra,
-                ],
-                stdin=stdin,
-                capture_output=True,
-                text=True,
-                timeout=60,
-            )
-        assert proc.returncode == 0, proc.stderr
-        assert "Use arrow keys to move the turtle." in proc.stderr
-        return docs(proc.stdout)
+            r = llfsm_process(
+                "run", "--clock", "sim", FOLLOWER, "--node", "turtlesim", "--node", "teleop",
+                "--duration", "5s", "--echo", "/turtle1/pose", *extra, stdin=stdin,
+            )  # fmt: skip
+        assert r.status == 0, r.stderr
+        assert "Use arrow keys to move the turtle." in r.stderr
+        return docs(r.stdout)
 
     ps = run()
     # forward at 2.0 m/s from the first key (0.1 s) until 1 s after the last (0.5 s): about 2.8 m
@@ -233,29 +211,8 @@ def test_teleop_drives_turtle1_and_can_be_remapped_to_turtle2(tmp_path: Path) ->
 
 def test_the_live_view_runs_headless(tmp_path: Path) -> None:
     import os
-    import subprocess
-    import sys
 
     env = dict(os.environ, SDL_VIDEODRIVER="dummy", SDL_AUDIODRIVER="dummy")
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "llfsm",
-            "run",
-            "--clock",
-            "sim",
-            str(BLIND),
-            "--node",
-            "turtlesim",
-            "--view",
-            "--duration",
-            "2s",
-        ],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=60,
-    )
-    assert proc.returncode == 0, proc.stderr
-    assert "Traceback" not in proc.stderr
+    r = llfsm_process("run", "--clock", "sim", BLIND, "--node", "turtlesim", "--view", "--duration", "2s", env=env)
+    assert r.status == 0, r.stderr
+    assert "Traceback" not in r.stderr
