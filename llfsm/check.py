@@ -529,21 +529,19 @@ _PLAIN: frozenset[type[ast.AST]] = frozenset(
 _PLAIN_DEPTH = 20  # CPython refuses more than 20 statically nested blocks
 
 
-def _plain(node: ast.AST, depth: int) -> bool:
-    """Whether `node` is in `_PLAIN` and none of its compile-time-only errors can apply."""
-    kind = type(node)
-    if kind not in _PLAIN or depth >= _PLAIN_DEPTH:
-        return False
-    if kind is ast.ImportFrom:
-        return node.module != "__future__" and all(a.name != "*" for a in node.names)  # type: ignore[attr-defined]
-    if kind is ast.Call:
-        given = [k.arg for k in node.keywords if k.arg is not None]  # type: ignore[attr-defined]
+_PLAIN_IF_CHECKED = (ast.ImportFrom, ast.Call, ast.Try, ast.comprehension)
+
+
+def _plain_as_used(node: ast.AST) -> bool:
+    """For a `_PLAIN_IF_CHECKED` node: whether none of its compile-time-only errors applies."""
+    if isinstance(node, ast.ImportFrom):
+        return node.module != "__future__" and all(a.name != "*" for a in node.names)
+    if isinstance(node, ast.Call):
+        given = [k.arg for k in node.keywords if k.arg is not None]
         return len(given) == len(set(given))  # `keyword argument repeated` is the compiler's
-    if kind is ast.Try:
-        return all(h.type is not None for h in node.handlers[:-1])  # type: ignore[attr-defined]
-    if kind is ast.comprehension:
-        return not node.is_async  # type: ignore[attr-defined]
-    return True
+    if isinstance(node, ast.Try):
+        return all(h.type is not None for h in node.handlers[:-1])
+    return not node.is_async  # type: ignore[attr-defined]  # a comprehension
 
 
 @dataclass
@@ -554,7 +552,7 @@ class _Scanned:
     escapes: list[tuple[ast.AST, str]] = field(default_factory=list)  # global/nonlocal; top-level return...
     may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping somewhere
     too_deep: ast.AST | None = None  # the first node nested deeper than MAX_CODE_DEPTH: stop there
-    plain: bool = True  # only `_PLAIN` nodes: compiling to bytecode cannot fail (see `_plain`)
+    plain: bool = True  # only `_PLAIN` nodes, used as it allows: compiling to bytecode cannot fail
 
 
 def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
@@ -570,7 +568,11 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
             out.too_deep = node
             return out
         for child in ast.iter_child_nodes(node):
-            if out.plain and not _plain(child, depth):
+            if out.plain and (
+                type(child) not in _PLAIN
+                or depth >= _PLAIN_DEPTH
+                or (isinstance(child, _PLAIN_IF_CHECKED) and not _plain_as_used(child))
+            ):
                 out.plain = False
             if isinstance(child, ast.Name):
                 if child.id == "self" or child.id.startswith("_llfsm"):
