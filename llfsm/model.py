@@ -100,12 +100,6 @@ class Machine(BaseModel):
                 return s
         raise KeyError(name)
 
-    def index_of(self, name: str) -> int:
-        for i, s in enumerate(self.states):
-            if s.name == name:
-                return i
-        raise KeyError(name)
-
 
 class MachineYaml(BaseModel):
     """The schema of machine.yaml, as published by `llfsm schema`.

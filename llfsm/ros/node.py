@@ -130,10 +130,6 @@ class Subscription:
             return self.latest
         return None
 
-    @property
-    def is_pull(self) -> bool:
-        return self.callback is None
-
     def destroy(self) -> None:
         if not self._destroyed:
             self._destroyed = True
