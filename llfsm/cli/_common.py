@@ -1,0 +1,85 @@
+"""What every command shares: the group, `fail`, durations, a closed pipe.
+
+Each command imports what it needs when it runs: `llfsm run` must start fast and never load
+the compiler's libraries when its cached modules are fresh.  Every failure the user can cause
+ends in a one-line-per-problem message and an exit status (1 or 2), never a traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, NoReturn
+
+import click
+
+from .. import __version__
+
+if TYPE_CHECKING:
+    pass
+
+EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
+
+
+def fail(message: str, status: int = EXIT_USAGE) -> NoReturn:
+    click.echo(f"llfsm: {message}", err=True)
+    sys.exit(status)
+
+
+class Duration(click.ParamType):
+    """Seconds (`0.5`) or a number with a unit (`500ms`, `2s`), as nanoseconds."""
+
+    name = "duration"
+
+    def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> int:
+        if isinstance(value, int):
+            return value
+        from ..runtime.clock import parse_duration
+
+        try:
+            return parse_duration(str(value))
+        except ValueError as e:
+            self.fail(str(e), param, ctx)
+
+
+DURATION = Duration()
+
+
+def _quiet_broken_pipe() -> NoReturn:
+    """Our reader went away (`llfsm run ... | head -1`): end quietly, as `cat` would."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            os.dup2(devnull, stream.fileno())  # later flushes (and interpreter exit) write nowhere
+        except (OSError, ValueError):
+            pass
+    sys.exit(EXIT_OK)
+
+
+def _existing(paths: tuple[str, ...]) -> list[Path]:
+    out = []
+    for p in paths:
+        path = Path(p)
+        if not path.exists():
+            fail(f"{p}: no such file or directory")
+        if not path.is_dir():
+            fail(f"{p}: not a machine directory or a folder of machines")
+        out.append(path)
+    return out
+
+
+class _Group(click.Group):
+    """Handles a closed pipe before click does: click would turn it into exit status 1."""
+
+    def invoke(self, ctx: click.Context) -> object:
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError:
+            _quiet_broken_pipe()
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="llfsm")
+def cli() -> None:
+    """Logic-labelled finite-state machines: check, build and run them."""

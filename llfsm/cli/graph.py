@@ -1,0 +1,63 @@
+"""`llfsm graph` and `llfsm schema`: a machine's diagram, and the JSON Schema of machine.yaml."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ._common import EXIT_ERRORS, cli, fail
+
+# -- graph, schema -------------------------------------------------------------------------------
+
+
+@cli.command()
+@click.argument("path", type=click.Path())
+@click.option(
+    "--format", "fmt", type=click.Choice(["mermaid", "dot", "svg", "png"]), default="mermaid", show_default=True
+)
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE (needed for png).")
+def graph(path: str, fmt: str, output: str | None) -> None:
+    """The machine's diagram, guards on the arrows."""
+    from ..check import check_machine
+    from ..diagnostics import Severity, format_text
+    from ..graph import GraphError, dot, mermaid, render_image
+
+    p = Path(path)
+    if not p.is_dir():
+        fail(f"{path}: not a machine directory")
+    if fmt == "png" and not output:
+        fail("--format png writes binary data: give -o FILE.png")
+    result = check_machine(p)
+    blocking = [
+        d
+        for d in result.diagnostics
+        if d.severity is Severity.ERROR and d.code in {"LF001", "LF002", "LF003", "LF004", "LF005"}
+    ]
+    if result.machine is None or blocking:
+        click.echo(format_text(result.diagnostics), nl=False, err=True)
+        sys.exit(EXIT_ERRORS)
+    m = result.machine
+    try:
+        data: bytes = (
+            mermaid(m).encode() if fmt == "mermaid" else dot(m).encode() if fmt == "dot" else render_image(m, fmt)
+        )
+    except GraphError as e:
+        fail(str(e), EXIT_ERRORS)
+    if output:
+        from ..compiler.build import write_atomic_bytes
+
+        write_atomic_bytes(Path(output), data)
+    else:
+        sys.stdout.write(data.decode())
+
+
+@cli.command()
+def schema() -> None:
+    """JSON Schema of machine.yaml."""
+    import json
+
+    from ..model import MachineYaml
+
+    click.echo(json.dumps(MachineYaml.model_json_schema(), indent=2))
