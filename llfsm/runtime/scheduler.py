@@ -8,13 +8,14 @@ them apart means an untraced run pays nothing for tracing.
 from __future__ import annotations
 
 import signal
+import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 
 from .clock import Clock, SimClock
 from .context import RunContext, activate
-from .errors import ErrorReport, report_for
+from .errors import ErrorReport, RunStopped, passes_through, report_for, signal_name
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
 
@@ -22,7 +23,13 @@ FOREVER = 1 << 62
 
 #: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
-EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
+#: 128 + the signal's number, as a shell reports a process the signal killed.
+EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
+#: Signals that interrupt a run: Ctrl-C, `kill`, and a closed terminal (SIGHUP).
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+#: After a first interrupt, machine code that still holds the run this long (seconds of real
+#: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
+STUCK_SLACK_S = 0.5
 
 
 @dataclass
@@ -63,6 +70,9 @@ class Arrangement:
         self._interrupts = 0
         self._signal: int | None = None
         self._grace_end: int | None = None
+        self._interrupted_at = 0.0  # time.monotonic() of the first interrupt: grace is real time too
+        self._grace_ns = 1_000_000_000
+        self.running = False  # inside run(): a stop may be raised into the running code
         self.rounds = 0
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
@@ -175,7 +185,9 @@ class Arrangement:
         """Ctrl-C / SIGTERM: `ros.ok()` turns false, rounds go on for the grace time; twice: stop.
         signum 0 is a stop asked for from inside the run (teleop's `q`): it ends with status 0."""
         self._interrupts += 1
-        self._signal = signum if self._signal is None else self._signal
+        if self._signal is None:
+            self._signal = signum
+            self._interrupted_at = time.monotonic()
         self.ctx.interrupted = True
         self._attention = True
 
@@ -217,7 +229,9 @@ class Arrangement:
                 self._grace_end = now + grace
                 if self.on_interrupt is not None:
                     self.on_interrupt(grace)
-            elif now >= self._grace_end:
+            elif now >= self._grace_end or time.monotonic() - self._interrupted_at >= grace / 1e9:
+                # run time or real time, whichever passes first: under `--clock sim --period 1ns`
+                # a second of run time is a billion rounds
                 return self._result("interrupted", status)
         return None
 
@@ -225,13 +239,22 @@ class Arrangement:
         """Run rounds until the run ends (SPEC §2); machine exceptions become an error report."""
         prev = activate(self.ctx)
         self.ctx.deadline = duration_ns
+        self._grace_ns = grace_ns
+        self.running = True
         try:
             result = self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
             result.rounds = self.rounds  # the loop keeps its count in a local until it ends
             return result
-        except (BrokenPipeError, KeyboardInterrupt, SystemExit):
-            raise
-        except BaseException as exc:  # machine code may raise anything, e.g. asyncio.CancelledError
+        except RunStopped as exc:  # raised by signals_handled into whatever was running
+            self.running = False
+            rep = report_for(exc) or ErrorReport(exception=str(exc), kind="stopped")
+            if self.tracer is not None:
+                self.tracer.error(None, rep.as_dict())
+            return RunResult("killed", self.rounds, self.clock.now, EXIT_SIGNAL.get(exc.signum, 130), rep)
+        except BaseException as exc:  # machine code may raise anything: SystemExit, CancelledError...
+            self.running = False
+            if passes_through(exc):
+                raise
             rep = report_for(exc)
             if rep is None:
                 raise
@@ -239,6 +262,7 @@ class Arrangement:
                 self.tracer.error(None, rep.as_dict())
             return RunResult("error", self.rounds, self.clock.now, EXIT_ERROR, rep)
         finally:
+            self.running = False  # from here on a signal is only counted: at_end runs whole
             try:
                 for fn in self.ctx.at_end:
                     fn()
@@ -316,14 +340,37 @@ def _regate(m: Machine) -> None:
 
 @contextmanager
 def signals_handled(arr: Arrangement) -> Iterator[None]:
-    """Route SIGINT/SIGTERM to the arrangement for the duration of a run."""
+    """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run.
+
+    The first one asks the machines to finish (the scheduler sees it between rounds).  A second
+    one, or the grace time passing in real time while machine code still loops or blocks (a real
+    timer, SIGALRM, catches that), raises RunStopped from the handler: Python delivers it inside
+    whatever code is running, machine code included, and a blocking `time.sleep` ends with it,
+    so nothing a section does can keep the run from stopping."""
+
+    def stop(text: str) -> None:
+        if arr.running:
+            raise RunStopped(arr._signal or signal.SIGINT, text)
 
     def handler(signum: int, _frame: object) -> None:
+        first = not arr._interrupts
         arr.interrupt(signum)
+        if first:
+            signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
+        else:
+            stop(f"stopped by a second {signal_name(signum)}")
 
-    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    def alarm(_signum: int, _frame: object) -> None:
+        if arr._interrupts:
+            grace = arr._grace_ns / 1e9
+            sig = signal_name(arr._signal or 0)
+            stop(f"stopped by {sig}: still running {grace + STUCK_SLACK_S:g} s after it (grace time {grace:g} s)")
+
+    old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
+    old[signal.SIGALRM] = signal.signal(signal.SIGALRM, alarm)
     try:
         yield
     finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
         for s, h in old.items():
             signal.signal(s, h)
