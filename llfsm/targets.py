@@ -12,12 +12,13 @@ import hashlib
 import importlib.util
 import os
 import sys
-import tempfile
 from pathlib import Path
 
+from .cachedir import cache_dir
+from .cachedir import problem as cache_problem
 from .discover import MACHINE_SUFFIX, machine_name_of
 from .fingerprint import machine_fingerprint, module_fingerprint
-from .runtime.errors import ErrorReport, report_for
+from .runtime.errors import ErrorReport, passes_through, report_for
 from .runtime.machine import Machine
 
 
@@ -49,32 +50,24 @@ def cache_root() -> Path:
     return Path(base) / "llfsm"
 
 
-def _writable(p: Path) -> Path:
-    """p, or the same key under the temporary folder when the cache cannot be written."""
-    try:
-        p.mkdir(parents=True, exist_ok=True)
-        if os.access(p, os.W_OK):
-            return p
-    except OSError:
-        pass
-    return Path(tempfile.gettempdir()) / f"llfsm-cache-{os.getuid()}" / p.name
-
-
 def compiled_module_for(machine_dir: Path) -> Path:
     """The cached module of a machine directory, compiled first if missing or stale."""
     key = hashlib.sha256(os.fsencode(machine_dir.resolve())).hexdigest()[:16]
-    out = _writable(cache_root() / key)
+    out = Path(cache_dir(str(cache_root()), key))  # a folder of ours that no one else can write
     module = out / f"{machine_name_of(machine_dir)}.py"
     try:
         fresh = module_fingerprint(module) == machine_fingerprint(machine_dir)
     except OSError:
         fresh = False
+    untrusted = fresh and cache_problem(module, directory=False) is not None
+    if untrusted:
+        fresh = False  # not written by us for us: compile again (the atomic write replaces it)
     if fresh:
         return module
     from .compiler.build import build_machine  # only now: the compiler is not needed to run
 
     try:
-        outcome = build_machine(machine_dir, out)
+        outcome = build_machine(machine_dir, out, force=untrusted)
     except OSError as e:
         raise TargetError(f"{machine_dir}: cannot write its compiled module into {out}: {e.strerror or e}") from None
     if outcome.status == "failed" or outcome.module is None:
@@ -130,11 +123,10 @@ def load_class(module_path: Path) -> type[Machine]:
     except SyntaxError as e:
         sys.modules.pop(mod_name, None)
         raise TargetError(f"{module_path}:{e.lineno}: not a valid module: {e.msg}") from None
-    except (KeyboardInterrupt, SystemExit):
+    except BaseException as exc:  # an include may raise anything, SystemExit too
         sys.modules.pop(mod_name, None)
-        raise
-    except BaseException as exc:  # an include may raise anything
-        sys.modules.pop(mod_name, None)
+        if passes_through(exc):
+            raise
         rep = report_for(exc)
         if rep is None:
             raise TargetError(f"{module_path}: import failed: {type(exc).__name__}: {exc}") from None

@@ -119,3 +119,100 @@ def test_sighup_ends_a_run_like_sigterm_flushing_the_trace_and_writing_the_image
     lines = trace.read_text().splitlines()
     assert lines and all(json.loads(line) for line in lines)  # complete lines, flushed
     assert image.read_bytes().startswith(b"\x89PNG")
+
+
+# -- 2. trusting what another user can write -------------------------------------------------------
+
+PLANTED = "\nprint('PLANTED CODE RAN')\n"
+
+
+def _fallback_env(tmp_path: Path) -> dict[str, str]:
+    """The usual cache cannot be created (/proc), so the temporary folder's fallback is used."""
+    tmp = tmp_path / "tmp"
+    tmp.mkdir(exist_ok=True)
+    return dict(os.environ, LLFSM_CACHE_DIR="/proc/llfsm-cannot-be-here", TMPDIR=str(tmp))
+
+
+def _run_counter(env: dict[str, str]) -> subprocess.CompletedProcess[str]:
+    m = REPO / "machines" / "counter.machine"
+    return subprocess.run(
+        [PY, "-m", "llfsm", "run", "--clock", "sim", "--duration", "50ms", str(m)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=60,
+    )
+
+
+@pytest.mark.skipif(os.getuid() != 0, reason="changing a folder's owner needs root")
+@pytest.mark.parametrize("spoil", ["foreign_owner", "world_writable", "module_foreign", "module_writable"])
+def test_a_cache_someone_else_could_write_is_never_used(tmp_path: Path, spoil: str) -> None:
+    env = _fallback_env(tmp_path)
+    first = _run_counter(env)
+    assert first.returncode == 0, first.stderr
+    root = tmp_path / "tmp" / f"llfsm-cache-{os.getuid()}"
+    (key,) = root.iterdir()
+    assert (root.stat().st_mode & 0o777) == 0o700 and (key.stat().st_mode & 0o077) == 0
+    (module,) = key.glob("*.py")
+    with module.open("a") as f:  # the fingerprint header still matches: only trust can refuse it
+        f.write(PLANTED)
+    target = {"foreign_owner": root, "world_writable": root, "module_foreign": module, "module_writable": module}
+    if spoil.endswith("foreign") or spoil == "foreign_owner":
+        os.chown(target[spoil], 4242, 4242)
+    else:
+        os.chmod(target[spoil], 0o777 if target[spoil].is_dir() else 0o666)
+    again = _run_counter(env)
+    assert again.returncode == 0, again.stderr
+    assert "PLANTED" not in again.stdout and "count = 1" in again.stdout
+    if spoil in ("foreign_owner", "world_writable"):
+        assert f"llfsm: warning: not using the cache {root}:" in again.stderr
+        assert ("belongs to uid 4242" if spoil == "foreign_owner" else "others can write to it") in again.stderr
+    # the fresh private folder is gone once the run is over
+    assert sorted(p.name for p in (tmp_path / "tmp").iterdir()) == [root.name]
+
+
+def test_a_symlinked_cache_folder_is_not_followed(tmp_path: Path) -> None:
+    env = _fallback_env(tmp_path)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir(mode=0o700)
+    (tmp_path / "tmp" / f"llfsm-cache-{os.getuid()}").symlink_to(elsewhere)
+    r = _run_counter(env)
+    assert r.returncode == 0 and "it is a symbolic link" in r.stderr
+    assert list(elsewhere.iterdir()) == []
+
+
+@pytest.mark.skipif(os.getuid() != 0, reason="changing a folder's owner needs root")
+@pytest.mark.parametrize("spoil", ["foreign_owner", "world_writable"])
+def test_the_interface_cache_never_imports_an_init_it_cannot_trust(tmp_path: Path, spoil: str) -> None:
+    ws = tmp_path / "ws" / "llfsm_trust_pkg" / "msg"
+    ws.mkdir(parents=True)
+    (ws / "Reading.msg").write_text("float32 value\n")
+    cache = tmp_path / "cache"
+    env = dict(os.environ, LLFSM_INTERFACE_PATH=str(tmp_path / "ws"), LLFSM_CACHE_DIR=str(cache))
+    probe = "from llfsm.msgs.llfsm_trust_pkg.msg import Reading; print(Reading(value=2).value)"
+    run = [PY, "-c", probe]
+    first = subprocess.run(run, env=env, capture_output=True, text=True, timeout=60)
+    assert first.stdout.strip() == "2.0", first.stderr
+    (pkg,) = (cache / "interfaces").glob("llfsm_trust_pkg-*")
+    with (pkg / "__init__.py").open("a") as f:
+        f.write(PLANTED)
+    if spoil == "foreign_owner":
+        os.chown(pkg / "__init__.py", 4242, 4242)
+    else:
+        os.chmod(pkg, 0o777)
+    again = subprocess.run(run, env=env, capture_output=True, text=True, timeout=60)
+    assert again.stdout.strip() == "2.0" and "PLANTED" not in again.stdout, again.stderr
+    assert f"not using the cache {pkg}" in again.stderr
+
+
+def test_python_m_llfsm_does_not_import_modules_from_the_current_folder(tmp_path: Path) -> None:
+    """A repository being checked may hold a `yaml.py` (or `click.py`...): it must not run."""
+    for name in ("yaml", "click", "pydantic", "jinja2"):
+        (tmp_path / f"{name}.py").write_text(f"print('{name}.py from the current folder ran')\n")
+    m = write_machine(tmp_path, "fine", {"A": [("END", "True")], "END": None})
+    for flags in ([], ["-P"]):
+        r = subprocess.run(
+            [PY, *flags, "-m", "llfsm", "check", str(m)], capture_output=True, text=True, cwd=tmp_path, timeout=60
+        )
+        assert r.returncode == 0, r.stderr
+        assert "current folder ran" not in r.stdout + r.stderr

@@ -134,12 +134,10 @@ def run(
             arr = Arrangement(classes, context=ctx, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended)
         except ArrangementError as e:
             fail(str(e))
-        except (KeyboardInterrupt, SystemExit):
-            raise
         except BaseException as exc:  # a variable initialiser raised: machine code may raise anything
-            from ..runtime import report_for
+            from ..runtime.errors import passes_through, report_for
 
-            rep = report_for(exc)
+            rep = None if passes_through(exc) else report_for(exc)
             if rep is None:
                 raise
             click.echo(rep.format(), nl=False, err=True)

@@ -176,6 +176,26 @@ def _exception_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
 
 
+def _reentrant_call_hint(tb: TracebackType | None) -> str:
+    """Why a RecursionError happened when it is the classic one: a service callback that calls
+    its own service synchronously (each call serves the request, which calls again...)."""
+    seen: dict[str, int] = {}
+    while tb is not None:
+        code = tb.tb_frame.f_code
+        if code.co_name == "call" and code.co_filename.endswith(os.path.join("llfsm", "ros", "node.py")):
+            name = getattr(tb.tb_frame.f_locals.get("self"), "srv_name", None)
+            if isinstance(name, str):
+                seen[name] = seen.get(name, 0) + 1
+        tb = tb.tb_next
+    again = [n for n, k in seen.items() if k > 1]
+    if not again:
+        return ""
+    return (
+        f" (service {again[0]} is called synchronously from inside its own callback, which calls it again:"
+        " answer without calling it, or use call_async)"
+    )
+
+
 def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorReport | None:
     """The report for an exception raised in machine code, or None if no frame is the user's."""
     tb: TracebackType | None = exc.__traceback__
@@ -191,6 +211,8 @@ def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorRepor
     frame, lineno = found.tb_frame, found.tb_lineno
     fname = frame.f_code.co_filename
     rep = ErrorReport(exception=_exception_text(exc), kind="stopped" if isinstance(exc, RunStopped) else "error")
+    if isinstance(exc, RecursionError):
+        rep.exception += _reentrant_call_hint(exc.__traceback__)
     self_ = frame.f_locals.get("self")
     m = self_ if isinstance(self_, Machine) else machine
     if m is not None:
