@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import REPO, write_machine
+from conftest import REPO, llfsm, llfsm_process, write_machine
 
 PY = sys.executable
 
@@ -216,3 +216,134 @@ def test_python_m_llfsm_does_not_import_modules_from_the_current_folder(tmp_path
         )
         assert r.returncode == 0, r.stderr
         assert "current folder ran" not in r.stdout + r.stderr
+
+
+# -- 3. a clear message, not an internal error or a silent success -----------------------------------
+
+
+@pytest.mark.parametrize(
+    ("where", "code", "line"),
+    [
+        ("A_OnEntry", "x = 1\nraise SystemExit(5)", 2),
+        ("A_OnEntry", "import sys\nsys.exit(0)", 2),
+        ("A_Internal", "raise BrokenPipeError(32, 'Broken pipe')", 1),
+        ("Variables.py", "n: int = exit(3)", 1),
+    ],
+    ids=["SystemExit", "sys.exit(0)", "BrokenPipeError", "exit-in-initialiser"],
+)
+def test_exits_and_broken_pipes_raised_by_machine_code_are_reported(
+    tmp_path: Path, where: str, code: str, line: int
+) -> None:
+    m = write_machine(tmp_path, "quitter", {"A": [("A", "False")]}, {where: code})
+    r = llfsm_process("run", "--clock", "sim", "--duration", "10ms", m, cwd=tmp_path)
+    assert r.status == 1, (r.status, r.stderr)
+    file = where if where.endswith(".py") else f"State_{where}.py"
+    first = r.stderr.splitlines()[0]
+    assert first.startswith(f"quitter.machine/{file}:{line}: error: "), first
+    assert "(machine quitter" in first and "Traceback" not in r.stderr
+
+
+def test_a_reentrant_service_call_names_the_line_and_the_service(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "reent",
+        {"A": [("END", "True")], "END": None},
+        {
+            "A_OnEntry": (
+                "ros.init()\nnode = ros.Node('reent')\n"
+                "def handle(req, resp):\n    client.call(Empty.Request())\n    return resp\n"
+                "node.create_service(Empty, 'again', handle)\n"
+                "client = node.create_client(Empty, 'again')\nclient.call(Empty.Request())\n"
+            )
+        },
+        variables="node: object = None\nclient: object = None\n",
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_srvs.srv import Empty\n",
+    )
+    r = llfsm_process("run", "--clock", "sim", m, cwd=tmp_path)
+    assert r.status == 1 and "Traceback" not in r.stderr
+    first = r.stderr.splitlines()[0]
+    assert first.startswith("reent.machine/State_A_OnEntry.py:4: error: RecursionError"), first
+    assert "service /again is called synchronously from inside its own callback" in first
+
+
+@pytest.fixture
+def full_disk(tmp_path: Path) -> object:
+    """A 64 KiB tmpfs, filled: every write into it fails with ENOSPC."""
+    if os.getuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    d = tmp_path / "full"
+    d.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(d)], capture_output=True).returncode:
+        pytest.skip("cannot mount a tmpfs here")
+    try:
+        (d / "old.txt").write_text("the old content\n")
+        with open(d / "filler", "wb") as f:
+            try:
+                f.write(b"\0" * 128 * 1024)
+            except OSError:
+                pass
+        yield d
+    finally:
+        subprocess.run(["umount", str(d)], check=False)
+
+
+COUNTER = REPO / "machines" / "counter.machine"
+BOT = REPO / "machines" / "ros2_blind_turtle_bot.machine"
+OUTPUTS = {
+    "check -o": (["check", "--format", "json", "-o", "{}", str(COUNTER)], ".json"),
+    "graph -o": (["graph", "-o", "{}", str(COUNTER)], ".mmd"),
+    "--trace": (["run", "--clock", "sim", "--duration", "3s", "--trace", "{}", "{machine}"], ".jsonl"),
+    "--image": (
+        ["run", "--clock", "sim", "--duration", "1s", "--node", "turtlesim", "--image", "{}", str(BOT)],
+        ".png",
+    ),
+}
+
+
+@pytest.mark.parametrize("option", list(OUTPUTS))
+def test_an_output_that_cannot_be_written_is_one_clear_line_and_nothing_half_written(
+    full_disk: Path, option: str
+) -> None:
+    args, suffix = OUTPUTS[option]
+    flag = option.split()[-1]
+    ticker = write_machine(full_disk.parent, "ticker", {"A": [("A", "True")]})  # a long trace: 6000 events
+    targets = [full_disk / f"new{suffix}", Path("/proc/version" if suffix != ".png" else "/proc/llfsm.png")]
+    if suffix in (".json", ".mmd"):  # whole files: an old one is kept as it was (a stream replaces it)
+        targets.append(full_disk / "old.txt")
+    if suffix != ".png":  # --image needs a picture's suffix
+        targets.append(Path("/dev/full"))
+    for target in targets:
+        r = llfsm_process(*[a.replace("{}", str(target)).replace("{machine}", str(ticker)) for a in args], timeout=60)
+        assert r.status == 1, (target, r.status, r.stderr)
+        mine = [line for line in r.stderr.splitlines() if line.startswith("llfsm:")]
+        assert mine == [f"llfsm: {flag} {target}: cannot write: " + mine[0].split(": cannot write: ", 1)[1]], r.stderr
+        assert "Traceback" not in r.stderr and "internal error" not in r.stderr
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler", "old.txt"]  # no temporary or partial file
+    assert (full_disk / "old.txt").read_text() == "the old content\n"
+
+
+def test_build_goes_on_when_the_reader_of_its_progress_goes_away(tmp_path: Path) -> None:
+    machines = [write_machine(tmp_path / "src", f"m{i}", {"A": [("END", "True")], "END": None}) for i in range(4)]
+    assert len(machines) == 4
+    out = tmp_path / "out"
+    cmd = f"{PY} -m llfsm build -o {out} {tmp_path / 'src'} 2>&1 | head -1; exit ${{PIPESTATUS[0]}}"
+    r = subprocess.run(["bash", "-c", cmd], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.startswith("[1/4] m")
+    assert sorted(p.name for p in out.iterdir()) == ["m0.py", "m1.py", "m2.py", "m3.py"]
+
+
+@pytest.mark.parametrize(
+    "command", [["run", "--clock", "sim", "--duration", "10ms", str(COUNTER)], ["check", str(COUNTER)]]
+)
+def test_a_closed_stdout_is_a_clear_usage_error(command: list[str]) -> None:
+    shell = " ".join([PY, "-m", "llfsm", *command]) + " >&-"
+    r = subprocess.run(["sh", "-c", shell], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2
+    assert r.stderr == "llfsm: standard output is closed; to discard the output, use >/dev/null\n"
+
+
+@pytest.mark.parametrize("value", ["1e308min", "1e30", "99999999999999999999s"])
+@pytest.mark.parametrize("option", ["--duration", "--grace", "--period", "--idle"])
+def test_a_duration_too_long_is_a_usage_error(option: str, value: str) -> None:
+    r = llfsm("run", "--clock", "sim", option, value, COUNTER)
+    assert r.status == 2 and "too long (at most 100 years)" in r.stderr

@@ -20,6 +20,8 @@ if TYPE_CHECKING:
     pass
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
+#: The longest duration accepted (100 years): run-time arithmetic stays in 64-bit nanoseconds.
+MAX_DURATION_NS = 100 * 365 * 24 * 3600 * 1_000_000_000
 
 
 def fail(message: str, status: int = EXIT_USAGE) -> NoReturn:
@@ -38,12 +40,44 @@ class Duration(click.ParamType):
         from ..runtime.clock import parse_duration
 
         try:
-            return parse_duration(str(value))
+            ns = parse_duration(str(value))
         except ValueError as e:
             self.fail(str(e), param, ctx)
+        except OverflowError:  # 1e308min: finite as a number, infinite in nanoseconds
+            ns = MAX_DURATION_NS + 1
+        if ns > MAX_DURATION_NS:
+            self.fail(f"{value}: too long (at most 100 years)", param, ctx)
+        return ns
 
 
 DURATION = Duration()
+
+
+def write_output(path: str, data: bytes, what: str) -> None:
+    """Write a file the user named (`-o FILE`) through llfsm.outputs: atomically, and one clear
+    line with exit status 1 if it cannot be written (full disk, /proc, a directory)."""
+    from ..outputs import OutputError, write_file
+
+    try:
+        write_file(path, data, what=what, mkdirs=True)
+    except OutputError as e:
+        fail(f"{e}", EXIT_ERRORS)
+
+
+def progress(text: str) -> None:
+    """A progress line on stderr that cannot stop the work: when its reader has gone
+    (`llfsm build 2>&1 | head -1`), later lines go nowhere and the work goes on to its end,
+    so the exit status still says whether it succeeded."""
+    try:
+        click.echo(text, nl=False, err=True)
+    except (BrokenPipeError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, sys.stderr.fileno())
+        except (OSError, ValueError):
+            pass
+        finally:
+            os.close(devnull)
 
 
 def _quiet_broken_pipe() -> NoReturn:

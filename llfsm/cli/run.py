@@ -124,11 +124,13 @@ def run(
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
     trace_out = None
     if trace_file:
+        from ..outputs import OutputError, StreamedOutput
+
         try:
-            trace_out = open(trace_file, "w", encoding="utf-8")  # noqa: SIM115 (closed after the run)
-        except OSError as e:
-            fail(f"--trace {trace_file}: {e.strerror}")
-    tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None
+            trace_out = StreamedOutput(trace_file, what="--trace")  # write errors kept, not raised mid-run
+        except OutputError as e:
+            fail(str(e), EXIT_ERRORS)
+    tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None  # type: ignore[arg-type]
     try:
         try:
             arr = Arrangement(classes, context=ctx, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended)
@@ -149,14 +151,18 @@ def run(
         with signals_handled(arr):
             result = arr.run(duration, grace)
     finally:
-        if trace_out is not None:
-            trace_out.close()
+        # a named output that could not be written whole is an error, never a silent success
+        failed_outputs: list[str] = list(ctx.extras.get("output_errors", ()))
+        if trace_out is not None and (trace_error := trace_out.finish()) is not None:
+            failed_outputs.append(trace_error)
     sys.stdout.flush()
     if result.error is not None:
         click.echo(result.error.format(), nl=False, err=True)
     if introspect and bus is not None:
         click.echo(_graph_text(bus.graph()), nl=False, err=True)
-    sys.exit(result.status)
+    for message in failed_outputs:
+        click.echo(f"llfsm: {message}", err=True)
+    sys.exit(result.status if result.status or not failed_outputs else EXIT_ERRORS)
 
 
 def _start_bus(

@@ -165,7 +165,8 @@ class Turtlesim:
         try:
             render(self.world, path)
         except OSError as e:
-            self.log.error(f"--image {path}: {e.strerror or e}")
+            # `llfsm run` reports it and ends with status 1: a picture asked for and not written
+            self.ctx.extras.setdefault("output_errors", []).append(f"--image {path}: cannot write: {e.strerror or e}")
 
 
 def start(ctx: RunContext, options: NodeOptions) -> Turtlesim:
