@@ -347,3 +347,76 @@ def test_a_closed_stdout_is_a_clear_usage_error(command: list[str]) -> None:
 def test_a_duration_too_long_is_a_usage_error(option: str, value: str) -> None:
     r = llfsm("run", "--clock", "sim", option, value, COUNTER)
     assert r.status == 2 and "too long (at most 100 years)" in r.stderr
+
+
+# -- 4. the newcomer's rough edges ---------------------------------------------------------------------
+
+
+def test_run_of_a_name_without_its_suffix_or_with_a_typo_suggests_the_machine(tmp_path: Path) -> None:
+    write_machine(tmp_path, "pingpong", {"A": [("END", "True")], "END": None})
+    r = llfsm("run", "--clock", "sim", tmp_path / "pingpong")
+    assert r.status == 2
+    said = f"llfsm: {tmp_path}/pingpong: no such machine directory or module; did you mean {tmp_path}/pingpong.machine?"
+    assert r.stderr == said + "\n"
+    r = llfsm("run", "--clock", "sim", tmp_path / "pinpong.machine")
+    assert r.status == 2 and r.stderr.rstrip().endswith(f"did you mean {tmp_path}/pingpong.machine?")
+    r = llfsm("run", "--clock", "sim", tmp_path / "unrelated.machine")
+    assert r.status == 2 and "did you mean" not in r.stderr
+
+
+def test_run_of_pkg_name_lists_the_package_machines(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    share = tmp_path / "install" / "share" / "turtle_pkg"
+    write_machine(share / "machine", "leader", {"A": [("END", "True")], "END": None})
+    (share / "llfsm").mkdir()
+    (share / "llfsm" / "follower.py").write_text("# a built machine\n")
+    monkeypatch.setenv("AMENT_PREFIX_PATH", str(tmp_path / "install"))
+    r = llfsm("run", "--clock", "sim", "turtle_pkg/leadr")
+    assert r.status == 2
+    assert "package turtle_pkg has: follower, leader; did you mean leader?" in r.stderr
+    r = llfsm("run", "--clock", "sim", "turtle_pgk/leader")
+    assert (
+        r.status == 2 and "no package turtle_pgk with machines" in r.stderr and "did you mean turtle_pkg?" in r.stderr
+    )
+
+
+def test_echo_of_a_topic_nobody_published_says_so_after_the_run() -> None:
+    ping = REPO / "machines" / "ros2_ping_pong.machine"
+    r = llfsm("run", "--clock", "sim", "--duration", "2s", "--echo", "/pingpog", ping)
+    assert r.status == 0
+    assert r.stderr.splitlines()[-1] == (
+        "llfsm: --echo /pingpog: no node published or subscribed to /pingpog during the run; did you mean /pingpong?"
+    )
+    r = llfsm("run", "--clock", "sim", "--duration", "2s", "--echo", "/pingpong", ping)
+    assert r.status == 0 and "--echo" not in r.stderr and "data: The count is 0" in r.stdout
+
+
+def test_view_without_a_display_says_why(monkeypatch: pytest.MonkeyPatch) -> None:
+    for var in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER"):
+        monkeypatch.delenv(var, raising=False)
+    r = llfsm("run", "--clock", "sim", "--duration", "1s", "--node", "turtlesim", "--view", BOT)
+    assert r.status == 2
+    assert r.stderr.startswith("llfsm: --view opens a window, but there is no display")
+
+
+def test_helper_modules_beside_a_machine_import_without_pythonpath(tmp_path: Path) -> None:
+    """A `helpers.py` in the folder that holds NAME.machine (docs/machine-format.md) imports from
+    Includes.py, from any current folder, for a machine directory and for a built module."""
+    src = tmp_path / "project"
+    m = write_machine(
+        src,
+        "greeter",
+        {"A": [("END", "True")], "END": None},
+        {"A_OnEntry": "print(greeting_helpers.greet('turtle'))"},
+        includes="import greeting_helpers\n",
+    )
+    (src / "greeting_helpers.py").write_text("def greet(who):\n    return f'hello, {who}'\n")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    r = llfsm_process("run", "--clock", "sim", m, cwd=elsewhere, env=env)
+    assert (r.status, r.stdout) == (0, "hello, turtle\n"), r.stderr
+    build = tmp_path / "build"
+    assert llfsm_process("build", "-q", "-o", build, m, cwd=elsewhere, env=env).status == 0
+    (build / "greeting_helpers.py").write_text((src / "greeting_helpers.py").read_text())
+    r = llfsm_process("run", "--clock", "sim", build / "greeter.py", cwd=elsewhere, env=env)
+    assert (r.status, r.stdout) == (0, "hello, turtle\n"), r.stderr

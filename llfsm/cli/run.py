@@ -120,6 +120,8 @@ def run(
         fail(f"--image {image}: the picture is written as .png or .svg")
     if (image or view) and "turtlesim" not in nodes:
         fail("--image and --view draw the turtle simulator: add --node turtlesim")
+    if view and (why := _no_display()) is not None:
+        fail(why)
     uses_bus = bool(nodes or remaps or params or echoes or introspect)
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
     trace_out = None
@@ -205,6 +207,19 @@ def _start_bus(
         return bus
     finally:
         activate(prev)
+
+
+def _no_display() -> str | None:
+    """Why --view cannot open a window, or None.  Without a display SDL falls back to drawing
+    off-screen, and the user would wait for a window that never appears."""
+    if not sys.platform.startswith("linux"):
+        return None  # macOS and Windows always have their own display
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or os.environ.get("SDL_VIDEODRIVER"):
+        return None  # a display, or a video driver chosen on purpose (dummy: off-screen, for tests)
+    return (
+        "--view opens a window, but there is no display (neither DISPLAY nor WAYLAND_DISPLAY is set); "
+        "use --image FILE.png for a picture, or SDL_VIDEODRIVER=dummy to draw off-screen on purpose"
+    )
 
 
 def _graph_text(graph: dict[str, Any]) -> str:
