@@ -102,6 +102,18 @@ def test_grace_is_bounded_in_real_time_under_a_fast_sim_clock(tmp_path: Path) ->
     assert "interrupted; machines have 0.3 s" in err and "Traceback" not in err
 
 
+def test_a_long_wait_between_rounds_does_not_hold_the_run_past_the_grace(tmp_path: Path) -> None:
+    """Time-triggered rounds 30 s apart: the scheduler sleeps, no machine code runs, so the run
+    ends as a grace time's end ends it, without a report of a place in machine code."""
+    m = write_machine(tmp_path, "slow", {"A": [("A", "False")]}, {"A_OnEntry": "print('go', flush=True)"})
+    p = _spawn(["run", "--period", "30s", "--grace", "200ms", str(m)], cwd=tmp_path)
+    _wait_for_go(p)
+    p.send_signal(signal.SIGINT)
+    _out, err = _finish(p, timeout=10)
+    assert p.returncode == 130, err
+    assert "stopped by" not in err and "Traceback" not in err
+
+
 def test_sighup_ends_a_run_like_sigterm_flushing_the_trace_and_writing_the_image(tmp_path: Path) -> None:
     m = write_machine(
         tmp_path,

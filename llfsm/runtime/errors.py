@@ -37,10 +37,11 @@ class RunStopped(BaseException):
     still loops or blocks.  A BaseException, as KeyboardInterrupt is, so that `except Exception`
     in machine code does not swallow it; the report then names where the run was stopped."""
 
-    def __init__(self, signum: int, text: str) -> None:
+    def __init__(self, signum: int, text: str, *, in_machine_code: bool = True) -> None:
         super().__init__(signum, text)
         self.signum = signum
         self.text = text
+        self.in_machine_code = in_machine_code
 
     def __str__(self) -> str:
         return self.text

@@ -12,10 +12,11 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from types import FrameType
 
 from .clock import Clock, SimClock
 from .context import RunContext, activate
-from .errors import ErrorReport, RunStopped, passes_through, report_for, signal_name
+from .errors import ErrorReport, RunStopped, is_generated, passes_through, report_for, signal_name
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
 
@@ -247,10 +248,14 @@ class Arrangement:
             return result
         except RunStopped as exc:  # raised by signals_handled into whatever was running
             self.running = False
-            rep = report_for(exc) or ErrorReport(exception=str(exc), kind="stopped")
+            status = EXIT_SIGNAL.get(exc.signum, 130)
+            rep = report_for(exc) if exc.in_machine_code else None
+            if rep is None:  # stopped between rounds or in the bus: nothing of the user's to show
+                reason = "killed" if self._interrupts > 1 else "interrupted"
+                return RunResult(reason, self.rounds, self.clock.now, status)
             if self.tracer is not None:
                 self.tracer.error(None, rep.as_dict())
-            return RunResult("killed", self.rounds, self.clock.now, EXIT_SIGNAL.get(exc.signum, 130), rep)
+            return RunResult("killed", self.rounds, self.clock.now, status, rep)
         except BaseException as exc:  # machine code may raise anything: SystemExit, CancelledError...
             self.running = False
             if passes_through(exc):
@@ -338,6 +343,15 @@ def _regate(m: Machine) -> None:
     m._ringlets = m._held if (m._pending is not None or m._suspended) else m.RINGLETS
 
 
+def _in_machine_code(frame: FrameType | None) -> bool:
+    """Whether a generated module's code is on the stack (a signal handler's view of it)."""
+    while frame is not None:
+        if is_generated(frame.f_code.co_filename):
+            return True
+        frame = frame.f_back
+    return False
+
+
 @contextmanager
 def signals_handled(arr: Arrangement) -> Iterator[None]:
     """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run.
@@ -348,23 +362,26 @@ def signals_handled(arr: Arrangement) -> Iterator[None]:
     whatever code is running, machine code included, and a blocking `time.sleep` ends with it,
     so nothing a section does can keep the run from stopping."""
 
-    def stop(text: str) -> None:
+    def stop(frame: FrameType | None, text: str) -> None:
         if arr.running:
-            raise RunStopped(arr._signal or signal.SIGINT, text)
+            # outside machine code (the scheduler sleeping between rounds, the bus) there is no
+            # place of the user's to name: the run ends as the grace time's end would end it
+            raise RunStopped(arr._signal or signal.SIGINT, text, in_machine_code=_in_machine_code(frame))
 
-    def handler(signum: int, _frame: object) -> None:
+    def handler(signum: int, frame: FrameType | None) -> None:
         first = not arr._interrupts
         arr.interrupt(signum)
         if first:
             signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
         else:
-            stop(f"stopped by a second {signal_name(signum)}")
+            stop(frame, f"stopped by a second {signal_name(signum)}")
 
-    def alarm(_signum: int, _frame: object) -> None:
+    def alarm(_signum: int, frame: FrameType | None) -> None:
         if arr._interrupts:
             grace = arr._grace_ns / 1e9
             sig = signal_name(arr._signal or 0)
-            stop(f"stopped by {sig}: still running {grace + STUCK_SLACK_S:g} s after it (grace time {grace:g} s)")
+            held = grace + STUCK_SLACK_S
+            stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
 
     old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
     old[signal.SIGALRM] = signal.signal(signal.SIGALRM, alarm)
