@@ -334,6 +334,15 @@ def test_an_output_that_cannot_be_written_is_one_clear_line_and_nothing_half_wri
     assert (full_disk / "old.txt").read_text() == "the old content\n"
 
 
+@pytest.mark.parametrize("what", [["new", "machine", "blinky"], ["new", "package", "blinky_pkg"]])
+def test_new_into_a_folder_that_cannot_be_written_is_one_clear_line(full_disk: Path, what: list[str]) -> None:
+    for folder in (full_disk, Path("/proc")):
+        r = llfsm_process(*what, "--dir", folder, timeout=60)
+        assert r.status == 1 and r.stderr.startswith(f"llfsm: {folder}: cannot write: "), r.stderr
+        assert len(r.stderr.splitlines()) == 1
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler", "old.txt"]
+
+
 def test_build_goes_on_when_the_reader_of_its_progress_goes_away(tmp_path: Path) -> None:
     machines = [write_machine(tmp_path / "src", f"m{i}", {"A": [("END", "True")], "END": None}) for i in range(4)]
     assert len(machines) == 4
