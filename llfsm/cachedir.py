@@ -88,11 +88,16 @@ def cache_dir(preferred_root: str, key: str) -> str:
     preferred = os.path.join(preferred_root, key)
     try:
         os.makedirs(preferred_root, 0o700, exist_ok=True)
-        why = _make(preferred)
+        # the root too: whoever can write there can swap our folder for theirs after the check
+        # (a link the user made to put the cache elsewhere is followed: its target is checked)
+        bad = os.path.realpath(preferred_root)
+        why = problem(bad)
+        if why is None:
+            bad, why = preferred, _make(preferred)
         if why is None and os.access(preferred, os.W_OK):
             return preferred
-        if why is not None and os.path.lexists(preferred):
-            warn(preferred, why)  # it exists but is not ours to trust: say so, do not use it
+        if why is not None and os.path.lexists(bad):
+            warn(bad, why)  # it exists but is not ours to trust: say so, do not use it
     except OSError:
         pass  # cannot be created (read-only, no home): the fallback, quietly
     out = os.path.join(fallback_root(), key)

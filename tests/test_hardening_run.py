@@ -183,6 +183,17 @@ def test_a_cache_someone_else_could_write_is_never_used(tmp_path: Path, spoil: s
     assert sorted(p.name for p in (tmp_path / "tmp").iterdir()) == [root.name]
 
 
+def test_a_cache_folder_others_can_write_is_not_used_even_when_chosen(tmp_path: Path) -> None:
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    env = dict(_fallback_env(tmp_path), LLFSM_CACHE_DIR=str(shared))
+    r = _run_counter(env)
+    assert r.returncode == 0 and "count = 1" in r.stdout
+    assert f"not using the cache {shared}: others can write to it (mode 0777)" in r.stderr
+    assert list(shared.iterdir()) == []
+
+
 def test_a_symlinked_cache_folder_is_not_followed(tmp_path: Path) -> None:
     env = _fallback_env(tmp_path)
     elsewhere = tmp_path / "elsewhere"
