@@ -29,6 +29,10 @@ def _drop_current_folder() -> None:
         here = False
     if here:
         del sys.path[0]
+        # llfsm itself run from a checkout without being installed: keep it importable (by
+        # worker processes too), but after every installed library, never before them
+        if os.path.dirname(os.path.dirname(os.path.abspath(__file__))) == os.path.abspath(first or "."):
+            sys.path.append(first)
 
 
 if __name__ == "__main__":
