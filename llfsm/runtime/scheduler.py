@@ -183,8 +183,10 @@ class Arrangement:
         self._attention = True
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
-        """Ctrl-C / SIGTERM: `ros.ok()` turns false, rounds go on for the grace time; twice: stop.
-        signum 0 is a stop asked for from inside the run (teleop's `q`): it ends with status 0."""
+        """Ctrl-C / SIGTERM / SIGHUP: `ros.ok()` turns false, rounds go on for the grace time (run
+        time or real time, whichever passes first); twice: stop (signals_handled raises the stop
+        into running code at once).  signum 0 is a stop asked for from inside the run (teleop's
+        `q`): it ends with status 0."""
         self._interrupts += 1
         if self._signal is None:
             self._signal = signum
