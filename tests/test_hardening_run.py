@@ -345,6 +345,33 @@ def test_an_output_that_cannot_be_written_is_one_clear_line_and_nothing_half_wri
     assert (full_disk / "old.txt").read_text() == "the old content\n"
 
 
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["check", "--format", "json", str(COUNTER)],
+        ["graph", str(COUNTER)],
+        ["schema"],
+        [
+            "run",
+            "--clock",
+            "sim",
+            "--duration",
+            "3s",
+            "--echo",
+            "/pingpong",
+            str(REPO / "machines" / "ros2_ping_pong.machine"),
+        ],
+    ],
+    ids=["check", "graph", "schema", "run-echo"],
+)
+def test_stdout_on_a_full_disk_is_one_clear_line(command: list[str]) -> None:
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([PY, "-m", "llfsm", *command], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
+    assert r.returncode == 1
+    assert r.stderr.splitlines()[-1] == "llfsm: cannot write the output: No space left on device"
+    assert "Traceback" not in r.stderr and "internal error" not in r.stderr
+
+
 @pytest.mark.parametrize("what", [["new", "machine", "blinky"], ["new", "package", "blinky_pkg"]])
 def test_new_into_a_folder_that_cannot_be_written_is_one_clear_line(full_disk: Path, what: list[str]) -> None:
     for folder in (full_disk, Path("/proc")):

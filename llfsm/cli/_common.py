@@ -7,6 +7,8 @@ ends in a one-line-per-problem message and an exit status (1 or 2), never a trac
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 import sys
 from pathlib import Path
@@ -111,6 +113,25 @@ class _Group(click.Group):
             return super().invoke(ctx)
         except BrokenPipeError:
             _quiet_broken_pipe()
+        except OSError as e:
+            if e.errno in _OUTPUT_ERRNOS:  # stdout on a full disk, /dev/full: not an llfsm bug
+                _output_failed(e)
+            raise
+
+
+#: Errors that only a write can get: the output (stdout) could not be written.
+_OUTPUT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
+
+
+def _output_failed(e: OSError) -> NoReturn:
+    """One line on stderr, status 1; what is still buffered for stdout is dropped, so that
+    Python's exit does not fail on it a second time."""
+    with contextlib.suppress(OSError):
+        os.write(2, f"llfsm: cannot write the output: {e.strerror or e}\n".encode())
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    with contextlib.suppress(OSError, ValueError):
+        os.dup2(devnull, sys.stdout.fileno())
+    sys.exit(EXIT_ERRORS)
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
