@@ -50,13 +50,16 @@ STUCK = {
     # section code, the line (of State_A_OnEntry.py) where it is stopped
     "loop": ("print('go', flush=True)\nwhile True:\n    pass\n", 2, "while True:"),
     "sleep": ("print('go', flush=True)\ntime.sleep(600)\n", 2, "time.sleep(600)"),
+    "wait": ("print('go', flush=True)\nthreading.Event().wait()\n", 2, "threading.Event().wait()"),
 }
 SIGNALS = {"SIGINT": (signal.SIGINT, 130), "SIGTERM": (signal.SIGTERM, 143), "SIGHUP": (signal.SIGHUP, 129)}
 
 
 def _stuck_machine(root: Path, kind: str) -> Path:
     code, _line, _text = STUCK[kind]
-    return write_machine(root, kind, {"A": [("A", "True")]}, {"A_OnEntry": code}, includes="import time\n")
+    return write_machine(
+        root, kind, {"A": [("A", "True")]}, {"A_OnEntry": code}, includes="import threading\nimport time\n"
+    )
 
 
 @pytest.mark.parametrize("signame", list(SIGNALS))
