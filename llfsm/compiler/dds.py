@@ -6,15 +6,19 @@ Each generated module holds, per message:
   `pkg::srv::dds_::Name_Request_`), for creating topics and for code that wants cyclonedds
   samples (`_to_Name`, `_from_Name` convert);
 - a CDR encoder and decoder written out field by field (`_cdr_Name(msg) -> bytes`,
-  `_msg_Name(data) -> msg`): XCDR1 plain CDR, little endian, with the encapsulation header
-  00 01 00 00, byte for byte what rclpy's `serialize_message` gives.  Runs of fixed-size fields
-  whose alignment is known at generation time become one precompiled `struct.Struct` (a Twist
-  is one `pack` of six doubles); alignment is worked out at run time only after a string or a
-  sequence.  Nested messages are inlined, so a Pose is one `unpack` too;
+  `_msg_Name(data) -> (msg, end)`, and `_enc_Name`/`_dec_Name` for a message at any offset):
+  XCDR1 plain CDR, little endian, with the encapsulation header 00 01 00 00, byte for byte what
+  rclpy's `serialize_message` gives.  Runs of fixed-size fields whose alignment is known at
+  generation time become one precompiled `struct.Struct` (a Twist is one `pack` of six doubles,
+  header included); alignment is worked out at run time only after a string or a sequence.
+  Nested messages are inlined, so a PoseStamped is two `unpack` calls.  Two rules follow Fast
+  CDR (checked against rclpy in tests/interop): an empty sequence of 8-byte values is its count
+  alone (the elements' alignment comes only with elements), and a wstring is a count of UTF-16
+  code units then 4 bytes per unit;
 - its RIHS01 type hash (REP 2011), computed here from the type description, as rosidl does.
 
 Why hand-written CDR beside the IdlStruct: the IdlStruct route converts a message to a sample
-and lets cyclonedds' interpreted serializer walk it, several times slower for a Twist (see
+and lets cyclonedds' interpreted serializer walk it, some 40 times slower for a Twist (see
 bench/dds_types.py); the IdlStruct is still needed to register the topic's type.
 
 Long statements are laid out as ruff format lays them out (`layout`), so the committed modules
@@ -30,7 +34,7 @@ import hashlib
 import json
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from .interfaces import (
@@ -121,7 +125,8 @@ Lookup = Callable[[str], MessageSpec]
 
 
 def dds_name(type_name: str) -> str:
-    """ "geometry_msgs/msg/Twist" -> "geometry_msgs::msg::dds_::Twist_" (rmw's type name)."""
+    """The DDS type name rmw gives a ROS type: geometry_msgs/msg/Twist is
+    geometry_msgs::msg::dds_::Twist_."""
     pkg, kind, name = type_name.split("/")
     return f"{pkg}::{kind}::dds_::{name}_"
 
@@ -204,18 +209,6 @@ def service_specs(service: ServiceSpec) -> tuple[MessageSpec, MessageSpec]:
 
 
 # -- CDR code ----------------------------------------------------------------------------------
-
-
-@dataclass
-class _Structs:
-    """The module's precompiled struct.Struct objects, one per format."""
-
-    names: dict[str, str] = field(default_factory=dict)
-
-    def __call__(self, fmt: str) -> str:
-        if fmt not in self.names:
-            self.names[fmt] = f"_S{len(self.names)}"
-        return self.names[fmt]
 
 
 class _Alignment:
