@@ -150,6 +150,12 @@ def test_bad_payloads_are_value_errors() -> None:
         _dds.from_cdr(b"\x00", String)
     with pytest.raises(ValueError, match="malformed std_msgs/msg/String"):
         _dds.from_cdr(b"\x00\x01\x00\x00\x05\x00\x00\x00\xff\xfe\x00\x00\x00", String)
+    from llfsm.msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
+
+    # A count of 2**32 - 1 nodes in 8 bytes: refused at once, not looped over.
+    bogus = b"\x00\x01\x00\x00" + bytes(16) + b"\xff\xff\xff\xff" + bytes(8)
+    with pytest.raises(ValueError, match="elements announced"):
+        _dds.from_cdr(bogus, ParticipantEntitiesInfo)
     with pytest.raises(TypeError, match="not a message class"):
         _dds.cdr("text")  # type: ignore[arg-type]
 

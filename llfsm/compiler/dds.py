@@ -479,6 +479,9 @@ class _Reader(_Code):
             inner.lines.append(f"{e}, o = {self.module.ref(element.base, '_dec')}(d, o)")
         else:
             inner.lines.append(layout(f"{e} = ", inner.field(element)))
+        if t.array != "fixed":  # every element takes a byte at least: a bogus count fails now
+            self.lines.append(f"if {n} > len(d) - o:")
+            self.lines.append(f'    raise ValueError(f"{{{n}}} elements announced, {{len(d) - o}} bytes left")')
         self.lines.append(f"{v} = []")
         self.lines.append(f"for _ in range({n}):")
         self.lines += [_indented(line) for line in inner.lines]

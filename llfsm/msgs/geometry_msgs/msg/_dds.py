@@ -831,6 +831,8 @@ def _msg_Polygon(d):
     t1 = _S11.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_Point32(d, o)
@@ -852,6 +854,8 @@ def _dec_Polygon(d, o):
     t1 = _S11.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_Point32(d, o)
@@ -913,6 +917,8 @@ def _msg_PolygonStamped(d):
     t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
+    if n5 > len(d) - o:
+        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
         e7, o = _dec_Point32(d, o)
@@ -945,6 +951,8 @@ def _dec_PolygonStamped(d, o):
     t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
+    if n5 > len(d) - o:
+        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
         e7, o = _dec_Point32(d, o)
@@ -1195,6 +1203,8 @@ def _msg_PoseArray(d):
     t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
+    if n5 > len(d) - o:
+        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
         e7, o = _dec_Pose(d, o)
@@ -1227,6 +1237,8 @@ def _dec_PoseArray(d, o):
     t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
+    if n5 > len(d) - o:
+        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
         e7, o = _dec_Pose(d, o)

@@ -133,6 +133,8 @@ def _msg_NodeEntitiesInfo(d):
     t7 = _S2.unpack_from(d, o)
     o += 4
     n8 = t7[0]
+    if n8 > len(d) - o:
+        raise ValueError(f"{n8} elements announced, {len(d) - o} bytes left")
     v9 = []
     for _ in range(n8):
         e10, o = _dec_Gid(d, o)
@@ -141,6 +143,8 @@ def _msg_NodeEntitiesInfo(d):
     t11 = _S2.unpack_from(d, o)
     o += 4
     n12 = t11[0]
+    if n12 > len(d) - o:
+        raise ValueError(f"{n12} elements announced, {len(d) - o} bytes left")
     v13 = []
     for _ in range(n12):
         e14, o = _dec_Gid(d, o)
@@ -189,6 +193,8 @@ def _dec_NodeEntitiesInfo(d, o):
     t7 = _S2.unpack_from(d, o)
     o += 4
     n8 = t7[0]
+    if n8 > len(d) - o:
+        raise ValueError(f"{n8} elements announced, {len(d) - o} bytes left")
     v9 = []
     for _ in range(n8):
         e10, o = _dec_Gid(d, o)
@@ -197,6 +203,8 @@ def _dec_NodeEntitiesInfo(d, o):
     t11 = _S2.unpack_from(d, o)
     o += 4
     n12 = t11[0]
+    if n12 > len(d) - o:
+        raise ValueError(f"{n12} elements announced, {len(d) - o} bytes left")
     v13 = []
     for _ in range(n12):
         e14, o = _dec_Gid(d, o)
@@ -255,6 +263,8 @@ def _msg_ParticipantEntitiesInfo(d):
     t1 = _S3.unpack_from(d, o)
     o += 20
     n2 = t1[16]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_NodeEntitiesInfo(d, o)
@@ -279,6 +289,8 @@ def _dec_ParticipantEntitiesInfo(d, o):
     t2 = _S2.unpack_from(d, o)
     o += 4
     n3 = t2[0]
+    if n3 > len(d) - o:
+        raise ValueError(f"{n3} elements announced, {len(d) - o} bytes left")
     v4 = []
     for _ in range(n3):
         e5, o = _dec_NodeEntitiesInfo(d, o)

@@ -259,6 +259,8 @@ def _msg_MultiArrayLayout(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -285,6 +287,8 @@ def _dec_MultiArrayLayout(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -343,6 +347,8 @@ def _msg_ByteMultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -374,6 +380,8 @@ def _dec_ByteMultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -640,6 +648,8 @@ def _msg_Float32MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -671,6 +681,8 @@ def _dec_Float32MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -785,6 +797,8 @@ def _msg_Float64MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -820,6 +834,8 @@ def _dec_Float64MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1002,6 +1018,8 @@ def _msg_Int16MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1033,6 +1051,8 @@ def _dec_Int16MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1145,6 +1165,8 @@ def _msg_Int32MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1176,6 +1198,8 @@ def _dec_Int32MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1290,6 +1314,8 @@ def _msg_Int64MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1325,6 +1351,8 @@ def _dec_Int64MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1437,6 +1465,8 @@ def _msg_Int8MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1468,6 +1498,8 @@ def _dec_Int8MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1645,6 +1677,8 @@ def _msg_UInt16MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1676,6 +1710,8 @@ def _dec_UInt16MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1788,6 +1824,8 @@ def _msg_UInt32MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1819,6 +1857,8 @@ def _dec_UInt32MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1933,6 +1973,8 @@ def _msg_UInt64MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -1968,6 +2010,8 @@ def _dec_UInt64MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -2080,6 +2124,8 @@ def _msg_UInt8MultiArray(d):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
@@ -2111,6 +2157,8 @@ def _dec_UInt8MultiArray(d, o):
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
