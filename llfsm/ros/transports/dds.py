@@ -26,6 +26,7 @@ from __future__ import annotations
 import ctypes as ct
 import itertools
 import time
+from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -65,6 +66,8 @@ REPLY_PATIENCE_S = 2.0
 #: How long a client trusts its last look at the server's matches (spin calls ask often).
 READY_CACHE_S = 0.05
 TAKE_BATCH = 256
+#: The RTPS vendor id at the start of every Fast DDS GUID (eProsima, 1.15).
+FAST_DDS_VENDOR = b"\x01\x0f"
 
 
 def _write(writer: DataWriter, payload: bytes) -> None:
@@ -338,6 +341,9 @@ class _Client(_Endpoint):
         self.unanswerable: set[int] = set()  # futures sent while no server was matched
         self._ready_at = -1.0
         self._ready = False
+        #: A Fast DDS server (rmw_fastrtps_cpp) was matched: it wants requests without the header.
+        self.fast = False
+        self.plain: _PlainClient | None = None
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
         t.add_endpoint(self)
@@ -366,15 +372,29 @@ class _Client(_Endpoint):
         readers = self.writer.get_matched_subscriptions()
         writers = self.reader.get_matched_publications()
         ids = set()
+        fast = others = 0
         for h in readers:
             try:
                 ep = self.writer.get_matched_subscription_data(h)
             except Exception:
                 continue
-            sid = _user_data_key(ep.qos if ep is not None else None, "serviceid")
+            if ep is None:
+                continue
+            sid = _user_data_key(ep.qos, "serviceid")
             if sid is not None:
                 ids.add(sid)
-        if not ids:
+            if ep.key.bytes[:2] == FAST_DDS_VENDOR:
+                fast += 1
+            else:
+                others += 1
+        self.fast = bool(fast) and not others and not ids
+        if self.fast:
+            # Fast DDS matched our (header) endpoints by name; it talks without the header
+            if self.plain is None:
+                self.plain = _PlainClient(self)
+                self.t.add_endpoint(self)  # announce the new reader and writer
+            self._ready = self.plain.ready()
+        elif not ids:
             self._ready = bool(readers) and bool(writers)
         else:
             self._ready = False
@@ -392,6 +412,9 @@ class _Client(_Endpoint):
         seq = next(self.seq)
         if not self.ready():
             self.unanswerable.add(id(future))
+        if self.fast and self.plain is not None:
+            self.plain.send(request, future)
+            return
         self.pending[seq] = future
         _write(self.writer, _dds.wrap(request, self.guid, seq))
 
@@ -404,6 +427,56 @@ class _Client(_Endpoint):
     def close(self) -> None:
         self.t.waits.detach(self.cond, self.token)
         self.t.remove_endpoint(self)
+        if self.plain is not None:
+            self.plain.close()
+        _delete(self.cond, self.reader, self.writer)
+
+
+class _PlainClient:
+    """The endpoints a client uses with a Fast DDS server: the same topics and type names, the
+    payload without rmw_cyclonedds's request header (rmw_fastrtps_cpp correlates replies through
+    RTPS inline QoS, which Cyclone's Python binding cannot read or write).  So replies are matched
+    to requests in order: right for one client per service, which is the usual case; with several
+    clients of one Fast DDS service at once a reply may reach the wrong llfsm client.  Made only
+    when such a server is seen."""
+
+    def __init__(self, owner: _Client) -> None:
+        t, srv, name = owner.t, owner.cli.srv_type, owner.cli.srv_name
+        self.t, self.owner = t, owner
+        self.writer = DataWriter(
+            t.publisher_, t.topic(f"rq{name}Request", _dds.dds_type(srv.Request)), qos=_qos(1000)
+        )
+        self.reader = DataReader(
+            t.subscriber_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.Response)), qos=_qos(1000, reader=True)
+        )
+        owner.readers, owner.writers = (owner.reader, self.reader), (owner.writer, self.writer)
+        self.waiting: deque[Future] = deque()
+        self.cond = ReadCondition(self.reader, ANY)
+        self.token = t.waits.attach(self.cond, self)
+
+    def ready(self) -> bool:
+        return bool(self.writer.get_matched_subscriptions()) and bool(self.reader.get_matched_publications())
+
+    def send(self, request: Message, future: Future) -> None:
+        self.waiting.append(future)
+        _write(self.writer, _dds.cdr(request))
+
+    def on_trigger(self) -> None:
+        cls = self.owner.cli.srv_type.Response
+        for data, _info in _take(self.reader):
+            try:
+                response = _dds.from_cdr(data, cls)
+            except ValueError as e:
+                self.t.warn(f"{self.owner.cli.srv_name}: dropped a reply that is not a {cls._TYPE}: {e}")
+                continue
+            while self.waiting:
+                future = self.waiting.popleft()
+                if not future.done():
+                    future.set_result(response)
+                    break
+
+    def close(self) -> None:
+        self.t.waits.detach(self.cond, self.token)
         _delete(self.cond, self.reader, self.writer)
 
 
@@ -464,7 +537,7 @@ class DdsTransport(Transport):
         self.publisher_ = Publisher(self.dp)
         self.subscriber_ = Subscriber(self.dp)
         self.waits = _WaitSet(self.dp)
-        self._topics: dict[str, Topic] = {}
+        self._topics: dict[tuple[str, type], Topic] = {}
         self._endpoints: dict[int, list[_Endpoint]] = {}
         self._parked: list[Callable[[], bool]] = []
         self._discovery: _Discovery | None = None
@@ -495,9 +568,9 @@ class DdsTransport(Transport):
 
     # -- bookkeeping --------------------------------------------------------------------------
     def topic(self, name: str, idl: type) -> Topic:
-        t = self._topics.get(name)
+        t = self._topics.get((name, idl))
         if t is None:
-            t = self._topics[name] = Topic(self.dp, name, idl)
+            t = self._topics[(name, idl)] = Topic(self.dp, name, idl)
         return t
 
     def new_csid(self) -> str:
