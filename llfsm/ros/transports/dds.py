@@ -443,9 +443,7 @@ class _PlainClient:
     def __init__(self, owner: _Client) -> None:
         t, srv, name = owner.t, owner.cli.srv_type, owner.cli.srv_name
         self.t, self.owner = t, owner
-        self.writer = DataWriter(
-            t.publisher_, t.topic(f"rq{name}Request", _dds.dds_type(srv.Request)), qos=_qos(1000)
-        )
+        self.writer = DataWriter(t.publisher_, t.topic(f"rq{name}Request", _dds.dds_type(srv.Request)), qos=_qos(1000))
         self.reader = DataReader(
             t.subscriber_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.Response)), qos=_qos(1000, reader=True)
         )
