@@ -571,6 +571,7 @@ class DdsTransport(Transport):
 
     def __init__(self, domain_id: int | None = None) -> None:
         self.dp = dds_config.participant(domain_id)
+        self._notes = dds_config.settings().notes  # rcl's warnings (ignored peers, deprecated variable)
         self.publisher_ = Publisher(self.dp)
         self.subscriber_ = Subscriber(self.dp)
         self.waits = _WaitSet(self.dp)
@@ -603,6 +604,8 @@ class DdsTransport(Transport):
         if getattr(clock, "kind", "") == "wall" and hasattr(clock, "waiter"):
             clock.waiter = self._idle_wait  # the idle sleep between rounds wakes on data
         bus.ctx.at_end.append(self.close)
+        for note in self._notes:
+            self.warn(note)
 
     # -- bookkeeping --------------------------------------------------------------------------
     def topic(self, name: str, idl: type) -> Topic:
