@@ -231,3 +231,28 @@ def test_a_node_on_its_own_runs_for_its_duration_in_process_too() -> None:
 
 if sys.platform != "linux":  # pragma: no cover
     pytestmark = pytest.mark.skip(reason="the DDS tests use Linux network namespaces")
+
+
+WAITER = """\
+ros.init()
+node = ros.Node("patient")
+found = node.create_client(Trigger, "/never").wait_for_service(timeout_sec=120.0)
+node.get_logger().info(f"found={found} ok={ros.ok()}")
+"""
+
+
+def test_ctrl_c_ends_a_long_wait_for_a_service_on_dds(netns: NetNamespace, tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "patient",
+        {"INITIAL": [("END", "not ros.ok()")], "END": None},
+        code={"INITIAL_OnEntry": WAITER},
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_srvs.srv import Trigger\n",
+    )
+    p = netns.llfsm("run", "--transport", "dds", m)
+    interrupt(p, 3.0)
+    t0 = time.monotonic()
+    status, _, err = finish(p, 60)
+    assert time.monotonic() - t0 < 20, "the wait ignored Ctrl-C"
+    assert "found=False ok=False" in err, err
+    assert status == 0 and "Traceback" not in err  # the machine took its `not ros.ok()` to END

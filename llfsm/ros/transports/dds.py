@@ -72,6 +72,8 @@ SERVICE_DEPTH = 10
 #: (run-clock ns): a round then costs a comparison, and a message waits at most 0.1 ms longer.
 #: Spin calls and the idle sleep look at once.
 POLL_INTERVAL_NS = 100_000
+#: The longest single wait on the wait set (a Ctrl-C is seen when it returns).
+MAX_WAIT_NS = 100_000_000
 
 
 def _write(writer: DataWriter, payload: bytes) -> None:
@@ -717,7 +719,8 @@ class DdsTransport(Transport):
         read = getattr(clock, "read", None)
         now = read() if read is not None else clock.now
         if until_ns > now:
-            self.waits.wait(min(until_ns - now, 10**10) if not self._parked else min(until_ns - now, 10_000_000))
+            # at most 0.1 s in the C call: Python runs a Ctrl-C handler only once it returns
+            self.waits.wait(min(until_ns - now, 10_000_000 if self._parked else MAX_WAIT_NS))
         clock.now = read() if read is not None else until_ns
 
     def _idle_wait(self, ns: int) -> None:
@@ -728,7 +731,7 @@ class DdsTransport(Transport):
             ns = min(ns, max(0, due - self.bus.clock.read()))  # type: ignore[attr-defined]
         if self._parked:
             ns = min(ns, 10_000_000)
-        self.waits.wait(ns)
+        self.waits.wait(min(ns, MAX_WAIT_NS))
         self._next_poll = 0  # whatever woke us is taken right after this round
 
     # -- the graph ----------------------------------------------------------------------------------
