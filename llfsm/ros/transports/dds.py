@@ -441,7 +441,7 @@ class _Client(_Endpoint):
             # Fast DDS matched our (header) endpoints by name; it talks without the header
             if self.plain is None:
                 self.plain = _PlainClient(self)
-                self.t.add_endpoint(self)  # announce the new reader and writer
+                self.t._dirty = True  # announce the new reader and writer with this client's
             self._ready = self.plain.ready()
         elif not ids:
             self._ready = bool(readers) and bool(writers)
