@@ -256,3 +256,33 @@ def test_ctrl_c_ends_a_long_wait_for_a_service_on_dds(netns: NetNamespace, tmp_p
     assert time.monotonic() - t0 < 20, "the wait ignored Ctrl-C"
     assert "found=False ok=False" in err, err
     assert status == 0 and "Traceback" not in err  # the machine took its `not ros.ok()` to END
+
+
+#: A user's own Cyclone configuration (it comes after llfsm's, so it wins): no multicast at all.
+NO_MULTICAST = {
+    "CYCLONEDDS_URI": "<CycloneDDS><Domain><General><AllowMulticast>false</AllowMulticast></General></Domain>"
+    "</CycloneDDS>"
+}
+
+
+@pytest.mark.parametrize(
+    ("talker_env", "listener_env", "hears"),
+    [
+        ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}, {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}, True),
+        ({**NO_MULTICAST, "ROS_STATIC_PEERS": "127.0.0.1"}, {**NO_MULTICAST, "ROS_STATIC_PEERS": "127.0.0.1"}, True),
+        ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF"}, {}, False),
+        ({"ROS_DOMAIN_ID": "3"}, {"ROS_DOMAIN_ID": "4"}, False),
+    ],
+    ids=["localhost", "user-config-and-static-peer", "off", "other-domain"],
+)
+def test_discovery_follows_the_ros_variables(
+    netns: NetNamespace, talker_env: dict[str, str], listener_env: dict[str, str], hears: bool
+) -> None:
+    listener = netns.llfsm("run", "--transport", "dds", "--echo", "/pingpong", "--duration", "6", env=listener_env)
+    talker = netns.llfsm(
+        "run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "5", env=talker_env
+    )
+    t_status, _, t_err = finish(talker, 30)
+    l_status, out, l_err = finish(listener, 30)
+    assert t_status == 0 and l_status == 0, t_err + l_err
+    assert ("data: The count is" in out) is hears, out + l_err
