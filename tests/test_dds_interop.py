@@ -59,6 +59,7 @@ end = time.monotonic() + 8
 while time.monotonic() < end and pub.get_subscription_count() == 0:
     rclpy.spin_once(node, timeout_sec=0.1)
 print("MATCHED", pub.get_subscription_count(), flush=True)
+time.sleep(1.0)  # Fast DDS saw llfsm's reader; give llfsm's side the time to see this writer too
 msg = Twist()
 msg.linear.x = 2.0
 for _ in range(20):  # 2 s at 2 m/s: the turtle goes east by about 4 m
