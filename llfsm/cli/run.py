@@ -144,6 +144,7 @@ def run(
                 raise
             click.echo(rep.format(), nl=False, err=True)
             sys.exit(EXIT_ERRORS)
+        _machines_on_graph(ctx)
         arr.on_interrupt = lambda grace: click.echo(
             f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish (interrupt again to stop now)",
             err=True,
@@ -191,7 +192,7 @@ def _start_bus(
         except (InvalidNameError, ValueError) as e:
             fail(str(e))
         if nodes:
-            bus.initialised = True  # the nodes are up: ros.ok() is true from the first round
+            bus.init()  # the nodes are up: ros.ok() is true from the first round
         options = NodeOptions(image=Path(image) if image else None, view=view)
         for name in dict.fromkeys(nodes):
             try:
@@ -201,6 +202,25 @@ def _start_bus(
         return bus
     finally:
         activate(prev)
+
+
+def _machines_on_graph(ctx: RunContext) -> None:
+    """SPEC §8: the machines' state topics and control services join the graph with the bus
+    (now if it is up, else at the first `ros.init()`); a run that never uses the bus never
+    imports it."""
+    bus = ctx.extras.get("bus")
+    if bus is not None and bus.initialised:
+        from ..ros.control import enable
+
+        enable(ctx)
+    else:
+        ctx.extras.setdefault("on_init", []).append(lambda bus: _enable(ctx))
+
+
+def _enable(ctx: RunContext) -> None:
+    from ..ros.control import enable
+
+    enable(ctx)
 
 
 def _graph_text(graph: dict[str, Any]) -> str:

@@ -66,6 +66,9 @@ class Arrangement:
         self.rounds = 0
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
+        #: SPEC §2 ends a run whose machines are all suspended: nothing could resume them.  A run
+        #: steered from outside (control services a page or another process calls) waits instead.
+        self.end_when_suspended = True
         names = [c.NAME for c in classes]
         for n in names:
             if names.count(n) > 1:
@@ -118,6 +121,13 @@ class Arrangement:
             self.tracer.command("suspend", m, m.SUSPENDED)
             self.tracer.entry(m, m.SUSPENDED)
         m.RINGLETS[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
+        self._attention = True
+
+    def set_tracer(self, tracer: Tracer | None) -> None:
+        """Change the tracer during a run (from the scheduler's thread): the round loop picks
+        it up before its next round.  How state topics get their events only while someone
+        listens: the plain loop runs otherwise."""
+        self.tracer = tracer
         self._attention = True
 
     # -- control commands -------------------------------------------------------------------
@@ -206,7 +216,7 @@ class Arrangement:
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
         if not self._live:
             return self._result("finished", EXIT_OK)
-        if all(m._suspended and m._pending is None for m in self._live):
+        if self.end_when_suspended and all(m._suspended and m._pending is None for m in self._live):
             return self._result("suspended", EXIT_OK)
         if self._interrupts:
             self._attention = True  # keep checking the grace time every round
@@ -264,6 +274,7 @@ class Arrangement:
                     if done is not None:
                         return done
                     live = self._live
+                    tr = self.tracer  # set_tracer() may have changed it
                 if now >= end:
                     return self._result("duration", EXIT_OK)
                 if tr is None and sim and not hooks:
