@@ -65,6 +65,12 @@ if TYPE_CHECKING:
 )
 @click.option("--view", is_flag=True, help="turtlesim: open a live window (needs pygame).")
 @click.option("--introspect", is_flag=True, help="At the end, print the nodes, topics and services on stderr.")
+@click.option(
+    "--web",
+    "web",
+    metavar="[HOST:]PORT",
+    help="Serve a live web view of the run (127.0.0.1 unless HOST is given; 0: a free port). Needs llfsm[web].",
+)
 def run(
     targets: tuple[str, ...],
     verbose: bool,
@@ -83,6 +89,7 @@ def run(
     image: str | None = None,
     view: bool = False,
     introspect: bool = False,
+    web: str | None = None,
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
@@ -120,7 +127,8 @@ def run(
         fail(f"--image {image}: the picture is written as .png or .svg")
     if (image or view) and "turtlesim" not in nodes:
         fail("--image and --view draw the turtle simulator: add --node turtlesim")
-    uses_bus = bool(nodes or remaps or params or echoes or introspect)
+    web_address = _web_address(web) if web is not None else None
+    uses_bus = bool(nodes or remaps or params or echoes or introspect or web)
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
     trace_out = None
     if trace_file:
@@ -149,8 +157,13 @@ def run(
             f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish (interrupt again to stop now)",
             err=True,
         )
-        with signals_handled(arr):
-            result = arr.run(duration, grace)
+        web_server = _start_web(web_address, arr, bus) if web_address is not None and bus is not None else None
+        try:
+            with signals_handled(arr):
+                result = arr.run(duration, grace)
+        finally:
+            if web_server is not None:
+                web_server.stop()
     finally:
         if trace_out is not None:
             trace_out.close()
@@ -202,6 +215,45 @@ def _start_bus(
         return bus
     finally:
         activate(prev)
+
+
+def _web_address(text: str) -> tuple[str, int]:
+    from ..web import INSTALL_HINT, WebUnavailable, server_class
+
+    try:
+        server_class()
+    except WebUnavailable:
+        fail(f"--web: {INSTALL_HINT}")
+    from ..web.server import AddressError, parse_address
+
+    try:
+        return parse_address(text)
+    except AddressError as e:
+        fail(str(e))
+
+
+def _start_web(address: tuple[str, int], arr: Any, bus: Bus) -> Any:
+    """--web: the page's server on its own thread, the bus up (so the machines' control
+    services exist), and a run that waits, rather than ends, when every machine is suspended:
+    the page can resume them."""
+    from ..runtime.context import activate
+    from ..web.server import AddressError, WebServer
+    from ..web.source import RunSource
+
+    prev = activate(arr.ctx)
+    try:
+        bus.init()
+        source = RunSource(arr, bus)
+    finally:
+        activate(prev)
+    arr.end_when_suspended = False
+    server = WebServer(source, *address)
+    try:
+        url = server.start()
+    except AddressError as e:
+        fail(str(e))
+    click.echo(f"llfsm: web view at {url}", err=True)
+    return server
 
 
 def _machines_on_graph(ctx: RunContext) -> None:
