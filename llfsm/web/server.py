@@ -144,13 +144,13 @@ class WebServer:
         app.router.add_get("/", self._index)
         app.router.add_get("/static/{name}", self._static)
         app.router.add_get("/ws", self._ws)
-        app.router.add_get("/favicon.ico", lambda request: web.Response(status=204))
+        app.router.add_get("/favicon.ico", _no_icon)
         app.router.add_post("/api/command", self._command)
         app.router.add_post("/api/publish", self._publish)
         app.router.add_post("/api/call", self._call)
-        self._runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        self._runner = web.AppRunner(app, access_log=None, handle_signals=False, shutdown_timeout=1.0)
         await self._runner.setup()
-        await web.SockSite(self._runner, sock, shutdown_timeout=1.0).start()
+        await web.SockSite(self._runner, sock).start()
         self._wake = asyncio.Event()
         self._pusher = asyncio.get_running_loop().create_task(self._push())
 
@@ -298,6 +298,10 @@ class WebServer:
         return await self._answer(
             request, lambda d: self.source.call(_text(d, "service"), _text(d, "type"), _text(d, "values"))
         )
+
+
+async def _no_icon(request: web.Request) -> web.Response:
+    return web.Response(status=204)
 
 
 def _text(data: dict[str, Any], key: str) -> str:

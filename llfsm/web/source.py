@@ -206,6 +206,9 @@ class RunSource:
         return {"success": True, "message": f"published on {name}", "yaml": to_yaml(msg)}
 
     def _publish(self, name: str, cls: Any, msg: Any) -> None:
+        if name not in self._readers:  # so the page shows this very message as the topic's last
+            self._asked.add(name)
+            self._watch(name, cls)
         pub = self._publishers.get(name)
         if pub is None:
             pub = self._publishers[name] = self.node.create_publisher(cls, name, 10)
