@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 PIP := $(PY) -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint fuzz bench clean msgs
+.PHONY: demo test lint fuzz bench clean msgs chromium
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -36,7 +36,16 @@ demo: $(VENV)/.installed
 lint: $(VENV)/.installed-dev
 	$(VENV)/bin/ruff check llfsm tests bench
 
-test: $(VENV)/.installed-dev lint
+# The web view's browser tests drive Debian's Chromium (Playwright never downloads a browser):
+# installed here where we can (root with apt-get); elsewhere those tests skip and say why.
+chromium:
+	@if command -v chromium >/dev/null 2>&1; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		(apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium) >/dev/null \
+			|| echo "make: could not install chromium: the browser tests will skip"; \
+	else echo "make: no chromium (apt-get install chromium as root): the browser tests will skip"; fi
+
+test: $(VENV)/.installed-dev lint chromium
 	$(PY) -m pytest -q
 
 fuzz: $(VENV)/.installed-dev

@@ -75,6 +75,8 @@ class WebServer:
         #: Required on any address but loopback.
         self.token = token if token is not None else (None if is_loopback(host) else secrets.token_urlsafe(18))
         self.clients: set[web.WebSocketResponse] = set()
+        #: Snapshots per second at most.
+        self.rate = RATE
         self.url = ""
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
@@ -244,7 +246,7 @@ class WebServer:
         last = ""
         assert self._wake is not None
         while True:
-            await asyncio.sleep(1 / RATE)
+            await asyncio.sleep(1 / self.rate)
             if not self.clients:
                 self._wake.clear()
                 await self._wake.wait()
