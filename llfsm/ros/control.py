@@ -127,6 +127,12 @@ class MachineGraph(Tracer):
             for verb in (SUSPEND, RESUME, RESTART):
                 node.create_service(Trigger, f"~/{verb}", self._service(m, verb))
             entry.listened = entry.state_pub.get_subscription_count() > 0
+        #: Readers in other processes come and go unannounced (a DDS transport): there, states
+        #: are always published, so the writer's kept sample is current for a late joiner.
+        self.always = bool(getattr(getattr(bus, "transport", None), "remote", False))
+        if self.always:
+            for entry in self.entries:
+                entry.listened = True
         self._update_tracer()
 
     # -- publishing -----------------------------------------------------------------------------
@@ -143,7 +149,7 @@ class MachineGraph(Tracer):
                 self._publish(entry, current)
             entry.listened = True
         else:
-            entry.listened = bool(topic.readers)
+            entry.listened = self.always or bool(topic.readers)
         self._update_tracer()
 
     def _update_tracer(self) -> None:

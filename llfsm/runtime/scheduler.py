@@ -69,6 +69,9 @@ class Arrangement:
         #: SPEC §2 ends a run whose machines are all suspended: nothing could resume them.  A run
         #: steered from outside (control services a page or another process calls) waits instead.
         self.end_when_suspended = True
+        #: Keep running rounds with no machine left (nodes on their own, SPEC 4): the run then
+        #: ends by an interrupt or --duration only.
+        self.serve_forever = False
         names = [c.NAME for c in classes]
         for n in names:
             if names.count(n) > 1:
@@ -215,8 +218,9 @@ class Arrangement:
         self._attention = False
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
         if not self._live:
-            return self._result("finished", EXIT_OK)
-        if self.end_when_suspended and all(m._suspended and m._pending is None for m in self._live):
+            if not self.serve_forever:
+                return self._result("finished", EXIT_OK)
+        elif self.end_when_suspended and all(m._suspended and m._pending is None for m in self._live):
             return self._result("suspended", EXIT_OK)
         if self._interrupts:
             self._attention = True  # keep checking the grace time every round
