@@ -60,127 +60,67 @@ class _TopicStats:
         self.rate = (count - c0) / (now - t0) if now - t0 >= 0.2 else self.rate
 
 
-class RunSource:
-    """The machines, topics, services and turtle world of the run in this process."""
+class Source:
+    """What both sources share: the page's node, topic readers and statistics, publishing and
+    service calls through the bus (on the scheduler's thread), and the machines' commands
+    through their control services."""
 
-    def __init__(self, arr: Arrangement, bus: Bus) -> None:
+    def __init__(self, bus: Bus, node_name: str) -> None:
         from ..ros.node import Node
 
-        self.arr = arr
         self.bus = bus
-        self.ctx = arr.ctx
-        self.clock = arr.clock
-        self.node: Node = Node("llfsm_web")  # on the scheduler's thread, before the run
-        self.descriptions = [description(type(m)) for m in arr.machines]
+        self.ctx = bus.ctx
+        self.clock = bus.clock
+        self.node: Node = Node(node_name)  # on the scheduler's thread, before the run
         self._readers: dict[str, Any] = {}
         self._asked: set[str] = set()
         self._stats: dict[str, _TopicStats] = {}
         self._publishers: dict[str, Any] = {}
         self._clients: dict[tuple[str, str], Any] = {}
-        self._last: list[tuple[int, int]] = [(-1, -1)] * len(arr.machines)
-        self._history: list[deque[dict[str, Any]]] = [deque(maxlen=HISTORY) for _ in arr.machines]
-        self._world_key: object = None
-        self._world_at = 0.0
-        self._world_svg: str | None = None
         self.ended = False
 
-    # -- what the page is sent ---------------------------------------------------------------------
+    # -- to be provided -----------------------------------------------------------------------------
     def machines(self) -> list[dict[str, Any]]:
-        return self.descriptions
+        """The machines' descriptions (llfsm.ros.control.description), in order."""
+        raise NotImplementedError
 
+    def machine_rows(self) -> list[dict[str, Any]]:
+        """Each machine's name, state, status, pending command, since, transitions."""
+        raise NotImplementedError
+
+    def topic_types(self) -> dict[str, Any]:
+        """Topic name -> message class (or None if llfsm has no class for it)."""
+        raise NotImplementedError
+
+    def service_types(self) -> dict[str, Any]:
+        """Service name -> service class (or None)."""
+        raise NotImplementedError
+
+    def world(self) -> str | None:
+        return None
+
+    def has_machine(self, name: str) -> bool:
+        return any(d["name"] == name for d in self.machines())
+
+    # -- what the page is sent ---------------------------------------------------------------------
     def sample(self) -> dict[str, Any]:
-        """A snapshot of the run (on the server's thread)."""
-        now_ns = self.clock.now
-        machines = []
-        for i, m in enumerate(self.arr.machines):
-            state, t0 = m._state, m._t0
-            if (state, t0) != self._last[i]:
-                prev = self._last[i][0]
-                if prev >= 0:
-                    self._history[i].appendleft(
-                        {"t": round(t0 / 1e9, 3), "from": m.STATES[prev], "to": m.STATES[state]}
-                    )
-                self._last[i] = (state, t0)
-            status = "finished" if m._finished else "suspended" if m._suspended else "running"
-            machines.append(
-                {
-                    "name": m.NAME,
-                    "state": m.STATES[state],
-                    "status": status,
-                    "pending": m._pending,
-                    "since": round(t0 / 1e9, 3),
-                    "transitions": list(self._history[i]),
-                }
-            )
+        """A snapshot (on the server's thread)."""
+        services = self.service_types()
         return {
-            "t": round(now_ns / 1e9, 3),
+            "t": round(self.clock.now / 1e9, 3),
             "clock": self.clock.kind,
             "ended": self.ended,
-            "machines": machines,
+            "machines": self.machine_rows(),
             "topics": self._topics(),
-            "services": [
-                {"name": name, "type": server.type._TYPE} for name, server in sorted(list(self.bus.services.items()))
-            ],
-            "world": self._world(),
+            "services": [{"name": n, "type": t._TYPE if t is not None else ""} for n, t in sorted(services.items())],
+            "world": self.world(),
         }
-
-    def _topics(self) -> list[dict[str, Any]]:
-        wall = time.monotonic()
-        out = []
-        for name, topic in sorted(list(self.bus.topics.items())):
-            entry: dict[str, Any] = {"name": name, "type": topic.type._TYPE}
-            if name.startswith(NAMESPACE + "/"):
-                entry.update(count=None, rate=None, last="(the machines' diagrams show it)")
-                out.append(entry)
-                continue
-            reader = self._readers.get(name)
-            if reader is None:
-                if name not in self._asked:
-                    self._asked.add(name)
-                    self.bus.call_soon_threadsafe(lambda n=name, t=topic.type: self._watch(n, t))
-                entry.update(count=0, rate=0.0, last="")
-            else:
-                stats = self._stats.setdefault(name, _TopicStats())
-                count = max(reader.count, topic.published)  # published: also before the page's reader came
-                stats.update(wall, count)
-                if count != stats.last_count:
-                    stats.last_count = count
-                    latest = reader.latest
-                    stats.text = to_yaml(latest) if latest is not None else ""
-                entry.update(count=count, rate=round(stats.rate, 2), last=stats.text)
-            out.append(entry)
-        return out
-
-    def _watch(self, name: str, type_: Any) -> None:
-        """(scheduler thread) A PULL reader for the page: counts messages, keeps the newest."""
-        self._readers[name] = self.node.create_subscription(type_, name, None, 1)
-
-    def _world(self) -> str | None:
-        sim = self.ctx.extras.get("turtlesim")
-        if sim is None:
-            return None
-        world = sim.world
-        wall = time.monotonic()
-        if self._world_svg is not None and wall - self._world_at < WORLD_PERIOD:
-            return self._world_svg
-        try:
-            key = (world.raster_version, tuple(world.turtle_pixels()), world.background)
-            if key != self._world_key or self._world_svg is None:
-                from ..sim.draw import svg_text
-
-                text = svg_text(world)
-                self._world_svg = text[text.index("<svg") :]
-                self._world_key = key
-        except RuntimeError:  # the scheduler changed the world while it was drawn: next time
-            pass
-        self._world_at = wall
-        return self._world_svg
 
     # -- what the page asks for ------------------------------------------------------------------------
     async def command(self, machine: str, verb: str) -> dict[str, Any]:
         if verb not in ("suspend", "resume", "restart"):
             raise CommandError(f"unknown command {verb!r}: suspend, resume or restart")
-        if machine not in self.arr.by_name:
+        if not self.has_machine(machine):
             raise CommandError(f"no machine named {machine!r} in this run")
         response = await self._call(f"{NAMESPACE}/{machine}/{verb}", "std_srvs/srv/Trigger", "")
         return {"success": response.success, "message": response.message}
@@ -192,13 +132,13 @@ class RunSource:
             name = expand(topic.strip(), "llfsm_web", "/")
         except Exception as e:  # InvalidNameError and friends: one line
             raise CommandError(str(e)) from None
-        existing = self.bus.topics.get(name)
+        existing = self.topic_types().get(name)
         if type_name.strip():
             cls = values.resolve_type(type_name, "msg")
-            if existing is not None and existing.type is not cls:
-                raise CommandError(f"{name} carries {existing.type._TYPE}, not {cls._TYPE}")
+            if existing is not None and existing is not cls:
+                raise CommandError(f"{name} carries {existing._TYPE}, not {cls._TYPE}")
         elif existing is not None:
-            cls = existing.type
+            cls = existing
         else:
             raise CommandError(f"{name} does not exist yet: give its type, such as std_msgs/msg/String")
         msg = values.message(cls, text)
@@ -225,15 +165,15 @@ class RunSource:
             name = expand(service, "llfsm_web", "/")
         except Exception as e:
             raise CommandError(str(e)) from None
-        server = self.bus.services.get(name)
+        known = self.service_types().get(name)
         if type_name.strip():
             srv = values.resolve_type(type_name, "srv")
-            if server is not None and server.type is not srv:
-                raise CommandError(f"{name} is a {server.type._TYPE} service, not {srv._TYPE}")
-        elif server is not None:
-            srv = server.type
+            if known is not None and known is not srv:
+                raise CommandError(f"{name} is a {known._TYPE} service, not {srv._TYPE}")
+        elif known is not None:
+            srv = known
         else:
-            raise CommandError(f"no service {name} in this run")
+            raise CommandError(f"no service {name} is known: give its type, such as std_srvs/srv/Trigger")
         req = values.request(srv, text)
         done: ThreadFuture[Any] = ThreadFuture()
 
@@ -255,6 +195,113 @@ class RunSource:
         if self.ended:
             raise CommandError("the run has ended")
         self.bus.call_soon_threadsafe(fn)
+
+    def _topics(self) -> list[dict[str, Any]]:
+        wall = time.monotonic()
+        out = []
+        for name, type_ in sorted(self.topic_types().items()):
+            entry: dict[str, Any] = {"name": name, "type": type_._TYPE if type_ is not None else ""}
+            if name.startswith(NAMESPACE + "/"):
+                entry.update(count=None, rate=None, last="(the machines' diagrams show it)")
+                out.append(entry)
+                continue
+            reader = self._readers.get(name)
+            if reader is None:
+                if name not in self._asked and type_ is not None:
+                    self._asked.add(name)
+                    self.bus.call_soon_threadsafe(lambda n=name, t=type_: self._watch(n, t))
+                entry.update(count=0, rate=0.0, last="")
+            else:
+                stats = self._stats.setdefault(name, _TopicStats())
+                count = max(reader.count, self._published(name))
+                stats.update(wall, count)
+                if count != stats.last_count:
+                    stats.last_count = count
+                    latest = reader.latest
+                    stats.text = to_yaml(latest) if latest is not None else ""
+                entry.update(count=count, rate=round(stats.rate, 2), last=stats.text)
+            out.append(entry)
+        return out
+
+    def _published(self, name: str) -> int:
+        """Messages published on the topic in this process (also before the page's reader came)."""
+        topic = self.bus.topics.get(name)
+        return topic.published if topic is not None else 0
+
+    def _watch(self, name: str, type_: Any) -> None:
+        """(scheduler thread) A PULL reader for the page: counts messages, keeps the newest."""
+        self._readers[name] = self.node.create_subscription(type_, name, None, 1)
+
+
+class RunSource(Source):
+    """The machines, topics, services and turtle world of the run in this process."""
+
+    def __init__(self, arr: Arrangement, bus: Bus) -> None:
+        super().__init__(bus, "llfsm_web")
+        self.arr = arr
+        self.descriptions = [description(type(m)) for m in arr.machines]
+        self._last: list[tuple[int, int]] = [(-1, -1)] * len(arr.machines)
+        self._history: list[deque[dict[str, Any]]] = [deque(maxlen=HISTORY) for _ in arr.machines]
+        self._world_key: object = None
+        self._world_at = 0.0
+        self._world_svg: str | None = None
+
+    def machines(self) -> list[dict[str, Any]]:
+        return self.descriptions
+
+    def has_machine(self, name: str) -> bool:
+        return name in self.arr.by_name
+
+    def topic_types(self) -> dict[str, Any]:
+        return {name: topic.type for name, topic in list(self.bus.topics.items())}
+
+    def service_types(self) -> dict[str, Any]:
+        return {name: server.type for name, server in list(self.bus.services.items())}
+
+    def machine_rows(self) -> list[dict[str, Any]]:
+        machines = []
+        for i, m in enumerate(self.arr.machines):
+            state, t0 = m._state, m._t0
+            if (state, t0) != self._last[i]:
+                prev = self._last[i][0]
+                if prev >= 0:
+                    self._history[i].appendleft(
+                        {"t": round(t0 / 1e9, 3), "from": m.STATES[prev], "to": m.STATES[state]}
+                    )
+                self._last[i] = (state, t0)
+            status = "finished" if m._finished else "suspended" if m._suspended else "running"
+            machines.append(
+                {
+                    "name": m.NAME,
+                    "state": m.STATES[state],
+                    "status": status,
+                    "pending": m._pending,
+                    "since": round(t0 / 1e9, 3),
+                    "transitions": list(self._history[i]),
+                }
+            )
+        return machines
+
+    def world(self) -> str | None:
+        sim = self.ctx.extras.get("turtlesim")
+        if sim is None:
+            return None
+        world = sim.world
+        wall = time.monotonic()
+        if self._world_svg is not None and wall - self._world_at < WORLD_PERIOD:
+            return self._world_svg
+        try:
+            key = (world.raster_version, tuple(world.turtle_pixels()), world.background)
+            if key != self._world_key or self._world_svg is None:
+                from ..sim.draw import svg_text
+
+                text = svg_text(world)
+                self._world_svg = text[text.index("<svg") :]
+                self._world_key = key
+        except RuntimeError:  # the scheduler changed the world while it was drawn: next time
+            pass
+        self._world_at = wall
+        return self._world_svg
 
 
 def _settle(done: ThreadFuture[Any], fut: Any) -> None:
