@@ -182,6 +182,8 @@ def run(
         else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
             arr.serve_forever = True
             grace = 0
+        if transport != "inproc":  # other processes can resume machines (SPEC 8): all suspended is no end
+            arr.end_when_suspended = False
         web_server = _start_web(web_address, arr, bus) if web_address is not None and bus is not None else None
         try:
             with signals_handled(arr):

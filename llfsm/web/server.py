@@ -223,6 +223,9 @@ class WebServer:
             "snapshot": snap,
         }
 
+    def _machine_names(self) -> tuple[str, ...]:
+        return tuple(d["name"] for d in self.source.machines())
+
     def _snapshot(self) -> dict[str, Any]:
         return {"type": "snapshot", **self.source.sample()}
 
@@ -245,6 +248,7 @@ class WebServer:
         """Sample and push at most RATE times a second, only while a page is connected."""
         last = ""
         assert self._wake is not None
+        machines = self._machine_names()
         while True:
             await asyncio.sleep(1 / self.rate)
             if not self.clients:
@@ -252,6 +256,10 @@ class WebServer:
                 await self._wake.wait()
                 last = ""
                 continue
+            names = self._machine_names()
+            if names != machines:  # machines came (llfsm view): the pages draw them afresh
+                machines = names
+                await self._broadcast(self._hello())
             text = dumps(self._snapshot())
             if text != last:
                 last = text

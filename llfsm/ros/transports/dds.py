@@ -190,6 +190,7 @@ class _Writer(_Endpoint):
         )
         self.writers = (self.writer,)
         self.matched = 0
+        self.keeps = pub.transient_local  # the writer keeps its last samples for readers still to come
         self.writer.set_status_mask(DDSStatus.PublicationMatched)
         self.token = t.waits.attach(self.writer, self)
         t.add_endpoint(self)
@@ -198,7 +199,7 @@ class _Writer(_Endpoint):
         self.matched = self.writer.get_publication_matched_status().current_count
 
     def write(self, msg: Message) -> None:
-        if self.matched:  # nobody elsewhere: skip the serialisation (volatile: nothing is kept)
+        if self.matched or self.keeps:  # nobody elsewhere: skip the serialisation (volatile: nothing is kept)
             _write(self.writer, self.cdr(msg))
 
     def subscription_count(self) -> int:
