@@ -48,7 +48,7 @@ TIMEOUT_MS = 15_000
 class LiveRun:
     """`llfsm run ... --web` in a subprocess: its URL, and its stdout collected as it comes."""
 
-    def __init__(self, cache: Path, *extra: str) -> None:
+    def __init__(self, cache: Path, *extra: str, machines: tuple[str, ...] = (MACHINE,)) -> None:
         env = {**os.environ, "LLFSM_CACHE_DIR": str(cache), "PYTHONUNBUFFERED": "1"}
         self.proc = subprocess.Popen(
             [
@@ -58,7 +58,7 @@ class LiveRun:
                 "run",
                 "--clock",
                 "wall",
-                str(MACHINES / f"{MACHINE}.machine"),
+                *(str(MACHINES / f"{m}.machine") for m in machines),
                 "--web",
                 "127.0.0.1:0",
                 "--duration",
@@ -210,12 +210,23 @@ def test_calling_the_suspend_service_from_the_service_form_and_the_page_follows(
     page.wait_for_selector(f'article[data-machine="{MACHINE}"][data-status="running"]')
 
 
-def test_screenshot_of_the_page(page: Any) -> None:
-    """docs/images/view.png: the picture docs/view.md shows (look at it after a change)."""
-    page.wait_for_selector(_current("WAIT_AND_COUNT"))
-    _until(lambda: page.locator(".transitions li").count() >= 4)
-    out = REPO / "docs" / "images" / "view.png"
-    page.screenshot(path=str(out), full_page=True)
+def test_screenshot_of_the_page(browser: Any, tmp_path: Path) -> None:
+    """docs/images/view.png: the picture docs/view.md shows (look at it after a change): the
+    seed's suspend/resume pair driving the blind turtle bot in turtlesim."""
+    run = LiveRun(tmp_path, "--node", "turtlesim", machines=("ros2_turtle_suspend_resume", "ros2_blind_turtle_bot"))
+    try:
+        p = browser.new_page(viewport={"width": 1400, "height": 900})
+        p.set_default_timeout(TIMEOUT_MS)
+        p.goto(run.url)
+        p.wait_for_selector("#world svg .turtle")
+        p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="suspended"]')
+        p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="running"]')
+        _until(lambda: p.locator('article[data-machine="ros2_blind_turtle_bot"] .transitions li').count() >= 5)
+        out = REPO / "docs" / "images" / "view.png"
+        p.screenshot(path=str(out), full_page=True)
+        p.close()
+    finally:
+        run.stop()
     data = out.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
 

@@ -202,7 +202,7 @@ class Source:
         for name, type_ in sorted(self.topic_types().items()):
             entry: dict[str, Any] = {"name": name, "type": type_._TYPE if type_ is not None else ""}
             if name.startswith(NAMESPACE + "/"):
-                entry.update(count=None, rate=None, last="(the machines' diagrams show it)")
+                entry.update(count=None, rate=None, last="a machine's state or description: the diagrams show it")
                 out.append(entry)
                 continue
             reader = self._readers.get(name)

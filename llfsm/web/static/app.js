@@ -91,6 +91,7 @@ function updateTopics(topics) {
       el("td", t.count === null ? "—" : String(t.count), "num count"),
       el("td", t.rate === null ? "—" : `${t.rate.toFixed(1)} Hz`, "num rate"));
     rows.push(tr);
+    if (t.count === null) { tr.className = "last"; tr.title = t.last; continue; } // /llfsm/...: the diagrams show it
     const last = el("tr", null, "last");
     last.dataset.topic = t.name;
     const td = el("td");
