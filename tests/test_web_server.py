@@ -201,3 +201,34 @@ def test_web_without_aiohttp_says_what_to_install(monkeypatch: pytest.MonkeyPatc
 def test_a_bad_web_address_is_a_usage_error(tmp_path: Path) -> None:
     r = llfsm("run", "--clock", "sim", str(PING_PONG), "--web", "localhost:http", "--duration", "1ms")
     assert r.status == 2 and "expected [HOST:]PORT" in r.stderr
+
+
+def test_the_run_is_sampled_only_while_a_page_is_connected(server: WebServer) -> None:
+    """A closed tab costs the run nothing: no page, no sampling (the scheduler never does any)."""
+    import asyncio
+    import time
+
+    import aiohttp
+
+    calls = {"n": 0}
+    sample = server.source.sample
+
+    def counting() -> dict:
+        calls["n"] += 1
+        return sample()
+
+    server.source.sample = counting  # type: ignore[method-assign]
+
+    async def visit() -> list[str]:
+        kinds = []
+        async with aiohttp.ClientSession() as s, s.ws_connect(f"ws://127.0.0.1:{server.port}/ws") as ws:
+            for _ in range(2):
+                kinds.append(json.loads((await ws.receive()).data)["type"])
+        return kinds
+
+    assert asyncio.run(visit())[0] == "hello"
+    time.sleep(0.3)  # the server notices the page has gone
+    after_close = calls["n"]
+    time.sleep(0.6)  # a dozen push periods
+    assert calls["n"] == after_close
+    assert not server.clients
