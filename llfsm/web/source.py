@@ -241,6 +241,7 @@ class RunSource(Source):
         self.arr = arr
         self.descriptions = [description(type(m)) for m in arr.machines]
         self._last: list[tuple[int, int]] = [(-1, -1)] * len(arr.machines)
+        self._since: list[int] = [0] * len(arr.machines)
         self._history: list[deque[dict[str, Any]]] = [deque(maxlen=HISTORY) for _ in arr.machines]
         self._world_key: object = None
         self._world_at = 0.0
@@ -259,16 +260,26 @@ class RunSource(Source):
         return {name: server.type for name, server in list(self.bus.services.items())}
 
     def machine_rows(self) -> list[dict[str, Any]]:
+        """Each machine as sampled now.  A change of state is a transition for the page's list;
+        its time is the entry time the machine recorded (`_t0`) once that is newer than the
+        last one seen, else the sample's run time (the target's entry is still to come, or the
+        state keeps no entry time)."""
+        now = self.clock.now
         machines = []
         for i, m in enumerate(self.arr.machines):
             state, t0 = m._state, m._t0
-            if (state, t0) != self._last[i]:
-                prev = self._last[i][0]
+            prev, prev_t0 = self._last[i]
+            if state != prev:
+                since = t0 if t0 > prev_t0 else now
                 if prev >= 0:
                     self._history[i].appendleft(
-                        {"t": round(t0 / 1e9, 3), "from": m.STATES[prev], "to": m.STATES[state]}
+                        {"t": round(since / 1e9, 3), "from": m.STATES[prev], "to": m.STATES[state]}
                     )
+                self._last[i] = (state, max(t0, prev_t0))
+                self._since[i] = since
+            elif t0 > prev_t0:  # the entry was recorded since (or the state was entered again)
                 self._last[i] = (state, t0)
+                self._since[i] = t0
             status = "finished" if m._finished else "suspended" if m._suspended else "running"
             machines.append(
                 {
@@ -276,7 +287,7 @@ class RunSource(Source):
                     "state": m.STATES[state],
                     "status": status,
                     "pending": m._pending,
-                    "since": round(t0 / 1e9, 3),
+                    "since": round(self._since[i] / 1e9, 3),
                     "transitions": list(self._history[i]),
                 }
             )
