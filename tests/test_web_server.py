@@ -232,3 +232,25 @@ def test_the_run_is_sampled_only_while_a_page_is_connected(server: WebServer) ->
     time.sleep(0.6)  # a dozen push periods
     assert calls["n"] == after_close
     assert not server.clients
+
+
+def test_the_page_tells_running_suspended_and_finished_machines_apart(tmp_path: Path) -> None:
+    from conftest import write_machine
+
+    quick = write_machine(tmp_path, "quick", {"A": [("END", "after_ms(2)")], "END": None})
+    slow = write_machine(tmp_path, "slow", {"A": [("B", "after_ms(1)")], "B": [("A", "after_ms(1)")]})
+    idle = write_machine(tmp_path, "idle", {"A": [("END", "False")], "END": None})
+    ctx = RunContext(SimClock())
+    prev = activate(ctx)
+    try:
+        arr = Arrangement([load(str(m)) for m in (quick, slow, idle)], context=ctx, suspended=["idle"])
+        ros.init()
+        enable(ctx)
+        source = RunSource(arr, ros.bus_of())
+        arr.run(duration_ns=10_000_000)
+        rows = {r["name"]: r for r in source.machine_rows()}
+    finally:
+        activate(prev)
+    assert (rows["quick"]["status"], rows["quick"]["state"]) == ("finished", "END")
+    assert (rows["idle"]["status"], rows["idle"]["state"]) == ("suspended", "SUSPENDED")
+    assert rows["slow"]["status"] == "running" and rows["slow"]["state"] in ("A", "B")
