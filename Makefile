@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 PIP := $(PY) -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint fuzz bench clean msgs ros-venv
+.PHONY: demo test lint fuzz bench clean msgs ros-venv chromium
 
 # Real ROS 2 for the interop tests (pytest -m interop): rclpy, message packages and Fast DDS as
 # wheels from PyPI, in a virtualenv of their own (they bring numpy, lark, empy...).  There is
@@ -43,6 +43,15 @@ demo: $(VENV)/.installed
 lint: $(VENV)/.installed-dev
 	$(VENV)/bin/ruff check llfsm tests bench
 
+# The web view's browser tests drive Debian's Chromium (Playwright never downloads a browser):
+# installed here where we can (root with apt-get); elsewhere those tests skip and say why.
+chromium:
+	@if command -v chromium >/dev/null 2>&1; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		(apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium) >/dev/null \
+			|| echo "make: could not install chromium: the browser tests will skip"; \
+	else echo "make: no chromium (apt-get install chromium as root): the browser tests will skip"; fi
+
 $(VENV_ROS)/.installed: Makefile
 	$(PYTHON) -m venv $(VENV_ROS)
 	$(VENV_ROS)/bin/python -m pip --disable-pip-version-check -q install $(ROS_WHEELS)
@@ -53,7 +62,7 @@ $(VENV_ROS)/.installed: Makefile
 ros-venv:
 	@$(MAKE) --no-print-directory $(VENV_ROS)/.installed || echo "warning: $(VENV_ROS) not installed: interop tests will be skipped"
 
-test: $(VENV)/.installed-dev lint ros-venv
+test: $(VENV)/.installed-dev lint ros-venv chromium
 	$(PY) -m pytest -q
 
 fuzz: $(VENV)/.installed-dev

@@ -66,6 +66,12 @@ if TYPE_CHECKING:
 @click.option("--view", is_flag=True, help="turtlesim: open a live window (needs pygame).")
 @click.option("--introspect", is_flag=True, help="At the end, print the nodes, topics and services on stderr.")
 @click.option(
+    "--web",
+    "web",
+    metavar="[HOST:]PORT",
+    help="Serve a live web view of the run (127.0.0.1 unless HOST is given; 0: a free port). Needs llfsm[web].",
+)
+@click.option(
     "--transport",
     type=click.Choice(["inproc", "dds"]),
     default="inproc",
@@ -92,6 +98,7 @@ def run(
     image: str | None = None,
     view: bool = False,
     introspect: bool = False,
+    web: str | None = None,
     transport: str = "inproc",
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
@@ -140,9 +147,10 @@ def run(
         fail("--image and --view draw the turtle simulator: add --node turtlesim")
     if view and (why := _no_display()) is not None:
         fail(why)
+    web_address = _web_address(web) if web is not None else None
     if transport != "inproc":
         ctx.extras["transport"] = _open_transport(transport)
-    uses_bus = bool(nodes or remaps or params or echoes or introspect or transport != "inproc")
+    uses_bus = bool(nodes or remaps or params or echoes or introspect or web or transport != "inproc")
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
     trace_out = None
     if trace_file:
@@ -166,6 +174,7 @@ def run(
                 raise
             click.echo(rep.format(), nl=False, err=True)
             sys.exit(EXIT_ERRORS)
+        _machines_on_graph(ctx)
         if classes:
             arr.on_interrupt = lambda grace: click.echo(
                 f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish "
@@ -175,8 +184,15 @@ def run(
         else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
             arr.serve_forever = True
             grace = 0
-        with signals_handled(arr):
-            result = arr.run(duration, grace)
+        if transport != "inproc":  # other processes can resume machines (SPEC 8): all suspended is no end
+            arr.end_when_suspended = False
+        web_server = _start_web(web_address, arr, bus) if web_address is not None and bus is not None else None
+        try:
+            with signals_handled(arr):
+                result = arr.run(duration, grace)
+        finally:
+            if web_server is not None:
+                web_server.stop()
     finally:
         # a named output that could not be written whole is an error, never a silent success
         failed_outputs: list[str] = list(ctx.extras.get("output_errors", ()))
@@ -232,7 +248,7 @@ def _start_bus(
         except (InvalidNameError, ValueError) as e:
             fail(str(e))
         if nodes:
-            bus.initialised = True  # the nodes are up: ros.ok() is true from the first round
+            bus.init()  # the nodes are up: ros.ok() is true from the first round
         options = NodeOptions(image=Path(image) if image else None, view=view)
         for name in dict.fromkeys(nodes):
             try:
@@ -255,6 +271,64 @@ def _no_display() -> str | None:
         "--view opens a window, but there is no display (neither DISPLAY nor WAYLAND_DISPLAY is set); "
         "use --image FILE.png for a picture, or SDL_VIDEODRIVER=dummy to draw off-screen on purpose"
     )
+
+
+def _web_address(text: str) -> tuple[str, int]:
+    from ..web import INSTALL_HINT, WebUnavailable, server_class
+
+    try:
+        server_class()
+    except WebUnavailable:
+        fail(f"--web: {INSTALL_HINT}")
+    from ..web.server import AddressError, parse_address
+
+    try:
+        return parse_address(text)
+    except AddressError as e:
+        fail(str(e))
+
+
+def _start_web(address: tuple[str, int], arr: Any, bus: Bus) -> Any:
+    """--web: the page's server on its own thread, the bus up (so the machines' control
+    services exist), and a run that waits, rather than ends, when every machine is suspended:
+    the page can resume them."""
+    from ..runtime.context import activate
+    from ..web.server import AddressError, WebServer
+    from ..web.source import RunSource
+
+    prev = activate(arr.ctx)
+    try:
+        bus.init()
+        source = RunSource(arr, bus)
+    finally:
+        activate(prev)
+    arr.end_when_suspended = False
+    server = WebServer(source, *address)
+    try:
+        url = server.start()
+    except AddressError as e:
+        fail(str(e))
+    click.echo(f"llfsm: web view at {url}", err=True)
+    return server
+
+
+def _machines_on_graph(ctx: RunContext) -> None:
+    """SPEC §8: the machines' state topics and control services join the graph with the bus
+    (now if it is up, else at the first `ros.init()`); a run that never uses the bus never
+    imports it."""
+    bus = ctx.extras.get("bus")
+    if bus is not None and bus.initialised:
+        from ..ros.control import enable
+
+        enable(ctx)
+    else:
+        ctx.extras.setdefault("on_init", []).append(lambda bus: _enable(ctx))
+
+
+def _enable(ctx: RunContext) -> None:
+    from ..ros.control import enable
+
+    enable(ctx)
 
 
 def _graph_text(graph: dict[str, Any]) -> str:

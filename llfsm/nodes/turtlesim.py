@@ -95,6 +95,7 @@ class Turtlesim:
         self.node.create_service(Empty, "reset", self.reset)
         self.node.create_timer(UPDATE_PERIOD, self.update)
         self.viewer: Any = None
+        ctx.extras["turtlesim"] = self  # the web view draws self.world live
         if options.view:
             try:
                 from ..sim.view import Viewer

@@ -110,7 +110,7 @@ class Future:
 class Topic:
     """A named channel: its type and the readers attached to it."""
 
-    __slots__ = ("name", "published", "publishers", "readers", "type")
+    __slots__ = ("latched", "name", "on_readers", "published", "publishers", "readers", "type")
 
     def __init__(self, name: str, type_: type[Message]) -> None:
         self.name = name
@@ -118,6 +118,11 @@ class Topic:
         self.readers: list[Subscription] = []
         self.publishers = 0
         self.published = 0
+        #: What TRANSIENT_LOCAL publishers kept for late subscribers: publisher -> last messages.
+        self.latched: dict[Any, deque[Message]] = {}
+        #: Called as fn(topic, joining) when a subscription is about to join (True) or has left
+        #: (False): lets a publisher publish only while someone listens (llfsm.ros.control).
+        self.on_readers: list[Callable[[Topic, bool], None]] = []
 
 
 class _Request:
@@ -133,6 +138,18 @@ class _Request:
         if server is None or self.future.done():
             return  # no server (any more): the future stays pending; spin_until_future_complete says TIMEOUT
         server._serve(self.request, self.future)
+
+
+class _Call:
+    """A function queued from another thread (`Bus.call_soon_threadsafe`)."""
+
+    __slots__ = ("fn",)
+
+    def __init__(self, fn: Callable[[], object]) -> None:
+        self.fn = fn
+
+    def _run(self) -> None:
+        self.fn()
 
 
 class Bus:
@@ -165,6 +182,22 @@ class Bus:
         ctx.between_rounds.append(self.spin_some)
 
     # -- lifecycle ---------------------------------------------------------------------------
+    def init(self) -> None:
+        """Initialise (the first `ros.init()`, or the command line before nodes start); then
+        run the run's on-init hooks once (`ctx.extras["on_init"]`: the machines' state topics
+        and control services join the graph with the first node, never in a run without one)."""
+        if self.initialised:
+            return
+        self.initialised = True
+        for fn in self.ctx.extras.pop("on_init", ()):
+            fn(self)
+
+    def call_soon_threadsafe(self, fn: Callable[[], object]) -> None:
+        """Run fn() on the scheduler's thread, between rounds (or inside a spin call), in the
+        order of the calls.  The one door for other threads (the web view's server) into the
+        bus: deque.append is atomic, and the executor drains `ready` anyway."""
+        self.ready.append(_Call(fn))
+
     def ok(self) -> bool:
         return self.initialised and not self.shut and not self.ctx.interrupted
 

@@ -14,11 +14,32 @@ from .bus import Bus, Future, bus_of
 from .names import expand, normalise_namespace, remap_name, remap_node, validate_node_name
 
 
-class QoSProfile:
-    """Only the history depth matters in process; accepted wherever rclpy takes a QoS."""
+class DurabilityPolicy(IntEnum):
+    """rclpy's durability policies.  TRANSIENT_LOCAL: a publisher keeps its last `depth`
+    messages and hands them to subscriptions that join later (and ask for TRANSIENT_LOCAL too),
+    as a latched topic does; VOLATILE (the default): a late subscription gets only new messages."""
 
-    def __init__(self, depth: int = 10, **_ignored: Any) -> None:
+    SYSTEM_DEFAULT = 0
+    TRANSIENT_LOCAL = 1
+    VOLATILE = 2
+
+
+QoSDurabilityPolicy = DurabilityPolicy  # rclpy's older name
+
+
+class QoSProfile:
+    """The history depth and the durability matter in process; other policies are accepted
+    wherever rclpy takes them and ignored (the in-process bus is always reliable)."""
+
+    def __init__(
+        self, depth: int = 10, *, durability: DurabilityPolicy = DurabilityPolicy.VOLATILE, **_ignored: Any
+    ) -> None:
         self.depth = depth
+        self.durability = DurabilityPolicy(durability)
+
+
+def _transient_local(qos: int | QoSProfile) -> bool:
+    return isinstance(qos, QoSProfile) and qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
 
 
 def _depth(qos: int | QoSProfile, where: str) -> int:
@@ -38,6 +59,9 @@ def _type_name(obj: object) -> str:
 
 class Publisher:
     __slots__ = ("_bus", "_destroyed", "_remote", "_topic", "_type", "depth", "msg_type", "node", "topic_name")
+
+    #: TRANSIENT_LOCAL (see _LatchingPublisher): a transport gives its writer that durability.
+    transient_local = False
 
     def __init__(self, node: Node, msg_type: type[Message], topic: str, depth: int = 10) -> None:
         self._bus = node._bus
@@ -70,8 +94,28 @@ class Publisher:
         if not self._destroyed:
             self._destroyed = True
             self._topic.publishers -= 1
+            self._topic.latched.pop(self, None)
             if self._remote is not None:
                 self._remote.close()
+
+
+class _LatchingPublisher(Publisher):
+    """A TRANSIENT_LOCAL publisher: also keeps its last `depth` messages on the topic, for
+    subscriptions that join later (a DDS transport gives its writer the same durability).
+    A subclass, so volatile publishers pay nothing for it."""
+
+    __slots__ = ()
+    transient_local = True
+
+    def __init__(self, node: Node, msg_type: type[Message], topic: str, depth: int) -> None:
+        super().__init__(node, msg_type, topic, depth)
+        self._topic.latched[self] = deque(maxlen=depth)
+
+    def publish(self, msg: Message) -> None:
+        super().publish(msg)
+        kept = self._topic.latched.get(self)
+        if kept is not None:
+            kept.append(msg._copy())
 
 
 class Subscription:
@@ -94,10 +138,17 @@ class Subscription:
         "msg_type",
         "node",
         "topic_name",
+        "transient_local",
     )
 
     def __init__(
-        self, node: Node, msg_type: type[Message], topic: str, callback: Callable[[Any], Any] | None, depth: int
+        self,
+        node: Node,
+        msg_type: type[Message],
+        topic: str,
+        callback: Callable[[Any], Any] | None,
+        depth: int,
+        transient_local: bool = False,
     ) -> None:
         self._bus = node._bus
         self.topic_name = node.resolve_topic_name(topic)
@@ -110,9 +161,17 @@ class Subscription:
         self._queue: deque[Any] = deque(maxlen=depth)
         self._scheduled = False
         self._destroyed = False
-        self._topic.readers.append(self)
+        topic = self._topic
+        for fn in topic.on_readers:  # before joining: a latched value can still be brought up to date
+            fn(topic, True)
+        topic.readers.append(self)
+        if transient_local:  # a late joiner gets what TRANSIENT_LOCAL publishers kept, oldest first
+            for kept in list(topic.latched.values()):
+                for msg in kept:
+                    self._deliver(msg._copy())
         self.node = node
         self.depth = depth
+        self.transient_local = transient_local
         self._remote = node._bus.transport.subscription(self)  # brings in other processes' messages
 
     def _deliver(self, msg: Any) -> None:
@@ -147,7 +206,10 @@ class Subscription:
     def destroy(self) -> None:
         if not self._destroyed:
             self._destroyed = True
-            self._topic.readers.remove(self)
+            topic = self._topic
+            topic.readers.remove(self)
+            for fn in topic.on_readers:
+                fn(topic, False)
             if self._remote is not None:
                 self._remote.close()
 
@@ -464,7 +526,11 @@ class Node:
         self._check()
         if not is_message_class(msg_type):
             raise TypeError(f"create_publisher(): msg_type must be a message class such as Twist, not {msg_type!r}")
-        pub = Publisher(self, msg_type, topic, _depth(qos_profile, "create_publisher()"))
+        depth = _depth(qos_profile, "create_publisher()")
+        if _transient_local(qos_profile):
+            pub: Publisher = _LatchingPublisher(self, msg_type, topic, depth)
+        else:
+            pub = Publisher(self, msg_type, topic, depth)
         self._entities.append(pub)
         self._bus.transport.node_changed(self)
         return pub
@@ -482,7 +548,8 @@ class Node:
             raise TypeError(f"create_subscription(): msg_type must be a message class such as Twist, not {msg_type!r}")
         if callback is not None and not callable(callback):
             raise TypeError("create_subscription(): callback must be callable, or None for a PULL reader")
-        sub = Subscription(self, msg_type, topic, callback, _depth(qos_profile, "create_subscription()"))
+        depth = _depth(qos_profile, "create_subscription()")
+        sub = Subscription(self, msg_type, topic, callback, depth, _transient_local(qos_profile))
         self._entities.append(sub)
         self._bus.transport.node_changed(self)
         return sub

@@ -77,6 +77,9 @@ class Arrangement:
         self.rounds = 0
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
+        #: SPEC §2 ends a run whose machines are all suspended: nothing could resume them.  A run
+        #: steered from outside (control services a page or another process calls) waits instead.
+        self.end_when_suspended = True
         #: Keep running rounds with no machine left (nodes on their own, SPEC 4): the run then
         #: ends by an interrupt or --duration only.
         self.serve_forever = False
@@ -132,6 +135,13 @@ class Arrangement:
             self.tracer.command("suspend", m, m.SUSPENDED)
             self.tracer.entry(m, m.SUSPENDED)
         m.RINGLETS[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
+        self._attention = True
+
+    def set_tracer(self, tracer: Tracer | None) -> None:
+        """Change the tracer during a run (from the scheduler's thread): the round loop picks
+        it up before its next round.  How state topics get their events only while someone
+        listens: the plain loop runs otherwise."""
+        self.tracer = tracer
         self._attention = True
 
     # -- control commands -------------------------------------------------------------------
@@ -225,7 +235,7 @@ class Arrangement:
         if not self._live:
             if not self.serve_forever:
                 return self._result("finished", EXIT_OK)
-        elif all(m._suspended and m._pending is None for m in self._live):
+        elif self.end_when_suspended and all(m._suspended and m._pending is None for m in self._live):
             return self._result("suspended", EXIT_OK)
         if self._interrupts:
             self._attention = True  # keep checking the grace time every round
@@ -299,6 +309,7 @@ class Arrangement:
                     if done is not None:
                         return done
                     live = self._live
+                    tr = self.tracer  # set_tracer() may have changed it
                 if now >= end:
                     return self._result("duration", EXIT_OK)
                 if tr is None and sim and not hooks:

@@ -102,13 +102,14 @@ def _type_hash(cls: type) -> bytes:
         return b""
 
 
-def _qos(depth: int, user_data: bytes = b"", *, reader: bool = False) -> Qos:
-    """rclpy's default QoS as rmw_cyclonedds_cpp sets it: reliable, keep last `depth`, volatile,
-    automatic liveliness, no autodispose; XCDR1; a reader ignores its own participant."""
+def _qos(depth: int, user_data: bytes = b"", *, reader: bool = False, transient_local: bool = False) -> Qos:
+    """rclpy's default QoS as rmw_cyclonedds_cpp sets it: reliable, keep last `depth`, volatile
+    (transient local when asked: the machines' state topics), automatic liveliness, no
+    autodispose; XCDR1; a reader ignores its own participant."""
     policies: list[Any] = [
         Policy.Reliability.Reliable(max_blocking_time=1_000_000_000),
         Policy.History.KeepLast(depth),
-        Policy.Durability.Volatile,
+        Policy.Durability.TransientLocal if transient_local else Policy.Durability.Volatile,
         Policy.DataRepresentation(use_cdrv0_representation=True),
     ]
     if reader:
@@ -190,9 +191,12 @@ class _Writer(_Endpoint):
         self.t, self.node = t, pub.node
         self.cdr = _dds.codec(pub.msg_type).cdr
         topic = t.topic("rt" + pub.topic_name, _dds.dds_type(pub.msg_type))
-        self.writer = DataWriter(t.publisher_, topic, qos=_qos(pub.depth, _type_hash(pub.msg_type)))
+        self.writer = DataWriter(
+            t.publisher_, topic, qos=_qos(pub.depth, _type_hash(pub.msg_type), transient_local=pub.transient_local)
+        )
         self.writers = (self.writer,)
         self.matched = 0
+        self.keeps = pub.transient_local  # the writer keeps its last samples for readers still to come
         self.writer.set_status_mask(DDSStatus.PublicationMatched)
         self.token = t.waits.attach(self.writer, self)
         t.add_endpoint(self)
@@ -201,7 +205,7 @@ class _Writer(_Endpoint):
         self.matched = self.writer.get_publication_matched_status().current_count
 
     def write(self, msg: Message) -> None:
-        if self.matched and not self.t.closed:  # nobody elsewhere: no serialisation (volatile)
+        if (self.matched or self.keeps) and not self.t.closed:  # nobody elsewhere, nothing kept: no serialisation
             _write(self.writer, self.cdr(msg))
 
     def subscription_count(self) -> int:
@@ -218,7 +222,11 @@ class _Reader(_Endpoint):
         self.t, self.node, self.sub = t, sub.node, sub
         self.msg_type = sub.msg_type
         topic = t.topic("rt" + sub.topic_name, _dds.dds_type(sub.msg_type))
-        self.reader = DataReader(t.subscriber_, topic, qos=_qos(sub.depth, _type_hash(sub.msg_type), reader=True))
+        self.reader = DataReader(
+            t.subscriber_,
+            topic,
+            qos=_qos(sub.depth, _type_hash(sub.msg_type), reader=True, transient_local=sub.transient_local),
+        )
         self.readers = (self.reader,)
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
