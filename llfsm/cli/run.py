@@ -65,6 +65,19 @@ if TYPE_CHECKING:
 )
 @click.option("--view", is_flag=True, help="turtlesim: open a live window (needs pygame).")
 @click.option("--introspect", is_flag=True, help="At the end, print the nodes, topics and services on stderr.")
+# -- bags (llfsm.bag) --
+@click.option("--record", "record", metavar="DIR", help="Record every message on the bus into the rosbag2 bag DIR.")
+@click.option("--record-topic", "record_topics", multiple=True, metavar="TOPIC", help="Record only TOPIC (repeatable).")
+@click.option(
+    "--storage",
+    type=click.Choice(["mcap", "sqlite3"]),
+    default="mcap",
+    show_default=True,
+    help="--record: the bag's storage.",
+)
+@click.option("--play", "play", metavar="DIR", help="Publish the messages of the bag DIR at their recorded times.")
+@click.option("--play-topic", "play_topics", multiple=True, metavar="TOPIC", help="Play only TOPIC (repeatable).")
+@click.option("--play-rate", type=float, default=1.0, show_default=True, help="--play: time scale (2 = twice as fast).")
 def run(
     targets: tuple[str, ...],
     verbose: bool,
@@ -83,6 +96,12 @@ def run(
     image: str | None = None,
     view: bool = False,
     introspect: bool = False,
+    record: str | None = None,
+    record_topics: tuple[str, ...] = (),
+    storage: str = "mcap",
+    play: str | None = None,
+    play_topics: tuple[str, ...] = (),
+    play_rate: float = 1.0,
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
@@ -120,8 +139,11 @@ def run(
         fail(f"--image {image}: the picture is written as .png or .svg")
     if (image or view) and "turtlesim" not in nodes:
         fail("--image and --view draw the turtle simulator: add --node turtlesim")
-    uses_bus = bool(nodes or remaps or params or echoes or introspect)
+    bags = _open_bags(record, record_topics, storage, play, play_topics, play_rate) if (record or play) else None
+    uses_bus = bool(nodes or remaps or params or echoes or introspect or bags)
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
+    if bags is not None and bus is not None:
+        bags.attach(bus)
     trace_out = None
     if trace_file:
         try:
@@ -153,12 +175,38 @@ def run(
     finally:
         if trace_out is not None:
             trace_out.close()
+        bag_error = bags.close() if bags is not None else None  # the bag is closed whatever happened
     sys.stdout.flush()
     if result.error is not None:
         click.echo(result.error.format(), nl=False, err=True)
     if introspect and bus is not None:
         click.echo(_graph_text(bus.graph()), nl=False, err=True)
-    sys.exit(result.status)
+    sys.exit(result.status or (EXIT_ERRORS if bag_error else 0))
+
+
+def _open_bags(
+    record: str | None,
+    record_topics: tuple[str, ...],
+    storage: str,
+    play: str | None,
+    play_topics: tuple[str, ...],
+    play_rate: float,
+) -> Any:
+    """The bag to play (read and checked now) and the bag to record (created now), or fail."""
+    from ..bag import BagError, RunBags
+
+    try:
+        return RunBags(
+            record,
+            record_topics,
+            storage,
+            play,
+            play_topics,
+            play_rate,
+            report=lambda text: click.echo(f"llfsm: {text}", err=True),
+        )
+    except BagError as e:
+        fail(f"--record {record}: {e}" if record and not play else f"{e}")
 
 
 def _start_bus(
