@@ -46,11 +46,17 @@ class RunBags:
         if play is not None:  # first: a bad bag to play must not leave a new bag folder behind
             from .player import Player
 
-            self.player = Player(play, play_topics, play_rate)
+            try:
+                self.player = Player(play, play_topics, play_rate)
+            except BagError as e:
+                raise BagError(f"--play {e}") from None
         if record is not None:
             from .recorder import Recorder
 
-            self.recorder = Recorder(record, storage, record_topics, report=report)
+            try:
+                self.recorder = Recorder(record, storage, record_topics, report=report)
+            except BagError as e:
+                raise BagError(f"--record {record}: {e}") from None
 
     def attach(self, bus: Bus) -> None:
         if self.recorder is not None:
@@ -59,5 +65,18 @@ class RunBags:
             self.player.attach(bus)
 
     def close(self) -> str | None:
-        """Close the recording; its error message if it failed."""
-        return self.recorder.close() if self.recorder is not None else None
+        """Close the recording; its error message if it failed.  Another Ctrl-C meanwhile
+        waits: a bag cut off while its summary is written would be unreadable."""
+        if self.recorder is None:
+            return None
+        import signal
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return self.recorder.close()
+        old = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            return self.recorder.close()
+        finally:
+            for s, h in old.items():
+                signal.signal(s, h)

@@ -16,6 +16,10 @@ def _reader_errors() -> tuple[type[BaseException], ...]:
     return (ReaderError, OSError, KeyError, ValueError, IndexError, EOFError, TypeError)
 
 
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split())
+
+
 class BagReader:
     """A bag folder (with its metadata.yaml) or one storage file (`x.mcap`, `x.db3`)."""
 
@@ -36,7 +40,7 @@ class BagReader:
             self._reader = Reader(self.path)
             self._reader.open()
         except _reader_errors() as e:
-            raise BagError(f"{path}: cannot read the bag: {e}") from None
+            raise BagError(f"{path}: cannot read the bag: {_one_line(e)}") from None
 
     def __enter__(self) -> BagReader:
         return self
@@ -71,7 +75,7 @@ class BagReader:
         except BagError:
             raise
         except _reader_errors() as e:
-            raise BagError(f"{self.path}: the bag is damaged: {e}") from None
+            raise BagError(f"{self.path}: the bag is damaged: {_one_line(e)}") from None
 
     def timestamps(self) -> Iterator[tuple[int, int]]:
         for conn, t, _data in self.messages():

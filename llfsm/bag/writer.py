@@ -34,7 +34,8 @@ from .errors import BagError
 
 VERSION = 9  # rosbag2's metadata version since Jazzy
 ROS_DISTRO = "jazzy"  # the rosbag2 whose files these are (ROS_DISTRO overrides, as rosbag2 reads it)
-CHUNK_SIZE = 256 * 1024  # smaller than rosbag2's 768 KiB: less in memory, less lost to a kill -9
+CHUNK_SIZE = 64 * 1024  # rosbag2: 768 KiB; smaller chunks reach the disk sooner (less lost to a kill or a full disk)
+COMMIT_EVERY = 1000  # sqlite3: messages per transaction at most (a transaction is kept or lost whole)
 RESERVE = 32 * 1024  # bytes the placeholder metadata.yaml keeps free for closing a full disk's bag
 INFINITE = {"sec": 9223372036, "nsec": 854775807}  # RMW_DURATION_INFINITE, as rosbag2 writes it
 
@@ -242,6 +243,8 @@ class _McapStorage:
 
     def write(self, c: Connection, t: int, data: bytes) -> None:
         self.writer.add_message(c.storage_id, log_time=t, data=data, publish_time=t)
+        if self.spool.parts:  # a chunk is complete: to the disk with it, so the file ends on it
+            self.sync()
 
     def chunk(self) -> None:
         """End the chunk in progress (wall-clock recordings reach the disk every second or so)."""
@@ -296,13 +299,14 @@ class _Sqlite3Storage:
 
             def __init__(self, file: Path) -> None:
                 self.path = file
-                self.conn = sqlite3.connect(f"file:{file}", uri=True)
+                self.conn = sqlite3.connect(f"file:{file}", uri=True, check_same_thread=False)  # the writer thread
                 self.conn.executescript(self.SQLITE_SCHEMA.replace("'rosbags'", repr(_distro())))
                 self.cursor = self.conn.cursor()
 
         self.path = path
         self.writer = Writer(path)
         self.types: set[str] = set()
+        self.uncommitted = 0
 
     def add(self, c: Connection) -> None:
         from rosbags.interfaces import (
@@ -332,12 +336,16 @@ class _Sqlite3Storage:
 
     def write(self, c: Connection, t: int, data: bytes) -> None:
         self.writer.write(c.storage_id, t, data)
+        self.uncommitted += 1
+        if self.uncommitted >= COMMIT_EVERY:
+            self.sync()
 
     def chunk(self) -> None:
         pass
 
     def sync(self) -> None:
         self.writer.conn.commit()
+        self.uncommitted = 0
 
     def close(self, meta: dict[str, Any]) -> None:
         self.writer.close(VERSION, dump_yaml(meta).rstrip("\n"))

@@ -206,7 +206,7 @@ def _open_bags(
             report=lambda text: click.echo(f"llfsm: {text}", err=True),
         )
     except BagError as e:
-        fail(f"--record {record}: {e}" if record and not play else f"{e}")
+        fail(str(e))
 
 
 def _start_bus(
