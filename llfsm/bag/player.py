@@ -1,11 +1,14 @@
 """`--play`: a bag's messages published into a run at their recorded times.
 
 A node (`rosbag2_player`, as `ros2 bag play` names its node) publishes on each played topic.
-A timer on the run clock publishes every message whose time has come: message times are taken
-relative to the bag's first message and divided by the rate.  A message recorded at time t
-goes out at the first executor pass after t, which is where the bus delivered it when it was
-recorded (a machine publishes during a round; the executor runs after it), so a bag recorded
-under `--clock sim` and played under `--clock sim` with the same period reproduces the run.
+A timer on the run clock publishes every message whose time has come, at the first executor
+pass at or after it.  Times are taken relative to the bag's first message (as `ros2 bag play`
+does) and divided by the rate; a bag llfsm recorded under `--clock sim` says so in its
+custom_data, and its times, which are run times, are kept as they are.  So record -> play ->
+record under the sim clock gives the same messages at the same times, and what nodes published
+from the executor (teleop, turtlesim) is replayed exactly where it happened.  What a machine
+published during a round is replayed at the executor pass before that round (one period
+earlier for callbacks, the same round for PULL readers).
 
 Types: llfsm's class when it has one; otherwise the class is compiled from the definition the
 bag embeds (see `typesupport.class_from_definition`), or the bag is refused naming the type.
@@ -19,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import BagError
 from .reader import BagReader
+from .recorder import SIM_CLOCK_KEY
 from .typesupport import TypeSupport, class_from_definition, scratch_folder
 
 if TYPE_CHECKING:
@@ -62,7 +66,9 @@ class Player:
                 cls = class_from_definition(c.msgtype, _format_name(c.msgdef.format), c.msgdef.data or "", folder)
                 self.topics[c.topic] = cls
                 decoders[c.id] = types.deserializer(cls)
-            start = reader.start_time
+            # a bag llfsm recorded under the sim clock holds run times: they stay as they are
+            # (so record -> play -> record gives the same bag); any other bag starts at once
+            start = 0 if reader.custom_data.get(SIM_CLOCK_KEY) == "sim" else reader.start_time
             self.messages: list[tuple[int, str, Any]] = []
             if conns:  # decoded now: a damaged message is refused before the run starts
                 for c, t, data in reader.messages(conns):
@@ -104,7 +110,7 @@ class Player:
         now = self._clock.now
         msgs = self.messages
         while True:
-            while self._next < len(msgs) and self._due(self._next) < now:
+            while self._next < len(msgs) and self._due(self._next) <= now:
                 _rel, topic, msg = msgs[self._next]
                 self._publishers[topic].publish(msg)
                 self._next += 1

@@ -63,6 +63,16 @@ class BagReader:
         return self._reader.start_time
 
     @property
+    def custom_data(self) -> dict[str, str]:
+        """The bag's custom_data (metadata.yaml), {} for a lone storage file."""
+        if not self.path.is_dir():
+            return {}
+        from .info import read_metadata
+
+        custom = read_metadata(self.path).get("custom_data")
+        return {str(k): str(v) for k, v in custom.items()} if isinstance(custom, dict) else {}
+
+    @property
     def message_count(self) -> int:
         return self._reader.message_count
 

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
 
     from ..ros.bus import Bus, Topic
 
+SIM_CLOCK_KEY = "llfsm.clock"  # in the bag's custom_data
 BATCH_S = 0.05  # how often the writer thread takes the queue
 CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
 
@@ -76,6 +77,8 @@ class Recorder:
         """Tap every topic of the bus (from now on) and start the writer thread."""
         self.clock = bus.clock
         self.wall = bus.clock.kind != "sim"
+        if not self.wall:  # the times are run times: --play keeps them as they are
+            self.writer.custom[SIM_CLOCK_KEY] = "sim"
         bus.add_tap(self._on_topic)
         self._thread = threading.Thread(target=self._run, name="llfsm-bag-writer", daemon=True)
         self._thread.start()

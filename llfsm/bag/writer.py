@@ -144,7 +144,7 @@ class Stats:
         self.end = max(self.end, t)
 
 
-def metadata(storage_id: str, file_name: str, stats: Stats) -> dict[str, Any]:
+def metadata(storage_id: str, file_name: str, stats: Stats, custom: dict[str, str] | None = None) -> dict[str, Any]:
     """rosbag2's BagMetadata, in its field order (rosbag2_storage/yaml.hpp)."""
     start = stats.start or 0
     duration = stats.end - start if stats.count else 0
@@ -178,7 +178,7 @@ def metadata(storage_id: str, file_name: str, stats: Stats) -> dict[str, Any]:
                 "message_count": stats.count,
             }
         ],
-        "custom_data": {},
+        "custom_data": dict(custom or {}),
         "ros_distro": os.environ.get("ROS_DISTRO") or ROS_DISTRO,
     }
 
@@ -393,6 +393,8 @@ class BagWriter:
             raise BagError(f"output folder '{self.dir}' already exists")
         self.file_name = f"{self.dir.name}_0{STORAGES[storage].suffix}"
         self.stats = Stats()
+        #: rosbag2's custom_data: llfsm notes `llfsm.clock: sim` when times are run times
+        self.custom: dict[str, str] = {}
         self.by_topic: dict[str, Connection] = {}
         self.failed: str | None = None
         try:
@@ -434,7 +436,7 @@ class BagWriter:
     # -- closing ---------------------------------------------------------------------------------
     def close(self) -> None:
         """Close the bag properly; on a write error, salvage what is on disk (then BagError)."""
-        meta = metadata(self.storage_id, self.file_name, self.stats)
+        meta = metadata(self.storage_id, self.file_name, self.stats, self.custom)
         try:
             self.storage.close(meta)
             self._write_metadata(meta)
@@ -478,7 +480,7 @@ class BagWriter:
         except BagError:
             pass
         try:
-            self._write_metadata(metadata(self.storage_id, self.file_name, stats))
+            self._write_metadata(metadata(self.storage_id, self.file_name, stats, self.custom))
         except OSError:
             pass
         return stats.count
