@@ -92,6 +92,7 @@ class Player:
 
         prev = activate(bus.ctx)
         try:
+            bus.initialised = True  # like the --node nodes: the player is up before the first round
             node = Node(NODE_NAME)
             for topic, cls in self.topics.items():
                 self._publishers[topic] = node.create_publisher(cls, topic, 10)
