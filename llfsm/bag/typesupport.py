@@ -9,9 +9,9 @@ ROS packages (std_msgs, geometry_msgs, builtin_interfaces) have no file here, so
 rebuilt from rosbags' type store (fields and constants, without comments).  Type hashes are
 RIHS01 as rosidl computes them, by rosbags.
 
-Bytes are XCDR1 (plain CDR, little endian) as rclpy's `serialize_message` gives them.  llfsm's
-own DDS type support (`llfsm.msgs._dds`) provides them where it exists; until then rosbags'
-serializer does the work through a conversion of the message.
+Bytes are XCDR1 (plain CDR, little endian) as rclpy's `serialize_message` gives them, from
+llfsm's own DDS type support (`llfsm.msgs._dds`); a class without a DDS form (none should be
+left) goes through rosbags' serializer instead.
 
 Everything here is loaded only by a run that records or plays a bag, never by a plain run.
 """
@@ -184,17 +184,26 @@ class TypeSupport:
 
 
 def _native_serializer(cls: type[Message]) -> Callable[[Any], bytes] | None:
+    """llfsm's own XCDR1 encoder of the class (llfsm.msgs._dds), if it has one."""
     try:
-        from ..msgs._dds import cdr  # type: ignore[import-not-found]  # llfsm's DDS type support
-    except ImportError:
+        from ..msgs._dds import cdr, codec
+    except ImportError:  # pragma: no cover - the DDS type support is part of llfsm
+        return None
+    try:
+        codec(cls)
+    except TypeError:
         return None
     return cdr
 
 
 def _native_deserializer(cls: type[Message]) -> Callable[[bytes], Any] | None:
     try:
-        from ..msgs._dds import from_cdr  # type: ignore[import-not-found]
-    except ImportError:
+        from ..msgs._dds import codec, from_cdr
+    except ImportError:  # pragma: no cover
+        return None
+    try:
+        codec(cls)
+    except TypeError:
         return None
     return lambda data: from_cdr(data, cls)
 
