@@ -4,7 +4,8 @@ The recorder is a tap on the bus (`Bus.add_tap`): a reader on every topic, those
 those made later, like `ros2 bag record -a`.  Delivery costs the round one append of
 (time, topic, message) to a queue; the message is the copy the bus makes for each reader, so
 nobody changes it afterwards.  A writer thread serialises the queued messages to CDR and
-writes them in batches (every 50 ms), so a slow disk never holds up a round.
+writes them in batches, in short slices with pauses while the run is busy, so neither a slow
+disk nor the writing itself holds up the rounds (bench/bag.py measures it).
 
 Timestamps are the run clock under `--clock sim` (nanoseconds from the start of the run: two
 runs give the same bag, byte for byte) and the wall clock (nanoseconds since the epoch)
@@ -28,7 +29,13 @@ if TYPE_CHECKING:
     from ..ros.bus import Bus, Topic
 
 SIM_CLOCK_KEY = "llfsm.clock"  # in the bag's custom_data
-BATCH_S = 0.05  # how often the writer thread takes the queue
+BATCH_S = 0.05  # how often an idle writer thread looks at the queue
+# The writer works in slices and pauses between them while a backlog lasts: in a busy run,
+# Python's GIL lets one thread run at a time, and the rounds keep most of it (the writer gets
+# back a slice of 0.5 ms per pause and switch interval, 2 + 5 ms); whatever is left is written when the run
+# sleeps between rounds, or after the last round.
+SLICE_S = 0.0005
+PAUSE_S = 0.002
 CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
 
 
@@ -61,6 +68,7 @@ class Recorder:
         self.selected = {t if t.startswith("/") else "/" + t for t in topics} or None
         self.writer = BagWriter(path, storage)
         self.types = TypeSupport()
+        self.types.store  # noqa: B018  (loaded now, before the first round, not by the writer mid-run)
         self.queue: deque[tuple[int, Topic, Any]] = deque()
         self.clock: Any = None
         self.wall = True
@@ -94,31 +102,44 @@ class Recorder:
     def _run(self) -> None:
         last_chunk = time.monotonic()
         while True:
-            stopping = self._stop.wait(BATCH_S)
+            stopping = self._stop.wait(BATCH_S)  # a batch every BATCH_S; everything at the end
             try:
-                self._drain()
-                now = time.monotonic()
-                end_chunk = self.wall and now - last_chunk >= CHUNK_S
-                if end_chunk:
-                    last_chunk = now
-                self.writer.sync(end_chunk)
+                while True:
+                    more = self._drain(final=stopping)
+                    now = time.monotonic()
+                    end_chunk = self.wall and now - last_chunk >= CHUNK_S
+                    if end_chunk:
+                        last_chunk = now
+                    if not more or end_chunk:
+                        self.writer.sync(end_chunk)
+                    if not more:
+                        break
+                    time.sleep(PAUSE_S)  # rounds first: a busy run keeps most of the interpreter
             except Exception as e:  # a full disk above all; whatever it is, the bag is closed around it
                 self._failed(e)
                 return
             if stopping:
                 return
 
-    def _drain(self) -> None:
+    def _drain(self, final: bool) -> bool:
+        """Write queued messages: all of them at the end, else about SLICE_S worth.  True if
+        some are left."""
         queue, writer, conns = self.queue, self.writer, self._conns
+        clock = time.perf_counter
+        deadline = clock() + SLICE_S
+        k = 0
         while queue:
             t, topic, msg = queue.popleft()
             entry = conns.get(topic)
             if entry is None:
                 entry = conns[topic] = self._connection(topic)
-            if entry is False:
-                continue
-            conn, serialize = entry
-            writer.write(conn, t, serialize(msg))
+            if entry is not False:
+                conn, serialize = entry
+                writer.write(conn, t, serialize(msg))
+            k += 1
+            if not final and k % 32 == 0 and clock() > deadline:
+                return bool(queue)
+        return False
 
     def _connection(self, topic: Topic) -> Any:
         try:

@@ -80,10 +80,7 @@ class TypeSupport:
     @property
     def store(self) -> Typestore:
         if self._store is None:
-            from rosbags.typesys import Stores, get_typestore
-
-            # llfsm's built-in classes are generated from this same store (llfsm.compiler.interfaces)
-            self._store = get_typestore(Stores.ROS2_HUMBLE)
+            self._store = _base_store()
         return self._store
 
     def _register(self, type_name: str, seen: set[str] | None = None) -> None:
@@ -181,6 +178,21 @@ class TypeSupport:
             return _from_rosbags(store.deserialize_cdr(data, type_name), cls)
 
         return deserialize
+
+
+_BASE_STORE: Typestore | None = None
+
+
+def _base_store() -> Typestore:
+    """rosbags' store of the ROS 2 Humble types, which llfsm's built-in classes are generated
+    from (llfsm.compiler.interfaces), with the types of llfsm's .msg files added as they are
+    needed: one per process (loading it takes a few tenths of a second)."""
+    global _BASE_STORE
+    if _BASE_STORE is None:
+        from rosbags.typesys import Stores, get_typestore
+
+        _BASE_STORE = get_typestore(Stores.ROS2_HUMBLE)
+    return _BASE_STORE
 
 
 def _native_serializer(cls: type[Message]) -> Callable[[Any], bytes] | None:
