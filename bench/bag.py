@@ -103,7 +103,7 @@ def one_run(
     recorded = 0
     if bags is not None:
         assert bags.close() is None
-        recorded = bags.recorder.writer.stats.count if bags.recorder else 0
+        recorded = (bags.recorder.count or 0) if bags.recorder else 0
     t2 = time.perf_counter()
     return result.rounds / (t1 - t0), t2 - t1, recorded, result.rounds
 
