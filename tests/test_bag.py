@@ -251,10 +251,10 @@ def test_record_topic_selects_topics(tmp_path: Path) -> None:
 def test_wall_clock_timestamps_are_epoch_times(tmp_path: Path) -> None:
     bag = tmp_path / "wall"
     before = time.time_ns()
-    assert llfsm("run", driver(tmp_path), "--duration", "300ms", "--record", bag).status == 0
+    assert llfsm("run", driver(tmp_path), "--duration", "500ms", "--record", bag).status == 0
     after = time.time_ns()
     times = [t for t, _ in rosbags_messages(bag)["/chat"]]
-    assert len(times) == 3 and before <= times[0] < times[-1] <= after
+    assert len(times) >= 2 and before <= times[0] < times[-1] <= after
     assert "custom_data: ~" in (bag / "metadata.yaml").read_text()
 
 
