@@ -468,3 +468,32 @@ def test_full_disk_is_one_message_a_failed_status_and_a_readable_bag(tmp_path: P
             assert sum(1 for _ in read_ros2_messages(str(disk / "full" / "full_0.mcap"))) == kept
     finally:
         subprocess.run(["umount", str(disk)], check=False)
+
+
+def test_a_killed_run_still_leaves_a_closed_bag(tmp_path: Path) -> None:
+    """kill -9 gives the run no chance to close anything: the writer process sees its pipe
+    close and closes the bag with everything it was sent."""
+    import signal
+
+    m = write_machine(tmp_path, "tick", {"A": [("A", "after_ms(20)")]}, {"A_OnEntry": "print('tick', flush=True)"})
+    p = _spawn("run", m, "--node", "turtlesim", "--record", tmp_path / "killed", cwd=tmp_path)
+    try:
+        assert p.stdout is not None
+        for _ in range(15):
+            assert p.stdout.readline().strip() == "tick"
+        p.send_signal(signal.SIGKILL)
+        p.communicate(timeout=30)
+    finally:
+        p.kill()
+    meta = {}
+    for _ in range(200):  # the writer process closes the bag on its own, shortly after
+        time.sleep(0.05)
+        try:
+            meta = read_metadata(tmp_path / "killed")
+        except (yaml.YAMLError, TypeError):  # being rewritten right now
+            continue
+        if meta["message_count"]:
+            break
+    got = rosbags_messages(tmp_path / "killed")
+    assert meta["message_count"] == sum(len(v) for v in got.values()) > 0
+    assert len(read_ros2_messages(str(tmp_path / "killed" / "killed_0.mcap"))) == meta["message_count"]
