@@ -107,11 +107,17 @@ class Recorder:
     # -- the run's side ------------------------------------------------------------------------
     def attach(self, bus: Bus) -> None:
         """Tap every topic of the bus (from now on) and start the sending thread."""
+        self.start(bus, tap=True)
+
+    def start(self, bus: Bus, tap: bool) -> None:
+        """Start the sending thread; with `tap`, record every topic of the bus.  Without it,
+        whoever feeds `queue` with (time, topic, message) decides (`llfsm bag record`)."""
         self.clock = bus.clock
         self.wall = bus.clock.kind != "sim"
         if not self.wall:  # the times are run times: --play keeps them as they are
             self._send(b"X", json.dumps({SIM_CLOCK_KEY: "sim"}).encode())
-        bus.add_tap(self._on_topic)
+        if tap:
+            bus.add_tap(self._on_topic)
         self._listener = threading.Thread(target=self._listen, name="llfsm-bag-replies", daemon=True)
         self._listener.start()
         self._thread = threading.Thread(target=self._run, name="llfsm-bag-sender", daemon=True)
