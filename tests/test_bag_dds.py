@@ -73,3 +73,18 @@ def test_bag_play_reaches_a_run_in_another_process(netns: NetNamespace, tmp_path
 def test_bag_record_without_topics_is_a_usage_error() -> None:
     r = llfsm("bag", "record", "-o", "x")
     assert r.status == 2 and "name the topics" in r.stderr
+
+
+def test_run_on_dds_records_its_own_topics_and_what_other_processes_send_it(
+    netns: NetNamespace, tmp_path: Path
+) -> None:
+    sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "7")
+    run = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--echo", "/turtle1/pose",
+                      "--duration", "5", "--record", tmp_path / "mine")  # fmt: skip
+    status, _out, err = finish(run, 60)
+    assert status == 0, err
+    finish(sim, 60)
+    got = messages(tmp_path / "mine")
+    texts = [m.data for _, m in got["/pingpong"]]  # type: ignore[attr-defined]
+    assert len(texts) >= 3 and texts == [f"The count is {n}" for n in range(len(texts))]
+    assert len(got["/turtle1/pose"]) > 20  # published by turtlesim in the other process

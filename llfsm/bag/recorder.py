@@ -1,7 +1,8 @@
 """`--record`: a bus subscriber that sees every topic and writes a rosbag2 bag beside the run.
 
 The recorder is a tap on the bus (`Bus.add_tap`): a reader on every topic, those that exist and
-those made later, like `ros2 bag record -a`.  Delivery costs the round one append of
+those made later, like `ros2 bag record -a`.  (With the DDS transport it subscribes to each topic instead, so that
+what other processes publish is recorded too.)  Delivery costs the round one append of
 (time, topic, message) to a queue; the message is the copy the bus makes for each reader, so
 nobody changes it afterwards.  A thread of the run serialises the queued messages to CDR and
 sends them in batches to the bag writer process (`_writer_process`), which writes the bag on
@@ -47,6 +48,7 @@ PAUSE_S = 0.002
 BUSY_S = 0.0005  # a pause this much longer than asked for: the rounds had the interpreter
 CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
 START_TIMEOUT_S = 60.0
+QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
 
 
 class _Tap:
@@ -90,6 +92,8 @@ class Recorder:
         self._thread: threading.Thread | None = None
         self._listener: threading.Thread | None = None
         self._taps: list[tuple[Topic, _Tap]] = []
+        self._bus: Bus | None = None
+        self._node: Any = None  # with a remote transport: the recorder's node and subscriptions
         self._proc = subprocess.Popen(
             [sys.executable, "-m", "llfsm.bag._writer_process", os.fspath(path), storage],
             stdin=subprocess.PIPE,
@@ -117,6 +121,7 @@ class Recorder:
         if not self.wall:  # the times are run times: --play keeps them as they are
             self._send(b"X", json.dumps({SIM_CLOCK_KEY: "sim"}).encode())
         if tap:
+            self._bus = bus
             bus.add_tap(self._on_topic)
         self._listener = threading.Thread(target=self._listen, name="llfsm-bag-replies", daemon=True)
         self._listener.start()
@@ -126,9 +131,30 @@ class Recorder:
     def _on_topic(self, topic: Topic) -> None:
         if self.selected is not None and topic.name not in self.selected:
             return
+        if self._bus is not None and self._bus.transport.remote:
+            self._subscribe(topic)
+            return
         tap = _Tap(self, topic)
         topic.readers.append(tap)  # type: ignore[arg-type]  # a reader as far as publish() is concerned
         self._taps.append((topic, tap))
+
+    def _subscribe(self, topic: Topic) -> None:
+        """With a transport that reaches other processes (DDS), a tap would see only what this
+        process publishes: the recorder subscribes instead, as any subscriber, and hears both."""
+        from ..ros.node import Node
+        from ..runtime.context import activate
+
+        assert self._bus is not None
+        prev = activate(self._bus.ctx)
+        try:
+            if self._node is None:
+                self._node = Node("rosbag2_recorder")
+            queue = self.queue
+            self._node.create_subscription(
+                topic.type, topic.name, lambda msg: queue.append((time.time_ns(), topic, msg)), QUEUE_DEPTH
+            )
+        finally:
+            activate(prev)
 
     # -- the sending thread -------------------------------------------------------------------------
     def _send(self, kind: bytes, payload: bytes) -> None:
