@@ -31,8 +31,11 @@ RECORD = struct.Struct("<IqI")
 
 
 def _reply(out: IO[bytes], **fields: Any) -> None:
-    out.write(json.dumps(fields).encode() + b"\n")
-    out.flush()
+    try:
+        out.write(json.dumps(fields).encode() + b"\n")
+        out.flush()
+    except OSError:  # the run is gone (killed): the bag is closed all the same, nobody to tell
+        pass
 
 
 def _read(inp: IO[bytes], n: int) -> bytes | None:

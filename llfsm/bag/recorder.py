@@ -93,6 +93,7 @@ class Recorder:
         self._listener: threading.Thread | None = None
         self._taps: list[tuple[Topic, _Tap]] = []
         self._bus: Bus | None = None
+        self._started = False
         self._node: Any = None  # with a remote transport: the recorder's node and subscriptions
         self._proc = subprocess.Popen(
             [sys.executable, "-m", "llfsm.bag._writer_process", os.fspath(path), storage],
@@ -123,6 +124,7 @@ class Recorder:
         if tap:
             self._bus = bus
             bus.add_tap(self._on_topic)
+        self._started = True
         self._listener = threading.Thread(target=self._listen, name="llfsm-bag-replies", daemon=True)
         self._listener.start()
         self._thread = threading.Thread(target=self._run, name="llfsm-bag-sender", daemon=True)
@@ -131,6 +133,11 @@ class Recorder:
     def _on_topic(self, topic: Topic) -> None:
         if self.selected is not None and topic.name not in self.selected:
             return
+        if not self._started:  # before the first round: the definition now, not mid-run
+            try:
+                self.types.definition(topic.type._TYPE)
+            except BagError:
+                pass  # said when its first message comes
         if self._bus is not None and self._bus.transport.remote:
             self._subscribe(topic)
             return
