@@ -301,7 +301,7 @@ def test_play_rate_scales_time(tmp_path: Path) -> None:
     assert [d for _, d in a] == [d for _, d in b]
 
 
-def _foreign_bag(path: Path, storage: str, with_definition: bool = True) -> None:
+def _foreign_bag(path: Path, storage: str, with_definition: bool = True, reading_topic: str = "/weather") -> None:
     """A bag as ROS 2 tools write it (rosbags' writer): wall-clock times, a Twist topic and a
     type llfsm has no class for (its definition travels in the bag)."""
     from rosbags.rosbag2 import StoragePlugin, Writer
@@ -318,9 +318,9 @@ def _foreign_bag(path: Path, storage: str, with_definition: bool = True) -> None
     with Writer(path, version=9, storage_plugin=plugin) as w:
         tw = w.add_connection("/turtle1/cmd_vel", "geometry_msgs/msg/Twist", typestore=store)
         if with_definition:
-            rd = w.add_connection("/weather", "weather_msgs/msg/Reading", typestore=store)
+            rd = w.add_connection(reading_topic, "weather_msgs/msg/Reading", typestore=store)
         else:
-            rd = w.add_connection("/weather", "weather_msgs/msg/Reading", msgdef="", rihs01="RIHS01_" + "0" * 64)
+            rd = w.add_connection(reading_topic, "weather_msgs/msg/Reading", msgdef="", rihs01="RIHS01_" + "0" * 64)
         t0 = 1_700_000_000_000_000_000
         for k in range(3):
             twist = Twist(linear=Vector3(x=float(k + 1), y=0.0, z=0.0), angular=Vector3(x=0.0, y=0.0, z=0.5))
@@ -391,6 +391,7 @@ def test_bad_bags_and_folders_are_one_clear_line(tmp_path: Path) -> None:
     (cut / "metadata.yaml").write_text((tmp_path / "good" / "metadata.yaml").read_text().replace("good_0", "cut_0"))
     (cut / "cut_0.mcap").write_bytes((tmp_path / "good" / "good_0.mcap").read_bytes()[:700])
     _foreign_bag(tmp_path / "nodef", "mcap", with_definition=False)
+    _foreign_bag(tmp_path / "wrong", "mcap", reading_topic="/turtle1/pose")
     cases = [
         (["--record", tmp_path / "exists"], 2, "output folder"),
         (["--record", tmp_path / "a_file" / "bag"], 2, "Not a directory"),
@@ -399,6 +400,7 @@ def test_bad_bags_and_folders_are_one_clear_line(tmp_path: Path) -> None:
         (["--play", cut], 2, "cut"),
         (["--play", tmp_path / "nodef"], 2, "weather_msgs/msg/Reading"),
         (["--play", tmp_path / "good", "--play-topic", "/nothing"], 2, "no topic /nothing"),
+        (["--play", tmp_path / "wrong", "--node", "turtlesim"], 2, "already carries turtlesim/msg/Pose"),
     ]
     for args, status, text in cases:
         r = llfsm_process("run", "--clock", "sim", m, "--duration", "10ms", *args)

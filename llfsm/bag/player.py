@@ -42,6 +42,7 @@ class Player:
     def __init__(self, path: str, topics: Iterable[str] = (), rate: float = 1.0, loop: bool = False) -> None:
         if not rate > 0:
             raise BagError(f"the play rate must be greater than 0, not {rate:g}")
+        self.path = path
         self.rate = rate
         self.loop = loop
         wanted = {t if t.startswith("/") else "/" + t for t in topics}
@@ -95,7 +96,10 @@ class Player:
             bus.initialised = True  # like the --node nodes: the player is up before the first round
             node = Node(NODE_NAME)
             for topic, cls in self.topics.items():
-                self._publishers[topic] = node.create_publisher(cls, topic, 10)
+                try:
+                    self._publishers[topic] = node.create_publisher(cls, topic, 10)
+                except (TypeError, ValueError) as e:  # the run already has the topic with another type
+                    raise BagError(f"{self.path}: {topic} cannot be played into this run: {e}") from None
             clock = bus.clock
             period = getattr(clock, "period", None) if clock.kind == "sim" else None
             self._offset = clock.now

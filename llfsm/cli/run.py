@@ -163,7 +163,7 @@ def run(
     uses_bus = bool(nodes or remaps or params or echoes or introspect or transport != "inproc" or bags)
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
     if bags is not None and bus is not None:
-        bags.attach(bus)
+        _attach_bags(bags, bus)
     trace_out = None
     if trace_file:
         try:
@@ -242,6 +242,16 @@ def _open_transport(name: str) -> Any:
         return make(name)
     except (ImportError, ValueError) as e:
         fail(str(e))
+
+
+def _attach_bags(bags: Any, bus: Bus) -> None:
+    from ..bag import BagError
+
+    try:
+        bags.attach(bus)
+    except BagError as e:
+        bags.close()
+        fail(f"--play {e}")
 
 
 def _start_bus(
