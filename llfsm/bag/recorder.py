@@ -1,10 +1,10 @@
 """`--record`: a bus subscriber that sees every topic and writes a rosbag2 bag beside the run.
 
 The recorder is a tap on the bus (`Bus.add_tap`): a reader on every topic, those that exist and
-those made later, like `ros2 bag record -a`.  (With the DDS transport it subscribes to each topic instead, so that
-what other processes publish is recorded too.)  Delivery costs the round one append of
-(time, topic, message) to a queue; the message is the copy the bus makes for each reader, so
-nobody changes it afterwards.  A thread of the run serialises the queued messages to CDR and
+those made later, like `ros2 bag record -a`.  (On the DDS transport it subscribes to each topic
+instead, so that what other processes publish is recorded too.)  Delivery costs the round one
+append of (time, topic, message) to a queue; the message is the copy the bus makes for each
+reader, so nobody changes it afterwards.  A thread of the run serialises the queued messages to CDR and
 sends them in batches to the bag writer process (`_writer_process`), which writes the bag on
 another core: neither the disk nor the storage libraries hold up a round.  While the run is
 busy the thread works in short slices with pauses, so the rounds keep most of the interpreter.

@@ -331,5 +331,10 @@ def class_from_definition(type_name: str, encoding: str, definition: str, folder
 
 
 def scratch_folder() -> Path:
-    """A folder for definitions taken from bags (removed with the process's temporary files)."""
-    return Path(tempfile.mkdtemp(prefix=f"llfsm-bag-types-{os.getpid()}-"))
+    """A folder for definitions taken from bags, removed when the process ends."""
+    import atexit
+    import shutil
+
+    folder = Path(tempfile.mkdtemp(prefix=f"llfsm-bag-types-{os.getpid()}-"))
+    atexit.register(shutil.rmtree, folder, True)
+    return folder

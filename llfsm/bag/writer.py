@@ -381,7 +381,7 @@ def _reason(e: BaseException) -> str:
 class BagWriter:
     """One bag being written: open, add topics, write (timestamp, topic, bytes), close.
 
-    Not thread-safe: the recorder calls it from its writer thread only.
+    Not thread-safe: one thread uses it (in the writer process, `_writer_process`).
     """
 
     def __init__(self, path: str | os.PathLike[str], storage: str = "mcap") -> None:
