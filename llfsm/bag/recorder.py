@@ -83,7 +83,6 @@ class Recorder:
         self.selected = {t if t.startswith("/") else "/" + t for t in topics} or None
         self.path = path
         self.types = TypeSupport()
-        self.types.store  # noqa: B018  (loaded now, before the first round, not mid-run)
         self.queue: deque[tuple[int, Topic, Any]] = deque()
         self.clock: Any = None
         self.wall = True
@@ -105,6 +104,7 @@ class Recorder:
         )
         assert self._proc.stdin is not None and self._proc.stdout is not None
         self._pipe: IO[bytes] = self._proc.stdin
+        self.types.store  # noqa: B018  (loaded while the writer starts: before the first round, not mid-run)
         first = self._proc.stdout.readline()
         reply = json.loads(first) if first else {"error": "the bag writer did not start"}
         if "error" in reply:
