@@ -507,3 +507,32 @@ def test_a_killed_run_still_leaves_a_closed_bag(tmp_path: Path) -> None:
     got = rosbags_messages(tmp_path / "killed")
     assert meta["message_count"] == sum(len(v) for v in got.values()) > 0
     assert len(read_ros2_messages(str(tmp_path / "killed" / "killed_0.mcap"))) == meta["message_count"]
+
+
+def test_player_loops_over_the_bag(tmp_path: Path) -> None:
+    """`bag play --loop` (the player in process, under the sim clock): the bag again from the
+    start once its last message is out, keeping the bag's spacing."""
+    from llfsm import ros
+    from llfsm.bag.player import Player
+    from llfsm.msgs.std_msgs.msg import String
+    from llfsm.ros.bus import bus_of
+    from llfsm.runtime import RunContext, SimClock
+    from llfsm.runtime.context import activate
+
+    assert run_sim(driver(tmp_path), "--duration", "250ms", "--record", tmp_path / "a").status == 0  # 1, 103, 205 ms
+    player = Player(str(tmp_path / "a"), ["/chat"], loop=True)
+    ctx = RunContext(SimClock())
+    prev = activate(ctx)
+    try:
+        bus = bus_of(ctx)
+        player.attach(bus)
+        heard: list[tuple[int, str]] = []
+        ros.Node("ear").create_subscription(String, "/chat", lambda m: heard.append((bus.clock.now, m.data)), 10)
+        for _ in range(700):
+            bus.clock.now += 1_000_000
+            bus.spin_some()
+    finally:
+        activate(prev)
+    assert [d for _, d in heard] == ["step 1", "step 2", "step 3"] * 3 + ["step 1"]
+    # each pass starts where the last ended, with the bag's own spacing (its first message at 1 ms)
+    assert [t // 1_000_000 for t, _ in heard] == [1, 103, 205, 206, 308, 410, 411, 513, 615, 616]
