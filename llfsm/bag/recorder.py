@@ -97,10 +97,14 @@ class Recorder:
         self._bus: Bus | None = None
         self._started = False
         self._node: Any = None  # with a remote transport: the recorder's node and subscriptions
+        # the writer runs this same llfsm, installed or not
+        root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p))
         self._proc = subprocess.Popen(
             [sys.executable, "-m", "llfsm.bag._writer_process", os.fspath(path), storage],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
+            env=env,
         )
         assert self._proc.stdin is not None and self._proc.stdout is not None
         self._pipe: IO[bytes] = self._proc.stdin
