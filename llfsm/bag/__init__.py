@@ -43,6 +43,8 @@ class RunBags:
         _need_libraries()
         self.player: Player | None = None
         self.recorder: Recorder | None = None
+        if play is not None and not play_rate > 0:
+            raise BagError(f"--play-rate must be greater than 0, not {play_rate:g}")
         if play is not None:  # first: a bad bag to play must not leave a new bag folder behind
             from .player import Player
 
