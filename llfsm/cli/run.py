@@ -80,6 +80,19 @@ if TYPE_CHECKING:
     help="inproc: the in-process bus; dds: ROS 2's wire (Cyclone DDS), seen by other processes and ROS 2 nodes. "
     "Also LLFSM_TRANSPORT.",
 )
+# -- bags (llfsm.bag) --
+@click.option("--record", "record", metavar="DIR", help="Record every message on the bus into the rosbag2 bag DIR.")
+@click.option("--record-topic", "record_topics", multiple=True, metavar="TOPIC", help="Record only TOPIC (repeatable).")
+@click.option(
+    "--storage",
+    type=click.Choice(["mcap", "sqlite3"]),
+    default="mcap",
+    show_default=True,
+    help="--record: the bag's storage.",
+)
+@click.option("--play", "play", metavar="DIR", help="Publish the messages of the bag DIR at their recorded times.")
+@click.option("--play-topic", "play_topics", multiple=True, metavar="TOPIC", help="Play only TOPIC (repeatable).")
+@click.option("--play-rate", type=float, default=1.0, show_default=True, help="--play: time scale (2 = twice as fast).")
 def run(
     targets: tuple[str, ...],
     verbose: bool,
@@ -100,6 +113,12 @@ def run(
     introspect: bool = False,
     web: str | None = None,
     transport: str = "inproc",
+    record: str | None = None,
+    record_topics: tuple[str, ...] = (),
+    storage: str = "mcap",
+    play: str | None = None,
+    play_topics: tuple[str, ...] = (),
+    play_rate: float = 1.0,
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
@@ -150,8 +169,11 @@ def run(
     web_address = _web_address(web) if web is not None else None
     if transport != "inproc":
         ctx.extras["transport"] = _open_transport(transport)
-    uses_bus = bool(nodes or remaps or params or echoes or introspect or web or transport != "inproc")
+    bags = _open_bags(record, record_topics, storage, play, play_topics, play_rate) if (record or play) else None
+    uses_bus = bool(nodes or remaps or params or echoes or introspect or web or transport != "inproc" or bags)
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
+    if bags is not None and bus is not None:
+        _attach_bags(bags, bus)
     trace_out = None
     if trace_file:
         from ..outputs import OutputError, StreamedOutput
@@ -198,6 +220,7 @@ def run(
         failed_outputs: list[str] = list(ctx.extras.get("output_errors", ()))
         if trace_out is not None and (trace_error := trace_out.finish()) is not None:
             failed_outputs.append(trace_error)
+        bag_error = bags.close() if bags is not None else None  # the bag is closed whatever happened
     sys.stdout.flush()
     if result.error is not None:
         click.echo(result.error.format(), nl=False, err=True)
@@ -205,7 +228,32 @@ def run(
         click.echo(_graph_text(bus.graph()), nl=False, err=True)
     for message in failed_outputs:
         click.echo(f"llfsm: {message}", err=True)
-    sys.exit(result.status if result.status or not failed_outputs else EXIT_ERRORS)
+    sys.exit(result.status if result.status or not (failed_outputs or bag_error) else EXIT_ERRORS)
+
+
+def _open_bags(
+    record: str | None,
+    record_topics: tuple[str, ...],
+    storage: str,
+    play: str | None,
+    play_topics: tuple[str, ...],
+    play_rate: float,
+) -> Any:
+    """The bag to play (read and checked now) and the bag to record (created now), or fail."""
+    from ..bag import BagError, RunBags
+
+    try:
+        return RunBags(
+            record,
+            record_topics,
+            storage,
+            play,
+            play_topics,
+            play_rate,
+            report=lambda text: click.echo(f"llfsm: {text}", err=True),
+        )
+    except BagError as e:
+        fail(str(e))
 
 
 def _open_transport(name: str) -> Any:
@@ -216,6 +264,16 @@ def _open_transport(name: str) -> Any:
         return make(name)
     except (ImportError, ValueError) as e:
         fail(str(e))
+
+
+def _attach_bags(bags: Any, bus: Bus) -> None:
+    from ..bag import BagError
+
+    try:
+        bags.attach(bus)
+    except BagError as e:
+        bags.close()
+        fail(f"--play {e}")
 
 
 def _start_bus(

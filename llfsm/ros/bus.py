@@ -170,6 +170,8 @@ class Bus:
         self.parameters: dict[tuple[str | None, str], Any] = {}  # (node or None, name) -> override
         #: Called with each new topic whose name is a key here (`--echo` waits for its topic).
         self.watchers: dict[str, list[Callable[[Topic], None]]] = {}
+        #: Called with every topic, those made later too (`add_tap`: `--record` attaches its readers).
+        self.taps: list[Callable[[Topic], None]] = []
         self._seq = itertools.count()
         self.log_to_stdout = os.environ.get("RCUTILS_LOGGING_USE_STDOUT", "0") == "1"
         #: None: whatever sys.stderr (or sys.stdout) is when a line is logged, so that a
@@ -208,6 +210,8 @@ class Bus:
             t = self.topics[name] = Topic(name, type_)
             for fn in self.watchers.pop(name, []):
                 fn(t)
+            for fn in self.taps:
+                fn(t)
         elif t.type is not type_:
             raise TypeError(f"cannot {role} {name} as {type_._TYPE}: the topic already carries {t.type._TYPE}")
         return t
@@ -230,6 +234,13 @@ class Bus:
                     self.topic(name, type_, "subscribe to")  # calls the watchers
 
             self.transport.discover(name, found)
+
+    def add_tap(self, fn: Callable[[Topic], None]) -> None:
+        """Call fn(topic) for every topic: each existing one now, each new one when it is made.
+        A recorder attaches its reader to each topic this way (llfsm.bag.recorder)."""
+        self.taps.append(fn)
+        for t in list(self.topics.values()):
+            fn(t)
 
     def next_timer_due(self) -> int | None:
         while self.timers and self.timers[0][2]._cancelled:
