@@ -1,0 +1,492 @@
+"""`topic echo`, `topic pub`, `topic hz` and `service call` over DDS, printing what `ros2` prints.
+
+Each joins the ROS domain with one participant (the transport's discovery settings, through the
+graph reader, which also tells the type and QoS of what is there), makes one reader or writer
+with the DDS form of the llfsm message class (llfsm/msgs/_dds.py), and waits at most `timeout`
+seconds for what it needs.  Input mistakes (a TYPE, VALUES, a field, a name) are found before
+the domain is joined, so they cost nothing and exit 2; what is not there exits 1.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from typing import TYPE_CHECKING, Any, TextIO
+
+from . import CliError
+from .graph import NOT_FOUND, open_graph, where
+from .interfaces import message_class, service_class, use_working_directory
+
+if TYPE_CHECKING:
+    from ..msgs import Message
+    from ..ros.transports.dds_graph import Endpoint, Graph
+
+#: rclpy's default QoS depth for `ros2 topic pub` ("default" profile) and `echo` ("sensor_data").
+PUB_DEPTH, ECHO_DEPTH = 10, 5
+#: How long echo looks for the topic's publishers (to match their QoS) when TYPE is given.
+QOS_LOOKUP = 1.0
+
+
+def full_name(name: str, what: str = "topic") -> str:
+    """The fully qualified name, as a node in the root namespace expands it."""
+    from ..ros.names import InvalidNameError, expand
+
+    try:
+        return expand(name, "_llfsm_cli", "/", what)
+    except InvalidNameError as e:
+        raise CliError(str(e)) from None
+
+
+def wait_for_topic_types(graph: Graph, name: str, timeout: float) -> list[str]:
+    """The topic's types once discovery shows it; exit 1 when it does not within `timeout`."""
+    if not graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True)):
+        raise CliError(f"topic '{name}' not found within {timeout:g} s ({where()})", NOT_FOUND)
+    return graph.topics(include_hidden=True)[name]
+
+
+def _class_of_topic(name: str, types: list[str]) -> type[Message]:
+    if len(types) > 1:
+        raise CliError(f"topic '{name}' has more than one type: [{', '.join(types)}]; give TYPE", NOT_FOUND)
+    try:
+        return message_class(types[0])
+    except CliError as e:
+        raise CliError(f"topic '{name}' has type {types[0]}, which llfsm cannot read: {e.message}") from None
+
+
+def _check_types(graph: Graph, name: str, cls: type[Message], endpoints: list[Endpoint]) -> None:
+    """A topic whose endpoints have another type never matches ours: say so instead of waiting."""
+    from ..ros.transports.dds_graph import message_type
+
+    others = sorted({message_type(e.type_name) for e in endpoints} - {cls._TYPE})
+    if others:
+        what = "types" if len(others) > 1 else "type"
+        raise CliError(f"topic '{name}' has {what} {', '.join(others)}, not {cls._TYPE}", NOT_FOUND)
+
+
+# -- the DDS forms of messages (llfsm/msgs/_dds.py, the ddstypes helper's module) ---------------
+
+
+def _dds() -> Any:
+    try:
+        from ..msgs import _dds  # type: ignore[attr-defined]
+    except ImportError as e:
+        raise CliError(f"the DDS forms of messages are not available: {e}") from None
+    return _dds
+
+
+def _qos(reliable: bool, transient_local: bool, depth: int) -> Any:
+    from cyclonedds.core import Policy, Qos
+    from cyclonedds.util import duration
+
+    return Qos(
+        Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100))
+        if reliable
+        else Policy.Reliability.BestEffort,
+        Policy.Durability.TransientLocal if transient_local else Policy.Durability.Volatile,
+        Policy.History.KeepLast(depth),
+    )
+
+
+def _reader(graph: Graph, dds_topic: str, wire_type: type, qos: Any) -> Any:
+    from cyclonedds.sub import DataReader
+    from cyclonedds.topic import Topic
+
+    return DataReader(graph.participant, Topic(graph.participant, dds_topic, wire_type, qos=qos), qos=qos)
+
+
+def _writer(graph: Graph, dds_topic: str, wire_type: type, qos: Any) -> Any:
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.topic import Topic
+
+    return DataWriter(graph.participant, Topic(graph.participant, dds_topic, wire_type, qos=qos), qos=qos)
+
+
+class _Waiter:
+    """Blocks until a reader has data, at most a given time (a wait set: no polling)."""
+
+    def __init__(self, graph: Graph, reader: Any) -> None:
+        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
+
+        self.waitset = WaitSet(graph.participant)
+        self.condition = ReadCondition(reader, SampleState.NotRead | ViewState.Any | InstanceState.Any)
+        self.waitset.attach(self.condition)
+
+    def wait(self, seconds: float) -> bool:
+        return self.waitset.wait(max(0, int(seconds * 1e9))) > 0
+
+
+# -- echo ----------------------------------------------------------------------------------------
+
+
+def _field_path(cls: type[Message], field: str | None) -> list[str]:
+    """`--field pose.position` as names, checked against the type now rather than at the first
+    message."""
+    if field is None:
+        return []
+    parts = [p for p in field.split(".") if p]
+    if not parts:
+        raise CliError(f"Invalid field value '{field}'")
+    current: Any = cls
+    for i, part in enumerate(parts):
+        fields = dict(current._FIELDS) if current is not None else {}
+        if part not in fields:
+            owner = current._TYPE if current is not None else "a field that is not a message"
+            raise CliError(f"Invalid field '{field}': {owner} has no field '{part}'")
+        ftype = fields[part]
+        if "/" in ftype and not ftype.endswith("]") and i + 1 < len(parts):
+            pkg, kind, name = ftype.split("/")
+            import importlib
+
+            current = getattr(importlib.import_module(f"llfsm.msgs.{pkg}.{kind}"), name)
+        else:
+            current = None
+    return parts
+
+
+def _plain_filtered(value: Any, no_arr: bool, no_str: bool) -> Any:
+    if isinstance(value, dict):
+        return {
+            k: _plain_filtered(v, no_arr, no_str)
+            for k, v in value.items()
+            if not (no_arr and isinstance(v, list | tuple)) and not (no_str and isinstance(v, str))
+        }
+    return value
+
+
+def format_message(
+    msg: Any, field: list[str], truncate_length: int | None, no_arr: bool = False, no_str: bool = False
+) -> str:
+    """One message as `ros2 topic echo` prints it, its `---` line included."""
+    from ..msgs import Message, to_yaml
+
+    value = msg
+    for part in field:
+        value = getattr(value, part)
+    if not isinstance(value, Message):  # a primitive field: ros2 prints the Python value
+        if isinstance(value, list | tuple) and value and isinstance(value[0], Message):
+            value = [v.to_dict() for v in value]
+        return f"{value}\n---\n"
+    data = value.to_dict()
+    if no_arr or no_str:
+        data = _plain_filtered(data, no_arr, no_str)
+    return to_yaml(data, truncate_length=truncate_length) + "---\n"
+
+
+def echo(
+    topic: str,
+    type_text: str | None = None,
+    *,
+    once: bool = False,
+    field: str | None = None,
+    truncate_length: int | None = 128,
+    no_arr: bool = False,
+    no_str: bool = False,
+    timeout: float = 5.0,
+    out: TextIO | None = None,
+) -> None:
+    """`ros2 topic echo`: print each message; with `once`, the first one only.  Nothing within
+    `timeout` seconds (no such topic, or no message) ends with exit status 1."""
+    out = out or sys.stdout
+    name = full_name(topic)
+    use_working_directory()
+    cls = message_class(type_text) if type_text else None
+    path = _field_path(cls, field) if cls is not None else None
+    graph = open_graph()
+    try:
+        started = time.monotonic()
+        if cls is None:
+            cls = _class_of_topic(name, wait_for_topic_types(graph, name, timeout))
+            path = _field_path(cls, field)
+            graph.spin(0.1)  # the topic's other publishers, discovered with the first
+        else:
+            graph.spin(min(QOS_LOOKUP, timeout), until=lambda: bool(graph.topic_endpoints(name, "publisher")))
+        publishers = graph.topic_endpoints(name, "publisher")
+        _check_types(graph, name, cls, publishers)
+        # as ros2 echo: reliable / transient local only when every publisher offers it
+        reliable = bool(publishers) and all(p.reliable for p in publishers)
+        transient = bool(publishers) and all(p.transient_local for p in publishers)
+        dds = _dds()
+        reader = _reader(graph, f"rt{name}", dds.dds_type(cls), _qos(reliable, transient, ECHO_DEPTH))
+        waiter = _Waiter(graph, reader)
+        received = False
+        while True:
+            left = timeout - (time.monotonic() - started) if not received else 1.0
+            if not received and left <= 0:
+                raise CliError(f"no message on '{name}' within {timeout:g} s ({where()})", NOT_FOUND)
+            if not waiter.wait(left):
+                continue
+            for sample in reader.take(N=64):
+                info = getattr(sample, "sample_info", None)
+                if info is not None and not info.valid_data:
+                    continue
+                out.write(format_message(dds.from_dds(sample), path or [], truncate_length, no_arr, no_str))
+                out.flush()
+                received = True
+                if once:
+                    return
+    finally:
+        graph.close()
+
+
+# -- pub -----------------------------------------------------------------------------------------
+
+
+def publish(
+    topic: str,
+    type_text: str,
+    values: str = "{}",
+    *,
+    period: float = 1.0,
+    print_nth: int = 1,
+    times: int = 0,
+    wait_matching: int = 0,
+    keep_alive: float = 0.1,
+    timeout: float = 5.0,
+    out: TextIO | None = None,
+) -> None:
+    """`ros2 topic pub`: publish the message every `period` seconds, `times` times (0: until
+    interrupted), after `wait_matching` subscriptions have matched (at most `timeout` s)."""
+    from ..msgs._yaml import ValuesError, from_yaml
+
+    out = out or sys.stdout
+    name = full_name(topic)
+    use_working_directory()
+    cls = message_class(type_text)
+    try:
+        msg, stamps = from_yaml(cls, values)
+    except ValuesError as e:
+        raise CliError(f"invalid VALUES: {e}") from None
+    graph = open_graph()
+    try:
+        dds = _dds()
+        writer = _writer(graph, f"rt{name}", dds.dds_type(cls), _qos(True, False, PUB_DEPTH))
+        if wait_matching:
+            _wait_for_subscriptions(graph, writer, name, cls, wait_matching, timeout, out)
+        out.write("publisher: beginning loop\n")
+        count = 0
+        next_at = time.monotonic()
+        while True:
+            now_ns = time.time_ns()
+            for set_stamp in stamps:
+                set_stamp(now_ns // 1_000_000_000, now_ns % 1_000_000_000)
+            count += 1
+            if print_nth and count % print_nth == 0:
+                out.write(f"publishing #{count}: {msg!r}\n\n")
+                out.flush()
+            writer.write(dds.to_dds(msg))
+            if times and count >= times:
+                break
+            next_at += period
+            time.sleep(max(0.0, next_at - time.monotonic()))
+        from cyclonedds.util import duration
+
+        writer.wait_for_acks(duration(seconds=max(keep_alive, 1.0)))  # reliable: delivered before we leave
+        time.sleep(keep_alive)
+    finally:
+        graph.close()
+
+
+def _wait_for_subscriptions(
+    graph: Graph, writer: Any, name: str, cls: type[Message], n: int, timeout: float, out: TextIO
+) -> None:
+    deadline = time.monotonic() + timeout
+    said = False
+    while writer.get_publication_matched_status().current_count < n:
+        graph.update()
+        _check_types(graph, name, cls, graph.topic_endpoints(name, "subscription"))
+        if time.monotonic() >= deadline:
+            found = writer.get_publication_matched_status().current_count
+            raise CliError(
+                f"Timed out waiting for subscribers: expected {n} matching subscription(s) on '{name}' "
+                f"within {timeout:g} s, found {found} ({where()})",
+                NOT_FOUND,
+            )
+        if not said:
+            out.write(f"Waiting for at least {n} matching subscription(s)...\n")
+            out.flush()
+            said = True
+        time.sleep(0.05)
+
+
+# -- hz ------------------------------------------------------------------------------------------
+
+
+class RateMeter:
+    """ros2 topic hz's statistics over the gaps between the last `window` messages."""
+
+    def __init__(self, window: int = 10000) -> None:
+        self.window = window
+        self.last_ns: int | None = None
+        self.gaps: list[int] = []
+        self._printed_at: int | None = None
+
+    def tick(self, now_ns: int) -> None:
+        if self.last_ns is not None and now_ns >= self.last_ns:
+            self.gaps.append(now_ns - self.last_ns)
+            if len(self.gaps) > self.window:
+                del self.gaps[0]
+        self.last_ns = now_ns
+
+    def report(self) -> str | None:
+        """The text ros2 prints each second, or None with nothing new to say."""
+        if not self.gaps or self.last_ns == self._printed_at:
+            return None
+        self._printed_at = self.last_ns
+        n = len(self.gaps)
+        mean = sum(self.gaps) / n
+        rate = 1e9 / mean if mean > 0 else 0.0
+        std = math.sqrt(sum((g - mean) ** 2 for g in self.gaps) / n)
+        return (
+            f"average rate: {rate:.3f}\n\tmin: {min(self.gaps) * 1e-9:.3f}s max: {max(self.gaps) * 1e-9:.3f}s "
+            f"std dev: {std * 1e-9:.5f}s window: {n}\n"
+        )
+
+
+def hz(
+    topic: str,
+    *,
+    window: int = 10000,
+    duration: float | None = None,
+    timeout: float = 5.0,
+    out: TextIO | None = None,
+) -> None:
+    """`ros2 topic hz`: the publishing rate every second, until interrupted or `duration` ends."""
+    out = out or sys.stdout
+    name = full_name(topic)
+    use_working_directory()
+    graph = open_graph()
+    try:
+        started = time.monotonic()
+        cls = _class_of_topic(name, wait_for_topic_types(graph, name, timeout))
+        dds = _dds()
+        reader = _reader(graph, f"rt{name}", dds.dds_type(cls), _qos(False, False, ECHO_DEPTH))
+        waiter = _Waiter(graph, reader)
+        meter = RateMeter(window)
+        next_print = time.monotonic() + 1.0
+        end = started + duration if duration else math.inf
+        while True:
+            now = time.monotonic()
+            if now >= end:
+                return
+            if meter.last_ns is None and now - started >= timeout:
+                raise CliError(f"no message on '{name}' within {timeout:g} s ({where()})", NOT_FOUND)
+            if waiter.wait(min(next_print, end) - now):
+                for sample in reader.take(N=256):
+                    info = getattr(sample, "sample_info", None)
+                    if info is None or info.valid_data:
+                        meter.tick(time.monotonic_ns())
+            if time.monotonic() >= next_print:
+                text = meter.report()
+                if text:
+                    out.write(text)
+                    out.flush()
+                next_print += 1.0
+    finally:
+        graph.close()
+
+
+# -- service call --------------------------------------------------------------------------------
+
+
+def call(
+    service: str,
+    type_text: str,
+    values: str = "{}",
+    *,
+    period: float | None = None,
+    timeout: float = 5.0,
+    out: TextIO | None = None,
+) -> None:
+    """`ros2 service call`: send the request (every `period` seconds when given) and print the
+    response.  No server within `timeout`, or no answer within `timeout`: exit status 1."""
+    from ..msgs._yaml import ValuesError, from_yaml
+
+    out = out or sys.stdout
+    name = full_name(service, "service")
+    use_working_directory()
+    srv = service_class(type_text)
+    try:
+        request, stamps = from_yaml(srv.Request, values)
+    except ValuesError as e:
+        raise CliError(f"invalid VALUES: {e}") from None
+    graph = open_graph()
+    try:
+        requester = _Requester(graph, name, srv)
+        if not requester.ready():
+            out.write("waiting for service to become available...\n")
+            out.flush()
+            if not requester.wait_ready(timeout):
+                raise CliError(f"service '{name}' not available within {timeout:g} s ({where()})", NOT_FOUND)
+        while True:
+            now_ns = time.time_ns()
+            for set_stamp in stamps:
+                set_stamp(now_ns // 1_000_000_000, now_ns % 1_000_000_000)
+            out.write(f"requester: making request: {request!r}\n\n")
+            out.flush()
+            last = time.monotonic()
+            response = requester.call(request, timeout)
+            out.write(f"response:\n{response!r}\n\n")
+            out.flush()
+            if period is None:
+                return
+            time.sleep(max(0.0, last + period - time.monotonic()))
+    finally:
+        graph.close()
+
+
+class _Requester:
+    """One client of one service: a writer of `rq/<name>Request`, a reader of `rr/<name>Reply`,
+    requests and replies in rmw_cyclonedds's wrapping (a header of client GUID and sequence)."""
+
+    def __init__(self, graph: Graph, name: str, srv: Any) -> None:
+        self.graph = graph
+        self.name = name
+        self.srv = srv
+        dds = _dds()
+        request_type, response_type = dds.service_types(srv)
+        qos = _qos(True, False, PUB_DEPTH)
+        self.writer = _writer(graph, f"rq{name}Request", request_type, qos)
+        self.reader = _reader(graph, f"rr{name}Reply", response_type, qos)
+        self.waiter = _Waiter(graph, self.reader)
+        self.client_id = dds.client_id(self.writer)
+        self.sequence = 0
+
+    def ready(self) -> bool:
+        return (
+            self.writer.get_publication_matched_status().current_count > 0
+            and self.reader.get_subscription_matched_status().current_count > 0
+        )
+
+    def wait_ready(self, timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        while not self.ready():
+            self.graph.update()
+            types = self.graph.services(include_hidden=True).get(self.name)
+            if types and self.srv._TYPE not in types:
+                raise CliError(f"service '{self.name}' has type {', '.join(types)}, not {self.srv._TYPE}", NOT_FOUND)
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.05)
+        return True
+
+    def call(self, request: Any, timeout: float) -> Any:
+        dds = _dds()
+        self.sequence += 1
+        self.writer.write(dds.wrap_request(self.srv, request, self.client_id, self.sequence))
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise CliError(f"no response from service '{self.name}' within {timeout:g} s", NOT_FOUND)
+            if self.reader.get_subscription_matched_status().current_count == 0:
+                raise CliError(f"service '{self.name}' went away before it answered", NOT_FOUND)
+            if not self.waiter.wait(min(left, 0.2)):
+                continue
+            for sample in self.reader.take(N=16):
+                info = getattr(sample, "sample_info", None)
+                if info is not None and not info.valid_data:
+                    continue
+                client_id, sequence, response = dds.unwrap_response(self.srv, sample)
+                if client_id == self.client_id and sequence == self.sequence:
+                    return response
