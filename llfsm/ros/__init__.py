@@ -110,6 +110,9 @@ def spin(node: Node) -> None:
     while bus.ok():
         if bus.ctx.deadline is not None and bus.clock.now >= bus.ctx.deadline:
             return
+        if bus.transport.remote:  # other processes can always bring something: wait for it
+            bus.spin_once(100_000_000)
+            continue
         if not bus.spin_once(0) and bus.next_timer_due() is None:
             return  # nothing can ever happen: do not hang
         if not bus.ready:

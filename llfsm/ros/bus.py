@@ -8,6 +8,11 @@ reproducible byte for byte.
 Delivery: publishing copies the message once per reader (so a machine may keep mutating and
 re-publishing one object, as the seed machines do); a PULL reader keeps only the newest
 message; a PUSH subscription queues up to its QoS depth, dropping the oldest.
+
+The bus delivers within its process itself; the run's transport (transports/) carries traffic
+to and from other processes.  With the in-process transport nothing else happens; with DDS the
+executor also takes what arrived (`transport.poll`, a cheap check when nothing did) and waits
+on it instead of sleeping blindly.
 """
 
 from __future__ import annotations
@@ -24,6 +29,8 @@ from typing import IO, TYPE_CHECKING, Any
 
 from ..runtime.context import RunContext, current
 from .names import Remap
+from .transports.base import RemoteClient, Transport
+from .transports.inproc import InProcess
 
 if TYPE_CHECKING:
     from ..msgs._message import Message
@@ -44,9 +51,10 @@ class FutureReturnCode(Enum):
 class Future:
     """The result of an asynchronous service call (`client.call_async`)."""
 
-    __slots__ = ("_callbacks", "_cancelled", "_done", "_exception", "_result", "_service")
+    __slots__ = ("_callbacks", "_cancelled", "_done", "_exception", "_remote", "_result", "_service")
 
-    def __init__(self, service: str | None = None) -> None:
+    def __init__(self, service: str | None = None, remote: RemoteClient | None = None) -> None:
+        self._remote = remote  # the transport's client that sent the request to another process
         self._done = False
         self._cancelled = False
         self._result: Any = None
@@ -150,6 +158,10 @@ class Bus:
         #: None: whatever sys.stderr (or sys.stdout) is when a line is logged, so that a
         #: redirection made after the bus started is honoured.
         self.log_stream: IO[str] | None = None
+        self.transport: Transport = ctx.extras.get("transport") or InProcess()
+        #: The transport's poll when it can bring anything in (never for the in-process one).
+        self._poll = self.transport.poll if self.transport.remote else None
+        self.transport.start(self)
         ctx.between_rounds.append(self.spin_some)
 
     # -- lifecycle ---------------------------------------------------------------------------
@@ -172,11 +184,19 @@ class Bus:
         heapq.heappush(self.timers, (due, next(self._seq), timer))
 
     def watch(self, name: str, fn: Callable[[Topic], None]) -> None:
-        """Call fn(topic) once the topic exists (now, if it already does)."""
+        """Call fn(topic) once the topic exists (now, if it already does), in this process or,
+        with a remote transport, once a publisher of it appears in another process."""
         if name in self.topics:
             fn(self.topics[name])
-        else:
-            self.watchers.setdefault(name, []).append(fn)
+            return
+        self.watchers.setdefault(name, []).append(fn)
+        if self.transport.remote:
+
+            def found(type_: type[Message]) -> None:
+                if name not in self.topics:
+                    self.topic(name, type_, "subscribe to")  # calls the watchers
+
+            self.transport.discover(name, found)
 
     def next_timer_due(self) -> int | None:
         while self.timers and self.timers[0][2]._cancelled:
@@ -202,7 +222,10 @@ class Bus:
 
     # -- the executor --------------------------------------------------------------------------
     def spin_some(self) -> None:
-        """Between rounds: due timers, then the work queued before this call (first in, first out)."""
+        """Between rounds: what arrived from other processes, due timers, then the work queued
+        before this call (first in, first out)."""
+        if self._poll is not None:
+            self._poll()
         if self.timers and self.timers[0][0] <= self.clock.now:
             self._fire_due_timers(self.clock.now)
         ready = self.ready
@@ -211,7 +234,10 @@ class Bus:
 
     def spin_once(self, timeout_ns: int) -> bool:
         """One piece of work: a due timer, or the oldest queued item; else wait up to timeout_ns
-        for the next timer (the sim clock jumps, the wall clock sleeps).  True if work ran."""
+        for the next timer or (with a remote transport) for data from another process (the sim
+        clock jumps, the wall clock sleeps).  True if work ran."""
+        if self._poll is not None:
+            self._poll()
         now = self.clock.now
         if self.timers and self.timers[0][0] <= now:
             return self._fire_due_timers(now)
@@ -222,6 +248,15 @@ class Bus:
             return False
         due = self.next_timer_due()
         deadline = now + timeout_ns
+        if self._poll is not None:
+            self.transport.wait(deadline if due is None else min(due, deadline))
+            self._poll()
+            if self.timers and self.timers[0][0] <= self.clock.now:
+                return self._fire_due_timers(self.clock.now)
+            if self.ready:
+                self.ready.popleft()._run()
+                return True
+            return False
         if due is None or due > deadline:
             self.clock.sleep_until(deadline)
             return False
@@ -237,16 +272,35 @@ class Bus:
                 return FutureReturnCode.SUCCESS
             if not self.ok():
                 return FutureReturnCode.INTERRUPTED
-            if future._service is not None and future._service not in self.services:
+            remote = future._remote
+            if remote is not None:
+                if not remote.can_still_answer(future):
+                    return FutureReturnCode.TIMEOUT  # no server in any process, or it went away
+            elif future._service is not None and future._service not in self.services:
                 return FutureReturnCode.TIMEOUT  # no server: nothing in this process can answer
+            if self._poll is not None:
+                self._poll()
             if self.timers and self.timers[0][0] <= self.clock.now:
                 self._fire_due_timers(self.clock.now)
                 continue
             if self.ready:
                 self.ready.popleft()._run()
                 continue
-            # nothing ready: only a timer can still change anything
             due = self.next_timer_due()
+            if remote is not None:
+                # another process may still answer: wait for data, a timer or the deadline,
+                # and look again at least every 100 ms (a server that vanished)
+                until = self.clock.now + 100_000_000
+                for t in (due, deadline):
+                    if t is not None:
+                        until = min(until, t)
+                self.transport.wait(until)
+                if deadline is not None and self.clock.now >= deadline and not future.done():
+                    self._poll()
+                    if not future.done():
+                        return FutureReturnCode.TIMEOUT
+                continue
+            # nothing ready: only a timer can still change anything
             if due is None:
                 return FutureReturnCode.TIMEOUT  # would block forever: say so at once
             if deadline is not None and due > deadline:

@@ -1,0 +1,541 @@
+"""The DDS transport: the bus on ROS 2's wire, through Cyclone DDS (the `cyclonedds` package).
+
+What a ROS 2 peer sees, as rmw_cyclonedds_cpp makes it (SPEC 6):
+- one DomainParticipant per run (USER_DATA `enclave=/;`), configured from the ROS_* variables
+  (dds_config.py);
+- each `ros.Node` a ROS 2 node, announced on `ros_discovery_info` (rmw_dds_common's
+  ParticipantEntitiesInfo: the participant's gid and, per node, its name, namespace and the gids
+  of its readers and writers; reliable, transient local, keep last 1), so `ros2 node list` and
+  rclpy's graph API list them;
+- topics `rt/<name>`, services `rq/<name>Request` + `rr/<name>Reply`, type names
+  `pkg::msg::dds_::Name_`; QoS as rclpy's defaults (reliable, keep last depth, volatile, no
+  autodispose), payloads XCDR1;
+- service endpoints carry `serviceid=` / `clientid=` in USER_DATA and requests carry
+  rmw_cyclonedds's header (client id and sequence number) in the payload, so clients and
+  servers on rmw_cyclonedds_cpp pair with ours exactly as with their own.
+
+The bus delivers within the process itself; Cyclone's readers ignore this participant's own
+writers (no message arrives twice).  Everything runs on the scheduler's thread: Cyclone receives
+on its own threads, and `poll` takes what arrived.  One WaitSet holds a read condition per
+reader and the writers' match status, so `poll` after an idle round is one `wait(0)` call,
+whatever the number of readers; `wait` blocks on the same WaitSet (data wakes it).
+"""
+
+from __future__ import annotations
+
+import ctypes as ct
+import itertools
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
+from cyclonedds.core import (
+    DDSStatus,
+    Entity,
+    InstanceState,
+    Policy,
+    Qos,
+    ReadCondition,
+    SampleState,
+    ViewState,
+    WaitSet,
+)
+from cyclonedds.pub import DataWriter, Publisher
+from cyclonedds.sub import DataReader, Subscriber
+from cyclonedds.topic import Topic
+
+from . import _ddstypes as types
+from . import dds_config
+from .base import Transport
+
+if TYPE_CHECKING:
+    from ...msgs._message import Message
+    from ..bus import Bus, Future
+    from ..node import Client, Node, ServiceServer, Subscription
+    from ..node import Publisher as RosPublisher
+
+ANY = SampleState.Any | ViewState.Any | InstanceState.Any
+U64 = (1 << 64) - 1
+#: How long a server keeps an answer for a client whose reply reader it has not matched yet
+#: (rmw_cyclonedds_cpp blocks 100 ms for this; we park the reply and go on running rounds).
+REPLY_PATIENCE_S = 2.0
+#: How long a client trusts its last look at the server's matches (spin calls ask often).
+READY_CACHE_S = 0.05
+TAKE_BATCH = 256
+
+
+def _qos(depth: int, user_data: bytes = b"", *, reader: bool = False) -> Qos:
+    """rclpy's default QoS as rmw_cyclonedds_cpp sets it: reliable, keep last `depth`, volatile,
+    automatic liveliness, no autodispose; XCDR1; a reader ignores its own participant."""
+    policies: list[Any] = [
+        Policy.Reliability.Reliable(max_blocking_time=1_000_000_000),
+        Policy.History.KeepLast(depth),
+        Policy.Durability.Volatile,
+        Policy.DataRepresentation(use_cdrv0_representation=True),
+    ]
+    if reader:
+        policies.append(Policy.IgnoreLocal.Participant)
+    else:
+        policies.append(Policy.WriterDataLifecycle(autodispose=False))
+    if user_data:
+        policies.append(Policy.Userdata(user_data))
+    return Qos(*policies)
+
+
+def _user_data_key(qos: Qos | None, key: str) -> str | None:
+    """`key=value;` from an endpoint's USER_DATA (rmw_cyclonedds's format), or None."""
+    if qos is None:
+        return None
+    try:
+        raw = qos[Policy.Userdata].data
+    except (KeyError, AttributeError, TypeError):
+        return None
+    for item in bytes(raw).decode("utf-8", "replace").split(";"):
+        k, sep, v = item.partition("=")
+        if sep and k == key:
+            return v
+    return None
+
+
+class _WaitSet:
+    """A Cyclone WaitSet whose attachments are small integers naming our handlers, so a wait
+    returns just the handlers that have something (the Python wrapper does not expose this)."""
+
+    def __init__(self, dp: Any) -> None:
+        self.ws = WaitSet(dp)
+        self.handlers: dict[int, Any] = {}
+        self._ids = itertools.count(1)
+        self._xs = (ct.c_void_p * 8)()
+
+    def attach(self, entity: Entity, handler: Any) -> int:
+        token = next(self._ids)
+        ret = self.ws._waitset_attach(self.ws._ref, entity._ref, token)
+        if ret < 0:
+            raise RuntimeError(f"cannot attach {entity!r} to the wait set ({ret})")
+        self.handlers[token] = handler
+        if len(self.handlers) > len(self._xs):
+            self._xs = (ct.c_void_p * (2 * len(self.handlers)))()
+        return token
+
+    def detach(self, entity: Entity, token: int) -> None:
+        if self.handlers.pop(token, None) is not None:
+            self.ws._waitset_detach(self.ws._ref, entity._ref)
+
+    def wait(self, timeout_ns: int) -> list[Any]:
+        xs = self._xs
+        n = self.ws._waitset_wait(self.ws._ref, ct.cast(xs, ct.POINTER(ct.c_void_p)), len(xs), max(0, timeout_ns))
+        if n <= 0:
+            return []
+        handlers = self.handlers
+        return [h for h in (handlers.get(xs[i]) for i in range(min(n, len(xs)))) if h is not None]
+
+
+def _delete(*entities: Entity | None) -> None:
+    for e in entities:
+        if e is not None:
+            e.__del__()  # dds_delete now; the wrapper's own __del__ later does nothing
+
+
+# -- endpoints ------------------------------------------------------------------------------------
+
+
+class _Endpoint:
+    """One node's DDS reader or writer, as the graph announcement lists it."""
+
+    node: Any
+    readers: tuple[Entity, ...] = ()
+    writers: tuple[Entity, ...] = ()
+
+
+class _Writer(_Endpoint):
+    def __init__(self, t: DdsTransport, pub: RosPublisher) -> None:
+        self.t, self.node = t, pub.node
+        self.sample = types.to_sample
+        topic = t.topic("rt" + pub.topic_name, types.topic_type(pub.msg_type))
+        self.writer = DataWriter(t.publisher_, topic, qos=_qos(pub.depth))
+        self.writers = (self.writer,)
+        self.matched = 0
+        self.writer.set_status_mask(DDSStatus.PublicationMatched)
+        self.token = t.waits.attach(self.writer, self)
+        t.add_endpoint(self)
+
+    def on_trigger(self) -> None:
+        self.matched = self.writer.get_publication_matched_status().current_count
+
+    def write(self, msg: Message) -> None:
+        if self.matched:  # nobody elsewhere: skip the serialisation (volatile: nothing is kept)
+            self.writer.write(self.sample(msg))
+
+    def subscription_count(self) -> int:
+        return self.matched
+
+    def close(self) -> None:
+        self.t.waits.detach(self.writer, self.token)
+        self.t.remove_endpoint(self)
+        _delete(self.writer)
+
+
+class _Reader(_Endpoint):
+    def __init__(self, t: DdsTransport, sub: Subscription) -> None:
+        self.t, self.node, self.sub = t, sub.node, sub
+        self.msg_type = sub.msg_type
+        topic = t.topic("rt" + sub.topic_name, types.topic_type(sub.msg_type))
+        self.reader = DataReader(t.subscriber_, topic, qos=_qos(sub.depth, reader=True))
+        self.readers = (self.reader,)
+        self.cond = ReadCondition(self.reader, ANY)
+        self.token = t.waits.attach(self.cond, self)
+        t.add_endpoint(self)
+
+    def on_trigger(self) -> None:
+        deliver, cls, back = self.sub._deliver, self.msg_type, types.from_sample
+        for s in self.reader.take(N=TAKE_BATCH):
+            if s.sample_info.valid_data:
+                deliver(back(s, cls))
+
+    def close(self) -> None:
+        self.t.waits.detach(self.cond, self.token)
+        self.t.remove_endpoint(self)
+        _delete(self.cond, self.reader)
+
+
+class _RemoteRequest:
+    """A request from another process, queued in the executor like a local one."""
+
+    __slots__ = ("guid", "request", "seq", "server", "writer_handle")
+
+    def __init__(self, server: _Server, guid: int, seq: int, request: Message, writer_handle: int) -> None:
+        self.server, self.guid, self.seq, self.request, self.writer_handle = server, guid, seq, request, writer_handle
+
+    def _run(self) -> None:
+        if self.server.closed:
+            return
+        response = self.server.srv._answer(self.request)
+        self.server.reply(self, response, time.monotonic() + REPLY_PATIENCE_S)
+
+
+class _Server(_Endpoint):
+    def __init__(self, t: DdsTransport, srv: ServiceServer) -> None:
+        self.t, self.node, self.srv = t, srv.node, srv
+        self.closed = False
+        name = srv.srv_name
+        user = f"serviceid={t.new_csid()};".encode()
+        self.req_type, self.rep_type = types.request_type(srv.type), types.reply_type(srv.type)
+        self.reader = DataReader(
+            t.subscriber_, t.topic(f"rq{name}Request", self.req_type), qos=_qos(1000, user, reader=True)
+        )
+        self.writer = DataWriter(t.publisher_, t.topic(f"rr{name}Reply", self.rep_type), qos=_qos(1000, user))
+        self.readers, self.writers = (self.reader,), (self.writer,)
+        self.cond = ReadCondition(self.reader, ANY)
+        self.token = t.waits.attach(self.cond, self)
+        t.add_endpoint(self)
+
+    def on_trigger(self) -> None:
+        cls = self.srv.type.Request
+        for s in self.reader.take(N=TAKE_BATCH):
+            if s.sample_info.valid_data:
+                guid, seq, request = types.unwrap(s, cls)
+                self.t.bus.ready.append(_RemoteRequest(self, guid, seq, request, s.sample_info.publication_handle))
+
+    def _client_present(self, writer_handle: int) -> str:
+        """rmw_cyclonedds_cpp's check before answering: is the client's reply reader matched yet?"""
+        try:
+            ep = self.reader.get_matched_publication_data(writer_handle)
+        except Exception:
+            ep = None
+        if ep is None:
+            return "gone"
+        clientid = _user_data_key(ep.qos, "clientid")
+        if clientid is None:
+            return "yes"  # a client without an id (older rmw, Fast DDS): assume all is well
+        for h in self.writer.get_matched_subscriptions():
+            try:
+                rd = self.writer.get_matched_subscription_data(h)
+            except Exception:
+                continue
+            if rd is not None and _user_data_key(rd.qos, "clientid") == clientid:
+                return "yes"
+        return "maybe"
+
+    def reply(self, req: _RemoteRequest, response: Message, give_up: float) -> bool:
+        """Send the answer if the client can receive it; park it (True) while it cannot yet."""
+        if self.closed:
+            return False
+        state = self._client_present(req.writer_handle)
+        if state == "maybe" and time.monotonic() < give_up:
+            self.t.park(lambda: self.reply(req, response, give_up))
+            return True
+        if state == "yes":
+            self.writer.write(types.wrap(self.rep_type, req.guid, req.seq, response))
+        return False
+
+    def close(self) -> None:
+        self.closed = True
+        self.t.waits.detach(self.cond, self.token)
+        self.t.remove_endpoint(self)
+        _delete(self.cond, self.reader, self.writer)
+
+
+class _Client(_Endpoint):
+    def __init__(self, t: DdsTransport, cli: Client) -> None:
+        self.t, self.node, self.cli = t, cli.node, cli
+        name = cli.srv_name
+        user = f"clientid={t.new_csid()};".encode()
+        self.req_type, self.rep_type = types.request_type(cli.srv_type), types.reply_type(cli.srv_type)
+        self.writer = DataWriter(t.publisher_, t.topic(f"rq{name}Request", self.req_type), qos=_qos(1000, user))
+        self.reader = DataReader(
+            t.subscriber_, t.topic(f"rr{name}Reply", self.rep_type), qos=_qos(1000, user, reader=True)
+        )
+        self.readers, self.writers = (self.reader,), (self.writer,)
+        self.guid = self.writer.get_instance_handle() & U64  # rmw_cyclonedds: the request writer's handle
+        self.seq = itertools.count(1)
+        self.pending: dict[int, Future] = {}
+        self.unanswerable: set[int] = set()  # futures sent while no server was matched
+        self._ready_at = -1.0
+        self._ready = False
+        self.cond = ReadCondition(self.reader, ANY)
+        self.token = t.waits.attach(self.cond, self)
+        t.add_endpoint(self)
+
+    def on_trigger(self) -> None:
+        cls = self.cli.srv_type.Response
+        for s in self.reader.take(N=TAKE_BATCH):
+            if not s.sample_info.valid_data:
+                continue
+            guid, seq, response = types.unwrap(s, cls)
+            if guid & U64 != self.guid:
+                continue  # an answer to another client of the same service
+            future = self.pending.pop(seq, None)
+            if future is not None and not future.done():
+                future.set_result(response)
+
+    def ready(self) -> bool:
+        """rmw_cyclonedds_cpp's test: a matched request reader and a matched reply writer of the
+        same server (by `serviceid=`), or both matched at all when no server says its id."""
+        now = time.monotonic()
+        if now - self._ready_at < READY_CACHE_S:
+            return self._ready
+        self._ready_at = now
+        readers = self.writer.get_matched_subscriptions()
+        writers = self.reader.get_matched_publications()
+        ids = set()
+        for h in readers:
+            try:
+                ep = self.writer.get_matched_subscription_data(h)
+            except Exception:
+                continue
+            sid = _user_data_key(ep.qos if ep is not None else None, "serviceid")
+            if sid is not None:
+                ids.add(sid)
+        if not ids:
+            self._ready = bool(readers) and bool(writers)
+        else:
+            self._ready = False
+            for h in writers:
+                try:
+                    ep = self.reader.get_matched_publication_data(h)
+                except Exception:
+                    continue
+                if _user_data_key(ep.qos if ep is not None else None, "serviceid") in ids:
+                    self._ready = True
+                    break
+        return self._ready
+
+    def send(self, request: Message, future: Future) -> None:
+        seq = next(self.seq)
+        if not self.ready():
+            self.unanswerable.add(id(future))
+        self.pending[seq] = future
+        self.writer.write(types.wrap(self.req_type, self.guid, seq, request))
+
+    def can_still_answer(self, future: Future) -> bool:
+        if id(future) in self.unanswerable:
+            return False
+        self._ready_at = -1.0 if time.monotonic() - self._ready_at > 0.2 else self._ready_at
+        return self.ready()
+
+    def close(self) -> None:
+        self.t.waits.detach(self.cond, self.token)
+        self.t.remove_endpoint(self)
+        _delete(self.cond, self.reader, self.writer)
+
+
+class _Discovery:
+    """Watches DCPSPublication for topics asked about (`--echo` of a topic published elsewhere)."""
+
+    def __init__(self, t: DdsTransport) -> None:
+        self.t = t
+        self.wanted: dict[str, list[Callable[[type], None]]] = {}
+        self.reader = BuiltinDataReader(t.dp, BuiltinTopicDcpsPublication)
+        self.cond = ReadCondition(self.reader, ANY)
+        self.token = t.waits.attach(self.cond, self)
+
+    def on_trigger(self) -> None:
+        for s in self.reader.take(N=TAKE_BATCH):
+            name = getattr(s, "topic_name", None)
+            if not name or not name.startswith("rt") or name[2:] not in self.wanted:
+                continue
+            cls = message_class(getattr(s, "type_name", ""))
+            if cls is None:
+                continue
+            for fn in self.wanted.pop(name[2:]):
+                fn(cls)
+
+    def close(self) -> None:
+        self.t.waits.detach(self.cond, self.token)
+        _delete(self.cond, self.reader)
+
+
+def message_class(dds_type: str) -> type[Message] | None:
+    """`geometry_msgs::msg::dds_::Twist_` -> llfsm's Twist class, or None if llfsm has none."""
+    import importlib
+
+    parts = dds_type.split("::")
+    if len(parts) != 4 or parts[2] != "dds_" or not parts[3].endswith("_"):
+        return None
+    try:
+        module = importlib.import_module(f"llfsm.msgs.{parts[0]}.{parts[1]}")
+    except ImportError:
+        return None
+    return getattr(module, parts[3][:-1], None)
+
+
+# -- the transport ----------------------------------------------------------------------------------
+
+
+class DdsTransport(Transport):
+    name = "dds"
+    remote = True
+
+    def __init__(self, domain_id: int | None = None) -> None:
+        self.dp = dds_config.participant(domain_id)
+        self.publisher_ = Publisher(self.dp)
+        self.subscriber_ = Subscriber(self.dp)
+        self.waits = _WaitSet(self.dp)
+        self._topics: dict[str, Topic] = {}
+        self._endpoints: dict[int, list[_Endpoint]] = {}
+        self._parked: list[Callable[[], bool]] = []
+        self._discovery: _Discovery | None = None
+        self._csids = itertools.count(1)
+        self._gid = self.dp.get_guid().bytes
+        self._dirty = True
+        self.closed = False
+        graph_qos = Qos(
+            Policy.Reliability.Reliable(max_blocking_time=1_000_000_000),
+            Policy.History.KeepLast(1),
+            Policy.Durability.TransientLocal,
+            Policy.DataRepresentation(use_cdrv0_representation=True),
+            Policy.WriterDataLifecycle(autodispose=False),
+        )
+        self._info = DataWriter(
+            self.publisher_, self.topic("ros_discovery_info", types.ParticipantEntitiesInfo), qos=graph_qos
+        )
+
+    def start(self, bus: Bus) -> None:
+        self.bus = bus
+        clock = bus.clock
+        if getattr(clock, "kind", "") == "wall" and hasattr(clock, "waiter"):
+            clock.waiter = self._idle_wait  # the idle sleep between rounds wakes on data
+        bus.ctx.at_end.append(self.close)
+
+    # -- bookkeeping --------------------------------------------------------------------------
+    def topic(self, name: str, idl: type) -> Topic:
+        t = self._topics.get(name)
+        if t is None:
+            t = self._topics[name] = Topic(self.dp, name, idl)
+        return t
+
+    def new_csid(self) -> str:
+        """rmw_cyclonedds_cpp's client/service id: the participant's 12-byte prefix and a counter."""
+        data = self._gid[:12] + next(self._csids).to_bytes(4, "big")
+        return ".".join(f"{b:x}" for b in data)
+
+    def add_endpoint(self, ep: _Endpoint) -> None:
+        self._endpoints.setdefault(id(ep.node), []).append(ep)
+        self._dirty = True
+
+    def remove_endpoint(self, ep: _Endpoint) -> None:
+        eps = self._endpoints.get(id(ep.node), [])
+        if ep in eps:
+            eps.remove(ep)
+        self._dirty = True
+
+    def park(self, retry: Callable[[], bool]) -> None:
+        self._parked.append(retry)
+
+    # -- the Transport interface ------------------------------------------------------------------
+    def publisher(self, pub: RosPublisher) -> _Writer:
+        return _Writer(self, pub)
+
+    def subscription(self, sub: Subscription) -> _Reader:
+        return _Reader(self, sub)
+
+    def service(self, srv: ServiceServer) -> _Server:
+        return _Server(self, srv)
+
+    def client(self, cli: Client) -> _Client:
+        return _Client(self, cli)
+
+    def node_changed(self, node: Node) -> None:
+        self._dirty = True
+
+    def discover(self, topic: str, fn: Callable[[type], None]) -> None:
+        if self._discovery is None:
+            self._discovery = _Discovery(self)
+        self._discovery.wanted.setdefault(topic, []).append(fn)
+
+    def poll(self) -> bool:
+        if self._dirty:
+            self._announce()
+        if self._parked:
+            parked, self._parked = self._parked, []
+            for retry in parked:
+                retry()
+        handlers = self.waits.wait(0)
+        for h in handlers:
+            h.on_trigger()
+        return bool(handlers)
+
+    def wait(self, until_ns: int) -> None:
+        clock = self.bus.clock
+        read = getattr(clock, "read", None)
+        now = read() if read is not None else clock.now
+        if until_ns > now:
+            self.waits.wait(min(until_ns - now, 10**10) if not self._parked else min(until_ns - now, 10_000_000))
+        clock.now = read() if read is not None else until_ns
+
+    def _idle_wait(self, ns: int) -> None:
+        """The wall clock's idle sleep: as long, unless data arrives first."""
+        self.waits.wait(ns if not self._parked else min(ns, 10_000_000))
+
+    # -- the graph ----------------------------------------------------------------------------------
+    def _announce(self) -> None:
+        """Publish this participant's ParticipantEntitiesInfo (ros_discovery_info), as rmw does
+        whenever a node or an endpoint comes or goes."""
+        self._dirty = False
+        nodes = []
+        for node in self.bus.nodes:
+            if node._destroyed:
+                continue
+            eps = self._endpoints.get(id(node), [])
+            readers = [types.gid(r.get_guid().bytes) for ep in eps for r in ep.readers]
+            writers = [types.gid(w.get_guid().bytes) for ep in eps for w in ep.writers]
+            nodes.append(
+                types.NodeEntitiesInfo(
+                    node_namespace=node.get_namespace(),
+                    node_name=node.get_name(),
+                    reader_gid_seq=readers,
+                    writer_gid_seq=writers,
+                )
+            )
+        self._info.write(types.ParticipantEntitiesInfo(gid=types.gid(self._gid), node_entities_info_seq=nodes))
+
+    def close(self) -> None:
+        """Leave the domain: peers see this participant and its endpoints go at once."""
+        if self.closed:
+            return
+        self.closed = True
+        clock = getattr(self, "bus", None) and self.bus.clock
+        if clock is not None and getattr(clock, "waiter", None) == self._idle_wait:
+            clock.waiter = None
+        _delete(self.dp)
