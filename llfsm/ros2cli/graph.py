@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from ..ros.transports.dds_graph import Graph
 
 NOT_FOUND = 1
+NEEDS_CYCLONEDDS = "the ros2-style verbs speak DDS and need the cyclonedds package ({}): pip install 'llfsm[dds]'"
 
 
 def open_graph() -> Graph:
@@ -26,9 +27,7 @@ def open_graph() -> Graph:
 
         return Graph()
     except ImportError as e:
-        raise CliError(
-            f"the ros2-style verbs speak DDS and need the cyclonedds package ({e}): pip install 'llfsm[dds]'"
-        ) from None
+        raise CliError(NEEDS_CYCLONEDDS.format(e)) from None
     except DiscoveryError as e:
         raise CliError(str(e)) from None
 
@@ -107,8 +106,6 @@ def node_list(graph: Graph, *, include_hidden: bool = False, count: bool = False
     if count:
         return f"{len(names)}\n"
     if not names:
-        if not graph.knows_nodes:
-            raise CliError("node names cannot be read: this build has no ros_discovery_info wire type", NOT_FOUND)
         raise CliError(f"no nodes found within {spin_time:g} s ({where()})", NOT_FOUND)
     return "".join(f"{n}\n" for n in names)
 

@@ -10,16 +10,20 @@ the domain is joined, so they cost nothing and exit 2; what is not there exits 1
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any, TextIO
 
 from . import CliError
-from .graph import NOT_FOUND, open_graph, where
+from .graph import NEEDS_CYCLONEDDS, NOT_FOUND, open_graph, where
 from .interfaces import message_class, service_class, use_working_directory
 
 if TYPE_CHECKING:
     from ..msgs import Message
+    from ..ros.node import Node
     from ..ros.transports.dds_graph import Endpoint, Graph
 
 #: rclpy's default QoS depth for `ros2 topic pub` ("default" profile) and `echo` ("sensor_data").
@@ -64,27 +68,28 @@ def _check_types(graph: Graph, name: str, cls: type[Message], endpoints: list[En
         raise CliError(f"topic '{name}' has {what} {', '.join(others)}, not {cls._TYPE}", NOT_FOUND)
 
 
-# -- the DDS forms of messages (llfsm/msgs/_dds.py, the ddstypes helper's module) ---------------
+# -- DDS: the transport's types and participant ------------------------------------------------
 
 
-def _dds() -> Any:
+def _types() -> Any:
+    """The DDS forms of llfsm's messages, as the transport makes them (one place for both)."""
     try:
-        from ..msgs import _dds  # type: ignore[attr-defined]
+        from ..ros.transports import _ddstypes
     except ImportError as e:
-        raise CliError(f"the DDS forms of messages are not available: {e}") from None
-    return _dds
+        raise CliError(NEEDS_CYCLONEDDS.format(e)) from None
+    return _ddstypes
 
 
 def _qos(reliable: bool, transient_local: bool, depth: int) -> Any:
+    """A reader's QoS: rclpy's profile as rmw_cyclonedds sets it (XCDR1), reliability and
+    durability as asked."""
     from cyclonedds.core import Policy, Qos
-    from cyclonedds.util import duration
 
     return Qos(
-        Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100))
-        if reliable
-        else Policy.Reliability.BestEffort,
+        Policy.Reliability.Reliable(max_blocking_time=100_000_000) if reliable else Policy.Reliability.BestEffort,
         Policy.Durability.TransientLocal if transient_local else Policy.Durability.Volatile,
         Policy.History.KeepLast(depth),
+        Policy.DataRepresentation(use_cdrv0_representation=True),
     )
 
 
@@ -92,14 +97,38 @@ def _reader(graph: Graph, dds_topic: str, wire_type: type, qos: Any) -> Any:
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
 
-    return DataReader(graph.participant, Topic(graph.participant, dds_topic, wire_type, qos=qos), qos=qos)
+    return DataReader(graph.participant, Topic(graph.participant, dds_topic, wire_type), qos=qos)
 
 
-def _writer(graph: Graph, dds_topic: str, wire_type: type, qos: Any) -> Any:
-    from cyclonedds.pub import DataWriter
-    from cyclonedds.topic import Topic
+@contextmanager
+def _node(name: str) -> Iterator[tuple[Node, Graph]]:
+    """A hidden ROS node of llfsm's own bus on the DDS transport (announced on the graph as
+    `ros2`'s own `_ros2cli_...` nodes are), and a graph reader on the same participant."""
+    from ..ros import bus_of
+    from ..ros.node import Node
+    from ..ros.transports.dds_config import DiscoveryError
+    from ..ros.transports.dds_graph import Graph
+    from ..runtime.clock import WallClock
+    from ..runtime.context import RunContext, activate
 
-    return DataWriter(graph.participant, Topic(graph.participant, dds_topic, wire_type, qos=qos), qos=qos)
+    _types()
+    from ..ros.transports.dds import DdsTransport
+
+    ctx = RunContext(WallClock())
+    try:
+        transport = DdsTransport()
+    except DiscoveryError as e:
+        raise CliError(str(e)) from None
+    ctx.extras["transport"] = transport
+    prev = activate(ctx)
+    try:
+        bus = bus_of(ctx)
+        bus.initialised = True
+        node = Node(name, start_parameter_services=False)
+        yield node, Graph(transport.dp)
+    finally:
+        transport.close()
+        activate(prev)
 
 
 class _Waiter:
@@ -206,8 +235,8 @@ def echo(
         # as ros2 echo: reliable / transient local only when every publisher offers it
         reliable = bool(publishers) and all(p.reliable for p in publishers)
         transient = bool(publishers) and all(p.transient_local for p in publishers)
-        dds = _dds()
-        reader = _reader(graph, f"rt{name}", dds.dds_type(cls), _qos(reliable, transient, ECHO_DEPTH))
+        types = _types()
+        reader = _reader(graph, f"rt{name}", types.topic_type(cls), _qos(reliable, transient, ECHO_DEPTH))
         waiter = _Waiter(graph, reader)
         received = False
         while True:
@@ -220,7 +249,8 @@ def echo(
                 info = getattr(sample, "sample_info", None)
                 if info is not None and not info.valid_data:
                     continue
-                out.write(format_message(dds.from_dds(sample), path or [], truncate_length, no_arr, no_str))
+                msg = types.from_sample(sample, cls)
+                out.write(format_message(msg, path or [], truncate_length, no_arr, no_str))
                 out.flush()
                 received = True
                 if once:
@@ -257,12 +287,10 @@ def publish(
         msg, stamps = from_yaml(cls, values)
     except ValuesError as e:
         raise CliError(f"invalid VALUES: {e}") from None
-    graph = open_graph()
-    try:
-        dds = _dds()
-        writer = _writer(graph, f"rt{name}", dds.dds_type(cls), _qos(True, False, PUB_DEPTH))
+    with _node(f"_llfsm_cli_{os.getpid()}") as (node, graph):
+        pub = node.create_publisher(cls, name, PUB_DEPTH)
         if wait_matching:
-            _wait_for_subscriptions(graph, writer, name, cls, wait_matching, timeout, out)
+            _wait_for_subscriptions(graph, pub, name, cls, wait_matching, timeout, out)
         out.write("publisher: beginning loop\n")
         count = 0
         next_at = time.monotonic()
@@ -274,29 +302,38 @@ def publish(
             if print_nth and count % print_nth == 0:
                 out.write(f"publishing #{count}: {msg!r}\n\n")
                 out.flush()
-            writer.write(dds.to_dds(msg))
+            pub.publish(msg)
             if times and count >= times:
                 break
             next_at += period
-            time.sleep(max(0.0, next_at - time.monotonic()))
-        from cyclonedds.util import duration
+            while (left := next_at - time.monotonic()) > 0:
+                node._bus.spin_once(int(left * 1e9))  # answers discovery meanwhile
+        _linger(node, pub, keep_alive)
 
-        writer.wait_for_acks(duration(seconds=max(keep_alive, 1.0)))  # reliable: delivered before we leave
-        time.sleep(keep_alive)
-    finally:
-        graph.close()
+
+def _linger(node: Node, pub: Any, keep_alive: float) -> None:
+    """Stay `keep_alive` seconds (as ros2 does) and until what was sent is acknowledged, at most
+    a second more: a reliable message must reach the wire before the participant goes."""
+    from cyclonedds.util import duration
+
+    for writer in getattr(pub._remote, "writers", ()):
+        writer.wait_for_acks(duration(seconds=1))
+    end = time.monotonic() + keep_alive
+    while (left := end - time.monotonic()) > 0:
+        node._bus.spin_once(int(left * 1e9))
 
 
 def _wait_for_subscriptions(
-    graph: Graph, writer: Any, name: str, cls: type[Message], n: int, timeout: float, out: TextIO
+    graph: Graph, pub: Any, name: str, cls: type[Message], n: int, timeout: float, out: TextIO
 ) -> None:
     deadline = time.monotonic() + timeout
     said = False
-    while writer.get_publication_matched_status().current_count < n:
+    while pub.get_subscription_count() < n:
+        pub.node._bus.spin_once(0)
         graph.update()
         _check_types(graph, name, cls, graph.topic_endpoints(name, "subscription"))
         if time.monotonic() >= deadline:
-            found = writer.get_publication_matched_status().current_count
+            found = pub.get_subscription_count()
             raise CliError(
                 f"Timed out waiting for subscribers: expected {n} matching subscription(s) on '{name}' "
                 f"within {timeout:g} s, found {found} ({where()})",
@@ -359,8 +396,7 @@ def hz(
     try:
         started = time.monotonic()
         cls = _class_of_topic(name, wait_for_topic_types(graph, name, timeout))
-        dds = _dds()
-        reader = _reader(graph, f"rt{name}", dds.dds_type(cls), _qos(False, False, ECHO_DEPTH))
+        reader = _reader(graph, f"rt{name}", _types().topic_type(cls), _qos(False, False, ECHO_DEPTH))
         waiter = _Waiter(graph, reader)
         meter = RateMeter(window)
         next_print = time.monotonic() + 1.0
@@ -410,13 +446,15 @@ def call(
         request, stamps = from_yaml(srv.Request, values)
     except ValuesError as e:
         raise CliError(f"invalid VALUES: {e}") from None
-    graph = open_graph()
-    try:
-        requester = _Requester(graph, name, srv)
-        if not requester.ready():
+    pkg, _, srv_name = srv._TYPE.split("/")
+    with _node(f"_llfsm_cli_requester_{pkg}_{srv_name}") as (node, graph):
+        from ..ros import FutureReturnCode, spin_until_future_complete
+
+        client = node.create_client(srv, name)
+        if not client.service_is_ready():
             out.write("waiting for service to become available...\n")
             out.flush()
-            if not requester.wait_ready(timeout):
+            if not _wait_for_service(graph, client, name, srv, timeout):
                 raise CliError(f"service '{name}' not available within {timeout:g} s ({where()})", NOT_FOUND)
         while True:
             now_ns = time.time_ns()
@@ -425,68 +463,29 @@ def call(
             out.write(f"requester: making request: {request!r}\n\n")
             out.flush()
             last = time.monotonic()
-            response = requester.call(request, timeout)
-            out.write(f"response:\n{response!r}\n\n")
+            future = client.call_async(request)
+            code = spin_until_future_complete(node, future, timeout_sec=timeout)
+            if code is not FutureReturnCode.SUCCESS or future.result() is None:
+                if client.service_is_ready():
+                    raise CliError(f"no response from service '{name}' within {timeout:g} s", NOT_FOUND)
+                raise CliError(f"service '{name}' went away before it answered", NOT_FOUND)
+            out.write(f"response:\n{future.result()!r}\n\n")
             out.flush()
             if period is None:
                 return
-            time.sleep(max(0.0, last + period - time.monotonic()))
-    finally:
-        graph.close()
+            while (left := last + period - time.monotonic()) > 0:
+                node._bus.spin_once(int(left * 1e9))
 
 
-class _Requester:
-    """One client of one service: a writer of `rq/<name>Request`, a reader of `rr/<name>Reply`,
-    requests and replies in rmw_cyclonedds's wrapping (a header of client GUID and sequence)."""
-
-    def __init__(self, graph: Graph, name: str, srv: Any) -> None:
-        self.graph = graph
-        self.name = name
-        self.srv = srv
-        dds = _dds()
-        request_type, response_type = dds.service_types(srv)
-        qos = _qos(True, False, PUB_DEPTH)
-        self.writer = _writer(graph, f"rq{name}Request", request_type, qos)
-        self.reader = _reader(graph, f"rr{name}Reply", response_type, qos)
-        self.waiter = _Waiter(graph, self.reader)
-        self.client_id = dds.client_id(self.writer)
-        self.sequence = 0
-
-    def ready(self) -> bool:
-        return (
-            self.writer.get_publication_matched_status().current_count > 0
-            and self.reader.get_subscription_matched_status().current_count > 0
-        )
-
-    def wait_ready(self, timeout: float) -> bool:
-        deadline = time.monotonic() + timeout
-        while not self.ready():
-            self.graph.update()
-            types = self.graph.services(include_hidden=True).get(self.name)
-            if types and self.srv._TYPE not in types:
-                raise CliError(f"service '{self.name}' has type {', '.join(types)}, not {self.srv._TYPE}", NOT_FOUND)
-            if time.monotonic() >= deadline:
-                return False
-            time.sleep(0.05)
-        return True
-
-    def call(self, request: Any, timeout: float) -> Any:
-        dds = _dds()
-        self.sequence += 1
-        self.writer.write(dds.wrap_request(self.srv, request, self.client_id, self.sequence))
-        deadline = time.monotonic() + timeout
-        while True:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                raise CliError(f"no response from service '{self.name}' within {timeout:g} s", NOT_FOUND)
-            if self.reader.get_subscription_matched_status().current_count == 0:
-                raise CliError(f"service '{self.name}' went away before it answered", NOT_FOUND)
-            if not self.waiter.wait(min(left, 0.2)):
-                continue
-            for sample in self.reader.take(N=16):
-                info = getattr(sample, "sample_info", None)
-                if info is not None and not info.valid_data:
-                    continue
-                client_id, sequence, response = dds.unwrap_response(self.srv, sample)
-                if client_id == self.client_id and sequence == self.sequence:
-                    return response
+def _wait_for_service(graph: Graph, client: Any, name: str, srv: Any, timeout: float) -> bool:
+    """True once the client sees a server; a server of another type is said at once."""
+    deadline = time.monotonic() + timeout
+    while not client.service_is_ready():
+        client.node._bus.spin_once(50_000_000)
+        graph.update()
+        types = graph.services(include_hidden=True).get(name)
+        if types and srv._TYPE not in types:
+            raise CliError(f"service '{name}' has type {', '.join(types)}, not {srv._TYPE}", NOT_FOUND)
+        if time.monotonic() >= deadline:
+            return False
+    return True

@@ -125,7 +125,7 @@ class Graph:
         from .dds_config import participant as make_participant
 
         self.participant = participant if participant is not None else make_participant()
-        self._own = self.participant.guid.bytes
+        self._own = self.participant.get_guid().bytes
         self._participants_reader = BuiltinDataReader(self.participant, BuiltinTopicDcpsParticipant)
         self._readers = {
             "publisher": BuiltinDataReader(self.participant, BuiltinTopicDcpsPublication),
@@ -137,22 +137,21 @@ class Graph:
         self._info_reader = self._discovery_info_reader()
 
     def _discovery_info_reader(self) -> Any:
-        """A reader of ros_discovery_info, with rmw's QoS (reliable, transient local, depth 1),
-        or None when the wire type of ParticipantEntitiesInfo is not available."""
-        try:
-            from ...msgs._dds import participant_entities_info_type  # type: ignore[attr-defined]
-        except ImportError:
-            return None
+        """A reader of ros_discovery_info with rmw's QoS (reliable, transient local), but a deep
+        history: the topic has no key, and every participant's last sample must be kept."""
         from cyclonedds.core import Policy, Qos
         from cyclonedds.sub import DataReader
         from cyclonedds.topic import Topic
 
+        from . import _ddstypes as types
+
         qos = Qos(
             Policy.Reliability.Reliable(max_blocking_time=100_000_000),
             Policy.Durability.TransientLocal,
-            Policy.History.KeepLast(1),
+            Policy.History.KeepLast(256),
+            Policy.DataRepresentation(use_cdrv0_representation=True),
         )
-        topic = Topic(self.participant, DISCOVERY_TOPIC, participant_entities_info_type(), qos=qos)
+        topic = Topic(self.participant, DISCOVERY_TOPIC, types.ParticipantEntitiesInfo)
         return DataReader(self.participant, topic, qos=qos)
 
     # -- collecting -------------------------------------------------------------------------
@@ -180,22 +179,23 @@ class Graph:
                 if participant == self._own:
                     continue
                 self._endpoints[gid] = Endpoint(gid, participant, kind, sample.topic_name, sample.type_name, sample.qos)
-        if self._info_reader is not None:
-            for sample in self._info_reader.take(N=256):
-                info = getattr(sample, "sample_info", None)
-                if info is not None and not info.valid_data:
-                    continue
+        for sample in self._info_reader.take(N=256):
+            if sample.sample_info.valid_data:
                 self._take_discovery_info(sample)
 
     def _take_discovery_info(self, sample: Any) -> None:
-        from ...msgs._dds import participant_entities_info_nodes  # type: ignore[attr-defined]
-
-        participant, nodes = participant_entities_info_nodes(sample)
-        if participant[:16] == self._own:
+        """One participant's nodes (rmw_dds_common/msg/ParticipantEntitiesInfo): each replaces
+        what that participant said before."""
+        participant = bytes(sample.gid.data)[:16]
+        if participant == self._own:
             return
-        self._nodes[participant[:16]] = [
-            (NodeName(ns, name), [g[:16] for g in readers], [g[:16] for g in writers])
-            for ns, name, readers, writers in nodes
+        self._nodes[participant] = [
+            (
+                NodeName(n.node_namespace, n.node_name),
+                [bytes(g.data)[:16] for g in n.reader_gid_seq],
+                [bytes(g.data)[:16] for g in n.writer_gid_seq],
+            )
+            for n in sample.node_entities_info_seq
         ]
 
     def spin(self, seconds: float, until: Callable[[], bool] | None = None) -> bool:
@@ -247,11 +247,6 @@ class Graph:
         """The readers of a service's requests: one per server."""
         dds = f"{REQUEST_PREFIX}{name}Request"
         return [e for e in self._endpoints.values() if e.topic == dds and e.kind == "subscription"]
-
-    @property
-    def knows_nodes(self) -> bool:
-        """False when ros_discovery_info cannot be read (node names are then unknown)."""
-        return self._info_reader is not None
 
     def nodes(self, include_hidden: bool = False) -> list[NodeName]:
         """Every node of every live participant, as `ros2 node list` lists them."""
