@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 
 
 @cli.command()
-@click.argument("targets", nargs=-1, required=True)
+@click.argument("targets", nargs=-1, required=False)
 @click.option(
     "-v", "--verbose", is_flag=True, help="clfsm's trace on stderr: a line before each ringlet that enters a state."
 )
@@ -65,6 +65,15 @@ if TYPE_CHECKING:
 )
 @click.option("--view", is_flag=True, help="turtlesim: open a live window (needs pygame).")
 @click.option("--introspect", is_flag=True, help="At the end, print the nodes, topics and services on stderr.")
+@click.option(
+    "--transport",
+    type=click.Choice(["inproc", "dds"]),
+    default="inproc",
+    envvar="LLFSM_TRANSPORT",
+    show_default=True,
+    help="inproc: the in-process bus; dds: ROS 2's wire (Cyclone DDS), seen by other processes and ROS 2 nodes. "
+    "Also LLFSM_TRANSPORT.",
+)
 def run(
     targets: tuple[str, ...],
     verbose: bool,
@@ -83,18 +92,27 @@ def run(
     image: str | None = None,
     view: bool = False,
     introspect: bool = False,
+    transport: str = "inproc",
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
     A TARGET is a NAME.machine directory (compiled into a cache), a built module, or PKG/NAME
-    of an installed package.  Exit status: 0 normal end, 1 an exception in machine code,
-    2 bad arguments or a machine that fails validation.
+    of an installed package.  With --node and no TARGET the nodes run on their own until
+    Ctrl-C or --duration, as `ros2 run` does.  Exit status: 0 normal end, 1 an exception in
+    machine code, 2 bad arguments or a machine that fails validation.
     """
     from ..runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
     from ..targets import InvalidMachine, MachineLoadError, TargetError, load
 
     if period is not None and period <= 0:
         fail("--period must be greater than 0")
+    if not targets and not nodes:
+        fail("nothing to run: give a machine (TARGET), or --node NAME to run nodes on their own")
+    if transport == "dds" and clock == "sim":
+        fail(
+            "--clock sim cannot be used with --transport dds: DDS peers live on the wall clock (their messages "
+            "come in real time), so simulated time would neither keep pace with them nor be reproducible"
+        )
     from ..msgs import add_search_path
 
     for t in targets:  # user interfaces (PKG/msg/*.msg) beside or above the machines import too
@@ -120,7 +138,9 @@ def run(
         fail(f"--image {image}: the picture is written as .png or .svg")
     if (image or view) and "turtlesim" not in nodes:
         fail("--image and --view draw the turtle simulator: add --node turtlesim")
-    uses_bus = bool(nodes or remaps or params or echoes or introspect)
+    if transport != "inproc":
+        ctx.extras["transport"] = _open_transport(transport)
+    uses_bus = bool(nodes or remaps or params or echoes or introspect or transport != "inproc")
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
     trace_out = None
     if trace_file:
@@ -144,10 +164,15 @@ def run(
                 raise
             click.echo(rep.format(), nl=False, err=True)
             sys.exit(EXIT_ERRORS)
-        arr.on_interrupt = lambda grace: click.echo(
-            f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish (interrupt again to stop now)",
-            err=True,
-        )
+        if classes:
+            arr.on_interrupt = lambda grace: click.echo(
+                f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish "
+                "(interrupt again to stop now)",
+                err=True,
+            )
+        else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
+            arr.serve_forever = True
+            grace = 0
         with signals_handled(arr):
             result = arr.run(duration, grace)
     finally:
@@ -159,6 +184,16 @@ def run(
     if introspect and bus is not None:
         click.echo(_graph_text(bus.graph()), nl=False, err=True)
     sys.exit(result.status)
+
+
+def _open_transport(name: str) -> Any:
+    """The run's transport; a missing package or a bad ROS_* variable is a usage error."""
+    from ..ros.transports.inproc import make
+
+    try:
+        return make(name)
+    except (ImportError, ValueError) as e:
+        fail(str(e))
 
 
 def _start_bus(

@@ -66,6 +66,9 @@ class Arrangement:
         self.rounds = 0
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
+        #: Keep running rounds with no machine left (nodes on their own, SPEC 4): the run then
+        #: ends by an interrupt or --duration only.
+        self.serve_forever = False
         names = [c.NAME for c in classes]
         for n in names:
             if names.count(n) > 1:
@@ -205,8 +208,9 @@ class Arrangement:
         self._attention = False
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
         if not self._live:
-            return self._result("finished", EXIT_OK)
-        if all(m._suspended and m._pending is None for m in self._live):
+            if not self.serve_forever:
+                return self._result("finished", EXIT_OK)
+        elif all(m._suspended and m._pending is None for m in self._live):
             return self._result("suspended", EXIT_OK)
         if self._interrupts:
             self._attention = True  # keep checking the grace time every round

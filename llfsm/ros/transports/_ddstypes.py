@@ -10,7 +10,7 @@ import dataclasses
 from functools import cache
 from typing import Any
 
-from cyclonedds.idl import IdlStruct
+from cyclonedds.idl import IdlStruct, make_idl_struct
 from cyclonedds.idl import types as t
 from cyclonedds.idl.annotations import final
 
@@ -74,10 +74,8 @@ def _plain_struct(typename: str, cls: type[Message], header: bool = False) -> ty
         fields = [("_guid", t.uint64), ("_seq", t.int64)] + (
             fields or [("structure_needs_at_least_one_member", t.uint8)]
         )
-    ns: dict[str, Any] = {"__annotations__": dict(fields)}
-    kls = type(typename.replace("::", "_"), (IdlStruct,), ns, typename=typename)
-    kls = final(kls)
-    return dataclasses.dataclass(kls) if not dataclasses.is_dataclass(kls) else kls
+    kls = make_idl_struct(typename.replace("::", "_"), typename, dict(fields), dataclassify=False)
+    return dataclasses.dataclass(final(kls))
 
 
 def to_sample(msg: Message) -> Any:

@@ -505,8 +505,14 @@ class DdsTransport(Transport):
         clock.now = read() if read is not None else until_ns
 
     def _idle_wait(self, ns: int) -> None:
-        """The wall clock's idle sleep: as long, unless data arrives first."""
-        self.waits.wait(ns if not self._parked else min(ns, 10_000_000))
+        """The wall clock's idle sleep: as long, unless data arrives or a timer falls due first
+        (a node-only run then keeps its timers' rhythm, turtlesim's 16 ms, to the millisecond)."""
+        due = self.bus.next_timer_due()
+        if due is not None:
+            ns = min(ns, max(0, due - self.bus.clock.read()))  # type: ignore[attr-defined]
+        if self._parked:
+            ns = min(ns, 10_000_000)
+        self.waits.wait(ns)
 
     # -- the graph ----------------------------------------------------------------------------------
     def _announce(self) -> None:
