@@ -25,6 +25,7 @@ _LLFSM_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # What shapes generated message code: a change to any of these recompiles users' packages.
 _GENERATOR_FILES = (
     os.path.join(_LLFSM_DIR, "compiler", "interfaces.py"),
+    os.path.join(_LLFSM_DIR, "compiler", "dds.py"),
     os.path.join(_LLFSM_DIR, "msgs", "_message.py"),
 )
 _added: list[str] = []
