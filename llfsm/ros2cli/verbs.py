@@ -72,12 +72,14 @@ def _check_types(graph: Graph, name: str, cls: type[Message], endpoints: list[En
 
 
 def _types() -> Any:
-    """The DDS forms of llfsm's messages, as the transport makes them (one place for both)."""
+    """The DDS forms of llfsm's messages (llfsm/msgs/_dds.py: `dds_type`, `from_dds`)."""
     try:
-        from ..ros.transports import _ddstypes
+        import cyclonedds  # noqa: F401
+
+        from ..msgs import _dds
     except ImportError as e:
         raise CliError(NEEDS_CYCLONEDDS.format(e)) from None
-    return _ddstypes
+    return _dds
 
 
 def _qos(reliable: bool, transient_local: bool, depth: int) -> Any:
@@ -236,7 +238,7 @@ def echo(
         reliable = bool(publishers) and all(p.reliable for p in publishers)
         transient = bool(publishers) and all(p.transient_local for p in publishers)
         types = _types()
-        reader = _reader(graph, f"rt{name}", types.topic_type(cls), _qos(reliable, transient, ECHO_DEPTH))
+        reader = _reader(graph, f"rt{name}", types.dds_type(cls), _qos(reliable, transient, ECHO_DEPTH))
         waiter = _Waiter(graph, reader)
         received = False
         while True:
@@ -249,7 +251,7 @@ def echo(
                 info = getattr(sample, "sample_info", None)
                 if info is not None and not info.valid_data:
                     continue
-                msg = types.from_sample(sample, cls)
+                msg = types.from_dds(sample, cls)
                 out.write(format_message(msg, path or [], truncate_length, no_arr, no_str))
                 out.flush()
                 received = True
@@ -396,7 +398,7 @@ def hz(
     try:
         started = time.monotonic()
         cls = _class_of_topic(name, wait_for_topic_types(graph, name, timeout))
-        reader = _reader(graph, f"rt{name}", _types().topic_type(cls), _qos(False, False, ECHO_DEPTH))
+        reader = _reader(graph, f"rt{name}", _types().dds_type(cls), _qos(False, False, ECHO_DEPTH))
         waiter = _Waiter(graph, reader)
         meter = RateMeter(window)
         next_print = time.monotonic() + 1.0

@@ -143,7 +143,8 @@ class Graph:
         from cyclonedds.sub import DataReader
         from cyclonedds.topic import Topic
 
-        from . import _ddstypes as types
+        from ...msgs._dds import dds_type
+        from ...msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
 
         qos = Qos(
             Policy.Reliability.Reliable(max_blocking_time=100_000_000),
@@ -151,7 +152,7 @@ class Graph:
             Policy.History.KeepLast(256),
             Policy.DataRepresentation(use_cdrv0_representation=True),
         )
-        topic = Topic(self.participant, DISCOVERY_TOPIC, types.ParticipantEntitiesInfo)
+        topic = Topic(self.participant, DISCOVERY_TOPIC, dds_type(ParticipantEntitiesInfo))
         return DataReader(self.participant, topic, qos=qos)
 
     # -- collecting -------------------------------------------------------------------------
@@ -179,14 +180,18 @@ class Graph:
                 if participant == self._own:
                     continue
                 self._endpoints[gid] = Endpoint(gid, participant, kind, sample.topic_name, sample.type_name, sample.qos)
-        for sample in self._info_reader.take(N=256):
-            if sample.sample_info.valid_data:
-                self._take_discovery_info(sample)
+        if self._info_reader is not None:
+            from ...msgs._dds import from_dds
+            from ...msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
 
-    def _take_discovery_info(self, sample: Any) -> None:
+            for sample in self._info_reader.take(N=256):
+                if sample.sample_info.valid_data:
+                    self._take_discovery_info(from_dds(sample, ParticipantEntitiesInfo))
+
+    def _take_discovery_info(self, info: Any) -> None:
         """One participant's nodes (rmw_dds_common/msg/ParticipantEntitiesInfo): each replaces
         what that participant said before."""
-        participant = bytes(sample.gid.data)[:16]
+        participant = bytes(info.gid.data)[:16]
         if participant == self._own:
             return
         self._nodes[participant] = [
@@ -195,7 +200,7 @@ class Graph:
                 [bytes(g.data)[:16] for g in n.reader_gid_seq],
                 [bytes(g.data)[:16] for g in n.writer_gid_seq],
             )
-            for n in sample.node_entities_info_seq
+            for n in info.node_entities_info_seq
         ]
 
     def spin(self, seconds: float, until: Callable[[], bool] | None = None) -> bool:
