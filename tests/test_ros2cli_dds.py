@@ -318,3 +318,45 @@ def test_verbs_see_an_rclpy_node(netns: Netns) -> None:
     assert re.fullmatch(r"data: 'Hello World: \d+'\n---\n", r.stdout), r.stdout
     r = netns.wait_for("node", "list", needle="/rclpy_talker")
     assert "/rclpy_talker" in r.stdout.splitlines(), (r.stdout, r.stderr)
+
+
+STUCK_SERVER = textwrap.dedent(
+    """
+    import os, sys, time
+    from llfsm import ros
+    from llfsm.ros.transports.dds import DdsTransport
+    from llfsm.runtime.context import RunContext, activate
+    from llfsm.msgs.std_srvs.srv import Trigger
+    transport = DdsTransport()
+    ctx = RunContext(); ctx.extras["transport"] = transport; activate(ctx)
+    ros.init()
+    node = ros.Node("stuck")
+
+    def answer(request, response):
+        if sys.argv[1] == "vanish":  # leave the domain mid-call, as a crashing peer's lease ends
+            transport.close()
+            os._exit(0)
+        time.sleep(120)  # never answers in time
+        return response
+
+    node.create_service(Trigger, "/stuck", answer)
+    end = time.monotonic() + 90
+    while time.monotonic() < end:
+        ros.spin_once(node, timeout_sec=0.1)
+    """
+)
+
+
+@pytest.mark.parametrize(
+    ("mode", "needle"),
+    [("sleep", "no response from service '/stuck' within 2 s"), ("vanish", "service '/stuck' went away")],
+)
+def test_service_call_to_a_server_that_never_answers_ends_with_one_line(netns: Netns, mode: str, needle: str) -> None:
+    netns.start("-c", STUCK_SERVER, mode)
+    r = netns.wait_for("service", "list", needle="/stuck")
+    assert "/stuck" in r.stdout.splitlines(), r.stderr
+    r = netns.llfsm("service", "call", "/stuck", "std_srvs/srv/Trigger", "--timeout", "2", timeout=60)
+    assert r.status == 1, (r.stdout, r.stderr)
+    assert r.stdout.startswith("requester: making request: std_srvs.srv.Trigger_Request()\n\n")
+    assert "response:" not in r.stdout
+    assert len(r.stderr.splitlines()) == 1 and needle in r.stderr, r.stderr
