@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import textwrap
@@ -360,3 +361,28 @@ def test_service_call_to_a_server_that_never_answers_ends_with_one_line(netns: N
     assert r.stdout.startswith("requester: making request: std_srvs.srv.Trigger_Request()\n\n")
     assert "response:" not in r.stdout
     assert len(r.stderr.splitlines()) == 1 and needle in r.stderr, r.stderr
+
+
+@needs_run_dds
+def test_ctrl_c_ends_echo_quietly(netns: Netns) -> None:
+    turtlesim(netns)
+    p = subprocess.Popen(
+        [*netns.prefix, sys.executable, "-m", "llfsm", "topic", "echo", "/turtle1/pose"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=netns.env,
+        cwd=REPO,
+    )
+    try:
+        assert p.stdout is not None
+        first = [p.stdout.readline() for _ in range(6)]
+        assert first[0].startswith("x: ") and first[5] == "---\n", first
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=20)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait(timeout=10)
+    assert p.returncode == 130
+    assert "Traceback" not in err
