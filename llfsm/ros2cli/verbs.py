@@ -1,10 +1,14 @@
 """`topic echo`, `topic pub`, `topic hz` and `service call` over DDS, printing what `ros2` prints.
 
-Each joins the ROS domain with one participant (the transport's discovery settings, through the
-graph reader, which also tells the type and QoS of what is there), makes one reader or writer
-with the DDS form of the llfsm message class (llfsm/msgs/_dds.py), and waits at most `timeout`
-seconds for what it needs.  Input mistakes (a TYPE, VALUES, a field, a name) are found before
-the domain is joined, so they cost nothing and exit 2; what is not there exits 1.
+Each joins the ROS domain with one participant (the transport's discovery settings) and waits
+at most `timeout` seconds for what it needs.  echo and hz read with a DataReader of their own,
+of the message's DDS form (llfsm/msgs/_dds.py), because they choose QoS as `ros2` does (best
+effort unless every publisher is reliable, transient local when every publisher is); the graph
+reader on the same participant tells the type and QoS of what is there.  pub and service call
+are a hidden node of llfsm's own bus on the DDS transport, as `ros2` makes a node of rclpy: the
+transport's publisher and client (request header, client id, readiness) serve them unchanged,
+and the node is announced on the graph.  Input mistakes (a TYPE, VALUES, a field, a name) are
+found before the domain is joined, so they cost nothing and exit 2; what is not there exits 1.
 """
 
 from __future__ import annotations
