@@ -304,19 +304,23 @@ class _Writer(_Code):
 
     def string(self, base: str, expr: str) -> None:
         """string: uint32 length counting the NUL, the UTF-8 bytes, the NUL.  wstring: uint32
-        length in UTF-16 code units, then the code units, no NUL (rosidl's u16string)."""
+        count of UTF-16 code units, then each unit as 4 bytes (a wchar_t), no NUL: what both
+        Fast CDR and rmw_cyclonedds_cpp write for XCDR1."""
         s = self.var("s")
         if base == "string":
             self.lines.append(f"{s} = {expr}.encode()")
             self.primitive("uint32", f"len({s}) + 1")
             self.flush()
             self.lines += [f"b += {s}", "b.append(0)"]
+            self.at.unknown()
         else:
-            self.lines.append(f'{s} = {expr}.encode("utf-16-le")')
-            self.primitive("uint32", f"len({s}) >> 1")
+            n = self.var("n")
+            self.module.uses.update(("_pack", "_unpack_from", "_wstring"))
+            self.lines.append(f"{n}, {s} = _wstring_units({expr})")
+            self.primitive("uint32", n)
             self.flush()
             self.lines.append(f"b += {s}")
-        self.at.unknown()
+            self.at.aligned(4)
 
     def field(self, t: FieldType, expr: str) -> None:
         if t.array is None:
@@ -337,14 +341,22 @@ class _Writer(_Code):
             self.primitive("uint32", f"len({v})")
         if t.base in SIZES:  # a sequence of primitives: one pack, after the element's alignment
             size = SIZES[t.base]
-            self.align(size)
+            if size == 8 and t.array != "fixed" and self.at.static_pad(8) != 0:
+                # Fast CDR aligns the elements only when there are some: an empty sequence of
+                # 8-byte values is its count alone.
+                self.flush()
+                self.lines.append(f"if {v}:")
+                self.lines.append("    b += _Z[(4 - len(b)) & 7]")
+                self.at.aligned(4)
+            else:
+                self.align(size)
             self.flush()
             if t.base in _BYTES:
                 self.lines.append(f"b += bytes({v})")
             else:
                 self.module.uses.add("_pack")
                 self.lines.append(f'b += _pack(f"<{{len({v})}}{FORMATS[t.base]}", *{v})')
-            self.at.aligned(size)
+            self.at.aligned(min(size, 4))  # an empty sequence of 8-byte values leaves 4
             return
         self.flush()
         e = self.var("e")
@@ -417,10 +429,12 @@ class _Reader(_Code):
         if base == "string":
             self.lines.append(f'{s} = str(d[o : o + {n} - 1], "utf-8") if {n} else ""')
             self.lines.append(f"o += {n}")
+            self.at.unknown()
         else:
-            self.lines.append(f'{s} = str(d[o : o + 2 * {n}], "utf-16-le")')
-            self.lines.append(f"o += 2 * {n}")
-        self.at.unknown()
+            self.module.uses.update(("_pack", "_unpack_from", "_wstring"))
+            self.lines.append(f"{s} = _wstring_text(d, o, {n})")
+            self.lines.append(f"o += 4 * {n}")
+            self.at.aligned(4)
         return s
 
     def field(self, t: FieldType) -> str:
@@ -444,7 +458,13 @@ class _Reader(_Code):
         v = self.var("v")
         if t.base in SIZES:
             size = SIZES[t.base]
-            self.align(size)
+            if size == 8 and t.array != "fixed" and self.at.static_pad(8) != 0:
+                self.flush()  # elements aligned only if there are some, as Fast CDR does
+                self.lines.append(f"if {n}:")
+                self.lines.append("    o += (4 - o) & 7")
+                self.at.aligned(4)
+            else:
+                self.align(size)
             self.flush()
             if t.base in _BYTES:
                 self.lines.append(f"{v} = list(d[o : o + {n}])")
@@ -453,7 +473,7 @@ class _Reader(_Code):
                 self.module.uses.add("_unpack_from")
                 self.lines.append(f'{v} = list(_unpack_from(f"<{{{n}}}{FORMATS[t.base]}", d, o))')
                 self.lines.append(f"o += {n} * {size}")
-            self.at.aligned(size)
+            self.at.aligned(min(size, 4))  # an empty sequence of 8-byte values leaves 4
             return v
         inner = _Reader(self.module, _Alignment(1))
         e = self.var("e")

@@ -740,7 +740,8 @@ def _cdr_Float64MultiArray(m):
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
     b += _S3.pack(m._layout._data_offset, len(v3))
-    b += _Z[(4 - len(b)) & 7]
+    if v3:
+        b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}d", *v3)
     return bytes(b)
 
@@ -758,7 +759,8 @@ def _msg_Float64MultiArray(d):
     t5 = _S3.unpack_from(d, o)
     o += 8
     n6 = t5[1]
-    o += (4 - o) & 7
+    if n6:
+        o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}d", d, o))
     o += n6 * 8
     return _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
@@ -773,7 +775,8 @@ def _enc_Float64MultiArray(m, b):
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
     b += _S3.pack(m._layout._data_offset, len(v3))
-    b += _Z[(4 - len(b)) & 7]
+    if v3:
+        b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}d", *v3)
 
 
@@ -790,7 +793,8 @@ def _dec_Float64MultiArray(d, o):
     t5 = _S3.unpack_from(d, o)
     o += 8
     n6 = t5[1]
-    o += (4 - o) & 7
+    if n6:
+        o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}d", d, o))
     o += n6 * 8
     return _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
@@ -1227,7 +1231,8 @@ def _cdr_Int64MultiArray(m):
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
     b += _S3.pack(m._layout._data_offset, len(v3))
-    b += _Z[(4 - len(b)) & 7]
+    if v3:
+        b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}q", *v3)
     return bytes(b)
 
@@ -1245,7 +1250,8 @@ def _msg_Int64MultiArray(d):
     t5 = _S3.unpack_from(d, o)
     o += 8
     n6 = t5[1]
-    o += (4 - o) & 7
+    if n6:
+        o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}q", d, o))
     o += n6 * 8
     return _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
@@ -1260,7 +1266,8 @@ def _enc_Int64MultiArray(m, b):
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
     b += _S3.pack(m._layout._data_offset, len(v3))
-    b += _Z[(4 - len(b)) & 7]
+    if v3:
+        b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}q", *v3)
 
 
@@ -1277,7 +1284,8 @@ def _dec_Int64MultiArray(d, o):
     t5 = _S3.unpack_from(d, o)
     o += 8
     n6 = t5[1]
-    o += (4 - o) & 7
+    if n6:
+        o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}q", d, o))
     o += n6 * 8
     return _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
@@ -1848,7 +1856,8 @@ def _cdr_UInt64MultiArray(m):
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
     b += _S3.pack(m._layout._data_offset, len(v3))
-    b += _Z[(4 - len(b)) & 7]
+    if v3:
+        b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}Q", *v3)
     return bytes(b)
 
@@ -1866,7 +1875,8 @@ def _msg_UInt64MultiArray(d):
     t5 = _S3.unpack_from(d, o)
     o += 8
     n6 = t5[1]
-    o += (4 - o) & 7
+    if n6:
+        o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}Q", d, o))
     o += n6 * 8
     return _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
@@ -1881,7 +1891,8 @@ def _enc_UInt64MultiArray(m, b):
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
     b += _S3.pack(m._layout._data_offset, len(v3))
-    b += _Z[(4 - len(b)) & 7]
+    if v3:
+        b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}Q", *v3)
 
 
@@ -1898,7 +1909,8 @@ def _dec_UInt64MultiArray(d, o):
     t5 = _S3.unpack_from(d, o)
     o += 8
     n6 = t5[1]
-    o += (4 - o) & 7
+    if n6:
+        o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}Q", d, o))
     o += n6 * 8
     return _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
