@@ -222,3 +222,15 @@ def test_user_package_gets_dds_forms(tmp_path: Path, monkeypatch: pytest.MonkeyP
         assert _dds.dds_type(cls).__idl_typename__.startswith("llfsm_dds_user_pkg::")
     assert _dds.type_hash(srv_module.Ask).startswith("RIHS01_")
     assert interfaces.installed_spec("llfsm_dds_user_pkg/msg/Inner").fields[2].type.array == "unbounded"
+
+
+def test_vendor_of_a_guid_tells_the_service_wire_form() -> None:
+    import uuid
+
+    cyclone = uuid.UUID("01103ee2-9a02-e95c-c321-3714000001c1")  # a cyclonedds participant's key
+    fast = "010f7f01-3604-56e1-0000-000000001304"  # rmw_fastrtps_cpp's rq/ reader
+    assert _dds.vendor_name(cyclone) == "Eclipse Cyclone DDS" and _dds.carries_request_header(cyclone)
+    assert _dds.vendor_name(fast) == "eProsima Fast DDS" and not _dds.carries_request_header(fast)
+    assert _dds.vendor_name(bytes.fromhex("01aa") + bytes(14)) == "vendor 01.aa"
+    with pytest.raises(ValueError):
+        _dds.vendor_id(b"")

@@ -17,7 +17,8 @@ from the class and offers:
   The header (`cdds_request_header_t`) is a uint64 client id (the client's request writer's
   instance handle on rmw_cyclonedds_cpp) and an int64 sequence number, first in the payload of
   requests AND replies; a reply echoes the request's.  Fast DDS (rmw_fastrtps_cpp) sends no
-  header (it correlates through RTPS inline QoS instead): `cdr` / `from_cdr` are its payloads.
+  header (it correlates through RTPS inline QoS instead): `cdr` / `from_cdr` are its payloads;
+  `carries_request_header(guid)` tells from a peer's GUID which form it speaks.
 - `type_hash(cls) -> str`: the RIHS01 hash ROS 2 (Iron and later) puts in endpoints' USER_DATA
   as `typehash=<hash>;`, for messages and services, computed when the modules were generated.
 
@@ -32,6 +33,7 @@ from dataclasses import fields as _dataclass_fields
 from struct import Struct
 from struct import error as StructError
 from typing import Any, NamedTuple
+from uuid import UUID
 
 from ._message import Message, Service
 
@@ -192,6 +194,48 @@ def from_wire(sample: Any, msg_cls: type[Message]) -> tuple[int, int, Message]:
     plain = dds_type(msg_cls)
     fields = (getattr(sample, f.name) for f in _dataclass_fields(plain))
     return sample.client_guid_, sample.sequence_number_, from_dds(plain(*fields), msg_cls)
+
+
+# Vendor ids (the first two bytes of every RTPS GUID prefix: participant keys, endpoint keys).
+# Which wire form a service peer speaks follows from it: rmw_cyclonedds_cpp puts the request
+# header in the payload; rmw_fastrtps_cpp (and RTI's rmw_connextdds) send the bare message and
+# correlate through RTPS inline QoS (PID_RELATED_SAMPLE_IDENTITY), which cyclonedds can neither
+# write nor show.  See docs/transports.md, "Services across DDS implementations".
+VENDOR_RTI_CONNEXT = 0x0101
+VENDOR_FAST_DDS = 0x010F
+VENDOR_CYCLONE_DDS = 0x0110
+VENDORS = {
+    VENDOR_RTI_CONNEXT: "RTI Connext DDS",
+    0x0102: "OpenSplice DDS",
+    0x0104: "Twin Oaks CoreDX",
+    0x010F: "eProsima Fast DDS",
+    0x0110: "Eclipse Cyclone DDS",
+    0x0112: "RustDDS",
+    0x0113: "Zenoh (zenoh-plugin-dds)",
+}
+
+
+def vendor_id(guid: UUID | bytes | str) -> int:
+    """The vendor id in a GUID or participant key (a `uuid.UUID` as cyclonedds' builtin topics
+    give them, 16 bytes, or their text)."""
+    if isinstance(guid, str):
+        guid = UUID(guid)
+    raw = guid.bytes if isinstance(guid, UUID) else bytes(guid)
+    if len(raw) < 2:
+        raise ValueError(f"not a GUID: {raw!r}")
+    return raw[0] << 8 | raw[1]
+
+
+def vendor_name(guid: UUID | bytes | str) -> str:
+    vid = vendor_id(guid)
+    return VENDORS.get(vid, f"vendor {vid >> 8:02x}.{vid & 0xFF:02x}")
+
+
+def carries_request_header(guid: UUID | bytes | str) -> bool:
+    """Whether a service peer (the GUID of its request reader, reply writer or participant)
+    expects and sends rmw_cyclonedds_cpp's request header: only Cyclone DDS peers do.  For
+    the others, requests and replies are `cdr(msg)` alone."""
+    return vendor_id(guid) == VENDOR_CYCLONE_DDS
 
 
 # -- type hashes -------------------------------------------------------------------------------
