@@ -26,9 +26,11 @@ from __future__ import annotations
 import ctypes as ct
 import itertools
 import time
+from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from cyclonedds._clayer import ddspy_take, ddspy_write
 from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 from cyclonedds.core import (
     DDSStatus,
@@ -45,7 +47,8 @@ from cyclonedds.pub import DataWriter, Publisher
 from cyclonedds.sub import DataReader, Subscriber
 from cyclonedds.topic import Topic
 
-from . import _ddstypes as types
+from ...msgs import _dds
+from ...msgs.rmw_dds_common.msg import Gid, NodeEntitiesInfo, ParticipantEntitiesInfo
 from . import dds_config
 from .base import Transport
 
@@ -63,6 +66,34 @@ REPLY_PATIENCE_S = 2.0
 #: How long a client trusts its last look at the server's matches (spin calls ask often).
 READY_CACHE_S = 0.05
 TAKE_BATCH = 256
+#: The RTPS vendor id at the start of every Fast DDS GUID (eProsima, 1.15).
+FAST_DDS_VENDOR = b"\x01\x0f"
+
+
+def _write(writer: DataWriter, payload: bytes) -> None:
+    """Write a serialized sample (llfsm's generated CDR, several times faster than cyclonedds'
+    own serialisation of an IdlStruct), padded to 4 bytes as cyclonedds pads its own."""
+    if len(payload) & 3:
+        payload += b"\0" * (4 - (len(payload) & 3))
+    ret = ddspy_write(writer._ref, payload)
+    if ret < 0:
+        raise RuntimeError(f"DDS write failed on {writer.topic.name if writer.topic else '?'} ({ret})")
+
+
+def _take(reader: DataReader) -> list[tuple[bytes, Any]]:
+    """Serialized samples with valid data, and their infos (payloads still to be decoded)."""
+    ret = ddspy_take(reader._ref, ANY, TAKE_BATCH)
+    if isinstance(ret, int):
+        return []
+    return [(data, info) for data, info in ret if info.valid_data]
+
+
+def _type_hash(cls: type) -> bytes:
+    """`typehash=RIHS01_...;` as rmw puts it in an endpoint's USER_DATA (Iron and later)."""
+    try:
+        return f"typehash={_dds.type_hash(cls)};".encode()
+    except TypeError:
+        return b""
 
 
 def _qos(depth: int, user_data: bytes = b"", *, reader: bool = False) -> Qos:
@@ -151,9 +182,9 @@ class _Endpoint:
 class _Writer(_Endpoint):
     def __init__(self, t: DdsTransport, pub: RosPublisher) -> None:
         self.t, self.node = t, pub.node
-        self.sample = types.to_sample
-        topic = t.topic("rt" + pub.topic_name, types.topic_type(pub.msg_type))
-        self.writer = DataWriter(t.publisher_, topic, qos=_qos(pub.depth))
+        self.cdr = _dds.codec(pub.msg_type).cdr
+        topic = t.topic("rt" + pub.topic_name, _dds.dds_type(pub.msg_type))
+        self.writer = DataWriter(t.publisher_, topic, qos=_qos(pub.depth, _type_hash(pub.msg_type)))
         self.writers = (self.writer,)
         self.matched = 0
         self.writer.set_status_mask(DDSStatus.PublicationMatched)
@@ -165,7 +196,7 @@ class _Writer(_Endpoint):
 
     def write(self, msg: Message) -> None:
         if self.matched:  # nobody elsewhere: skip the serialisation (volatile: nothing is kept)
-            self.writer.write(self.sample(msg))
+            _write(self.writer, self.cdr(msg))
 
     def subscription_count(self) -> int:
         return self.matched
@@ -180,18 +211,22 @@ class _Reader(_Endpoint):
     def __init__(self, t: DdsTransport, sub: Subscription) -> None:
         self.t, self.node, self.sub = t, sub.node, sub
         self.msg_type = sub.msg_type
-        topic = t.topic("rt" + sub.topic_name, types.topic_type(sub.msg_type))
-        self.reader = DataReader(t.subscriber_, topic, qos=_qos(sub.depth, reader=True))
+        topic = t.topic("rt" + sub.topic_name, _dds.dds_type(sub.msg_type))
+        self.reader = DataReader(t.subscriber_, topic, qos=_qos(sub.depth, _type_hash(sub.msg_type), reader=True))
         self.readers = (self.reader,)
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
         t.add_endpoint(self)
 
     def on_trigger(self) -> None:
-        deliver, cls, back = self.sub._deliver, self.msg_type, types.from_sample
-        for s in self.reader.take(N=TAKE_BATCH):
-            if s.sample_info.valid_data:
-                deliver(back(s, cls))
+        deliver, cls, decode = self.sub._deliver, self.msg_type, _dds.from_cdr
+        for data, _info in _take(self.reader):
+            try:
+                msg = decode(data, cls)
+            except ValueError as e:
+                self.t.warn(f"{self.sub.topic_name}: dropped a sample that is not a {cls._TYPE}: {e}")
+                continue
+            deliver(msg)
 
     def close(self) -> None:
         self.t.waits.detach(self.cond, self.token)
@@ -220,11 +255,15 @@ class _Server(_Endpoint):
         self.closed = False
         name = srv.srv_name
         user = f"serviceid={t.new_csid()};".encode()
-        self.req_type, self.rep_type = types.request_type(srv.type), types.reply_type(srv.type)
+        req_type, rep_type = _dds.request_type(srv.type), _dds.response_type(srv.type)
         self.reader = DataReader(
-            t.subscriber_, t.topic(f"rq{name}Request", self.req_type), qos=_qos(1000, user, reader=True)
+            t.subscriber_,
+            t.topic(f"rq{name}Request", req_type),
+            qos=_qos(1000, user + _type_hash(srv.type.Request), reader=True),
         )
-        self.writer = DataWriter(t.publisher_, t.topic(f"rr{name}Reply", self.rep_type), qos=_qos(1000, user))
+        self.writer = DataWriter(
+            t.publisher_, t.topic(f"rr{name}Reply", rep_type), qos=_qos(1000, user + _type_hash(srv.type.Response))
+        )
         self.readers, self.writers = (self.reader,), (self.writer,)
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
@@ -232,10 +271,13 @@ class _Server(_Endpoint):
 
     def on_trigger(self) -> None:
         cls = self.srv.type.Request
-        for s in self.reader.take(N=TAKE_BATCH):
-            if s.sample_info.valid_data:
-                guid, seq, request = types.unwrap(s, cls)
-                self.t.bus.ready.append(_RemoteRequest(self, guid, seq, request, s.sample_info.publication_handle))
+        for data, info in _take(self.reader):
+            try:
+                guid, seq, request = _dds.unwrap(data, cls)
+            except ValueError as e:
+                self.t.warn(f"{self.srv.srv_name}: dropped a request that is not a {cls._TYPE}: {e}")
+                continue
+            self.t.bus.ready.append(_RemoteRequest(self, guid, seq, request, info.publication_handle))
 
     def _client_present(self, writer_handle: int) -> str:
         """rmw_cyclonedds_cpp's check before answering: is the client's reply reader matched yet?"""
@@ -266,7 +308,7 @@ class _Server(_Endpoint):
             self.t.park(lambda: self.reply(req, response, give_up))
             return True
         if state == "yes":
-            self.writer.write(types.wrap(self.rep_type, req.guid, req.seq, response))
+            _write(self.writer, _dds.wrap(response, req.guid, req.seq))
         return False
 
     def close(self) -> None:
@@ -281,10 +323,16 @@ class _Client(_Endpoint):
         self.t, self.node, self.cli = t, cli.node, cli
         name = cli.srv_name
         user = f"clientid={t.new_csid()};".encode()
-        self.req_type, self.rep_type = types.request_type(cli.srv_type), types.reply_type(cli.srv_type)
-        self.writer = DataWriter(t.publisher_, t.topic(f"rq{name}Request", self.req_type), qos=_qos(1000, user))
+        srv = cli.srv_type
+        self.writer = DataWriter(
+            t.publisher_,
+            t.topic(f"rq{name}Request", _dds.request_type(srv)),
+            qos=_qos(1000, user + _type_hash(srv.Request)),
+        )
         self.reader = DataReader(
-            t.subscriber_, t.topic(f"rr{name}Reply", self.rep_type), qos=_qos(1000, user, reader=True)
+            t.subscriber_,
+            t.topic(f"rr{name}Reply", _dds.response_type(srv)),
+            qos=_qos(1000, user + _type_hash(srv.Response), reader=True),
         )
         self.readers, self.writers = (self.reader,), (self.writer,)
         self.guid = self.writer.get_instance_handle() & U64  # rmw_cyclonedds: the request writer's handle
@@ -293,16 +341,21 @@ class _Client(_Endpoint):
         self.unanswerable: set[int] = set()  # futures sent while no server was matched
         self._ready_at = -1.0
         self._ready = False
+        #: A Fast DDS server (rmw_fastrtps_cpp) was matched: it wants requests without the header.
+        self.fast = False
+        self.plain: _PlainClient | None = None
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
         t.add_endpoint(self)
 
     def on_trigger(self) -> None:
         cls = self.cli.srv_type.Response
-        for s in self.reader.take(N=TAKE_BATCH):
-            if not s.sample_info.valid_data:
+        for data, _info in _take(self.reader):
+            try:
+                guid, seq, response = _dds.unwrap(data, cls)
+            except ValueError as e:
+                self.t.warn(f"{self.cli.srv_name}: dropped a reply that is not a {cls._TYPE}: {e}")
                 continue
-            guid, seq, response = types.unwrap(s, cls)
             if guid & U64 != self.guid:
                 continue  # an answer to another client of the same service
             future = self.pending.pop(seq, None)
@@ -319,15 +372,29 @@ class _Client(_Endpoint):
         readers = self.writer.get_matched_subscriptions()
         writers = self.reader.get_matched_publications()
         ids = set()
+        fast = others = 0
         for h in readers:
             try:
                 ep = self.writer.get_matched_subscription_data(h)
             except Exception:
                 continue
-            sid = _user_data_key(ep.qos if ep is not None else None, "serviceid")
+            if ep is None:
+                continue
+            sid = _user_data_key(ep.qos, "serviceid")
             if sid is not None:
                 ids.add(sid)
-        if not ids:
+            if ep.key.bytes[:2] == FAST_DDS_VENDOR:
+                fast += 1
+            else:
+                others += 1
+        self.fast = bool(fast) and not others and not ids
+        if self.fast:
+            # Fast DDS matched our (header) endpoints by name; it talks without the header
+            if self.plain is None:
+                self.plain = _PlainClient(self)
+                self.t.add_endpoint(self)  # announce the new reader and writer
+            self._ready = self.plain.ready()
+        elif not ids:
             self._ready = bool(readers) and bool(writers)
         else:
             self._ready = False
@@ -345,8 +412,11 @@ class _Client(_Endpoint):
         seq = next(self.seq)
         if not self.ready():
             self.unanswerable.add(id(future))
+        if self.fast and self.plain is not None:
+            self.plain.send(request, future)
+            return
         self.pending[seq] = future
-        self.writer.write(types.wrap(self.req_type, self.guid, seq, request))
+        _write(self.writer, _dds.wrap(request, self.guid, seq))
 
     def can_still_answer(self, future: Future) -> bool:
         if id(future) in self.unanswerable:
@@ -357,6 +427,54 @@ class _Client(_Endpoint):
     def close(self) -> None:
         self.t.waits.detach(self.cond, self.token)
         self.t.remove_endpoint(self)
+        if self.plain is not None:
+            self.plain.close()
+        _delete(self.cond, self.reader, self.writer)
+
+
+class _PlainClient:
+    """The endpoints a client uses with a Fast DDS server: the same topics and type names, the
+    payload without rmw_cyclonedds's request header (rmw_fastrtps_cpp correlates replies through
+    RTPS inline QoS, which Cyclone's Python binding cannot read or write).  So replies are matched
+    to requests in order: right for one client per service, which is the usual case; with several
+    clients of one Fast DDS service at once a reply may reach the wrong llfsm client.  Made only
+    when such a server is seen."""
+
+    def __init__(self, owner: _Client) -> None:
+        t, srv, name = owner.t, owner.cli.srv_type, owner.cli.srv_name
+        self.t, self.owner = t, owner
+        self.writer = DataWriter(t.publisher_, t.topic(f"rq{name}Request", _dds.dds_type(srv.Request)), qos=_qos(1000))
+        self.reader = DataReader(
+            t.subscriber_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.Response)), qos=_qos(1000, reader=True)
+        )
+        owner.readers, owner.writers = (owner.reader, self.reader), (owner.writer, self.writer)
+        self.waiting: deque[Future] = deque()
+        self.cond = ReadCondition(self.reader, ANY)
+        self.token = t.waits.attach(self.cond, self)
+
+    def ready(self) -> bool:
+        return bool(self.writer.get_matched_subscriptions()) and bool(self.reader.get_matched_publications())
+
+    def send(self, request: Message, future: Future) -> None:
+        self.waiting.append(future)
+        _write(self.writer, _dds.cdr(request))
+
+    def on_trigger(self) -> None:
+        cls = self.owner.cli.srv_type.Response
+        for data, _info in _take(self.reader):
+            try:
+                response = _dds.from_cdr(data, cls)
+            except ValueError as e:
+                self.t.warn(f"{self.owner.cli.srv_name}: dropped a reply that is not a {cls._TYPE}: {e}")
+                continue
+            while self.waiting:
+                future = self.waiting.popleft()
+                if not future.done():
+                    future.set_result(response)
+                    break
+
+    def close(self) -> None:
+        self.t.waits.detach(self.cond, self.token)
         _delete(self.cond, self.reader, self.writer)
 
 
@@ -386,6 +504,11 @@ class _Discovery:
         _delete(self.cond, self.reader)
 
 
+def _gid(guid: bytes) -> Gid:
+    """rmw's gid of an entity: its 16-byte DDS GUID (ROS 2 Iron and later; Humble used 24)."""
+    return Gid(data=list(guid[:16]))
+
+
 def message_class(dds_type: str) -> type[Message] | None:
     """`geometry_msgs::msg::dds_::Twist_` -> llfsm's Twist class, or None if llfsm has none."""
     import importlib
@@ -412,13 +535,14 @@ class DdsTransport(Transport):
         self.publisher_ = Publisher(self.dp)
         self.subscriber_ = Subscriber(self.dp)
         self.waits = _WaitSet(self.dp)
-        self._topics: dict[str, Topic] = {}
+        self._topics: dict[tuple[str, type], Topic] = {}
         self._endpoints: dict[int, list[_Endpoint]] = {}
         self._parked: list[Callable[[], bool]] = []
         self._discovery: _Discovery | None = None
         self._csids = itertools.count(1)
         self._gid = self.dp.get_guid().bytes
         self._dirty = True
+        self._warned: set[str] = set()
         self.closed = False
         graph_qos = Qos(
             Policy.Reliability.Reliable(max_blocking_time=1_000_000_000),
@@ -428,7 +552,9 @@ class DdsTransport(Transport):
             Policy.WriterDataLifecycle(autodispose=False),
         )
         self._info = DataWriter(
-            self.publisher_, self.topic("ros_discovery_info", types.ParticipantEntitiesInfo), qos=graph_qos
+            self.publisher_,
+            self.topic("ros_discovery_info", _dds.dds_type(ParticipantEntitiesInfo)),
+            qos=graph_qos,
         )
 
     def start(self, bus: Bus) -> None:
@@ -440,9 +566,9 @@ class DdsTransport(Transport):
 
     # -- bookkeeping --------------------------------------------------------------------------
     def topic(self, name: str, idl: type) -> Topic:
-        t = self._topics.get(name)
+        t = self._topics.get((name, idl))
         if t is None:
-            t = self._topics[name] = Topic(self.dp, name, idl)
+            t = self._topics[(name, idl)] = Topic(self.dp, name, idl)
         return t
 
     def new_csid(self) -> str:
@@ -524,17 +650,27 @@ class DdsTransport(Transport):
             if node._destroyed:
                 continue
             eps = self._endpoints.get(id(node), [])
-            readers = [types.gid(r.get_guid().bytes) for ep in eps for r in ep.readers]
-            writers = [types.gid(w.get_guid().bytes) for ep in eps for w in ep.writers]
+            readers = [_gid(r.get_guid().bytes) for ep in eps for r in ep.readers]
+            writers = [_gid(w.get_guid().bytes) for ep in eps for w in ep.writers]
             nodes.append(
-                types.NodeEntitiesInfo(
+                NodeEntitiesInfo(
                     node_namespace=node.get_namespace(),
                     node_name=node.get_name(),
                     reader_gid_seq=readers,
                     writer_gid_seq=writers,
                 )
             )
-        self._info.write(types.ParticipantEntitiesInfo(gid=types.gid(self._gid), node_entities_info_seq=nodes))
+        info = ParticipantEntitiesInfo(gid=_gid(self._gid), node_entities_info_seq=nodes)
+        _write(self._info, _dds.cdr(info))
+
+    def warn(self, text: str) -> None:
+        """A problem with what another process sent: logged once per text, never fatal."""
+        if text not in self._warned:
+            self._warned.add(text)
+            stream = self.bus.log_output()
+            sec, nsec = self.bus.stamp()
+            stream.write(f"[WARN] [{sec}.{nsec:09d}] [llfsm.dds]: {text}\n")
+            stream.flush()
 
     def close(self) -> None:
         """Leave the domain: peers see this participant and its endpoints go at once."""

@@ -24,9 +24,7 @@ def make(name: str) -> Transport:
         try:
             import cyclonedds  # noqa: F401
         except ImportError:
-            raise ImportError(
-                "--transport dds needs the cyclonedds package: pip install 'llfsm[dds]' (or pip install cyclonedds)"
-            ) from None
+            raise ImportError("--transport dds needs the cyclonedds package (pip install cyclonedds)") from None
         from .dds import DdsTransport
 
         return DdsTransport()
