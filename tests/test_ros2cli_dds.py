@@ -306,3 +306,34 @@ def test_ctrl_c_ends_echo_quietly(netns: NetNamespace) -> None:
     status, _, err = finish(p, 20)
     assert status == 130
     assert "Traceback" not in err
+
+
+TRIGGER_SERVER = textwrap.dedent(
+    """
+    import time, rclpy
+    from std_srvs.srv import Trigger
+    rclpy.init()
+    node = rclpy.create_node("rclpy_server")
+
+    def answer(request, response):
+        response.success = True
+        response.message = "done by rclpy"
+        return response
+
+    node.create_service(Trigger, "do_it", answer)
+    end = time.monotonic() + 60
+    while time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.1)
+    """
+)
+
+
+@pytest.mark.interop
+@pytest.mark.skipif(not ros_installed(), reason="real ROS 2 not installed: run `make .venv-ros/.installed`")
+def test_service_call_gets_an_answer_from_an_rclpy_service(netns: NetNamespace) -> None:
+    start_python(netns, TRIGGER_SERVER, python=ROS_PYTHON)
+    r = wait_for(netns, "service", "list", "-t", needle="/do_it [std_srvs/srv/Trigger]")
+    assert "/do_it [std_srvs/srv/Trigger]" in r.stdout.splitlines(), (r.stdout, r.stderr)
+    r = llfsm(netns, "service", "call", "/do_it", "std_srvs/srv/Trigger", "--timeout", "20")
+    assert r.status == 0, r.stderr
+    assert r.stdout.endswith("response:\nstd_srvs.srv.Trigger_Response(success=True, message='done by rclpy')\n\n")
