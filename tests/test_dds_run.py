@@ -57,16 +57,21 @@ def test_wall_turtle_in_one_process_backs_off_the_walls_of_turtlesim_in_another(
     )
     echo = netns.llfsm("run", "--transport", "dds", "--echo", "/turtle1/pose", "--node", "teleop", "--duration", "13")
     time.sleep(0.5)
-    bot = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_wall_turtle_bot.machine", "-v", "--duration", "12")
+    bot = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_wall_turtle_bot.machine", "-v")
+    # Ctrl-C rather than --duration: a --duration ending inside a pose request would cut that
+    # request short (TIMEOUT, then SERVICE_FAILS), as it does in process; after Ctrl-C the bot
+    # takes its `not ros.ok()` transitions to END
+    interrupt(bot, 11.0)
     bot_status, _, bot_err = finish(bot, 40)
     _, echo_out, echo_err = finish(echo, 40)
     sim_status, _, sim_err = finish(sim, 40)
-    assert bot_status == 0 and sim_status == 0, bot_err + sim_err
+    assert bot_status == 0 and sim_status == 0, bot_err + sim_err  # END reached: a normal end
     assert "Traceback" not in bot_err + sim_err + echo_err
     states = re.findall(r"- ros2_wall_turtle_bot - (\w+)", bot_err)
     assert "TEST" in states, "the pose service never answered across processes"
     assert "BACK" in states, "the turtle never came near a wall to back off from"
-    assert "SERVICE_FAILS" not in states
+    assert "SERVICE_FAILS" not in states, bot_err
+    assert states[-1] == "END", bot_err
     assert "I hit the wall" not in sim_err, "the turtle hit a wall: the bot did not back off in time"
     seen = poses(echo_out)
     assert len(seen) > 100, "--echo in a third process saw too few poses"

@@ -97,8 +97,8 @@ def run(
     """Run an arrangement of machines, round-robin, in command-line order.
 
     A TARGET is a NAME.machine directory (compiled into a cache), a built module, or PKG/NAME
-    of an installed package.  With --node and no TARGET the nodes run on their own until
-    Ctrl-C or --duration, as `ros2 run` does.  Exit status: 0 normal end, 1 an exception in
+    of an installed package.  With --node (or --echo) and no TARGET the nodes run on their own
+    until Ctrl-C or --duration, as `ros2 run` does.  Exit status: 0 normal end, 1 an exception in
     machine code, 2 bad arguments or a machine that fails validation.
     """
     from ..runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
@@ -106,8 +106,8 @@ def run(
 
     if period is not None and period <= 0:
         fail("--period must be greater than 0")
-    if not targets and not nodes:
-        fail("nothing to run: give a machine (TARGET), or --node NAME to run nodes on their own")
+    if not targets and not nodes and not echoes:
+        fail("nothing to run: give a machine (TARGET), or --node NAME / --echo TOPIC to run on their own")
     if transport == "dds" and clock == "sim":
         fail(
             "--clock sim cannot be used with --transport dds: DDS peers live on the wall clock (their messages "

@@ -100,7 +100,10 @@ def from_dds(sample: Any, msg_cls: type[Message] | None = None) -> Message:
         msg_cls = _by_idl.get(type(sample))
         if msg_cls is None:
             raise TypeError(f"not a sample of a known message's DDS type: {type(sample).__name__}")
-    return codec(msg_cls).from_dds(sample)
+    c = codec(msg_cls)
+    if not isinstance(sample, c.idl):  # e.g. cyclonedds' InvalidSample (a dispose, no data)
+        raise TypeError(f"not a {dds_type_name(msg_cls)} sample: {type(sample).__name__}")
+    return c.from_dds(sample)
 
 
 def cdr(msg: Message) -> bytes:

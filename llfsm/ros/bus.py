@@ -225,7 +225,7 @@ class Bus:
         """Between rounds: what arrived from other processes, due timers, then the work queued
         before this call (first in, first out)."""
         if self._poll is not None:
-            self._poll()
+            self._poll(False)
         if self.timers and self.timers[0][0] <= self.clock.now:
             self._fire_due_timers(self.clock.now)
         ready = self.ready

@@ -53,6 +53,7 @@ reader = DataReader(dp, Topic(dp, "rr/toggleReply", _dds.dds_type(SetBool.Respon
 deadline = time.monotonic() + 15
 while time.monotonic() < deadline and not (writer.get_matched_subscriptions() and reader.get_matched_publications()):
     time.sleep(0.05)
+time.sleep(0.5)  # our side has matched; give the server's side time to match us too
 server = writer.get_matched_subscription_data(writer.get_matched_subscriptions()[0])
 header = _dds.carries_request_header(server.key)
 answers = []
@@ -93,9 +94,12 @@ rclpy.init()
 node = Node("fast_client")
 client = node.create_client(SetBool, "toggle")
 ready = client.wait_for_service(timeout_sec=15)
-future = client.call_async(SetBool.Request(data=True))
-rclpy.spin_until_future_complete(node, future, timeout_sec=4)
-print(json.dumps({"ready": ready, "answered": future.done()}))
+answered = []
+for _ in range(3):  # the first request may go out before the server's reader has matched it
+    future = client.call_async(SetBool.Request(data=True))
+    rclpy.spin_until_future_complete(node, future, timeout_sec=1.5)
+    answered.append(future.done())
+print(json.dumps({"ready": ready, "answered": any(answered)}))
 """
 
 # A server on Cyclone: reads the bare request of a Fast DDS client (its writer's GUID says so),
@@ -113,16 +117,14 @@ from llfsm.msgs.std_srvs.srv import SetBool
 dp = DomainParticipant(0)
 reader = DataReader(dp, Topic(dp, "rq/toggleRequest", _dds.dds_type(SetBool.Request), qos=QOS), qos=QOS)
 writer = DataWriter(dp, Topic(dp, "rr/toggleReply", _dds.dds_type(SetBool.Response), qos=QOS), qos=QOS)
-seen, deadline = [], time.monotonic() + 25
-while time.monotonic() < deadline and not seen:
+deadline = time.monotonic() + 25
+while time.monotonic() < deadline:
     for s in reader.take(10):
         if s.sample_info.valid_data:
             client = reader.get_matched_publication_data(s.sample_info.publication_handle)
-            seen.append([_dds.from_dds(s, SetBool.Request).data, _dds.vendor_name(client.key)])
+            print(json.dumps([_dds.from_dds(s, SetBool.Request).data, _dds.vendor_name(client.key)]), flush=True)
             writer.write(_dds.to_dds(SetBool.Response(success=True, message="from cyclone")))
     time.sleep(0.02)
-time.sleep(1)
-print(json.dumps(seen))
 """
 )
 
@@ -131,8 +133,11 @@ def test_fast_dds_client_gets_no_answer_from_cyclone_server() -> None:
     """The request arrives and is served, but rmw_fastrtps_cpp drops the reply: it keeps only
     replies whose RTPS related-sample-identity names its own request, which Cyclone DDS does not
     send.  When this starts to pass the other way, docs/transports.md needs updating."""
-    client, server = run_together([ros_command(_RCLPY_CLIENT), python_command(_CYCLONE_SERVER)], timeout=40)
-    assert server.returncode == 0, server.stderr
+    client, server = run_together(
+        [ros_command(_RCLPY_CLIENT), python_command(_CYCLONE_SERVER)], timeout=40, stop_after_first=0
+    )
+    assert server.returncode == -15, server.stderr  # ended by run_together once the client is done
     assert client.returncode == 0, client.stderr
-    assert json.loads(server.stdout.strip().splitlines()[-1]) == [[True, "eProsima Fast DDS"]]
+    seen = [json.loads(line) for line in server.stdout.splitlines()]
+    assert seen and all(s == [True, "eProsima Fast DDS"] for s in seen), server.stdout
     assert json.loads(client.stdout.strip().splitlines()[-1]) == {"ready": True, "answered": False}

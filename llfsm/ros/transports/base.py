@@ -77,9 +77,11 @@ class Transport:
     def discover(self, topic: str, fn: Any) -> None:
         """Call fn(message class) once a publisher of `topic` appears in another process."""
 
-    def poll(self) -> bool:
+    def poll(self, force: bool = True) -> bool:
         """Bring in what arrived since the last call (messages, requests, replies, matches).
-        Must be cheap when nothing did: it runs after every round.  True if anything came."""
+        Between rounds the bus calls it with force=False: then it must be cheap when nothing
+        arrived (it runs after every round) and may skip looking if it looked very recently.
+        True if anything came."""
         return False
 
     def wait(self, until_ns: int) -> None:
