@@ -150,6 +150,12 @@ def test_bad_payloads_are_value_errors() -> None:
         _dds.from_cdr(b"\x00", String)
     with pytest.raises(ValueError, match="malformed std_msgs/msg/String"):
         _dds.from_cdr(b"\x00\x01\x00\x00\x05\x00\x00\x00\xff\xfe\x00\x00\x00", String)
+    from llfsm.msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
+
+    # A count of 2**32 - 1 nodes in 8 bytes: refused at once, not looped over.
+    bogus = b"\x00\x01\x00\x00" + bytes(16) + b"\xff\xff\xff\xff" + bytes(8)
+    with pytest.raises(ValueError, match="elements announced"):
+        _dds.from_cdr(bogus, ParticipantEntitiesInfo)
     with pytest.raises(TypeError, match="not a message class"):
         _dds.cdr("text")  # type: ignore[arg-type]
 
@@ -210,16 +216,20 @@ def test_user_package_gets_dds_forms(tmp_path: Path, monkeypatch: pytest.MonkeyP
         "std_msgs/Header header\nchar[4] tag\nbyte[] blob\nwstring wide\nfloat32 last\n"
     )
     (pkg / "srv" / "Ask.srv").write_text("Inner question\n---\nOuter answer\nbool ok\n")
+    other = tmp_path / "llfsm_dds_user_pkg2" / "msg"  # a user package using the first one
+    other.mkdir(parents=True)
+    (other / "Wrapper.msg").write_text("llfsm_dds_user_pkg/Outer[<=2] outers\nllfsm_dds_user_pkg/Inner inner\n")
     monkeypatch.setenv("LLFSM_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setenv("LLFSM_INTERFACE_PATH", str(tmp_path))
     msg_module = importlib.import_module("llfsm.msgs.llfsm_dds_user_pkg.msg")
     srv_module = importlib.import_module("llfsm.msgs.llfsm_dds_user_pkg.srv")
+    wrapper = importlib.import_module("llfsm.msgs.llfsm_dds_user_pkg2.msg").Wrapper
     rng = random.Random(5)
-    for cls in (msg_module.Inner, msg_module.Outer, srv_module.Ask.Request, srv_module.Ask.Response):
+    for cls in (msg_module.Inner, msg_module.Outer, srv_module.Ask.Request, srv_module.Ask.Response, wrapper):
         for _ in range(5):
             msg = sample(cls, rng)
             assert _dds.from_cdr(_dds.cdr(msg), cls) == msg
-        assert _dds.dds_type(cls).__idl_typename__.startswith("llfsm_dds_user_pkg::")
+        assert _dds.dds_type(cls).__idl_typename__.startswith(cls._TYPE.split("/")[0] + "::")
     assert _dds.type_hash(srv_module.Ask).startswith("RIHS01_")
     assert interfaces.installed_spec("llfsm_dds_user_pkg/msg/Inner").fields[2].type.array == "unbounded"
 
@@ -234,3 +244,40 @@ def test_vendor_of_a_guid_tells_the_service_wire_form() -> None:
     assert _dds.vendor_name(bytes.fromhex("01aa") + bytes(14)) == "vendor 01.aa"
     with pytest.raises(ValueError):
         _dds.vendor_id(b"")
+
+
+def test_generated_dds_modules_import_nothing_heavy() -> None:
+    """Running pays for no parser or template engine: a `_dds` module imports cyclonedds' IDL
+    support, struct, dataclasses and other generated modules only."""
+    allowed = (
+        "from dataclasses import",
+        "from struct import",
+        "import cyclonedds.idl.types",
+        "from cyclonedds.idl import",
+    )
+    paths = sorted(interfaces.MSGS_DIR.glob("*/*/_dds.py"))
+    assert len(paths) >= 9
+    for path in paths:
+        for line in path.read_text().splitlines():
+            if line.startswith(("import ", "from ")):
+                assert line.startswith(allowed) or line.startswith("import llfsm.msgs."), (path, line)
+
+
+@pytest.mark.parametrize("cls", CLASSES, ids=lambda c: c._TYPE)
+def test_damaged_payloads_raise_value_error_only(cls: type[Message]) -> None:
+    """What a peer may send: every truncation of a good payload and random byte changes give a
+    message or ValueError, never another exception (the transport drops such samples)."""
+    rng = random.Random(cls._TYPE + "damage")
+    good = _dds.cdr(sample(cls, rng))
+    damaged = [good[:n] for n in range(len(good))]
+    for _ in range(30):
+        data = bytearray(good)
+        for _ in range(rng.randint(1, 4)):
+            data[rng.randrange(4, len(data))] = rng.randrange(256) if len(data) > 4 else 0
+        damaged.append(bytes(data))
+    for data in damaged:
+        try:
+            msg = _dds.from_cdr(data, cls)
+        except ValueError:
+            continue
+        assert type(msg) is cls

@@ -6,16 +6,23 @@ Each generated module holds, per message:
   `pkg::srv::dds_::Name_Request_`), for creating topics and for code that wants cyclonedds
   samples (`_to_Name`, `_from_Name` convert);
 - a CDR encoder and decoder written out field by field (`_cdr_Name(msg) -> bytes`,
-  `_msg_Name(data) -> msg`): XCDR1 plain CDR, little endian, with the encapsulation header
-  00 01 00 00, byte for byte what rclpy's `serialize_message` gives.  Runs of fixed-size fields
-  whose alignment is known at generation time become one precompiled `struct.Struct` (a Twist
-  is one `pack` of six doubles); alignment is worked out at run time only after a string or a
-  sequence.  Nested messages are inlined, so a Pose is one `unpack` too;
+  `_msg_Name(data) -> (msg, end)`, and `_enc_Name`/`_dec_Name` for a message at any offset):
+  XCDR1 plain CDR, little endian, with the encapsulation header 00 01 00 00, byte for byte what
+  rclpy's `serialize_message` gives.  Runs of fixed-size fields whose alignment is known at
+  generation time become one precompiled `struct.Struct` (a Twist is one `pack` of six doubles,
+  header included); alignment is worked out at run time only after a string or a sequence.
+  Nested messages are inlined, so a PoseStamped is two `unpack` calls.  Two rules follow Fast
+  CDR (checked against rclpy in tests/interop): an empty sequence of 8-byte values is its count
+  alone (the elements' alignment comes only with elements), and a wstring is a count of UTF-16
+  code units then 4 bytes per unit;
 - its RIHS01 type hash (REP 2011), computed here from the type description, as rosidl does.
 
 Why hand-written CDR beside the IdlStruct: the IdlStruct route converts a message to a sample
-and lets cyclonedds' interpreted serializer walk it, several times slower for a Twist (see
+and lets cyclonedds' interpreted serializer walk it, some 40 times slower for a Twist (see
 bench/dds_types.py); the IdlStruct is still needed to register the topic's type.
+
+Long statements are laid out as ruff format lays them out (`layout`), so the committed modules
+pass the project's lint like hand-written code.
 
 Running never pays for this file: generated modules import only cyclonedds' idl package,
 `struct` and the generated message modules.
@@ -27,15 +34,17 @@ import hashlib
 import json
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from .interfaces import (
+    LINE_LIMIT,
     FieldSpec,
     FieldType,
     MessageSpec,
     PackageSpec,
     ServiceSpec,
+    _str_literal,
 )
 
 DDS_TEMPLATE = "msgs_dds.py.j2"
@@ -116,7 +125,8 @@ Lookup = Callable[[str], MessageSpec]
 
 
 def dds_name(type_name: str) -> str:
-    """ "geometry_msgs/msg/Twist" -> "geometry_msgs::msg::dds_::Twist_" (rmw's type name)."""
+    """The DDS type name rmw gives a ROS type: geometry_msgs/msg/Twist is
+    geometry_msgs::msg::dds_::Twist_."""
     pkg, kind, name = type_name.split("/")
     return f"{pkg}::{kind}::dds_::{name}_"
 
@@ -201,18 +211,6 @@ def service_specs(service: ServiceSpec) -> tuple[MessageSpec, MessageSpec]:
 # -- CDR code ----------------------------------------------------------------------------------
 
 
-@dataclass
-class _Structs:
-    """The module's precompiled struct.Struct objects, one per format."""
-
-    names: dict[str, str] = field(default_factory=dict)
-
-    def __call__(self, fmt: str) -> str:
-        if fmt not in self.names:
-            self.names[fmt] = f"_S{len(self.names)}"
-        return self.names[fmt]
-
-
 class _Alignment:
     """What is known at generation time of the write (or read) position: offset % mod == rem,
     the offset counted from the end of the encapsulation header, as CDR aligns."""
@@ -281,7 +279,7 @@ class _Writer(_Code):
     def flush(self) -> None:
         if self.fmt:
             name = self.module.struct("<" + "".join(self.fmt))
-            self.lines.append(f"b += {name}.pack({', '.join(self.args)})")
+            self.lines.append(layout("b += ", Call(f"{name}.pack", self.args)))
             self.fmt, self.args = [], []
 
     def align(self, a: int) -> None:
@@ -367,7 +365,7 @@ class _Writer(_Code):
             inner.field(element, e)
             inner.flush()
         self.lines.append(f"for {e} in {v}:")
-        self.lines += ["    " + line for line in inner.lines]
+        self.lines += [_indented(line) for line in inner.lines]
         self.at.unknown()
 
 
@@ -413,13 +411,13 @@ class _Reader(_Code):
         self.lines.append(f"{v} = {expr}")
         return v
 
-    def message(self, spec: MessageSpec) -> str:
+    def message(self, spec: MessageSpec) -> Call:
         if not spec.fields:  # the stand-in uint8, skipped
             self.fmt.append("x")
             self.at.advance(1)
-            return f"{self.module.ref(spec.type_name, '_mk')}()"
+            return Call(self.module.ref(spec.type_name, "_mk"), [])
         args = [self.field(f.type) for f in spec.fields]
-        return _call(f"{self.module.ref(spec.type_name, '_mk')}", args)
+        return Call(self.module.ref(spec.type_name, "_mk"), args)
 
     def string(self, base: str) -> str:
         n = self.primitive("uint32")
@@ -437,7 +435,7 @@ class _Reader(_Code):
             self.at.aligned(4)
         return s
 
-    def field(self, t: FieldType) -> str:
+    def field(self, t: FieldType) -> str | Call:
         if t.array is None:
             if t.is_message:
                 return self.message(self.module.lookup(t.base))
@@ -480,17 +478,46 @@ class _Reader(_Code):
         if element.is_message:
             inner.lines.append(f"{e}, o = {self.module.ref(element.base, '_dec')}(d, o)")
         else:
-            inner.lines.append(f"{e} = {inner.field(element)}")
+            inner.lines.append(layout(f"{e} = ", inner.field(element)))
+        if t.array != "fixed":  # every element takes a byte at least: a bogus count fails now
+            self.lines.append(f"if {n} > len(d) - o:")
+            self.lines.append(f'    raise ValueError(f"{{{n}}} elements announced, {{len(d) - o}} bytes left")')
         self.lines.append(f"{v} = []")
         self.lines.append(f"for _ in range({n}):")
-        self.lines += ["    " + line for line in inner.lines]
+        self.lines += [_indented(line) for line in inner.lines]
         self.lines.append(f"    {v}.append({e})")
         self.at.unknown()
         return v
 
 
-def _call(fn: str, args: list[str]) -> str:
-    return f"{fn}({', '.join(args)})"
+@dataclass
+class Call:
+    """A call expression kept as a tree, so that a long one is laid out as ruff lays it out."""
+
+    fn: str
+    args: list[Any]  # str | Call
+
+    def __str__(self) -> str:
+        return f"{self.fn}({', '.join(map(str, self.args))})"
+
+
+def layout(prefix: str, expr: Any, suffix: str = "", indent: int = 4, *, atom: bool = False) -> str:
+    """`prefix + expr + suffix` as a statement at `indent`, split as ruff format splits it: on
+    one line if it fits; else the arguments on one line of their own if they fit (calls only:
+    a bracketed collection, `atom`, is always exploded); else one argument a line, each laid
+    out likewise, with a trailing comma."""
+    one = f"{prefix}{expr}{suffix}"
+    if indent + len(one) <= LINE_LIMIT or not isinstance(expr, Call) or not expr.args:
+        return one
+    body = ", ".join(map(str, expr.args))
+    if not atom and indent + 4 + len(body) <= LINE_LIMIT:
+        return f"{prefix}{expr.fn}(\n    {body}\n){suffix}"
+    items = [layout("", a, ",", indent + 4) for a in expr.args]
+    return f"{prefix}{expr.fn}(\n" + "".join(_indented(i) + "\n" for i in items) + f"){suffix}"
+
+
+def _indented(text: str, by: str = "    ") -> str:
+    return "\n".join(by + line for line in text.split("\n"))
 
 
 class _Module:
@@ -536,7 +563,10 @@ class DdsMessageView:
     typename: str  # the DDS type name
     idl_fields: list[str]  # `name: annotation` lines of the IdlStruct
     mk: list[str]  # body of _mk_<Name>(a0, a1, ...)
-    mk_params: str
+    mk_def: str
+    class_line: str  # `class Name_(_IdlStruct, typename=...):`
+    wire_line: str  # same for the request/response with rmw_cyclonedds' header
+    codec: str  # its entry in CODECS
     cdr: list[str]  # body of _cdr_<Name>(m) -> bytes
     msg: list[str]  # body of _msg_<Name>(d) -> (message, end offset)
     enc: list[str]  # body of _enc_<Name>(m, b)
@@ -579,16 +609,17 @@ def message_view(spec: MessageSpec, module: _Module, type_hash_value: str) -> Dd
     fields = spec.fields
     idl_fields = [f"{f.name}: {_idl_annotation(f.type, module)}" for f in fields] or [f"{EMPTY_MEMBER}: _t.uint8 = 0"]
 
-    params = ", ".join(f"a{i}" for i in range(len(fields)))
+    mk_def = layout("def ", Call(f"_mk_{name}", [f"a{i}" for i in range(len(fields))]), ":", 0)
     mk = [f"m = _new(_c_{name})"] + [f"m._{f.name} = a{i}" for i, f in enumerate(fields)] + ["return m"]
 
     module.n = 0
     top = _Writer(module, _Alignment(8))
     top.message(spec, "m")
-    top.flush()
-    if len(top.lines) == 1 and top.lines[0].startswith("b += _S"):
-        cdr = ["return _HDR + " + top.lines[0][len("b += ") :]]
+    if not top.lines:  # fixed size: one pack, the encapsulation header included
+        packer = module.struct("<4s" + "".join(top.fmt))
+        cdr = [layout("return ", Call(f"{packer}.pack", ["_HDR", *top.args]))]
     else:
+        top.flush()
         cdr = ["b = bytearray(_HDR)", *top.lines, "return bytes(b)"]
     module.n = 0
     anywhere = _Writer(module, _Alignment(1))
@@ -599,15 +630,15 @@ def message_view(spec: MessageSpec, module: _Module, type_hash_value: str) -> Dd
     reader = _Reader(module, _Alignment(8))
     result = reader.message(spec)
     reader.flush()
-    msg = ["o = 4", *reader.lines, f"return {result}, o"]
+    msg = ["o = 4", *reader.lines, layout("m = ", result), "return m, o"]
     module.n = 0
     dec_reader = _Reader(module, _Alignment(1))
     result = dec_reader.message(spec)
     dec_reader.flush()
-    dec = [*dec_reader.lines, f"return {result}, o"]
+    dec = [*dec_reader.lines, layout("m = ", result), "return m, o"]
 
     to_args = [f"{f.name}={_conversion(f.type, f'm._{f.name}', module, 'to')}" for f in fields]
-    to_dds = [f"return {name}_({', '.join(to_args)})"]
+    to_dds = [layout("return ", Call(f"{name}_", to_args))]
     from_dds = [f"m = _new(_c_{name})"]
     from_dds += [f"m._{f.name} = {_conversion(f.type, f's.{f.name}', module, 'from')}" for f in fields]
     from_dds.append("return m")
@@ -617,7 +648,10 @@ def message_view(spec: MessageSpec, module: _Module, type_hash_value: str) -> Dd
         typename=dds_name(spec.type_name),
         idl_fields=idl_fields,
         mk=mk,
-        mk_params=params,
+        mk_def=mk_def,
+        class_line=_class_line(f"{name}_", spec.type_name),
+        wire_line=_class_line(f"{name}_wire_", spec.type_name),
+        codec=_codec_line(name),
         cdr=cdr,
         msg=msg,
         enc=anywhere.lines or ["pass"],
@@ -626,6 +660,15 @@ def message_view(spec: MessageSpec, module: _Module, type_hash_value: str) -> Dd
         from_dds=from_dds,
         type_hash=type_hash_value,
     )
+
+
+def _class_line(cls: str, type_name: str) -> str:
+    return layout("class ", Call(cls, ["_IdlStruct", f"typename={_str_literal(dds_name(type_name))}"]), ":", 0)
+
+
+def _codec_line(name: str) -> str:
+    items = [f"{name}_"] + [f"_{p}_{name}" for p in ("cdr", "msg", "to", "from", "enc", "dec")]
+    return layout(f"{_str_literal(name)}: ", Call("", items), ",", atom=True)
 
 
 def _ordered(messages: list[MessageSpec]) -> list[MessageSpec]:
@@ -674,9 +717,16 @@ def render_dds_module(package: PackageSpec, kind: str, lookup: Lookup, header: l
         header=header,
         package=package.name,
         kind=kind,
-        imports=sorted(module.imports),
+        imports=sorted(
+            [f"import llfsm.msgs.{pkg}.msg._dds as _{pkg}" for pkg in module.imports]
+            + [f"import llfsm.msgs.{package.name}.{kind} as _classes"],
+            key=lambda line: line.split()[1],
+        ),
         uses=module.uses,
-        structs=sorted(module.structs.items(), key=lambda kv: int(kv[1][2:])),
+        structs=[
+            layout(f"{name} = ", Call("_Struct", [_str_literal(fmt)]), indent=0)
+            for fmt, name in sorted(module.structs.items(), key=lambda kv: int(kv[1][2:]))
+        ],
         messages=views,
         services=[(s.name, s.request.name, s.response.name) for s in package.services] if kind == "srv" else [],
         service_hashes=hashes,

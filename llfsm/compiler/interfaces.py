@@ -6,6 +6,10 @@ builtin_interfaces from the definitions rosbags carries for ROS 2 Humble, and th
 files shipped in llfsm/msgs/_interfaces/ (std_srvs, turtlesim, turtle_sensor_interface).  And the
 import hook of llfsm.msgs calls `build_package` to compile a user's package into its cache.
 
+Beside each generated msg/srv module goes its DDS form, `_dds.py` (llfsm.compiler.dds: cyclonedds
+types named as ROS 2 names them, XCDR1 encoders and decoders, RIHS01 type hashes), from the same
+parsed definitions and the template msgs_dds.py.j2.
+
 The parser is our own rather than rosbags': rosbags drops default values (`float64 x 1.5`) and
 does not know wstring, and our own can point at the file and line of a mistake.  Generated
 modules import only llfsm.msgs._message and other generated modules, so running a machine never

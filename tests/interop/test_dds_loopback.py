@@ -70,7 +70,7 @@ def test_rclpy_from_wheels_runs_in_a_private_network() -> None:
 
 
 # rclpy side: a subscriber that prints what it gets on /chatter, and a publisher of Twist on
-# /cmd_vel, for 8 s at most.
+# /cmd_vel, for 14 s at most.
 _RCLPY_PEER = r"""
 import json, time, rclpy
 from rclpy.node import Node
@@ -81,8 +81,12 @@ node = Node("rclpy_peer")
 got = []
 node.create_subscription(String, "chatter", lambda m: got.append(m.data), 10)
 pub = node.create_publisher(Twist, "cmd_vel", 10)
-deadline = time.monotonic() + 12
-while time.monotonic() < deadline and len(got) < 3:
+deadline, first = time.monotonic() + 14, None
+# Publish on for 3 s after the first ping: the other side may match this writer later than
+# this side matched its own.
+while time.monotonic() < deadline and (len(got) < 3 or time.monotonic() < first + 3):
+    if got and first is None:
+        first = time.monotonic()
     t = Twist()
     t.linear.x, t.angular.z = 2.0, -1.25
     pub.publish(t)
@@ -109,7 +113,7 @@ qos = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepL
 dp = DomainParticipant(0)
 writer = DataWriter(dp, Topic(dp, "rt/chatter", _dds.dds_type(String), qos=qos), qos=qos)
 reader = DataReader(dp, Topic(dp, "rt/cmd_vel", _dds.dds_type(Twist), qos=qos), qos=qos)
-twists, i, deadline = [], 0, time.monotonic() + 12
+twists, i, deadline = [], 0, time.monotonic() + 14
 while time.monotonic() < deadline and (i < 40 or not twists):
     writer.write(_dds.to_dds(String(data=f"ping {i}")))
     i += 1

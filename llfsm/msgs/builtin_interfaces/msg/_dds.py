@@ -15,7 +15,8 @@ import llfsm.msgs.builtin_interfaces.msg as _classes
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<iI")
+_S0 = _Struct("<4siI")
+_S1 = _Struct("<iI")
 
 
 # -- builtin_interfaces/msg/Duration
@@ -37,26 +38,28 @@ def _mk_Duration(a0, a1):
 
 
 def _cdr_Duration(m):
-    return _HDR + _S0.pack(m._sec, m._nanosec)
+    return _S0.pack(_HDR, m._sec, m._nanosec)
 
 
 def _msg_Duration(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 8
-    return _mk_Duration(t1[0], t1[1]), o
+    m = _mk_Duration(t1[0], t1[1])
+    return m, o
 
 
 def _enc_Duration(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S0.pack(m._sec, m._nanosec)
+    b += _S1.pack(m._sec, m._nanosec)
 
 
 def _dec_Duration(d, o):
     o += (4 - o) & 3
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 8
-    return _mk_Duration(t1[0], t1[1]), o
+    m = _mk_Duration(t1[0], t1[1])
+    return m, o
 
 
 def _to_Duration(m):
@@ -89,26 +92,28 @@ def _mk_Time(a0, a1):
 
 
 def _cdr_Time(m):
-    return _HDR + _S0.pack(m._sec, m._nanosec)
+    return _S0.pack(_HDR, m._sec, m._nanosec)
 
 
 def _msg_Time(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 8
-    return _mk_Time(t1[0], t1[1]), o
+    m = _mk_Time(t1[0], t1[1])
+    return m, o
 
 
 def _enc_Time(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S0.pack(m._sec, m._nanosec)
+    b += _S1.pack(m._sec, m._nanosec)
 
 
 def _dec_Time(d, o):
     o += (4 - o) & 3
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 8
-    return _mk_Time(t1[0], t1[1]), o
+    m = _mk_Time(t1[0], t1[1])
+    return m, o
 
 
 def _to_Time(m):

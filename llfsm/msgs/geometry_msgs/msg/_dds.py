@@ -11,22 +11,30 @@ import cyclonedds.idl.types as _t
 from cyclonedds.idl import IdlStruct as _IdlStruct
 
 import llfsm.msgs.builtin_interfaces.msg._dds as _builtin_interfaces
-import llfsm.msgs.std_msgs.msg._dds as _std_msgs
 import llfsm.msgs.geometry_msgs.msg as _classes
+import llfsm.msgs.std_msgs.msg._dds as _std_msgs
 
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<ddd")
-_S1 = _Struct("<dddddd")
-_S2 = _Struct("<iII")
-_S3 = _Struct("<dddddd36d")
-_S4 = _Struct("<dddddddddd")
-_S5 = _Struct("<fff")
-_S6 = _Struct("<I")
-_S7 = _Struct("<dddd")
-_S8 = _Struct("<ddddddd")
-_S9 = _Struct("<ddddddd36d")
+_S0 = _Struct("<4sddd")
+_S1 = _Struct("<ddd")
+_S2 = _Struct("<4sdddddd")
+_S3 = _Struct("<dddddd")
+_S4 = _Struct("<iII")
+_S5 = _Struct("<4sdddddd36d")
+_S6 = _Struct("<dddddd36d")
+_S7 = _Struct("<4sdddddddddd")
+_S8 = _Struct("<dddddddddd")
+_S9 = _Struct("<4sfff")
+_S10 = _Struct("<fff")
+_S11 = _Struct("<I")
+_S12 = _Struct("<4sdddd")
+_S13 = _Struct("<dddd")
+_S14 = _Struct("<4sddddddd")
+_S15 = _Struct("<ddddddd")
+_S16 = _Struct("<4sddddddd36d")
+_S17 = _Struct("<ddddddd36d")
 
 
 # -- geometry_msgs/msg/Vector3
@@ -50,26 +58,28 @@ def _mk_Vector3(a0, a1, a2):
 
 
 def _cdr_Vector3(m):
-    return _HDR + _S0.pack(m._x, m._y, m._z)
+    return _S0.pack(_HDR, m._x, m._y, m._z)
 
 
 def _msg_Vector3(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_Vector3(t1[0], t1[1], t1[2]), o
+    m = _mk_Vector3(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _enc_Vector3(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S0.pack(m._x, m._y, m._z)
+    b += _S1.pack(m._x, m._y, m._z)
 
 
 def _dec_Vector3(d, o):
     o += (4 - o) & 7
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_Vector3(t1[0], t1[1], t1[2]), o
+    m = _mk_Vector3(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _to_Vector3(m):
@@ -103,26 +113,28 @@ def _mk_Accel(a0, a1):
 
 
 def _cdr_Accel(m):
-    return _HDR + _S1.pack(m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
+    return _S2.pack(_HDR, m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
 
 
 def _msg_Accel(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), o
+    m = _mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
+    return m, o
 
 
 def _enc_Accel(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
+    b += _S3.pack(m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
 
 
 def _dec_Accel(d, o):
     o += (4 - o) & 7
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), o
+    m = _mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
+    return m, o
 
 
 def _to_Accel(m):
@@ -157,48 +169,70 @@ def _mk_AccelStamped(a0, a1):
 def _cdr_AccelStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._accel._linear._x, m._accel._linear._y, m._accel._linear._z, m._accel._angular._x, m._accel._angular._y, m._accel._angular._z)
+    b += _S3.pack(
+        m._accel._linear._x,
+        m._accel._linear._y,
+        m._accel._linear._z,
+        m._accel._angular._x,
+        m._accel._angular._y,
+        m._accel._angular._z,
+    )
     return bytes(b)
 
 
 def _msg_AccelStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S1.unpack_from(d, o)
+    t4 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_AccelStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5]))), o
+    m = _mk_AccelStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
+    )
+    return m, o
 
 
 def _enc_AccelStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._accel._linear._x, m._accel._linear._y, m._accel._linear._z, m._accel._angular._x, m._accel._angular._y, m._accel._angular._z)
+    b += _S3.pack(
+        m._accel._linear._x,
+        m._accel._linear._y,
+        m._accel._linear._z,
+        m._accel._angular._x,
+        m._accel._angular._y,
+        m._accel._angular._z,
+    )
 
 
 def _dec_AccelStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S1.unpack_from(d, o)
+    t4 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_AccelStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5]))), o
+    m = _mk_AccelStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
+    )
+    return m, o
 
 
 def _to_AccelStamped(m):
@@ -231,26 +265,49 @@ def _mk_AccelWithCovariance(a0, a1):
 
 
 def _cdr_AccelWithCovariance(m):
-    return _HDR + _S3.pack(m._accel._linear._x, m._accel._linear._y, m._accel._linear._z, m._accel._angular._x, m._accel._angular._y, m._accel._angular._z, *m._covariance)
+    return _S5.pack(
+        _HDR,
+        m._accel._linear._x,
+        m._accel._linear._y,
+        m._accel._linear._z,
+        m._accel._angular._x,
+        m._accel._angular._y,
+        m._accel._angular._z,
+        *m._covariance,
+    )
 
 
 def _msg_AccelWithCovariance(d):
     o = 4
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S6.unpack_from(d, o)
     o += 336
-    return _mk_AccelWithCovariance(_mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])), o
+    m = _mk_AccelWithCovariance(
+        _mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])
+    )
+    return m, o
 
 
 def _enc_AccelWithCovariance(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._accel._linear._x, m._accel._linear._y, m._accel._linear._z, m._accel._angular._x, m._accel._angular._y, m._accel._angular._z, *m._covariance)
+    b += _S6.pack(
+        m._accel._linear._x,
+        m._accel._linear._y,
+        m._accel._linear._z,
+        m._accel._angular._x,
+        m._accel._angular._y,
+        m._accel._angular._z,
+        *m._covariance,
+    )
 
 
 def _dec_AccelWithCovariance(d, o):
     o += (4 - o) & 7
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S6.unpack_from(d, o)
     o += 336
-    return _mk_AccelWithCovariance(_mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])), o
+    m = _mk_AccelWithCovariance(
+        _mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])
+    )
+    return m, o
 
 
 def _to_AccelWithCovariance(m):
@@ -285,48 +342,76 @@ def _mk_AccelWithCovarianceStamped(a0, a1):
 def _cdr_AccelWithCovarianceStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._accel._accel._linear._x, m._accel._accel._linear._y, m._accel._accel._linear._z, m._accel._accel._angular._x, m._accel._accel._angular._y, m._accel._accel._angular._z, *m._accel._covariance)
+    b += _S6.pack(
+        m._accel._accel._linear._x,
+        m._accel._accel._linear._y,
+        m._accel._accel._linear._z,
+        m._accel._accel._angular._x,
+        m._accel._accel._angular._y,
+        m._accel._accel._angular._z,
+        *m._accel._covariance,
+    )
     return bytes(b)
 
 
 def _msg_AccelWithCovarianceStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S3.unpack_from(d, o)
+    t4 = _S6.unpack_from(d, o)
     o += 336
-    return _mk_AccelWithCovarianceStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_AccelWithCovariance(_mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42]))), o
+    m = _mk_AccelWithCovarianceStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_AccelWithCovariance(
+            _mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42])
+        ),
+    )
+    return m, o
 
 
 def _enc_AccelWithCovarianceStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._accel._accel._linear._x, m._accel._accel._linear._y, m._accel._accel._linear._z, m._accel._accel._angular._x, m._accel._accel._angular._y, m._accel._accel._angular._z, *m._accel._covariance)
+    b += _S6.pack(
+        m._accel._accel._linear._x,
+        m._accel._accel._linear._y,
+        m._accel._accel._linear._z,
+        m._accel._accel._angular._x,
+        m._accel._accel._angular._y,
+        m._accel._accel._angular._z,
+        *m._accel._covariance,
+    )
 
 
 def _dec_AccelWithCovarianceStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S3.unpack_from(d, o)
+    t4 = _S6.unpack_from(d, o)
     o += 336
-    return _mk_AccelWithCovarianceStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_AccelWithCovariance(_mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42]))), o
+    m = _mk_AccelWithCovarianceStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_AccelWithCovariance(
+            _mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42])
+        ),
+    )
+    return m, o
 
 
 def _to_AccelWithCovarianceStamped(m):
@@ -371,30 +456,34 @@ def _mk_Inertia(a0, a1, a2, a3, a4, a5, a6, a7):
 
 
 def _cdr_Inertia(m):
-    return _HDR + _S4.pack(m._m, m._com._x, m._com._y, m._com._z, m._ixx, m._ixy, m._ixz, m._iyy, m._iyz, m._izz)
+    return _S7.pack(_HDR, m._m, m._com._x, m._com._y, m._com._z, m._ixx, m._ixy, m._ixz, m._iyy, m._iyz, m._izz)
 
 
 def _msg_Inertia(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S8.unpack_from(d, o)
     o += 80
-    return _mk_Inertia(t1[0], _mk_Vector3(t1[1], t1[2], t1[3]), t1[4], t1[5], t1[6], t1[7], t1[8], t1[9]), o
+    m = _mk_Inertia(t1[0], _mk_Vector3(t1[1], t1[2], t1[3]), t1[4], t1[5], t1[6], t1[7], t1[8], t1[9])
+    return m, o
 
 
 def _enc_Inertia(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S4.pack(m._m, m._com._x, m._com._y, m._com._z, m._ixx, m._ixy, m._ixz, m._iyy, m._iyz, m._izz)
+    b += _S8.pack(m._m, m._com._x, m._com._y, m._com._z, m._ixx, m._ixy, m._ixz, m._iyy, m._iyz, m._izz)
 
 
 def _dec_Inertia(d, o):
     o += (4 - o) & 7
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S8.unpack_from(d, o)
     o += 80
-    return _mk_Inertia(t1[0], _mk_Vector3(t1[1], t1[2], t1[3]), t1[4], t1[5], t1[6], t1[7], t1[8], t1[9]), o
+    m = _mk_Inertia(t1[0], _mk_Vector3(t1[1], t1[2], t1[3]), t1[4], t1[5], t1[6], t1[7], t1[8], t1[9])
+    return m, o
 
 
 def _to_Inertia(m):
-    return Inertia_(m=m._m, com=_to_Vector3(m._com), ixx=m._ixx, ixy=m._ixy, ixz=m._ixz, iyy=m._iyy, iyz=m._iyz, izz=m._izz)
+    return Inertia_(
+        m=m._m, com=_to_Vector3(m._com), ixx=m._ixx, ixy=m._ixy, ixz=m._ixz, iyy=m._iyy, iyz=m._iyz, izz=m._izz
+    )
 
 
 def _from_Inertia(s):
@@ -431,48 +520,78 @@ def _mk_InertiaStamped(a0, a1):
 def _cdr_InertiaStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S4.pack(m._inertia._m, m._inertia._com._x, m._inertia._com._y, m._inertia._com._z, m._inertia._ixx, m._inertia._ixy, m._inertia._ixz, m._inertia._iyy, m._inertia._iyz, m._inertia._izz)
+    b += _S8.pack(
+        m._inertia._m,
+        m._inertia._com._x,
+        m._inertia._com._y,
+        m._inertia._com._z,
+        m._inertia._ixx,
+        m._inertia._ixy,
+        m._inertia._ixz,
+        m._inertia._iyy,
+        m._inertia._iyz,
+        m._inertia._izz,
+    )
     return bytes(b)
 
 
 def _msg_InertiaStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S4.unpack_from(d, o)
+    t4 = _S8.unpack_from(d, o)
     o += 80
-    return _mk_InertiaStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Inertia(t4[0], _mk_Vector3(t4[1], t4[2], t4[3]), t4[4], t4[5], t4[6], t4[7], t4[8], t4[9])), o
+    m = _mk_InertiaStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Inertia(t4[0], _mk_Vector3(t4[1], t4[2], t4[3]), t4[4], t4[5], t4[6], t4[7], t4[8], t4[9]),
+    )
+    return m, o
 
 
 def _enc_InertiaStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S4.pack(m._inertia._m, m._inertia._com._x, m._inertia._com._y, m._inertia._com._z, m._inertia._ixx, m._inertia._ixy, m._inertia._ixz, m._inertia._iyy, m._inertia._iyz, m._inertia._izz)
+    b += _S8.pack(
+        m._inertia._m,
+        m._inertia._com._x,
+        m._inertia._com._y,
+        m._inertia._com._z,
+        m._inertia._ixx,
+        m._inertia._ixy,
+        m._inertia._ixz,
+        m._inertia._iyy,
+        m._inertia._iyz,
+        m._inertia._izz,
+    )
 
 
 def _dec_InertiaStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S4.unpack_from(d, o)
+    t4 = _S8.unpack_from(d, o)
     o += 80
-    return _mk_InertiaStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Inertia(t4[0], _mk_Vector3(t4[1], t4[2], t4[3]), t4[4], t4[5], t4[6], t4[7], t4[8], t4[9])), o
+    m = _mk_InertiaStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Inertia(t4[0], _mk_Vector3(t4[1], t4[2], t4[3]), t4[4], t4[5], t4[6], t4[7], t4[8], t4[9]),
+    )
+    return m, o
 
 
 def _to_InertiaStamped(m):
@@ -507,26 +626,28 @@ def _mk_Point(a0, a1, a2):
 
 
 def _cdr_Point(m):
-    return _HDR + _S0.pack(m._x, m._y, m._z)
+    return _S0.pack(_HDR, m._x, m._y, m._z)
 
 
 def _msg_Point(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_Point(t1[0], t1[1], t1[2]), o
+    m = _mk_Point(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _enc_Point(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S0.pack(m._x, m._y, m._z)
+    b += _S1.pack(m._x, m._y, m._z)
 
 
 def _dec_Point(d, o):
     o += (4 - o) & 7
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_Point(t1[0], t1[1], t1[2]), o
+    m = _mk_Point(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _to_Point(m):
@@ -562,26 +683,28 @@ def _mk_Point32(a0, a1, a2):
 
 
 def _cdr_Point32(m):
-    return _HDR + _S5.pack(m._x, m._y, m._z)
+    return _S9.pack(_HDR, m._x, m._y, m._z)
 
 
 def _msg_Point32(d):
     o = 4
-    t1 = _S5.unpack_from(d, o)
+    t1 = _S10.unpack_from(d, o)
     o += 12
-    return _mk_Point32(t1[0], t1[1], t1[2]), o
+    m = _mk_Point32(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _enc_Point32(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S5.pack(m._x, m._y, m._z)
+    b += _S10.pack(m._x, m._y, m._z)
 
 
 def _dec_Point32(d, o):
     o += (4 - o) & 3
-    t1 = _S5.unpack_from(d, o)
+    t1 = _S10.unpack_from(d, o)
     o += 12
-    return _mk_Point32(t1[0], t1[1], t1[2]), o
+    m = _mk_Point32(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _to_Point32(m):
@@ -617,48 +740,54 @@ def _mk_PointStamped(a0, a1):
 def _cdr_PointStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S0.pack(m._point._x, m._point._y, m._point._z)
+    b += _S1.pack(m._point._x, m._point._y, m._point._z)
     return bytes(b)
 
 
 def _msg_PointStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S0.unpack_from(d, o)
+    t4 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_PointStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Point(t4[0], t4[1], t4[2])), o
+    m = _mk_PointStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Point(t4[0], t4[1], t4[2])
+    )
+    return m, o
 
 
 def _enc_PointStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S0.pack(m._point._x, m._point._y, m._point._z)
+    b += _S1.pack(m._point._x, m._point._y, m._point._z)
 
 
 def _dec_PointStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S0.unpack_from(d, o)
+    t4 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_PointStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Point(t4[0], t4[1], t4[2])), o
+    m = _mk_PointStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Point(t4[0], t4[1], t4[2])
+    )
+    return m, o
 
 
 def _to_PointStamped(m):
@@ -691,7 +820,7 @@ def _mk_Polygon(a0):
 def _cdr_Polygon(m):
     b = bytearray(_HDR)
     v1 = m._points
-    b += _S6.pack(len(v1))
+    b += _S11.pack(len(v1))
     for e2 in v1:
         _enc_Point32(e2, b)
     return bytes(b)
@@ -699,34 +828,40 @@ def _cdr_Polygon(m):
 
 def _msg_Polygon(d):
     o = 4
-    t1 = _S6.unpack_from(d, o)
+    t1 = _S11.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_Point32(d, o)
         v3.append(e4)
-    return _mk_Polygon(v3), o
+    m = _mk_Polygon(v3)
+    return m, o
 
 
 def _enc_Polygon(m, b):
     v1 = m._points
     b += _Z[(4 - len(b)) & 3]
-    b += _S6.pack(len(v1))
+    b += _S11.pack(len(v1))
     for e2 in v1:
         _enc_Point32(e2, b)
 
 
 def _dec_Polygon(d, o):
     o += (4 - o) & 3
-    t1 = _S6.unpack_from(d, o)
+    t1 = _S11.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_Point32(d, o)
         v3.append(e4)
-    return _mk_Polygon(v3), o
+    m = _mk_Polygon(v3)
+    return m, o
 
 
 def _to_Polygon(m):
@@ -760,12 +895,12 @@ def _mk_PolygonStamped(a0, a1):
 def _cdr_PolygonStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     v2 = m._polygon._points
     b += _Z[(4 - len(b)) & 3]
-    b += _S6.pack(len(v2))
+    b += _S11.pack(len(v2))
     for e3 in v2:
         _enc_Point32(e3, b)
     return bytes(b)
@@ -773,51 +908,57 @@ def _cdr_PolygonStamped(m):
 
 def _msg_PolygonStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S6.unpack_from(d, o)
+    t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
+    if n5 > len(d) - o:
+        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
         e7, o = _dec_Point32(d, o)
         v6.append(e7)
-    return _mk_PolygonStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Polygon(v6)), o
+    m = _mk_PolygonStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Polygon(v6))
+    return m, o
 
 
 def _enc_PolygonStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     v2 = m._polygon._points
     b += _Z[(4 - len(b)) & 3]
-    b += _S6.pack(len(v2))
+    b += _S11.pack(len(v2))
     for e3 in v2:
         _enc_Point32(e3, b)
 
 
 def _dec_PolygonStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S6.unpack_from(d, o)
+    t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
+    if n5 > len(d) - o:
+        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
         e7, o = _dec_Point32(d, o)
         v6.append(e7)
-    return _mk_PolygonStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Polygon(v6)), o
+    m = _mk_PolygonStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Polygon(v6))
+    return m, o
 
 
 def _to_PolygonStamped(m):
@@ -854,26 +995,28 @@ def _mk_Quaternion(a0, a1, a2, a3):
 
 
 def _cdr_Quaternion(m):
-    return _HDR + _S7.pack(m._x, m._y, m._z, m._w)
+    return _S12.pack(_HDR, m._x, m._y, m._z, m._w)
 
 
 def _msg_Quaternion(d):
     o = 4
-    t1 = _S7.unpack_from(d, o)
+    t1 = _S13.unpack_from(d, o)
     o += 32
-    return _mk_Quaternion(t1[0], t1[1], t1[2], t1[3]), o
+    m = _mk_Quaternion(t1[0], t1[1], t1[2], t1[3])
+    return m, o
 
 
 def _enc_Quaternion(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S7.pack(m._x, m._y, m._z, m._w)
+    b += _S13.pack(m._x, m._y, m._z, m._w)
 
 
 def _dec_Quaternion(d, o):
     o += (4 - o) & 7
-    t1 = _S7.unpack_from(d, o)
+    t1 = _S13.unpack_from(d, o)
     o += 32
-    return _mk_Quaternion(t1[0], t1[1], t1[2], t1[3]), o
+    m = _mk_Quaternion(t1[0], t1[1], t1[2], t1[3])
+    return m, o
 
 
 def _to_Quaternion(m):
@@ -908,26 +1051,45 @@ def _mk_Pose(a0, a1):
 
 
 def _cdr_Pose(m):
-    return _HDR + _S8.pack(m._position._x, m._position._y, m._position._z, m._orientation._x, m._orientation._y, m._orientation._z, m._orientation._w)
+    return _S14.pack(
+        _HDR,
+        m._position._x,
+        m._position._y,
+        m._position._z,
+        m._orientation._x,
+        m._orientation._y,
+        m._orientation._z,
+        m._orientation._w,
+    )
 
 
 def _msg_Pose(d):
     o = 4
-    t1 = _S8.unpack_from(d, o)
+    t1 = _S15.unpack_from(d, o)
     o += 56
-    return _mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), o
+    m = _mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6]))
+    return m, o
 
 
 def _enc_Pose(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S8.pack(m._position._x, m._position._y, m._position._z, m._orientation._x, m._orientation._y, m._orientation._z, m._orientation._w)
+    b += _S15.pack(
+        m._position._x,
+        m._position._y,
+        m._position._z,
+        m._orientation._x,
+        m._orientation._y,
+        m._orientation._z,
+        m._orientation._w,
+    )
 
 
 def _dec_Pose(d, o):
     o += (4 - o) & 7
-    t1 = _S8.unpack_from(d, o)
+    t1 = _S15.unpack_from(d, o)
     o += 56
-    return _mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), o
+    m = _mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6]))
+    return m, o
 
 
 def _to_Pose(m):
@@ -962,26 +1124,28 @@ def _mk_Pose2D(a0, a1, a2):
 
 
 def _cdr_Pose2D(m):
-    return _HDR + _S0.pack(m._x, m._y, m._theta)
+    return _S0.pack(_HDR, m._x, m._y, m._theta)
 
 
 def _msg_Pose2D(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_Pose2D(t1[0], t1[1], t1[2]), o
+    m = _mk_Pose2D(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _enc_Pose2D(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S0.pack(m._x, m._y, m._theta)
+    b += _S1.pack(m._x, m._y, m._theta)
 
 
 def _dec_Pose2D(d, o):
     o += (4 - o) & 7
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_Pose2D(t1[0], t1[1], t1[2]), o
+    m = _mk_Pose2D(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _to_Pose2D(m):
@@ -1017,12 +1181,12 @@ def _mk_PoseArray(a0, a1):
 def _cdr_PoseArray(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     v2 = m._poses
     b += _Z[(4 - len(b)) & 3]
-    b += _S6.pack(len(v2))
+    b += _S11.pack(len(v2))
     for e3 in v2:
         _enc_Pose(e3, b)
     return bytes(b)
@@ -1030,51 +1194,57 @@ def _cdr_PoseArray(m):
 
 def _msg_PoseArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S6.unpack_from(d, o)
+    t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
+    if n5 > len(d) - o:
+        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
         e7, o = _dec_Pose(d, o)
         v6.append(e7)
-    return _mk_PoseArray(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), v6), o
+    m = _mk_PoseArray(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), v6)
+    return m, o
 
 
 def _enc_PoseArray(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     v2 = m._poses
     b += _Z[(4 - len(b)) & 3]
-    b += _S6.pack(len(v2))
+    b += _S11.pack(len(v2))
     for e3 in v2:
         _enc_Pose(e3, b)
 
 
 def _dec_PoseArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S6.unpack_from(d, o)
+    t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
+    if n5 > len(d) - o:
+        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
         e7, o = _dec_Pose(d, o)
         v6.append(e7)
-    return _mk_PoseArray(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), v6), o
+    m = _mk_PoseArray(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), v6)
+    return m, o
 
 
 def _to_PoseArray(m):
@@ -1109,48 +1279,72 @@ def _mk_PoseStamped(a0, a1):
 def _cdr_PoseStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S8.pack(m._pose._position._x, m._pose._position._y, m._pose._position._z, m._pose._orientation._x, m._pose._orientation._y, m._pose._orientation._z, m._pose._orientation._w)
+    b += _S15.pack(
+        m._pose._position._x,
+        m._pose._position._y,
+        m._pose._position._z,
+        m._pose._orientation._x,
+        m._pose._orientation._y,
+        m._pose._orientation._z,
+        m._pose._orientation._w,
+    )
     return bytes(b)
 
 
 def _msg_PoseStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S8.unpack_from(d, o)
+    t4 = _S15.unpack_from(d, o)
     o += 56
-    return _mk_PoseStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6]))), o
+    m = _mk_PoseStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6])),
+    )
+    return m, o
 
 
 def _enc_PoseStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S8.pack(m._pose._position._x, m._pose._position._y, m._pose._position._z, m._pose._orientation._x, m._pose._orientation._y, m._pose._orientation._z, m._pose._orientation._w)
+    b += _S15.pack(
+        m._pose._position._x,
+        m._pose._position._y,
+        m._pose._position._z,
+        m._pose._orientation._x,
+        m._pose._orientation._y,
+        m._pose._orientation._z,
+        m._pose._orientation._w,
+    )
 
 
 def _dec_PoseStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S8.unpack_from(d, o)
+    t4 = _S15.unpack_from(d, o)
     o += 56
-    return _mk_PoseStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6]))), o
+    m = _mk_PoseStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6])),
+    )
+    return m, o
 
 
 def _to_PoseStamped(m):
@@ -1183,26 +1377,51 @@ def _mk_PoseWithCovariance(a0, a1):
 
 
 def _cdr_PoseWithCovariance(m):
-    return _HDR + _S9.pack(m._pose._position._x, m._pose._position._y, m._pose._position._z, m._pose._orientation._x, m._pose._orientation._y, m._pose._orientation._z, m._pose._orientation._w, *m._covariance)
+    return _S16.pack(
+        _HDR,
+        m._pose._position._x,
+        m._pose._position._y,
+        m._pose._position._z,
+        m._pose._orientation._x,
+        m._pose._orientation._y,
+        m._pose._orientation._z,
+        m._pose._orientation._w,
+        *m._covariance,
+    )
 
 
 def _msg_PoseWithCovariance(d):
     o = 4
-    t1 = _S9.unpack_from(d, o)
+    t1 = _S17.unpack_from(d, o)
     o += 344
-    return _mk_PoseWithCovariance(_mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), list(t1[7:43])), o
+    m = _mk_PoseWithCovariance(
+        _mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), list(t1[7:43])
+    )
+    return m, o
 
 
 def _enc_PoseWithCovariance(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S9.pack(m._pose._position._x, m._pose._position._y, m._pose._position._z, m._pose._orientation._x, m._pose._orientation._y, m._pose._orientation._z, m._pose._orientation._w, *m._covariance)
+    b += _S17.pack(
+        m._pose._position._x,
+        m._pose._position._y,
+        m._pose._position._z,
+        m._pose._orientation._x,
+        m._pose._orientation._y,
+        m._pose._orientation._z,
+        m._pose._orientation._w,
+        *m._covariance,
+    )
 
 
 def _dec_PoseWithCovariance(d, o):
     o += (4 - o) & 7
-    t1 = _S9.unpack_from(d, o)
+    t1 = _S17.unpack_from(d, o)
     o += 344
-    return _mk_PoseWithCovariance(_mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), list(t1[7:43])), o
+    m = _mk_PoseWithCovariance(
+        _mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), list(t1[7:43])
+    )
+    return m, o
 
 
 def _to_PoseWithCovariance(m):
@@ -1237,48 +1456,78 @@ def _mk_PoseWithCovarianceStamped(a0, a1):
 def _cdr_PoseWithCovarianceStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S9.pack(m._pose._pose._position._x, m._pose._pose._position._y, m._pose._pose._position._z, m._pose._pose._orientation._x, m._pose._pose._orientation._y, m._pose._pose._orientation._z, m._pose._pose._orientation._w, *m._pose._covariance)
+    b += _S17.pack(
+        m._pose._pose._position._x,
+        m._pose._pose._position._y,
+        m._pose._pose._position._z,
+        m._pose._pose._orientation._x,
+        m._pose._pose._orientation._y,
+        m._pose._pose._orientation._z,
+        m._pose._pose._orientation._w,
+        *m._pose._covariance,
+    )
     return bytes(b)
 
 
 def _msg_PoseWithCovarianceStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S9.unpack_from(d, o)
+    t4 = _S17.unpack_from(d, o)
     o += 344
-    return _mk_PoseWithCovarianceStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_PoseWithCovariance(_mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6])), list(t4[7:43]))), o
+    m = _mk_PoseWithCovarianceStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_PoseWithCovariance(
+            _mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6])), list(t4[7:43])
+        ),
+    )
+    return m, o
 
 
 def _enc_PoseWithCovarianceStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S9.pack(m._pose._pose._position._x, m._pose._pose._position._y, m._pose._pose._position._z, m._pose._pose._orientation._x, m._pose._pose._orientation._y, m._pose._pose._orientation._z, m._pose._pose._orientation._w, *m._pose._covariance)
+    b += _S17.pack(
+        m._pose._pose._position._x,
+        m._pose._pose._position._y,
+        m._pose._pose._position._z,
+        m._pose._pose._orientation._x,
+        m._pose._pose._orientation._y,
+        m._pose._pose._orientation._z,
+        m._pose._pose._orientation._w,
+        *m._pose._covariance,
+    )
 
 
 def _dec_PoseWithCovarianceStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S9.unpack_from(d, o)
+    t4 = _S17.unpack_from(d, o)
     o += 344
-    return _mk_PoseWithCovarianceStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_PoseWithCovariance(_mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6])), list(t4[7:43]))), o
+    m = _mk_PoseWithCovarianceStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_PoseWithCovariance(
+            _mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6])), list(t4[7:43])
+        ),
+    )
+    return m, o
 
 
 def _to_PoseWithCovarianceStamped(m):
@@ -1313,48 +1562,54 @@ def _mk_QuaternionStamped(a0, a1):
 def _cdr_QuaternionStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S7.pack(m._quaternion._x, m._quaternion._y, m._quaternion._z, m._quaternion._w)
+    b += _S13.pack(m._quaternion._x, m._quaternion._y, m._quaternion._z, m._quaternion._w)
     return bytes(b)
 
 
 def _msg_QuaternionStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S7.unpack_from(d, o)
+    t4 = _S13.unpack_from(d, o)
     o += 32
-    return _mk_QuaternionStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Quaternion(t4[0], t4[1], t4[2], t4[3])), o
+    m = _mk_QuaternionStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Quaternion(t4[0], t4[1], t4[2], t4[3])
+    )
+    return m, o
 
 
 def _enc_QuaternionStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S7.pack(m._quaternion._x, m._quaternion._y, m._quaternion._z, m._quaternion._w)
+    b += _S13.pack(m._quaternion._x, m._quaternion._y, m._quaternion._z, m._quaternion._w)
 
 
 def _dec_QuaternionStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S7.unpack_from(d, o)
+    t4 = _S13.unpack_from(d, o)
     o += 32
-    return _mk_QuaternionStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Quaternion(t4[0], t4[1], t4[2], t4[3])), o
+    m = _mk_QuaternionStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Quaternion(t4[0], t4[1], t4[2], t4[3])
+    )
+    return m, o
 
 
 def _to_QuaternionStamped(m):
@@ -1387,26 +1642,45 @@ def _mk_Transform(a0, a1):
 
 
 def _cdr_Transform(m):
-    return _HDR + _S8.pack(m._translation._x, m._translation._y, m._translation._z, m._rotation._x, m._rotation._y, m._rotation._z, m._rotation._w)
+    return _S14.pack(
+        _HDR,
+        m._translation._x,
+        m._translation._y,
+        m._translation._z,
+        m._rotation._x,
+        m._rotation._y,
+        m._rotation._z,
+        m._rotation._w,
+    )
 
 
 def _msg_Transform(d):
     o = 4
-    t1 = _S8.unpack_from(d, o)
+    t1 = _S15.unpack_from(d, o)
     o += 56
-    return _mk_Transform(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), o
+    m = _mk_Transform(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6]))
+    return m, o
 
 
 def _enc_Transform(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S8.pack(m._translation._x, m._translation._y, m._translation._z, m._rotation._x, m._rotation._y, m._rotation._z, m._rotation._w)
+    b += _S15.pack(
+        m._translation._x,
+        m._translation._y,
+        m._translation._z,
+        m._rotation._x,
+        m._rotation._y,
+        m._rotation._z,
+        m._rotation._w,
+    )
 
 
 def _dec_Transform(d, o):
     o += (4 - o) & 7
-    t1 = _S8.unpack_from(d, o)
+    t1 = _S15.unpack_from(d, o)
     o += 56
-    return _mk_Transform(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), o
+    m = _mk_Transform(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6]))
+    return m, o
 
 
 def _to_Transform(m):
@@ -1443,74 +1717,102 @@ def _mk_TransformStamped(a0, a1, a2):
 def _cdr_TransformStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     s2 = m._child_frame_id.encode()
     b += _Z[(4 - len(b)) & 3]
-    b += _S6.pack(len(s2) + 1)
+    b += _S11.pack(len(s2) + 1)
     b += s2
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S8.pack(m._transform._translation._x, m._transform._translation._y, m._transform._translation._z, m._transform._rotation._x, m._transform._rotation._y, m._transform._rotation._z, m._transform._rotation._w)
+    b += _S15.pack(
+        m._transform._translation._x,
+        m._transform._translation._y,
+        m._transform._translation._z,
+        m._transform._rotation._x,
+        m._transform._rotation._y,
+        m._transform._rotation._z,
+        m._transform._rotation._w,
+    )
     return bytes(b)
 
 
 def _msg_TransformStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S6.unpack_from(d, o)
+    t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
     s6 = str(d[o : o + n5 - 1], "utf-8") if n5 else ""
     o += n5
     o += (4 - o) & 7
-    t7 = _S8.unpack_from(d, o)
+    t7 = _S15.unpack_from(d, o)
     o += 56
-    return _mk_TransformStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), s6, _mk_Transform(_mk_Vector3(t7[0], t7[1], t7[2]), _mk_Quaternion(t7[3], t7[4], t7[5], t7[6]))), o
+    m = _mk_TransformStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        s6,
+        _mk_Transform(_mk_Vector3(t7[0], t7[1], t7[2]), _mk_Quaternion(t7[3], t7[4], t7[5], t7[6])),
+    )
+    return m, o
 
 
 def _enc_TransformStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     s2 = m._child_frame_id.encode()
     b += _Z[(4 - len(b)) & 3]
-    b += _S6.pack(len(s2) + 1)
+    b += _S11.pack(len(s2) + 1)
     b += s2
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S8.pack(m._transform._translation._x, m._transform._translation._y, m._transform._translation._z, m._transform._rotation._x, m._transform._rotation._y, m._transform._rotation._z, m._transform._rotation._w)
+    b += _S15.pack(
+        m._transform._translation._x,
+        m._transform._translation._y,
+        m._transform._translation._z,
+        m._transform._rotation._x,
+        m._transform._rotation._y,
+        m._transform._rotation._z,
+        m._transform._rotation._w,
+    )
 
 
 def _dec_TransformStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S6.unpack_from(d, o)
+    t4 = _S11.unpack_from(d, o)
     o += 4
     n5 = t4[0]
     s6 = str(d[o : o + n5 - 1], "utf-8") if n5 else ""
     o += n5
     o += (4 - o) & 7
-    t7 = _S8.unpack_from(d, o)
+    t7 = _S15.unpack_from(d, o)
     o += 56
-    return _mk_TransformStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), s6, _mk_Transform(_mk_Vector3(t7[0], t7[1], t7[2]), _mk_Quaternion(t7[3], t7[4], t7[5], t7[6]))), o
+    m = _mk_TransformStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        s6,
+        _mk_Transform(_mk_Vector3(t7[0], t7[1], t7[2]), _mk_Quaternion(t7[3], t7[4], t7[5], t7[6])),
+    )
+    return m, o
 
 
 def _to_TransformStamped(m):
-    return TransformStamped_(header=_std_msgs._to_Header(m._header), child_frame_id=m._child_frame_id, transform=_to_Transform(m._transform))
+    return TransformStamped_(
+        header=_std_msgs._to_Header(m._header), child_frame_id=m._child_frame_id, transform=_to_Transform(m._transform)
+    )
 
 
 def _from_TransformStamped(s):
@@ -1540,26 +1842,28 @@ def _mk_Twist(a0, a1):
 
 
 def _cdr_Twist(m):
-    return _HDR + _S1.pack(m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
+    return _S2.pack(_HDR, m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
 
 
 def _msg_Twist(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), o
+    m = _mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
+    return m, o
 
 
 def _enc_Twist(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
+    b += _S3.pack(m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
 
 
 def _dec_Twist(d, o):
     o += (4 - o) & 7
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), o
+    m = _mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
+    return m, o
 
 
 def _to_Twist(m):
@@ -1594,48 +1898,70 @@ def _mk_TwistStamped(a0, a1):
 def _cdr_TwistStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._twist._linear._x, m._twist._linear._y, m._twist._linear._z, m._twist._angular._x, m._twist._angular._y, m._twist._angular._z)
+    b += _S3.pack(
+        m._twist._linear._x,
+        m._twist._linear._y,
+        m._twist._linear._z,
+        m._twist._angular._x,
+        m._twist._angular._y,
+        m._twist._angular._z,
+    )
     return bytes(b)
 
 
 def _msg_TwistStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S1.unpack_from(d, o)
+    t4 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_TwistStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5]))), o
+    m = _mk_TwistStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
+    )
+    return m, o
 
 
 def _enc_TwistStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._twist._linear._x, m._twist._linear._y, m._twist._linear._z, m._twist._angular._x, m._twist._angular._y, m._twist._angular._z)
+    b += _S3.pack(
+        m._twist._linear._x,
+        m._twist._linear._y,
+        m._twist._linear._z,
+        m._twist._angular._x,
+        m._twist._angular._y,
+        m._twist._angular._z,
+    )
 
 
 def _dec_TwistStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S1.unpack_from(d, o)
+    t4 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_TwistStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5]))), o
+    m = _mk_TwistStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
+    )
+    return m, o
 
 
 def _to_TwistStamped(m):
@@ -1668,26 +1994,49 @@ def _mk_TwistWithCovariance(a0, a1):
 
 
 def _cdr_TwistWithCovariance(m):
-    return _HDR + _S3.pack(m._twist._linear._x, m._twist._linear._y, m._twist._linear._z, m._twist._angular._x, m._twist._angular._y, m._twist._angular._z, *m._covariance)
+    return _S5.pack(
+        _HDR,
+        m._twist._linear._x,
+        m._twist._linear._y,
+        m._twist._linear._z,
+        m._twist._angular._x,
+        m._twist._angular._y,
+        m._twist._angular._z,
+        *m._covariance,
+    )
 
 
 def _msg_TwistWithCovariance(d):
     o = 4
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S6.unpack_from(d, o)
     o += 336
-    return _mk_TwistWithCovariance(_mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])), o
+    m = _mk_TwistWithCovariance(
+        _mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])
+    )
+    return m, o
 
 
 def _enc_TwistWithCovariance(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._twist._linear._x, m._twist._linear._y, m._twist._linear._z, m._twist._angular._x, m._twist._angular._y, m._twist._angular._z, *m._covariance)
+    b += _S6.pack(
+        m._twist._linear._x,
+        m._twist._linear._y,
+        m._twist._linear._z,
+        m._twist._angular._x,
+        m._twist._angular._y,
+        m._twist._angular._z,
+        *m._covariance,
+    )
 
 
 def _dec_TwistWithCovariance(d, o):
     o += (4 - o) & 7
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S6.unpack_from(d, o)
     o += 336
-    return _mk_TwistWithCovariance(_mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])), o
+    m = _mk_TwistWithCovariance(
+        _mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])
+    )
+    return m, o
 
 
 def _to_TwistWithCovariance(m):
@@ -1722,48 +2071,76 @@ def _mk_TwistWithCovarianceStamped(a0, a1):
 def _cdr_TwistWithCovarianceStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._twist._twist._linear._x, m._twist._twist._linear._y, m._twist._twist._linear._z, m._twist._twist._angular._x, m._twist._twist._angular._y, m._twist._twist._angular._z, *m._twist._covariance)
+    b += _S6.pack(
+        m._twist._twist._linear._x,
+        m._twist._twist._linear._y,
+        m._twist._twist._linear._z,
+        m._twist._twist._angular._x,
+        m._twist._twist._angular._y,
+        m._twist._twist._angular._z,
+        *m._twist._covariance,
+    )
     return bytes(b)
 
 
 def _msg_TwistWithCovarianceStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S3.unpack_from(d, o)
+    t4 = _S6.unpack_from(d, o)
     o += 336
-    return _mk_TwistWithCovarianceStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_TwistWithCovariance(_mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42]))), o
+    m = _mk_TwistWithCovarianceStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_TwistWithCovariance(
+            _mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42])
+        ),
+    )
+    return m, o
 
 
 def _enc_TwistWithCovarianceStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._twist._twist._linear._x, m._twist._twist._linear._y, m._twist._twist._linear._z, m._twist._twist._angular._x, m._twist._twist._angular._y, m._twist._twist._angular._z, *m._twist._covariance)
+    b += _S6.pack(
+        m._twist._twist._linear._x,
+        m._twist._twist._linear._y,
+        m._twist._twist._linear._z,
+        m._twist._twist._angular._x,
+        m._twist._twist._angular._y,
+        m._twist._twist._angular._z,
+        *m._twist._covariance,
+    )
 
 
 def _dec_TwistWithCovarianceStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S3.unpack_from(d, o)
+    t4 = _S6.unpack_from(d, o)
     o += 336
-    return _mk_TwistWithCovarianceStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_TwistWithCovariance(_mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42]))), o
+    m = _mk_TwistWithCovarianceStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_TwistWithCovariance(
+            _mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42])
+        ),
+    )
+    return m, o
 
 
 def _to_TwistWithCovarianceStamped(m):
@@ -1798,48 +2175,54 @@ def _mk_Vector3Stamped(a0, a1):
 def _cdr_Vector3Stamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S0.pack(m._vector._x, m._vector._y, m._vector._z)
+    b += _S1.pack(m._vector._x, m._vector._y, m._vector._z)
     return bytes(b)
 
 
 def _msg_Vector3Stamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S0.unpack_from(d, o)
+    t4 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_Vector3Stamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Vector3(t4[0], t4[1], t4[2])), o
+    m = _mk_Vector3Stamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Vector3(t4[0], t4[1], t4[2])
+    )
+    return m, o
 
 
 def _enc_Vector3Stamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S0.pack(m._vector._x, m._vector._y, m._vector._z)
+    b += _S1.pack(m._vector._x, m._vector._y, m._vector._z)
 
 
 def _dec_Vector3Stamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S0.unpack_from(d, o)
+    t4 = _S1.unpack_from(d, o)
     o += 24
-    return _mk_Vector3Stamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Vector3(t4[0], t4[1], t4[2])), o
+    m = _mk_Vector3Stamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Vector3(t4[0], t4[1], t4[2])
+    )
+    return m, o
 
 
 def _to_Vector3Stamped(m):
@@ -1872,26 +2255,28 @@ def _mk_Wrench(a0, a1):
 
 
 def _cdr_Wrench(m):
-    return _HDR + _S1.pack(m._force._x, m._force._y, m._force._z, m._torque._x, m._torque._y, m._torque._z)
+    return _S2.pack(_HDR, m._force._x, m._force._y, m._force._z, m._torque._x, m._torque._y, m._torque._z)
 
 
 def _msg_Wrench(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_Wrench(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), o
+    m = _mk_Wrench(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
+    return m, o
 
 
 def _enc_Wrench(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._force._x, m._force._y, m._force._z, m._torque._x, m._torque._y, m._torque._z)
+    b += _S3.pack(m._force._x, m._force._y, m._force._z, m._torque._x, m._torque._y, m._torque._z)
 
 
 def _dec_Wrench(d, o):
     o += (4 - o) & 7
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_Wrench(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), o
+    m = _mk_Wrench(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
+    return m, o
 
 
 def _to_Wrench(m):
@@ -1926,48 +2311,70 @@ def _mk_WrenchStamped(a0, a1):
 def _cdr_WrenchStamped(m):
     b = bytearray(_HDR)
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._wrench._force._x, m._wrench._force._y, m._wrench._force._z, m._wrench._torque._x, m._wrench._torque._y, m._wrench._torque._z)
+    b += _S3.pack(
+        m._wrench._force._x,
+        m._wrench._force._y,
+        m._wrench._force._z,
+        m._wrench._torque._x,
+        m._wrench._torque._y,
+        m._wrench._torque._z,
+    )
     return bytes(b)
 
 
 def _msg_WrenchStamped(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S1.unpack_from(d, o)
+    t4 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_WrenchStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Wrench(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5]))), o
+    m = _mk_WrenchStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Wrench(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
+    )
+    return m, o
 
 
 def _enc_WrenchStamped(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._header._frame_id.encode()
-    b += _S2.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
+    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._wrench._force._x, m._wrench._force._y, m._wrench._force._z, m._wrench._torque._x, m._wrench._torque._y, m._wrench._torque._z)
+    b += _S3.pack(
+        m._wrench._force._x,
+        m._wrench._force._y,
+        m._wrench._force._z,
+        m._wrench._torque._x,
+        m._wrench._torque._y,
+        m._wrench._torque._z,
+    )
 
 
 def _dec_WrenchStamped(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 7
-    t4 = _S1.unpack_from(d, o)
+    t4 = _S3.unpack_from(d, o)
     o += 48
-    return _mk_WrenchStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Wrench(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5]))), o
+    m = _mk_WrenchStamped(
+        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
+        _mk_Wrench(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
+    )
+    return m, o
 
 
 def _to_WrenchStamped(m):
@@ -1985,33 +2392,185 @@ def _from_WrenchStamped(s):
 CODECS = {
     "Vector3": (Vector3_, _cdr_Vector3, _msg_Vector3, _to_Vector3, _from_Vector3, _enc_Vector3, _dec_Vector3),
     "Accel": (Accel_, _cdr_Accel, _msg_Accel, _to_Accel, _from_Accel, _enc_Accel, _dec_Accel),
-    "AccelStamped": (AccelStamped_, _cdr_AccelStamped, _msg_AccelStamped, _to_AccelStamped, _from_AccelStamped, _enc_AccelStamped, _dec_AccelStamped),
-    "AccelWithCovariance": (AccelWithCovariance_, _cdr_AccelWithCovariance, _msg_AccelWithCovariance, _to_AccelWithCovariance, _from_AccelWithCovariance, _enc_AccelWithCovariance, _dec_AccelWithCovariance),
-    "AccelWithCovarianceStamped": (AccelWithCovarianceStamped_, _cdr_AccelWithCovarianceStamped, _msg_AccelWithCovarianceStamped, _to_AccelWithCovarianceStamped, _from_AccelWithCovarianceStamped, _enc_AccelWithCovarianceStamped, _dec_AccelWithCovarianceStamped),
+    "AccelStamped": (
+        AccelStamped_,
+        _cdr_AccelStamped,
+        _msg_AccelStamped,
+        _to_AccelStamped,
+        _from_AccelStamped,
+        _enc_AccelStamped,
+        _dec_AccelStamped,
+    ),
+    "AccelWithCovariance": (
+        AccelWithCovariance_,
+        _cdr_AccelWithCovariance,
+        _msg_AccelWithCovariance,
+        _to_AccelWithCovariance,
+        _from_AccelWithCovariance,
+        _enc_AccelWithCovariance,
+        _dec_AccelWithCovariance,
+    ),
+    "AccelWithCovarianceStamped": (
+        AccelWithCovarianceStamped_,
+        _cdr_AccelWithCovarianceStamped,
+        _msg_AccelWithCovarianceStamped,
+        _to_AccelWithCovarianceStamped,
+        _from_AccelWithCovarianceStamped,
+        _enc_AccelWithCovarianceStamped,
+        _dec_AccelWithCovarianceStamped,
+    ),
     "Inertia": (Inertia_, _cdr_Inertia, _msg_Inertia, _to_Inertia, _from_Inertia, _enc_Inertia, _dec_Inertia),
-    "InertiaStamped": (InertiaStamped_, _cdr_InertiaStamped, _msg_InertiaStamped, _to_InertiaStamped, _from_InertiaStamped, _enc_InertiaStamped, _dec_InertiaStamped),
+    "InertiaStamped": (
+        InertiaStamped_,
+        _cdr_InertiaStamped,
+        _msg_InertiaStamped,
+        _to_InertiaStamped,
+        _from_InertiaStamped,
+        _enc_InertiaStamped,
+        _dec_InertiaStamped,
+    ),
     "Point": (Point_, _cdr_Point, _msg_Point, _to_Point, _from_Point, _enc_Point, _dec_Point),
     "Point32": (Point32_, _cdr_Point32, _msg_Point32, _to_Point32, _from_Point32, _enc_Point32, _dec_Point32),
-    "PointStamped": (PointStamped_, _cdr_PointStamped, _msg_PointStamped, _to_PointStamped, _from_PointStamped, _enc_PointStamped, _dec_PointStamped),
+    "PointStamped": (
+        PointStamped_,
+        _cdr_PointStamped,
+        _msg_PointStamped,
+        _to_PointStamped,
+        _from_PointStamped,
+        _enc_PointStamped,
+        _dec_PointStamped,
+    ),
     "Polygon": (Polygon_, _cdr_Polygon, _msg_Polygon, _to_Polygon, _from_Polygon, _enc_Polygon, _dec_Polygon),
-    "PolygonStamped": (PolygonStamped_, _cdr_PolygonStamped, _msg_PolygonStamped, _to_PolygonStamped, _from_PolygonStamped, _enc_PolygonStamped, _dec_PolygonStamped),
-    "Quaternion": (Quaternion_, _cdr_Quaternion, _msg_Quaternion, _to_Quaternion, _from_Quaternion, _enc_Quaternion, _dec_Quaternion),
+    "PolygonStamped": (
+        PolygonStamped_,
+        _cdr_PolygonStamped,
+        _msg_PolygonStamped,
+        _to_PolygonStamped,
+        _from_PolygonStamped,
+        _enc_PolygonStamped,
+        _dec_PolygonStamped,
+    ),
+    "Quaternion": (
+        Quaternion_,
+        _cdr_Quaternion,
+        _msg_Quaternion,
+        _to_Quaternion,
+        _from_Quaternion,
+        _enc_Quaternion,
+        _dec_Quaternion,
+    ),
     "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose),
     "Pose2D": (Pose2D_, _cdr_Pose2D, _msg_Pose2D, _to_Pose2D, _from_Pose2D, _enc_Pose2D, _dec_Pose2D),
-    "PoseArray": (PoseArray_, _cdr_PoseArray, _msg_PoseArray, _to_PoseArray, _from_PoseArray, _enc_PoseArray, _dec_PoseArray),
-    "PoseStamped": (PoseStamped_, _cdr_PoseStamped, _msg_PoseStamped, _to_PoseStamped, _from_PoseStamped, _enc_PoseStamped, _dec_PoseStamped),
-    "PoseWithCovariance": (PoseWithCovariance_, _cdr_PoseWithCovariance, _msg_PoseWithCovariance, _to_PoseWithCovariance, _from_PoseWithCovariance, _enc_PoseWithCovariance, _dec_PoseWithCovariance),
-    "PoseWithCovarianceStamped": (PoseWithCovarianceStamped_, _cdr_PoseWithCovarianceStamped, _msg_PoseWithCovarianceStamped, _to_PoseWithCovarianceStamped, _from_PoseWithCovarianceStamped, _enc_PoseWithCovarianceStamped, _dec_PoseWithCovarianceStamped),
-    "QuaternionStamped": (QuaternionStamped_, _cdr_QuaternionStamped, _msg_QuaternionStamped, _to_QuaternionStamped, _from_QuaternionStamped, _enc_QuaternionStamped, _dec_QuaternionStamped),
-    "Transform": (Transform_, _cdr_Transform, _msg_Transform, _to_Transform, _from_Transform, _enc_Transform, _dec_Transform),
-    "TransformStamped": (TransformStamped_, _cdr_TransformStamped, _msg_TransformStamped, _to_TransformStamped, _from_TransformStamped, _enc_TransformStamped, _dec_TransformStamped),
+    "PoseArray": (
+        PoseArray_,
+        _cdr_PoseArray,
+        _msg_PoseArray,
+        _to_PoseArray,
+        _from_PoseArray,
+        _enc_PoseArray,
+        _dec_PoseArray,
+    ),
+    "PoseStamped": (
+        PoseStamped_,
+        _cdr_PoseStamped,
+        _msg_PoseStamped,
+        _to_PoseStamped,
+        _from_PoseStamped,
+        _enc_PoseStamped,
+        _dec_PoseStamped,
+    ),
+    "PoseWithCovariance": (
+        PoseWithCovariance_,
+        _cdr_PoseWithCovariance,
+        _msg_PoseWithCovariance,
+        _to_PoseWithCovariance,
+        _from_PoseWithCovariance,
+        _enc_PoseWithCovariance,
+        _dec_PoseWithCovariance,
+    ),
+    "PoseWithCovarianceStamped": (
+        PoseWithCovarianceStamped_,
+        _cdr_PoseWithCovarianceStamped,
+        _msg_PoseWithCovarianceStamped,
+        _to_PoseWithCovarianceStamped,
+        _from_PoseWithCovarianceStamped,
+        _enc_PoseWithCovarianceStamped,
+        _dec_PoseWithCovarianceStamped,
+    ),
+    "QuaternionStamped": (
+        QuaternionStamped_,
+        _cdr_QuaternionStamped,
+        _msg_QuaternionStamped,
+        _to_QuaternionStamped,
+        _from_QuaternionStamped,
+        _enc_QuaternionStamped,
+        _dec_QuaternionStamped,
+    ),
+    "Transform": (
+        Transform_,
+        _cdr_Transform,
+        _msg_Transform,
+        _to_Transform,
+        _from_Transform,
+        _enc_Transform,
+        _dec_Transform,
+    ),
+    "TransformStamped": (
+        TransformStamped_,
+        _cdr_TransformStamped,
+        _msg_TransformStamped,
+        _to_TransformStamped,
+        _from_TransformStamped,
+        _enc_TransformStamped,
+        _dec_TransformStamped,
+    ),
     "Twist": (Twist_, _cdr_Twist, _msg_Twist, _to_Twist, _from_Twist, _enc_Twist, _dec_Twist),
-    "TwistStamped": (TwistStamped_, _cdr_TwistStamped, _msg_TwistStamped, _to_TwistStamped, _from_TwistStamped, _enc_TwistStamped, _dec_TwistStamped),
-    "TwistWithCovariance": (TwistWithCovariance_, _cdr_TwistWithCovariance, _msg_TwistWithCovariance, _to_TwistWithCovariance, _from_TwistWithCovariance, _enc_TwistWithCovariance, _dec_TwistWithCovariance),
-    "TwistWithCovarianceStamped": (TwistWithCovarianceStamped_, _cdr_TwistWithCovarianceStamped, _msg_TwistWithCovarianceStamped, _to_TwistWithCovarianceStamped, _from_TwistWithCovarianceStamped, _enc_TwistWithCovarianceStamped, _dec_TwistWithCovarianceStamped),
-    "Vector3Stamped": (Vector3Stamped_, _cdr_Vector3Stamped, _msg_Vector3Stamped, _to_Vector3Stamped, _from_Vector3Stamped, _enc_Vector3Stamped, _dec_Vector3Stamped),
+    "TwistStamped": (
+        TwistStamped_,
+        _cdr_TwistStamped,
+        _msg_TwistStamped,
+        _to_TwistStamped,
+        _from_TwistStamped,
+        _enc_TwistStamped,
+        _dec_TwistStamped,
+    ),
+    "TwistWithCovariance": (
+        TwistWithCovariance_,
+        _cdr_TwistWithCovariance,
+        _msg_TwistWithCovariance,
+        _to_TwistWithCovariance,
+        _from_TwistWithCovariance,
+        _enc_TwistWithCovariance,
+        _dec_TwistWithCovariance,
+    ),
+    "TwistWithCovarianceStamped": (
+        TwistWithCovarianceStamped_,
+        _cdr_TwistWithCovarianceStamped,
+        _msg_TwistWithCovarianceStamped,
+        _to_TwistWithCovarianceStamped,
+        _from_TwistWithCovarianceStamped,
+        _enc_TwistWithCovarianceStamped,
+        _dec_TwistWithCovarianceStamped,
+    ),
+    "Vector3Stamped": (
+        Vector3Stamped_,
+        _cdr_Vector3Stamped,
+        _msg_Vector3Stamped,
+        _to_Vector3Stamped,
+        _from_Vector3Stamped,
+        _enc_Vector3Stamped,
+        _dec_Vector3Stamped,
+    ),
     "Wrench": (Wrench_, _cdr_Wrench, _msg_Wrench, _to_Wrench, _from_Wrench, _enc_Wrench, _dec_Wrench),
-    "WrenchStamped": (WrenchStamped_, _cdr_WrenchStamped, _msg_WrenchStamped, _to_WrenchStamped, _from_WrenchStamped, _enc_WrenchStamped, _dec_WrenchStamped),
+    "WrenchStamped": (
+        WrenchStamped_,
+        _cdr_WrenchStamped,
+        _msg_WrenchStamped,
+        _to_WrenchStamped,
+        _from_WrenchStamped,
+        _enc_WrenchStamped,
+        _dec_WrenchStamped,
+    ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

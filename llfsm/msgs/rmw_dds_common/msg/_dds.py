@@ -15,9 +15,10 @@ import llfsm.msgs.rmw_dds_common.msg as _classes
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<16B")
-_S1 = _Struct("<I")
-_S2 = _Struct("<16BI")
+_S0 = _Struct("<4s16B")
+_S1 = _Struct("<16B")
+_S2 = _Struct("<I")
+_S3 = _Struct("<16BI")
 
 
 # -- rmw_dds_common/msg/Gid
@@ -37,24 +38,26 @@ def _mk_Gid(a0):
 
 
 def _cdr_Gid(m):
-    return _HDR + _S0.pack(*m._data)
+    return _S0.pack(_HDR, *m._data)
 
 
 def _msg_Gid(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 16
-    return _mk_Gid(list(t1[0:16])), o
+    m = _mk_Gid(list(t1[0:16]))
+    return m, o
 
 
 def _enc_Gid(m, b):
-    b += _S0.pack(*m._data)
+    b += _S1.pack(*m._data)
 
 
 def _dec_Gid(d, o):
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 16
-    return _mk_Gid(list(t1[0:16])), o
+    m = _mk_Gid(list(t1[0:16]))
+    return m, o
 
 
 def _to_Gid(m):
@@ -92,22 +95,22 @@ def _mk_NodeEntitiesInfo(a0, a1, a2, a3):
 def _cdr_NodeEntitiesInfo(m):
     b = bytearray(_HDR)
     s1 = m._node_namespace.encode()
-    b += _S1.pack(len(s1) + 1)
+    b += _S2.pack(len(s1) + 1)
     b += s1
     b.append(0)
     s2 = m._node_name.encode()
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(s2) + 1)
+    b += _S2.pack(len(s2) + 1)
     b += s2
     b.append(0)
     v3 = m._reader_gid_seq
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(v3))
+    b += _S2.pack(len(v3))
     for e4 in v3:
         _enc_Gid(e4, b)
     v5 = m._writer_gid_seq
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(v5))
+    b += _S2.pack(len(v5))
     for e6 in v5:
         _enc_Gid(e6, b)
     return bytes(b)
@@ -115,93 +118,108 @@ def _cdr_NodeEntitiesInfo(m):
 
 def _msg_NodeEntitiesInfo(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S2.unpack_from(d, o)
     o += 4
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S1.unpack_from(d, o)
+    t4 = _S2.unpack_from(d, o)
     o += 4
     n5 = t4[0]
     s6 = str(d[o : o + n5 - 1], "utf-8") if n5 else ""
     o += n5
     o += (4 - o) & 3
-    t7 = _S1.unpack_from(d, o)
+    t7 = _S2.unpack_from(d, o)
     o += 4
     n8 = t7[0]
+    if n8 > len(d) - o:
+        raise ValueError(f"{n8} elements announced, {len(d) - o} bytes left")
     v9 = []
     for _ in range(n8):
         e10, o = _dec_Gid(d, o)
         v9.append(e10)
     o += (4 - o) & 3
-    t11 = _S1.unpack_from(d, o)
+    t11 = _S2.unpack_from(d, o)
     o += 4
     n12 = t11[0]
+    if n12 > len(d) - o:
+        raise ValueError(f"{n12} elements announced, {len(d) - o} bytes left")
     v13 = []
     for _ in range(n12):
         e14, o = _dec_Gid(d, o)
         v13.append(e14)
-    return _mk_NodeEntitiesInfo(s3, s6, v9, v13), o
+    m = _mk_NodeEntitiesInfo(s3, s6, v9, v13)
+    return m, o
 
 
 def _enc_NodeEntitiesInfo(m, b):
     s1 = m._node_namespace.encode()
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(s1) + 1)
+    b += _S2.pack(len(s1) + 1)
     b += s1
     b.append(0)
     s2 = m._node_name.encode()
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(s2) + 1)
+    b += _S2.pack(len(s2) + 1)
     b += s2
     b.append(0)
     v3 = m._reader_gid_seq
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(v3))
+    b += _S2.pack(len(v3))
     for e4 in v3:
         _enc_Gid(e4, b)
     v5 = m._writer_gid_seq
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(v5))
+    b += _S2.pack(len(v5))
     for e6 in v5:
         _enc_Gid(e6, b)
 
 
 def _dec_NodeEntitiesInfo(d, o):
     o += (4 - o) & 3
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S2.unpack_from(d, o)
     o += 4
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S1.unpack_from(d, o)
+    t4 = _S2.unpack_from(d, o)
     o += 4
     n5 = t4[0]
     s6 = str(d[o : o + n5 - 1], "utf-8") if n5 else ""
     o += n5
     o += (4 - o) & 3
-    t7 = _S1.unpack_from(d, o)
+    t7 = _S2.unpack_from(d, o)
     o += 4
     n8 = t7[0]
+    if n8 > len(d) - o:
+        raise ValueError(f"{n8} elements announced, {len(d) - o} bytes left")
     v9 = []
     for _ in range(n8):
         e10, o = _dec_Gid(d, o)
         v9.append(e10)
     o += (4 - o) & 3
-    t11 = _S1.unpack_from(d, o)
+    t11 = _S2.unpack_from(d, o)
     o += 4
     n12 = t11[0]
+    if n12 > len(d) - o:
+        raise ValueError(f"{n12} elements announced, {len(d) - o} bytes left")
     v13 = []
     for _ in range(n12):
         e14, o = _dec_Gid(d, o)
         v13.append(e14)
-    return _mk_NodeEntitiesInfo(s3, s6, v9, v13), o
+    m = _mk_NodeEntitiesInfo(s3, s6, v9, v13)
+    return m, o
 
 
 def _to_NodeEntitiesInfo(m):
-    return NodeEntitiesInfo_(node_namespace=m._node_namespace, node_name=m._node_name, reader_gid_seq=[_to_Gid(e) for e in m._reader_gid_seq], writer_gid_seq=[_to_Gid(e) for e in m._writer_gid_seq])
+    return NodeEntitiesInfo_(
+        node_namespace=m._node_namespace,
+        node_name=m._node_name,
+        reader_gid_seq=[_to_Gid(e) for e in m._reader_gid_seq],
+        writer_gid_seq=[_to_Gid(e) for e in m._writer_gid_seq],
+    )
 
 
 def _from_NodeEntitiesInfo(s):
@@ -234,7 +252,7 @@ def _mk_ParticipantEntitiesInfo(a0, a1):
 def _cdr_ParticipantEntitiesInfo(m):
     b = bytearray(_HDR)
     v1 = m._node_entities_info_seq
-    b += _S2.pack(*m._gid._data, len(v1))
+    b += _S3.pack(*m._gid._data, len(v1))
     for e2 in v1:
         _enc_NodeEntitiesInfo(e2, b)
     return bytes(b)
@@ -242,41 +260,49 @@ def _cdr_ParticipantEntitiesInfo(m):
 
 def _msg_ParticipantEntitiesInfo(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 20
     n2 = t1[16]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_NodeEntitiesInfo(d, o)
         v3.append(e4)
-    return _mk_ParticipantEntitiesInfo(_mk_Gid(list(t1[0:16])), v3), o
+    m = _mk_ParticipantEntitiesInfo(_mk_Gid(list(t1[0:16])), v3)
+    return m, o
 
 
 def _enc_ParticipantEntitiesInfo(m, b):
     v1 = m._node_entities_info_seq
-    b += _S0.pack(*m._gid._data)
+    b += _S1.pack(*m._gid._data)
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(v1))
+    b += _S2.pack(len(v1))
     for e2 in v1:
         _enc_NodeEntitiesInfo(e2, b)
 
 
 def _dec_ParticipantEntitiesInfo(d, o):
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 16
     o += (4 - o) & 3
-    t2 = _S1.unpack_from(d, o)
+    t2 = _S2.unpack_from(d, o)
     o += 4
     n3 = t2[0]
+    if n3 > len(d) - o:
+        raise ValueError(f"{n3} elements announced, {len(d) - o} bytes left")
     v4 = []
     for _ in range(n3):
         e5, o = _dec_NodeEntitiesInfo(d, o)
         v4.append(e5)
-    return _mk_ParticipantEntitiesInfo(_mk_Gid(list(t1[0:16])), v4), o
+    m = _mk_ParticipantEntitiesInfo(_mk_Gid(list(t1[0:16])), v4)
+    return m, o
 
 
 def _to_ParticipantEntitiesInfo(m):
-    return ParticipantEntitiesInfo_(gid=_to_Gid(m._gid), node_entities_info_seq=[_to_NodeEntitiesInfo(e) for e in m._node_entities_info_seq])
+    return ParticipantEntitiesInfo_(
+        gid=_to_Gid(m._gid), node_entities_info_seq=[_to_NodeEntitiesInfo(e) for e in m._node_entities_info_seq]
+    )
 
 
 def _from_ParticipantEntitiesInfo(s):
@@ -289,8 +315,24 @@ def _from_ParticipantEntitiesInfo(s):
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
 CODECS = {
     "Gid": (Gid_, _cdr_Gid, _msg_Gid, _to_Gid, _from_Gid, _enc_Gid, _dec_Gid),
-    "NodeEntitiesInfo": (NodeEntitiesInfo_, _cdr_NodeEntitiesInfo, _msg_NodeEntitiesInfo, _to_NodeEntitiesInfo, _from_NodeEntitiesInfo, _enc_NodeEntitiesInfo, _dec_NodeEntitiesInfo),
-    "ParticipantEntitiesInfo": (ParticipantEntitiesInfo_, _cdr_ParticipantEntitiesInfo, _msg_ParticipantEntitiesInfo, _to_ParticipantEntitiesInfo, _from_ParticipantEntitiesInfo, _enc_ParticipantEntitiesInfo, _dec_ParticipantEntitiesInfo),
+    "NodeEntitiesInfo": (
+        NodeEntitiesInfo_,
+        _cdr_NodeEntitiesInfo,
+        _msg_NodeEntitiesInfo,
+        _to_NodeEntitiesInfo,
+        _from_NodeEntitiesInfo,
+        _enc_NodeEntitiesInfo,
+        _dec_NodeEntitiesInfo,
+    ),
+    "ParticipantEntitiesInfo": (
+        ParticipantEntitiesInfo_,
+        _cdr_ParticipantEntitiesInfo,
+        _msg_ParticipantEntitiesInfo,
+        _to_ParticipantEntitiesInfo,
+        _from_ParticipantEntitiesInfo,
+        _enc_ParticipantEntitiesInfo,
+        _dec_ParticipantEntitiesInfo,
+    ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

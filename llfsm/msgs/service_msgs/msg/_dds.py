@@ -16,10 +16,11 @@ import llfsm.msgs.service_msgs.msg as _classes
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<B3xiI16B4xq")
+_S0 = _Struct("<4sB3xiI16B4xq")
 _S1 = _Struct("<B")
 _S2 = _Struct("<iI16B")
 _S3 = _Struct("<q")
+_S4 = _Struct("<B3xiI16B4xq")
 
 
 # -- service_msgs/msg/ServiceEventInfo
@@ -45,14 +46,15 @@ def _mk_ServiceEventInfo(a0, a1, a2, a3):
 
 
 def _cdr_ServiceEventInfo(m):
-    return _HDR + _S0.pack(m._event_type, m._stamp._sec, m._stamp._nanosec, *m._client_gid, m._sequence_number)
+    return _S0.pack(_HDR, m._event_type, m._stamp._sec, m._stamp._nanosec, *m._client_gid, m._sequence_number)
 
 
 def _msg_ServiceEventInfo(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 40
-    return _mk_ServiceEventInfo(t1[0], _builtin_interfaces._mk_Time(t1[1], t1[2]), list(t1[3:19]), t1[19]), o
+    m = _mk_ServiceEventInfo(t1[0], _builtin_interfaces._mk_Time(t1[1], t1[2]), list(t1[3:19]), t1[19])
+    return m, o
 
 
 def _enc_ServiceEventInfo(m, b):
@@ -72,11 +74,17 @@ def _dec_ServiceEventInfo(d, o):
     o += (4 - o) & 7
     t3 = _S3.unpack_from(d, o)
     o += 8
-    return _mk_ServiceEventInfo(t1[0], _builtin_interfaces._mk_Time(t2[0], t2[1]), list(t2[2:18]), t3[0]), o
+    m = _mk_ServiceEventInfo(t1[0], _builtin_interfaces._mk_Time(t2[0], t2[1]), list(t2[2:18]), t3[0])
+    return m, o
 
 
 def _to_ServiceEventInfo(m):
-    return ServiceEventInfo_(event_type=m._event_type, stamp=_builtin_interfaces._to_Time(m._stamp), client_gid=list(m._client_gid), sequence_number=m._sequence_number)
+    return ServiceEventInfo_(
+        event_type=m._event_type,
+        stamp=_builtin_interfaces._to_Time(m._stamp),
+        client_gid=list(m._client_gid),
+        sequence_number=m._sequence_number,
+    )
 
 
 def _from_ServiceEventInfo(s):
@@ -90,7 +98,15 @@ def _from_ServiceEventInfo(s):
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
 CODECS = {
-    "ServiceEventInfo": (ServiceEventInfo_, _cdr_ServiceEventInfo, _msg_ServiceEventInfo, _to_ServiceEventInfo, _from_ServiceEventInfo, _enc_ServiceEventInfo, _dec_ServiceEventInfo),
+    "ServiceEventInfo": (
+        ServiceEventInfo_,
+        _cdr_ServiceEventInfo,
+        _msg_ServiceEventInfo,
+        _to_ServiceEventInfo,
+        _from_ServiceEventInfo,
+        _enc_ServiceEventInfo,
+        _dec_ServiceEventInfo,
+    ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

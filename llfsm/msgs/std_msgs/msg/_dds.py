@@ -18,20 +18,32 @@ import llfsm.msgs.std_msgs.msg as _classes
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<?")
-_S1 = _Struct("<B")
-_S2 = _Struct("<I")
-_S3 = _Struct("<II")
-_S4 = _Struct("<ffff")
-_S5 = _Struct("<f")
-_S6 = _Struct("<d")
-_S7 = _Struct("<iII")
-_S8 = _Struct("<h")
-_S9 = _Struct("<i")
-_S10 = _Struct("<q")
-_S11 = _Struct("<b")
-_S12 = _Struct("<H")
-_S13 = _Struct("<Q")
+_S0 = _Struct("<4s?")
+_S1 = _Struct("<?")
+_S2 = _Struct("<4sB")
+_S3 = _Struct("<B")
+_S4 = _Struct("<I")
+_S5 = _Struct("<II")
+_S6 = _Struct("<4sffff")
+_S7 = _Struct("<ffff")
+_S8 = _Struct("<4sf")
+_S9 = _Struct("<f")
+_S10 = _Struct("<4sd")
+_S11 = _Struct("<d")
+_S12 = _Struct("<iII")
+_S13 = _Struct("<4sh")
+_S14 = _Struct("<h")
+_S15 = _Struct("<4si")
+_S16 = _Struct("<i")
+_S17 = _Struct("<4sq")
+_S18 = _Struct("<q")
+_S19 = _Struct("<4sb")
+_S20 = _Struct("<b")
+_S21 = _Struct("<4sH")
+_S22 = _Struct("<H")
+_S23 = _Struct("<4sI")
+_S24 = _Struct("<4sQ")
+_S25 = _Struct("<Q")
 
 
 # -- std_msgs/msg/Bool
@@ -51,24 +63,26 @@ def _mk_Bool(a0):
 
 
 def _cdr_Bool(m):
-    return _HDR + _S0.pack(m._data)
+    return _S0.pack(_HDR, m._data)
 
 
 def _msg_Bool(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 1
-    return _mk_Bool(t1[0]), o
+    m = _mk_Bool(t1[0])
+    return m, o
 
 
 def _enc_Bool(m, b):
-    b += _S0.pack(m._data)
+    b += _S1.pack(m._data)
 
 
 def _dec_Bool(d, o):
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 1
-    return _mk_Bool(t1[0]), o
+    m = _mk_Bool(t1[0])
+    return m, o
 
 
 def _to_Bool(m):
@@ -98,24 +112,26 @@ def _mk_Byte(a0):
 
 
 def _cdr_Byte(m):
-    return _HDR + _S1.pack(m._data)
+    return _S2.pack(_HDR, m._data)
 
 
 def _msg_Byte(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
-    return _mk_Byte(t1[0]), o
+    m = _mk_Byte(t1[0])
+    return m, o
 
 
 def _enc_Byte(m, b):
-    b += _S1.pack(m._data)
+    b += _S3.pack(m._data)
 
 
 def _dec_Byte(d, o):
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
-    return _mk_Byte(t1[0]), o
+    m = _mk_Byte(t1[0])
+    return m, o
 
 
 def _to_Byte(m):
@@ -151,48 +167,50 @@ def _mk_MultiArrayDimension(a0, a1, a2):
 def _cdr_MultiArrayDimension(m):
     b = bytearray(_HDR)
     s1 = m._label.encode()
-    b += _S2.pack(len(s1) + 1)
+    b += _S4.pack(len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 3]
-    b += _S3.pack(m._size, m._stride)
+    b += _S5.pack(m._size, m._stride)
     return bytes(b)
 
 
 def _msg_MultiArrayDimension(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S3.unpack_from(d, o)
+    t4 = _S5.unpack_from(d, o)
     o += 8
-    return _mk_MultiArrayDimension(s3, t4[0], t4[1]), o
+    m = _mk_MultiArrayDimension(s3, t4[0], t4[1])
+    return m, o
 
 
 def _enc_MultiArrayDimension(m, b):
     s1 = m._label.encode()
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(s1) + 1)
+    b += _S4.pack(len(s1) + 1)
     b += s1
     b.append(0)
     b += _Z[(4 - len(b)) & 3]
-    b += _S3.pack(m._size, m._stride)
+    b += _S5.pack(m._size, m._stride)
 
 
 def _dec_MultiArrayDimension(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
     o += (4 - o) & 3
-    t4 = _S3.unpack_from(d, o)
+    t4 = _S5.unpack_from(d, o)
     o += 8
-    return _mk_MultiArrayDimension(s3, t4[0], t4[1]), o
+    m = _mk_MultiArrayDimension(s3, t4[0], t4[1])
+    return m, o
 
 
 def _to_MultiArrayDimension(m):
@@ -228,52 +246,58 @@ def _mk_MultiArrayLayout(a0, a1):
 def _cdr_MultiArrayLayout(m):
     b = bytearray(_HDR)
     v1 = m._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(m._data_offset)
+    b += _S4.pack(m._data_offset)
     return bytes(b)
 
 
 def _msg_MultiArrayLayout(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S2.unpack_from(d, o)
+    t5 = _S4.unpack_from(d, o)
     o += 4
-    return _mk_MultiArrayLayout(v3, t5[0]), o
+    m = _mk_MultiArrayLayout(v3, t5[0])
+    return m, o
 
 
 def _enc_MultiArrayLayout(m, b):
     v1 = m._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(m._data_offset)
+    b += _S4.pack(m._data_offset)
 
 
 def _dec_MultiArrayLayout(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S2.unpack_from(d, o)
+    t5 = _S4.unpack_from(d, o)
     o += 4
-    return _mk_MultiArrayLayout(v3, t5[0]), o
+    m = _mk_MultiArrayLayout(v3, t5[0])
+    return m, o
 
 
 def _to_MultiArrayLayout(m):
@@ -308,62 +332,68 @@ def _mk_ByteMultiArray(a0, a1):
 def _cdr_ByteMultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += bytes(v3)
     return bytes(b)
 
 
 def _msg_ByteMultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(d[o : o + n6])
     o += n6
-    return _mk_ByteMultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_ByteMultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_ByteMultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += bytes(v3)
 
 
 def _dec_ByteMultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(d[o : o + n6])
     o += n6
-    return _mk_ByteMultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_ByteMultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_ByteMultiArray(m):
@@ -394,24 +424,26 @@ def _mk_Char(a0):
 
 
 def _cdr_Char(m):
-    return _HDR + _S1.pack(m._data)
+    return _S2.pack(_HDR, m._data)
 
 
 def _msg_Char(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
-    return _mk_Char(t1[0]), o
+    m = _mk_Char(t1[0])
+    return m, o
 
 
 def _enc_Char(m, b):
-    b += _S1.pack(m._data)
+    b += _S3.pack(m._data)
 
 
 def _dec_Char(d, o):
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
-    return _mk_Char(t1[0]), o
+    m = _mk_Char(t1[0])
+    return m, o
 
 
 def _to_Char(m):
@@ -447,26 +479,28 @@ def _mk_ColorRGBA(a0, a1, a2, a3):
 
 
 def _cdr_ColorRGBA(m):
-    return _HDR + _S4.pack(m._r, m._g, m._b, m._a)
+    return _S6.pack(_HDR, m._r, m._g, m._b, m._a)
 
 
 def _msg_ColorRGBA(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S7.unpack_from(d, o)
     o += 16
-    return _mk_ColorRGBA(t1[0], t1[1], t1[2], t1[3]), o
+    m = _mk_ColorRGBA(t1[0], t1[1], t1[2], t1[3])
+    return m, o
 
 
 def _enc_ColorRGBA(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(m._r, m._g, m._b, m._a)
+    b += _S7.pack(m._r, m._g, m._b, m._a)
 
 
 def _dec_ColorRGBA(d, o):
     o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S7.unpack_from(d, o)
     o += 16
-    return _mk_ColorRGBA(t1[0], t1[1], t1[2], t1[3]), o
+    m = _mk_ColorRGBA(t1[0], t1[1], t1[2], t1[3])
+    return m, o
 
 
 def _to_ColorRGBA(m):
@@ -498,22 +532,24 @@ def _mk_Empty():
 
 
 def _cdr_Empty(m):
-    return _HDR + _S1.pack(0)
+    return _S2.pack(_HDR, 0)
 
 
 def _msg_Empty(d):
     o = 4
     o += 1
-    return _mk_Empty(), o
+    m = _mk_Empty()
+    return m, o
 
 
 def _enc_Empty(m, b):
-    b += _S1.pack(0)
+    b += _S3.pack(0)
 
 
 def _dec_Empty(d, o):
     o += 1
-    return _mk_Empty(), o
+    m = _mk_Empty()
+    return m, o
 
 
 def _to_Empty(m):
@@ -542,26 +578,28 @@ def _mk_Float32(a0):
 
 
 def _cdr_Float32(m):
-    return _HDR + _S5.pack(m._data)
+    return _S8.pack(_HDR, m._data)
 
 
 def _msg_Float32(d):
     o = 4
-    t1 = _S5.unpack_from(d, o)
+    t1 = _S9.unpack_from(d, o)
     o += 4
-    return _mk_Float32(t1[0]), o
+    m = _mk_Float32(t1[0])
+    return m, o
 
 
 def _enc_Float32(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S5.pack(m._data)
+    b += _S9.pack(m._data)
 
 
 def _dec_Float32(d, o):
     o += (4 - o) & 3
-    t1 = _S5.unpack_from(d, o)
+    t1 = _S9.unpack_from(d, o)
     o += 4
-    return _mk_Float32(t1[0]), o
+    m = _mk_Float32(t1[0])
+    return m, o
 
 
 def _to_Float32(m):
@@ -595,62 +633,68 @@ def _mk_Float32MultiArray(a0, a1):
 def _cdr_Float32MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}f", *v3)
     return bytes(b)
 
 
 def _msg_Float32MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}f", d, o))
     o += n6 * 4
-    return _mk_Float32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Float32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_Float32MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}f", *v3)
 
 
 def _dec_Float32MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}f", d, o))
     o += n6 * 4
-    return _mk_Float32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Float32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_Float32MultiArray(m):
@@ -681,26 +725,28 @@ def _mk_Float64(a0):
 
 
 def _cdr_Float64(m):
-    return _HDR + _S6.pack(m._data)
+    return _S10.pack(_HDR, m._data)
 
 
 def _msg_Float64(d):
     o = 4
-    t1 = _S6.unpack_from(d, o)
+    t1 = _S11.unpack_from(d, o)
     o += 8
-    return _mk_Float64(t1[0]), o
+    m = _mk_Float64(t1[0])
+    return m, o
 
 
 def _enc_Float64(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S6.pack(m._data)
+    b += _S11.pack(m._data)
 
 
 def _dec_Float64(d, o):
     o += (4 - o) & 7
-    t1 = _S6.unpack_from(d, o)
+    t1 = _S11.unpack_from(d, o)
     o += 8
-    return _mk_Float64(t1[0]), o
+    m = _mk_Float64(t1[0])
+    return m, o
 
 
 def _to_Float64(m):
@@ -734,12 +780,12 @@ def _mk_Float64MultiArray(a0, a1):
 def _cdr_Float64MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     if v3:
         b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}d", *v3)
@@ -748,33 +794,36 @@ def _cdr_Float64MultiArray(m):
 
 def _msg_Float64MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     if n6:
         o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}d", d, o))
     o += n6 * 8
-    return _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_Float64MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     if v3:
         b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}d", *v3)
@@ -782,22 +831,25 @@ def _enc_Float64MultiArray(m, b):
 
 def _dec_Float64MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     if n6:
         o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}d", d, o))
     o += n6 * 8
-    return _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_Float64MultiArray(m):
@@ -832,7 +884,7 @@ def _mk_Header(a0, a1):
 def _cdr_Header(m):
     b = bytearray(_HDR)
     s1 = m._frame_id.encode()
-    b += _S7.pack(m._stamp._sec, m._stamp._nanosec, len(s1) + 1)
+    b += _S12.pack(m._stamp._sec, m._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     return bytes(b)
@@ -840,30 +892,32 @@ def _cdr_Header(m):
 
 def _msg_Header(d):
     o = 4
-    t1 = _S7.unpack_from(d, o)
+    t1 = _S12.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), o
+    m = _mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3)
+    return m, o
 
 
 def _enc_Header(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._frame_id.encode()
-    b += _S7.pack(m._stamp._sec, m._stamp._nanosec, len(s1) + 1)
+    b += _S12.pack(m._stamp._sec, m._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
 
 
 def _dec_Header(d, o):
     o += (4 - o) & 3
-    t1 = _S7.unpack_from(d, o)
+    t1 = _S12.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), o
+    m = _mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3)
+    return m, o
 
 
 def _to_Header(m):
@@ -894,26 +948,28 @@ def _mk_Int16(a0):
 
 
 def _cdr_Int16(m):
-    return _HDR + _S8.pack(m._data)
+    return _S13.pack(_HDR, m._data)
 
 
 def _msg_Int16(d):
     o = 4
-    t1 = _S8.unpack_from(d, o)
+    t1 = _S14.unpack_from(d, o)
     o += 2
-    return _mk_Int16(t1[0]), o
+    m = _mk_Int16(t1[0])
+    return m, o
 
 
 def _enc_Int16(m, b):
     b += _Z[(4 - len(b)) & 1]
-    b += _S8.pack(m._data)
+    b += _S14.pack(m._data)
 
 
 def _dec_Int16(d, o):
     o += (4 - o) & 1
-    t1 = _S8.unpack_from(d, o)
+    t1 = _S14.unpack_from(d, o)
     o += 2
-    return _mk_Int16(t1[0]), o
+    m = _mk_Int16(t1[0])
+    return m, o
 
 
 def _to_Int16(m):
@@ -947,62 +1003,68 @@ def _mk_Int16MultiArray(a0, a1):
 def _cdr_Int16MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}h", *v3)
     return bytes(b)
 
 
 def _msg_Int16MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}h", d, o))
     o += n6 * 2
-    return _mk_Int16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Int16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_Int16MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}h", *v3)
 
 
 def _dec_Int16MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}h", d, o))
     o += n6 * 2
-    return _mk_Int16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Int16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_Int16MultiArray(m):
@@ -1033,26 +1095,28 @@ def _mk_Int32(a0):
 
 
 def _cdr_Int32(m):
-    return _HDR + _S9.pack(m._data)
+    return _S15.pack(_HDR, m._data)
 
 
 def _msg_Int32(d):
     o = 4
-    t1 = _S9.unpack_from(d, o)
+    t1 = _S16.unpack_from(d, o)
     o += 4
-    return _mk_Int32(t1[0]), o
+    m = _mk_Int32(t1[0])
+    return m, o
 
 
 def _enc_Int32(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S9.pack(m._data)
+    b += _S16.pack(m._data)
 
 
 def _dec_Int32(d, o):
     o += (4 - o) & 3
-    t1 = _S9.unpack_from(d, o)
+    t1 = _S16.unpack_from(d, o)
     o += 4
-    return _mk_Int32(t1[0]), o
+    m = _mk_Int32(t1[0])
+    return m, o
 
 
 def _to_Int32(m):
@@ -1086,62 +1150,68 @@ def _mk_Int32MultiArray(a0, a1):
 def _cdr_Int32MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}i", *v3)
     return bytes(b)
 
 
 def _msg_Int32MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}i", d, o))
     o += n6 * 4
-    return _mk_Int32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Int32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_Int32MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}i", *v3)
 
 
 def _dec_Int32MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}i", d, o))
     o += n6 * 4
-    return _mk_Int32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Int32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_Int32MultiArray(m):
@@ -1172,26 +1242,28 @@ def _mk_Int64(a0):
 
 
 def _cdr_Int64(m):
-    return _HDR + _S10.pack(m._data)
+    return _S17.pack(_HDR, m._data)
 
 
 def _msg_Int64(d):
     o = 4
-    t1 = _S10.unpack_from(d, o)
+    t1 = _S18.unpack_from(d, o)
     o += 8
-    return _mk_Int64(t1[0]), o
+    m = _mk_Int64(t1[0])
+    return m, o
 
 
 def _enc_Int64(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S10.pack(m._data)
+    b += _S18.pack(m._data)
 
 
 def _dec_Int64(d, o):
     o += (4 - o) & 7
-    t1 = _S10.unpack_from(d, o)
+    t1 = _S18.unpack_from(d, o)
     o += 8
-    return _mk_Int64(t1[0]), o
+    m = _mk_Int64(t1[0])
+    return m, o
 
 
 def _to_Int64(m):
@@ -1225,12 +1297,12 @@ def _mk_Int64MultiArray(a0, a1):
 def _cdr_Int64MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     if v3:
         b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}q", *v3)
@@ -1239,33 +1311,36 @@ def _cdr_Int64MultiArray(m):
 
 def _msg_Int64MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     if n6:
         o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}q", d, o))
     o += n6 * 8
-    return _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_Int64MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     if v3:
         b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}q", *v3)
@@ -1273,22 +1348,25 @@ def _enc_Int64MultiArray(m, b):
 
 def _dec_Int64MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     if n6:
         o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}q", d, o))
     o += n6 * 8
-    return _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_Int64MultiArray(m):
@@ -1319,24 +1397,26 @@ def _mk_Int8(a0):
 
 
 def _cdr_Int8(m):
-    return _HDR + _S11.pack(m._data)
+    return _S19.pack(_HDR, m._data)
 
 
 def _msg_Int8(d):
     o = 4
-    t1 = _S11.unpack_from(d, o)
+    t1 = _S20.unpack_from(d, o)
     o += 1
-    return _mk_Int8(t1[0]), o
+    m = _mk_Int8(t1[0])
+    return m, o
 
 
 def _enc_Int8(m, b):
-    b += _S11.pack(m._data)
+    b += _S20.pack(m._data)
 
 
 def _dec_Int8(d, o):
-    t1 = _S11.unpack_from(d, o)
+    t1 = _S20.unpack_from(d, o)
     o += 1
-    return _mk_Int8(t1[0]), o
+    m = _mk_Int8(t1[0])
+    return m, o
 
 
 def _to_Int8(m):
@@ -1370,62 +1450,68 @@ def _mk_Int8MultiArray(a0, a1):
 def _cdr_Int8MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}b", *v3)
     return bytes(b)
 
 
 def _msg_Int8MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}b", d, o))
     o += n6 * 1
-    return _mk_Int8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Int8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_Int8MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}b", *v3)
 
 
 def _dec_Int8MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}b", d, o))
     o += n6 * 1
-    return _mk_Int8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_Int8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_Int8MultiArray(m):
@@ -1458,7 +1544,7 @@ def _mk_String(a0):
 def _cdr_String(m):
     b = bytearray(_HDR)
     s1 = m._data.encode()
-    b += _S2.pack(len(s1) + 1)
+    b += _S4.pack(len(s1) + 1)
     b += s1
     b.append(0)
     return bytes(b)
@@ -1466,30 +1552,32 @@ def _cdr_String(m):
 
 def _msg_String(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_String(s3), o
+    m = _mk_String(s3)
+    return m, o
 
 
 def _enc_String(m, b):
     s1 = m._data.encode()
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(s1) + 1)
+    b += _S4.pack(len(s1) + 1)
     b += s1
     b.append(0)
 
 
 def _dec_String(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_String(s3), o
+    m = _mk_String(s3)
+    return m, o
 
 
 def _to_String(m):
@@ -1519,26 +1607,28 @@ def _mk_UInt16(a0):
 
 
 def _cdr_UInt16(m):
-    return _HDR + _S12.pack(m._data)
+    return _S21.pack(_HDR, m._data)
 
 
 def _msg_UInt16(d):
     o = 4
-    t1 = _S12.unpack_from(d, o)
+    t1 = _S22.unpack_from(d, o)
     o += 2
-    return _mk_UInt16(t1[0]), o
+    m = _mk_UInt16(t1[0])
+    return m, o
 
 
 def _enc_UInt16(m, b):
     b += _Z[(4 - len(b)) & 1]
-    b += _S12.pack(m._data)
+    b += _S22.pack(m._data)
 
 
 def _dec_UInt16(d, o):
     o += (4 - o) & 1
-    t1 = _S12.unpack_from(d, o)
+    t1 = _S22.unpack_from(d, o)
     o += 2
-    return _mk_UInt16(t1[0]), o
+    m = _mk_UInt16(t1[0])
+    return m, o
 
 
 def _to_UInt16(m):
@@ -1572,62 +1662,68 @@ def _mk_UInt16MultiArray(a0, a1):
 def _cdr_UInt16MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}H", *v3)
     return bytes(b)
 
 
 def _msg_UInt16MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}H", d, o))
     o += n6 * 2
-    return _mk_UInt16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_UInt16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_UInt16MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}H", *v3)
 
 
 def _dec_UInt16MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}H", d, o))
     o += n6 * 2
-    return _mk_UInt16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_UInt16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_UInt16MultiArray(m):
@@ -1658,26 +1754,28 @@ def _mk_UInt32(a0):
 
 
 def _cdr_UInt32(m):
-    return _HDR + _S2.pack(m._data)
+    return _S23.pack(_HDR, m._data)
 
 
 def _msg_UInt32(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
-    return _mk_UInt32(t1[0]), o
+    m = _mk_UInt32(t1[0])
+    return m, o
 
 
 def _enc_UInt32(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(m._data)
+    b += _S4.pack(m._data)
 
 
 def _dec_UInt32(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
-    return _mk_UInt32(t1[0]), o
+    m = _mk_UInt32(t1[0])
+    return m, o
 
 
 def _to_UInt32(m):
@@ -1711,62 +1809,68 @@ def _mk_UInt32MultiArray(a0, a1):
 def _cdr_UInt32MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}I", *v3)
     return bytes(b)
 
 
 def _msg_UInt32MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}I", d, o))
     o += n6 * 4
-    return _mk_UInt32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_UInt32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_UInt32MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += _pack(f"<{len(v3)}I", *v3)
 
 
 def _dec_UInt32MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(_unpack_from(f"<{n6}I", d, o))
     o += n6 * 4
-    return _mk_UInt32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_UInt32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_UInt32MultiArray(m):
@@ -1797,26 +1901,28 @@ def _mk_UInt64(a0):
 
 
 def _cdr_UInt64(m):
-    return _HDR + _S13.pack(m._data)
+    return _S24.pack(_HDR, m._data)
 
 
 def _msg_UInt64(d):
     o = 4
-    t1 = _S13.unpack_from(d, o)
+    t1 = _S25.unpack_from(d, o)
     o += 8
-    return _mk_UInt64(t1[0]), o
+    m = _mk_UInt64(t1[0])
+    return m, o
 
 
 def _enc_UInt64(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S13.pack(m._data)
+    b += _S25.pack(m._data)
 
 
 def _dec_UInt64(d, o):
     o += (4 - o) & 7
-    t1 = _S13.unpack_from(d, o)
+    t1 = _S25.unpack_from(d, o)
     o += 8
-    return _mk_UInt64(t1[0]), o
+    m = _mk_UInt64(t1[0])
+    return m, o
 
 
 def _to_UInt64(m):
@@ -1850,12 +1956,12 @@ def _mk_UInt64MultiArray(a0, a1):
 def _cdr_UInt64MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     if v3:
         b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}Q", *v3)
@@ -1864,33 +1970,36 @@ def _cdr_UInt64MultiArray(m):
 
 def _msg_UInt64MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     if n6:
         o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}Q", d, o))
     o += n6 * 8
-    return _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_UInt64MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     if v3:
         b += _Z[(4 - len(b)) & 7]
     b += _pack(f"<{len(v3)}Q", *v3)
@@ -1898,22 +2007,25 @@ def _enc_UInt64MultiArray(m, b):
 
 def _dec_UInt64MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     if n6:
         o += (4 - o) & 7
     v7 = list(_unpack_from(f"<{n6}Q", d, o))
     o += n6 * 8
-    return _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_UInt64MultiArray(m):
@@ -1944,24 +2056,26 @@ def _mk_UInt8(a0):
 
 
 def _cdr_UInt8(m):
-    return _HDR + _S1.pack(m._data)
+    return _S2.pack(_HDR, m._data)
 
 
 def _msg_UInt8(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
-    return _mk_UInt8(t1[0]), o
+    m = _mk_UInt8(t1[0])
+    return m, o
 
 
 def _enc_UInt8(m, b):
-    b += _S1.pack(m._data)
+    b += _S3.pack(m._data)
 
 
 def _dec_UInt8(d, o):
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
-    return _mk_UInt8(t1[0]), o
+    m = _mk_UInt8(t1[0])
+    return m, o
 
 
 def _to_UInt8(m):
@@ -1995,62 +2109,68 @@ def _mk_UInt8MultiArray(a0, a1):
 def _cdr_UInt8MultiArray(m):
     b = bytearray(_HDR)
     v1 = m._layout._dim
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += bytes(v3)
     return bytes(b)
 
 
 def _msg_UInt8MultiArray(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(d[o : o + n6])
     o += n6
-    return _mk_UInt8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_UInt8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _enc_UInt8MultiArray(m, b):
     v1 = m._layout._dim
     b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
+    b += _S4.pack(len(v1))
     for e2 in v1:
         _enc_MultiArrayDimension(e2, b)
     b += _Z[(4 - len(b)) & 3]
     v3 = m._data
-    b += _S3.pack(m._layout._data_offset, len(v3))
+    b += _S5.pack(m._layout._data_offset, len(v3))
     b += bytes(v3)
 
 
 def _dec_UInt8MultiArray(d, o):
     o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
+    if n2 > len(d) - o:
+        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
         e4, o = _dec_MultiArrayDimension(d, o)
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S3.unpack_from(d, o)
+    t5 = _S5.unpack_from(d, o)
     o += 8
     n6 = t5[1]
     v7 = list(d[o : o + n6])
     o += n6
-    return _mk_UInt8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7), o
+    m = _mk_UInt8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    return m, o
 
 
 def _to_UInt8MultiArray(m):
@@ -2068,34 +2188,146 @@ def _from_UInt8MultiArray(s):
 CODECS = {
     "Bool": (Bool_, _cdr_Bool, _msg_Bool, _to_Bool, _from_Bool, _enc_Bool, _dec_Bool),
     "Byte": (Byte_, _cdr_Byte, _msg_Byte, _to_Byte, _from_Byte, _enc_Byte, _dec_Byte),
-    "MultiArrayDimension": (MultiArrayDimension_, _cdr_MultiArrayDimension, _msg_MultiArrayDimension, _to_MultiArrayDimension, _from_MultiArrayDimension, _enc_MultiArrayDimension, _dec_MultiArrayDimension),
-    "MultiArrayLayout": (MultiArrayLayout_, _cdr_MultiArrayLayout, _msg_MultiArrayLayout, _to_MultiArrayLayout, _from_MultiArrayLayout, _enc_MultiArrayLayout, _dec_MultiArrayLayout),
-    "ByteMultiArray": (ByteMultiArray_, _cdr_ByteMultiArray, _msg_ByteMultiArray, _to_ByteMultiArray, _from_ByteMultiArray, _enc_ByteMultiArray, _dec_ByteMultiArray),
+    "MultiArrayDimension": (
+        MultiArrayDimension_,
+        _cdr_MultiArrayDimension,
+        _msg_MultiArrayDimension,
+        _to_MultiArrayDimension,
+        _from_MultiArrayDimension,
+        _enc_MultiArrayDimension,
+        _dec_MultiArrayDimension,
+    ),
+    "MultiArrayLayout": (
+        MultiArrayLayout_,
+        _cdr_MultiArrayLayout,
+        _msg_MultiArrayLayout,
+        _to_MultiArrayLayout,
+        _from_MultiArrayLayout,
+        _enc_MultiArrayLayout,
+        _dec_MultiArrayLayout,
+    ),
+    "ByteMultiArray": (
+        ByteMultiArray_,
+        _cdr_ByteMultiArray,
+        _msg_ByteMultiArray,
+        _to_ByteMultiArray,
+        _from_ByteMultiArray,
+        _enc_ByteMultiArray,
+        _dec_ByteMultiArray,
+    ),
     "Char": (Char_, _cdr_Char, _msg_Char, _to_Char, _from_Char, _enc_Char, _dec_Char),
-    "ColorRGBA": (ColorRGBA_, _cdr_ColorRGBA, _msg_ColorRGBA, _to_ColorRGBA, _from_ColorRGBA, _enc_ColorRGBA, _dec_ColorRGBA),
+    "ColorRGBA": (
+        ColorRGBA_,
+        _cdr_ColorRGBA,
+        _msg_ColorRGBA,
+        _to_ColorRGBA,
+        _from_ColorRGBA,
+        _enc_ColorRGBA,
+        _dec_ColorRGBA,
+    ),
     "Empty": (Empty_, _cdr_Empty, _msg_Empty, _to_Empty, _from_Empty, _enc_Empty, _dec_Empty),
     "Float32": (Float32_, _cdr_Float32, _msg_Float32, _to_Float32, _from_Float32, _enc_Float32, _dec_Float32),
-    "Float32MultiArray": (Float32MultiArray_, _cdr_Float32MultiArray, _msg_Float32MultiArray, _to_Float32MultiArray, _from_Float32MultiArray, _enc_Float32MultiArray, _dec_Float32MultiArray),
+    "Float32MultiArray": (
+        Float32MultiArray_,
+        _cdr_Float32MultiArray,
+        _msg_Float32MultiArray,
+        _to_Float32MultiArray,
+        _from_Float32MultiArray,
+        _enc_Float32MultiArray,
+        _dec_Float32MultiArray,
+    ),
     "Float64": (Float64_, _cdr_Float64, _msg_Float64, _to_Float64, _from_Float64, _enc_Float64, _dec_Float64),
-    "Float64MultiArray": (Float64MultiArray_, _cdr_Float64MultiArray, _msg_Float64MultiArray, _to_Float64MultiArray, _from_Float64MultiArray, _enc_Float64MultiArray, _dec_Float64MultiArray),
+    "Float64MultiArray": (
+        Float64MultiArray_,
+        _cdr_Float64MultiArray,
+        _msg_Float64MultiArray,
+        _to_Float64MultiArray,
+        _from_Float64MultiArray,
+        _enc_Float64MultiArray,
+        _dec_Float64MultiArray,
+    ),
     "Header": (Header_, _cdr_Header, _msg_Header, _to_Header, _from_Header, _enc_Header, _dec_Header),
     "Int16": (Int16_, _cdr_Int16, _msg_Int16, _to_Int16, _from_Int16, _enc_Int16, _dec_Int16),
-    "Int16MultiArray": (Int16MultiArray_, _cdr_Int16MultiArray, _msg_Int16MultiArray, _to_Int16MultiArray, _from_Int16MultiArray, _enc_Int16MultiArray, _dec_Int16MultiArray),
+    "Int16MultiArray": (
+        Int16MultiArray_,
+        _cdr_Int16MultiArray,
+        _msg_Int16MultiArray,
+        _to_Int16MultiArray,
+        _from_Int16MultiArray,
+        _enc_Int16MultiArray,
+        _dec_Int16MultiArray,
+    ),
     "Int32": (Int32_, _cdr_Int32, _msg_Int32, _to_Int32, _from_Int32, _enc_Int32, _dec_Int32),
-    "Int32MultiArray": (Int32MultiArray_, _cdr_Int32MultiArray, _msg_Int32MultiArray, _to_Int32MultiArray, _from_Int32MultiArray, _enc_Int32MultiArray, _dec_Int32MultiArray),
+    "Int32MultiArray": (
+        Int32MultiArray_,
+        _cdr_Int32MultiArray,
+        _msg_Int32MultiArray,
+        _to_Int32MultiArray,
+        _from_Int32MultiArray,
+        _enc_Int32MultiArray,
+        _dec_Int32MultiArray,
+    ),
     "Int64": (Int64_, _cdr_Int64, _msg_Int64, _to_Int64, _from_Int64, _enc_Int64, _dec_Int64),
-    "Int64MultiArray": (Int64MultiArray_, _cdr_Int64MultiArray, _msg_Int64MultiArray, _to_Int64MultiArray, _from_Int64MultiArray, _enc_Int64MultiArray, _dec_Int64MultiArray),
+    "Int64MultiArray": (
+        Int64MultiArray_,
+        _cdr_Int64MultiArray,
+        _msg_Int64MultiArray,
+        _to_Int64MultiArray,
+        _from_Int64MultiArray,
+        _enc_Int64MultiArray,
+        _dec_Int64MultiArray,
+    ),
     "Int8": (Int8_, _cdr_Int8, _msg_Int8, _to_Int8, _from_Int8, _enc_Int8, _dec_Int8),
-    "Int8MultiArray": (Int8MultiArray_, _cdr_Int8MultiArray, _msg_Int8MultiArray, _to_Int8MultiArray, _from_Int8MultiArray, _enc_Int8MultiArray, _dec_Int8MultiArray),
+    "Int8MultiArray": (
+        Int8MultiArray_,
+        _cdr_Int8MultiArray,
+        _msg_Int8MultiArray,
+        _to_Int8MultiArray,
+        _from_Int8MultiArray,
+        _enc_Int8MultiArray,
+        _dec_Int8MultiArray,
+    ),
     "String": (String_, _cdr_String, _msg_String, _to_String, _from_String, _enc_String, _dec_String),
     "UInt16": (UInt16_, _cdr_UInt16, _msg_UInt16, _to_UInt16, _from_UInt16, _enc_UInt16, _dec_UInt16),
-    "UInt16MultiArray": (UInt16MultiArray_, _cdr_UInt16MultiArray, _msg_UInt16MultiArray, _to_UInt16MultiArray, _from_UInt16MultiArray, _enc_UInt16MultiArray, _dec_UInt16MultiArray),
+    "UInt16MultiArray": (
+        UInt16MultiArray_,
+        _cdr_UInt16MultiArray,
+        _msg_UInt16MultiArray,
+        _to_UInt16MultiArray,
+        _from_UInt16MultiArray,
+        _enc_UInt16MultiArray,
+        _dec_UInt16MultiArray,
+    ),
     "UInt32": (UInt32_, _cdr_UInt32, _msg_UInt32, _to_UInt32, _from_UInt32, _enc_UInt32, _dec_UInt32),
-    "UInt32MultiArray": (UInt32MultiArray_, _cdr_UInt32MultiArray, _msg_UInt32MultiArray, _to_UInt32MultiArray, _from_UInt32MultiArray, _enc_UInt32MultiArray, _dec_UInt32MultiArray),
+    "UInt32MultiArray": (
+        UInt32MultiArray_,
+        _cdr_UInt32MultiArray,
+        _msg_UInt32MultiArray,
+        _to_UInt32MultiArray,
+        _from_UInt32MultiArray,
+        _enc_UInt32MultiArray,
+        _dec_UInt32MultiArray,
+    ),
     "UInt64": (UInt64_, _cdr_UInt64, _msg_UInt64, _to_UInt64, _from_UInt64, _enc_UInt64, _dec_UInt64),
-    "UInt64MultiArray": (UInt64MultiArray_, _cdr_UInt64MultiArray, _msg_UInt64MultiArray, _to_UInt64MultiArray, _from_UInt64MultiArray, _enc_UInt64MultiArray, _dec_UInt64MultiArray),
+    "UInt64MultiArray": (
+        UInt64MultiArray_,
+        _cdr_UInt64MultiArray,
+        _msg_UInt64MultiArray,
+        _to_UInt64MultiArray,
+        _from_UInt64MultiArray,
+        _enc_UInt64MultiArray,
+        _dec_UInt64MultiArray,
+    ),
     "UInt8": (UInt8_, _cdr_UInt8, _msg_UInt8, _to_UInt8, _from_UInt8, _enc_UInt8, _dec_UInt8),
-    "UInt8MultiArray": (UInt8MultiArray_, _cdr_UInt8MultiArray, _msg_UInt8MultiArray, _to_UInt8MultiArray, _from_UInt8MultiArray, _enc_UInt8MultiArray, _dec_UInt8MultiArray),
+    "UInt8MultiArray": (
+        UInt8MultiArray_,
+        _cdr_UInt8MultiArray,
+        _msg_UInt8MultiArray,
+        _to_UInt8MultiArray,
+        _from_UInt8MultiArray,
+        _enc_UInt8MultiArray,
+        _dec_UInt8MultiArray,
+    ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

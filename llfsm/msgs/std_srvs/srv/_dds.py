@@ -15,10 +15,12 @@ import llfsm.msgs.std_srvs.srv as _classes
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<B")
-_S1 = _Struct("<?")
-_S2 = _Struct("<?3xI")
-_S3 = _Struct("<I")
+_S0 = _Struct("<4sB")
+_S1 = _Struct("<B")
+_S2 = _Struct("<4s?")
+_S3 = _Struct("<?")
+_S4 = _Struct("<?3xI")
+_S5 = _Struct("<I")
 
 
 # -- std_srvs/srv/Empty_Request
@@ -46,22 +48,24 @@ def _mk_Empty_Request():
 
 
 def _cdr_Empty_Request(m):
-    return _HDR + _S0.pack(0)
+    return _S0.pack(_HDR, 0)
 
 
 def _msg_Empty_Request(d):
     o = 4
     o += 1
-    return _mk_Empty_Request(), o
+    m = _mk_Empty_Request()
+    return m, o
 
 
 def _enc_Empty_Request(m, b):
-    b += _S0.pack(0)
+    b += _S1.pack(0)
 
 
 def _dec_Empty_Request(d, o):
     o += 1
-    return _mk_Empty_Request(), o
+    m = _mk_Empty_Request()
+    return m, o
 
 
 def _to_Empty_Request(m):
@@ -98,22 +102,24 @@ def _mk_Empty_Response():
 
 
 def _cdr_Empty_Response(m):
-    return _HDR + _S0.pack(0)
+    return _S0.pack(_HDR, 0)
 
 
 def _msg_Empty_Response(d):
     o = 4
     o += 1
-    return _mk_Empty_Response(), o
+    m = _mk_Empty_Response()
+    return m, o
 
 
 def _enc_Empty_Response(m, b):
-    b += _S0.pack(0)
+    b += _S1.pack(0)
 
 
 def _dec_Empty_Response(d, o):
     o += 1
-    return _mk_Empty_Response(), o
+    m = _mk_Empty_Response()
+    return m, o
 
 
 def _to_Empty_Response(m):
@@ -151,24 +157,26 @@ def _mk_SetBool_Request(a0):
 
 
 def _cdr_SetBool_Request(m):
-    return _HDR + _S1.pack(m._data)
+    return _S2.pack(_HDR, m._data)
 
 
 def _msg_SetBool_Request(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
-    return _mk_SetBool_Request(t1[0]), o
+    m = _mk_SetBool_Request(t1[0])
+    return m, o
 
 
 def _enc_SetBool_Request(m, b):
-    b += _S1.pack(m._data)
+    b += _S3.pack(m._data)
 
 
 def _dec_SetBool_Request(d, o):
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
-    return _mk_SetBool_Request(t1[0]), o
+    m = _mk_SetBool_Request(t1[0])
+    return m, o
 
 
 def _to_SetBool_Request(m):
@@ -212,7 +220,7 @@ def _mk_SetBool_Response(a0, a1):
 def _cdr_SetBool_Response(m):
     b = bytearray(_HDR)
     s1 = m._message.encode()
-    b += _S2.pack(m._success, len(s1) + 1)
+    b += _S4.pack(m._success, len(s1) + 1)
     b += s1
     b.append(0)
     return bytes(b)
@@ -220,33 +228,35 @@ def _cdr_SetBool_Response(m):
 
 def _msg_SetBool_Response(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 8
     n2 = t1[1]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_SetBool_Response(t1[0], s3), o
+    m = _mk_SetBool_Response(t1[0], s3)
+    return m, o
 
 
 def _enc_SetBool_Response(m, b):
     s1 = m._message.encode()
-    b += _S1.pack(m._success)
+    b += _S3.pack(m._success)
     b += _Z[(4 - len(b)) & 3]
-    b += _S3.pack(len(s1) + 1)
+    b += _S5.pack(len(s1) + 1)
     b += s1
     b.append(0)
 
 
 def _dec_SetBool_Response(d, o):
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
     o += (4 - o) & 3
-    t2 = _S3.unpack_from(d, o)
+    t2 = _S5.unpack_from(d, o)
     o += 4
     n3 = t2[0]
     s4 = str(d[o : o + n3 - 1], "utf-8") if n3 else ""
     o += n3
-    return _mk_SetBool_Response(t1[0], s4), o
+    m = _mk_SetBool_Response(t1[0], s4)
+    return m, o
 
 
 def _to_SetBool_Response(m):
@@ -285,22 +295,24 @@ def _mk_Trigger_Request():
 
 
 def _cdr_Trigger_Request(m):
-    return _HDR + _S0.pack(0)
+    return _S0.pack(_HDR, 0)
 
 
 def _msg_Trigger_Request(d):
     o = 4
     o += 1
-    return _mk_Trigger_Request(), o
+    m = _mk_Trigger_Request()
+    return m, o
 
 
 def _enc_Trigger_Request(m, b):
-    b += _S0.pack(0)
+    b += _S1.pack(0)
 
 
 def _dec_Trigger_Request(d, o):
     o += 1
-    return _mk_Trigger_Request(), o
+    m = _mk_Trigger_Request()
+    return m, o
 
 
 def _to_Trigger_Request(m):
@@ -343,7 +355,7 @@ def _mk_Trigger_Response(a0, a1):
 def _cdr_Trigger_Response(m):
     b = bytearray(_HDR)
     s1 = m._message.encode()
-    b += _S2.pack(m._success, len(s1) + 1)
+    b += _S4.pack(m._success, len(s1) + 1)
     b += s1
     b.append(0)
     return bytes(b)
@@ -351,33 +363,35 @@ def _cdr_Trigger_Response(m):
 
 def _msg_Trigger_Response(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 8
     n2 = t1[1]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Trigger_Response(t1[0], s3), o
+    m = _mk_Trigger_Response(t1[0], s3)
+    return m, o
 
 
 def _enc_Trigger_Response(m, b):
     s1 = m._message.encode()
-    b += _S1.pack(m._success)
+    b += _S3.pack(m._success)
     b += _Z[(4 - len(b)) & 3]
-    b += _S3.pack(len(s1) + 1)
+    b += _S5.pack(len(s1) + 1)
     b += s1
     b.append(0)
 
 
 def _dec_Trigger_Response(d, o):
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 1
     o += (4 - o) & 3
-    t2 = _S3.unpack_from(d, o)
+    t2 = _S5.unpack_from(d, o)
     o += 4
     n3 = t2[0]
     s4 = str(d[o : o + n3 - 1], "utf-8") if n3 else ""
     o += n3
-    return _mk_Trigger_Response(t1[0], s4), o
+    m = _mk_Trigger_Response(t1[0], s4)
+    return m, o
 
 
 def _to_Trigger_Response(m):
@@ -393,12 +407,60 @@ def _from_Trigger_Response(s):
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
 CODECS = {
-    "Empty_Request": (Empty_Request_, _cdr_Empty_Request, _msg_Empty_Request, _to_Empty_Request, _from_Empty_Request, _enc_Empty_Request, _dec_Empty_Request),
-    "Empty_Response": (Empty_Response_, _cdr_Empty_Response, _msg_Empty_Response, _to_Empty_Response, _from_Empty_Response, _enc_Empty_Response, _dec_Empty_Response),
-    "SetBool_Request": (SetBool_Request_, _cdr_SetBool_Request, _msg_SetBool_Request, _to_SetBool_Request, _from_SetBool_Request, _enc_SetBool_Request, _dec_SetBool_Request),
-    "SetBool_Response": (SetBool_Response_, _cdr_SetBool_Response, _msg_SetBool_Response, _to_SetBool_Response, _from_SetBool_Response, _enc_SetBool_Response, _dec_SetBool_Response),
-    "Trigger_Request": (Trigger_Request_, _cdr_Trigger_Request, _msg_Trigger_Request, _to_Trigger_Request, _from_Trigger_Request, _enc_Trigger_Request, _dec_Trigger_Request),
-    "Trigger_Response": (Trigger_Response_, _cdr_Trigger_Response, _msg_Trigger_Response, _to_Trigger_Response, _from_Trigger_Response, _enc_Trigger_Response, _dec_Trigger_Response),
+    "Empty_Request": (
+        Empty_Request_,
+        _cdr_Empty_Request,
+        _msg_Empty_Request,
+        _to_Empty_Request,
+        _from_Empty_Request,
+        _enc_Empty_Request,
+        _dec_Empty_Request,
+    ),
+    "Empty_Response": (
+        Empty_Response_,
+        _cdr_Empty_Response,
+        _msg_Empty_Response,
+        _to_Empty_Response,
+        _from_Empty_Response,
+        _enc_Empty_Response,
+        _dec_Empty_Response,
+    ),
+    "SetBool_Request": (
+        SetBool_Request_,
+        _cdr_SetBool_Request,
+        _msg_SetBool_Request,
+        _to_SetBool_Request,
+        _from_SetBool_Request,
+        _enc_SetBool_Request,
+        _dec_SetBool_Request,
+    ),
+    "SetBool_Response": (
+        SetBool_Response_,
+        _cdr_SetBool_Response,
+        _msg_SetBool_Response,
+        _to_SetBool_Response,
+        _from_SetBool_Response,
+        _enc_SetBool_Response,
+        _dec_SetBool_Response,
+    ),
+    "Trigger_Request": (
+        Trigger_Request_,
+        _cdr_Trigger_Request,
+        _msg_Trigger_Request,
+        _to_Trigger_Request,
+        _from_Trigger_Request,
+        _enc_Trigger_Request,
+        _dec_Trigger_Request,
+    ),
+    "Trigger_Response": (
+        Trigger_Response_,
+        _cdr_Trigger_Response,
+        _msg_Trigger_Response,
+        _to_Trigger_Response,
+        _from_Trigger_Response,
+        _enc_Trigger_Response,
+        _dec_Trigger_Response,
+    ),
 }
 # name -> the IdlStruct of rq/.../rr/... topics, with rmw_cyclonedds_cpp's request header
 WIRE = {

@@ -15,8 +15,10 @@ import llfsm.msgs.turtle_sensor_interface.srv as _classes
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<B")
-_S1 = _Struct("<ddd")
+_S0 = _Struct("<4sB")
+_S1 = _Struct("<B")
+_S2 = _Struct("<4sddd")
+_S3 = _Struct("<ddd")
 
 
 # -- turtle_sensor_interface/srv/TurtlePosition_Request
@@ -44,22 +46,24 @@ def _mk_TurtlePosition_Request():
 
 
 def _cdr_TurtlePosition_Request(m):
-    return _HDR + _S0.pack(0)
+    return _S0.pack(_HDR, 0)
 
 
 def _msg_TurtlePosition_Request(d):
     o = 4
     o += 1
-    return _mk_TurtlePosition_Request(), o
+    m = _mk_TurtlePosition_Request()
+    return m, o
 
 
 def _enc_TurtlePosition_Request(m, b):
-    b += _S0.pack(0)
+    b += _S1.pack(0)
 
 
 def _dec_TurtlePosition_Request(d, o):
     o += 1
-    return _mk_TurtlePosition_Request(), o
+    m = _mk_TurtlePosition_Request()
+    return m, o
 
 
 def _to_TurtlePosition_Request(m):
@@ -84,7 +88,9 @@ class TurtlePosition_Response_(_IdlStruct, typename="turtle_sensor_interface::sr
 
 
 @_dataclass
-class TurtlePosition_Response_wire_(_IdlStruct, typename="turtle_sensor_interface::srv::dds_::TurtlePosition_Response_"):
+class TurtlePosition_Response_wire_(
+    _IdlStruct, typename="turtle_sensor_interface::srv::dds_::TurtlePosition_Response_"
+):
     """On the wire of rmw_cyclonedds_cpp: the request header, then the fields."""
 
     client_guid_: _t.uint64
@@ -103,26 +109,28 @@ def _mk_TurtlePosition_Response(a0, a1, a2):
 
 
 def _cdr_TurtlePosition_Response(m):
-    return _HDR + _S1.pack(m._x, m._y, m._theta)
+    return _S2.pack(_HDR, m._x, m._y, m._theta)
 
 
 def _msg_TurtlePosition_Response(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 24
-    return _mk_TurtlePosition_Response(t1[0], t1[1], t1[2]), o
+    m = _mk_TurtlePosition_Response(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _enc_TurtlePosition_Response(m, b):
     b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._x, m._y, m._theta)
+    b += _S3.pack(m._x, m._y, m._theta)
 
 
 def _dec_TurtlePosition_Response(d, o):
     o += (4 - o) & 7
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 24
-    return _mk_TurtlePosition_Response(t1[0], t1[1], t1[2]), o
+    m = _mk_TurtlePosition_Response(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _to_TurtlePosition_Response(m):
@@ -139,8 +147,24 @@ def _from_TurtlePosition_Response(s):
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
 CODECS = {
-    "TurtlePosition_Request": (TurtlePosition_Request_, _cdr_TurtlePosition_Request, _msg_TurtlePosition_Request, _to_TurtlePosition_Request, _from_TurtlePosition_Request, _enc_TurtlePosition_Request, _dec_TurtlePosition_Request),
-    "TurtlePosition_Response": (TurtlePosition_Response_, _cdr_TurtlePosition_Response, _msg_TurtlePosition_Response, _to_TurtlePosition_Response, _from_TurtlePosition_Response, _enc_TurtlePosition_Response, _dec_TurtlePosition_Response),
+    "TurtlePosition_Request": (
+        TurtlePosition_Request_,
+        _cdr_TurtlePosition_Request,
+        _msg_TurtlePosition_Request,
+        _to_TurtlePosition_Request,
+        _from_TurtlePosition_Request,
+        _enc_TurtlePosition_Request,
+        _dec_TurtlePosition_Request,
+    ),
+    "TurtlePosition_Response": (
+        TurtlePosition_Response_,
+        _cdr_TurtlePosition_Response,
+        _msg_TurtlePosition_Response,
+        _to_TurtlePosition_Response,
+        _from_TurtlePosition_Response,
+        _enc_TurtlePosition_Response,
+        _dec_TurtlePosition_Response,
+    ),
 }
 # name -> the IdlStruct of rq/.../rr/... topics, with rmw_cyclonedds_cpp's request header
 WIRE = {

@@ -15,8 +15,10 @@ import llfsm.msgs.turtlesim.msg as _classes
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<BBB")
-_S1 = _Struct("<fffff")
+_S0 = _Struct("<4sBBB")
+_S1 = _Struct("<BBB")
+_S2 = _Struct("<4sfffff")
+_S3 = _Struct("<fffff")
 
 
 # -- turtlesim/msg/Color
@@ -40,24 +42,26 @@ def _mk_Color(a0, a1, a2):
 
 
 def _cdr_Color(m):
-    return _HDR + _S0.pack(m._r, m._g, m._b)
+    return _S0.pack(_HDR, m._r, m._g, m._b)
 
 
 def _msg_Color(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 3
-    return _mk_Color(t1[0], t1[1], t1[2]), o
+    m = _mk_Color(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _enc_Color(m, b):
-    b += _S0.pack(m._r, m._g, m._b)
+    b += _S1.pack(m._r, m._g, m._b)
 
 
 def _dec_Color(d, o):
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S1.unpack_from(d, o)
     o += 3
-    return _mk_Color(t1[0], t1[1], t1[2]), o
+    m = _mk_Color(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _to_Color(m):
@@ -97,30 +101,34 @@ def _mk_Pose(a0, a1, a2, a3, a4):
 
 
 def _cdr_Pose(m):
-    return _HDR + _S1.pack(m._x, m._y, m._theta, m._linear_velocity, m._angular_velocity)
+    return _S2.pack(_HDR, m._x, m._y, m._theta, m._linear_velocity, m._angular_velocity)
 
 
 def _msg_Pose(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 20
-    return _mk_Pose(t1[0], t1[1], t1[2], t1[3], t1[4]), o
+    m = _mk_Pose(t1[0], t1[1], t1[2], t1[3], t1[4])
+    return m, o
 
 
 def _enc_Pose(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(m._x, m._y, m._theta, m._linear_velocity, m._angular_velocity)
+    b += _S3.pack(m._x, m._y, m._theta, m._linear_velocity, m._angular_velocity)
 
 
 def _dec_Pose(d, o):
     o += (4 - o) & 3
-    t1 = _S1.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 20
-    return _mk_Pose(t1[0], t1[1], t1[2], t1[3], t1[4]), o
+    m = _mk_Pose(t1[0], t1[1], t1[2], t1[3], t1[4])
+    return m, o
 
 
 def _to_Pose(m):
-    return Pose_(x=m._x, y=m._y, theta=m._theta, linear_velocity=m._linear_velocity, angular_velocity=m._angular_velocity)
+    return Pose_(
+        x=m._x, y=m._y, theta=m._theta, linear_velocity=m._linear_velocity, angular_velocity=m._angular_velocity
+    )
 
 
 def _from_Pose(s):

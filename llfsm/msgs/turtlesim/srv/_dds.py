@@ -16,11 +16,15 @@ _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<I")
-_S1 = _Struct("<B")
-_S2 = _Struct("<BBBBB")
-_S3 = _Struct("<fffI")
-_S4 = _Struct("<fff")
-_S5 = _Struct("<ff")
+_S1 = _Struct("<4sB")
+_S2 = _Struct("<B")
+_S3 = _Struct("<4sBBBBB")
+_S4 = _Struct("<BBBBB")
+_S5 = _Struct("<fffI")
+_S6 = _Struct("<4sfff")
+_S7 = _Struct("<fff")
+_S8 = _Struct("<4sff")
+_S9 = _Struct("<ff")
 
 
 # -- turtlesim/srv/Kill_Request
@@ -64,7 +68,8 @@ def _msg_Kill_Request(d):
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Kill_Request(s3), o
+    m = _mk_Kill_Request(s3)
+    return m, o
 
 
 def _enc_Kill_Request(m, b):
@@ -82,7 +87,8 @@ def _dec_Kill_Request(d, o):
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Kill_Request(s3), o
+    m = _mk_Kill_Request(s3)
+    return m, o
 
 
 def _to_Kill_Request(m):
@@ -120,22 +126,24 @@ def _mk_Kill_Response():
 
 
 def _cdr_Kill_Response(m):
-    return _HDR + _S1.pack(0)
+    return _S1.pack(_HDR, 0)
 
 
 def _msg_Kill_Response(d):
     o = 4
     o += 1
-    return _mk_Kill_Response(), o
+    m = _mk_Kill_Response()
+    return m, o
 
 
 def _enc_Kill_Response(m, b):
-    b += _S1.pack(0)
+    b += _S2.pack(0)
 
 
 def _dec_Kill_Response(d, o):
     o += 1
-    return _mk_Kill_Response(), o
+    m = _mk_Kill_Response()
+    return m, o
 
 
 def _to_Kill_Response(m):
@@ -185,24 +193,26 @@ def _mk_SetPen_Request(a0, a1, a2, a3, a4):
 
 
 def _cdr_SetPen_Request(m):
-    return _HDR + _S2.pack(m._r, m._g, m._b, m._width, m._off)
+    return _S3.pack(_HDR, m._r, m._g, m._b, m._width, m._off)
 
 
 def _msg_SetPen_Request(d):
     o = 4
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 5
-    return _mk_SetPen_Request(t1[0], t1[1], t1[2], t1[3], t1[4]), o
+    m = _mk_SetPen_Request(t1[0], t1[1], t1[2], t1[3], t1[4])
+    return m, o
 
 
 def _enc_SetPen_Request(m, b):
-    b += _S2.pack(m._r, m._g, m._b, m._width, m._off)
+    b += _S4.pack(m._r, m._g, m._b, m._width, m._off)
 
 
 def _dec_SetPen_Request(d, o):
-    t1 = _S2.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 5
-    return _mk_SetPen_Request(t1[0], t1[1], t1[2], t1[3], t1[4]), o
+    m = _mk_SetPen_Request(t1[0], t1[1], t1[2], t1[3], t1[4])
+    return m, o
 
 
 def _to_SetPen_Request(m):
@@ -244,22 +254,24 @@ def _mk_SetPen_Response():
 
 
 def _cdr_SetPen_Response(m):
-    return _HDR + _S1.pack(0)
+    return _S1.pack(_HDR, 0)
 
 
 def _msg_SetPen_Response(d):
     o = 4
     o += 1
-    return _mk_SetPen_Response(), o
+    m = _mk_SetPen_Response()
+    return m, o
 
 
 def _enc_SetPen_Response(m, b):
-    b += _S1.pack(0)
+    b += _S2.pack(0)
 
 
 def _dec_SetPen_Response(d, o):
     o += 1
-    return _mk_SetPen_Response(), o
+    m = _mk_SetPen_Response()
+    return m, o
 
 
 def _to_SetPen_Response(m):
@@ -308,7 +320,7 @@ def _mk_Spawn_Request(a0, a1, a2, a3):
 def _cdr_Spawn_Request(m):
     b = bytearray(_HDR)
     s1 = m._name.encode()
-    b += _S3.pack(m._x, m._y, m._theta, len(s1) + 1)
+    b += _S5.pack(m._x, m._y, m._theta, len(s1) + 1)
     b += s1
     b.append(0)
     return bytes(b)
@@ -316,30 +328,32 @@ def _cdr_Spawn_Request(m):
 
 def _msg_Spawn_Request(d):
     o = 4
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S5.unpack_from(d, o)
     o += 16
     n2 = t1[3]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Spawn_Request(t1[0], t1[1], t1[2], s3), o
+    m = _mk_Spawn_Request(t1[0], t1[1], t1[2], s3)
+    return m, o
 
 
 def _enc_Spawn_Request(m, b):
     b += _Z[(4 - len(b)) & 3]
     s1 = m._name.encode()
-    b += _S3.pack(m._x, m._y, m._theta, len(s1) + 1)
+    b += _S5.pack(m._x, m._y, m._theta, len(s1) + 1)
     b += s1
     b.append(0)
 
 
 def _dec_Spawn_Request(d, o):
     o += (4 - o) & 3
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S5.unpack_from(d, o)
     o += 16
     n2 = t1[3]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Spawn_Request(t1[0], t1[1], t1[2], s3), o
+    m = _mk_Spawn_Request(t1[0], t1[1], t1[2], s3)
+    return m, o
 
 
 def _to_Spawn_Request(m):
@@ -396,7 +410,8 @@ def _msg_Spawn_Response(d):
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Spawn_Response(s3), o
+    m = _mk_Spawn_Response(s3)
+    return m, o
 
 
 def _enc_Spawn_Response(m, b):
@@ -414,7 +429,8 @@ def _dec_Spawn_Response(d, o):
     n2 = t1[0]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
     o += n2
-    return _mk_Spawn_Response(s3), o
+    m = _mk_Spawn_Response(s3)
+    return m, o
 
 
 def _to_Spawn_Response(m):
@@ -459,26 +475,28 @@ def _mk_TeleportAbsolute_Request(a0, a1, a2):
 
 
 def _cdr_TeleportAbsolute_Request(m):
-    return _HDR + _S4.pack(m._x, m._y, m._theta)
+    return _S6.pack(_HDR, m._x, m._y, m._theta)
 
 
 def _msg_TeleportAbsolute_Request(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S7.unpack_from(d, o)
     o += 12
-    return _mk_TeleportAbsolute_Request(t1[0], t1[1], t1[2]), o
+    m = _mk_TeleportAbsolute_Request(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _enc_TeleportAbsolute_Request(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(m._x, m._y, m._theta)
+    b += _S7.pack(m._x, m._y, m._theta)
 
 
 def _dec_TeleportAbsolute_Request(d, o):
     o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S7.unpack_from(d, o)
     o += 12
-    return _mk_TeleportAbsolute_Request(t1[0], t1[1], t1[2]), o
+    m = _mk_TeleportAbsolute_Request(t1[0], t1[1], t1[2])
+    return m, o
 
 
 def _to_TeleportAbsolute_Request(m):
@@ -518,22 +536,24 @@ def _mk_TeleportAbsolute_Response():
 
 
 def _cdr_TeleportAbsolute_Response(m):
-    return _HDR + _S1.pack(0)
+    return _S1.pack(_HDR, 0)
 
 
 def _msg_TeleportAbsolute_Response(d):
     o = 4
     o += 1
-    return _mk_TeleportAbsolute_Response(), o
+    m = _mk_TeleportAbsolute_Response()
+    return m, o
 
 
 def _enc_TeleportAbsolute_Response(m, b):
-    b += _S1.pack(0)
+    b += _S2.pack(0)
 
 
 def _dec_TeleportAbsolute_Response(d, o):
     o += 1
-    return _mk_TeleportAbsolute_Response(), o
+    m = _mk_TeleportAbsolute_Response()
+    return m, o
 
 
 def _to_TeleportAbsolute_Response(m):
@@ -574,26 +594,28 @@ def _mk_TeleportRelative_Request(a0, a1):
 
 
 def _cdr_TeleportRelative_Request(m):
-    return _HDR + _S5.pack(m._linear, m._angular)
+    return _S8.pack(_HDR, m._linear, m._angular)
 
 
 def _msg_TeleportRelative_Request(d):
     o = 4
-    t1 = _S5.unpack_from(d, o)
+    t1 = _S9.unpack_from(d, o)
     o += 8
-    return _mk_TeleportRelative_Request(t1[0], t1[1]), o
+    m = _mk_TeleportRelative_Request(t1[0], t1[1])
+    return m, o
 
 
 def _enc_TeleportRelative_Request(m, b):
     b += _Z[(4 - len(b)) & 3]
-    b += _S5.pack(m._linear, m._angular)
+    b += _S9.pack(m._linear, m._angular)
 
 
 def _dec_TeleportRelative_Request(d, o):
     o += (4 - o) & 3
-    t1 = _S5.unpack_from(d, o)
+    t1 = _S9.unpack_from(d, o)
     o += 8
-    return _mk_TeleportRelative_Request(t1[0], t1[1]), o
+    m = _mk_TeleportRelative_Request(t1[0], t1[1])
+    return m, o
 
 
 def _to_TeleportRelative_Request(m):
@@ -632,22 +654,24 @@ def _mk_TeleportRelative_Response():
 
 
 def _cdr_TeleportRelative_Response(m):
-    return _HDR + _S1.pack(0)
+    return _S1.pack(_HDR, 0)
 
 
 def _msg_TeleportRelative_Response(d):
     o = 4
     o += 1
-    return _mk_TeleportRelative_Response(), o
+    m = _mk_TeleportRelative_Response()
+    return m, o
 
 
 def _enc_TeleportRelative_Response(m, b):
-    b += _S1.pack(0)
+    b += _S2.pack(0)
 
 
 def _dec_TeleportRelative_Response(d, o):
     o += 1
-    return _mk_TeleportRelative_Response(), o
+    m = _mk_TeleportRelative_Response()
+    return m, o
 
 
 def _to_TeleportRelative_Response(m):
@@ -661,16 +685,96 @@ def _from_TeleportRelative_Response(s):
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
 CODECS = {
-    "Kill_Request": (Kill_Request_, _cdr_Kill_Request, _msg_Kill_Request, _to_Kill_Request, _from_Kill_Request, _enc_Kill_Request, _dec_Kill_Request),
-    "Kill_Response": (Kill_Response_, _cdr_Kill_Response, _msg_Kill_Response, _to_Kill_Response, _from_Kill_Response, _enc_Kill_Response, _dec_Kill_Response),
-    "SetPen_Request": (SetPen_Request_, _cdr_SetPen_Request, _msg_SetPen_Request, _to_SetPen_Request, _from_SetPen_Request, _enc_SetPen_Request, _dec_SetPen_Request),
-    "SetPen_Response": (SetPen_Response_, _cdr_SetPen_Response, _msg_SetPen_Response, _to_SetPen_Response, _from_SetPen_Response, _enc_SetPen_Response, _dec_SetPen_Response),
-    "Spawn_Request": (Spawn_Request_, _cdr_Spawn_Request, _msg_Spawn_Request, _to_Spawn_Request, _from_Spawn_Request, _enc_Spawn_Request, _dec_Spawn_Request),
-    "Spawn_Response": (Spawn_Response_, _cdr_Spawn_Response, _msg_Spawn_Response, _to_Spawn_Response, _from_Spawn_Response, _enc_Spawn_Response, _dec_Spawn_Response),
-    "TeleportAbsolute_Request": (TeleportAbsolute_Request_, _cdr_TeleportAbsolute_Request, _msg_TeleportAbsolute_Request, _to_TeleportAbsolute_Request, _from_TeleportAbsolute_Request, _enc_TeleportAbsolute_Request, _dec_TeleportAbsolute_Request),
-    "TeleportAbsolute_Response": (TeleportAbsolute_Response_, _cdr_TeleportAbsolute_Response, _msg_TeleportAbsolute_Response, _to_TeleportAbsolute_Response, _from_TeleportAbsolute_Response, _enc_TeleportAbsolute_Response, _dec_TeleportAbsolute_Response),
-    "TeleportRelative_Request": (TeleportRelative_Request_, _cdr_TeleportRelative_Request, _msg_TeleportRelative_Request, _to_TeleportRelative_Request, _from_TeleportRelative_Request, _enc_TeleportRelative_Request, _dec_TeleportRelative_Request),
-    "TeleportRelative_Response": (TeleportRelative_Response_, _cdr_TeleportRelative_Response, _msg_TeleportRelative_Response, _to_TeleportRelative_Response, _from_TeleportRelative_Response, _enc_TeleportRelative_Response, _dec_TeleportRelative_Response),
+    "Kill_Request": (
+        Kill_Request_,
+        _cdr_Kill_Request,
+        _msg_Kill_Request,
+        _to_Kill_Request,
+        _from_Kill_Request,
+        _enc_Kill_Request,
+        _dec_Kill_Request,
+    ),
+    "Kill_Response": (
+        Kill_Response_,
+        _cdr_Kill_Response,
+        _msg_Kill_Response,
+        _to_Kill_Response,
+        _from_Kill_Response,
+        _enc_Kill_Response,
+        _dec_Kill_Response,
+    ),
+    "SetPen_Request": (
+        SetPen_Request_,
+        _cdr_SetPen_Request,
+        _msg_SetPen_Request,
+        _to_SetPen_Request,
+        _from_SetPen_Request,
+        _enc_SetPen_Request,
+        _dec_SetPen_Request,
+    ),
+    "SetPen_Response": (
+        SetPen_Response_,
+        _cdr_SetPen_Response,
+        _msg_SetPen_Response,
+        _to_SetPen_Response,
+        _from_SetPen_Response,
+        _enc_SetPen_Response,
+        _dec_SetPen_Response,
+    ),
+    "Spawn_Request": (
+        Spawn_Request_,
+        _cdr_Spawn_Request,
+        _msg_Spawn_Request,
+        _to_Spawn_Request,
+        _from_Spawn_Request,
+        _enc_Spawn_Request,
+        _dec_Spawn_Request,
+    ),
+    "Spawn_Response": (
+        Spawn_Response_,
+        _cdr_Spawn_Response,
+        _msg_Spawn_Response,
+        _to_Spawn_Response,
+        _from_Spawn_Response,
+        _enc_Spawn_Response,
+        _dec_Spawn_Response,
+    ),
+    "TeleportAbsolute_Request": (
+        TeleportAbsolute_Request_,
+        _cdr_TeleportAbsolute_Request,
+        _msg_TeleportAbsolute_Request,
+        _to_TeleportAbsolute_Request,
+        _from_TeleportAbsolute_Request,
+        _enc_TeleportAbsolute_Request,
+        _dec_TeleportAbsolute_Request,
+    ),
+    "TeleportAbsolute_Response": (
+        TeleportAbsolute_Response_,
+        _cdr_TeleportAbsolute_Response,
+        _msg_TeleportAbsolute_Response,
+        _to_TeleportAbsolute_Response,
+        _from_TeleportAbsolute_Response,
+        _enc_TeleportAbsolute_Response,
+        _dec_TeleportAbsolute_Response,
+    ),
+    "TeleportRelative_Request": (
+        TeleportRelative_Request_,
+        _cdr_TeleportRelative_Request,
+        _msg_TeleportRelative_Request,
+        _to_TeleportRelative_Request,
+        _from_TeleportRelative_Request,
+        _enc_TeleportRelative_Request,
+        _dec_TeleportRelative_Request,
+    ),
+    "TeleportRelative_Response": (
+        TeleportRelative_Response_,
+        _cdr_TeleportRelative_Response,
+        _msg_TeleportRelative_Response,
+        _to_TeleportRelative_Response,
+        _from_TeleportRelative_Response,
+        _enc_TeleportRelative_Response,
+        _dec_TeleportRelative_Response,
+    ),
 }
 # name -> the IdlStruct of rq/.../rr/... topics, with rmw_cyclonedds_cpp's request header
 WIRE = {
