@@ -337,3 +337,38 @@ def test_service_call_gets_an_answer_from_an_rclpy_service(netns: NetNamespace) 
     r = llfsm(netns, "service", "call", "/do_it", "std_srvs/srv/Trigger", "--timeout", "20")
     assert r.status == 0, r.stderr
     assert r.stdout.endswith("response:\nstd_srvs.srv.Trigger_Response(success=True, message='done by rclpy')\n\n")
+
+
+LATE_TALKER = textwrap.dedent(
+    """
+    import time
+    from llfsm import ros
+    from llfsm.ros.transports.dds import DdsTransport
+    from llfsm.runtime.context import RunContext, activate
+    from llfsm.msgs.std_msgs.msg import String
+    ctx = RunContext(); ctx.extras["transport"] = DdsTransport(); activate(ctx)
+    ros.init()
+    node = ros.Node("late_talker")
+    pub = node.create_publisher(String, "/late", 10)
+    start = time.monotonic()
+    while time.monotonic() < start + 60:
+        if time.monotonic() > start + 4:  # publishes rarely: first after 4 s, then every 2 s
+            pub.publish(String(data="at last"))
+            start += 2
+        ros.spin_once(node, timeout_sec=0.1)
+    """
+)
+
+
+def test_streaming_echo_waits_for_a_publisher_that_is_there(netns: NetNamespace) -> None:
+    """--timeout bounds the search for something to echo; once a publisher is matched, echo
+    without --once waits for its messages as ros2 does, however rare they are."""
+    start_python(netns, LATE_TALKER)
+    wait_for(netns, "topic", "list", needle="/late")
+    p = netns.popen([sys.executable, "-m", "llfsm", "topic", "echo", "/late", "--timeout", "1"], cwd=REPO)
+    assert p.stdout is not None
+    lines = [p.stdout.readline() for _ in range(2)]
+    p.send_signal(signal.SIGINT)
+    status, _, err = finish(p, 20)
+    assert lines == ["data: at last\n", "---\n"], err
+    assert status == 130

@@ -220,8 +220,10 @@ def echo(
     timeout: float = 5.0,
     out: TextIO | None = None,
 ) -> None:
-    """`ros2 topic echo`: print each message; with `once`, the first one only.  Nothing within
-    `timeout` seconds (no such topic, or no message) ends with exit status 1."""
+    """`ros2 topic echo`: print each message; with `once`, the first one only.  Exit status 1
+    when nothing is there within `timeout` seconds: no such topic (without TYPE), no message
+    (with `once`), or neither a publisher nor a message (streaming: a topic whose publisher is
+    there may publish rarely, and echo then waits as ros2 does)."""
     out = out or sys.stdout
     name = full_name(topic)
     use_working_directory()
@@ -244,10 +246,12 @@ def echo(
         types = _types()
         reader = _reader(graph, f"rt{name}", types.dds_type(cls), _qos(reliable, transient, ECHO_DEPTH))
         waiter = _Waiter(graph, reader)
-        received = False
+        patient = False  # a message was printed, or (streaming) a publisher is there: wait on
         while True:
-            left = timeout - (time.monotonic() - started) if not received else 1.0
-            if not received and left <= 0:
+            if not patient and not once and reader.get_subscription_matched_status().current_count:
+                patient = True  # as ros2: a topic that is there may publish rarely
+            left = 1.0 if patient else timeout - (time.monotonic() - started)
+            if left <= 0:
                 raise CliError(f"no message on '{name}' within {timeout:g} s ({where()})", NOT_FOUND)
             if not waiter.wait(left):
                 continue
@@ -258,7 +262,7 @@ def echo(
                 msg = types.from_dds(sample, cls)
                 out.write(format_message(msg, path or [], truncate_length, no_arr, no_str))
                 out.flush()
-                received = True
+                patient = True
                 if once:
                     return
     finally:
@@ -411,8 +415,12 @@ def hz(
             now = time.monotonic()
             if now >= end:
                 return
-            if meter.last_ns is None and now - started >= timeout:
-                raise CliError(f"no message on '{name}' within {timeout:g} s ({where()})", NOT_FOUND)
+            if (
+                meter.last_ns is None
+                and now - started >= timeout
+                and not reader.get_subscription_matched_status().current_count
+            ):
+                raise CliError(f"no publisher of '{name}' matched within {timeout:g} s ({where()})", NOT_FOUND)
             if waiter.wait(min(next_print, end) - now):
                 for sample in reader.take(N=256):
                     info = getattr(sample, "sample_info", None)
