@@ -24,6 +24,9 @@ from conftest import MACHINES, REPO, Run
 from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
 from interop.ros2env import ROS_PYTHON, ros_installed
 
+from llfsm.msgs import _dds
+from llfsm.msgs.geometry_msgs.msg import Twist
+
 
 def llfsm(ns: NetNamespace, *args: str | os.PathLike[str], timeout: float = 60) -> Run:
     """`llfsm ARGS` in the namespace, to its end."""
@@ -101,7 +104,14 @@ def test_lists_show_what_a_turtlesim_run_has(netns: NetNamespace) -> None:
     assert "/spawn" in llfsm(netns, "service", "list").stdout.splitlines()
     r = llfsm(netns, "topic", "info", "/turtle1/cmd_vel", "-v")
     assert r.stdout.startswith("Type: geometry_msgs/msg/Twist\n\nPublisher count: 0\n\nSubscription count: 1\n\n")
-    assert "Node name: turtlesim\nNode namespace: /\n" in r.stdout
+    endpoint = [
+        "Node name: turtlesim",
+        "Node namespace: /",
+        "Topic type: geometry_msgs/msg/Twist",
+        f"Topic type hash: {_dds.type_hash(Twist)}",
+        "Endpoint type: SUBSCRIPTION",
+    ]
+    assert "\n".join(endpoint) + "\n" in r.stdout
     assert "  Reliability: RELIABLE\n  History (Depth): KEEP_LAST" in r.stdout
 
 

@@ -90,6 +90,7 @@ def topic_info(graph: Graph, name: str, *, verbose: bool = False) -> str:
                 f"Node name: {node.name if node else '_NODE_NAME_UNKNOWN_'}",
                 f"Node namespace: {node.namespace if node else '_NODE_NAMESPACE_UNKNOWN_'}",
                 f"Topic type: {message_type(e.type_name)}",
+                f"Topic type hash: {e.type_hash}",
                 f"Endpoint type: {'PUBLISHER' if kind == 'publisher' else 'SUBSCRIPTION'}",
                 f"GID: {'.'.join(f'{b:02x}' for b in e.gid)}",
                 "QoS profile:",

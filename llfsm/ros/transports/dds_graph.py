@@ -94,6 +94,15 @@ class Endpoint:
         return isinstance(self.qos[Policy.Reliability], Policy.Reliability.Reliable)
 
     @property
+    def type_hash(self) -> str:
+        """The RIHS01 type hash that rmw (Iron and later) puts in USER_DATA, or 'INVALID' as
+        rclpy says when there is none (Humble's peers, non-ROS writers)."""
+        from .dds import _user_data_key
+
+        value = _user_data_key(self.qos, "typehash")
+        return value if value and value.startswith("RIHS") else "INVALID"
+
+    @property
     def transient_local(self) -> bool:
         from cyclonedds.qos import Policy
 
@@ -299,7 +308,7 @@ def describe_qos(qos: Any) -> list[str]:
         Policy.Durability.Transient: "TRANSIENT",
         Policy.Durability.Persistent: "PERSISTENT",
     }.get(dur, "VOLATILE")
-    history = f"KEEP_LAST ({hist.depth})" if isinstance(hist, Policy.History.KeepLast) else "KEEP_ALL (0)"
+    history = f"KEEP_LAST ({hist.depth})" if isinstance(hist, Policy.History.KeepLast) else "KEEP_ALL"
     liveliness = "AUTOMATIC"
     lease = INFINITE_NS
     if live is not None:
