@@ -164,6 +164,8 @@ def test_types_resolve_in_both_spellings() -> None:
         (message_class, "geometry_msgs/msg/twist", "expected pkg/msg/Name"),
         (message_class, "geometry_msgs/msg/Pos", "did you mean 'geometry_msgs/msg/Pose'?"),
         (message_class, "_yaml/msg/Thing", "expected pkg/msg/Name"),  # never llfsm.msgs' own modules
+        (message_class, "std_srvs/msg/Trigger", "('std_srvs/srv/Trigger' is a service type)"),
+        (service_class, "std_msgs/String", "('std_msgs/msg/String' is a message type)"),
     ],
 )
 def test_bad_types_are_usage_errors(call: object, text: str, needle: str) -> None:

@@ -92,6 +92,12 @@ def known_types(kind: str) -> list[str]:
 
 def _unknown(text: str, kind: str) -> CliError:
     name = "message" if kind == "msg" else "service"
+    parts = text.split("/")
+    other = "srv" if kind == "msg" else "msg"
+    twin = f"{parts[0]}/{other}/{parts[-1]}"
+    if len(parts) in (2, 3) and twin in known_types(other):  # std_srvs/msg/Trigger: the kind is wrong
+        what = "a service" if other == "srv" else "a message"
+        return CliError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
     candidates = known_types(kind)
     close = difflib.get_close_matches(text, candidates, n=1, cutoff=0.6)
     if not close:  # "Twist", "geometry_msgs/twist": match on the name alone
@@ -107,7 +113,7 @@ def _import(pkg: str, kind: str, name: str, text: str) -> object:
     try:
         module = importlib.import_module(f"llfsm.msgs.{pkg}.{kind}")
     except ModuleNotFoundError as e:
-        if e.name is not None and f"llfsm.msgs.{pkg}".startswith(e.name):
+        if e.name is not None and e.name.startswith(f"llfsm.msgs.{pkg}"):  # no such package, or no msg/srv in it
             raise _unknown(text, kind) from None
         raise CliError(f"{text}: {e}") from None
     except ImportError as e:  # a user's definition that does not compile: file and line
