@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from ..ros.transports.dds_graph import Graph
 
 NOT_FOUND = 1
-NEEDS_CYCLONEDDS = "the ros2-style verbs speak DDS and need the cyclonedds package ({}): pip install 'llfsm[dds]'"
+NEEDS_CYCLONEDDS = "the ros2-style verbs speak DDS through the cyclonedds package, which does not load here ({})"
 
 
 def open_graph() -> Graph:
