@@ -20,7 +20,7 @@ from llfsm.msgs.std_msgs.msg import Float64MultiArray, String
 from llfsm.msgs.turtlesim.srv import Spawn
 from llfsm.ros2cli import CliError
 from llfsm.ros2cli.interfaces import known_types, message_class, service_class, show
-from llfsm.ros2cli.verbs import RateMeter, format_message
+from llfsm.ros2cli.verbs import RateMeter, format_message, rate_table
 
 # -- interface show --------------------------------------------------------------------------------
 
@@ -288,3 +288,18 @@ def test_hz_window_keeps_the_last_gaps() -> None:
         meter.tick(t)
     assert meter.report().endswith("window: 2\n")  # type: ignore[union-attr]
     assert meter.report() is None
+
+
+def test_hz_of_several_topics_is_ros2s_table() -> None:
+    slow, fast = RateMeter(), RateMeter()
+    for t in (0, 100_000_000, 200_000_000):
+        slow.tick(t)
+    for t in (0, 16_000_000, 32_000_000, 48_000_000):
+        fast.tick(t)
+    assert rate_table({"/turtle1/pose": fast, "/chatter": slow}) == (
+        "    topic        rate    min_delta   max_delta   std_dev   window\n"
+        "=================================================================\n"
+        "/turtle1/pose   62.500   0.016       0.016       0.00000   3     \n"
+        "/chatter        10.000   0.100       0.100       0.00000   2     \n\n"
+    )
+    assert rate_table({"/turtle1/pose": fast, "/chatter": slow}) is None  # nothing new since

@@ -159,6 +159,10 @@ def test_topic_hz_prints_rate_statistics(netns: NetNamespace) -> None:
     )
     assert reports, r.stdout
     assert float(reports[-1][0]) > 0 and int(reports[-1][1]) > 1
+    r = llfsm(netns, "topic", "hz", "/turtle1/pose", "/turtle1/color_sensor", "--duration", "3")
+    assert r.status == 0, r.stderr
+    assert r.stdout.startswith("Subscribed to [/turtle1/pose]\nSubscribed to [/turtle1/color_sensor]\n")
+    assert re.search(r"^ +topic +rate +min_delta +max_delta +std_dev +window\n=+\n/turtle1/pose +\d", r.stdout, re.M)
 
 
 @needs_run_dds

@@ -189,15 +189,15 @@ def pub(
 
 
 @topic.command()
-@click.argument("topic_name", metavar="TOPIC")
+@click.argument("topic_names", metavar="TOPIC...", nargs=-1, required=True)
 @click.option(
     "-w", "--window", type=click.IntRange(min=1), default=10000, show_default=True, help="Messages to average over."
 )
 @click.option("--duration", type=float, callback=positive, help="Stop after this many seconds (default: until Ctrl-C).")
 @timeout_option
 @verb
-def hz(topic_name: str, window: int, duration: float | None, timeout: float) -> None:
-    """Print the average publishing rate of a topic every second."""
+def hz(topic_names: tuple[str, ...], window: int, duration: float | None, timeout: float) -> None:
+    """Print the average publishing rate of topics every second (a table for several)."""
     from ..ros2cli.verbs import hz as run_hz
 
-    run_hz(topic_name, window=window, duration=duration, timeout=timeout)
+    run_hz(list(topic_names), window=window, duration=duration, timeout=timeout)

@@ -138,14 +138,15 @@ def _node(name: str) -> Iterator[tuple[Node, Graph]]:
 
 
 class _Waiter:
-    """Blocks until a reader has data, at most a given time (a wait set: no polling)."""
+    """Blocks until one of the readers has data, at most a given time (a wait set: no polling)."""
 
-    def __init__(self, graph: Graph, reader: Any) -> None:
+    def __init__(self, graph: Graph, *readers: Any) -> None:
         from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 
         self.waitset = WaitSet(graph.participant)
-        self.condition = ReadCondition(reader, SampleState.NotRead | ViewState.Any | InstanceState.Any)
-        self.waitset.attach(self.condition)
+        self.conditions = [ReadCondition(r, SampleState.NotRead | ViewState.Any | InstanceState.Any) for r in readers]
+        for c in self.conditions:
+            self.waitset.attach(c)
 
     def wait(self, seconds: float) -> bool:
         return self.waitset.wait(max(0, int(seconds * 1e9))) > 0
@@ -375,8 +376,9 @@ class RateMeter:
                 del self.gaps[0]
         self.last_ns = now_ns
 
-    def report(self) -> str | None:
-        """The text ros2 prints each second, or None with nothing new to say."""
+    def stats(self) -> tuple[float, float, float, float, int] | None:
+        """(rate in Hz, min, max and standard deviation of the gaps in s, window), or None when
+        there is nothing new since the last call."""
         if not self.gaps or self.last_ns == self._printed_at:
             return None
         self._printed_at = self.last_ns
@@ -384,50 +386,78 @@ class RateMeter:
         mean = sum(self.gaps) / n
         rate = 1e9 / mean if mean > 0 else 0.0
         std = math.sqrt(sum((g - mean) ** 2 for g in self.gaps) / n)
-        return (
-            f"average rate: {rate:.3f}\n\tmin: {min(self.gaps) * 1e-9:.3f}s max: {max(self.gaps) * 1e-9:.3f}s "
-            f"std dev: {std * 1e-9:.5f}s window: {n}\n"
-        )
+        return rate, min(self.gaps) * 1e-9, max(self.gaps) * 1e-9, std * 1e-9, n
+
+    def report(self) -> str | None:
+        """The text ros2 prints each second for one topic, or None with nothing new to say."""
+        s = self.stats()
+        if s is None:
+            return None
+        rate, lo, hi, std, n = s
+        return f"average rate: {rate:.3f}\n\tmin: {lo:.3f}s max: {hi:.3f}s std dev: {std:.5f}s window: {n}\n"
+
+
+def rate_table(meters: dict[str, RateMeter]) -> str | None:
+    """What ros2 topic hz prints each second for several topics: a table, one row per topic
+    with something new, or None."""
+    header = ["topic", "rate", "min_delta", "max_delta", "std_dev", "window"]
+    rows = []
+    for topic, meter in meters.items():
+        s = meter.stats()
+        if s is not None:
+            rate, lo, hi, std, n = s
+            rows.append([topic, f"{rate:.3f}", f"{lo:.3f}", f"{hi:.3f}", f"{std:.5f}", str(n)])
+    if not rows:
+        return None
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
+    head = "   ".join(h.center(w) for h, w in zip(header, widths, strict=True))
+    line = "=" * (sum(widths) + 3 * (len(header) - 1))
+    body = "\n".join("   ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in rows)
+    return f"{head}\n{line}\n{body}\n\n"
 
 
 def hz(
-    topic: str,
+    topics: str | list[str],
     *,
     window: int = 10000,
     duration: float | None = None,
     timeout: float = 5.0,
     out: TextIO | None = None,
 ) -> None:
-    """`ros2 topic hz`: the publishing rate every second, until interrupted or `duration` ends."""
+    """`ros2 topic hz`: the publishing rate every second (a table for several topics), until
+    interrupted or `duration` ends."""
     out = out or sys.stdout
-    name = full_name(topic)
+    names = list(dict.fromkeys(full_name(t) for t in ([topics] if isinstance(topics, str) else topics)))
     use_working_directory()
     graph = open_graph()
     try:
         started = time.monotonic()
-        cls = _class_of_topic(name, wait_for_topic_types(graph, name, timeout))
-        reader = _reader(graph, f"rt{name}", _types().dds_type(cls), _qos(False, False, ECHO_DEPTH))
-        waiter = _Waiter(graph, reader)
-        meter = RateMeter(window)
+        readers = {}
+        for name in names:
+            left = max(0.0, timeout - (time.monotonic() - started))
+            cls = _class_of_topic(name, wait_for_topic_types(graph, name, left))
+            readers[name] = _reader(graph, f"rt{name}", _types().dds_type(cls), _qos(False, False, ECHO_DEPTH))
+            if len(names) > 1:
+                out.write(f"Subscribed to [{name}]\n")
+        waiter = _Waiter(graph, *readers.values())
+        meters = {name: RateMeter(window) for name in names}
         next_print = time.monotonic() + 1.0
         end = started + duration if duration else math.inf
         while True:
             now = time.monotonic()
             if now >= end:
                 return
-            if (
-                meter.last_ns is None
-                and now - started >= timeout
-                and not reader.get_subscription_matched_status().current_count
-            ):
-                raise CliError(f"no publisher of '{name}' matched within {timeout:g} s ({where()})", NOT_FOUND)
+            if now - started >= timeout:
+                for name, reader in readers.items():
+                    if meters[name].last_ns is None and not reader.get_subscription_matched_status().current_count:
+                        raise CliError(f"no publisher of '{name}' matched within {timeout:g} s ({where()})", NOT_FOUND)
             if waiter.wait(min(next_print, end) - now):
-                for sample in reader.take(N=256):
-                    info = getattr(sample, "sample_info", None)
-                    if info is None or info.valid_data:
-                        meter.tick(time.monotonic_ns())
+                for name, reader in readers.items():
+                    for sample in reader.take(N=256):
+                        if sample.sample_info.valid_data:
+                            meters[name].tick(time.monotonic_ns())
             if time.monotonic() >= next_print:
-                text = meter.report()
+                text = meters[names[0]].report() if len(names) == 1 else rate_table(meters)
                 if text:
                     out.write(text)
                     out.flush()
