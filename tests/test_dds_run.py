@@ -231,3 +231,58 @@ def test_a_node_on_its_own_runs_for_its_duration_in_process_too() -> None:
 
 if sys.platform != "linux":  # pragma: no cover
     pytestmark = pytest.mark.skip(reason="the DDS tests use Linux network namespaces")
+
+
+WAITER = """\
+ros.init()
+node = ros.Node("patient")
+found = node.create_client(Trigger, "/never").wait_for_service(timeout_sec=120.0)
+node.get_logger().info(f"found={found} ok={ros.ok()}")
+"""
+
+
+def test_ctrl_c_ends_a_long_wait_for_a_service_on_dds(netns: NetNamespace, tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "patient",
+        {"INITIAL": [("END", "not ros.ok()")], "END": None},
+        code={"INITIAL_OnEntry": WAITER},
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_srvs.srv import Trigger\n",
+    )
+    p = netns.llfsm("run", "--transport", "dds", m)
+    interrupt(p, 3.0)
+    t0 = time.monotonic()
+    status, _, err = finish(p, 60)
+    assert time.monotonic() - t0 < 20, "the wait ignored Ctrl-C"
+    assert "found=False ok=False" in err, err
+    assert status == 0 and "Traceback" not in err  # the machine took its `not ros.ok()` to END
+
+
+#: A user's own Cyclone configuration (it comes after llfsm's, so it wins): no multicast at all.
+NO_MULTICAST = {
+    "CYCLONEDDS_URI": "<CycloneDDS><Domain><General><AllowMulticast>false</AllowMulticast></General></Domain>"
+    "</CycloneDDS>"
+}
+
+
+@pytest.mark.parametrize(
+    ("talker_env", "listener_env", "hears"),
+    [
+        ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}, {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}, True),
+        ({**NO_MULTICAST, "ROS_STATIC_PEERS": "127.0.0.1"}, {**NO_MULTICAST, "ROS_STATIC_PEERS": "127.0.0.1"}, True),
+        ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF"}, {}, False),
+        ({"ROS_DOMAIN_ID": "3"}, {"ROS_DOMAIN_ID": "4"}, False),
+    ],
+    ids=["localhost", "user-config-and-static-peer", "off", "other-domain"],
+)
+def test_discovery_follows_the_ros_variables(
+    netns: NetNamespace, talker_env: dict[str, str], listener_env: dict[str, str], hears: bool
+) -> None:
+    listener = netns.llfsm("run", "--transport", "dds", "--echo", "/pingpong", "--duration", "6", env=listener_env)
+    talker = netns.llfsm(
+        "run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "5", env=talker_env
+    )
+    t_status, _, t_err = finish(talker, 30)
+    l_status, out, l_err = finish(listener, 30)
+    assert t_status == 0 and l_status == 0, t_err + l_err
+    assert ("data: The count is" in out) is hears, out + l_err

@@ -222,3 +222,17 @@ def test_nodes_are_announced_on_ros_discovery_info(runs: Callable[[], Run]) -> N
     assert [bytes(g.data) for g in announced.writer_gid_seq] == [pub._remote.writer.get_guid().bytes]
     assert [bytes(g.data) for g in announced.reader_gid_seq] == [sub._remote.reader.get_guid().bytes]
     assert nodes[("/ns", "second")].writer_gid_seq == []
+
+
+def test_wait_for_service_returns_when_the_server_appears_not_at_its_timeout(runs: Callable[[], Run]) -> None:
+    a, b = runs(), runs()
+    with b:
+        node = b.node("client")
+        client = node.create_client(Trigger, "/late")
+        assert not client.service_is_ready()
+    with a:
+        a.node("server").create_service(Trigger, "/late", lambda req, resp: resp)  # a never spins
+    with b:
+        t0 = time.monotonic()
+        assert client.wait_for_service(timeout_sec=20.0)
+    assert time.monotonic() - t0 < 10.0  # woken by the match, not by the timeout

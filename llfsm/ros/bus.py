@@ -236,16 +236,15 @@ class Bus:
         """One piece of work: a due timer, or the oldest queued item; else wait up to timeout_ns
         for the next timer or (with a remote transport) for data from another process (the sim
         clock jumps, the wall clock sleeps).  True if work ran."""
-        if self._poll is not None:
-            self._poll()
+        came = self._poll() if self._poll is not None else False
         now = self.clock.now
         if self.timers and self.timers[0][0] <= now:
             return self._fire_due_timers(now)
         if self.ready:
             self.ready.popleft()._run()
             return True
-        if timeout_ns <= 0:
-            return False
+        if timeout_ns <= 0 or came:
+            return came  # something came in (a PULL message, a match): the caller looks first
         due = self.next_timer_due()
         deadline = now + timeout_ns
         if self._poll is not None:

@@ -219,6 +219,8 @@ class Client:
             return False
         deadline = bus.clock.now + round(timeout_sec * 1e9)
         while bus.clock.now < deadline:
+            if self._remote is not None and not bus.ok():
+                return False  # Ctrl-C while waiting for another process, as rclpy after shutdown
             bus.spin_once(deadline - bus.clock.now)
             if self.service_is_ready():
                 return True

@@ -36,11 +36,13 @@ class RemoteClient(Protocol):
         """A server in another process is matched both ways (its request reader and reply writer)."""
 
     def send(self, request: Message, future: Future) -> None:
-        """Send the request; the future completes when `poll` brings in the reply."""
+        """Send the request; the future completes when `poll` brings in the reply.  Sent while
+        no server is ready, it sets `future._remote = None`: nothing can answer it, and spin
+        calls say TIMEOUT at once, as for a missing server in process."""
 
     def can_still_answer(self, future: Future) -> bool:
-        """False once nothing can ever complete this future (no server when it was sent, or the
-        server went away): spin calls then return TIMEOUT instead of waiting forever."""
+        """False once the server the request went to is gone: spin calls then return TIMEOUT
+        instead of waiting forever."""
 
     def close(self) -> None: ...
 

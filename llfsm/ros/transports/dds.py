@@ -66,10 +66,14 @@ REPLY_PATIENCE_S = 2.0
 #: How long a client trusts its last look at the server's matches (spin calls ask often).
 READY_CACHE_S = 0.05
 TAKE_BATCH = 256
+#: History depth of service endpoints: rmw's default service QoS (keep last 10, reliable, volatile).
+SERVICE_DEPTH = 10
 #: Between rounds that run back to back (no idle sleep), look at the wait set at most this often
 #: (run-clock ns): a round then costs a comparison, and a message waits at most 0.1 ms longer.
 #: Spin calls and the idle sleep look at once.
 POLL_INTERVAL_NS = 100_000
+#: The longest single wait on the wait set (a Ctrl-C is seen when it returns).
+MAX_WAIT_NS = 100_000_000
 
 
 def _write(writer: DataWriter, payload: bytes) -> None:
@@ -197,7 +201,7 @@ class _Writer(_Endpoint):
         self.matched = self.writer.get_publication_matched_status().current_count
 
     def write(self, msg: Message) -> None:
-        if self.matched:  # nobody elsewhere: skip the serialisation (volatile: nothing is kept)
+        if self.matched and not self.t.closed:  # nobody elsewhere: no serialisation (volatile)
             _write(self.writer, self.cdr(msg))
 
     def subscription_count(self) -> int:
@@ -261,18 +265,22 @@ class _Server(_Endpoint):
         self.reader = DataReader(
             t.subscriber_,
             t.topic(f"rq{name}Request", req_type),
-            qos=_qos(1000, user + _type_hash(srv.type.Request), reader=True),
+            qos=_qos(SERVICE_DEPTH, user + _type_hash(srv.type.Request), reader=True),
         )
         self.writer = DataWriter(
-            t.publisher_, t.topic(f"rr{name}Reply", rep_type), qos=_qos(1000, user + _type_hash(srv.type.Response))
+            t.publisher_,
+            t.topic(f"rr{name}Reply", rep_type),
+            qos=_qos(SERVICE_DEPTH, user + _type_hash(srv.type.Response)),
         )
         # Fast DDS clients send the bare request (no header): a reader of that form too, so their
         # calls run (their side effects happen); see docs/transports.md for why they get no answer
         self.bare_reader = DataReader(
-            t.subscriber_, t.topic(f"rq{name}Request", _dds.dds_type(srv.type.Request)), qos=_qos(1000, reader=True)
+            t.subscriber_,
+            t.topic(f"rq{name}Request", _dds.dds_type(srv.type.Request)),
+            qos=_qos(SERVICE_DEPTH, reader=True),
         )
         self.bare_writer = DataWriter(
-            t.publisher_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.type.Response)), qos=_qos(1000)
+            t.publisher_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.type.Response)), qos=_qos(SERVICE_DEPTH)
         )
         self.readers, self.writers = (self.reader, self.bare_reader), (self.writer, self.bare_writer)
         self.cond = ReadCondition(self.reader, ANY)
@@ -366,18 +374,17 @@ class _Client(_Endpoint):
         self.writer = DataWriter(
             t.publisher_,
             t.topic(f"rq{name}Request", _dds.request_type(srv)),
-            qos=_qos(1000, user + _type_hash(srv.Request)),
+            qos=_qos(SERVICE_DEPTH, user + _type_hash(srv.Request)),
         )
         self.reader = DataReader(
             t.subscriber_,
             t.topic(f"rr{name}Reply", _dds.response_type(srv)),
-            qos=_qos(1000, user + _type_hash(srv.Response), reader=True),
+            qos=_qos(SERVICE_DEPTH, user + _type_hash(srv.Response), reader=True),
         )
         self.readers, self.writers = (self.reader,), (self.writer,)
         self.guid = self.writer.get_instance_handle() & U64  # rmw_cyclonedds: the request writer's handle
         self.seq = itertools.count(1)
         self.pending: dict[int, Future] = {}
-        self.unanswerable: set[int] = set()  # futures sent while no server was matched
         self._ready_at = -1.0
         self._ready = False
         #: A Fast DDS server (rmw_fastrtps_cpp) was matched: it wants requests without the header.
@@ -385,6 +392,7 @@ class _Client(_Endpoint):
         self.plain: _PlainClient | None = None
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
+        self.matches = _MatchWatch(self)  # a server coming or going wakes waits at once
         t.add_endpoint(self)
 
     def on_trigger(self) -> None:
@@ -404,6 +412,8 @@ class _Client(_Endpoint):
     def ready(self) -> bool:
         """rmw_cyclonedds_cpp's test: a matched request reader and a matched reply writer of the
         same server (by `serviceid=`), or both matched at all when no server says its id."""
+        if self.t.closed:
+            return False
         now = time.monotonic()
         if now - self._ready_at < READY_CACHE_S:
             return self._ready
@@ -431,7 +441,7 @@ class _Client(_Endpoint):
             # Fast DDS matched our (header) endpoints by name; it talks without the header
             if self.plain is None:
                 self.plain = _PlainClient(self)
-                self.t.add_endpoint(self)  # announce the new reader and writer
+                self.t._dirty = True  # announce the new reader and writer with this client's
             self._ready = self.plain.ready()
         elif not ids:
             self._ready = bool(readers) and bool(writers)
@@ -448,9 +458,13 @@ class _Client(_Endpoint):
         return self._ready
 
     def send(self, request: Message, future: Future) -> None:
+        if self.t.closed or not self.ready():
+            # sent to nobody: no process can answer it, so spin calls say TIMEOUT at once (as
+            # in process); the future is left to the bus's own rule for a missing server
+            future._remote = None
+            if self.t.closed:
+                return
         seq = next(self.seq)
-        if not self.ready():
-            self.unanswerable.add(id(future))
         if self.fast and self.plain is not None:
             self.plain.send(request, future)
             return
@@ -458,17 +472,40 @@ class _Client(_Endpoint):
         _write(self.writer, _dds.wrap(request, self.guid, seq))
 
     def can_still_answer(self, future: Future) -> bool:
-        if id(future) in self.unanswerable:
+        if self.t.closed:
             return False
         self._ready_at = -1.0 if time.monotonic() - self._ready_at > 0.2 else self._ready_at
         return self.ready()
 
     def close(self) -> None:
         self.t.waits.detach(self.cond, self.token)
+        self.matches.close()
         self.t.remove_endpoint(self)
         if self.plain is not None:
             self.plain.close()
         _delete(self.cond, self.reader, self.writer)
+
+
+class _MatchWatch:
+    """A client's match statuses on the wait set: `wait_for_service` and spin calls wake as
+    soon as a server is matched or lost, instead of at their next timeout."""
+
+    def __init__(self, client: _Client) -> None:
+        self.client, waits = client, client.t.waits
+        client.writer.set_status_mask(DDSStatus.PublicationMatched)
+        client.reader.set_status_mask(DDSStatus.SubscriptionMatched)
+        self.tokens = (waits.attach(client.writer, self), waits.attach(client.reader, self))
+
+    def on_trigger(self) -> None:
+        c = self.client
+        c.writer.get_publication_matched_status()  # reading a status resets its trigger
+        c.reader.get_subscription_matched_status()
+        c._ready_at = -1.0  # look again at the next ready()
+
+    def close(self) -> None:
+        c = self.client
+        c.t.waits.detach(c.writer, self.tokens[0])
+        c.t.waits.detach(c.reader, self.tokens[1])
 
 
 class _PlainClient:
@@ -482,9 +519,11 @@ class _PlainClient:
     def __init__(self, owner: _Client) -> None:
         t, srv, name = owner.t, owner.cli.srv_type, owner.cli.srv_name
         self.t, self.owner = t, owner
-        self.writer = DataWriter(t.publisher_, t.topic(f"rq{name}Request", _dds.dds_type(srv.Request)), qos=_qos(1000))
+        self.writer = DataWriter(
+            t.publisher_, t.topic(f"rq{name}Request", _dds.dds_type(srv.Request)), qos=_qos(SERVICE_DEPTH)
+        )
         self.reader = DataReader(
-            t.subscriber_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.Response)), qos=_qos(1000, reader=True)
+            t.subscriber_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.Response)), qos=_qos(SERVICE_DEPTH, reader=True)
         )
         owner.readers, owner.writers = (owner.reader, self.reader), (owner.writer, self.writer)
         self.waiting: deque[Future] = deque()
@@ -654,6 +693,8 @@ class DdsTransport(Transport):
         self._discovery.wanted.setdefault(topic, []).append(fn)
 
     def poll(self, force: bool = True) -> bool:
+        if self.closed:
+            return False
         if not force:
             now = self.bus.clock.now
             if now < self._next_poll:
@@ -671,11 +712,15 @@ class DdsTransport(Transport):
         return bool(handlers)
 
     def wait(self, until_ns: int) -> None:
+        if self.closed:
+            super().wait(until_ns)
+            return
         clock = self.bus.clock
         read = getattr(clock, "read", None)
         now = read() if read is not None else clock.now
         if until_ns > now:
-            self.waits.wait(min(until_ns - now, 10**10) if not self._parked else min(until_ns - now, 10_000_000))
+            # at most 0.1 s in the C call: Python runs a Ctrl-C handler only once it returns
+            self.waits.wait(min(until_ns - now, 10_000_000 if self._parked else MAX_WAIT_NS))
         clock.now = read() if read is not None else until_ns
 
     def _idle_wait(self, ns: int) -> None:
@@ -686,7 +731,7 @@ class DdsTransport(Transport):
             ns = min(ns, max(0, due - self.bus.clock.read()))  # type: ignore[attr-defined]
         if self._parked:
             ns = min(ns, 10_000_000)
-        self.waits.wait(ns)
+        self.waits.wait(min(ns, MAX_WAIT_NS))
         self._next_poll = 0  # whatever woke us is taken right after this round
 
     # -- the graph ----------------------------------------------------------------------------------
