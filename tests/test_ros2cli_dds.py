@@ -293,16 +293,19 @@ STUCK_SERVER = textwrap.dedent(
 
 
 @pytest.mark.parametrize(
-    ("mode", "needle"),
-    [("sleep", "no response from service '/stuck' within 2 s"), ("vanish", "service '/stuck' went away")],
+    ("mode", "timeout", "needle"),
+    [
+        ("sleep", "2", "no response from service '/stuck' within 2 s"),
+        ("vanish", "30", "service '/stuck' went away"),  # said when the peer leaves, long before 30 s
+    ],
 )
 def test_service_call_to_a_server_that_never_answers_ends_with_one_line(
-    netns: NetNamespace, mode: str, needle: str
+    netns: NetNamespace, mode: str, timeout: str, needle: str
 ) -> None:
     start_python(netns, STUCK_SERVER, mode)
     r = wait_for(netns, "service", "list", needle="/stuck")
     assert "/stuck" in r.stdout.splitlines(), r.stderr
-    r = llfsm(netns, "service", "call", "/stuck", "std_srvs/srv/Trigger", "--timeout", "2", timeout=60)
+    r = llfsm(netns, "service", "call", "/stuck", "std_srvs/srv/Trigger", "--timeout", timeout, timeout=90)
     assert r.status == 1, (r.stdout, r.stderr)
     assert r.stdout.startswith("requester: making request: std_srvs.srv.Trigger_Request()\n\n")
     assert "response:" not in r.stdout
@@ -366,7 +369,7 @@ LATE_TALKER = textwrap.dedent(
     pub = node.create_publisher(String, "/late", 10)
     start = time.monotonic()
     while time.monotonic() < start + 60:
-        if time.monotonic() > start + 4:  # publishes rarely: first after 4 s, then every 2 s
+        if time.monotonic() > start + 8:  # publishes rarely: first after 8 s, then every 2 s
             pub.publish(String(data="at last"))
             start += 2
         ros.spin_once(node, timeout_sec=0.1)
@@ -379,7 +382,7 @@ def test_streaming_echo_waits_for_a_publisher_that_is_there(netns: NetNamespace)
     without --once waits for its messages as ros2 does, however rare they are."""
     start_python(netns, LATE_TALKER)
     wait_for(netns, "topic", "list", needle="/late")
-    p = netns.popen([sys.executable, "-m", "llfsm", "topic", "echo", "/late", "--timeout", "1"], cwd=REPO)
+    p = netns.popen([sys.executable, "-m", "llfsm", "topic", "echo", "/late", "--timeout", "2"], cwd=REPO)
     assert p.stdout is not None
     lines = [p.stdout.readline() for _ in range(2)]
     p.send_signal(signal.SIGINT)
