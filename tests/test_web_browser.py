@@ -192,7 +192,8 @@ def test_a_message_published_from_the_form_is_echoed(page: Any, live: LiveRun) -
     while "data: 'hello: from the page'\n" not in live.stdout and time.monotonic() < deadline:
         time.sleep(0.1)
     assert "data: 'hello: from the page'\n" in live.stdout  # --echo printed it, quoted as ros2 topic echo does
-    form.locator('textarea[name="values"]').fill("{data: 3.5}")
+    # not a number: `{data: 3.5}` is the string '3.5' here, as in topic pub (rosidl writes str(value))
+    form.locator('textarea[name="values"]').fill("{data: [1, 2]}")
     form.locator('button[type="submit"]').click()
     page.wait_for_selector('#publish-result[data-ok="false"]')
     assert "must be of type 'str'" in page.locator("#publish-result").inner_text()
