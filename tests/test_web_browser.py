@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import threading
@@ -212,9 +213,12 @@ def test_calling_the_suspend_service_from_the_service_form_and_the_page_follows(
 
 
 def test_screenshot_of_the_page(browser: Any, tmp_path: Path) -> None:
-    """docs/images/view.png: the picture docs/view.md shows (look at it after a change): the
-    seed's suspend/resume pair driving the blind turtle bot in turtlesim."""
+    """A picture of the page (look at it after a change): the seed's suspend/resume pair driving
+    the blind turtle bot in turtlesim.  It is written under tmp_path; with
+    LLFSM_UPDATE_DOC_IMAGES=1 it is also copied to docs/images/view.png, the picture docs/view.md
+    shows (a test run never changes the repository otherwise)."""
     run = LiveRun(tmp_path, "--node", "turtlesim", machines=("ros2_turtle_suspend_resume", "ros2_blind_turtle_bot"))
+    out = tmp_path / "view.png"
     try:
         p = browser.new_page(viewport={"width": 1400, "height": 900})
         p.set_default_timeout(TIMEOUT_MS)
@@ -223,13 +227,16 @@ def test_screenshot_of_the_page(browser: Any, tmp_path: Path) -> None:
         p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="suspended"]')
         p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="running"]')
         _until(lambda: p.locator('article[data-machine="ros2_blind_turtle_bot"] .transitions li').count() >= 5)
-        out = REPO / "docs" / "images" / "view.png"
         p.screenshot(path=str(out), full_page=True)
         p.close()
     finally:
         run.stop()
     data = out.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR" and len(data) > 20_000
+    width, height = struct.unpack(">II", data[16:24])
+    assert width == 1400 and 900 <= height <= 10_000, (width, height)  # the viewport's width, the whole page
+    if os.environ.get("LLFSM_UPDATE_DOC_IMAGES") == "1":
+        shutil.copyfile(out, REPO / "docs" / "images" / "view.png")
 
 
 def test_the_turtle_world_is_drawn_live(browser: Any, tmp_path: Path) -> None:
