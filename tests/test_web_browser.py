@@ -22,6 +22,7 @@ from typing import Any
 
 import pytest
 from conftest import MACHINES, REPO
+from dds_netns import NetNamespace, finish, netns  # noqa: F401  (the fixture)
 
 pytest.importorskip("aiohttp")
 sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
@@ -255,3 +256,65 @@ def test_the_turtle_world_is_drawn_live(browser: Any, tmp_path: Path) -> None:
         p.close()
     finally:
         run.stop()
+
+
+# -- the page follows `llfsm service call` from another process, over DDS ------------------------
+
+#: The browser's side, run inside the test's network namespace (where the run's 127.0.0.1 is):
+#: Chromium driven by Playwright sees the machine run, says "ready", then waits for the page to
+#: show it suspended, which only a call from outside can do.
+WATCH_PAGE = r"""
+import sys, time
+from playwright.sync_api import sync_playwright
+url, chromium, args, machine = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4]
+card = f'article.machine[data-machine="{machine}"]'
+with sync_playwright() as pw:
+    b = pw.chromium.launch(executable_path=chromium, args=args)
+    p = b.new_page(viewport={"width": 1280, "height": 860})
+    p.set_default_timeout(30_000)
+    p.goto(url)
+    for state in ("PUBLISH", "WAIT_AND_COUNT"):
+        p.wait_for_selector(f'{card}[data-status="running"] .state[data-state="{state}"][aria-current="true"]')
+    print("ready", flush=True)
+    p.wait_for_selector(f'{card}[data-status="suspended"]', timeout=45_000)
+    p.wait_for_selector(f'.state[data-machine="{machine}"][data-state="SUSPENDED"][aria-current="true"]')
+    print("suspended", flush=True)
+    b.close()
+"""
+
+
+def test_the_page_follows_a_suspend_called_with_llfsm_service_call(netns: NetNamespace) -> None:  # noqa: F811
+    """Issue 9: `llfsm service call /llfsm/M/suspend` from another process, over DDS, and the
+    page (in Chromium, in the same private network) shows M suspended.  The call's output is
+    ros2's, word for word (the reprs checked against rclpy 9.1.2's std_srvs)."""
+    run = netns.llfsm(
+        "run", "--transport", "dds", MACHINES / f"{MACHINE}.machine", "--web", "127.0.0.1:0", "--duration", "90"
+    )
+    assert run.stderr is not None
+    url = ""
+    for line in run.stderr:
+        m = re.search(r"http://\S+", line)
+        if m:
+            url = m.group(0)
+            break
+    assert url, "the run printed no http:// address"
+    threading.Thread(target=LiveRun._drain, args=(run.stderr, []), daemon=True).start()
+    threading.Thread(target=LiveRun._drain, args=(run.stdout, []), daemon=True).start()
+    watcher = netns.popen([sys.executable, "-c", WATCH_PAGE, url, CHROMIUM, " ".join(ARGS), MACHINE])
+    assert watcher.stdout is not None
+    ready = watcher.stdout.readline()  # ends with the watcher: it prints or it dies within 30 s
+    assert ready == "ready\n", ready + (watcher.stderr.read() if watcher.stderr else "")
+    call = netns.llfsm("service", "call", f"/llfsm/{MACHINE}/suspend", "std_srvs/srv/Trigger")
+    c_status, c_out, c_err = finish(call, 60)
+    w_status, w_out, w_err = finish(watcher, 60)
+    run.terminate()
+    finish(run, 20)
+    assert c_status == 0, c_err
+    answer = (
+        "requester: making request: std_srvs.srv.Trigger_Request()\n\n"
+        "response:\n"
+        "std_srvs.srv.Trigger_Response(success=True, "
+        f"message='suspend of {MACHINE} pending until its next ringlet')\n\n"
+    )
+    assert c_out in (answer, "waiting for service to become available...\n" + answer), c_out
+    assert w_status == 0 and w_out == "suspended\n", w_out + w_err
