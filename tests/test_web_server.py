@@ -17,7 +17,7 @@ from conftest import MACHINES, llfsm
 pytest.importorskip("aiohttp")
 
 from llfsm import ros
-from llfsm.msgs.geometry_msgs.msg import Twist
+from llfsm.msgs.geometry_msgs.msg import PoseStamped, Twist
 from llfsm.msgs.std_msgs.msg import String
 from llfsm.ros.control import description, enable
 from llfsm.runtime import Arrangement, RunContext, SimClock
@@ -76,6 +76,8 @@ def test_values_are_yaml_checked_by_the_message_types_never_evaluated() -> None:
     t, _ = parse_values(Twist, "{linear: {x: 2}, angular: {z: -1.5}}")
     assert t.linear.x == 2.0 and t.angular.z == -1.5
     assert parse_values(String, "")[0].data == ""
+    stamped, stamps = parse_values(PoseStamped, "{header: auto, pose: {position: {x: 1.5}}}")  # as topic pub takes it
+    assert stamped.pose.position.x == 1.5 and len(stamps) == 1
     with pytest.raises(CommandError, match="float"):
         parse_values(Twist, "{linear: {x: \"__import__('os').system('true')\"}}")
     with pytest.raises(CommandError, match="no field 'linar'"):
