@@ -122,6 +122,26 @@ def test_idl_type_is_named_as_ros2_names_it(cls: type[Message]) -> None:
     assert t.__idl_typename__ == f"{pkg}::{kind}::dds_::{name}_"
 
 
+def test_dds_type_names_read_back_to_the_classes() -> None:
+    """The one reading of the mangled names (dds_graph), used by the transport, the graph
+    verbs, the bag recorder and `llfsm view`: every shipped type's DDS name leads back to it."""
+    from llfsm.msgs.std_srvs.srv import Trigger
+    from llfsm.ros.transports.dds_graph import message_class, message_type, service_class, service_type
+
+    for cls in CLASSES:
+        assert message_class(_dds.dds_type(cls).__idl_typename__) is cls
+    for srv in shipped_services():
+        for half in (srv.Request, srv.Response):
+            name = _dds.dds_type(half).__idl_typename__
+            assert service_type(name) == srv._TYPE and service_class(name) is srv
+    assert message_type("std_srvs::srv::dds_::Trigger_Request_") == "std_srvs/srv/Trigger_Request"
+    assert service_class("std_srvs::srv::dds_::Trigger_Request_") is Trigger
+    assert message_type("MyModule::Point") == "MyModule/Point"  # a foreign type, shown as rmw shows it
+    for foreign in ("MyModule::Point", "nope_msgs::msg::dds_::Thing_", "std_msgs::msg::dds_::String", "::dds_::_"):
+        assert message_class(foreign) is None and service_class(foreign) is None
+    assert service_type("std_srvs::srv::dds_::_Request_") is None
+
+
 def test_cdr_layout_of_well_known_messages() -> None:
     """The CDR rules themselves: strings carry their NUL and a uint32 length, 8-byte values
     align to 8 counted after the encapsulation header, an empty message is one zero byte."""

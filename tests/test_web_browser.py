@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import threading
@@ -21,6 +22,7 @@ from typing import Any
 
 import pytest
 from conftest import MACHINES, REPO
+from dds_netns import NetNamespace, finish, netns  # noqa: F401  (the fixture)
 
 pytest.importorskip("aiohttp")
 sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
@@ -192,7 +194,8 @@ def test_a_message_published_from_the_form_is_echoed(page: Any, live: LiveRun) -
     while "data: 'hello: from the page'\n" not in live.stdout and time.monotonic() < deadline:
         time.sleep(0.1)
     assert "data: 'hello: from the page'\n" in live.stdout  # --echo printed it, quoted as ros2 topic echo does
-    form.locator('textarea[name="values"]').fill("{data: 3.5}")
+    # not a number: `{data: 3.5}` is the string '3.5' here, as in topic pub (rosidl writes str(value))
+    form.locator('textarea[name="values"]').fill("{data: [1, 2]}")
     form.locator('button[type="submit"]').click()
     page.wait_for_selector('#publish-result[data-ok="false"]')
     assert "must be of type 'str'" in page.locator("#publish-result").inner_text()
@@ -211,9 +214,12 @@ def test_calling_the_suspend_service_from_the_service_form_and_the_page_follows(
 
 
 def test_screenshot_of_the_page(browser: Any, tmp_path: Path) -> None:
-    """docs/images/view.png: the picture docs/view.md shows (look at it after a change): the
-    seed's suspend/resume pair driving the blind turtle bot in turtlesim."""
+    """A picture of the page (look at it after a change): the seed's suspend/resume pair driving
+    the blind turtle bot in turtlesim.  It is written under tmp_path; with
+    LLFSM_UPDATE_DOC_IMAGES=1 it is also copied to docs/images/view.png, the picture docs/view.md
+    shows (a test run never changes the repository otherwise)."""
     run = LiveRun(tmp_path, "--node", "turtlesim", machines=("ros2_turtle_suspend_resume", "ros2_blind_turtle_bot"))
+    out = tmp_path / "view.png"
     try:
         p = browser.new_page(viewport={"width": 1400, "height": 900})
         p.set_default_timeout(TIMEOUT_MS)
@@ -222,13 +228,16 @@ def test_screenshot_of_the_page(browser: Any, tmp_path: Path) -> None:
         p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="suspended"]')
         p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="running"]')
         _until(lambda: p.locator('article[data-machine="ros2_blind_turtle_bot"] .transitions li').count() >= 5)
-        out = REPO / "docs" / "images" / "view.png"
         p.screenshot(path=str(out), full_page=True)
         p.close()
     finally:
         run.stop()
     data = out.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR" and len(data) > 20_000
+    width, height = struct.unpack(">II", data[16:24])
+    assert width == 1400 and 900 <= height <= 10_000, (width, height)  # the viewport's width, the whole page
+    if os.environ.get("LLFSM_UPDATE_DOC_IMAGES") == "1":
+        shutil.copyfile(out, REPO / "docs" / "images" / "view.png")
 
 
 def test_the_turtle_world_is_drawn_live(browser: Any, tmp_path: Path) -> None:
@@ -247,3 +256,65 @@ def test_the_turtle_world_is_drawn_live(browser: Any, tmp_path: Path) -> None:
         p.close()
     finally:
         run.stop()
+
+
+# -- the page follows `llfsm service call` from another process, over DDS ------------------------
+
+#: The browser's side, run inside the test's network namespace (where the run's 127.0.0.1 is):
+#: Chromium driven by Playwright sees the machine run, says "ready", then waits for the page to
+#: show it suspended, which only a call from outside can do.
+WATCH_PAGE = r"""
+import sys, time
+from playwright.sync_api import sync_playwright
+url, chromium, args, machine = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4]
+card = f'article.machine[data-machine="{machine}"]'
+with sync_playwright() as pw:
+    b = pw.chromium.launch(executable_path=chromium, args=args)
+    p = b.new_page(viewport={"width": 1280, "height": 860})
+    p.set_default_timeout(30_000)
+    p.goto(url)
+    for state in ("PUBLISH", "WAIT_AND_COUNT"):
+        p.wait_for_selector(f'{card}[data-status="running"] .state[data-state="{state}"][aria-current="true"]')
+    print("ready", flush=True)
+    p.wait_for_selector(f'{card}[data-status="suspended"]', timeout=45_000)
+    p.wait_for_selector(f'.state[data-machine="{machine}"][data-state="SUSPENDED"][aria-current="true"]')
+    print("suspended", flush=True)
+    b.close()
+"""
+
+
+def test_the_page_follows_a_suspend_called_with_llfsm_service_call(netns: NetNamespace) -> None:  # noqa: F811
+    """Issue 9: `llfsm service call /llfsm/M/suspend` from another process, over DDS, and the
+    page (in Chromium, in the same private network) shows M suspended.  The call's output is
+    ros2's, word for word (the reprs checked against rclpy 9.1.2's std_srvs)."""
+    run = netns.llfsm(
+        "run", "--transport", "dds", MACHINES / f"{MACHINE}.machine", "--web", "127.0.0.1:0", "--duration", "90"
+    )
+    assert run.stderr is not None
+    url = ""
+    for line in run.stderr:
+        m = re.search(r"http://\S+", line)
+        if m:
+            url = m.group(0)
+            break
+    assert url, "the run printed no http:// address"
+    threading.Thread(target=LiveRun._drain, args=(run.stderr, []), daemon=True).start()
+    threading.Thread(target=LiveRun._drain, args=(run.stdout, []), daemon=True).start()
+    watcher = netns.popen([sys.executable, "-c", WATCH_PAGE, url, CHROMIUM, " ".join(ARGS), MACHINE])
+    assert watcher.stdout is not None
+    ready = watcher.stdout.readline()  # ends with the watcher: it prints or it dies within 30 s
+    assert ready == "ready\n", ready + (watcher.stderr.read() if watcher.stderr else "")
+    call = netns.llfsm("service", "call", f"/llfsm/{MACHINE}/suspend", "std_srvs/srv/Trigger")
+    c_status, c_out, c_err = finish(call, 60)
+    w_status, w_out, w_err = finish(watcher, 60)
+    run.terminate()
+    finish(run, 20)
+    assert c_status == 0, c_err
+    answer = (
+        "requester: making request: std_srvs.srv.Trigger_Request()\n\n"
+        "response:\n"
+        "std_srvs.srv.Trigger_Response(success=True, "
+        f"message='suspend of {MACHINE} pending until its next ringlet')\n\n"
+    )
+    assert c_out in (answer, "waiting for service to become available...\n" + answer), c_out
+    assert w_status == 0 and w_out == "suspended\n", w_out + w_err

@@ -17,15 +17,15 @@ from conftest import MACHINES, llfsm
 pytest.importorskip("aiohttp")
 
 from llfsm import ros
-from llfsm.msgs.geometry_msgs.msg import Twist
+from llfsm.msgs.geometry_msgs.msg import PoseStamped, Twist
 from llfsm.msgs.std_msgs.msg import String
 from llfsm.ros.control import description, enable
 from llfsm.runtime import Arrangement, RunContext, SimClock
 from llfsm.runtime.context import activate
 from llfsm.targets import load
-from llfsm.web import diagram, values
+from llfsm.web import diagram
 from llfsm.web.server import WebServer, parse_address
-from llfsm.web.source import RunSource
+from llfsm.web.source import CommandError, RunSource, parse_values, type_class
 
 PING_PONG = MACHINES / "ros2_ping_pong.machine"
 
@@ -71,21 +71,28 @@ def test_a_layout_keeps_states_apart() -> None:
 
 
 def test_values_are_yaml_checked_by_the_message_types_never_evaluated() -> None:
-    t = values.message(Twist, "{linear: {x: 2}, angular: {z: -1.5}}")
+    """The page's values go through `llfsm topic pub`'s parsing (llfsm.msgs._yaml) and its TYPE
+    reading (llfsm.ros2cli.interfaces); every mistake is a CommandError of one line."""
+    t, _ = parse_values(Twist, "{linear: {x: 2}, angular: {z: -1.5}}")
     assert t.linear.x == 2.0 and t.angular.z == -1.5
-    assert values.message(String, "").data == ""
-    with pytest.raises(values.BadValue, match="float"):
-        values.message(Twist, "{linear: {x: \"__import__('os').system('true')\"}}")
-    with pytest.raises(values.BadValue, match="no field 'linar'"):
-        values.message(Twist, "{linar: {x: 1}}")
-    with pytest.raises(values.BadValue, match="not valid YAML"):
-        values.message(Twist, "{linear: {x: 1}")
-    with pytest.raises(values.BadValue, match="mapping"):
-        values.message(String, "- a list")
-    with pytest.raises(values.BadValue, match="unknown type"):
-        values.resolve_type("nope_msgs/msg/Thing", "msg")
-    with pytest.raises(values.BadValue, match="not a msg type"):
-        values.resolve_type("../../etc/msg/x", "msg")
+    assert parse_values(String, "")[0].data == ""
+    stamped, stamps = parse_values(PoseStamped, "{header: auto, pose: {position: {x: 1.5}}}")  # as topic pub takes it
+    assert stamped.pose.position.x == 1.5 and len(stamps) == 1
+    with pytest.raises(CommandError, match="float"):
+        parse_values(Twist, "{linear: {x: \"__import__('os').system('true')\"}}")
+    with pytest.raises(CommandError, match="no field 'linar'"):
+        parse_values(Twist, "{linar: {x: 1}}")
+    with pytest.raises(CommandError, match="not valid YAML"):
+        parse_values(Twist, "{linear: {x: 1}")
+    with pytest.raises(CommandError, match="mapping"):
+        parse_values(String, "- a list")
+    assert type_class("std_msgs/String", "msg") is String
+    with pytest.raises(CommandError, match="unknown message type"):
+        type_class("nope_msgs/msg/Thing", "msg")
+    with pytest.raises(CommandError, match="invalid type"):
+        type_class("../../etc/msg/x", "msg")
+    with pytest.raises(CommandError, match="is a message type"):
+        type_class("std_msgs/msg/String", "srv")
 
 
 # -- the server --------------------------------------------------------------------------------------

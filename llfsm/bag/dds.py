@@ -79,7 +79,7 @@ def _all_topics(
     """A scan of DCPSPublication for ROS topics (`rt/...`): found(name, class) once per topic."""
     from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
-    from ..ros.transports.dds import message_class
+    from ..ros.transports.dds_graph import message_class
 
     reader = BuiltinDataReader(bus.transport.dp, BuiltinTopicDcpsPublication)  # type: ignore[attr-defined]
     seen: set[str] = set()

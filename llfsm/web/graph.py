@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..msgs.std_msgs.msg import String
 from ..ros.control import LATCHED, NAMESPACE
-from . import values
+from ..ros.transports.dds_graph import message_class, service_class
 from .source import HISTORY, Source
 
 if TYPE_CHECKING:
@@ -28,22 +28,6 @@ if TYPE_CHECKING:
 #: How often discovery is read (run time, seconds).
 DISCOVERY_PERIOD = 0.25
 _SUFFIX = "/description"
-
-
-def _message_type(dds_type: str, kind: str) -> Any:
-    """`pkg::msg::dds_::Name_` -> the class (None if llfsm has none); services by `_Request_`."""
-    head, sep, tail = dds_type.rpartition("::dds_::")
-    if not sep or not tail.endswith("_"):
-        return None
-    name = tail[:-1]
-    if kind == "srv":
-        if not name.endswith("_Request"):
-            return None
-        name = name[: -len("_Request")]
-    try:
-        return values.resolve_type(f"{head.replace('::', '/')}/{name}", kind)
-    except values.BadValue:
-        return None
 
 
 class _Machine:
@@ -83,7 +67,7 @@ class GraphSource(Source):
                 continue
             topic = name[2:]
             if topic not in self._topics_seen:
-                self._topics_seen[topic] = _message_type(type_name, "msg")
+                self._topics_seen[topic] = message_class(type_name)
             if topic.startswith(NAMESPACE + "/") and topic.endswith(_SUFFIX):
                 machine = topic[len(NAMESPACE) + 1 : -len(_SUFFIX)]
                 if "/" not in machine and machine not in self._machines:
@@ -93,7 +77,7 @@ class GraphSource(Source):
             if name.startswith("rq/") and name.endswith("Request") and len(name) > len("rq/Request"):
                 service = name[2 : -len("Request")]
                 if service not in self._services_seen:
-                    self._services_seen[service] = _message_type(type_name, "srv")
+                    self._services_seen[service] = service_class(type_name)
 
     def _follow(self, name: str) -> None:
         m = self._machines[name] = _Machine(name)

@@ -10,7 +10,8 @@ Security: it binds 127.0.0.1 unless told otherwise; on any other address every r
 carry the token of the printed URL (the page's query string, then a cookie); without a token,
 only loopback Host names are served (no DNS rebinding).  A WebSocket or POST whose Origin is not
 the page's own is refused (403), POSTs must be JSON (a cross-site form cannot send that), and
-message values are parsed as YAML and checked by the message classes (llfsm.web.values).
+message values are parsed as YAML and checked by the message classes, as `llfsm topic pub`
+parses them (llfsm.msgs._yaml).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from typing import Any
 
 from aiohttp import WSMsgType, web
 
-from . import diagram, values
+from . import diagram
 from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
@@ -290,7 +291,7 @@ class WebServer:
         try:
             data = await self._json(request)
             result = await action(data)
-        except (CommandError, values.BadValue) as e:
+        except CommandError as e:
             return web.json_response({"success": False, "message": str(e)}, status=400)
         if self._wake is not None:
             self._wake.set()

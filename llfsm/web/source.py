@@ -22,7 +22,6 @@ from typing import TYPE_CHECKING, Any
 
 from ..msgs import to_yaml
 from ..ros.control import NAMESPACE, description
-from . import values
 
 if TYPE_CHECKING:
     from ..ros.bus import Bus
@@ -39,6 +38,30 @@ CALL_TIMEOUT = 5.0
 
 class CommandError(Exception):
     """A request from the page that cannot be carried out (shown to the user as one line)."""
+
+
+def type_class(type_name: str, kind: str) -> Any:
+    """The class a type typed into the page names (`pkg/msg/Name`, `pkg/srv/Name`, or `pkg/Name`),
+    read as `llfsm topic pub` and `llfsm service call` read their TYPE."""
+    from ..ros2cli import CliError
+    from ..ros2cli.interfaces import message_class, service_class
+
+    try:
+        return message_class(type_name.strip()) if kind == "msg" else service_class(type_name.strip())
+    except CliError as e:
+        raise CommandError(e.message) from None
+
+
+def parse_values(cls: Any, text: str) -> tuple[Any, list[Any]]:
+    """The message (or request) the page's YAML values make, through the same parsing and type
+    checks as `llfsm topic pub` (llfsm.msgs._yaml: PyYAML's safe loader, then field by field
+    through the typed properties, never eval), and the setters of the stamps it asks for."""
+    from ..msgs._yaml import ValuesError, from_yaml
+
+    try:
+        return from_yaml(cls, text)
+    except ValuesError as e:
+        raise CommandError(f"invalid values: {e}") from None
 
 
 class _TopicStats:
@@ -134,18 +157,19 @@ class Source:
             raise CommandError(str(e)) from None
         existing = self.topic_types().get(name)
         if type_name.strip():
-            cls = values.resolve_type(type_name, "msg")
+            cls = type_class(type_name, "msg")
             if existing is not None and existing is not cls:
                 raise CommandError(f"{name} carries {existing._TYPE}, not {cls._TYPE}")
         elif existing is not None:
             cls = existing
         else:
             raise CommandError(f"{name} does not exist yet: give its type, such as std_msgs/msg/String")
-        msg = values.message(cls, text)
-        self._on_scheduler(lambda: self._publish(name, cls, msg))
+        msg, stamps = parse_values(cls, text)
+        self._on_scheduler(lambda: self._publish(name, cls, msg, stamps))
         return {"success": True, "message": f"published on {name}", "yaml": to_yaml(msg)}
 
-    def _publish(self, name: str, cls: Any, msg: Any) -> None:
+    def _publish(self, name: str, cls: Any, msg: Any, stamps: list[Any]) -> None:
+        self._stamp(stamps)
         if name not in self._readers:  # so the page shows this very message as the topic's last
             self._asked.add(name)
             self._watch(name, cls)
@@ -167,17 +191,18 @@ class Source:
             raise CommandError(str(e)) from None
         known = self.service_types().get(name)
         if type_name.strip():
-            srv = values.resolve_type(type_name, "srv")
+            srv = type_class(type_name, "srv")
             if known is not None and known is not srv:
                 raise CommandError(f"{name} is a {known._TYPE} service, not {srv._TYPE}")
         elif known is not None:
             srv = known
         else:
             raise CommandError(f"no service {name} is known: give its type, such as std_srvs/srv/Trigger")
-        req = values.request(srv, text)
+        req, stamps = parse_values(srv.Request, text)
         done: ThreadFuture[Any] = ThreadFuture()
 
         def start() -> None:
+            self._stamp(stamps)
             key = (name, srv._TYPE)
             client = self._clients.get(key)
             if client is None:
@@ -190,6 +215,14 @@ class Source:
             return await asyncio.wait_for(asyncio.wrap_future(done), CALL_TIMEOUT)
         except TimeoutError:
             raise CommandError(f"no response from {name} within {CALL_TIMEOUT:g} s") from None
+
+    def _stamp(self, stamps: list[Any]) -> None:
+        """Fill the stamps the values asked for (`header: auto`, `stamp: now`) with the run
+        clock's time, on the scheduler's thread, as the message leaves."""
+        if stamps:
+            sec, nanosec = divmod(self.bus.clock.now, 1_000_000_000)
+            for set_stamp in stamps:
+                set_stamp(sec, nanosec)
 
     def _on_scheduler(self, fn: Any) -> None:
         if self.ended:

@@ -51,6 +51,7 @@ from ...msgs import _dds
 from ...msgs.rmw_dds_common.msg import Gid, NodeEntitiesInfo, ParticipantEntitiesInfo
 from . import dds_config
 from .base import Transport
+from .dds_graph import message_class, user_data_value
 
 if TYPE_CHECKING:
     from ...msgs._message import Message
@@ -119,21 +120,6 @@ def _qos(depth: int, user_data: bytes = b"", *, reader: bool = False, transient_
     if user_data:
         policies.append(Policy.Userdata(user_data))
     return Qos(*policies)
-
-
-def _user_data_key(qos: Qos | None, key: str) -> str | None:
-    """`key=value;` from an endpoint's USER_DATA (rmw_cyclonedds's format), or None."""
-    if qos is None:
-        return None
-    try:
-        raw = qos[Policy.Userdata].data
-    except (KeyError, AttributeError, TypeError):
-        return None
-    for item in bytes(raw).decode("utf-8", "replace").split(";"):
-        k, sep, v = item.partition("=")
-        if sep and k == key:
-            return v
-    return None
 
 
 class _WaitSet:
@@ -314,7 +300,7 @@ class _Server(_Endpoint):
             ep = None
         if ep is None:
             return "gone"
-        clientid = _user_data_key(ep.qos, "clientid")
+        clientid = user_data_value(ep.qos, "clientid")
         if clientid is None:
             return "yes"  # a client without an id (older rmw, Fast DDS): assume all is well
         for h in self.writer.get_matched_subscriptions():
@@ -322,7 +308,7 @@ class _Server(_Endpoint):
                 rd = self.writer.get_matched_subscription_data(h)
             except Exception:
                 continue
-            if rd is not None and _user_data_key(rd.qos, "clientid") == clientid:
+            if rd is not None and user_data_value(rd.qos, "clientid") == clientid:
                 return "yes"
         return "maybe"
 
@@ -437,7 +423,7 @@ class _Client(_Endpoint):
                 continue
             if ep is None:
                 continue
-            sid = _user_data_key(ep.qos, "serviceid")
+            sid = user_data_value(ep.qos, "serviceid")
             if sid is not None:
                 ids.add(sid)
             if not _dds.carries_request_header(ep.key):
@@ -460,7 +446,7 @@ class _Client(_Endpoint):
                     ep = self.reader.get_matched_publication_data(h)
                 except Exception:
                     continue
-                if _user_data_key(ep.qos if ep is not None else None, "serviceid") in ids:
+                if user_data_value(ep.qos if ep is not None else None, "serviceid") in ids:
                     self._ready = True
                     break
         return self._ready
@@ -593,20 +579,6 @@ class _Discovery:
 def _gid(guid: bytes) -> Gid:
     """rmw's gid of an entity: its 16-byte DDS GUID (ROS 2 Iron and later; Humble used 24)."""
     return Gid(data=list(guid[:16]))
-
-
-def message_class(dds_type: str) -> type[Message] | None:
-    """`geometry_msgs::msg::dds_::Twist_` -> llfsm's Twist class, or None if llfsm has none."""
-    import importlib
-
-    parts = dds_type.split("::")
-    if len(parts) != 4 or parts[2] != "dds_" or not parts[3].endswith("_"):
-        return None
-    try:
-        module = importlib.import_module(f"llfsm.msgs.{parts[0]}.{parts[1]}")
-    except ImportError:
-        return None
-    return getattr(module, parts[3][:-1], None)
 
 
 # -- the transport ----------------------------------------------------------------------------------

@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from cyclonedds.domain import DomainParticipant
 
+    from ...msgs._message import Message, Service
+
 TOPIC_PREFIX = "rt"
 REQUEST_PREFIX, REPLY_PREFIX = "rq", "rr"
 DISCOVERY_TOPIC = "ros_discovery_info"
@@ -51,23 +53,80 @@ def service_name(dds_name: str) -> str | None:
     return None
 
 
+def ros_type(dds_type: str) -> str | None:
+    """ "std_msgs/msg/String" for "std_msgs::msg::dds_::String_", "turtlesim/srv/Spawn_Request"
+    for "turtlesim::srv::dds_::Spawn_Request_": the one reading of rmw's type-name mangling that
+    the transport, the graph, the bag recorder and the page share.  None for a name that is not
+    mangled so (a non-ROS writer's type)."""
+    head, sep, tail = dds_type.rpartition("::dds_::")
+    if not sep or not head or len(tail) < 2 or not tail.endswith("_"):
+        return None
+    return f"{head}::{tail[:-1]}".replace("::", "/")
+
+
 def message_type(dds_type: str) -> str:
     """ "std_msgs/msg/String" for "std_msgs::msg::dds_::String_"; a name that is not mangled so
     comes back with `::` as `/` (as rmw_cyclonedds shows a foreign type)."""
-    head, sep, tail = dds_type.rpartition("::dds_::")
-    if sep and tail.endswith("_"):
-        return f"{head}::{tail[:-1]}".replace("::", "/")
-    return dds_type.replace("::", "/")
+    return ros_type(dds_type) or dds_type.replace("::", "/")
 
 
 def service_type(dds_type: str) -> str | None:
     """ "turtlesim/srv/Spawn" for "turtlesim::srv::dds_::Spawn_Request_" (or `_Response_`)."""
-    head, sep, tail = dds_type.rpartition("::dds_::")
-    if not sep:
+    name = ros_type(dds_type)
+    if name is None:
         return None
-    for suffix in ("_Request_", "_Response_"):
-        if tail.endswith(suffix) and len(tail) > len(suffix):
-            return f"{head}::{tail[: -len(suffix)]}".replace("::", "/")
+    for suffix in ("_Request", "_Response"):
+        if name.endswith(suffix) and len(name.rsplit("/", 1)[-1]) > len(suffix):
+            return name[: -len(suffix)]
+    return None
+
+
+def message_class(dds_type: str) -> type[Message] | None:
+    """`geometry_msgs::msg::dds_::Twist_` -> llfsm's Twist class (and a service's
+    `pkg::srv::dds_::Name_Request_` -> its request class), or None if llfsm has none."""
+    name = ros_type(dds_type)
+    cls = None if name is None else _interface(name)
+    return cls if getattr(cls, "_TYPE", None) == name else None
+
+
+def service_class(dds_type: str) -> type[Service] | None:
+    """The service class whose request or reply has this DDS type, or None if llfsm has none."""
+    from ...msgs._message import is_service_class
+
+    name = service_type(dds_type)
+    cls = None if name is None else _interface(name)
+    return cls if is_service_class(cls) and getattr(cls, "_TYPE", None) == name else None
+
+
+def _interface(ros_name: str) -> Any:
+    """The attribute `Name` of `llfsm.msgs.pkg.kind` for "pkg/kind/Name", or None."""
+    import importlib
+
+    parts = ros_name.split("/")
+    if len(parts) != 3 or not all(p.isidentifier() for p in parts):
+        return None
+    try:
+        module = importlib.import_module(f"llfsm.msgs.{parts[0]}.{parts[1]}")
+    except ImportError:
+        return None
+    return getattr(module, parts[2], None)
+
+
+def user_data_value(qos: Any, key: str) -> str | None:
+    """`key=value;` from an endpoint's USER_DATA (rmw_cyclonedds's format: `typehash=RIHS01_…;`,
+    `clientid=…;`, `serviceid=…;`), or None."""
+    if qos is None:
+        return None
+    from cyclonedds.qos import Policy
+
+    try:
+        raw = qos[Policy.Userdata].data
+    except (KeyError, AttributeError, TypeError):
+        return None
+    for item in bytes(raw).decode("utf-8", "replace").split(";"):
+        k, sep, v = item.partition("=")
+        if sep and k == key:
+            return v
     return None
 
 
@@ -97,9 +156,7 @@ class Endpoint:
     def type_hash(self) -> str:
         """The RIHS01 type hash that rmw (Iron and later) puts in USER_DATA, or 'INVALID' as
         rclpy says when there is none (Humble's peers, non-ROS writers)."""
-        from .dds import _user_data_key
-
-        value = _user_data_key(self.qos, "typehash")
+        value = user_data_value(self.qos, "typehash")
         return value if value and value.startswith("RIHS") else "INVALID"
 
     @property
