@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import ast
 import io
-import json
 import os
 import tokenize
 from dataclasses import dataclass, field
@@ -267,7 +266,6 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         "fingerprint": fingerprint,
         "m": {
             "name": m.name,
-            "dirname": _doc(m.path.name),
             "class_name": class_name(m.name),
             "docstring": _doc(f"{m.name}: {m.description}" if m.description else f"The machine {m.name}."),
             "class_doc": _doc(m.description or f"The machine {m.name}."),
@@ -276,7 +274,6 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             "suspended": susp,
             "accepting": tuple(i for i, s in enumerate(m.states) if s.accepting and i != susp),
             "source_dir": source_dir,
-            "source_dir_json": json.dumps(source_dir)[1:-1],
             "includes": includes,
             "variables": variables,
             "state_variables": state_variables,
