@@ -13,11 +13,11 @@ import io
 import os
 import tokenize
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .compiler.rewrite import BadBinding, attribute_of, find, name_map, source_lines
+from .compiler.rewrite import BadBinding, attribute_of, find, line_index, name_map, state_map
 from .deps import undeclared_dependencies
 from .diagnostics import Diagnostic, Severity, diag
 from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
@@ -54,14 +54,12 @@ class MachineCheck:
 
 
 def check_machine(path: str | Path, within: Path | None = None) -> MachineCheck:
-    """Check one machine directory.  `within`: the folder it was found in by searching; a
-    machine directory that is a symlink leading out of that folder is refused, not read (an
-    untrusted pull request must not get `llfsm check` to read files from elsewhere)."""
+    """Check one machine directory.  A machine directory that is a symlink leading out of the
+    folder holding it is refused, not read, however it was named (discover.refused_link):
+    an untrusted pull request must not get `llfsm check` to read files from elsewhere.
+    `within` (the folder searched) is accepted for callers that pass it; the rule needs none."""
     path = Path(path)
-    if within is not None and _leads_out(path, within):
-        refused = diag("LF037", path, 1, 1, f"{path.name} is a symlink leading out of {within}; refused")
-        return MachineCheck(path, ReadResult(path, None, [refused]), [refused])
-    read = read_machine(path)
+    read = read_machine(path)  # refuses a linked directory by discover.refused_link, as everything does
     result = MachineCheck(path, read, list(read.diagnostics))
     _Checker(result).run()
     result.diagnostics = sorted(set(result.diagnostics), key=Diagnostic.sort_key)
@@ -75,18 +73,53 @@ def check_paths(paths: Iterable[Path]) -> list[MachineCheck]:
     return out
 
 
-def _leads_out(path: Path, root: Path) -> bool:
-    if not os.path.islink(path):
-        return False
-    return not Path(os.path.realpath(path)).is_relative_to(os.path.realpath(root))
-
-
 #: From this many machines on, `diagnose` spreads the work over worker processes.
 PARALLEL_FROM = 48
 
 
 def _diagnostics_of(path: Path, within: Path | None = None) -> list[Diagnostic]:
     return check_machine(path, within).diagnostics
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity mask, as `taskset` or a container's
+    cpuset sets it), not the machine's count."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def _die_with(parent: int) -> None:
+    """Worker initializer: end this worker when `llfsm check` ends, however it ends.
+
+    A worker forked by ProcessPoolExecutor waits on a pipe whose writing end it inherited
+    itself, so a parent killed by SIGKILL (or the OOM killer) would leave it waiting forever.
+    Linux ends it by PR_SET_PDEATHSIG; elsewhere a thread watches for the parent's exit."""
+    import signal
+
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        pr_set_pdeathsig = 1
+        if libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0) != 0:
+            raise OSError(ctypes.get_errno(), "prctl")
+        watch = False
+    except (OSError, AttributeError, ImportError):
+        watch = True
+    if os.getppid() != parent:  # the parent died before the signal was asked for
+        os._exit(1)
+    if watch:
+        import threading
+        import time
+
+        def watchdog() -> None:
+            while os.getppid() == parent:
+                time.sleep(0.5)
+            os._exit(1)
+
+        threading.Thread(target=watchdog, daemon=True, name="llfsm-parent-watch").start()
 
 
 def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[Diagnostic]]:
@@ -98,15 +131,18 @@ def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[
     """
     found = [(m, p) for p in paths for m in find_machines(p)]
     machines, roots = [m for m, _ in found], [p for _, p in found]
+    cores = usable_cores()
     if jobs is None:
-        jobs = (os.cpu_count() or 1) if len(machines) >= PARALLEL_FROM else 1
+        jobs = cores if len(machines) >= PARALLEL_FROM else 1
+    # more workers than cores only add memory and switching: `-j 10000` must not fork 10,000
+    jobs = min(jobs, cores, len(machines))
     if jobs <= 1 or len(machines) < 2:
         return len(machines), [d for m, p in found for d in check_machine(m, p).diagnostics]
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_die_with, initargs=(os.getpid(),)) as pool:
         chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
         return len(machines), [d for chunk in chunks for d in chunk]
 
@@ -119,6 +155,8 @@ class _Checker:
         #: so that a machine.yaml with 100 000 transitions is checked in linear time
         self.unreadable = {os.path.basename(d.file) for d in result.read.diagnostics}
         self.always_true: set[str] = set()  # states whose LF104 warnings are already given
+        self._base: Mapping[str, str] | None = None  # the machine-level name map
+        self._imported: set[str] | None = set()
 
     def add(self, code: str, file: str, line: int, col: int, msg: str) -> None:
         self.r.diagnostics.append(diag(code, self.path / file, line, col, msg))
@@ -402,10 +440,11 @@ class _Checker:
             self.add("LF030", code.file, line, col, f"cannot be compiled: {error.msg}")
 
     def code_of(self, m: Machine, s: State) -> None:
-        mvars = [v.name for v in m.variables]
-        svars = [v.name for v in s.variables]
-        mapping = name_map(mvars, s.name, svars, MACROS)
-        imported = self.imported_names()
+        if self._base is None:  # once per machine: per state it would cost states x variables
+            self._base = name_map([v.name for v in m.variables], None, [], MACROS)
+            self._imported = self.imported_names()
+        mapping = state_map(self._base, s.name, [v.name for v in s.variables])
+        imported = self._imported
         files = list(s.sections.values()) + [t.guard for t in s.transitions if t.guard is not None]
         for code in files:
             tree = self.r.read.trees.get(code.file)
@@ -431,9 +470,8 @@ class _Checker:
             ):
                 self.compiles(code, tree)
             if imported is not None and (not is_guard or _single_expression(tree)):
-                known = set(mapping) | imported | scan.bound | BUILTINS
                 for name, n in scan.loads.items():
-                    if name not in known:
+                    if not (name in mapping or name in imported or name in scan.bound or name in BUILTINS):
                         self.add(
                             "LF105",
                             code.file,
@@ -671,7 +709,4 @@ def _single_expression(tree: ast.Module) -> bool:
 
 
 def _col(text: str, line: int, byte_col: int) -> int:
-    lines = source_lines(text)
-    if 1 <= line <= len(lines):
-        return len(lines[line - 1].encode("utf-8")[:byte_col].decode("utf-8", "replace")) + 1
-    return byte_col + 1
+    return line_index(text).char_col(line, byte_col)

@@ -59,6 +59,7 @@ RULES: dict[str, Rule] = {
         _r("LF036", E, "return-in-section", "`return`, `yield` or `await` at the top level of a section."),
         _r("LF038", E, "bad-binding", "A machine variable is bound by `:=`, import, def, class, except-as or match."),
         _r("LF037", E, "unsafe-path", "A file is a symlink leading out of the machine directory."),
+        _r("LF039", E, "too-complex", "Code beyond a size or shape limit that keeps parsing it fast."),
         _r("LF101", W, "orphan-file", "A code file belongs to a state or transition that does not exist."),
         _r("LF102", W, "unreachable-state", "No path of transitions leads from the initial state to this state."),
         _r("LF103", W, "guard-always-false", "A guard is the constant False: the transition never fires."),

@@ -9,11 +9,16 @@ from __future__ import annotations
 import ast
 import io
 import os
+import signal
+import subprocess
+import sys
+import time
 import tokenize
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from conftest import write_machine
+from conftest import llfsm, run_sim, write_machine
 
 from llfsm.check import check_machine
 from llfsm.compiler.build import build_machine
@@ -117,3 +122,187 @@ class TestHeadersCarryNoCode:
         (d / "machine.yaml").write_text('states:\n  - name: "A\\n"\n    transitions: ["B\\n"]\n  - name: B\n')
         codes = {x.code for x in check_machine(d).diagnostics}
         assert "LF011" in codes
+
+
+def _ratio(make: Callable[[int], Callable[[], object]], n: int, factor: int = 4) -> float:
+    """time(factor * n) / time(n), each the best of three, interleaved: a linear cost gives
+    about `factor`, a quadratic one `factor` squared.  Never an absolute time."""
+    small, big = make(n), make(factor * n)
+    ts: list[float] = []
+    tb: list[float] = []
+    for _ in range(3):
+        for f, out in ((small, ts), (big, tb)):
+            t0 = time.perf_counter()
+            f()
+            out.append(time.perf_counter() - t0)
+    return min(tb) / max(min(ts), 1e-6)
+
+
+class TestLinearWork:
+    """Item 4 of issue 12: every per-diagnostic, per-node, per-file cost is linear overall."""
+
+    def _many_problems(self, tmp_path: Path, n: int) -> Path:
+        # one undefined name per line (a diagnostic each), on lines with non-ASCII text
+        code = "".join(f"é = 1; print(undefined_{i}); x_{i} = 1\n" for i in range(n))
+        return write_machine(tmp_path / str(n), "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code})
+
+    def test_the_file_is_split_once_however_many_diagnostics(self, tmp_path: Path, monkeypatch) -> None:
+        import llfsm.compiler.rewrite as rw
+
+        calls = []
+        real = rw.source_lines
+        monkeypatch.setattr(rw, "source_lines", lambda text: calls.append(len(text)) or real(text))
+        rw.line_index.cache_clear()
+        m = self._many_problems(tmp_path, 500)
+        diags = check_machine(m).diagnostics
+        assert len([d for d in diags if "undefined_" in d.message]) == 500
+        assert len(calls) <= 3, len(calls)  # the section, and perhaps the guard: not once per diagnostic
+
+    def test_check_time_grows_linearly_with_the_diagnostics(self, tmp_path: Path) -> None:
+        def make(n: int) -> Callable[[], object]:
+            m = self._many_problems(tmp_path, n)
+            return lambda: check_machine(m)
+
+        assert _ratio(make, 1000) < 10
+
+    def test_check_time_grows_linearly_with_states_and_variables(self, tmp_path: Path) -> None:
+        """States x machine variables, check and build: a name map per state used to copy every
+        variable, and each variable's text was cut out of a fresh split of the whole file."""
+
+        def make(n: int) -> Callable[[], object]:
+            states: dict[str, list[tuple[str, str]] | None] = {f"S{i}": [(f"S{i + 1}", "True")] for i in range(n)}
+            states[f"S{n}"] = None
+            variables = "".join(f"v{i}: int = {i}\n" for i in range(n))
+            m = write_machine(tmp_path / f"sv{n}", "m", states, variables=variables)
+            return lambda: build_machine(m, tmp_path / f"out{n}", force=True)
+
+        assert _ratio(make, 300) < 10
+
+    @pytest.mark.parametrize("where", ["guard", "section"])
+    def test_a_huge_f_string_is_refused_before_parsing(self, tmp_path: Path, where: str) -> None:
+        def make(n: int) -> Callable[[], object]:
+            fstring = 'f"' + "{x}" * n + '"'
+            guard, code = (f"{fstring} != ''", {}) if where == "guard" else ("True", {"A_OnEntry": f"s = {fstring}\n"})
+            m = write_machine(tmp_path / f"f{n}", "m", {"A": [("END", guard)], "END": None}, code)
+
+            def run() -> None:
+                diags = check_machine(m).diagnostics
+                assert [d.code for d in diags if d.code == "LF039"] == ["LF039"], diags
+
+            return run
+
+        assert _ratio(make, 20_000) < 10
+
+    def test_a_small_f_string_is_fine(self, tmp_path: Path) -> None:
+        m = write_machine(tmp_path, "m", {"A": [("END", 'f"{1}{2}{3}" != ""')], "END": None})
+        assert check_machine(m).ok
+
+    def test_jobs_are_bounded_by_the_usable_cores(self, tmp_path: Path, monkeypatch) -> None:
+        import concurrent.futures
+
+        from llfsm.check import diagnose, usable_cores
+
+        seen: list[int] = []
+        real = concurrent.futures.ProcessPoolExecutor
+
+        def recording(max_workers: int, **kw: object) -> object:
+            seen.append(max_workers)
+            return real(max_workers=max_workers, **kw)
+
+        monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", recording)
+        for i in range(4):
+            write_machine(tmp_path, f"m{i}", {"A": [("END", "True")], "END": None})
+        count, diags = diagnose([tmp_path], jobs=10_000)
+        assert count == 4 and diags == []
+        assert all(w <= usable_cores() for w in seen), seen
+
+    @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+    def test_workers_die_with_their_parent(self, tmp_path: Path) -> None:
+        """kill -9 of `llfsm check -j 2` leaves no worker behind."""
+        code = "".join(f"x_{i} = {i} + {i}\n" for i in range(3000))
+        for i in range(120):
+            write_machine(tmp_path, f"m{i}", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code})
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "llfsm", "check", "-q", "-j", "2", str(tmp_path)],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        try:
+            workers: set[int] = set()
+            deadline = time.monotonic() + 30
+            while not workers and time.monotonic() < deadline and proc.poll() is None:
+                workers = _children(proc.pid)
+                time.sleep(0.02)
+            assert workers, "no worker seen"
+            os.kill(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=10)
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline and any(_alive(w) for w in workers):
+                time.sleep(0.05)
+            assert not any(_alive(w) for w in workers)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(timeout=10)
+
+
+def _children(pid: int) -> set[int]:
+    out = set()
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            out.update(int(c) for c in (task / "children").read_text().split())
+        except OSError:
+            pass
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+class TestOneRuleForLinkedMachines:
+    """Item 5 of issue 12: a machine directory linked from outside is refused by every entry point."""
+
+    @pytest.fixture
+    def linked(self, tmp_path: Path) -> Path:
+        secret = write_machine(tmp_path / "secret", "stolen", {"A": [("END", "True")], "END": None})
+        (secret / "State_A_OnEntry.py").write_text("print('SECRET')\n")
+        repo = tmp_path / "repo"
+        repo.mkdir()
+        (repo / "evil.machine").symlink_to(secret)
+        (repo / "inside").mkdir()
+        write_machine(repo / "inside", "fine", {"A": [("END", "True")], "END": None})
+        (repo / "alias.machine").symlink_to("inside/fine.machine")  # stays in its folder: fine
+        return repo
+
+    def test_check_by_search_and_by_name(self, linked: Path) -> None:
+        for args in ([linked], [linked / "evil.machine"], sorted(linked.glob("*.machine"))):
+            r = llfsm("check", *args)
+            assert r.status == 1, args
+            assert "LF037" in r.stdout and "SECRET" not in r.stdout
+            assert r.stdout.count("LF037") == 1
+
+    def test_a_link_inside_its_folder_is_read(self, linked: Path) -> None:
+        r = llfsm("check", linked / "alias.machine")
+        assert r.status == 0, r.stdout
+
+    @pytest.mark.parametrize("explicit", [True, False])
+    def test_build(self, linked: Path, tmp_path: Path, explicit: bool) -> None:
+        r = llfsm("build", "-o", tmp_path / "out", linked / "evil.machine" if explicit else linked)
+        assert r.status == 1
+        assert "LF037" in r.stderr
+        assert not (tmp_path / "out" / "evil.py").exists()
+
+    def test_run(self, linked: Path) -> None:
+        r = run_sim(linked / "evil.machine", "--duration", "10ms")
+        assert r.status == 2
+        assert "LF037" in r.stderr and "SECRET" not in r.stdout
+
+    def test_graph(self, linked: Path) -> None:
+        r = llfsm("graph", linked / "evil.machine")
+        assert r.status == 1
+        assert "LF037" in r.stderr and "A" not in r.stdout
