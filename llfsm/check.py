@@ -624,6 +624,11 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
                 continue
             if isinstance(child, ast.arg):
                 bound.add(child.arg)
+                if child.arg == "self" or child.arg.startswith("_llfsm"):
+                    # `def get(self): return count` would read the instance's `count`
+                    out.reserved.append(
+                        ast.Name(id=child.arg, ctx=ast.Store(), lineno=child.lineno, col_offset=child.col_offset)
+                    )
             elif isinstance(child, ast.alias):
                 bound.add((child.asname or child.name).split(".")[0])
             elif (

@@ -306,3 +306,141 @@ class TestOneRuleForLinkedMachines:
         r = llfsm("graph", linked / "evil.machine")
         assert r.status == 1
         assert "LF037" in r.stderr and "A" not in r.stdout
+
+
+def _run_entry(tmp_path: Path, code: str, variables: str = "count: int = 3\n") -> list[str]:
+    """Run a machine whose INITIAL OnEntry is `code` (sim clock); its printed lines."""
+    m = write_machine(tmp_path, "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code}, variables=variables)
+    checked = check_machine(m)
+    assert checked.ok, checked.diagnostics
+    r = run_sim(m, "--duration", "20ms")
+    assert r.status == 0, r.stderr
+    return r.lines
+
+
+class TestRewriteFollowsPythonScoping:
+    """Item 6 of issue 12: the rewrite of bare names follows Python's scopes exactly."""
+
+    def test_class_body_names_are_not_seen_by_methods(self, tmp_path: Path) -> None:
+        code = (
+            "class Box:\n"
+            "    count = 10\n"
+            "    seen = count\n"
+            "    firsts = [k for k in range(count)]\n"  # the first iterable: in the class scope
+            "    doubled = [count * k for k in range(2)]\n"  # the rest: not in the class scope
+            "    def get(this):\n"
+            "        return count\n"
+            "    grab = lambda this: count\n"
+            "print(Box().get(), Box().grab(), Box.seen, len(Box.firsts), Box.doubled)\n"
+        )
+        assert _run_entry(tmp_path, code) == ["3 3 10 10 [0, 3]"]
+
+    def test_nested_classes(self, tmp_path: Path) -> None:
+        code = (
+            "def make():\n"
+            "    class Outer:\n"
+            "        count = 1\n"
+            "        class Inner:\n"
+            "            value = count\n"  # Inner's body does not see Outer's names
+            "    return Outer.Inner.value\n"
+            "print(make())\n"
+        )
+        assert _run_entry(tmp_path, code) == ["3"]
+
+    def test_comprehension_variables(self, tmp_path: Path) -> None:
+        code = (
+            "a = [count for count in range(2)]\n"
+            "b = {count: count for count in 'x'}\n"
+            "c = [count + y for y in range(2) for count in range(y, y + 1)]\n"
+            "d = [[count for _ in range(1)] for count in range(2)]\n"
+            "print(a, b, c, d, count)\n"
+        )
+        assert _run_entry(tmp_path, code) == ["[0, 1] {'x': 'x'} [0, 2] [[0], [1]] 3"]
+
+    def test_lambda_parameters(self, tmp_path: Path) -> None:
+        code = (
+            "f = lambda count: count * 2\n"
+            "g = lambda: count\n"
+            "h = lambda x, *count, **kw: count\n"
+            "k = lambda x=count: x\n"  # a default is evaluated where the lambda stands
+            "print(f(5), g(), h(1, 2), k())\n"
+        )
+        assert _run_entry(tmp_path, code) == ["10 3 (2,) 3"]
+
+    def test_nested_functions(self, tmp_path: Path) -> None:
+        code = (
+            "def g(count):\n"
+            "    def h():\n"
+            "        return count\n"  # g's parameter, through the closure
+            "    return h()\n"
+            "def k():\n"
+            "    count = 7\n"  # the machine variable, as documented (no `nonlocal` needed)
+            "def j(*, count=count):\n"
+            "    return count\n"
+            "k()\n"
+            "print(g(4), count, j(), j(count=1))\n"
+        )
+        assert _run_entry(tmp_path, code) == ["4 7 3 1"]
+
+    def test_self_documenting_f_strings(self, tmp_path: Path) -> None:
+        code = (
+            "print(f'{count=}')\n"
+            "print(f'{count = }')\n"
+            "print(f'{count=:>4}|')\n"
+            "print(f'{count=!s}')\n"
+            "print(f'{ (count) + 1 =}')\n"
+            'print(f"{count=} and {count}")\n'
+            "print(f'{ {count: 1}[count]=}')\n"
+            "print(f'{count==3}')\n"
+        )
+        assert _run_entry(tmp_path, code) == [
+            "count=3",
+            "count = 3",
+            "count=   3|",
+            "count=3",
+            " (count) + 1 =4",
+            "count=3 and 3",
+            " {count: 1}[count]=1",
+            "True",
+        ]
+
+    def test_self_documenting_f_string_in_a_guard(self, tmp_path: Path) -> None:
+        m = write_machine(
+            tmp_path,
+            "m",
+            {"A": [("END", "print(f'{count=}') or True")], "END": None},
+            variables="count: int = 5\n",
+        )
+        r = run_sim(m, "--duration", "20ms")
+        assert r.status == 0, r.stderr
+        assert r.lines == ["count=5"]
+
+    def test_walrus_in_a_comprehension_binds_in_the_enclosing_function(self, tmp_path: Path) -> None:
+        code = (
+            "vals = [(last := v) for v in range(3)]\n"
+            "f = lambda count: [(count := v) for v in range(3)] and count\n"
+            "print(last, f(0), count)\n"
+        )
+        assert _run_entry(tmp_path, code) == ["2 2 3"]
+
+    @pytest.mark.parametrize(
+        "code",
+        [
+            "vals = [(count := v) for v in range(3)]\n",
+            "def f():\n    return [(count := v) for v in range(3)]\n",
+            "vals = [[(count := v) for v in range(2)] for w in range(2)]\n",
+        ],
+    )
+    def test_walrus_binding_a_machine_variable_is_refused(self, tmp_path: Path, code: str) -> None:
+        m = write_machine(
+            tmp_path, "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code}, variables="count: int = 3\n"
+        )
+        assert "LF038" in {d.code for d in check_machine(m).diagnostics}
+
+    def test_a_parameter_named_self_is_refused(self, tmp_path: Path) -> None:
+        """`def get(self): return count` would read the instance's count, not the machine's."""
+        code = "class Box:\n    def get(self):\n        return count\n"
+        m = write_machine(
+            tmp_path, "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code}, variables="count: int = 3\n"
+        )
+        assert "LF013" in {d.code for d in check_machine(m).diagnostics}

@@ -146,7 +146,7 @@ class StateView:
 def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Edit] | None = None) -> Block | None:
     if not tree.body:
         return None  # empty, or only comments: costs nothing at run time
-    edits, _bad = find(tree, mapping)
+    edits, _bad = find(tree, mapping, code.text)
     text = apply(code.text, edits + (extra or []))
     lines = text.split("\n")
     first = 0

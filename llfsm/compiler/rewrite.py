@@ -129,67 +129,91 @@ def _targets(node: ast.AST) -> set[str]:
     return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
 
 
+class _Scope:
+    """What one scope of user code hides of the machine's names.
+
+    `here`: the names that code directly in this scope does not resolve to the machine (its
+    parameters, comprehension variables, class attributes, and those of the scopes around).
+    `inner`: what scopes nested in it inherit.  They differ for a class body only: as in
+    Python, a name bound in a class body is visible in that body and nowhere else, not in its
+    methods, lambdas or comprehensions (beyond the first iterable, evaluated in the class)."""
+
+    __slots__ = ("function", "here", "inner")
+
+    def __init__(self, here: frozenset[str], inner: frozenset[str], function: bool) -> None:
+        self.here = here
+        self.inner = inner
+        self.function = function  # a def or lambda, or the section itself: where := binds
+
+
 class _Finder(ast.NodeVisitor):
-    def __init__(self, mapping: Mapping[str, str]) -> None:
+    def __init__(self, mapping: Mapping[str, str], text: str | None = None) -> None:
         self.mapping = mapping
-        self.shadow: list[frozenset[str]] = [frozenset()]
+        self.text = text
+        self.scopes: list[_Scope] = [_Scope(frozenset(), frozenset(), True)]
         self.edits: list[Edit] = []
         self.bad: list[BadBinding] = []
 
     def _hidden(self, name: str) -> bool:
-        return name in self.shadow[-1]
+        return name in self.scopes[-1].here
 
-    def _with(self, names: set[str]) -> None:
-        self.shadow.append(self.shadow[-1] | names)
+    def _push(self, names: set[str] | frozenset[str], function: bool = True) -> None:
+        """A function-like scope (def, lambda, comprehension) nested in the current one."""
+        inherited = self.scopes[-1].inner
+        seen = inherited | names if names else inherited
+        self.scopes.append(_Scope(seen, seen, function))
 
     def visit_Name(self, node: ast.Name) -> None:
         attr = self.mapping.get(node.id)
         if attr is not None and not self._hidden(node.id):
             self.edits.append(Edit(node.lineno, node.col_offset, node.end_col_offset or node.col_offset, attr))
 
-    def _bind(self, name: str | None, how: str, node: ast.AST) -> None:
-        if name and name in self.mapping and not self._hidden(name):
+    def _bind(self, name: str | None, how: str, node: ast.AST, hidden: bool | None = None) -> None:
+        if name and name in self.mapping and not (self._hidden(name) if hidden is None else hidden):
             self.bad.append(BadBinding(name, how, node.lineno, node.col_offset))  # type: ignore[attr-defined]
 
     def _function(self, node: ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) -> None:
+        # decorators, defaults and annotations are evaluated where the def stands
         for d in getattr(node, "decorator_list", []):
             self.visit(d)
         for d in node.args.defaults + [d for d in node.args.kw_defaults if d is not None]:
             self.visit(d)
         if not isinstance(node, ast.Lambda):
             self._bind(node.name, "def", node)
-            for a in node.args.posonlyargs + node.args.args + node.args.kwonlyargs:
-                if a.annotation:
+            a_ = node.args
+            for a in [*a_.posonlyargs, *a_.args, *a_.kwonlyargs, a_.vararg, a_.kwarg]:
+                if a is not None and a.annotation:
                     self.visit(a.annotation)
             if node.returns:
                 self.visit(node.returns)
-        self._with(_params(node.args))
+        self._push(_params(node.args))
         body = node.body if isinstance(node.body, list) else [node.body]
         for stmt in body:
             self.visit(stmt)
-        self.shadow.pop()
+        self.scopes.pop()
 
     visit_FunctionDef = visit_AsyncFunctionDef = visit_Lambda = _function  # type: ignore[assignment]
 
     def _comprehension(self, node: ast.ListComp | ast.SetComp | ast.GeneratorExp | ast.DictComp) -> None:
         gens = node.generators
-        self.visit(gens[0].iter)  # evaluated in the enclosing scope
+        self.visit(gens[0].iter)  # evaluated in the enclosing scope (a class body's included)
         bound: set[str] = set()
-        for i, g in enumerate(gens):
+        for g in gens:
             bound |= _targets(g.target)
-            self._with(bound)
+        # the comprehension's own scope: all its targets, wherever they stand (Python's symbol
+        # table binds them for the whole comprehension); a class body's names are not seen
+        self._push(bound, function=False)
+        for i, g in enumerate(gens):
             if i:
                 self.visit(g.iter)
             for cond in g.ifs:
                 self.visit(cond)
-            self.shadow.pop()
-        self._with(bound)
         if isinstance(node, ast.DictComp):
             self.visit(node.key)
             self.visit(node.value)
         else:
             self.visit(node.elt)
-        self.shadow.pop()
+        self.scopes.pop()
 
     visit_ListComp = visit_SetComp = visit_GeneratorExp = visit_DictComp = _comprehension  # type: ignore[assignment]
 
@@ -197,22 +221,32 @@ class _Finder(ast.NodeVisitor):
         self._bind(node.name, "class", node)
         for d in node.decorator_list + node.bases + [k.value for k in node.keywords]:
             self.visit(d)
-        own = set()
-        for stmt in node.body:  # names assigned in a class body are class attributes
-            if isinstance(stmt, ast.Assign | ast.AnnAssign | ast.AugAssign):
-                tgts = stmt.targets if isinstance(stmt, ast.Assign) else [stmt.target]
-                for t in tgts:
-                    own |= _targets(t)
-            elif isinstance(stmt, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
-                own.add(stmt.name)
-        self._with(own)
+        outer = self.scopes[-1]  # a class in a class body does not see that body's names either
+        own = own_locals(ast.Module(body=node.body, type_ignores=[]))
+        # the body sees its own names; what is nested in it sees only what the class's
+        # surroundings see
+        self.scopes.append(_Scope(outer.inner | own, outer.inner, False))
         for stmt in node.body:
             self.visit(stmt)
-        self.shadow.pop()
+        self.scopes.pop()
 
     def visit_NamedExpr(self, node: ast.NamedExpr) -> None:
-        self._bind(node.target.id, ":=", node.target)
+        # `:=` in a comprehension binds in the enclosing function (PEP 572), so whether its
+        # target is the machine's is decided there, not by the comprehension's variables
+        function = next(s for s in reversed(self.scopes) if s.function)
+        self._bind(node.target.id, ":=", node.target, hidden=node.target.id in function.here)
         self.visit(node.value)
+
+    def visit_JoinedStr(self, node: ast.JoinedStr) -> None:
+        for value in node.values:
+            if not isinstance(value, ast.FormattedValue):
+                continue
+            before = len(self.edits)
+            self.visit(value.value)
+            if len(self.edits) > before and self.text is not None:
+                self.edits.extend(_self_documenting(self.text, value))
+            if value.format_spec is not None:
+                self.visit(value.format_spec)
 
     def visit_ExceptHandler(self, node: ast.ExceptHandler) -> None:
         self._bind(node.name, "except ... as", node)
@@ -234,6 +268,41 @@ class _Finder(ast.NodeVisitor):
     def visit_MatchMapping(self, node: ast.MatchMapping) -> None:
         self._bind(node.rest, "a match pattern", node)
         self.generic_visit(node)
+
+
+def _self_documenting(text: str, field: ast.FormattedValue) -> list[Edit]:
+    """Edits that keep `f"{x=}"` printing `x=` once `x` becomes `self.x`.
+
+    Python prints the text of the field as written, so `{x=}` rewritten to `{self.x=}` would
+    print `self.x=`.  The field becomes the same text as a literal followed by a plain field:
+    `x={self.x!r}` (repr, as `=` implies without a conversion or format spec).  No edit when
+    the field is not self-documenting, or when its text cannot be found on one line."""
+    expr = field.value
+    lines = line_index(text).lines
+    if expr.lineno != expr.end_lineno or not 1 <= expr.lineno <= len(lines):
+        return []
+    raw = lines[expr.lineno - 1].encode("utf-8")
+    brace = expr.col_offset - 1
+    while brace >= 0 and raw[brace : brace + 1] in (b" ", b"\t", b"("):
+        brace -= 1
+    if brace < 0 or raw[brace : brace + 1] != b"{":
+        return []
+    eq = expr.end_col_offset or 0
+    while eq < len(raw) and raw[eq : eq + 1] in (b" ", b"\t", b")"):
+        eq += 1
+    if raw[eq : eq + 1] != b"=" or raw[eq + 1 : eq + 2] == b"=":
+        return []
+    after = eq + 1
+    while after < len(raw) and raw[after : after + 1] in (b" ", b"\t"):
+        after += 1
+    nxt = raw[after : after + 1]
+    if nxt not in (b"}", b"!", b":"):
+        return []
+    literal = raw[brace + 1 : after].decode("utf-8").replace("{", "{{").replace("}", "}}")
+    return [
+        Edit(expr.lineno, brace, brace, literal),
+        Edit(expr.lineno, eq, after, "!r" if nxt == b"}" else ""),
+    ]
 
 
 def attribute_of(state: str, variable: str) -> str:
@@ -259,9 +328,10 @@ def state_map(base: Mapping[str, str], state: str, state_vars: list[str]) -> Map
     return ChainMap({v: f"self.{attribute_of(state, v)}" for v in state_vars}, base)  # type: ignore[arg-type]
 
 
-def find(tree: ast.AST, mapping: Mapping[str, str]) -> tuple[list[Edit], list[BadBinding]]:
-    """Where `tree` uses a name of `mapping` (bare name -> replacement text)."""
-    f = _Finder(mapping)
+def find(tree: ast.AST, mapping: Mapping[str, str], text: str | None = None) -> tuple[list[Edit], list[BadBinding]]:
+    """Where `tree` uses a name of `mapping` (bare name -> replacement text).  With the source
+    `text`, self-documenting f-string fields (`{x=}`) keep printing what the user wrote."""
+    f = _Finder(mapping, text)
     f.visit(tree)
     return f.edits, f.bad
 
@@ -284,7 +354,7 @@ def apply(text: str, edits: list[Edit]) -> str:
 
 def rewrite(text: str, mapping: Mapping[str, str], tree: ast.AST | None = None) -> str:
     tree = tree if tree is not None else ast.parse(text)
-    edits, _ = find(tree, mapping)
+    edits, _ = find(tree, mapping, text)
     return apply(text, edits)
 
 
