@@ -6,6 +6,8 @@ Codes never change meaning once published: CI configurations and suppressions re
 from __future__ import annotations
 
 import json
+import os
+import urllib.parse
 from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import StrEnum
@@ -104,7 +106,7 @@ class Diagnostic:
         return {
             "code": self.code,
             "severity": str(self.severity),
-            "file": self.file,
+            "file": unicode_text(self.file),
             "line": self.line,
             "column": self.column,
             "message": self.message,
@@ -127,6 +129,39 @@ def shown(text: str) -> str:
     if text.isprintable():
         return text
     return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text)
+
+
+def _path_bytes(path: str) -> bytes:
+    """The bytes of a file name as the file system has them: a name that is not UTF-8 reaches
+    Python with its bytes as lone surrogates (surrogateescape), and gets them back here."""
+    try:
+        return os.fsencode(path)
+    except UnicodeEncodeError:  # a surrogate that no byte made (a name built in Python)
+        return path.encode("utf-8", "surrogatepass")
+
+
+def unicode_text(path: str) -> str:
+    """`path` as valid Unicode for JSON: bytes that are not UTF-8 become `\\xNN` escapes
+    instead of lone surrogates, which JSON parsers of other languages refuse."""
+    try:
+        path.encode("utf-8")
+        return path
+    except UnicodeEncodeError:
+        return _path_bytes(path).decode("utf-8", "backslashreplace")
+
+
+def file_uri(path: str) -> str:
+    """An RFC 3986 reference for a file name, as SARIF's `artifactLocation.uri` requires.
+
+    Every byte but unreserved characters and `/` is percent-encoded (UTF-8 for text, the raw
+    byte for a name that is not UTF-8), so `#`, `?`, `%`, spaces and a `:` that would read as
+    a scheme all stay part of the path.  A relative name stays a relative reference (to the
+    folder `llfsm check` ran in); an absolute one becomes a `file:` URI."""
+    raw = _path_bytes(path)
+    quoted = urllib.parse.quote(raw, safe="/")
+    if raw.startswith(b"/"):
+        return "file://" + ("/" + quoted.lstrip("/") if raw.startswith(b"//") else quoted)
+    return quoted
 
 
 FORMATS = ("text", "json", "github", "sarif")
@@ -181,7 +216,7 @@ def format_sarif(diags: Iterable[Diagnostic], version: str) -> str:
             "locations": [
                 {
                     "physicalLocation": {
-                        "artifactLocation": {"uri": Path(d.file).as_posix()},
+                        "artifactLocation": {"uri": file_uri(Path(d.file).as_posix())},
                         "region": {"startLine": d.line, "startColumn": d.column},
                     }
                 }

@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import ast
 import io
+import json
 import os
 import signal
 import subprocess
 import sys
 import time
 import tokenize
+import urllib.parse
 from collections.abc import Callable
 from pathlib import Path
 
@@ -444,3 +446,82 @@ class TestRewriteFollowsPythonScoping:
             tmp_path, "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code}, variables="count: int = 3\n"
         )
         assert "LF013" in {d.code for d in check_machine(m).diagnostics}
+
+
+def _sarif_validator() -> object:
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json.loads((Path(__file__).parent / "data" / "sarif-schema-2.1.0.json").read_text(encoding="utf-8"))
+    # the schema is draft 4; FormatChecker() knows `uri-reference` (rfc3986-validator)
+    checker = jsonschema.FormatChecker()
+    assert not checker.conforms("a b#c#d", "uri-reference"), "uri-reference is not checked: install the extras"
+    return jsonschema.Draft4Validator(schema, format_checker=checker)
+
+
+def _strings(value: object) -> list[str]:
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, dict):
+        return [s for k, v in value.items() for s in (*_strings(k), *_strings(v))]
+    if isinstance(value, list):
+        return [s for v in value for s in _strings(v)]
+    return []
+
+
+class TestOutputFormatsForAnyFileName:
+    """SARIF and JSON output of issue 12: valid for any file name."""
+
+    @pytest.fixture
+    def hostile(self, tmp_path: Path) -> list[Path]:
+        out = []
+        for i, folder in enumerate(HOSTILE_FOLDERS):
+            root = _hostile_dir(tmp_path / f"h{i}", folder)
+            # a machine with an error and a warning: a diagnostic in each file it names
+            out.append(write_machine(root, "m", {"A": [("ENDD", "True")], "END": None, "LOST": None}))
+        return out
+
+    @pytest.mark.parametrize("relative", [False, True])
+    def test_sarif_is_valid_against_the_schema(
+        self, hostile: list[Path], tmp_path: Path, monkeypatch, relative: bool
+    ) -> None:
+        validator = _sarif_validator()
+        if relative:
+            monkeypatch.chdir(tmp_path)
+            args = [os.path.relpath(m, tmp_path) for m in hostile]
+        else:
+            args = [str(m) for m in hostile]
+        r = llfsm("check", "--format", "sarif", *args)
+        assert r.status == 1
+        doc = json.loads(r.stdout)
+        errors = sorted(validator.iter_errors(doc), key=str)
+        assert not errors, errors[0]
+        results = doc["runs"][0]["results"]
+        assert len(results) >= 2 * len(hostile)
+        for s in _strings(doc):
+            s.encode("utf-8")  # no lone surrogate anywhere
+        uris = [loc["physicalLocation"]["artifactLocation"]["uri"] for res in results for loc in res["locations"]]
+        for uri in uris:
+            assert uri.startswith("file:///") != relative
+            assert not any(c in uri for c in " #?") and uri.isascii()
+        # each URI gives back the bytes of the file it names
+        named = {os.fsencode(os.path.join(str(m), "machine.yaml")) for m in hostile}
+        decoded = set()
+        for uri in uris:
+            raw = urllib.parse.unquote_to_bytes(uri.removeprefix("file://"))
+            decoded.add(raw if not relative else os.fsencode(os.path.join(str(tmp_path), os.fsdecode(raw))))
+        assert named <= decoded
+
+    def test_json_has_no_lone_surrogates(self, hostile: list[Path]) -> None:
+        r = llfsm("check", "--format", "json", *hostile)
+        assert r.status == 1
+        doc = json.loads(r.stdout)
+        assert len({d["file"] for d in doc}) >= len(hostile)
+        for s in _strings(doc):
+            s.encode("utf-8")
+        assert any("\\xe9\\xff" in d["file"] for d in doc)  # the bytes, spelled out
+
+    @pytest.mark.parametrize("fmt", ["text", "github"])
+    def test_line_formats_keep_one_line_per_diagnostic(self, hostile: list[Path], fmt: str) -> None:
+        r = llfsm("check", "--format", fmt, *hostile)
+        count = len(json.loads(llfsm("check", "--format", "json", *hostile).stdout))
+        assert len(r.stdout.splitlines()) == count
+        r.stdout.encode("utf-8")
