@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ast
 import builtins
+import difflib
 import io
 import os
 import tokenize
@@ -21,7 +22,7 @@ from .compiler.rewrite import BadBinding, attribute_of, find, line_index, name_m
 from .deps import undeclared_dependencies
 from .diagnostics import Diagnostic, Severity, diag
 from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
-from .model import Code, Machine, State, is_valid_name
+from .model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
 from .reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
 
@@ -59,11 +60,62 @@ def check_machine(path: str | Path, within: Path | None = None) -> MachineCheck:
     an untrusted pull request must not get `llfsm check` to read files from elsewhere.
     `within` (the folder searched) is accepted for callers that pass it; the rule needs none."""
     path = Path(path)
+    _suggester.left = SUGGEST_AT_MOST  # a budget per machine
     read = read_machine(path)  # refuses a linked directory by discover.refused_link, as everything does
     result = MachineCheck(path, read, list(read.diagnostics))
     _Checker(result).run()
-    result.diagnostics = sorted(set(result.diagnostics), key=Diagnostic.sort_key)
+    result.diagnostics = sorted(set(_without_cascade(result.diagnostics)), key=Diagnostic.sort_key)
     return result
+
+
+#: Diagnostics that follow from an earlier one rather than from a mistake of their own: one
+#: typo in machine.yaml (`transition:` for `transitions:`, a misspelt target) must give one
+#: diagnostic, not that one plus an orphan file for each guard and an unreachable state for
+#: each target.  They come back, if still true, once the first is fixed.
+#: (A misspelt target is followed to the state it was meant for by `reachability` instead.)
+_CASCADES = {
+    "LF004": frozenset({"LF020", "LF021", "LF022", "LF101", "LF102", "LF104"}),
+}
+
+
+#: "Did you mean" is for hand-written machines: difflib compares a name with every candidate,
+#: so a machine.yaml with 100,000 misspelt targets among 100,000 states would take hours.
+#: Beyond these bounds, no suggestion (the diagnostic itself stays).
+SUGGEST_AMONG = 1000
+SUGGEST_AT_MOST = 100
+
+
+class _Suggester:
+    def __init__(self) -> None:
+        self.left = SUGGEST_AT_MOST
+
+    def close(self, name: str, names: Iterable[str]) -> list[str]:
+        names = names if isinstance(names, list | set | frozenset | dict) else list(names)
+        if self.left <= 0 or len(names) > SUGGEST_AMONG or len(name) > 200:
+            return []
+        self.left -= 1
+        return difflib.get_close_matches(name, [n for n in names if len(n) <= 200], n=1, cutoff=0.6)
+
+
+_suggester = _Suggester()
+
+
+def _close_names(name: str, names: Iterable[str]) -> list[str]:
+    return _suggester.close(name, names)
+
+
+def did_you_mean(name: str, names: Iterable[str]) -> str:
+    """` (did you mean 'END'?)` when a known name is close to `name`, else nothing."""
+    close = _close_names(name, names)
+    if not close:
+        return ""
+    return f" (did you mean {' or '.join(repr(c) for c in close)}?)"
+
+
+def _without_cascade(diags: list[Diagnostic]) -> list[Diagnostic]:
+    codes = {d.code for d in diags}
+    drop = frozenset().union(*(_CASCADES[c] for c in codes if c in _CASCADES))
+    return [d for d in diags if d.code not in drop] if drop else diags
 
 
 def check_paths(paths: Iterable[Path]) -> list[MachineCheck]:
@@ -179,6 +231,15 @@ class _Checker:
             self.add(
                 "LF010", "machine.yaml", 1, 1, f"machine name {name!r} must be a Python identifier and not a keyword"
             )
+        elif len(name) > MAX_MACHINE_NAME:
+            self.add(
+                "LF014",
+                "machine.yaml",
+                1,
+                1,
+                f"machine name {name[:20]}... is {len(name)} characters long; at most {MAX_MACHINE_NAME} "
+                "fit the file names a build writes",
+            )
         m = self.r.machine
         if m is None:
             return
@@ -221,6 +282,7 @@ class _Checker:
     def states(self, m: Machine) -> None:
         seen: dict[str, State] = {}
         names = {s.name for s in m.states}
+        declared = [s.name for s in m.states if not s.implicit]  # what "did you mean" offers
         for s in m.states:
             if s.implicit:
                 continue
@@ -232,12 +294,25 @@ class _Checker:
                 seen[s.name] = s
             for t in s.transitions:
                 if t.target not in names:
-                    self.at("LF020", t.loc, f"transition {t.index} of {s.name} goes to unknown state {t.target!r}")
+                    self.at(
+                        "LF020",
+                        t.loc,
+                        f"transition {t.index} of {s.name} goes to unknown state {t.target!r}"
+                        + did_you_mean(t.target, declared),
+                    )
                 self.guard(s, t.index, t.guard)
         if m.initial not in names:
-            self.at("LF021", m.initial_loc, f"initial state {m.initial!r} is not a state of this machine")
+            self.at(
+                "LF021",
+                m.initial_loc,
+                f"initial state {m.initial!r} is not a state of this machine" + did_you_mean(m.initial, declared),
+            )
         if m.suspended not in names:
-            self.at("LF022", m.suspended_loc, f"suspend state {m.suspended!r} is not a state of this machine")
+            self.at(
+                "LF022",
+                m.suspended_loc,
+                f"suspend state {m.suspended!r} is not a state of this machine" + did_you_mean(m.suspended, declared),
+            )
 
     def guard(self, s: State, index: int, code: Code | None) -> None:
         fname = f"State_{s.name}_Transition_{index}.expr"
@@ -519,11 +594,18 @@ class _Checker:
             return
         seen = {m.initial}
         todo = [m.initial]
+        meant: dict[str, str | None] = {}  # a misspelt target -> the state it was meant for
         while todo:
             for t in names[todo.pop()].transitions:
-                if t.target in names and t.target not in seen:
-                    seen.add(t.target)
-                    todo.append(t.target)
+                target = t.target
+                if target not in names:  # already LF020: follow it where it was meant to go
+                    if target not in meant:
+                        close = _close_names(target, names)
+                        meant[target] = close[0] if close else None
+                    target = meant[target]
+                if target is not None and target not in seen:
+                    seen.add(target)
+                    todo.append(target)
         for s in m.states:
             if s.name not in seen and s.name != m.suspended and not s.implicit:
                 self.at("LF102", s.loc, f"state {s.name} cannot be reached from the initial state {m.initial}")

@@ -325,10 +325,14 @@ class _Reader:
                 if not isinstance(tnode, yaml.SequenceNode):
                     self.structure_error(tnode, f"`transitions` of {sname} must be a list of state names")
                 else:
-                    for t in tnode.value:
+                    for position, t in enumerate(tnode.value):
                         tname = self.scalar(t, "a transition target")
                         if tname is not None:
                             targets.append((tname, _mark_loc(t)))
+                        elif isinstance(t, yaml.ScalarNode):  # `[~, END]`: never dropped in silence
+                            self.structure_error(
+                                t, f"transition {position} of {sname} has no target (`~` or empty); name a state"
+                            )
             states.append(self.state(sname, sloc, targets, entry_set))
 
         if not states:

@@ -525,3 +525,92 @@ class TestOutputFormatsForAnyFileName:
         count = len(json.loads(llfsm("check", "--format", "json", *hostile).stdout))
         assert len(r.stdout.splitlines()) == count
         r.stdout.encode("utf-8")
+
+
+class TestClearMessages:
+    """'Should be a clear message' of issue 12, the front end's share."""
+
+    def test_a_name_check_accepts_is_a_name_build_can_write(self, tmp_path: Path) -> None:
+        from llfsm.model import MAX_MACHINE_NAME
+
+        ok = write_machine(tmp_path, "m" * MAX_MACHINE_NAME, {"A": [("END", "True")], "END": None})
+        r = llfsm("build", "-q", "-o", tmp_path / "out", ok)
+        assert r.status == 0, r.stderr
+        long = write_machine(tmp_path, "n" * (255 - len(".machine")), {"A": [("END", "True")], "END": None})
+        r = llfsm("check", long)
+        assert r.status == 1 and "LF014" in r.stdout
+        r = llfsm("build", "-q", "-o", tmp_path / "out", long)
+        assert r.status == 1 and "LF014" in r.stderr and "Traceback" not in r.stderr
+
+    @pytest.mark.parametrize("targets", ["[~, END]", "[END, ~]", "[~]", "\n      -\n      - END"])
+    def test_a_missing_transition_target_is_reported(self, tmp_path: Path, targets: str) -> None:
+        d = tmp_path / "m.machine"
+        d.mkdir()
+        (d / "machine.yaml").write_text(f"states:\n  - name: A\n    transitions: {targets}\n  - name: END\n")
+        (d / "State_A_Transition_0.expr").write_text("after(1)\n")
+        (d / "State_A_Transition_1.expr").write_text("after(2)\n")
+        diags = check_machine(d).diagnostics
+        assert [x.code for x in diags] == ["LF004"], diags
+        assert "has no target" in diags[0].message
+
+
+class TestNewcomerYaml:
+    """The newcomer's rough edges in machine.yaml: one typo, one diagnostic, with a suggestion."""
+
+    def _machine(self, tmp_path: Path, yaml_text: str) -> Path:
+        d = tmp_path / "m.machine"
+        d.mkdir()
+        (d / "machine.yaml").write_text(yaml_text)
+        for s, n in (("INITIAL", 2), ("WAIT", 1)):
+            for i in range(n):
+                (d / f"State_{s}_Transition_{i}.expr").write_text(f"after({i + 1})\n")
+        return d
+
+    def test_a_misspelt_target_gets_one_diagnostic_with_a_suggestion(self, tmp_path: Path) -> None:
+        d = self._machine(
+            tmp_path,
+            "states:\n  - name: INITIAL\n    transitions: [WAIT, ENDD]\n"
+            "  - name: WAIT\n    transitions: [END]\n  - name: END\n",
+        )
+        diags = check_machine(d).diagnostics
+        assert [x.code for x in diags] == ["LF020"], diags
+        assert "did you mean 'END'?" in diags[0].message
+
+    def test_a_misspelt_key_gets_one_diagnostic(self, tmp_path: Path) -> None:
+        d = self._machine(
+            tmp_path,
+            "states:\n  - name: INITIAL\n    transition: [WAIT, END]\n"
+            "  - name: WAIT\n    transitions: [END]\n  - name: END\n",
+        )
+        diags = check_machine(d).diagnostics
+        assert [x.code for x in diags] == ["LF004"], diags
+
+    def test_a_misspelt_initial_state(self, tmp_path: Path) -> None:
+        d = self._machine(
+            tmp_path,
+            "initial: INITAL\nstates:\n  - name: INITIAL\n    transitions: [WAIT, END]\n"
+            "  - name: WAIT\n    transitions: [END]\n  - name: END\n",
+        )
+        diags = check_machine(d).diagnostics
+        assert [x.code for x in diags] == ["LF021"], diags
+        assert "did you mean 'INITIAL'?" in diags[0].message
+
+    def test_an_unrelated_unreachable_state_is_still_reported(self, tmp_path: Path) -> None:
+        d = self._machine(
+            tmp_path,
+            "states:\n  - name: INITIAL\n    transitions: [END, ENDD]\n"
+            "  - name: WAIT\n    transitions: [END]\n  - name: END\n",
+        )
+        assert sorted(x.code for x in check_machine(d).diagnostics) == ["LF020", "LF102"]
+
+    def test_suggestions_stay_linear(self, tmp_path: Path) -> None:
+        def make(n: int) -> Callable[[], object]:
+            d = tmp_path / f"s{n}.machine"
+            d.mkdir()
+            states = "".join(f"  - name: S{i}\n    transitions: [T{i}]\n" for i in range(n))
+            (d / "machine.yaml").write_text("states:\n" + states)
+            for i in range(n):
+                (d / f"State_S{i}_Transition_0.expr").write_text("True\n")
+            return lambda: check_machine(d)
+
+        assert _ratio(make, 1000) < 10
