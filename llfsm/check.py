@@ -23,14 +23,44 @@ from .deps import undeclared_dependencies
 from .diagnostics import Diagnostic, Severity, diag
 from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
 from .model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
+from .names import Unresolved, section_bindings, unresolved
 from .reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
 
-BUILTINS = frozenset(dir(builtins))
+#: Builtins, and the globals every module has (the compiled machine is a module).
+BUILTINS = frozenset(dir(builtins)) | {"__file__", "__builtins__", "__cached__", "__loader__", "__spec__"}
 GENERATED_PREFIXES = ("ringlet_", "on_entry_", "internal_", "on_exit_", "on_suspend_", "on_resume_")
 #: Module-level names the compiled module itself uses (templates/machine.py.j2): an import in
 #: Includes.py that rebinds one would break the class the module defines.
 MODULE_NAMES = frozenset({"Machine", "super", "frozenset"})
+
+
+#: Names from C, C++ and clfsm habits, and their Python spelling.
+CPP_NAMES = {
+    "true": "True",
+    "false": "False",
+    "TRUE": "True",
+    "FALSE": "False",
+    "null": "None",
+    "NULL": "None",
+    "nullptr": "None",
+    "this": "a machine variable's bare name (no `this->`)",
+}
+
+
+class _Known:
+    """What machine code may read without binding it: machine and state variables, macros,
+    names imported by Includes.py, builtins.  A view, not a set: building a set per file
+    would cost the machine's variables once per file."""
+
+    __slots__ = ("imported", "mapping")
+
+    def __init__(self, mapping: Mapping[str, str], imported: set[str] | None) -> None:
+        self.mapping = mapping
+        self.imported = imported or set()
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.mapping or name in self.imported or name in BUILTINS
 
 
 @dataclass
@@ -209,6 +239,7 @@ class _Checker:
         self.always_true: set[str] = set()  # states whose LF104 warnings are already given
         self._base: Mapping[str, str] | None = None  # the machine-level name map
         self._imported: set[str] | None = set()
+        self._locals: dict[str, str] | None = None  # name -> a section file binding it
 
     def add(self, code: str, file: str, line: int, col: int, msg: str) -> None:
         self.r.diagnostics.append(diag(code, self.path / file, line, col, msg))
@@ -544,17 +575,50 @@ class _Checker:
                 and (not is_guard or _single_expression(tree))
             ):
                 self.compiles(code, tree)
-            if imported is not None and (not is_guard or _single_expression(tree)):
-                for name, n in scan.loads.items():
-                    if not (name in mapping or name in imported or name in scan.bound or name in BUILTINS):
-                        self.add(
-                            "LF105",
-                            code.file,
-                            n.lineno,
-                            node_col(code.text, n),
-                            f"name {name!r} is not a variable of this machine or state, an import, a builtin "
-                            "or a macro, and is not assigned in this file",
-                        )
+            if (not is_guard or _single_expression(tree)) and any(
+                not (name in mapping or name in BUILTINS or (imported is not None and name in imported))
+                or name in scan.bound  # bound here: where, and in which scope, decides
+                for name in scan.loads
+            ):
+                known = _Known(mapping, imported)
+                for u in unresolved(tree, known):
+                    self.undefined(m, s, code, u, star=imported is None)
+
+    def undefined(self, m: Machine, s: State, code: Code, u: Unresolved, star: bool) -> None:
+        """LF040 for a name nothing provides (LF105, a warning, when Includes.py star-imports,
+        since the star may provide it), with the likeliest cause and its fix."""
+        name, n = u.name, u.node
+        declare = (
+            f"declare it in Variables.py (`{name}: int = 0`) to keep a value between sections and read it in guards"
+        )
+        other = self.locals_elsewhere(m).get(name)
+        if u.assigned_at is not None:
+            msg = f"name {name!r} is read before it is assigned (line {u.assigned_at}); assign it first, or {declare}"
+        elif name in CPP_NAMES:
+            msg = f"name {name!r} is not defined: Python spells it `{CPP_NAMES[name]}`"
+        elif other is not None and other != code.file:
+            msg = f"name {name!r} is a local of {other}: a section's locals last one section, as in clfsm; {declare}"
+        else:
+            candidates = [k for k in self._base or {} if k not in MACROS] + [v.name for v in s.variables]
+            candidates += sorted(self._imported or ()) + sorted(MACROS)
+            close = _close_names(name, candidates)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            msg = f"name {name!r} is not defined{hint}: not a variable, an import, a builtin or a macro; {declare}"
+        if star:
+            msg = f"{msg} (unless the star import of Includes.py provides it)"
+        self.add("LF105" if star else "LF040", code.file, n.lineno, node_col(code.text, n), msg)
+
+    def locals_elsewhere(self, m: Machine) -> dict[str, str]:
+        """name -> the first code file of the machine that binds it at its own level."""
+        if self._locals is None:
+            self._locals = {}
+            for st in m.states:
+                for c in st.sections.values():
+                    tree = self.r.read.trees.get(c.file)
+                    if tree is not None:
+                        for name in section_bindings(tree):
+                            self._locals.setdefault(name, c.file)
+        return self._locals
 
     def bad_binding(self, code: Code, b: BadBinding) -> None:
         kind = "macro" if b.name in MACROS else "variable"
@@ -697,7 +761,7 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
             if isinstance(child, ast.Name):
                 if child.id == "self" or child.id.startswith("_llfsm"):
                     out.reserved.append(child)
-                elif isinstance(child.ctx, ast.Load):
+                elif isinstance(child.ctx, ast.Load | ast.Del):  # `del x` reads x as well
                     out.loads.setdefault(child.id, child)
                 else:
                     bound.add(child.id)

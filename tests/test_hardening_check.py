@@ -614,3 +614,99 @@ class TestNewcomerYaml:
             return lambda: check_machine(d)
 
         assert _ratio(make, 1000) < 10
+
+
+def _codes_of(tmp_path: Path, code: dict[str, str], guard: str = "True", **kw: str) -> list[tuple[str, str, int]]:
+    m = write_machine(tmp_path, "m", {"A": [("END", guard)], "END": None}, code, **kw)
+    return sorted((d.code, Path(d.file).name, d.line) for d in check_machine(m).diagnostics)
+
+
+class TestUndeclaredNames:
+    """The newcomer's commonest mistake is an error at check time, with the fix in its message."""
+
+    def test_a_local_of_on_entry_read_in_a_guard(self, tmp_path: Path) -> None:
+        m = write_machine(tmp_path, "m", {"A": [("END", "started")], "END": None}, {"A_OnEntry": "started = True\n"})
+        diags = check_machine(m).diagnostics
+        assert [(d.code, Path(d.file).name) for d in diags] == [("LF040", "State_A_Transition_0.expr")]
+        assert "State_A_OnEntry.py" in diags[0].message and "Variables.py" in diags[0].message
+        assert llfsm("check", m).status == 1
+        # and what the message says to do makes it pass and run
+        (m / "Variables.py").write_text("started: bool = False\n")
+        assert check_machine(m).ok
+        assert run_sim(m, "--duration", "10ms").status == 0
+
+    def test_a_local_of_another_section(self, tmp_path: Path) -> None:
+        got = _codes_of(tmp_path, {"A_OnEntry": "n = 1\n", "A_OnExit": "print(n)\n"})
+        assert got == [("LF040", "State_A_OnExit.py", 1)]
+
+    def test_read_before_assigned(self, tmp_path: Path) -> None:
+        got = _codes_of(tmp_path, {"A_OnEntry": "print(total)\ntotal = 0\nx += 1\n"})
+        assert got == [("LF040", "State_A_OnEntry.py", 1), ("LF040", "State_A_OnEntry.py", 3)]
+
+    @pytest.mark.parametrize(
+        "code",
+        [
+            "total = 0\nprint(total)\n",
+            "for i in range(3):\n    if i:\n        print(prev)\n    prev = i\n",
+            "n = 0\nwhile n < 3:\n    if n:\n        print(last)\n    last = n\n    n += 1\n",
+            "def f():\n    return later\nlater = 1\nprint(f())\n",
+            "import math\nprint(math.pi)\n",
+            "try:\n    import json as j\nexcept ImportError:\n    j = None\nprint(j)\n",
+            "try:\n    1 / 0\nexcept ZeroDivisionError as e:\n    print(e)\n",
+            "print([v for v in range(2)], {k: k for k in 'ab'})\n",
+            "vals = [(last := v) for v in range(3)]\nprint(last)\n",
+            "with open(__file__) as fh:\n    pass\nprint(fh.closed)\n",
+            "x = 1\ndel x\n",
+            "for a, (b, c) in [(1, (2, 3))]:\n    print(a, b, c)\n",
+            "class K:\n    y = 1\n    z = y + 1\nprint(K.z)\n",
+            "count = count + 1\nprint(after_ms(1), count)\n",
+            "f = lambda a, *r, k=1, **kw: (a, r, k, kw)\nprint(f(1))\n",
+            "match [1, 2]:\n    case [a, *rest]:\n        print(a, rest)\n",
+        ],
+    )
+    def test_correct_code_passes_and_runs(self, tmp_path: Path, code: str) -> None:
+        m = write_machine(
+            tmp_path,
+            "m",
+            {"A": [("END", "True")], "END": None},
+            {"A_OnEntry": code},
+            variables="count: int = 0\n",
+        )
+        checked = check_machine(m)
+        assert checked.ok, checked.diagnostics
+        r = run_sim(m, "--duration", "10ms")
+        assert r.status == 0, r.stderr
+
+    @pytest.mark.parametrize(
+        ("code", "name"),
+        [
+            ("print([v for v in range(2)], v)\n", "v"),
+            ("class K:\n    y = 1\n    def m(this):\n        return y\nK().m()\n", "y"),
+            ("x: int\nprint(x)\n", "x"),
+            ("f = lambda a: a + b\nf(1)\n", "b"),
+            ("del nothere\n", "nothere"),
+            ("g = [k for k in range(k)]\n", "k"),
+        ],
+    )
+    def test_wrong_code_is_an_error(self, tmp_path: Path, code: str, name: str) -> None:
+        m = write_machine(tmp_path, "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code})
+        diags = check_machine(m).diagnostics
+        assert [d.code for d in diags] == ["LF040"], diags
+        assert repr(name) in diags[0].message
+        # and check is right: the run fails
+        assert run_sim(m, "--duration", "10ms").status != 0
+
+    def test_suggestions_and_other_languages(self, tmp_path: Path) -> None:
+        m = write_machine(
+            tmp_path,
+            "m",
+            {"A": [("END", "conut > 1 or true")], "END": None},
+            variables="count: int = 0\n",
+        )
+        msgs = {d.message.split("'")[1]: d.message for d in check_machine(m).diagnostics if d.code == "LF040"}
+        assert "did you mean 'count'?" in msgs["conut"]
+        assert "`True`" in msgs["true"]
+
+    def test_a_star_import_makes_it_a_warning(self, tmp_path: Path) -> None:
+        got = _codes_of(tmp_path, {"A_OnEntry": "print(pi)\n"}, includes="from math import *\n")
+        assert got == [("LF105", "State_A_OnEntry.py", 1)]
