@@ -11,7 +11,9 @@ import ast
 import builtins
 import difflib
 import io
+import itertools
 import os
+import re
 import tokenize
 import warnings
 from collections.abc import Iterable, Mapping
@@ -46,6 +48,45 @@ CPP_NAMES = {
     "nullptr": "None",
     "this": "a machine variable's bare name (no `this->`)",
 }
+
+
+#: Names rclpy code uses that llfsm spells otherwise (read without an import: LF040's hint).
+ROS_NAMES = {
+    "rclpy": "`from llfsm import ros` in Includes.py, then ros.Node(...), ros.ok()",
+    "qos_profile_sensor_data": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "qos_profile_system_default": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "qos_profile_services_default": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "qos_profile_parameters": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "QoSPresetProfiles": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+}
+_ROS_MESSAGE_MODULE = re.compile(r"(?P<pkg>[a-z][a-z0-9_]*)\.(?P<kind>msg|srv|action)(?:\.(?P<rest>.*))?\Z")
+
+
+def ros_import_hint(module: str, stmt: ast.Import | ast.ImportFrom) -> str | None:
+    """The llfsm spelling of an rclpy-style import, or None if the import is not one."""
+    top = module.split(".")[0]
+    if top == "rclpy":
+        names = [a.name for a in stmt.names] if isinstance(stmt, ast.ImportFrom) else []
+        qos = [n for n in names if n in ROS_NAMES and n != "rclpy"]
+        if qos:
+            return f"`{qos[0]}` comes from rclpy, which llfsm machines do not use: pass {ROS_NAMES[qos[0]]}"
+        return f"`{module}` is rclpy; llfsm machines use `from llfsm import ros` (ros.Node, ros.ok(), ...)"
+    m = _ROS_MESSAGE_MODULE.match(module)
+    if m is None:
+        return None
+    if isinstance(stmt, ast.ImportFrom):
+        names = ", ".join(a.name for a in stmt.names)
+        spelled = f"from llfsm.msgs.{module} import {names}"
+    else:
+        spelled = f"import llfsm.msgs.{module}"
+    return f"ROS messages of {m['pkg']} come from llfsm.msgs: `{spelled}`"
+
+
+def _ros_time_has(attr: str) -> bool:
+    """Whether llfsm's run-clock time has `attr` (read from llfsm's own code, not the user's)."""
+    from .ros.node import Time
+
+    return hasattr(Time, attr)
 
 
 class _Known:
@@ -401,6 +442,9 @@ class _Checker:
         tree = self.r.read.trees.get("Includes.py")
         if tree is None or m.includes is None:
             return
+        self.ros_habits(
+            m.includes, _Scanned(imports=[s for s in tree.body if isinstance(s, ast.Import | ast.ImportFrom)])
+        )
         for stmt in tree.body:
             col = node_col(m.includes.text, stmt)
             if not isinstance(stmt, ast.Import | ast.ImportFrom):
@@ -435,6 +479,34 @@ class _Checker:
                             f"Includes.py binds `{bound}`, which the compiled module uses itself; "
                             "import it under another name (`import x as y`)",
                         )
+
+    def ros_habits(self, code: Code, scan: _Scanned) -> None:
+        """LF041: rclpy spellings that llfsm does not take, with the llfsm spelling."""
+        for stmt in scan.imports:
+            modules = [stmt.module or ""] if isinstance(stmt, ast.ImportFrom) else [a.name for a in stmt.names]
+            if isinstance(stmt, ast.ImportFrom) and stmt.level:
+                continue
+            for mod in modules:
+                hint = ros_import_hint(mod, stmt)
+                if hint is not None:
+                    self.add("LF041", code.file, stmt.lineno, node_col(code.text, stmt), hint)
+                    break
+        for attr in scan.to_msg:
+            now = attr.value
+            if (
+                isinstance(now, ast.Call)
+                and isinstance(now.func, ast.Attribute)
+                and now.func.attr == "now"
+                and not _ros_time_has("to_msg")
+            ):
+                self.add(
+                    "LF041",
+                    code.file,
+                    attr.lineno,
+                    node_col(code.text, attr),
+                    "llfsm's clock time has no to_msg(): `s, ns = node.get_clock().now().seconds_nanoseconds()` "
+                    "then `Time(sec=s, nanosec=ns)` (from llfsm.msgs.builtin_interfaces.msg import Time)",
+                )
 
     def imported_names(self) -> set[str] | None:
         """Names Includes.py binds; None if it star-imports (then any name may exist)."""
@@ -569,6 +641,10 @@ class _Checker:
                     self.bad_binding(code, b)
             for n in scan.reserved:
                 self.reserved_use(code, n)
+            self.ros_habits(code, scan)
+            if not is_guard and ";" in code.text:
+                for line, col in _trailing_semicolons(code.text):
+                    self.add("LF108", code.file, line, col, "Python needs no `;` at the end of a statement; drop it")
             if (
                 not scan.escapes
                 and (not scan.plain or "__debug__" in code.text)  # `__debug__` cannot be assigned
@@ -596,6 +672,8 @@ class _Checker:
             msg = f"name {name!r} is read before it is assigned (line {u.assigned_at}); assign it first, or {declare}"
         elif name in CPP_NAMES:
             msg = f"name {name!r} is not defined: Python spells it `{CPP_NAMES[name]}`"
+        elif name in ROS_NAMES:
+            msg = f"name {name!r} is not defined: llfsm spells it {ROS_NAMES[name]}"
         elif other is not None and other != code.file:
             msg = f"name {name!r} is a local of {other}: a section's locals last one section, as in clfsm; {declare}"
         else:
@@ -737,6 +815,8 @@ class _Scanned:
     may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping somewhere
     too_deep: ast.AST | None = None  # the first node nested deeper than MAX_CODE_DEPTH: stop there
     plain: bool = True  # only `_PLAIN` nodes, used as it allows: compiling to bytecode cannot fail
+    imports: list[ast.Import | ast.ImportFrom] = field(default_factory=list)  # for LF041
+    to_msg: list[ast.Attribute] = field(default_factory=list)  # `x.to_msg`, for LF041
 
 
 def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
@@ -768,6 +848,10 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
                     if child.id in MACROS:
                         out.reserved.append(child)
                 continue
+            if isinstance(child, ast.Import | ast.ImportFrom):
+                out.imports.append(child)
+            elif isinstance(child, ast.Attribute) and child.attr == "to_msg":
+                out.to_msg.append(child)
             if isinstance(child, ast.arg):
                 bound.add(child.arg)
                 if child.arg == "self" or child.arg.startswith("_llfsm"):
@@ -853,6 +937,22 @@ def _semicolon(text: str) -> tuple[int, int] | None:
     except (tokenize.TokenError, SyntaxError):
         return None
     return None
+
+
+def _trailing_semicolons(text: str) -> list[tuple[int, int]]:
+    """(line, column) of each `;` that ends a line's code (C++'s habit); `a = 1; b = 2` is left
+    alone.  At most a few: one per line is enough to make the point."""
+    out: list[tuple[int, int]] = []
+    try:
+        toks = list(tokenize.generate_tokens(io.StringIO(text).readline))
+    except (tokenize.TokenError, SyntaxError):
+        return out
+    for tok, nxt in itertools.pairwise(toks):
+        if tok.type == tokenize.OP and tok.string == ";" and nxt.type in (tokenize.NEWLINE, tokenize.COMMENT):
+            out.append((tok.start[0], tok.start[1] + 1))
+            if len(out) >= 20:
+                break
+    return out
 
 
 def _single_expression(tree: ast.Module) -> bool:

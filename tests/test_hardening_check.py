@@ -710,3 +710,79 @@ class TestUndeclaredNames:
     def test_a_star_import_makes_it_a_warning(self, tmp_path: Path) -> None:
         got = _codes_of(tmp_path, {"A_OnEntry": "print(pi)\n"}, includes="from math import *\n")
         assert got == [("LF105", "State_A_OnEntry.py", 1)]
+
+
+class TestOtherLanguagesHabits:
+    """C++ (clfsm) and rclpy habits get the llfsm spelling, not just "invalid syntax"."""
+
+    @pytest.mark.parametrize(
+        ("line", "spelling"),
+        [
+            ("count++", "count += 1"),
+            ("count--", "count -= 1"),
+            ("ok = a && b", "`and`"),
+            ("ok = a || b", "`or`"),
+            ("if !done:\n    pass", "`not x`"),
+            ("int x = 0;", "x = ..."),
+            ("if (a) {\n}", "colon and indentation"),
+            ("// a comment", "`#`"),
+        ],
+    )
+    def test_cpp_syntax_gets_a_hint(self, tmp_path: Path, line: str, spelling: str) -> None:
+        m = write_machine(
+            tmp_path, "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": line}, variables="count: int = 0\n"
+        )
+        diags = check_machine(m).diagnostics
+        assert [d.code for d in diags] == ["LF030"], diags
+        assert spelling in diags[0].message
+
+    def test_a_guard_with_cpp_operators(self, tmp_path: Path) -> None:
+        m = write_machine(tmp_path, "m", {"A": [("END", "after(1) && !false")], "END": None})
+        diags = check_machine(m).diagnostics
+        assert [d.code for d in diags] == ["LF030"] and "`and`" in diags[0].message
+
+    def test_a_trailing_semicolon_is_a_warning(self, tmp_path: Path) -> None:
+        got = _codes_of(tmp_path, {"A_OnEntry": "x = 1;\ny = 2; z = 3\nprint(x, y, z);  # done\n"})
+        assert got == [("LF108", "State_A_OnEntry.py", 1), ("LF108", "State_A_OnEntry.py", 3)]
+
+    @pytest.mark.parametrize(
+        ("where", "text", "spelling"),
+        [
+            ("Includes.py", "import rclpy\n", "from llfsm import ros"),
+            ("Includes.py", "from std_msgs.msg import String\n", "from llfsm.msgs.std_msgs.msg import String"),
+            ("Includes.py", "import geometry_msgs.msg\n", "import llfsm.msgs.geometry_msgs.msg"),
+            ("Includes.py", "from rclpy.qos import qos_profile_sensor_data\n", "ros.QoSProfile(depth=10)"),
+            ("Includes.py", "from rclpy.node import Node\n", "from llfsm import ros"),
+            ("State_A_OnEntry.py", "from turtlesim.srv import Spawn\n", "from llfsm.msgs.turtlesim.srv import Spawn"),
+        ],
+    )
+    def test_rclpy_habits_get_the_llfsm_spelling(self, tmp_path: Path, where: str, text: str, spelling: str) -> None:
+        m = write_machine(tmp_path, "m", {"A": [("END", "True")], "END": None}, {where: text})
+        diags = [d for d in check_machine(m).diagnostics if d.code == "LF041"]
+        assert len(diags) == 1 and spelling in diags[0].message, diags
+
+    def test_to_msg_and_qos_presets(self, tmp_path: Path) -> None:
+        m = write_machine(
+            tmp_path,
+            "m",
+            {"A": [("END", "True")], "END": None},
+            {
+                "A_OnEntry": "node = ros.Node('n')\nstamp = node.get_clock().now().to_msg()\nq = qos_profile_sensor_data\n"
+            },
+            includes="from llfsm import ros\n",
+        )
+        diags = check_machine(m).diagnostics
+        assert {(d.code, d.line) for d in diags} == {("LF041", 2), ("LF040", 3)}
+        assert "seconds_nanoseconds" in next(d.message for d in diags if d.code == "LF041")
+        assert "QoSProfile" in next(d.message for d in diags if d.code == "LF040")
+
+    def test_llfsm_spellings_and_helper_modules_pass(self, tmp_path: Path) -> None:
+        m = write_machine(
+            tmp_path,
+            "m",
+            {"A": [("END", "True")], "END": None},
+            {"A_OnEntry": "s, ns = node.get_clock().now().seconds_nanoseconds()\nprint(helpers, String)\n"},
+            includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import String\nimport helpers\n",
+            variables="node: ros.Node = ros.Node('n')\n",
+        )
+        assert check_machine(m).ok, check_machine(m).diagnostics
