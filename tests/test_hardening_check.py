@@ -762,13 +762,14 @@ class TestOtherLanguagesHabits:
         assert len(diags) == 1 and spelling in diags[0].message, diags
 
     def test_to_msg_and_qos_presets(self, tmp_path: Path) -> None:
+        ROS_HABITS = "\n".join(
+            ["node = ros.Node('n')", "stamp = node.get_clock().now().to_msg()", "q = qos_profile_sensor_data", ""]
+        )
         m = write_machine(
             tmp_path,
             "m",
             {"A": [("END", "True")], "END": None},
-            {
-                "A_OnEntry": "node = ros.Node('n')\nstamp = node.get_clock().now().to_msg()\nq = qos_profile_sensor_data\n"
-            },
+            {"A_OnEntry": ROS_HABITS},
             includes="from llfsm import ros\n",
         )
         diags = check_machine(m).diagnostics
