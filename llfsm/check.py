@@ -638,7 +638,17 @@ class _Checker:
             if scan.may_bind_variable:  # rare: only then pay for the scoped walk
                 _edits, bad = find(tree, mapping)
                 for b in bad:
-                    self.bad_binding(code, b)
+                    if b.how == "self":
+                        self.add(
+                            "LF013",
+                            code.file,
+                            b.line,
+                            _col(code.text, b.line, b.col),
+                            f"`{b.name}` here would be an attribute of this function's `self`, not the machine's "
+                            "variable: name the parameter `this`",
+                        )
+                    else:
+                        self.bad_binding(code, b)
             for n in scan.reserved:
                 self.reserved_use(code, n)
             self.ros_habits(code, scan)
@@ -854,8 +864,9 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
                 out.to_msg.append(child)
             if isinstance(child, ast.arg):
                 bound.add(child.arg)
-                if child.arg == "self" or child.arg.startswith("_llfsm"):
-                    # `def get(self): return count` would read the instance's `count`
+                if child.arg == "self":  # the scoped walk looks for machine names it would hide
+                    out.may_bind_variable = True
+                elif child.arg.startswith("_llfsm"):
                     out.reserved.append(
                         ast.Name(id=child.arg, ctx=ast.Store(), lineno=child.lineno, col_offset=child.col_offset)
                     )

@@ -454,13 +454,22 @@ class TestRewriteFollowsPythonScoping:
         )
         assert "LF038" in {d.code for d in check_machine(m).diagnostics}
 
-    def test_a_parameter_named_self_is_refused(self, tmp_path: Path) -> None:
+    def test_a_parameter_named_self_that_hides_the_machine_is_refused(self, tmp_path: Path) -> None:
         """`def get(self): return count` would read the instance's count, not the machine's."""
-        code = "class Box:\n    def get(self):\n        return count\n"
-        m = write_machine(
-            tmp_path, "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code}, variables="count: int = 3\n"
-        )
-        assert "LF013" in {d.code for d in check_machine(m).diagnostics}
+        for code in (
+            "class Box:\n    def get(self):\n        return count\n",
+            "f = lambda self: [count for _ in range(1)]\n",
+        ):
+            m = write_machine(
+                tmp_path, "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code}, variables="count: int = 3\n"
+            )
+            diags = check_machine(m).diagnostics
+            assert [d.code for d in diags] == ["LF013"], diags
+            assert "`count`" in diags[0].message and "this" in diags[0].message
+
+    def test_a_parameter_named_self_is_fine_otherwise(self, tmp_path: Path) -> None:
+        code = "class Box:\n    def __str__(self):\n        return 'box'\nprint(Box(), count)\n"
+        assert _run_entry(tmp_path, code) == ["box 3"]
 
 
 def _sarif_validator() -> object:

@@ -138,12 +138,13 @@ class _Scope:
     Python, a name bound in a class body is visible in that body and nowhere else, not in its
     methods, lambdas or comprehensions (beyond the first iterable, evaluated in the class)."""
 
-    __slots__ = ("function", "here", "inner")
+    __slots__ = ("function", "here", "inner", "self_param")
 
-    def __init__(self, here: frozenset[str], inner: frozenset[str], function: bool) -> None:
+    def __init__(self, here: frozenset[str], inner: frozenset[str], function: bool, self_param: bool = False) -> None:
         self.here = here
         self.inner = inner
         self.function = function  # a def or lambda, or the section itself: where := binds
+        self.self_param = self_param  # a parameter `self` (here or around) hides the machine's
 
 
 class _Finder(ast.NodeVisitor):
@@ -159,13 +160,17 @@ class _Finder(ast.NodeVisitor):
 
     def _push(self, names: set[str] | frozenset[str], function: bool = True) -> None:
         """A function-like scope (def, lambda, comprehension) nested in the current one."""
-        inherited = self.scopes[-1].inner
+        outer = self.scopes[-1]
+        inherited = outer.inner
         seen = inherited | names if names else inherited
-        self.scopes.append(_Scope(seen, seen, function))
+        self.scopes.append(_Scope(seen, seen, function, outer.self_param or "self" in names))
 
     def visit_Name(self, node: ast.Name) -> None:
         attr = self.mapping.get(node.id)
         if attr is not None and not self._hidden(node.id):
+            if self.scopes[-1].self_param and attr.startswith("self."):
+                # `def get(self): return count` -> `self.count`: the instance's, not the machine's
+                self.bad.append(BadBinding(node.id, "self", node.lineno, node.col_offset))
             self.edits.append(Edit(node.lineno, node.col_offset, node.end_col_offset or node.col_offset, attr))
 
     def _bind(self, name: str | None, how: str, node: ast.AST, hidden: bool | None = None) -> None:
@@ -225,7 +230,7 @@ class _Finder(ast.NodeVisitor):
         own = own_locals(ast.Module(body=node.body, type_ignores=[]))
         # the body sees its own names; what is nested in it sees only what the class's
         # surroundings see
-        self.scopes.append(_Scope(outer.inner | own, outer.inner, False))
+        self.scopes.append(_Scope(outer.inner | own, outer.inner, False, outer.self_param))
         for stmt in node.body:
             self.visit(stmt)
         self.scopes.pop()
