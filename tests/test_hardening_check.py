@@ -7,6 +7,7 @@ one example cannot pass for a fix of the class.
 from __future__ import annotations
 
 import ast
+import functools
 import io
 import json
 import os
@@ -74,12 +75,13 @@ def _header_ok(source: str) -> None:
 
 
 def _only_expected_statements(tree: ast.Module) -> None:
-    """A machine module holds its docstring, the runtime's import, functions and the class,
-    and its source map: any other statement at module level got in from somewhere else."""
+    """A machine module holds its docstring, imports (the runtime's and those of Includes.py,
+    which check allows to hold nothing else), functions and the class, and its source map:
+    any other statement at module level got in from somewhere else."""
     for i, stmt in enumerate(tree.body):
         if i == 0 and isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
             continue
-        if isinstance(stmt, ast.ImportFrom) and stmt.module == "llfsm.runtime":
+        if isinstance(stmt, ast.Import | ast.ImportFrom):
             continue
         if isinstance(stmt, ast.FunctionDef | ast.ClassDef):
             continue
@@ -472,6 +474,7 @@ class TestRewriteFollowsPythonScoping:
         assert _run_entry(tmp_path, code) == ["box 3"]
 
 
+@functools.cache
 def _sarif_validator() -> object:
     jsonschema = pytest.importorskip("jsonschema")
     schema = json.loads((Path(__file__).parent / "data" / "sarif-schema-2.1.0.json").read_text(encoding="utf-8"))
@@ -864,3 +867,22 @@ class TestGeneratedModulesInTheDocs:
         assert r.status == 1
         assert r.lines == ["hello"]
         assert "State_END_OnEntry.py:2" in r.stderr and "ZeroDivisionError" in r.stderr
+
+
+@pytest.mark.parametrize("folder", HOSTILE_FOLDERS)
+def test_hostile_folders_through_every_command(tmp_path: Path, folder: str) -> None:
+    """Item 9: check (every format), build, run and graph on a machine in a hostile folder."""
+    root = _hostile_dir(tmp_path, folder)
+    m = write_machine(root, "m", {"A": [("END", "after_ms(1)")], "END": None}, {"A_OnEntry": "print('hi')\n"})
+    for fmt in ("text", "json", "github", "sarif"):
+        r = llfsm("check", "--format", fmt, "-q", m)
+        assert r.status == 0 and "Traceback" not in r.stderr, (fmt, r.stderr)
+        r.stdout.encode("utf-8")
+    r = llfsm("build", "-q", "-o", tmp_path / "out", m)
+    assert r.status == 0, r.stderr
+    _header_ok((tmp_path / "out" / "m.py").read_text(encoding="utf-8"))
+    r = run_sim(m, "--duration", "10ms")
+    assert r.status == 0 and r.lines == ["hi"], r.stderr
+    for fmt in ("mermaid", "dot"):
+        r = llfsm("graph", "--format", fmt, m)
+        assert r.status == 0 and "A" in r.stdout, r.stderr
