@@ -686,6 +686,8 @@ class _Checker:
             msg = f"name {name!r} is not defined: llfsm spells it {ROS_NAMES[name]}"
         elif other is not None and other != code.file:
             msg = f"name {name!r} is a local of {other}: a section's locals last one section, as in clfsm; {declare}"
+        elif _suggester.left <= 0 or len(m.variables) + len(s.variables) > SUGGEST_AMONG:
+            msg = f"name {name!r} is not defined: not a variable, an import, a builtin or a macro; {declare}"
         else:
             candidates = [k for k in self._base or {} if k not in MACROS] + [v.name for v in s.variables]
             candidates += sorted(self._imported or ()) + sorted(MACROS)
