@@ -212,6 +212,25 @@ class TestLinearWork:
 
         assert _ratio(make, 20_000) < 10
 
+    @pytest.mark.parametrize("bracket", ["()", "[]", "{}"])
+    def test_deeply_nested_brackets_stay_linear_and_too_deep_is_refused(self, tmp_path: Path, bracket: str) -> None:
+        """CPython refuses more than 200 nested brackets at once; below that, parsing (even
+        with a syntax error at the end, which makes it parse twice) is linear in the file."""
+        o, c = bracket
+
+        def make(n: int) -> Callable[[], object]:
+            line = f"x = {o * 190}1{c * 190}\n" if o != "{" else f"x = {'{1:' * 95}1{'}' * 95}\n"
+            m = write_machine(
+                tmp_path / f"b{n}", "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": line * n + "x +\n"}
+            )
+            return lambda: check_machine(m)
+
+        assert _ratio(make, 30) < 10
+        deep = write_machine(
+            tmp_path / "deep", "m", {"A": [("END", o * 300 + "1" + c * 300)], "END": None}, {"A_OnEntry": "x = 1\n"}
+        )
+        assert [d.code for d in check_machine(deep).diagnostics] == ["LF030"]
+
     def test_a_small_f_string_is_fine(self, tmp_path: Path) -> None:
         m = write_machine(tmp_path, "m", {"A": [("END", 'f"{1}{2}{3}" != ""')], "END": None})
         assert check_machine(m).ok
