@@ -905,3 +905,29 @@ def test_hostile_folders_through_every_command(tmp_path: Path, folder: str) -> N
     for fmt in ("mermaid", "dot"):
         r = llfsm("graph", "--format", fmt, m)
         assert r.status == 0 and "A" in r.stdout, r.stderr
+
+
+@pytest.mark.parametrize(
+    "text", ["coding=utf_7 +AGEAYQ-", "a\nraise SystemExit(7)", 'q\'"""\\', "# -*- coding: latin-1 -*-"]
+)
+def test_package_scaffold_python_files_carry_no_user_text_in_lines_1_and_2(tmp_path: Path, text: str) -> None:
+    """Item 3 for the package templates: setup.py and the test file begin with llfsm's own text."""
+    from llfsm.scaffold import ScaffoldError, create_package
+
+    reference = tmp_path / "ref"
+    reference.mkdir()
+    create_package(reference, "pkg", machines=["m"])
+    target = tmp_path / "hostile"
+    target.mkdir()
+    try:
+        create_package(target, "pkg", machines=["m"], description=text, maintainer_name=text)
+    except ScaffoldError:
+        return  # refused with a message: nothing of it reaches a file
+    for rel in ("setup.py", "test/test_llfsm_check.py"):
+        got = (target / "pkg" / rel).read_text(encoding="utf-8")
+        want = (reference / "pkg" / rel).read_text(encoding="utf-8")
+        assert got.split("\n")[:2] == want.split("\n")[:2]
+        enc, _ = tokenize.detect_encoding(io.BytesIO(got.encode("utf-8")).readline)
+        assert enc == "utf-8"
+        kinds = [type(s).__name__ for s in ast.parse(got).body]
+        assert kinds == [type(s).__name__ for s in ast.parse(want).body]
