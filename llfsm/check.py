@@ -487,6 +487,8 @@ class _Checker:
             if isinstance(stmt, ast.ImportFrom) and stmt.level:
                 continue
             for mod in modules:
+                if self.is_helper(mod):
+                    continue
                 hint = ros_import_hint(mod, stmt)
                 if hint is not None:
                     self.add("LF041", code.file, stmt.lineno, node_col(code.text, stmt), hint)
@@ -507,6 +509,15 @@ class _Checker:
                     "llfsm's clock time has no to_msg(): `s, ns = node.get_clock().now().seconds_nanoseconds()` "
                     "then `Time(sec=s, nanosec=ns)` (from llfsm.msgs.builtin_interfaces.msg import Time)",
                 )
+
+    def is_helper(self, module: str) -> bool:
+        """Whether `module` names a helper module or package of the user's, beside the machine
+        (where `llfsm run` lets machines import them): `my_msgs.msg` is then theirs, not ROS's."""
+        top = module.split(".")[0]
+        if not top.isidentifier():
+            return False
+        parent = self.path.parent
+        return (parent / top).is_dir() or (parent / f"{top}.py").is_file()
 
     def imported_names(self) -> set[str] | None:
         """Names Includes.py binds; None if it star-imports (then any name may exist)."""

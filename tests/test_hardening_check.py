@@ -931,3 +931,16 @@ def test_package_scaffold_python_files_carry_no_user_text_in_lines_1_and_2(tmp_p
         assert enc == "utf-8"
         kinds = [type(s).__name__ for s in ast.parse(got).body]
         assert kinds == [type(s).__name__ for s in ast.parse(want).body]
+
+
+def test_a_helper_package_beside_the_machine_is_not_a_ros_habit(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path, "m", {"A": [("END", "True")], "END": None}, includes="from tools.msg import helper\nimport helpers\n"
+    )
+    (tmp_path / "tools").mkdir()
+    (tmp_path / "tools" / "msg.py").write_text("helper = 1\n")
+    (tmp_path / "helpers.py").write_text("")
+    assert check_machine(m).ok, check_machine(m).diagnostics
+    (tmp_path / "tools" / "msg.py").unlink()
+    (tmp_path / "tools").rmdir()
+    assert [d.code for d in check_machine(m).diagnostics] == ["LF041"]
