@@ -28,6 +28,7 @@ from .model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
 from .names import Unresolved, section_bindings, unresolved
 from .reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
+from .workers import die_with_parent, usable_cores
 
 #: Builtins, and the globals every module has (the compiled machine is a module).
 BUILTINS = frozenset(dir(builtins)) | {"__file__", "__builtins__", "__cached__", "__loader__", "__spec__"}
@@ -204,47 +205,6 @@ def _diagnostics_of(path: Path, within: Path | None = None) -> list[Diagnostic]:
     return check_machine(path, within).diagnostics
 
 
-def usable_cores() -> int:
-    """The cores this process may run on (its affinity mask, as `taskset` or a container's
-    cpuset sets it), not the machine's count."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except (AttributeError, OSError):
-        return max(1, os.cpu_count() or 1)
-
-
-def _die_with(parent: int) -> None:
-    """Worker initializer: end this worker when `llfsm check` ends, however it ends.
-
-    A worker forked by ProcessPoolExecutor waits on a pipe whose writing end it inherited
-    itself, so a parent killed by SIGKILL (or the OOM killer) would leave it waiting forever.
-    Linux ends it by PR_SET_PDEATHSIG; elsewhere a thread watches for the parent's exit."""
-    import signal
-
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        pr_set_pdeathsig = 1
-        if libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0) != 0:
-            raise OSError(ctypes.get_errno(), "prctl")
-        watch = False
-    except (OSError, AttributeError, ImportError):
-        watch = True
-    if os.getppid() != parent:  # the parent died before the signal was asked for
-        os._exit(1)
-    if watch:
-        import threading
-        import time
-
-        def watchdog() -> None:
-            while os.getppid() == parent:
-                time.sleep(0.5)
-            os._exit(1)
-
-        threading.Thread(target=watchdog, daemon=True, name="llfsm-parent-watch").start()
-
-
 def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[Diagnostic]]:
     """(number of machines, their diagnostics in a stable order) for `llfsm check`.
 
@@ -265,7 +225,9 @@ def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_die_with, initargs=(os.getpid(),)) as pool:
+    with ProcessPoolExecutor(
+        max_workers=jobs, mp_context=ctx, initializer=die_with_parent, initargs=(os.getpid(),)
+    ) as pool:
         chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
         return len(machines), [d for chunk in chunks for d in chunk]
 
