@@ -4,7 +4,14 @@ VENV := .venv
 PY := $(VENV)/bin/python
 PIP := $(PY) -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint fuzz bench clean msgs
+.PHONY: demo test lint fuzz bench clean msgs ros-venv chromium
+
+# Real ROS 2 for the interop tests (pytest -m interop): rclpy, message packages and Fast DDS as
+# wheels from PyPI, in a virtualenv of their own (they bring numpy, lark, empy...).  There is
+# no rmw_cyclonedds wheel.  About 20 s with a warm pip cache.
+VENV_ROS := .venv-ros
+ROS_WHEELS := ros-rclpy==9.1.2 ros-rmw-fastrtps-cpp==9.3.3 ros-std-msgs==5.5.1 ros-std-srvs==5.5.1 \
+	ros-geometry-msgs==5.5.1 ros-test-msgs==2.3.0
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -36,7 +43,26 @@ demo: $(VENV)/.installed
 lint: $(VENV)/.installed-dev
 	$(VENV)/bin/ruff check llfsm tests bench
 
-test: $(VENV)/.installed-dev lint
+# The web view's browser tests drive Debian's Chromium (Playwright never downloads a browser):
+# installed here where we can (root with apt-get); elsewhere those tests skip and say why.
+chromium:
+	@if command -v chromium >/dev/null 2>&1; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		(apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium) >/dev/null \
+			|| echo "make: could not install chromium: the browser tests will skip"; \
+	else echo "make: no chromium (apt-get install chromium as root): the browser tests will skip"; fi
+
+$(VENV_ROS)/.installed: Makefile
+	$(PYTHON) -m venv $(VENV_ROS)
+	$(VENV_ROS)/bin/python -m pip --disable-pip-version-check -q install $(ROS_WHEELS)
+	touch $@
+
+# `make test` tries to provide real ROS 2 but goes on without it: the interop tests then skip
+# and say why.
+ros-venv:
+	@$(MAKE) --no-print-directory $(VENV_ROS)/.installed || echo "warning: $(VENV_ROS) not installed: interop tests will be skipped"
+
+test: $(VENV)/.installed-dev lint ros-venv chromium
 	$(PY) -m pytest -q
 
 fuzz: $(VENV)/.installed-dev
@@ -49,4 +75,4 @@ msgs: $(VENV)/.installed-dev
 	$(PY) -m llfsm.compiler.interfaces
 
 clean:
-	rm -rf $(VENV) build demo-output .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(VENV_ROS) build demo-output .pytest_cache .ruff_cache

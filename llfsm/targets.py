@@ -12,12 +12,13 @@ import hashlib
 import importlib.util
 import os
 import sys
-import tempfile
 from pathlib import Path
 
+from .cachedir import cache_dir
+from .cachedir import problem as cache_problem
 from .discover import MACHINE_SUFFIX, machine_name_of
 from .fingerprint import machine_fingerprint, module_fingerprint
-from .runtime.errors import ErrorReport, report_for
+from .runtime.errors import ErrorReport, passes_through, report_for
 from .runtime.machine import Machine
 
 
@@ -49,32 +50,24 @@ def cache_root() -> Path:
     return Path(base) / "llfsm"
 
 
-def _writable(p: Path) -> Path:
-    """p, or the same key under the temporary folder when the cache cannot be written."""
-    try:
-        p.mkdir(parents=True, exist_ok=True)
-        if os.access(p, os.W_OK):
-            return p
-    except OSError:
-        pass
-    return Path(tempfile.gettempdir()) / f"llfsm-cache-{os.getuid()}" / p.name
-
-
 def compiled_module_for(machine_dir: Path) -> Path:
     """The cached module of a machine directory, compiled first if missing or stale."""
     key = hashlib.sha256(os.fsencode(machine_dir.resolve())).hexdigest()[:16]
-    out = _writable(cache_root() / key)
+    out = Path(cache_dir(str(cache_root()), key))  # a folder of ours that no one else can write
     module = out / f"{machine_name_of(machine_dir)}.py"
     try:
         fresh = module_fingerprint(module) == machine_fingerprint(machine_dir)
     except OSError:
         fresh = False
+    untrusted = fresh and cache_problem(module, directory=False) is not None
+    if untrusted:
+        fresh = False  # not written by us for us: compile again (the atomic write replaces it)
     if fresh:
         return module
     from .compiler.build import build_machine  # only now: the compiler is not needed to run
 
     try:
-        outcome = build_machine(machine_dir, out)
+        outcome = build_machine(machine_dir, out, force=untrusted)
     except OSError as e:
         raise TargetError(f"{machine_dir}: cannot write its compiled module into {out}: {e.strerror or e}") from None
     if outcome.status == "failed" or outcome.module is None:
@@ -91,12 +84,76 @@ def find_installed(spec: str) -> Path:
         for candidate in (share / "llfsm" / f"{name}.py", share / "machine" / f"{name}{MACHINE_SUFFIX}"):
             if candidate.exists():
                 return candidate
-    where = (
-        "AMENT_PREFIX_PATH is not set: did you `source install/setup.bash`?"
-        if not prefixes
-        else (f"searched {', '.join(prefixes)}")
-    )
+    if not prefixes:
+        where = "AMENT_PREFIX_PATH is not set: did you `source install/setup.bash`?"
+    else:
+        machines = _installed_machines(prefixes, pkg)
+        if machines:
+            hint = _did_you_mean(name, machines)
+            where = f"package {pkg} has: {', '.join(sorted(machines))}{hint}"
+        else:
+            packages = _installed_packages(prefixes)
+            hint = _did_you_mean(pkg, packages)
+            where = f"no package {pkg} with machines under {', '.join(prefixes)}{hint}"
+    local = Path(spec + MACHINE_SUFFIX)
+    if local.is_dir():
+        where = f"did you mean the folder {local}?"
     raise TargetError(f"{spec}: no installed machine {name!r} in package {pkg!r} ({where})")
+
+
+def _installed_machines(prefixes: list[str], pkg: str) -> set[str]:
+    """The machines a package installs: share/PKG/llfsm/NAME.py and share/PKG/machine/NAME.machine."""
+    out: set[str] = set()
+    for prefix in prefixes:
+        share = Path(prefix) / "share" / pkg
+        out.update(p.stem for p in _listing(share / "llfsm") if p.suffix == ".py")
+        out.update(
+            p.name.removesuffix(MACHINE_SUFFIX) for p in _listing(share / "machine") if p.name.endswith(MACHINE_SUFFIX)
+        )
+    return out
+
+
+def _installed_packages(prefixes: list[str]) -> set[str]:
+    return {
+        p.name
+        for prefix in prefixes
+        for p in _listing(Path(prefix) / "share")
+        if (p / "llfsm").is_dir() or (p / "machine").is_dir()
+    }
+
+
+def _listing(folder: Path, limit: int = 2000) -> list[Path]:
+    """A folder's entries (at most `limit`: a hint must not cost a scan of a huge folder)."""
+    try:
+        with os.scandir(folder) as it:
+            return [Path(e.path) for _, e in zip(range(limit), it, strict=False)]
+    except OSError:
+        return []
+
+
+def _did_you_mean(name: str, choices: set[str] | list[str]) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(name, sorted(choices), n=3, cutoff=0.6)
+    return f"; did you mean {' or '.join(close)}?" if close else ""
+
+
+def _not_found(target: str) -> str:
+    """What to say about a target that names nothing: the NAME.machine folder it probably meant,
+    or close names of machines and modules beside it."""
+    p = Path(target)
+    bare = p.name.removesuffix(MACHINE_SUFFIX).removesuffix(".py")
+    for guess in (p.with_name(bare + MACHINE_SUFFIX), p.with_name(bare + ".py")):
+        if guess != p and guess.exists():
+            return f"{target}: no such machine directory or module; did you mean {guess}?"
+    folder = p.parent
+    names = {e.name for e in _listing(folder) if e.name.endswith((MACHINE_SUFFIX, ".py"))}
+    stems = {n.removesuffix(MACHINE_SUFFIX).removesuffix(".py"): n for n in names}
+    import difflib
+
+    close = difflib.get_close_matches(bare, sorted(stems), n=3, cutoff=0.6)
+    hint = f"; did you mean {' or '.join(str(folder / stems[c]) for c in close)}?" if close else ""
+    return f"{target}: no such machine directory, module or installed PKG/NAME{hint}"
 
 
 def resolve(target: str) -> Path:
@@ -110,10 +167,24 @@ def resolve(target: str) -> Path:
         if p.suffix == ".py":
             return p
         raise TargetError(f"{target}: not a machine directory or a built module (.py)")
-    if target.count("/") == 1 and not target.startswith((".", "/")) and not target.endswith(".py"):
+    if target.count("/") == 1 and not target.startswith((".", "/")) and not target.endswith((".py", MACHINE_SUFFIX)):
         found = find_installed(target)
         return compiled_module_for(found) if found.is_dir() else found
-    raise TargetError(f"{target}: no such machine directory, module or installed PKG/NAME")
+    raise TargetError(_not_found(target))
+
+
+def helper_folder(target: str) -> Path | None:
+    """Where a machine's helper modules live: the folder that holds NAME.machine (or the built
+    module).  Its modules can be imported from Includes.py without setting PYTHONPATH."""
+    p = Path(target)
+    if p.exists():
+        return Path(os.path.realpath(p)).parent
+    if target.count("/") == 1:
+        try:
+            return find_installed(target).parent
+        except TargetError:
+            return None
+    return None
 
 
 def load_class(module_path: Path) -> type[Machine]:
@@ -130,11 +201,10 @@ def load_class(module_path: Path) -> type[Machine]:
     except SyntaxError as e:
         sys.modules.pop(mod_name, None)
         raise TargetError(f"{module_path}:{e.lineno}: not a valid module: {e.msg}") from None
-    except (KeyboardInterrupt, SystemExit):
+    except BaseException as exc:  # an include may raise anything, SystemExit too
         sys.modules.pop(mod_name, None)
-        raise
-    except BaseException as exc:  # an include may raise anything
-        sys.modules.pop(mod_name, None)
+        if passes_through(exc):
+            raise
         rep = report_for(exc)
         if rep is None:
             raise TargetError(f"{module_path}: import failed: {type(exc).__name__}: {exc}") from None
@@ -150,4 +220,10 @@ def load_class(module_path: Path) -> type[Machine]:
 
 
 def load(target: str) -> type[Machine]:
-    return load_class(resolve(target))
+    module = resolve(target)
+    folder = helper_folder(target)
+    if folder is not None and str(folder) not in sys.path:
+        # last: a helper never hides an installed module of the same name (a `yaml.py` beside
+        # the machines stays a helper for them, pyyaml stays pyyaml)
+        sys.path.append(str(folder))
+    return load_class(module)

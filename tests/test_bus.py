@@ -340,10 +340,16 @@ def test_introspect_lists_nodes_topics_and_services(tmp_path: Path) -> None:
     r = run_sim(_talker(tmp_path), "--introspect")
     assert r.stderr.splitlines() == [
         "nodes:",
+        "  /llfsm/talker",  # SPEC §8: every machine's state and control on the graph
         "  /talker",
         "topics:",
         "  /chatter [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 2",
+        "  /llfsm/talker/description [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
+        "  /llfsm/talker/state [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
         "services:",
+        "  /llfsm/talker/restart [std_srvs/srv/Trigger]",
+        "  /llfsm/talker/resume [std_srvs/srv/Trigger]",
+        "  /llfsm/talker/suspend [std_srvs/srv/Trigger]",
     ]
 
 

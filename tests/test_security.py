@@ -165,8 +165,10 @@ def test_descriptions_never_escape_their_docstrings(description: str) -> None:
         members |= {n.name for n in cls.body if isinstance(n, ast.FunctionDef)}
         assert members == {
             *("NAME", "STATES", "INITIAL", "SUSPENDED", "ACCEPTING", "SOURCE_DIR", "__slots__"),
+            *("DESCRIPTION", "TRANSITIONS"),  # what /llfsm/M/description publishes (a literal, like NAME)
             *("ringlet_A", "ringlet_SUSPENDED", "RINGLETS", "ON_SUSPEND", "ON_RESUME"),
         }
+        assert " ".join(type(machine).DESCRIPTION.split()) == want
 
 
 VARIABLE_FILES = [

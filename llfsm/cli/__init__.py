@@ -12,7 +12,19 @@ import sys
 
 import click
 
-from . import build, check, graph, new, run  # noqa: F401  (each registers its commands)
+from . import (  # noqa: F401  (each registers its commands)
+    bag,
+    build,
+    check,
+    graph,
+    interface,
+    new,
+    node,
+    run,
+    service,
+    topic,
+    view,
+)
 from ._common import EXIT_USAGE, _quiet_broken_pipe, cli
 
 __all__ = ["cli", "main"]

@@ -7,6 +7,8 @@ ends in a one-line-per-problem message and an exit status (1 or 2), never a trac
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 import sys
 from pathlib import Path
@@ -20,6 +22,8 @@ if TYPE_CHECKING:
     pass
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
+#: The longest duration accepted (100 years): run-time arithmetic stays in 64-bit nanoseconds.
+MAX_DURATION_NS = 100 * 365 * 24 * 3600 * 1_000_000_000
 
 
 def fail(message: str, status: int = EXIT_USAGE) -> NoReturn:
@@ -38,12 +42,44 @@ class Duration(click.ParamType):
         from ..runtime.clock import parse_duration
 
         try:
-            return parse_duration(str(value))
+            ns = parse_duration(str(value))
         except ValueError as e:
             self.fail(str(e), param, ctx)
+        except OverflowError:  # 1e308min: finite as a number, infinite in nanoseconds
+            ns = MAX_DURATION_NS + 1
+        if ns > MAX_DURATION_NS:
+            self.fail(f"{value}: too long (at most 100 years)", param, ctx)
+        return ns
 
 
 DURATION = Duration()
+
+
+def write_output(path: str, data: bytes, what: str) -> None:
+    """Write a file the user named (`-o FILE`) through llfsm.outputs: atomically, and one clear
+    line with exit status 1 if it cannot be written (full disk, /proc, a directory)."""
+    from ..outputs import OutputError, write_file
+
+    try:
+        write_file(path, data, what=what, mkdirs=True)
+    except OutputError as e:
+        fail(f"{e}", EXIT_ERRORS)
+
+
+def progress(text: str) -> None:
+    """A progress line on stderr that cannot stop the work: when its reader has gone
+    (`llfsm build 2>&1 | head -1`), later lines go nowhere and the work goes on to its end,
+    so the exit status still says whether it succeeded."""
+    try:
+        click.echo(text, nl=False, err=True)
+    except (BrokenPipeError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, sys.stderr.fileno())
+        except (OSError, ValueError):
+            pass
+        finally:
+            os.close(devnull)
 
 
 def _quiet_broken_pipe() -> NoReturn:
@@ -77,6 +113,25 @@ class _Group(click.Group):
             return super().invoke(ctx)
         except BrokenPipeError:
             _quiet_broken_pipe()
+        except OSError as e:
+            if e.errno in _OUTPUT_ERRNOS:  # stdout on a full disk, /dev/full: not an llfsm bug
+                _output_failed(e)
+            raise
+
+
+#: Errors that only a write can get: the output (stdout) could not be written.
+_OUTPUT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
+
+
+def _output_failed(e: OSError) -> NoReturn:
+    """One line on stderr, status 1; what is still buffered for stdout is dropped, so that
+    Python's exit does not fail on it a second time."""
+    with contextlib.suppress(OSError):
+        os.write(2, f"llfsm: cannot write the output: {e.strerror or e}\n".encode())
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    with contextlib.suppress(OSError, ValueError):
+        os.dup2(devnull, sys.stdout.fileno())
+    sys.exit(EXIT_ERRORS)
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})

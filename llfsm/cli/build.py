@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail
+from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail, progress
 
 # -- build -------------------------------------------------------------------------------------
 
@@ -51,14 +51,14 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
         except OSError as e:  # the output cannot be written: not the machine's fault, still a failure
             failed += 1
             target = out_dir / f"{path.name.removesuffix('.machine')}.py"
-            click.echo(f"llfsm: cannot write {target}: {e.strerror or e}", err=True)
+            progress(f"llfsm: cannot write {target}: {e.strerror or e}\n")
             continue
         if outcome.status == "failed":
             from ..diagnostics import format_text
 
             failed += 1
-            click.echo(format_text(outcome.diagnostics), nl=False, err=True)
+            progress(format_text(outcome.diagnostics))
         if not quiet:
             where = f" -> {outcome.module}" if outcome.module else ""
-            click.echo(f"[{i}/{len(machines)}] {outcome.name}: {outcome.status}{where}", err=True)
+            progress(f"[{i}/{len(machines)}] {outcome.name}: {outcome.status}{where}\n")
     sys.exit(EXIT_ERRORS if failed else EXIT_OK)

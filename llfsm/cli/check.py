@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from .. import __version__
-from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail
+from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail, write_output
 
 # -- check -------------------------------------------------------------------------------------
 
@@ -60,9 +60,7 @@ def check(paths: tuple[str, ...], fmt: str, strict: bool, output: str | None, qu
         fail(f"no NAME.machine directories found in {', '.join(paths)}")
     text = render(diags, fmt, __version__)
     if output:
-        from ..compiler.build import write_atomic
-
-        write_atomic(Path(output), text)
+        write_output(output, text.encode("utf-8"), "-o")
     else:
         click.echo(text, nl=False)
     errors = sum(d.severity is Severity.ERROR for d in diags)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_ERRORS, cli, fail
+from ._common import EXIT_ERRORS, cli, fail, write_output
 
 # -- graph, schema -------------------------------------------------------------------------------
 
@@ -46,9 +46,7 @@ def graph(path: str, fmt: str, output: str | None) -> None:
     except GraphError as e:
         fail(str(e), EXIT_ERRORS)
     if output:
-        from ..compiler.build import write_atomic_bytes
-
-        write_atomic_bytes(Path(output), data)
+        write_output(output, data, "-o")
     else:
         sys.stdout.write(data.decode())
 

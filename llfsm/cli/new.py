@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._common import cli, fail
+from ._common import EXIT_ERRORS, cli, fail
 
 # -- new ---------------------------------------------------------------------------------------
 
@@ -36,6 +36,8 @@ def new_machine(name: str, directory: str, description: str | None) -> None:
         path = create_machine(Path(directory), name, description)
     except ScaffoldError as e:
         fail(str(e))
+    except OSError as e:  # a full disk, a read-only folder: nothing was written (_write_tree)
+        fail(f"{directory}: cannot write: {e.strerror or e}", EXIT_ERRORS)
     click.echo(f"created {path}")
 
 
@@ -140,6 +142,8 @@ def new_package(
         )
     except ScaffoldError as e:
         fail(str(e))
+    except OSError as e:  # a full disk, a read-only folder: nothing was written (_write_tree)
+        fail(f"{directory}: cannot write: {e.strerror or e}", EXIT_ERRORS)
     # the summary ros2 pkg create prints, so the two read alike (printed once all is written)
     click.echo("created a new package")
     click.echo(f"package name: {name}")

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 
 
 @cli.command()
-@click.argument("targets", nargs=-1, required=True)
+@click.argument("targets", nargs=-1, required=False)
 @click.option(
     "-v", "--verbose", is_flag=True, help="clfsm's trace on stderr: a line before each ringlet that enters a state."
 )
@@ -65,6 +65,34 @@ if TYPE_CHECKING:
 )
 @click.option("--view", is_flag=True, help="turtlesim: open a live window (needs pygame).")
 @click.option("--introspect", is_flag=True, help="At the end, print the nodes, topics and services on stderr.")
+@click.option(
+    "--web",
+    "web",
+    metavar="[HOST:]PORT",
+    help="Serve a live web view of the run (127.0.0.1 unless HOST is given; 0: a free port). Needs llfsm[web].",
+)
+@click.option(
+    "--transport",
+    type=click.Choice(["inproc", "dds"]),
+    default="inproc",
+    envvar="LLFSM_TRANSPORT",
+    show_default=True,
+    help="inproc: the in-process bus; dds: ROS 2's wire (Cyclone DDS), seen by other processes and ROS 2 nodes. "
+    "Also LLFSM_TRANSPORT.",
+)
+# -- bags (llfsm.bag) --
+@click.option("--record", "record", metavar="DIR", help="Record every message on the bus into the rosbag2 bag DIR.")
+@click.option("--record-topic", "record_topics", multiple=True, metavar="TOPIC", help="Record only TOPIC (repeatable).")
+@click.option(
+    "--storage",
+    type=click.Choice(["mcap", "sqlite3"]),
+    default="mcap",
+    show_default=True,
+    help="--record: the bag's storage.",
+)
+@click.option("--play", "play", metavar="DIR", help="Publish the messages of the bag DIR at their recorded times.")
+@click.option("--play-topic", "play_topics", multiple=True, metavar="TOPIC", help="Play only TOPIC (repeatable).")
+@click.option("--play-rate", type=float, default=1.0, show_default=True, help="--play: time scale (2 = twice as fast).")
 def run(
     targets: tuple[str, ...],
     verbose: bool,
@@ -83,18 +111,34 @@ def run(
     image: str | None = None,
     view: bool = False,
     introspect: bool = False,
+    web: str | None = None,
+    transport: str = "inproc",
+    record: str | None = None,
+    record_topics: tuple[str, ...] = (),
+    storage: str = "mcap",
+    play: str | None = None,
+    play_topics: tuple[str, ...] = (),
+    play_rate: float = 1.0,
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
     A TARGET is a NAME.machine directory (compiled into a cache), a built module, or PKG/NAME
-    of an installed package.  Exit status: 0 normal end, 1 an exception in machine code,
-    2 bad arguments or a machine that fails validation.
+    of an installed package.  With --node (or --echo) and no TARGET the nodes run on their own
+    until Ctrl-C or --duration, as `ros2 run` does.  Exit status: 0 normal end, 1 an exception in
+    machine code, 2 bad arguments or a machine that fails validation.
     """
     from ..runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
     from ..targets import InvalidMachine, MachineLoadError, TargetError, load
 
     if period is not None and period <= 0:
         fail("--period must be greater than 0")
+    if not targets and not nodes and not echoes:
+        fail("nothing to run: give a machine (TARGET), or --node NAME / --echo TOPIC to run on their own")
+    if transport == "dds" and clock == "sim":
+        fail(
+            "--clock sim cannot be used with --transport dds: DDS peers live on the wall clock (their messages "
+            "come in real time), so simulated time would neither keep pace with them nor be reproducible"
+        )
     from ..msgs import add_search_path
 
     for t in targets:  # user interfaces (PKG/msg/*.msg) beside or above the machines import too
@@ -120,45 +164,116 @@ def run(
         fail(f"--image {image}: the picture is written as .png or .svg")
     if (image or view) and "turtlesim" not in nodes:
         fail("--image and --view draw the turtle simulator: add --node turtlesim")
-    uses_bus = bool(nodes or remaps or params or echoes or introspect)
+    if view and (why := _no_display()) is not None:
+        fail(why)
+    web_address = _web_address(web) if web is not None else None
+    if transport != "inproc":
+        ctx.extras["transport"] = _open_transport(transport)
+    bags = _open_bags(record, record_topics, storage, play, play_topics, play_rate) if (record or play) else None
+    uses_bus = bool(nodes or remaps or params or echoes or introspect or web or transport != "inproc" or bags)
     bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
+    if bags is not None and bus is not None:
+        _attach_bags(bags, bus)
     trace_out = None
     if trace_file:
+        from ..outputs import OutputError, StreamedOutput
+
         try:
-            trace_out = open(trace_file, "w", encoding="utf-8")  # noqa: SIM115 (closed after the run)
-        except OSError as e:
-            fail(f"--trace {trace_file}: {e.strerror}")
-    tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None
+            trace_out = StreamedOutput(trace_file, what="--trace")  # write errors kept, not raised mid-run
+        except OutputError as e:
+            fail(str(e), EXIT_ERRORS)
+    tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None  # type: ignore[arg-type]
     try:
         try:
             arr = Arrangement(classes, context=ctx, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended)
         except ArrangementError as e:
             fail(str(e))
-        except (KeyboardInterrupt, SystemExit):
-            raise
         except BaseException as exc:  # a variable initialiser raised: machine code may raise anything
-            from ..runtime import report_for
+            from ..runtime.errors import passes_through, report_for
 
-            rep = report_for(exc)
+            rep = None if passes_through(exc) else report_for(exc)
             if rep is None:
                 raise
             click.echo(rep.format(), nl=False, err=True)
             sys.exit(EXIT_ERRORS)
-        arr.on_interrupt = lambda grace: click.echo(
-            f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish (interrupt again to stop now)",
-            err=True,
-        )
-        with signals_handled(arr):
-            result = arr.run(duration, grace)
+        _machines_on_graph(ctx)
+        if classes:
+            arr.on_interrupt = lambda grace: click.echo(
+                f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish "
+                "(interrupt again to stop now)",
+                err=True,
+            )
+        else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
+            arr.serve_forever = True
+            grace = 0
+        if transport != "inproc":  # other processes can resume machines (SPEC 8): all suspended is no end
+            arr.end_when_suspended = False
+        web_server = _start_web(web_address, arr, bus) if web_address is not None and bus is not None else None
+        try:
+            with signals_handled(arr):
+                result = arr.run(duration, grace)
+        finally:
+            if web_server is not None:
+                web_server.stop()
     finally:
-        if trace_out is not None:
-            trace_out.close()
+        # a named output that could not be written whole is an error, never a silent success
+        failed_outputs: list[str] = list(ctx.extras.get("output_errors", ()))
+        if trace_out is not None and (trace_error := trace_out.finish()) is not None:
+            failed_outputs.append(trace_error)
+        bag_error = bags.close() if bags is not None else None  # the bag is closed whatever happened
     sys.stdout.flush()
     if result.error is not None:
         click.echo(result.error.format(), nl=False, err=True)
     if introspect and bus is not None:
         click.echo(_graph_text(bus.graph()), nl=False, err=True)
-    sys.exit(result.status)
+    for message in failed_outputs:
+        click.echo(f"llfsm: {message}", err=True)
+    sys.exit(result.status if result.status or not (failed_outputs or bag_error) else EXIT_ERRORS)
+
+
+def _open_bags(
+    record: str | None,
+    record_topics: tuple[str, ...],
+    storage: str,
+    play: str | None,
+    play_topics: tuple[str, ...],
+    play_rate: float,
+) -> Any:
+    """The bag to play (read and checked now) and the bag to record (created now), or fail."""
+    from ..bag import BagError, RunBags
+
+    try:
+        return RunBags(
+            record,
+            record_topics,
+            storage,
+            play,
+            play_topics,
+            play_rate,
+            report=lambda text: click.echo(f"llfsm: {text}", err=True),
+        )
+    except BagError as e:
+        fail(str(e))
+
+
+def _open_transport(name: str) -> Any:
+    """The run's transport; a missing package or a bad ROS_* variable is a usage error."""
+    from ..ros.transports.inproc import make
+
+    try:
+        return make(name)
+    except (ImportError, ValueError) as e:
+        fail(str(e))
+
+
+def _attach_bags(bags: Any, bus: Bus) -> None:
+    from ..bag import BagError
+
+    try:
+        bags.attach(bus)
+    except BagError as e:
+        bags.close()
+        fail(f"--play {e}")
 
 
 def _start_bus(
@@ -191,7 +306,7 @@ def _start_bus(
         except (InvalidNameError, ValueError) as e:
             fail(str(e))
         if nodes:
-            bus.initialised = True  # the nodes are up: ros.ok() is true from the first round
+            bus.init()  # the nodes are up: ros.ok() is true from the first round
         options = NodeOptions(image=Path(image) if image else None, view=view)
         for name in dict.fromkeys(nodes):
             try:
@@ -201,6 +316,77 @@ def _start_bus(
         return bus
     finally:
         activate(prev)
+
+
+def _no_display() -> str | None:
+    """Why --view cannot open a window, or None.  Without a display SDL falls back to drawing
+    off-screen, and the user would wait for a window that never appears."""
+    if not sys.platform.startswith("linux"):
+        return None  # macOS and Windows always have their own display
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or os.environ.get("SDL_VIDEODRIVER"):
+        return None  # a display, or a video driver chosen on purpose (dummy: off-screen, for tests)
+    return (
+        "--view opens a window, but there is no display (neither DISPLAY nor WAYLAND_DISPLAY is set); "
+        "use --image FILE.png for a picture, or SDL_VIDEODRIVER=dummy to draw off-screen on purpose"
+    )
+
+
+def _web_address(text: str) -> tuple[str, int]:
+    from ..web import INSTALL_HINT, WebUnavailable, server_class
+
+    try:
+        server_class()
+    except WebUnavailable:
+        fail(f"--web: {INSTALL_HINT}")
+    from ..web.server import AddressError, parse_address
+
+    try:
+        return parse_address(text)
+    except AddressError as e:
+        fail(str(e))
+
+
+def _start_web(address: tuple[str, int], arr: Any, bus: Bus) -> Any:
+    """--web: the page's server on its own thread, the bus up (so the machines' control
+    services exist), and a run that waits, rather than ends, when every machine is suspended:
+    the page can resume them."""
+    from ..runtime.context import activate
+    from ..web.server import AddressError, WebServer
+    from ..web.source import RunSource
+
+    prev = activate(arr.ctx)
+    try:
+        bus.init()
+        source = RunSource(arr, bus)
+    finally:
+        activate(prev)
+    arr.end_when_suspended = False
+    server = WebServer(source, *address)
+    try:
+        url = server.start()
+    except AddressError as e:
+        fail(str(e))
+    click.echo(f"llfsm: web view at {url}", err=True)
+    return server
+
+
+def _machines_on_graph(ctx: RunContext) -> None:
+    """SPEC §8: the machines' state topics and control services join the graph with the bus
+    (now if it is up, else at the first `ros.init()`); a run that never uses the bus never
+    imports it."""
+    bus = ctx.extras.get("bus")
+    if bus is not None and bus.initialised:
+        from ..ros.control import enable
+
+        enable(ctx)
+    else:
+        ctx.extras.setdefault("on_init", []).append(lambda bus: _enable(ctx))
+
+
+def _enable(ctx: RunContext) -> None:
+    from ..ros.control import enable
+
+    enable(ctx)
 
 
 def _graph_text(graph: dict[str, Any]) -> str:

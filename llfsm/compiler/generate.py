@@ -275,6 +275,13 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             "suspended": susp,
             "accepting": tuple(i for i, s in enumerate(m.states) if s.accepting and i != susp),
             "source_dir": source_dir,
+            "description": m.description or "",
+            # per state, (target index, guard as written) in priority order: for the description
+            # a run publishes on /llfsm/NAME/description and the web view draws
+            "transitions": tuple(
+                tuple((index[t.target], t.guard.text.strip() if t.guard is not None else "") for t in s.transitions)
+                for s in m.states
+            ),
             "includes": includes,
             "variables": variables,
             "state_variables": state_variables,

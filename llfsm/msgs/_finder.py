@@ -25,6 +25,7 @@ _LLFSM_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # What shapes generated message code: a change to any of these recompiles users' packages.
 _GENERATOR_FILES = (
     os.path.join(_LLFSM_DIR, "compiler", "interfaces.py"),
+    os.path.join(_LLFSM_DIR, "compiler", "dds.py"),
     os.path.join(_LLFSM_DIR, "msgs", "_message.py"),
 )
 _added: list[str] = []
@@ -95,18 +96,18 @@ def _cache_root() -> str:
 
 
 def _interfaces_cache() -> str:
-    d = os.path.join(_cache_root(), "interfaces")
-    try:
-        os.makedirs(d, exist_ok=True)
-        if os.access(d, os.W_OK):
-            return d
-    except OSError:
-        pass
-    import tempfile
+    """The cache's `interfaces` folder: one of ours that no one else can write (llfsm.cachedir)."""
+    from ..cachedir import cache_dir
 
-    d = os.path.join(tempfile.gettempdir(), f"llfsm-cache-{os.getuid()}", "interfaces")
-    os.makedirs(d, exist_ok=True)
-    return d
+    return cache_dir(_cache_root(), "interfaces")
+
+
+def _trusted_package(out: str) -> bool:
+    """A compiled package folder (and its __init__.py) that this user wrote and only it can
+    change; anything else there is never imported."""
+    from ..cachedir import problem
+
+    return problem(out) is None and problem(os.path.join(out, "__init__.py"), directory=False) is None
 
 
 def _fingerprint(package_dir: str) -> str:
@@ -147,7 +148,16 @@ def compiled_package(package: str, package_dir: str) -> str:
     cache = _interfaces_cache()
     out = os.path.join(cache, f"{package}-{fingerprint[:20]}")
     if os.path.isfile(os.path.join(out, "__init__.py")):
-        return out
+        if _trusted_package(out):
+            return out
+        from ..cachedir import fresh_private, problem, warn
+
+        why = problem(out) or problem(os.path.join(out, "__init__.py"), directory=False) or "not trusted"
+        warn(out, why)
+        cache = fresh_private()  # compile again where only we can write
+        out = os.path.join(cache, f"{package}-{fingerprint[:20]}")
+        if os.path.isfile(os.path.join(out, "__init__.py")):
+            return out
     import shutil
     import tempfile
     from pathlib import Path
@@ -160,7 +170,7 @@ def compiled_package(package: str, package_dir: str) -> str:
         try:
             os.replace(tmp, out)  # the whole package appears at once
         except OSError:
-            if not os.path.isfile(os.path.join(out, "__init__.py")):  # not a concurrent build
+            if not _trusted_package(out):  # not a concurrent build of ours
                 raise
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -1,4 +1,5 @@
-"""Messages as `ros2 topic echo` prints them, without importing PyYAML.
+"""Messages as `ros2 topic echo` prints them, without importing PyYAML; and VALUES, the YAML
+that `ros2 topic pub` and `ros2 service call` take, into a message.
 
 `ros2 topic echo` prints rosidl_runtime_py's `message_to_yaml(msg)`: the message as an ordered
 mapping through `yaml.dump(..., allow_unicode=True, width=sys.maxsize, default_flow_style=False)`.
@@ -6,11 +7,18 @@ mapping through `yaml.dump(..., allow_unicode=True, width=sys.maxsize, default_f
 such a document uses: block mappings and (indentless) sequences, `{}` and `[]` for empty ones,
 and PyYAML's choice between plain, single-quoted and double-quoted strings.  The tests compare it
 with yaml.dump on generated data.
+
+Reading VALUES (`from_yaml`, `set_fields`) does import PyYAML, when it is called: it follows
+rosidl_runtime_py's `set_message_fields` (a mapping of field names, nested mappings for nested
+messages, lists for arrays, `auto` for a header and `now` for a time stamp) but turns every
+mistake into one ValuesError line naming the field, where rosidl converts quietly or raises
+from deep inside.
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from typing import Any
 
 from ._message import Message
@@ -37,15 +45,31 @@ _ESCAPES = {
 _resolvers: dict[str, list[re.Pattern[str]]] | None = None
 
 
-def to_yaml(msg: Message | dict[str, Any]) -> str:
+def to_yaml(msg: Message | dict[str, Any], truncate_length: int | None = None) -> str:
     """The text `ros2 topic echo` prints for a message, before its `---` line.  A dict (as from
-    `msg.to_dict()`) prints the same way."""
+    `msg.to_dict()`) prints the same way.  With `truncate_length` (`ros2 topic echo` uses 128),
+    longer strings and arrays are cut there and end in '...', as rosidl_runtime_py cuts them."""
+    if truncate_length is not None:
+        msg = _truncated(msg if isinstance(msg, dict) else msg.to_dict(), truncate_length)
     items = _items(msg)
     if not items:
         return "{}\n"
     out: list[str] = []
     _mapping(items, 0, "", out)
     return "\n".join(out) + "\n"
+
+
+def _truncated(value: Any, n: int) -> Any:
+    if isinstance(value, bytes | bytearray):
+        value = "".join(map(chr, value))
+    if isinstance(value, str):
+        return value[:n] + "..." if len(value) > n else value
+    if isinstance(value, list | tuple):
+        items = [_truncated(v, n) for v in value[:n]]
+        return [*items, "..."] if len(value) > n else items
+    if isinstance(value, dict):
+        return {k: _truncated(v, n) for k, v in value.items()}
+    return value
 
 
 def _items(value: Any) -> list[tuple[str, Any]]:
@@ -292,3 +316,111 @@ def _double_quoted(s: str) -> str:
             out.append(ch)
     out.append('"')
     return "".join(out)
+
+
+# -- VALUES: YAML into a message (rosidl_runtime_py's set_message_fields, with clear errors) ---
+
+
+class ValuesError(ValueError):
+    """VALUES that cannot fill the message: malformed YAML, an unknown field, a wrong type."""
+
+
+StampSetter = Callable[[int, int], None]
+
+
+def from_yaml(cls: type[Message], text: str) -> tuple[Message, list[StampSetter]]:
+    """A new `cls` filled from VALUES (`"{linear: {x: 2.0}}"`, `"data: hello"`; empty means
+    defaults), and the setters of the stamps VALUES asked to be `now` (a header `auto`), which
+    the caller calls with (sec, nanosec) each time it sends the message."""
+    import yaml
+
+    try:
+        data = yaml.safe_load(text) if text.strip() else {}
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
+        problem = getattr(e, "problem", None) or str(e).splitlines()[0]
+        raise ValuesError(f"not valid YAML: {problem}{where}") from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ValuesError(f"must be a YAML mapping of field names, such as '{{data: hello}}', not {text!r}")
+    msg = cls()
+    stamps: list[StampSetter] = []
+    set_fields(msg, data, "", stamps)
+    return msg, stamps
+
+
+def set_fields(msg: Message, values: dict[Any, Any], path: str = "", stamps: list[StampSetter] | None = None) -> None:
+    """Set `msg`'s fields from a mapping, nested mappings for nested messages."""
+    fields = dict(msg._FIELDS)
+    for key, value in values.items():
+        name = str(key)
+        where = f"{path}{name}"
+        if name not in fields:
+            import difflib
+
+            close = difflib.get_close_matches(name, list(fields), n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else f" (its fields: {', '.join(fields) or 'none'})"
+            raise ValuesError(f"{msg._TYPE} has no field '{where}'{hint}")
+        ros_type = fields[name]
+        try:
+            _set(msg, name, ros_type, value, where, stamps)
+        except ValuesError:
+            raise
+        except (TypeError, ValueError) as e:
+            raise ValuesError(f"{where}: {e}") from None
+
+
+def _message_class(ros_type: str) -> type[Message]:
+    import importlib
+
+    pkg, kind, name = ros_type.split("/")
+    return getattr(importlib.import_module(f"llfsm.msgs.{pkg}.{kind}"), name)
+
+
+def _set(msg: Message, name: str, ros_type: str, value: Any, where: str, stamps: list[StampSetter] | None) -> None:
+    element, is_array = ros_type, ros_type.endswith("]")
+    if is_array:
+        element = ros_type[: ros_type.index("[")]
+    if "/" in element:
+        cls = _message_class(element)
+        if is_array:
+            if not isinstance(value, list):
+                raise ValuesError(f"{where}: {ros_type} takes a list, not {value!r}")
+            setattr(msg, name, [_build(cls, v, f"{where}[{i}]", stamps) for i, v in enumerate(value)])
+            return
+        sub = getattr(msg, name)
+        if value == "auto" and element == "std_msgs/msg/Header":
+            stamps is not None and stamps.append(_stamp_setter(sub.stamp))
+            return
+        if value == "now" and element == "builtin_interfaces/msg/Time":
+            stamps is not None and stamps.append(_stamp_setter(sub))
+            return
+        if not isinstance(value, dict):
+            raise ValuesError(f"{where}: {element} takes a mapping of its fields, not {value!r}")
+        set_fields(sub, value, f"{where}.", stamps)
+        return
+    if element.startswith(("string", "wstring")):  # rosidl writes str(value): `data: 42` is "42"
+        value = [_as_text(v) for v in value] if is_array and isinstance(value, list) else _as_text(value)
+    setattr(msg, name, value)
+
+
+def _as_text(value: Any) -> Any:
+    return str(value) if isinstance(value, int | float) and not isinstance(value, bool) else value
+
+
+def _build(cls: type[Message], value: Any, where: str, stamps: list[StampSetter] | None) -> Message:
+    if not isinstance(value, dict):
+        raise ValuesError(f"{where}: {cls._TYPE} takes a mapping of its fields, not {value!r}")
+    msg = cls()
+    set_fields(msg, value, f"{where}.", stamps)
+    return msg
+
+
+def _stamp_setter(time_msg: Any) -> StampSetter:
+    def set_stamp(sec: int, nanosec: int) -> None:
+        time_msg.sec = sec
+        time_msg.nanosec = nanosec
+
+    return set_stamp

@@ -20,11 +20,13 @@ from .bus import Bus, Future, FutureReturnCode, bus_of
 from .names import InvalidNameError, Remap
 from .node import (
     Client,
+    DurabilityPolicy,
     Logger,
     LoggingSeverity,
     Node,
     Parameter,
     Publisher,
+    QoSDurabilityPolicy,
     QoSProfile,
     ServiceServer,
     Subscription,
@@ -37,6 +39,7 @@ Service = ServiceServer  # rclpy calls the server object `Service`
 __all__ = [
     "Bus",
     "Client",
+    "DurabilityPolicy",
     "Future",
     "FutureReturnCode",
     "InvalidNameError",
@@ -45,6 +48,7 @@ __all__ = [
     "Node",
     "Parameter",
     "Publisher",
+    "QoSDurabilityPolicy",
     "QoSProfile",
     "Remap",
     "Service",
@@ -63,8 +67,7 @@ __all__ = [
 
 def init(args: list[str] | None = None, **_ignored: Any) -> None:
     """Initialise the bus of this run.  Every machine may call it; later calls do nothing."""
-    bus = bus_of()
-    bus.initialised = True
+    bus_of().init()
 
 
 def ok() -> bool:
@@ -110,6 +113,9 @@ def spin(node: Node) -> None:
     while bus.ok():
         if bus.ctx.deadline is not None and bus.clock.now >= bus.ctx.deadline:
             return
+        if bus.transport.remote:  # other processes can always bring something: wait for it
+            bus.spin_once(100_000_000)
+            continue
         if not bus.spin_once(0) and bus.next_timer_due() is None:
             return  # nothing can ever happen: do not hang
         if not bus.ready:

@@ -8,6 +8,11 @@ reproducible byte for byte.
 Delivery: publishing copies the message once per reader (so a machine may keep mutating and
 re-publishing one object, as the seed machines do); a PULL reader keeps only the newest
 message; a PUSH subscription queues up to its QoS depth, dropping the oldest.
+
+The bus delivers within its process itself; the run's transport (transports/) carries traffic
+to and from other processes.  With the in-process transport nothing else happens; with DDS the
+executor also takes what arrived (`transport.poll`, a cheap check when nothing did) and waits
+on it instead of sleeping blindly.
 """
 
 from __future__ import annotations
@@ -24,6 +29,8 @@ from typing import IO, TYPE_CHECKING, Any
 
 from ..runtime.context import RunContext, current
 from .names import Remap
+from .transports.base import RemoteClient, Transport
+from .transports.inproc import InProcess
 
 if TYPE_CHECKING:
     from ..msgs._message import Message
@@ -44,9 +51,10 @@ class FutureReturnCode(Enum):
 class Future:
     """The result of an asynchronous service call (`client.call_async`)."""
 
-    __slots__ = ("_callbacks", "_cancelled", "_done", "_exception", "_result", "_service")
+    __slots__ = ("_callbacks", "_cancelled", "_done", "_exception", "_remote", "_result", "_service")
 
-    def __init__(self, service: str | None = None) -> None:
+    def __init__(self, service: str | None = None, remote: RemoteClient | None = None) -> None:
+        self._remote = remote  # the transport's client that sent the request to another process
         self._done = False
         self._cancelled = False
         self._result: Any = None
@@ -102,7 +110,7 @@ class Future:
 class Topic:
     """A named channel: its type and the readers attached to it."""
 
-    __slots__ = ("name", "published", "publishers", "readers", "type")
+    __slots__ = ("latched", "name", "on_readers", "published", "publishers", "readers", "type")
 
     def __init__(self, name: str, type_: type[Message]) -> None:
         self.name = name
@@ -110,6 +118,11 @@ class Topic:
         self.readers: list[Subscription] = []
         self.publishers = 0
         self.published = 0
+        #: What TRANSIENT_LOCAL publishers kept for late subscribers: publisher -> last messages.
+        self.latched: dict[Any, deque[Message]] = {}
+        #: Called as fn(topic, joining) when a subscription is about to join (True) or has left
+        #: (False): lets a publisher publish only while someone listens (llfsm.ros.control).
+        self.on_readers: list[Callable[[Topic, bool], None]] = []
 
 
 class _Request:
@@ -125,6 +138,18 @@ class _Request:
         if server is None or self.future.done():
             return  # no server (any more): the future stays pending; spin_until_future_complete says TIMEOUT
         server._serve(self.request, self.future)
+
+
+class _Call:
+    """A function queued from another thread (`Bus.call_soon_threadsafe`)."""
+
+    __slots__ = ("fn",)
+
+    def __init__(self, fn: Callable[[], object]) -> None:
+        self.fn = fn
+
+    def _run(self) -> None:
+        self.fn()
 
 
 class Bus:
@@ -145,14 +170,36 @@ class Bus:
         self.parameters: dict[tuple[str | None, str], Any] = {}  # (node or None, name) -> override
         #: Called with each new topic whose name is a key here (`--echo` waits for its topic).
         self.watchers: dict[str, list[Callable[[Topic], None]]] = {}
+        #: Called with every topic, those made later too (`add_tap`: `--record` attaches its readers).
+        self.taps: list[Callable[[Topic], None]] = []
         self._seq = itertools.count()
         self.log_to_stdout = os.environ.get("RCUTILS_LOGGING_USE_STDOUT", "0") == "1"
         #: None: whatever sys.stderr (or sys.stdout) is when a line is logged, so that a
         #: redirection made after the bus started is honoured.
         self.log_stream: IO[str] | None = None
+        self.transport: Transport = ctx.extras.get("transport") or InProcess()
+        #: The transport's poll when it can bring anything in (never for the in-process one).
+        self._poll = self.transport.poll if self.transport.remote else None
+        self.transport.start(self)
         ctx.between_rounds.append(self.spin_some)
 
     # -- lifecycle ---------------------------------------------------------------------------
+    def init(self) -> None:
+        """Initialise (the first `ros.init()`, or the command line before nodes start); then
+        run the run's on-init hooks once (`ctx.extras["on_init"]`: the machines' state topics
+        and control services join the graph with the first node, never in a run without one)."""
+        if self.initialised:
+            return
+        self.initialised = True
+        for fn in self.ctx.extras.pop("on_init", ()):
+            fn(self)
+
+    def call_soon_threadsafe(self, fn: Callable[[], object]) -> None:
+        """Run fn() on the scheduler's thread, between rounds (or inside a spin call), in the
+        order of the calls.  The one door for other threads (the web view's server) into the
+        bus: deque.append is atomic, and the executor drains `ready` anyway."""
+        self.ready.append(_Call(fn))
+
     def ok(self) -> bool:
         return self.initialised and not self.shut and not self.ctx.interrupted
 
@@ -163,6 +210,8 @@ class Bus:
             t = self.topics[name] = Topic(name, type_)
             for fn in self.watchers.pop(name, []):
                 fn(t)
+            for fn in self.taps:
+                fn(t)
         elif t.type is not type_:
             raise TypeError(f"cannot {role} {name} as {type_._TYPE}: the topic already carries {t.type._TYPE}")
         return t
@@ -172,11 +221,26 @@ class Bus:
         heapq.heappush(self.timers, (due, next(self._seq), timer))
 
     def watch(self, name: str, fn: Callable[[Topic], None]) -> None:
-        """Call fn(topic) once the topic exists (now, if it already does)."""
+        """Call fn(topic) once the topic exists (now, if it already does), in this process or,
+        with a remote transport, once a publisher of it appears in another process."""
         if name in self.topics:
             fn(self.topics[name])
-        else:
-            self.watchers.setdefault(name, []).append(fn)
+            return
+        self.watchers.setdefault(name, []).append(fn)
+        if self.transport.remote:
+
+            def found(type_: type[Message]) -> None:
+                if name not in self.topics:
+                    self.topic(name, type_, "subscribe to")  # calls the watchers
+
+            self.transport.discover(name, found)
+
+    def add_tap(self, fn: Callable[[Topic], None]) -> None:
+        """Call fn(topic) for every topic: each existing one now, each new one when it is made.
+        A recorder attaches its reader to each topic this way (llfsm.bag.recorder)."""
+        self.taps.append(fn)
+        for t in list(self.topics.values()):
+            fn(t)
 
     def next_timer_due(self) -> int | None:
         while self.timers and self.timers[0][2]._cancelled:
@@ -202,7 +266,10 @@ class Bus:
 
     # -- the executor --------------------------------------------------------------------------
     def spin_some(self) -> None:
-        """Between rounds: due timers, then the work queued before this call (first in, first out)."""
+        """Between rounds: what arrived from other processes, due timers, then the work queued
+        before this call (first in, first out)."""
+        if self._poll is not None:
+            self._poll(False)
         if self.timers and self.timers[0][0] <= self.clock.now:
             self._fire_due_timers(self.clock.now)
         ready = self.ready
@@ -211,17 +278,28 @@ class Bus:
 
     def spin_once(self, timeout_ns: int) -> bool:
         """One piece of work: a due timer, or the oldest queued item; else wait up to timeout_ns
-        for the next timer (the sim clock jumps, the wall clock sleeps).  True if work ran."""
+        for the next timer or (with a remote transport) for data from another process (the sim
+        clock jumps, the wall clock sleeps).  True if work ran."""
+        came = self._poll() if self._poll is not None else False
         now = self.clock.now
         if self.timers and self.timers[0][0] <= now:
             return self._fire_due_timers(now)
         if self.ready:
             self.ready.popleft()._run()
             return True
-        if timeout_ns <= 0:
-            return False
+        if timeout_ns <= 0 or came:
+            return came  # something came in (a PULL message, a match): the caller looks first
         due = self.next_timer_due()
         deadline = now + timeout_ns
+        if self._poll is not None:
+            self.transport.wait(deadline if due is None else min(due, deadline))
+            self._poll()
+            if self.timers and self.timers[0][0] <= self.clock.now:
+                return self._fire_due_timers(self.clock.now)
+            if self.ready:
+                self.ready.popleft()._run()
+                return True
+            return False
         if due is None or due > deadline:
             self.clock.sleep_until(deadline)
             return False
@@ -237,16 +315,35 @@ class Bus:
                 return FutureReturnCode.SUCCESS
             if not self.ok():
                 return FutureReturnCode.INTERRUPTED
-            if future._service is not None and future._service not in self.services:
+            remote = future._remote
+            if remote is not None:
+                if not remote.can_still_answer(future):
+                    return FutureReturnCode.TIMEOUT  # no server in any process, or it went away
+            elif future._service is not None and future._service not in self.services:
                 return FutureReturnCode.TIMEOUT  # no server: nothing in this process can answer
+            if self._poll is not None:
+                self._poll()
             if self.timers and self.timers[0][0] <= self.clock.now:
                 self._fire_due_timers(self.clock.now)
                 continue
             if self.ready:
                 self.ready.popleft()._run()
                 continue
-            # nothing ready: only a timer can still change anything
             due = self.next_timer_due()
+            if remote is not None:
+                # another process may still answer: wait for data, a timer or the deadline,
+                # and look again at least every 100 ms (a server that vanished)
+                until = self.clock.now + 100_000_000
+                for t in (due, deadline):
+                    if t is not None:
+                        until = min(until, t)
+                self.transport.wait(until)
+                if deadline is not None and self.clock.now >= deadline and not future.done():
+                    self._poll()
+                    if not future.done():
+                        return FutureReturnCode.TIMEOUT
+                continue
+            # nothing ready: only a timer can still change anything
             if due is None:
                 return FutureReturnCode.TIMEOUT  # would block forever: say so at once
             if deadline is not None and due > deadline:

@@ -14,11 +14,32 @@ from .bus import Bus, Future, bus_of
 from .names import expand, normalise_namespace, remap_name, remap_node, validate_node_name
 
 
-class QoSProfile:
-    """Only the history depth matters in process; accepted wherever rclpy takes a QoS."""
+class DurabilityPolicy(IntEnum):
+    """rclpy's durability policies.  TRANSIENT_LOCAL: a publisher keeps its last `depth`
+    messages and hands them to subscriptions that join later (and ask for TRANSIENT_LOCAL too),
+    as a latched topic does; VOLATILE (the default): a late subscription gets only new messages."""
 
-    def __init__(self, depth: int = 10, **_ignored: Any) -> None:
+    SYSTEM_DEFAULT = 0
+    TRANSIENT_LOCAL = 1
+    VOLATILE = 2
+
+
+QoSDurabilityPolicy = DurabilityPolicy  # rclpy's older name
+
+
+class QoSProfile:
+    """The history depth and the durability matter in process; other policies are accepted
+    wherever rclpy takes them and ignored (the in-process bus is always reliable)."""
+
+    def __init__(
+        self, depth: int = 10, *, durability: DurabilityPolicy = DurabilityPolicy.VOLATILE, **_ignored: Any
+    ) -> None:
         self.depth = depth
+        self.durability = DurabilityPolicy(durability)
+
+
+def _transient_local(qos: int | QoSProfile) -> bool:
+    return isinstance(qos, QoSProfile) and qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
 
 
 def _depth(qos: int | QoSProfile, where: str) -> int:
@@ -37,15 +58,21 @@ def _type_name(obj: object) -> str:
 
 
 class Publisher:
-    __slots__ = ("_bus", "_destroyed", "_topic", "_type", "msg_type", "topic_name")
+    __slots__ = ("_bus", "_destroyed", "_remote", "_topic", "_type", "depth", "msg_type", "node", "topic_name")
 
-    def __init__(self, node: Node, msg_type: type[Message], topic: str) -> None:
+    #: TRANSIENT_LOCAL (see _LatchingPublisher): a transport gives its writer that durability.
+    transient_local = False
+
+    def __init__(self, node: Node, msg_type: type[Message], topic: str, depth: int = 10) -> None:
         self._bus = node._bus
+        self.node = node
         self.topic_name = node.resolve_topic_name(topic)
         self._topic = node._bus.topic(self.topic_name, msg_type, "publish on")
         self._topic.publishers += 1
         self._type = self.msg_type = msg_type
+        self.depth = depth
         self._destroyed = False
+        self._remote = node._bus.transport.publisher(self)  # None unless the transport has one
 
     def publish(self, msg: Message) -> None:
         if type(msg) is not self._type:
@@ -56,14 +83,39 @@ class Publisher:
         topic.published += 1
         for reader in topic.readers:
             reader._deliver(msg._copy())
+        if self._remote is not None:
+            self._remote.write(msg)
 
     def get_subscription_count(self) -> int:
-        return len(self._topic.readers)
+        remote = self._remote.subscription_count() if self._remote is not None else 0
+        return len(self._topic.readers) + remote
 
     def destroy(self) -> None:
         if not self._destroyed:
             self._destroyed = True
             self._topic.publishers -= 1
+            self._topic.latched.pop(self, None)
+            if self._remote is not None:
+                self._remote.close()
+
+
+class _LatchingPublisher(Publisher):
+    """A TRANSIENT_LOCAL publisher: also keeps its last `depth` messages on the topic, for
+    subscriptions that join later (a DDS transport gives its writer the same durability).
+    A subclass, so volatile publishers pay nothing for it."""
+
+    __slots__ = ()
+    transient_local = True
+
+    def __init__(self, node: Node, msg_type: type[Message], topic: str, depth: int) -> None:
+        super().__init__(node, msg_type, topic, depth)
+        self._topic.latched[self] = deque(maxlen=depth)
+
+    def publish(self, msg: Message) -> None:
+        super().publish(msg)
+        kept = self._topic.latched.get(self)
+        if kept is not None:
+            kept.append(msg._copy())
 
 
 class Subscription:
@@ -76,17 +128,27 @@ class Subscription:
         "_destroyed",
         "_fresh",
         "_queue",
+        "_remote",
         "_scheduled",
         "_topic",
         "callback",
         "count",
+        "depth",
         "latest",
         "msg_type",
+        "node",
         "topic_name",
+        "transient_local",
     )
 
     def __init__(
-        self, node: Node, msg_type: type[Message], topic: str, callback: Callable[[Any], Any] | None, depth: int
+        self,
+        node: Node,
+        msg_type: type[Message],
+        topic: str,
+        callback: Callable[[Any], Any] | None,
+        depth: int,
+        transient_local: bool = False,
     ) -> None:
         self._bus = node._bus
         self.topic_name = node.resolve_topic_name(topic)
@@ -99,7 +161,18 @@ class Subscription:
         self._queue: deque[Any] = deque(maxlen=depth)
         self._scheduled = False
         self._destroyed = False
-        self._topic.readers.append(self)
+        topic = self._topic
+        for fn in topic.on_readers:  # before joining: a latched value can still be brought up to date
+            fn(topic, True)
+        topic.readers.append(self)
+        if transient_local:  # a late joiner gets what TRANSIENT_LOCAL publishers kept, oldest first
+            for kept in list(topic.latched.values()):
+                for msg in kept:
+                    self._deliver(msg._copy())
+        self.node = node
+        self.depth = depth
+        self.transient_local = transient_local
+        self._remote = node._bus.transport.subscription(self)  # brings in other processes' messages
 
     def _deliver(self, msg: Any) -> None:
         self.latest = msg
@@ -133,7 +206,12 @@ class Subscription:
     def destroy(self) -> None:
         if not self._destroyed:
             self._destroyed = True
-            self._topic.readers.remove(self)
+            topic = self._topic
+            topic.readers.remove(self)
+            for fn in topic.on_readers:
+                fn(topic, False)
+            if self._remote is not None:
+                self._remote.close()
 
 
 # -- services --------------------------------------------------------------------------------------
@@ -147,42 +225,64 @@ class ServiceServer:
             raise ValueError(f"create_service(): {self.srv_name} already has a server; a service has exactly one")
         self.type = srv_type
         self.callback = callback
+        self.node = node
         self._bus.services[self.srv_name] = self
+        self._remote = self._bus.transport.service(self)  # answers other processes' clients
 
-    def _serve(self, request: Message, future: Future) -> None:
+    def _answer(self, request: Message) -> Message:
         response = self.callback(request, self.type.Response())
         if type(response) is not self.type.Response:
             raise TypeError(
                 f"the callback of service {self.srv_name} must return the {self.type.Response._TYPE} it was "
                 f"given (filled in), not {_type_name(response)}"
             )
-        future.set_result(response._copy())
+        return response
+
+    def _serve(self, request: Message, future: Future) -> None:
+        future.set_result(self._answer(request)._copy())
 
     def destroy(self) -> None:
         if self._bus.services.get(self.srv_name) is self:
             del self._bus.services[self.srv_name]
+        if self._remote is not None:
+            self._remote.close()
+            self._remote = None
 
 
 class Client:
     def __init__(self, node: Node, srv_type: type[Service], name: str) -> None:
         self._bus = node._bus
+        self.node = node
         self.srv_name = node.resolve_service_name(name)
         self.srv_type = srv_type
+        self._remote = self._bus.transport.client(self)  # reaches servers of other processes
 
     def service_is_ready(self) -> bool:
-        return self.srv_name in self._bus.services
+        """A server in this process, or (DDS) one in another process matched both ways."""
+        if self.srv_name in self._bus.services:
+            return True
+        return self._remote is not None and self._remote.ready()
 
     def wait_for_service(self, timeout_sec: float | None = None) -> bool:
         """True once a server exists.  Waits (the sim clock jumps) at most timeout_sec, running due
-        timers meanwhile; with no timeout it does not block: nothing else in this process could
-        create the server while this machine waits."""
+        timers meanwhile; with no timeout it does not block in process (nothing else in this
+        process could create the server while this machine waits) and waits for one as rclpy
+        does with a remote transport (until Ctrl-C or the run's --duration)."""
         if self.service_is_ready():
             return True
+        bus = self._bus
+        if timeout_sec is None and self._remote is not None:
+            while bus.ok() and (bus.ctx.deadline is None or bus.clock.now < bus.ctx.deadline):
+                bus.spin_once(100_000_000)
+                if self.service_is_ready():
+                    return True
+            return False
         if timeout_sec is None or timeout_sec <= 0:
             return False
-        bus = self._bus
         deadline = bus.clock.now + round(timeout_sec * 1e9)
         while bus.clock.now < deadline:
+            if self._remote is not None and not bus.ok():
+                return False  # Ctrl-C while waiting for another process, as rclpy after shutdown
             bus.spin_once(deadline - bus.clock.now)
             if self.service_is_ready():
                 return True
@@ -193,6 +293,10 @@ class Client:
             raise TypeError(
                 f"call_async() on {self.srv_name}: expected a {self.srv_type.Request._TYPE}, got {_type_name(request)}"
             )
+        if self._remote is not None and self.srv_name not in self._bus.services:
+            future = Future(self.srv_name, self._remote)
+            self._remote.send(request, future)
+            return future
         return self._bus.call(self.srv_name, request._copy())
 
     def call(self, request: Message, timeout_sec: float | None = None) -> Any:
@@ -206,7 +310,9 @@ class Client:
         return future.result()
 
     def destroy(self) -> None:
-        pass
+        if self._remote is not None:
+            self._remote.close()
+            self._remote = None
 
 
 # -- timers ------------------------------------------------------------------------------------------
@@ -389,6 +495,7 @@ class Node:
         logger_name = ".".join([*ns.strip("/").split("/"), name]) if ns != "/" else name
         self._logger = Logger(bus, logger_name)
         bus.nodes.append(self)
+        bus.transport.node_changed(self)
 
     # names
     def get_name(self) -> str:
@@ -419,9 +526,13 @@ class Node:
         self._check()
         if not is_message_class(msg_type):
             raise TypeError(f"create_publisher(): msg_type must be a message class such as Twist, not {msg_type!r}")
-        _depth(qos_profile, "create_publisher()")
-        pub = Publisher(self, msg_type, topic)
+        depth = _depth(qos_profile, "create_publisher()")
+        if _transient_local(qos_profile):
+            pub: Publisher = _LatchingPublisher(self, msg_type, topic, depth)
+        else:
+            pub = Publisher(self, msg_type, topic, depth)
         self._entities.append(pub)
+        self._bus.transport.node_changed(self)
         return pub
 
     def create_subscription(
@@ -437,8 +548,10 @@ class Node:
             raise TypeError(f"create_subscription(): msg_type must be a message class such as Twist, not {msg_type!r}")
         if callback is not None and not callable(callback):
             raise TypeError("create_subscription(): callback must be callable, or None for a PULL reader")
-        sub = Subscription(self, msg_type, topic, callback, _depth(qos_profile, "create_subscription()"))
+        depth = _depth(qos_profile, "create_subscription()")
+        sub = Subscription(self, msg_type, topic, callback, depth, _transient_local(qos_profile))
         self._entities.append(sub)
+        self._bus.transport.node_changed(self)
         return sub
 
     def create_service(
@@ -451,6 +564,7 @@ class Node:
             raise TypeError("create_service(): callback must be callable as callback(request, response)")
         srv = ServiceServer(self, srv_type, srv_name, callback)
         self._entities.append(srv)
+        self._bus.transport.node_changed(self)
         return srv
 
     def create_client(self, srv_type: type[Service], srv_name: str, **_ignored: Any) -> Client:
@@ -459,6 +573,7 @@ class Node:
             raise TypeError(f"create_client(): srv_type must be a service class such as Spawn, not {srv_type!r}")
         cli = Client(self, srv_type, srv_name)
         self._entities.append(cli)
+        self._bus.transport.node_changed(self)
         return cli
 
     def create_timer(self, timer_period_sec: float, callback: Callable[[], Any], **_ignored: Any) -> Timer:
@@ -487,6 +602,7 @@ class Node:
             e.destroy()
         self._entities.clear()
         self._destroyed = True
+        self._bus.transport.node_changed(self)
 
     # logging, time, parameters
     def get_logger(self) -> Logger:

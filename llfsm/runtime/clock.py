@@ -4,6 +4,7 @@ comparisons are exact and a simulated run is reproducible byte for byte."""
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 
 def parse_duration(text: str) -> int:
@@ -70,6 +71,9 @@ class WallClock(Clock):
         self.idle = idle_ns
         self.period = period_ns
         self._next = period_ns or 0
+        #: Waits out the idle sleep instead of time.sleep; a transport that receives from other
+        #: processes sets it so that arriving data ends the sleep early (the DDS transport).
+        self.waiter: Callable[[int], None] | None = None
 
     def read(self) -> int:
         return time.monotonic_ns() - self._start
@@ -84,7 +88,10 @@ class WallClock(Clock):
             if self._next < self.read():
                 self._next = self.read() + self.period
         elif not fired and self.idle:
-            time.sleep(self.idle / 1e9)
+            if self.waiter is not None:
+                self.waiter(self.idle)
+            else:
+                time.sleep(self.idle / 1e9)
         self.now = self.read()
 
     def sleep_until(self, t: int) -> None:

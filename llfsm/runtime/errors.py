@@ -10,6 +10,7 @@ through being imported (a bad include).
 from __future__ import annotations
 
 import bisect
+import errno
 import json
 import linecache
 import os
@@ -30,6 +31,59 @@ FILE_RE = re.compile(
 )
 
 
+class RunStopped(BaseException):
+    """Raised from a signal handler into whatever code is running, machine code included: the
+    second interrupt, or a first one whose grace time has passed in real time while a section
+    still loops or blocks.  A BaseException, as KeyboardInterrupt is, so that `except Exception`
+    in machine code does not swallow it; the report then names where the run was stopped."""
+
+    def __init__(self, signum: int, text: str, *, in_machine_code: bool = True) -> None:
+        super().__init__(signum, text)
+        self.signum = signum
+        self.text = text
+        self.in_machine_code = in_machine_code
+
+    def __str__(self) -> str:
+        return self.text
+
+
+def signal_name(signum: int) -> str:
+    import signal
+
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
+
+
+def passes_through(exc: BaseException) -> bool:
+    """True for what is not a fault of machine code even when raised inside it: a real Ctrl-C
+    (KeyboardInterrupt, when no handler of ours is installed) and a write to our own stdout or
+    stderr after its reader went away (`llfsm run ... | head -1`), which ends the run quietly.
+    Anything else raised in machine code, SystemExit and a BrokenPipeError it raises itself
+    included, is reported with the user's file and line."""
+    if isinstance(exc, KeyboardInterrupt):
+        return True
+    if isinstance(exc, BrokenPipeError):
+        return exc.errno == errno.EPIPE and _std_stream_broken()
+    return False
+
+
+def _std_stream_broken() -> bool:
+    """Whether stdout or stderr is a pipe whose reader has gone (poll reports an error on it)."""
+    import select
+
+    if not hasattr(select, "poll"):
+        return True
+    poller = select.poll()
+    for fd in (1, 2):
+        poller.register(fd, select.POLLOUT)
+    try:
+        return any(ev & (select.POLLERR | select.POLLNVAL) for _fd, ev in poller.poll(0))
+    except OSError:
+        return True
+
+
 @dataclass
 class ErrorReport:
     exception: str  # "ZeroDivisionError: division by zero"
@@ -40,6 +94,7 @@ class ErrorReport:
     file: str | None = None  # path of the user's file
     line: int | None = None
     text: str | None = None  # the line as the user wrote it
+    kind: str = "error"  # "stopped" when an interrupt stopped the run there
 
     def format(self) -> str:
         """Two lines: a compiler-style first line, then the offending source line."""
@@ -51,8 +106,9 @@ class ErrorReport:
         if self.section:
             where.append(self.section)
         ctx = f" ({', '.join(where)})" if where else ""
-        head = f"{self.file}:{self.line}: " if self.file else ""
-        out = f"{head}error: {self.exception}{ctx}\n"
+        head = f"{self.file}:{self.line}: " if self.file else "llfsm: " if self.kind != "error" else ""
+        what = f"error: {self.exception}" if self.kind == "error" else self.exception  # "stopped by ..."
+        out = f"{head}{what}{ctx}\n"
         if self.text:
             out += f"    {self.text.strip()}\n"
         return out
@@ -112,11 +168,33 @@ def _display(path: str) -> str:
 
 def _exception_text(exc: BaseException) -> str:
     """`Type: message`, whatever the exception does: machine code may raise anything."""
+    if isinstance(exc, RunStopped):
+        return str(exc)
     try:
         msg = str(exc)
     except Exception:  # a broken __str__ must not hide the report of the error itself
         msg = "<exception str() failed>"
     return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
+
+
+def _reentrant_call_hint(tb: TracebackType | None) -> str:
+    """Why a RecursionError happened when it is the classic one: a service callback that calls
+    its own service synchronously (each call serves the request, which calls again...)."""
+    seen: dict[str, int] = {}
+    while tb is not None:
+        code = tb.tb_frame.f_code
+        if code.co_name == "call" and code.co_filename.endswith(os.path.join("llfsm", "ros", "node.py")):
+            name = getattr(tb.tb_frame.f_locals.get("self"), "srv_name", None)
+            if isinstance(name, str):
+                seen[name] = seen.get(name, 0) + 1
+        tb = tb.tb_next
+    again = [n for n, k in seen.items() if k > 1]
+    if not again:
+        return ""
+    return (
+        f" (service {again[0]} is called synchronously from inside its own callback, which calls it again:"
+        " answer without calling it, or use call_async)"
+    )
 
 
 def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorReport | None:
@@ -133,7 +211,9 @@ def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorRepor
         return None
     frame, lineno = found.tb_frame, found.tb_lineno
     fname = frame.f_code.co_filename
-    rep = ErrorReport(exception=_exception_text(exc))
+    rep = ErrorReport(exception=_exception_text(exc), kind="stopped" if isinstance(exc, RunStopped) else "error")
+    if isinstance(exc, RecursionError):
+        rep.exception += _reentrant_call_hint(exc.__traceback__)
     self_ = frame.f_locals.get("self")
     m = self_ if isinstance(self_, Machine) else machine
     if m is not None:

@@ -42,6 +42,10 @@ class Machine:
     ON_RESUME: ClassVar[tuple[Hook, ...]] = ()
     #: The machine directory the class was compiled from.
     SOURCE_DIR: ClassVar[str] = ""
+    #: machine.yaml's description, and per state its transitions in priority order as
+    #: (target index, guard text as written): what /llfsm/NAME/description and the web view show.
+    DESCRIPTION: ClassVar[str] = ""
+    TRANSITIONS: ClassVar[tuple[tuple[tuple[int, str], ...], ...]] = ()
 
     # Slots make attribute access on the hot path as cheap as CPython allows; generated classes
     # add their variables to them.

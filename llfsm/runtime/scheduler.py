@@ -8,13 +8,15 @@ them apart means an untraced run pays nothing for tracing.
 from __future__ import annotations
 
 import signal
+import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from types import FrameType
 
 from .clock import Clock, SimClock
 from .context import RunContext, activate
-from .errors import ErrorReport, report_for
+from .errors import ErrorReport, RunStopped, is_generated, passes_through, report_for, signal_name
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
 
@@ -22,7 +24,13 @@ FOREVER = 1 << 62
 
 #: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
-EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
+#: 128 + the signal's number, as a shell reports a process the signal killed.
+EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
+#: Signals that interrupt a run: Ctrl-C, `kill`, and a closed terminal (SIGHUP).
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+#: After a first interrupt, machine code that still holds the run this long (seconds of real
+#: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
+STUCK_SLACK_S = 0.5
 
 
 @dataclass
@@ -63,9 +71,18 @@ class Arrangement:
         self._interrupts = 0
         self._signal: int | None = None
         self._grace_end: int | None = None
+        self._interrupted_at = 0.0  # time.monotonic() of the first interrupt: grace is real time too
+        self._grace_ns = 1_000_000_000
+        self.running = False  # inside run(): a stop may be raised into the running code
         self.rounds = 0
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
+        #: SPEC §2 ends a run whose machines are all suspended: nothing could resume them.  A run
+        #: steered from outside (control services a page or another process calls) waits instead.
+        self.end_when_suspended = True
+        #: Keep running rounds with no machine left (nodes on their own, SPEC 4): the run then
+        #: ends by an interrupt or --duration only.
+        self.serve_forever = False
         names = [c.NAME for c in classes]
         for n in names:
             if names.count(n) > 1:
@@ -120,6 +137,13 @@ class Arrangement:
         m.RINGLETS[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
         self._attention = True
 
+    def set_tracer(self, tracer: Tracer | None) -> None:
+        """Change the tracer during a run (from the scheduler's thread): the round loop picks
+        it up before its next round.  How state topics get their events only while someone
+        listens: the plain loop runs otherwise."""
+        self.tracer = tracer
+        self._attention = True
+
     # -- control commands -------------------------------------------------------------------
     def _apply(self, m: Machine) -> bool:
         """Apply m's pending command; True if the ringlet goes on (step 2), False if it ends."""
@@ -172,10 +196,14 @@ class Arrangement:
         self._attention = True
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
-        """Ctrl-C / SIGTERM: `ros.ok()` turns false, rounds go on for the grace time; twice: stop.
-        signum 0 is a stop asked for from inside the run (teleop's `q`): it ends with status 0."""
+        """Ctrl-C / SIGTERM / SIGHUP: `ros.ok()` turns false, rounds go on for the grace time (run
+        time or real time, whichever passes first); twice: stop (signals_handled raises the stop
+        into running code at once).  signum 0 is a stop asked for from inside the run (teleop's
+        `q`): it ends with status 0."""
         self._interrupts += 1
-        self._signal = signum if self._signal is None else self._signal
+        if self._signal is None:
+            self._signal = signum
+            self._interrupted_at = time.monotonic()
         self.ctx.interrupted = True
         self._attention = True
 
@@ -205,8 +233,9 @@ class Arrangement:
         self._attention = False
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
         if not self._live:
-            return self._result("finished", EXIT_OK)
-        if all(m._suspended and m._pending is None for m in self._live):
+            if not self.serve_forever:
+                return self._result("finished", EXIT_OK)
+        elif self.end_when_suspended and all(m._suspended and m._pending is None for m in self._live):
             return self._result("suspended", EXIT_OK)
         if self._interrupts:
             self._attention = True  # keep checking the grace time every round
@@ -217,7 +246,9 @@ class Arrangement:
                 self._grace_end = now + grace
                 if self.on_interrupt is not None:
                     self.on_interrupt(grace)
-            elif now >= self._grace_end:
+            elif now >= self._grace_end or time.monotonic() - self._interrupted_at >= grace / 1e9:
+                # run time or real time, whichever passes first: under `--clock sim --period 1ns`
+                # a second of run time is a billion rounds
                 return self._result("interrupted", status)
         return None
 
@@ -225,13 +256,26 @@ class Arrangement:
         """Run rounds until the run ends (SPEC §2); machine exceptions become an error report."""
         prev = activate(self.ctx)
         self.ctx.deadline = duration_ns
+        self._grace_ns = grace_ns
+        self.running = True
         try:
             result = self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
             result.rounds = self.rounds  # the loop keeps its count in a local until it ends
             return result
-        except (BrokenPipeError, KeyboardInterrupt, SystemExit):
-            raise
-        except BaseException as exc:  # machine code may raise anything, e.g. asyncio.CancelledError
+        except RunStopped as exc:  # raised by signals_handled into whatever was running
+            self.running = False
+            status = EXIT_SIGNAL.get(exc.signum, 130)
+            rep = report_for(exc) if exc.in_machine_code else None
+            if rep is None:  # stopped between rounds or in the bus: nothing of the user's to show
+                reason = "killed" if self._interrupts > 1 else "interrupted"
+                return RunResult(reason, self.rounds, self.clock.now, status)
+            if self.tracer is not None:
+                self.tracer.error(None, rep.as_dict())
+            return RunResult("killed", self.rounds, self.clock.now, status, rep)
+        except BaseException as exc:  # machine code may raise anything: SystemExit, CancelledError...
+            self.running = False
+            if passes_through(exc):
+                raise
             rep = report_for(exc)
             if rep is None:
                 raise
@@ -239,6 +283,7 @@ class Arrangement:
                 self.tracer.error(None, rep.as_dict())
             return RunResult("error", self.rounds, self.clock.now, EXIT_ERROR, rep)
         finally:
+            self.running = False  # from here on a signal is only counted: at_end runs whole
             try:
                 for fn in self.ctx.at_end:
                     fn()
@@ -264,6 +309,7 @@ class Arrangement:
                     if done is not None:
                         return done
                     live = self._live
+                    tr = self.tracer  # set_tracer() may have changed it
                 if now >= end:
                     return self._result("duration", EXIT_OK)
                 if tr is None and sim and not hooks:
@@ -314,16 +360,51 @@ def _regate(m: Machine) -> None:
     m._ringlets = m._held if (m._pending is not None or m._suspended) else m.RINGLETS
 
 
+def _in_machine_code(frame: FrameType | None) -> bool:
+    """Whether a generated module's code is on the stack (a signal handler's view of it)."""
+    while frame is not None:
+        if is_generated(frame.f_code.co_filename):
+            return True
+        frame = frame.f_back
+    return False
+
+
 @contextmanager
 def signals_handled(arr: Arrangement) -> Iterator[None]:
-    """Route SIGINT/SIGTERM to the arrangement for the duration of a run."""
+    """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run.
 
-    def handler(signum: int, _frame: object) -> None:
+    The first one asks the machines to finish (the scheduler sees it between rounds).  A second
+    one, or the grace time passing in real time while machine code still loops or blocks (a real
+    timer, SIGALRM, catches that), raises RunStopped from the handler: Python delivers it inside
+    whatever code is running, machine code included, and a blocking `time.sleep` ends with it,
+    so nothing a section does can keep the run from stopping."""
+
+    def stop(frame: FrameType | None, text: str) -> None:
+        if arr.running:
+            # outside machine code (the scheduler sleeping between rounds, the bus) there is no
+            # place of the user's to name: the run ends as the grace time's end would end it
+            raise RunStopped(arr._signal or signal.SIGINT, text, in_machine_code=_in_machine_code(frame))
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        first = not arr._interrupts
         arr.interrupt(signum)
+        if first:
+            signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
+        else:
+            stop(frame, f"stopped by a second {signal_name(signum)}")
 
-    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    def alarm(_signum: int, frame: FrameType | None) -> None:
+        if arr._interrupts:
+            grace = arr._grace_ns / 1e9
+            sig = signal_name(arr._signal or 0)
+            held = grace + STUCK_SLACK_S
+            stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
+
+    old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
+    old[signal.SIGALRM] = signal.signal(signal.SIGALRM, alarm)
     try:
         yield
     finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
         for s, h in old.items():
             signal.signal(s, h)

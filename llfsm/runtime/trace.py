@@ -56,3 +56,56 @@ class Tracer:
     def close(self) -> None:
         if self.jsonl is not None:
             self.jsonl.flush()
+
+
+class Tee(Tracer):
+    """Several tracers seen as one by the scheduler, each told every event in turn: `-v` and
+    `--trace` go on unchanged while a state feed (llfsm.ros.control) listens beside them."""
+
+    def __init__(self, *tracers: Tracer) -> None:
+        self.tracers = tracers
+        self._round = self._now = 0
+
+    @property  # type: ignore[override]
+    def round(self) -> int:
+        return self._round
+
+    @round.setter
+    def round(self, value: int) -> None:
+        self._round = value
+        for t in self.tracers:
+            t.round = value
+
+    @property  # type: ignore[override]
+    def now(self) -> int:
+        return self._now
+
+    @now.setter
+    def now(self, value: int) -> None:
+        self._now = value
+        for t in self.tracers:
+            t.now = value
+
+    def entry(self, m: Machine, state: int) -> None:
+        for t in self.tracers:
+            t.entry(m, state)
+
+    def transition(self, m: Machine, source: int, target: int, index: int) -> None:
+        for t in self.tracers:
+            t.transition(m, source, target, index)
+
+    def command(self, kind: str, m: Machine, state: int) -> None:
+        for t in self.tracers:
+            t.command(kind, m, state)
+
+    def finish(self, m: Machine) -> None:
+        for t in self.tracers:
+            t.finish(m)
+
+    def error(self, m: Machine | None, report: dict[str, object]) -> None:
+        for t in self.tracers:
+            t.error(m, report)
+
+    def close(self) -> None:
+        for t in self.tracers:
+            t.close()

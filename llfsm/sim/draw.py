@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import zlib
 from collections.abc import Callable
 from pathlib import Path
@@ -205,17 +204,9 @@ def _xml_attr(text: str) -> str:
 
 
 def _atomic_write(path: Path, write: Callable[[IO[bytes]], object]) -> Path:
-    folder = path.parent if str(path.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            write(f)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    """Through llfsm.outputs, as every file a user names: atomic, and an OSError (OutputError)
+    with one clear message when it cannot be written."""
+    from ..outputs import write_file
+
+    write_file(path, write, what="--image")
     return path

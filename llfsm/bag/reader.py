@@ -1,0 +1,92 @@
+"""Reading rosbag2 bags (ours and ROS 2's, MCAP or sqlite3) with rosbags' reader."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from .errors import BagError
+
+
+def _reader_errors() -> tuple[type[BaseException], ...]:
+    from rosbags.rosbag2 import ReaderError
+
+    return (ReaderError, OSError, KeyError, ValueError, IndexError, EOFError, TypeError)
+
+
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split())
+
+
+class BagReader:
+    """A bag folder (with its metadata.yaml) or one storage file (`x.mcap`, `x.db3`)."""
+
+    def __init__(self, path: str | Path, storage: str | None = None, file_name: str | None = None) -> None:
+        self.path = Path(path)
+        if file_name is not None:  # a bag being salvaged: its metadata.yaml is not written yet
+            self.path = self.path / file_name
+        if not self.path.exists():
+            raise BagError(f"{path}: no such bag")
+        if self.path.is_dir() and not (self.path / "metadata.yaml").is_file():
+            raise BagError(f"{path}: not a bag (no metadata.yaml in it)")
+        try:
+            from rosbags.highlevel import AnyReader  # noqa: F401  (rosbags is installed)
+            from rosbags.rosbag2 import Reader
+        except ImportError:  # pragma: no cover - the bag extra is missing
+            raise BagError("reading bags needs rosbags: pip install 'llfsm[bag]'") from None
+        try:
+            self._reader = Reader(self.path)
+            self._reader.open()
+        except _reader_errors() as e:
+            raise BagError(f"{path}: cannot read the bag: {_one_line(e)}") from None
+
+    def __enter__(self) -> BagReader:
+        return self
+
+    def __exit__(self, t: type[BaseException] | None, e: BaseException | None, tb: TracebackType | None) -> None:
+        self.close()
+
+    def close(self) -> None:
+        try:
+            self._reader.close()
+        except Exception:
+            pass
+
+    @property
+    def connections(self) -> list[Any]:
+        return list(self._reader.connections)
+
+    @property
+    def start_time(self) -> int:
+        return self._reader.start_time
+
+    @property
+    def custom_data(self) -> dict[str, str]:
+        """The bag's custom_data (metadata.yaml), {} for a lone storage file."""
+        if not self.path.is_dir():
+            return {}
+        from .info import read_metadata
+
+        custom = read_metadata(self.path).get("custom_data")
+        return {str(k): str(v) for k, v in custom.items()} if isinstance(custom, dict) else {}
+
+    @property
+    def message_count(self) -> int:
+        return self._reader.message_count
+
+    def messages(self, connections: Iterable[Any] | None = None) -> Iterator[tuple[Any, int, bytes]]:
+        """(connection, timestamp ns, CDR bytes) in time order; a damaged file is a BagError."""
+        try:
+            conns = None if connections is None else list(connections)
+            for conn, t, data in self._reader.messages(connections=conns or ()):
+                yield conn, t, bytes(data)
+        except BagError:
+            raise
+        except _reader_errors() as e:
+            raise BagError(f"{self.path}: the bag is damaged: {_one_line(e)}") from None
+
+    def timestamps(self) -> Iterator[tuple[int, int]]:
+        for conn, t, _data in self.messages():
+            yield conn.id, t

@@ -1,0 +1,299 @@
+"""`--record`: a bus subscriber that sees every topic and writes a rosbag2 bag beside the run.
+
+The recorder is a tap on the bus (`Bus.add_tap`): a reader on every topic, those that exist and
+those made later, like `ros2 bag record -a`.  (On the DDS transport it subscribes to each topic
+instead, so that what other processes publish is recorded too.)  Delivery costs the round one
+append of (time, topic, message) to a queue; the message is the copy the bus makes for each
+reader, so nobody changes it afterwards.  A thread of the run serialises the queued messages to CDR and
+sends them in batches to the bag writer process (`_writer_process`), which writes the bag on
+another core: neither the disk nor the storage libraries hold up a round.  While the run is
+busy the thread works in short slices with pauses, so the rounds keep most of the interpreter.
+
+Timestamps are the run clock under `--clock sim` (nanoseconds from the start of the run: two
+runs give the same bag, byte for byte) and the wall clock (nanoseconds since the epoch)
+otherwise, as rosbag2 stamps messages with their arrival time.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+from collections import deque
+from typing import IO, TYPE_CHECKING, Any
+
+from ._writer_process import FRAME, RECORD
+from .errors import BagError
+from .typesupport import TypeSupport
+from .writer import qos_profile
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+
+    from ..ros.bus import Bus, Topic
+
+SIM_CLOCK_KEY = "llfsm.clock"  # in the bag's custom_data
+BATCH_S = 0.05  # how often an idle thread looks at the queue
+# The thread works in slices and pauses between them while a backlog lasts: Python's GIL lets
+# one thread run at a time, and the rounds must keep most of it.  A slice starts small; after
+# a pause, a thread that gets the interpreter back at once (the run is sleeping between
+# rounds, or over) doubles its slice, one that had to wait for it (the rounds are busy) goes
+# back to the smallest.
+SLICE_MIN = 32  # messages
+SLICE_MAX = 8192
+PAUSE_S = 0.002
+BUSY_S = 0.0005  # a pause this much longer than asked for: the rounds had the interpreter
+CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
+START_TIMEOUT_S = 60.0
+QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
+
+
+class _Tap:
+    """The recorder's reader on one topic: what `Publisher.publish` hands a copy to.  It keeps
+    the message's CDR bytes, not the message: one small object per message waits in the
+    queue instead of a tree of them (which costs a busy run more than the encoding does)."""
+
+    __slots__ = ("_cdr", "_clock", "_queue", "_wall", "key")
+
+    def __init__(self, recorder: Recorder, topic: Topic, cdr: Callable[[Any], bytes]) -> None:
+        self._queue = recorder.queue
+        self._clock = recorder.clock
+        self._wall = recorder.wall
+        self._cdr = cdr
+        self.key = topic
+
+    def _deliver(self, msg: Any) -> None:
+        self._queue.append((time.time_ns() if self._wall else self._clock.now, self.key, self._cdr(msg)))
+
+
+class Recorder:
+    """Records the topics of one bus into one bag."""
+
+    def __init__(
+        self,
+        path: str,
+        storage: str = "mcap",
+        topics: Iterable[str] = (),
+        *,
+        report: Callable[[str], None] | None = None,
+    ) -> None:
+        self.selected = {t if t.startswith("/") else "/" + t for t in topics} or None
+        self.path = path
+        self.types = TypeSupport()
+        self.queue: deque[tuple[int, Topic, Any]] = deque()
+        self.clock: Any = None
+        self.wall = True
+        self.error: str | None = None
+        self.count: int | None = None  # messages in the closed bag
+        self._report = report
+        self._conns: dict[Topic, Any] = {}
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._listener: threading.Thread | None = None
+        self._taps: list[tuple[Topic, _Tap]] = []
+        self._bus: Bus | None = None
+        self._started = False
+        self._node: Any = None  # with a remote transport: the recorder's node and subscriptions
+        # the writer runs this same llfsm, installed or not
+        root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p))
+        self._proc = subprocess.Popen(
+            [sys.executable, "-m", "llfsm.bag._writer_process", os.fspath(path), storage],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            env=env,
+        )
+        assert self._proc.stdin is not None and self._proc.stdout is not None
+        self._pipe: IO[bytes] = self._proc.stdin
+        self.types.store  # noqa: B018  (loaded while the writer starts: before the first round, not mid-run)
+        first = self._proc.stdout.readline()
+        reply = json.loads(first) if first else {"error": "the bag writer did not start"}
+        if "error" in reply:
+            self._proc.wait(START_TIMEOUT_S)
+            raise BagError(reply["error"])
+        self._replies: list[dict[str, Any]] = []
+
+    # -- the run's side ------------------------------------------------------------------------
+    def attach(self, bus: Bus) -> None:
+        """Tap every topic of the bus (from now on) and start the sending thread."""
+        self.start(bus, tap=True)
+
+    def start(self, bus: Bus, tap: bool) -> None:
+        """Start the sending thread; with `tap`, record every topic of the bus.  Without it,
+        whoever feeds `queue` with (time, topic, message) decides (`llfsm bag record`)."""
+        self.clock = bus.clock
+        self.wall = bus.clock.kind != "sim"
+        if not self.wall:  # the times are run times: --play keeps them as they are
+            self._send(b"X", json.dumps({SIM_CLOCK_KEY: "sim"}).encode())
+        if tap:
+            self._bus = bus
+            bus.add_tap(self._on_topic)
+        self._started = True
+        self._listener = threading.Thread(target=self._listen, name="llfsm-bag-replies", daemon=True)
+        self._listener.start()
+        self._thread = threading.Thread(target=self._run, name="llfsm-bag-sender", daemon=True)
+        self._thread.start()
+
+    def _on_topic(self, topic: Topic) -> None:
+        if self.selected is not None and topic.name not in self.selected:
+            return
+        if not self._started:  # before the first round: the definition now, not mid-run
+            try:
+                self.types.definition(topic.type._TYPE)
+            except BagError:
+                pass  # said when its first message comes
+        if self._bus is not None and self._bus.transport.remote:
+            self._subscribe(topic)
+            return
+        try:
+            cdr = self.types.serializer(topic.type)
+        except BagError as e:
+            self._say(f"--record: {topic.name} is not recorded: {e}")
+            return
+        tap = _Tap(self, topic, cdr)
+        topic.readers.append(tap)  # type: ignore[arg-type]  # a reader as far as publish() is concerned
+        self._taps.append((topic, tap))
+
+    def _subscribe(self, topic: Topic) -> None:
+        """With a transport that reaches other processes (DDS), a tap would see only what this
+        process publishes: the recorder subscribes instead, as any subscriber, and hears both."""
+        from ..ros.node import Node
+        from ..runtime.context import activate
+
+        assert self._bus is not None
+        prev = activate(self._bus.ctx)
+        try:
+            if self._node is None:
+                self._node = Node("rosbag2_recorder")
+            queue = self.queue
+            self._node.create_subscription(
+                topic.type, topic.name, lambda msg: queue.append((time.time_ns(), topic, msg)), QUEUE_DEPTH
+            )
+        finally:
+            activate(prev)
+
+    # -- the sending thread -------------------------------------------------------------------------
+    def _send(self, kind: bytes, payload: bytes) -> None:
+        self._pipe.write(FRAME.pack(kind, len(payload)))
+        self._pipe.write(payload)
+
+    def _run(self) -> None:
+        last_chunk = time.monotonic()
+        slice_ = SLICE_MIN
+        try:
+            while True:
+                stopping = self._stop.wait(BATCH_S)  # a batch every BATCH_S; everything at the end
+                while True:
+                    more = self._drain(None if stopping else slice_)
+                    now = time.monotonic()
+                    end_chunk = self.wall and now - last_chunk >= CHUNK_S
+                    if end_chunk:
+                        last_chunk = now
+                    if not more or end_chunk:
+                        self._send(b"S", b"\x01" if end_chunk else b"\x00")
+                    self._pipe.flush()
+                    if not more:
+                        break
+                    t = time.perf_counter()
+                    time.sleep(PAUSE_S)  # rounds first
+                    late = time.perf_counter() - t - PAUSE_S
+                    slice_ = SLICE_MIN if late > BUSY_S else min(2 * slice_, SLICE_MAX)
+                if stopping:
+                    return
+        except (BrokenPipeError, OSError, ValueError):
+            self._detach()  # the writer has gone (its reply says why)
+
+    def _drain(self, limit: int | None) -> bool:
+        """Serialise and send queued messages: at most `limit` (None: all).  True if some
+        are left."""
+        queue, conns = self.queue, self._conns
+        parts: list[bytes] = []
+        pack = RECORD.pack
+        n = len(queue) if limit is None else min(limit, len(queue))
+        for _ in range(n):
+            t, topic, msg = queue.popleft()
+            entry = conns.get(topic)
+            if entry is None:
+                entry = conns[topic] = self._connection(topic)
+            if entry is not False:
+                cid, serialize = entry
+                data = msg if msg.__class__ is bytes else serialize(msg)  # a tap's bytes, or a message
+                parts.append(pack(cid, t, len(data)))
+                parts.append(data)
+        if parts:
+            self._send(b"M", b"".join(parts))
+        return bool(queue) and limit is not None
+
+    def _connection(self, topic: Topic) -> Any:
+        try:
+            definition, type_hash = self.types.definition(topic.type._TYPE)
+            serialize = self.types.serializer(topic.type)
+        except BagError as e:
+            self._say(f"--record: {topic.name} is not recorded: {e}")
+            return False
+        cid = len(self._conns) + 1
+        qos = [qos_profile() for _ in range(max(1, topic.publishers))]
+        info = {"id": cid, "topic": topic.name, "type": topic.type._TYPE, "definition": definition}
+        info.update(hash=type_hash, qos=qos)
+        self._send(b"T", json.dumps(info).encode())
+        return cid, serialize
+
+    # -- replies -------------------------------------------------------------------------------------
+    def _listen(self) -> None:
+        out = self._proc.stdout
+        assert out is not None
+        for line in out:
+            try:
+                reply = json.loads(line)
+            except ValueError:
+                continue
+            self._replies.append(reply)
+            if "error" in reply and self.error is None:
+                self.error = f"--record: {reply['error']}"
+                self._detach()
+                self._say(self.error)
+            elif "count" in reply:
+                self.count = int(reply["count"])
+
+    def _say(self, text: str) -> None:
+        if self._report is not None:
+            self._report(text)
+
+    def _detach(self) -> None:
+        for topic, tap in list(self._taps):
+            if tap in topic.readers:
+                topic.readers.remove(tap)  # type: ignore[arg-type]
+        self._taps.clear()
+        self.queue.clear()
+
+    # -- the end -----------------------------------------------------------------------------------
+    def close(self) -> str | None:
+        """Send what is queued, close the bag and wait for the writer.  Returns the error
+        message if recording failed (it was reported when it happened), else None."""
+        if self._thread is not None:
+            self._stop.set()
+            self._thread.join()
+            self._thread = None
+        self._detach()
+        try:
+            self._send(b"C", b"")
+            self._pipe.close()
+        except (BrokenPipeError, OSError, ValueError):
+            pass
+        self._proc.wait()
+        if self._listener is not None:
+            self._listener.join()
+        else:  # never attached: read the closing reply here
+            assert self._proc.stdout is not None
+            for line in self._proc.stdout:
+                reply = json.loads(line)
+                if "error" in reply and self.error is None:
+                    self.error = f"--record: {reply['error']}"
+                    self._say(self.error)
+        if self.error is None and self.count is None and self._proc.returncode != 0:
+            self.error = f"--record: the bag writer stopped unexpectedly (status {self._proc.returncode})"
+            self._say(self.error)
+        return self.error

@@ -1,0 +1,340 @@
+"""Types in bags: the message definitions and type hashes a bag embeds, CDR bytes, and classes
+for the types a bag brings that llfsm has no class for.
+
+Definitions follow rosbag2 (rosbag2_cpp's LocalMessageDefinitionSource): the type's own `.msg`
+text, then each dependency once, depth first in name order, after a line of 80 `=` and
+`MSG: pkg/Name`.  That is the `ros2msg` schema Foxglove and `ros2 bag play` read.  The text of
+a type comes from its `.msg` file where llfsm has one (turtlesim, user packages); the built-in
+ROS packages (std_msgs, geometry_msgs, builtin_interfaces) have no file here, so their text is
+rebuilt from rosbags' type store (fields and constants, without comments).  Type hashes are
+RIHS01 as rosidl computes them, by rosbags.
+
+Bytes are XCDR1 (plain CDR, little endian) as rclpy's `serialize_message` gives them, from
+llfsm's own DDS type support (`llfsm.msgs._dds`); a class without a DDS form (none should be
+left) goes through rosbags' serializer instead.
+
+Everything here is loaded only by a run that records or plays a bag, never by a plain run.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+import tempfile
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..msgs import Message, is_message_class, search_path
+from .errors import BagError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from rosbags.typesys.store import Typestore
+
+DELIMITER = "=" * 80 + "\n"
+_MSG_FIELD_TYPE = re.compile(r"(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+")
+_PRIMITIVES = frozenset(
+    (
+        "bool",
+        "byte",
+        "char",
+        "float32",
+        "float64",
+        "int8",
+        "uint8",
+        "int16",
+        "uint16",
+        "int32",
+        "uint32",
+        "int64",
+        "uint64",
+        "string",
+        "wstring",
+    )
+)
+_BUILTIN_DIR = Path(__file__).resolve().parent.parent / "msgs" / "_interfaces"
+
+
+def _split(type_name: str) -> tuple[str, str]:
+    """`pkg/msg/Name` or `pkg/Name` -> (pkg, Name)."""
+    parts = type_name.split("/")
+    if len(parts) == 3 and parts[1] == "msg":
+        return parts[0], parts[2]
+    if len(parts) == 2:
+        return parts[0], parts[1]
+    raise BagError(f"not a message type name: {type_name!r}")
+
+
+class TypeSupport:
+    """Definitions, hashes and (de)serialisers, one store per bag written or read."""
+
+    def __init__(self) -> None:
+        self._store: Typestore | None = None
+        self._texts: dict[str, str] = {}  # pkg/msg/Name -> own .msg text
+        self._full: dict[str, tuple[str, str]] = {}  # pkg/msg/Name -> (definition, RIHS01 hash)
+        self._ser: dict[type, Callable[[Any], bytes]] = {}
+
+    # -- the type store (rosbags) -------------------------------------------------------------
+    @property
+    def store(self) -> Typestore:
+        if self._store is None:
+            self._store = _base_store()
+        return self._store
+
+    def _register(self, type_name: str, seen: set[str] | None = None) -> None:
+        """Make sure the store knows type_name and what it uses (from .msg texts where needed)."""
+        seen = set() if seen is None else seen
+        if type_name in seen:
+            return
+        seen.add(type_name)
+        text = self.own_text(type_name)
+        for dep in self._dependencies(text, type_name):
+            self._register(dep, seen)
+        if type_name not in self.store.fielddefs:
+            from rosbags.typesys import get_types_from_msg
+
+            self.store.register(get_types_from_msg(text, type_name))
+
+    # -- definitions ------------------------------------------------------------------------
+    def own_text(self, type_name: str) -> str:
+        """The type's own .msg text (without its dependencies)."""
+        pkg, name = _split(type_name)
+        full_name = f"{pkg}/msg/{name}"
+        text = self._texts.get(full_name)
+        if text is not None:
+            return text
+        for root in [_BUILTIN_DIR, *search_path()]:
+            path = root / pkg / "msg" / f"{name}.msg"
+            if path.is_file():
+                text = path.read_text(encoding="utf-8")
+                break
+        else:
+            if full_name not in self.store.fielddefs:
+                raise BagError(f"{full_name}: no message definition found for this type")
+            generated, _ = self.store.generate_msgdef(full_name, ros_version=2)
+            text = generated.split("\n" + DELIMITER, 1)[0]
+            text = text if text.endswith("\n") else text + "\n"
+        self._texts[full_name] = text
+        return text
+
+    @staticmethod
+    def _dependencies(text: str, type_name: str) -> list[str]:
+        """Message types a .msg text uses, sorted: rosbag2's own regular expression and order."""
+        pkg, _ = _split(type_name)
+        deps = set()
+        for m in _MSG_FIELD_TYPE.finditer(text):
+            t = m.group(1)
+            if t not in _PRIMITIVES:
+                deps.add(t if "/" in t else f"{pkg}/{t}")
+        return sorted(deps)
+
+    def definition(self, type_name: str) -> tuple[str, str]:
+        """(concatenated ros2msg definition, RIHS01 type hash) of a message type."""
+        got = self._full.get(type_name)
+        if got is not None:
+            return got
+        seen: set[str] = set()
+
+        def append(t: str) -> str:
+            out = self.own_text(t)
+            for dep in self._dependencies(out, t):
+                if dep not in seen:
+                    seen.add(dep)
+                    pkg, name = _split(dep)
+                    out += "\n" + DELIMITER + f"MSG: {dep}\n" + append(f"{pkg}/msg/{name}")
+            return out
+
+        text = append(type_name)
+        self._register(type_name)
+        got = self._full[type_name] = (text, self.store.hash_rihs01(type_name))
+        return got
+
+    # -- bytes --------------------------------------------------------------------------------
+    def serializer(self, cls: type[Message]) -> Callable[[Any], bytes]:
+        fn = self._ser.get(cls)
+        if fn is None:
+            fn = self._ser[cls] = _native_serializer(cls) or self._rosbags_serializer(cls)
+        return fn
+
+    def _rosbags_serializer(self, cls: type[Message]) -> Callable[[Any], bytes]:
+        self._register(cls._TYPE)
+        store, type_name = self.store, cls._TYPE
+
+        def serialize(msg: Any) -> bytes:
+            return bytes(store.serialize_cdr(_to_rosbags(msg, store), type_name))
+
+        return serialize
+
+    def deserializer(self, cls: type[Message]) -> Callable[[bytes], Any]:
+        native = _native_deserializer(cls)
+        if native is not None:
+            return native
+        self._register(cls._TYPE)
+        store, type_name = self.store, cls._TYPE
+
+        def deserialize(data: bytes) -> Any:
+            return _from_rosbags(store.deserialize_cdr(data, type_name), cls)
+
+        return deserialize
+
+
+_BASE_STORE: Typestore | None = None
+
+
+def _base_store() -> Typestore:
+    """rosbags' store of the ROS 2 Humble types, which llfsm's built-in classes are generated
+    from (llfsm.compiler.interfaces), with the types of llfsm's .msg files added as they are
+    needed: one per process (loading it takes a few tenths of a second)."""
+    global _BASE_STORE
+    if _BASE_STORE is None:
+        from rosbags.typesys import Stores, get_typestore
+
+        _BASE_STORE = get_typestore(Stores.ROS2_HUMBLE)
+    return _BASE_STORE
+
+
+def _native_serializer(cls: type[Message]) -> Callable[[Any], bytes] | None:
+    """llfsm's own XCDR1 encoder of the class (llfsm.msgs._dds), if it has one."""
+    try:
+        from ..msgs._dds import cdr, codec
+    except ImportError:  # pragma: no cover - the DDS type support is part of llfsm
+        return None
+    try:
+        codec(cls)
+    except TypeError:
+        return None
+    return cdr
+
+
+def _native_deserializer(cls: type[Message]) -> Callable[[bytes], Any] | None:
+    try:
+        from ..msgs._dds import codec, from_cdr
+    except ImportError:  # pragma: no cover
+        return None
+    try:
+        codec(cls)
+    except TypeError:
+        return None
+    return lambda data: from_cdr(data, cls)
+
+
+_NUMPY_TYPES = {
+    "bool": "bool",
+    "byte": "uint8",
+    "char": "uint8",
+    "int8": "int8",
+    "uint8": "uint8",
+    "int16": "int16",
+    "uint16": "uint16",
+    "int32": "int32",
+    "uint32": "uint32",
+    "int64": "int64",
+    "uint64": "uint64",
+    "float32": "float32",
+    "float64": "float64",
+}
+
+
+def _to_rosbags(msg: Message, store: Typestore) -> Any:
+    cls = store.types[msg._TYPE]
+    kwargs = {}
+    for field, ftype in msg._FIELDS:
+        value = getattr(msg, field)
+        if isinstance(value, Message):
+            value = _to_rosbags(value, store)
+        elif isinstance(value, list):
+            element = ftype.partition("[")[0]
+            if element in _NUMPY_TYPES:
+                import numpy
+
+                value = numpy.array(value, dtype=_NUMPY_TYPES[element])
+            elif value and isinstance(value[0], Message):
+                value = [_to_rosbags(v, store) for v in value]
+        kwargs[field] = value
+    if not msg._FIELDS and "structure_needs_at_least_one_member" in cls.__dataclass_fields__:
+        kwargs["structure_needs_at_least_one_member"] = 0
+    return cls(**kwargs)
+
+
+def _from_rosbags(obj: Any, cls: type[Message]) -> Message:
+    kwargs = {}
+    for field, ftype in cls._FIELDS:
+        value = getattr(obj, field)
+        element = ftype.partition("[")[0].partition("<=")[0]
+        if "/" in element:
+            sub = class_for(element)
+            value = [_from_rosbags(v, sub) for v in value] if ftype.endswith("]") else _from_rosbags(value, sub)
+        elif hasattr(value, "tolist"):
+            value = value.tolist()
+        kwargs[field] = value
+    return cls(**kwargs)
+
+
+# -- classes -----------------------------------------------------------------------------------
+
+
+def class_for(type_name: str) -> type[Message]:
+    """llfsm's class of a message type; raises BagError naming the type if there is none."""
+    pkg, name = _split(type_name)
+    try:
+        module = importlib.import_module(f"llfsm.msgs.{pkg}.msg")
+    except ImportError as e:
+        raise BagError(f"{pkg}/msg/{name}: llfsm has no class for this type ({e})") from None
+    cls = getattr(module, name, None)
+    if not is_message_class(cls):
+        raise BagError(f"{pkg}/msg/{name}: llfsm has no class for this type")
+    return cls  # type: ignore[return-value]
+
+
+def class_from_definition(type_name: str, encoding: str, definition: str, folder: Path) -> type[Message]:
+    """The class of a type a bag brings: llfsm's own if it has one, else compiled from the
+    definition the bag embeds, through the interface import hook (the compiler's one door):
+    the definition is split into PKG/msg/Name.msg files under `folder`, which joins the
+    interface search path."""
+    try:
+        return class_for(type_name)
+    except BagError:
+        if not definition.strip():
+            raise BagError(
+                f"{type_name}: llfsm has no class for this type and the bag holds no definition of it"
+            ) from None
+        if encoding != "ros2msg":
+            raise BagError(
+                f"{type_name}: llfsm has no class for this type and cannot read its {encoding or 'unknown'} definition"
+            ) from None
+    from ..msgs import add_search_path
+
+    root_pkg, root_name = _split(type_name)
+    sections = [(f"{root_pkg}/{root_name}", definition.split("\n" + DELIMITER)[0])]
+    for part in definition.split(DELIMITER)[1:]:
+        header, _, body = part.partition("\n")
+        if header.startswith("MSG: "):
+            body = body.rsplit("\n\n", 1)[0] + "\n" if body.endswith("\n\n") else body
+            sections.append((header[5:].strip(), body))
+    for dep, text in sections:
+        pkg, name = _split(dep)
+        d = folder / pkg / "msg"
+        d.mkdir(parents=True, exist_ok=True)
+        target = d / f"{name}.msg"
+        if not target.exists():
+            target.write_text(text, encoding="utf-8")
+    add_search_path(folder)
+    importlib.invalidate_caches()
+    try:
+        return class_for(type_name)
+    except BagError as e:
+        raise BagError(f"{e}; the definition in the bag did not compile") from None
+    except Exception as e:  # the interface compiler's own error names the file and line
+        raise BagError(f"{type_name}: the definition in the bag does not compile: {e}") from None
+
+
+def scratch_folder() -> Path:
+    """A folder for definitions taken from bags, removed when the process ends."""
+    import atexit
+    import shutil
+
+    folder = Path(tempfile.mkdtemp(prefix=f"llfsm-bag-types-{os.getpid()}-"))
+    atexit.register(shutil.rmtree, folder, True)
+    return folder

@@ -1,0 +1,58 @@
+"""What the ros2-style verb groups (topic, service, node, interface) share: options with
+`ros2`'s names and defaults, and the turning of a CliError into its one line and status."""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import click
+
+from ._common import fail
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+#: How long a list waits for discovery (`ros2 ... --no-daemon` spins 0.5 s; a loaded machine
+#: needs a little more for the endpoints of every participant to arrive).
+SPIN_TIME = 1.0
+#: How long a verb waits for the topic, service or message it needs before it gives up.
+TIMEOUT = 5.0
+
+
+def verb(fn: F) -> F:
+    """Run the command; a CliError ends it with its message and status, Ctrl-C with 130."""
+    from ..ros2cli import CliError
+
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return fn(*args, **kwargs)
+        except CliError as e:
+            fail(e.message, e.status)
+
+    return wrapper  # type: ignore[return-value]
+
+
+def positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
+    if value is not None and value <= 0:
+        raise click.BadParameter("must be greater than 0")
+    return value
+
+
+spin_time_option = click.option(
+    "--spin-time",
+    type=float,
+    default=SPIN_TIME,
+    show_default=True,
+    callback=positive,
+    help="Seconds to wait for discovery.",
+)
+timeout_option = click.option(
+    "--timeout",
+    type=float,
+    default=TIMEOUT,
+    show_default=True,
+    callback=positive,
+    help="Seconds to wait for what the command needs (a publisher, a service, a message) before giving up.",
+)

@@ -1,0 +1,75 @@
+"""`llfsm bag`: rosbag2 bags, as `ros2 bag` has them (`info`; `record` and `play` speak DDS)."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from ._common import EXIT_ERRORS, cli, fail
+
+
+@cli.group()
+def bag() -> None:
+    """Inspect, record and play rosbag2 bags (MCAP or sqlite3)."""
+
+
+@bag.command()
+@click.argument("bag_path", metavar="DIR")
+def info(bag_path: str) -> None:
+    """Print what the bag holds: duration, start and end, messages, topics with types and counts."""
+    from ..bag.errors import BagError
+    from ..bag.info import format_info
+
+    try:
+        text = format_info(bag_path)
+    except BagError as e:
+        fail(str(e), 1)
+    click.echo(text, nl=False)
+
+
+@bag.command()
+@click.argument("topics", nargs=-1, metavar="[TOPIC]...")
+@click.option("-a", "--all", "all_topics", is_flag=True, help="Record every topic on the graph (hidden ones aside).")
+@click.option("-o", "--output", metavar="DIR", help="The bag folder to create (default: rosbag2_YYYY_MM_DD-HH_MM_SS).")
+@click.option("-s", "--storage", type=click.Choice(["mcap", "sqlite3"]), default="mcap", show_default=True)
+@click.option("--duration", type=float, metavar="SECONDS", help="Stop after this long (default: at Ctrl-C).")
+def record(topics: tuple[str, ...], all_topics: bool, output: str | None, storage: str, duration: float | None) -> None:
+    """Record topics from the DDS graph (llfsm runs on --transport dds, ROS 2 nodes) into a bag."""
+    import time
+
+    from ..bag.errors import BagError
+
+    if not topics and not all_topics:
+        fail("bag record: name the topics to record, or -a for all of them")
+    if topics and all_topics:
+        fail("bag record: -a records every topic; give topics or -a, not both")
+    out = output or time.strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
+    from ..bag.dds import record as record_dds
+
+    def report(text: str) -> None:
+        click.echo(f"llfsm: {text}", err=True)
+
+    try:
+        error = record_dds(out, topics, all_topics, storage, report=report, duration=duration)
+    except BagError as e:
+        fail(f"bag record: {e}")
+    if error is not None:
+        sys.exit(EXIT_ERRORS)
+
+
+@bag.command()
+@click.argument("bag_path", metavar="DIR")
+@click.option("-r", "--rate", type=float, default=1.0, show_default=True, help="Time scale (2 = twice as fast).")
+@click.option("-l", "--loop", is_flag=True, help="Start over at the end, until Ctrl-C.")
+@click.option("--topics", "topics", multiple=True, metavar="TOPIC", help="Play only these topics (repeatable).")
+@click.option("-d", "--delay", type=float, default=0.0, show_default=True, help="Wait this many seconds first.")
+def play(bag_path: str, rate: float, loop: bool, topics: tuple[str, ...], delay: float) -> None:
+    """Publish a bag's messages to the DDS graph at their recorded pace."""
+    from ..bag.dds import play as play_dds
+    from ..bag.errors import BagError
+
+    try:
+        play_dds(bag_path, rate, loop, topics, delay)
+    except BagError as e:
+        fail(f"bag play: {e}")

@@ -1,0 +1,52 @@
+"""`llfsm service list|call`: `ros2 service` over DDS, for llfsm runs and ROS 2 nodes alike."""
+
+from __future__ import annotations
+
+import click
+
+from ._common import cli
+from ._ros2 import positive, spin_time_option, timeout_option, verb
+
+
+@cli.group()
+def service() -> None:
+    """Services of the ROS 2 graph (as `ros2 service`)."""
+
+
+@service.command("list")
+@click.option("-t", "--show-types", is_flag=True, help="Additionally show the service type.")
+@click.option("-c", "--count-services", is_flag=True, help="Only display the number of services discovered.")
+@click.option("--include-hidden-services", is_flag=True, help="Consider hidden services as well.")
+@spin_time_option
+@verb
+def list_(show_types: bool, count_services: bool, include_hidden_services: bool, spin_time: float) -> None:
+    """Output a list of available services."""
+    from ..ros2cli.graph import open_graph, service_list
+
+    graph = open_graph()
+    try:
+        graph.spin(spin_time)
+        text = service_list(
+            graph,
+            show_types=show_types,
+            count=count_services,
+            include_hidden=include_hidden_services,
+            spin_time=spin_time,
+        )
+    finally:
+        graph.close()
+    click.echo(text, nl=False)
+
+
+@service.command()
+@click.argument("service_name", metavar="SERVICE")
+@click.argument("service_type", metavar="TYPE")
+@click.argument("values", metavar="[VALUES]", required=False, default="{}")
+@click.option("-r", "--rate", type=float, callback=positive, help="Repeat the call at this rate in Hz.")
+@timeout_option
+@verb
+def call(service_name: str, service_type: str, values: str, rate: float | None, timeout: float) -> None:
+    """Call a service.  VALUES fill the request, in YAML (e.g. "{x: 2.0, y: 2.0}")."""
+    from ..ros2cli.verbs import call as run_call
+
+    run_call(service_name, service_type, values, period=1.0 / rate if rate else None, timeout=timeout)

@@ -1,0 +1,213 @@
+"""Machines on the graph (SPEC §8): each machine's state, structure and control, as ROS means.
+
+For each loaded machine M, a node `/llfsm/M` offers
+- `/llfsm/M/state` (std_msgs/msg/String, the current state's name; TRANSIENT_LOCAL, so a late
+  subscriber gets the current one at once),
+- `/llfsm/M/description` (std_msgs/msg/String holding JSON: states in order, each with its
+  transitions in priority order, targets and guard text; initial and suspend state;
+  TRANSIENT_LOCAL),
+- `/llfsm/M/suspend`, `/llfsm/M/resume`, `/llfsm/M/restart` (std_srvs/srv/Trigger), which
+  schedule the command exactly as the macros do: pending until M's next ringlet.
+
+Everything goes through the public `ros` API, so it works on any transport.  It joins the
+graph with the bus (the first `ros.init()` or a `--node`): a run that never uses the bus
+never pays for one.
+
+Cost: states are published from scheduler events (a tracer), and that tracer is installed
+only while some state topic has a reader; otherwise the scheduler runs its plain loop and a
+state change costs nothing at all.  When a reader joins, the current state is published first,
+so what the reader is handed is never stale.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import TYPE_CHECKING, Any
+
+from ..msgs.std_msgs.msg import String
+from ..msgs.std_srvs.srv import Trigger
+from ..runtime.context import RunContext, activate
+from ..runtime.machine import RESTART, RESUME, SUSPEND, Machine
+from ..runtime.trace import Tee, Tracer
+from .node import DurabilityPolicy, Node, QoSProfile
+
+if TYPE_CHECKING:
+    from ..runtime.scheduler import Arrangement
+    from .bus import Bus, Topic
+
+#: The namespace of the machines' nodes: /llfsm/M/state and so on.
+NAMESPACE = "/llfsm"
+#: Latched, as a ROS user expects of a state or a description topic.
+LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def enable(ctx: RunContext) -> None:
+    """Put the run's machines on the graph as soon as its bus is initialised (now, if it is).
+
+    Call once the Arrangement exists (it registers itself in `ctx.extras["arrangement"]`)."""
+    arr = ctx.extras.get("arrangement")
+    if arr is None or "machine_graph" in ctx.extras:
+        return
+    bus = ctx.extras.get("bus")
+    if bus is not None and bus.initialised:
+        attach(arr, bus)
+    else:
+        ctx.extras.setdefault("on_init", []).append(lambda b: attach(arr, b))
+
+
+def attach(arr: Arrangement, bus: Bus) -> MachineGraph:
+    """Create the nodes, topics and services of every machine of `arr` on `bus` (once)."""
+    graph = arr.ctx.extras.get("machine_graph")
+    if graph is None:
+        prev = activate(arr.ctx)
+        try:
+            graph = arr.ctx.extras["machine_graph"] = MachineGraph(arr, bus)
+        finally:
+            activate(prev)
+    return graph
+
+
+def description(cls: type[Machine]) -> dict[str, Any]:
+    """The structure /llfsm/M/description carries, from the compiled class alone (its guard
+    text is embedded by the compiler; a module built before that has none, and says so with
+    empty transition lists)."""
+    states = cls.STATES
+    trans = cls.TRANSITIONS or ((),) * len(states)
+    return {
+        "name": cls.NAME,
+        "description": cls.DESCRIPTION,
+        "states": [
+            {
+                "name": name,
+                "transitions": [
+                    {"index": i, "target": states[target], "guard": guard} for i, (target, guard) in enumerate(ts)
+                ],
+                "accepting": i in cls.ACCEPTING,
+            }
+            for i, (name, ts) in enumerate(zip(states, trans, strict=True))
+        ],
+        "initial": states[cls.INITIAL],
+        "suspend": states[cls.SUSPENDED],
+    }
+
+
+class _Entry:
+    """One machine's publishers and what was last published."""
+
+    __slots__ = ("last", "listened", "machine", "state_pub")
+
+    def __init__(self, machine: Machine, state_pub: Any) -> None:
+        self.machine = machine
+        self.state_pub = state_pub
+        self.last: str | None = None
+        self.listened = False
+
+
+class MachineGraph(Tracer):
+    """The machines' nodes, and the tracer that publishes their states while someone listens."""
+
+    def __init__(self, arr: Arrangement, bus: Bus) -> None:
+        super().__init__()
+        self.arr = arr
+        self.bus = bus
+        #: The tracer the run had (-v, --trace) while this one is not installed.
+        self._own_tracer: Tracer | None = None
+        self._installed = False
+        self.entries: list[_Entry] = []
+        self.nodes: list[Node] = []
+        for m in arr.machines:
+            node = Node(m.NAME, namespace=NAMESPACE)
+            self.nodes.append(node)
+            desc = node.create_publisher(String, "~/description", LATCHED)
+            desc.publish(String(data=json.dumps(description(type(m)))))
+            entry = _Entry(m, node.create_publisher(String, "~/state", LATCHED))
+            self.entries.append(entry)
+            self._publish(entry, m.STATES[m._state])
+            entry.state_pub._topic.on_readers.append(lambda topic, joining, e=entry: self._readers(e, topic, joining))
+            for verb in (SUSPEND, RESUME, RESTART):
+                node.create_service(Trigger, f"~/{verb}", self._service(m, verb))
+            entry.listened = entry.state_pub.get_subscription_count() > 0
+        #: Readers in other processes come and go unannounced (a DDS transport): there, states
+        #: are always published, so the writer's kept sample is current for a late joiner.
+        self.always = bool(getattr(getattr(bus, "transport", None), "remote", False))
+        if self.always:
+            for entry in self.entries:
+                entry.listened = True
+        self._update_tracer()
+
+    # -- publishing -----------------------------------------------------------------------------
+    def _publish(self, entry: _Entry, name: str) -> None:
+        entry.last = name
+        entry.state_pub.publish(String(data=name))
+
+    def _readers(self, entry: _Entry, topic: Topic, joining: bool) -> None:
+        """A subscription joins (before it is handed the latched state) or leaves a state topic."""
+        if joining:
+            m = entry.machine
+            current = m.STATES[m._state]
+            if entry.last != current:  # changed while no one listened: bring the latched value up to date
+                self._publish(entry, current)
+            entry.listened = True
+        else:
+            entry.listened = self.always or bool(topic.readers)
+        self._update_tracer()
+
+    def _update_tracer(self) -> None:
+        """Install this tracer while any state topic has a reader; take it away when none has."""
+        want = any(e.listened for e in self.entries)
+        if want == self._installed:
+            return
+        arr = self.arr
+        if want:
+            self._own_tracer = arr.tracer
+            arr.set_tracer(self if arr.tracer is None else Tee(arr.tracer, self))
+        else:
+            arr.set_tracer(self._own_tracer)
+        self._installed = want
+
+    # -- scheduler events (only while installed) -----------------------------------------------------
+    def transition(self, m: Machine, source: int, target: int, index: int) -> None:
+        entry = self.entries[m._id]
+        if entry.listened:
+            name = m.STATES[m._state]
+            if m._state == m.SUSPENDED and entry.last == name:
+                return  # a transition into the suspend state: the suspend event has just told it
+            self._publish(entry, name)
+
+    def command(self, kind: str, m: Machine, state: int) -> None:
+        entry = self.entries[m._id]
+        if entry.listened:
+            self._publish(entry, m.STATES[state])
+
+    # -- control services ------------------------------------------------------------------------------
+    def _service(self, m: Machine, verb: str) -> Any:
+        arr = self.arr
+
+        def serve(request: Any, response: Any) -> Any:
+            reason = refusal(m, verb)
+            response.success = reason is None
+            if reason is None:
+                arr.command(m.NAME, verb)
+                response.message = f"{verb} of {m.NAME} pending until its next ringlet"
+            else:
+                response.message = reason
+            return response
+
+        return serve
+
+
+def refusal(m: Machine, verb: str) -> str | None:
+    """Why `verb` makes no sense for `m` now (None: it does), judged on the state the machine
+    will be in once the command already pending, if any, has been applied."""
+    pending = m._pending
+    finished = m._finished and pending != RESTART
+    suspended = pending == SUSPEND or (m._suspended and pending not in (RESUME, RESTART))
+    if verb == RESTART:
+        return None  # always meaningful: also brings a finished machine back
+    if finished:
+        return f"{m.NAME} has finished; only restart brings it back"
+    if verb == SUSPEND and suspended:
+        return f"{m.NAME} is already suspended"
+    if verb == RESUME and not suspended:
+        return f"{m.NAME} is not suspended"
+    return None

@@ -1,0 +1,335 @@
+"""The ROS 2 graph as DDS discovery shows it: topics, services and nodes of every participant in
+the domain, llfsm runs and ROS 2 nodes alike.
+
+What `ros2 topic list`, `ros2 service list` and `ros2 node list` show comes from two sources,
+read here as rmw_dds_common's graph cache reads them:
+
+- DDS's built-in topics DCPSPublication and DCPSSubscription: every endpoint with its topic
+  name, type name and QoS.  ROS topics are the `rt/` ones (`rt/turtle1/pose` is
+  `/turtle1/pose`), services the `rq/…Request` and `rr/…Reply` pairs; type names are mangled
+  as `pkg::msg::dds_::Name_` (`pkg/msg/Name`) and `pkg::srv::dds_::Name_Request_` (`pkg/srv/Name`).
+- `ros_discovery_info`: each participant's nodes and the GIDs of their endpoints
+  (rmw_dds_common/msg/ParticipantEntitiesInfo), which no built-in topic carries.
+
+A command-line reader has no daemon: like `ros2 ... --no-daemon`, it joins the domain, waits a
+short bounded time for discovery, and answers from what it has seen.  The participant uses the
+transport's discovery settings (dds_config), so it finds what `llfsm run --transport dds` finds.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from cyclonedds.domain import DomainParticipant
+
+TOPIC_PREFIX = "rt"
+REQUEST_PREFIX, REPLY_PREFIX = "rq", "rr"
+DISCOVERY_TOPIC = "ros_discovery_info"
+INFINITE_NS = 0x7FFFFFFFFFFFFFFF  # Cyclone's DDS_INFINITY
+
+
+def topic_name(dds_name: str) -> str | None:
+    """ "/turtle1/pose" for "rt/turtle1/pose"; None for a DDS topic that is not a ROS topic."""
+    if dds_name.startswith(TOPIC_PREFIX + "/"):
+        return dds_name[len(TOPIC_PREFIX) :]
+    return None
+
+
+def service_name(dds_name: str) -> str | None:
+    """ "/spawn" for "rq/spawnRequest" and for "rr/spawnReply"; None for anything else."""
+    for prefix, suffix in ((REQUEST_PREFIX, "Request"), (REPLY_PREFIX, "Reply")):
+        if (
+            dds_name.startswith(prefix + "/")
+            and dds_name.endswith(suffix)
+            and len(dds_name) > len(prefix) + len(suffix) + 1
+        ):
+            return dds_name[len(prefix) : -len(suffix)]
+    return None
+
+
+def message_type(dds_type: str) -> str:
+    """ "std_msgs/msg/String" for "std_msgs::msg::dds_::String_"; a name that is not mangled so
+    comes back with `::` as `/` (as rmw_cyclonedds shows a foreign type)."""
+    head, sep, tail = dds_type.rpartition("::dds_::")
+    if sep and tail.endswith("_"):
+        return f"{head}::{tail[:-1]}".replace("::", "/")
+    return dds_type.replace("::", "/")
+
+
+def service_type(dds_type: str) -> str | None:
+    """ "turtlesim/srv/Spawn" for "turtlesim::srv::dds_::Spawn_Request_" (or `_Response_`)."""
+    head, sep, tail = dds_type.rpartition("::dds_::")
+    if not sep:
+        return None
+    for suffix in ("_Request_", "_Response_"):
+        if tail.endswith(suffix) and len(tail) > len(suffix):
+            return f"{head}::{tail[: -len(suffix)]}".replace("::", "/")
+    return None
+
+
+def is_hidden(name: str) -> bool:
+    """rclpy's topic_or_service_is_hidden: a name with a part that starts with '_'."""
+    return any(part.startswith("_") for part in name.split("/"))
+
+
+@dataclass(frozen=True)
+class Endpoint:
+    """One reader or writer somewhere in the domain."""
+
+    gid: bytes  # the endpoint's DDS GUID (16 bytes): rmw's GID
+    participant: bytes  # its participant's GUID
+    kind: str  # "publisher" or "subscription"
+    topic: str  # the DDS topic name ("rt/chatter")
+    type_name: str  # the DDS type name ("std_msgs::msg::dds_::String_")
+    qos: Any  # cyclonedds.qos.Qos
+
+    @property
+    def reliable(self) -> bool:
+        from cyclonedds.qos import Policy
+
+        return isinstance(self.qos[Policy.Reliability], Policy.Reliability.Reliable)
+
+    @property
+    def type_hash(self) -> str:
+        """The RIHS01 type hash that rmw (Iron and later) puts in USER_DATA, or 'INVALID' as
+        rclpy says when there is none (Humble's peers, non-ROS writers)."""
+        from .dds import _user_data_key
+
+        value = _user_data_key(self.qos, "typehash")
+        return value if value and value.startswith("RIHS") else "INVALID"
+
+    @property
+    def transient_local(self) -> bool:
+        from cyclonedds.qos import Policy
+
+        return self.qos[Policy.Durability] == Policy.Durability.TransientLocal
+
+
+@dataclass(frozen=True)
+class NodeName:
+    namespace: str
+    name: str
+
+    @property
+    def full_name(self) -> str:
+        return f"{self.namespace.rstrip('/')}/{self.name}"
+
+
+class Graph:
+    """A reader of the domain's graph.  `spin(seconds)` waits for discovery; the queries answer
+    from what has been seen so far and leave out this reader's own participant."""
+
+    def __init__(self, participant: DomainParticipant | None = None) -> None:
+        from cyclonedds.builtin import (
+            BuiltinDataReader,
+            BuiltinTopicDcpsParticipant,
+            BuiltinTopicDcpsPublication,
+            BuiltinTopicDcpsSubscription,
+        )
+
+        from .dds_config import participant as make_participant
+
+        self.participant = participant if participant is not None else make_participant()
+        self._own = self.participant.get_guid().bytes
+        self._participants_reader = BuiltinDataReader(self.participant, BuiltinTopicDcpsParticipant)
+        self._readers = {
+            "publisher": BuiltinDataReader(self.participant, BuiltinTopicDcpsPublication),
+            "subscription": BuiltinDataReader(self.participant, BuiltinTopicDcpsSubscription),
+        }
+        self._endpoints: dict[bytes, Endpoint] = {}
+        self._participants: set[bytes] = set()
+        self._nodes: dict[bytes, list[tuple[NodeName, list[bytes], list[bytes]]]] = {}
+        self._info_reader = self._discovery_info_reader()
+
+    def _discovery_info_reader(self) -> Any:
+        """A reader of ros_discovery_info with rmw's QoS (reliable, transient local), but a deep
+        history: the topic has no key, and every participant's last sample must be kept."""
+        from cyclonedds.core import Policy, Qos
+        from cyclonedds.sub import DataReader
+        from cyclonedds.topic import Topic
+
+        from ...msgs._dds import dds_type
+        from ...msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
+
+        qos = Qos(
+            Policy.Reliability.Reliable(max_blocking_time=100_000_000),
+            Policy.Durability.TransientLocal,
+            Policy.History.KeepLast(256),
+            Policy.DataRepresentation(use_cdrv0_representation=True),
+        )
+        topic = Topic(self.participant, DISCOVERY_TOPIC, dds_type(ParticipantEntitiesInfo))
+        return DataReader(self.participant, topic, qos=qos)
+
+    # -- collecting -------------------------------------------------------------------------
+
+    def update(self) -> None:
+        """Take what discovery has delivered since the last call."""
+        from cyclonedds.core import InstanceState
+
+        for sample in self._participants_reader.take(N=4096):
+            key = sample.key.bytes
+            if sample.sample_info.instance_state == InstanceState.Alive:
+                self._participants.add(key)
+            else:
+                self._participants.discard(key)
+                self._nodes.pop(key, None)
+                for gid in [g for g, e in self._endpoints.items() if e.participant == key]:
+                    del self._endpoints[gid]
+        for kind, reader in self._readers.items():
+            for sample in reader.take(N=4096):
+                gid = sample.key.bytes
+                if sample.sample_info.instance_state != InstanceState.Alive:
+                    self._endpoints.pop(gid, None)
+                    continue
+                participant = sample.participant_key.bytes
+                if participant == self._own:
+                    continue
+                self._endpoints[gid] = Endpoint(gid, participant, kind, sample.topic_name, sample.type_name, sample.qos)
+        if self._info_reader is not None:
+            from ...msgs._dds import from_dds
+            from ...msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
+
+            for sample in self._info_reader.take(N=256):
+                if sample.sample_info.valid_data:
+                    self._take_discovery_info(from_dds(sample, ParticipantEntitiesInfo))
+
+    def _take_discovery_info(self, info: Any) -> None:
+        """One participant's nodes (rmw_dds_common/msg/ParticipantEntitiesInfo): each replaces
+        what that participant said before."""
+        participant = bytes(info.gid.data)[:16]
+        if participant == self._own:
+            return
+        self._nodes[participant] = [
+            (
+                NodeName(n.node_namespace, n.node_name),
+                [bytes(g.data)[:16] for g in n.reader_gid_seq],
+                [bytes(g.data)[:16] for g in n.writer_gid_seq],
+            )
+            for n in info.node_entities_info_seq
+        ]
+
+    def spin(self, seconds: float, until: Callable[[], bool] | None = None) -> bool:
+        """Collect discovery for `seconds`, or until `until()` holds (then True)."""
+        deadline = time.monotonic() + seconds
+        while True:
+            self.update()
+            if until is not None and until():
+                return True
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            time.sleep(min(0.05, left))
+
+    # -- queries ----------------------------------------------------------------------------
+
+    def endpoints(self) -> list[Endpoint]:
+        return list(self._endpoints.values())
+
+    def topics(self, include_hidden: bool = False) -> dict[str, list[str]]:
+        """ROS topic name -> its ROS type names (sorted), by name."""
+        out: dict[str, set[str]] = {}
+        for e in self._endpoints.values():
+            name = topic_name(e.topic)
+            if name is None or (not include_hidden and is_hidden(name)):
+                continue
+            out.setdefault(name, set()).add(message_type(e.type_name))
+        return {n: sorted(t) for n, t in sorted(out.items())}
+
+    def services(self, include_hidden: bool = False) -> dict[str, list[str]]:
+        """ROS service name -> its service type names (sorted), by name."""
+        out: dict[str, set[str]] = {}
+        for e in self._endpoints.values():
+            name = service_name(e.topic)
+            if name is None or (not include_hidden and is_hidden(name)):
+                continue
+            stype = service_type(e.type_name)
+            out.setdefault(name, set())
+            if stype is not None:
+                out[name].add(stype)
+        return {n: sorted(t) for n, t in sorted(out.items())}
+
+    def topic_endpoints(self, name: str, kind: str) -> list[Endpoint]:
+        """The publishers or subscriptions of ROS topic `name`."""
+        dds = f"{TOPIC_PREFIX}{name}"
+        return [e for e in self._endpoints.values() if e.topic == dds and e.kind == kind]
+
+    def service_servers(self, name: str) -> list[Endpoint]:
+        """The readers of a service's requests: one per server."""
+        dds = f"{REQUEST_PREFIX}{name}Request"
+        return [e for e in self._endpoints.values() if e.topic == dds and e.kind == "subscription"]
+
+    def nodes(self, include_hidden: bool = False) -> list[NodeName]:
+        """Every node of every live participant, as `ros2 node list` lists them."""
+        out = []
+        for key, nodes in self._nodes.items():
+            if key not in self._participants:
+                continue
+            for node, _, _ in nodes:
+                if include_hidden or not node.name.startswith("_"):
+                    out.append(node)
+        return out
+
+    def node_of(self, gid: bytes) -> NodeName | None:
+        """The node that owns the endpoint with this GID, from ros_discovery_info."""
+        for nodes in self._nodes.values():
+            for node, readers, writers in nodes:
+                if gid in readers or gid in writers:
+                    return node
+        return None
+
+    def close(self) -> None:
+        """Leave the domain now, so peers see this reader go at once."""
+        from cyclonedds.core import DDSException
+
+        try:
+            self.participant.__del__()
+        except DDSException:
+            pass
+
+
+def describe_qos(qos: Any) -> list[str]:
+    """rclpy's lines for a QoS profile, as `ros2 topic info -v` prints them."""
+    from cyclonedds.qos import Policy
+
+    rel = qos[Policy.Reliability]
+    dur = qos[Policy.Durability]
+    hist = qos[Policy.History]
+    life = qos[Policy.Lifespan]
+    dead = qos[Policy.Deadline]
+    live = qos[Policy.Liveliness]
+    reliability = "RELIABLE" if isinstance(rel, Policy.Reliability.Reliable) else "BEST_EFFORT"
+    durability = {
+        Policy.Durability.Volatile: "VOLATILE",
+        Policy.Durability.TransientLocal: "TRANSIENT_LOCAL",
+        Policy.Durability.Transient: "TRANSIENT",
+        Policy.Durability.Persistent: "PERSISTENT",
+    }.get(dur, "VOLATILE")
+    history = f"KEEP_LAST ({hist.depth})" if isinstance(hist, Policy.History.KeepLast) else "KEEP_ALL"
+    liveliness = "AUTOMATIC"
+    lease = INFINITE_NS
+    if live is not None:
+        lease = live.lease_duration
+        if isinstance(live, Policy.Liveliness.ManualByTopic):
+            liveliness = "MANUAL_BY_TOPIC"
+        elif isinstance(live, Policy.Liveliness.ManualByParticipant):
+            liveliness = "MANUAL_BY_PARTICIPANT"
+    return [
+        f"  Reliability: {reliability}",
+        f"  History (Depth): {history}",
+        f"  Durability: {durability}",
+        f"  Lifespan: {_duration(life.lifespan if life is not None else INFINITE_NS)}",
+        f"  Deadline: {_duration(dead.deadline if dead is not None else INFINITE_NS)}",
+        f"  Liveliness: {liveliness}",
+        f"  Liveliness lease duration: {_duration(lease)}",
+    ]
+
+
+def _duration(ns: int) -> str:
+    """rclpy's str(Duration): 'Infinite', or the nanoseconds."""
+    if ns >= INFINITE_NS:
+        return "Infinite"
+    return f"{ns} nanoseconds"

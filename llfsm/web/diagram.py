@@ -1,0 +1,247 @@
+"""A machine's diagram as SVG, laid out here (no Graphviz, nothing fetched): a small layered
+layout in the manner of Sugiyama, enough for the few to few dozen states of an LLFSM.
+
+1. Layers: breadth-first depth from the initial state, following transitions in priority
+   order; states it never reaches (the suspend state, usually) go on a layer below.
+2. Order within a layer: a few sweeps of the barycentre heuristic (each state moves towards the
+   mean position of its neighbours), which removes most crossings of small graphs.
+3. Edges: downward ones are vertical S-curves; upward ones (loops back) swing round the right
+   of everything they pass; same-layer ones dip below; a self-transition is a small loop.
+   Each carries `index: guard`, the guard text as written in the machine's files.
+
+Every state is a `<g class="state" data-machine=M data-state=S aria-current=...>`: the page
+moves `aria-current="true"` to the current state, and tests find states by these attributes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from html import escape
+from typing import Any
+
+NODE_H = 34
+LAYER_GAP = 96
+NODE_GAP = 56
+MARGIN = 24
+CHAR_W = 8.0  # of the 13 px state names
+LABEL_CHAR_W = 6.4  # of the 11 px guard labels
+LABEL_MAX = 34  # characters of guard text shown on an arrow (the whole text is in its tooltip)
+
+
+@dataclass
+class Box:
+    name: str
+    layer: int
+    x: float = 0.0  # centre
+    y: float = 0.0  # top
+    w: float = 0.0
+
+    @property
+    def left(self) -> float:
+        return self.x - self.w / 2
+
+    @property
+    def right(self) -> float:
+        return self.x + self.w / 2
+
+    @property
+    def bottom(self) -> float:
+        return self.y + NODE_H
+
+    @property
+    def mid(self) -> float:
+        return self.y + NODE_H / 2
+
+
+def layout(desc: dict[str, Any]) -> tuple[dict[str, Box], float, float]:
+    """Boxes by state name, and the drawing's width and height."""
+    states = [s["name"] for s in desc["states"]]
+    out: dict[str, list[str]] = {s["name"]: [t["target"] for t in s["transitions"]] for s in desc["states"]}
+    layer: dict[str, int] = {}
+    frontier = [desc["initial"]] if desc["initial"] in out else states[:1]
+    for s in frontier:
+        layer[s] = 0
+    while frontier:
+        nxt = []
+        for s in frontier:
+            for t in out.get(s, []):
+                if t not in layer:
+                    layer[t] = layer[s] + 1
+                    nxt.append(t)
+        frontier = nxt
+    bottom = max(layer.values(), default=-1) + 1
+    for s in states:  # unreached: on a layer of their own below the rest
+        layer.setdefault(s, bottom)
+    layers: list[list[str]] = [[] for _ in range(max(layer.values(), default=0) + 1)]
+    for s in states:
+        layers[layer[s]].append(s)
+    layers = [lay for lay in layers if lay]
+    for i, lay in enumerate(layers):
+        for s in lay:
+            layer[s] = i
+    neighbours: dict[str, set[str]] = {s: set() for s in states}
+    for s, targets in out.items():
+        for t in targets:
+            if t != s and t in neighbours:
+                neighbours[s].add(t)
+                neighbours[t].add(s)
+    for _ in range(4):  # barycentre sweeps
+        pos = {s: i / max(1, len(lay) - 1) for lay in layers for i, s in enumerate(lay)}
+        for lay in layers:
+            keyed = []
+            for i, s in enumerate(lay):
+                ns = [pos[n] for n in neighbours[s] if layer[n] != layer[s]]
+                keyed.append((sum(ns) / len(ns) if ns else pos[s], i, s))
+            lay[:] = [s for _, _, s in sorted(keyed)]
+    boxes: dict[str, Box] = {}
+    widths = []
+    for i, lay in enumerate(layers):
+        row = [Box(s, i, w=max(92.0, CHAR_W * len(s) + 30)) for s in lay]
+        widths.append(sum(b.w for b in row) + NODE_GAP * (len(row) - 1))
+        for b in row:
+            boxes[b.name] = b
+    inner = max(widths, default=0.0)
+    for i, lay in enumerate(layers):
+        x = MARGIN + (inner - widths[i]) / 2
+        for s in lay:
+            b = boxes[s]
+            b.x, b.y = x + b.w / 2, MARGIN + 18 + i * (NODE_H + LAYER_GAP)
+            x += b.w + NODE_GAP
+    width = MARGIN * 2 + inner
+    height = MARGIN * 2 + 18 + len(layers) * NODE_H + (len(layers) - 1) * LAYER_GAP
+    return boxes, width, height
+
+
+def _label(index: int, guard: str) -> str:
+    text = " ".join(guard.split())
+    if len(text) > LABEL_MAX:
+        text = text[: LABEL_MAX - 1] + "…"
+    return f"{index}: {text}"
+
+
+def _bezier_mid(p0: tuple[float, float], c1: tuple[float, float], c2: tuple[float, float], p3: tuple[float, float]):
+    return tuple(0.125 * a + 0.375 * b + 0.375 * c + 0.125 * d for a, b, c, d in zip(p0, c1, c2, p3, strict=True))
+
+
+def svg(desc: dict[str, Any], current: str | None = None) -> str:
+    """The diagram of one machine (the `description` structure of llfsm.ros.control)."""
+    machine = desc["name"]
+    boxes, width, height = layout(desc)
+    mid = escape(machine, quote=True)
+    marker = f"arrow-{mid}"
+    parts: list[str] = []
+    right_extent = width
+    left_extent = 0.0
+    placed: list[tuple[float, float, float]] = []  # guard labels: centre x, centre y, width
+    edges: list[str] = []
+    labels: list[str] = []
+    pair_count: dict[tuple[str, str], int] = {}
+    up_count = 0
+    for s in desc["states"]:
+        src = boxes[s["name"]]
+        n_out = len(s["transitions"])
+        for k, t in enumerate(s["transitions"]):
+            dst = boxes.get(t["target"])
+            if dst is None:
+                continue
+            key = (src.name, dst.name)
+            dup = pair_count.get(key, 0)
+            pair_count[key] = dup + 1
+            spread = (k - (n_out - 1) / 2) * 12
+            if dst is src:
+                x0, y0 = src.right, src.mid - 8
+                x1, y1 = src.right, src.mid + 8
+                c1, c2 = (x0 + 44 + dup * 14, y0 - 22), (x1 + 44 + dup * 14, y1 + 22)
+                right_extent = max(right_extent, x0 + 60 + dup * 14)
+            elif dst.layer > src.layer:
+                x0, y0 = src.x + spread, src.bottom
+                x1, y1 = dst.x + dup * 10, dst.y
+                dy = (y1 - y0) / 2
+                c1, c2 = (x0, y0 + dy), (x1, y1 - dy)
+            elif dst.layer == src.layer:
+                x0, y0 = src.x + spread, src.bottom
+                x1, y1 = dst.x + dup * 10, dst.bottom
+                c1, c2 = (x0, y0 + 40 + dup * 10), (x1, y1 + 40 + dup * 10)
+            else:  # back up: round the side where the target is open (the ends of its layer)
+                between = [b for b in boxes.values() if dst.layer <= b.layer <= src.layer]
+                row = sorted((b for b in boxes.values() if b.layer == dst.layer), key=lambda b: b.x)
+                if row[0] is dst and row[-1] is not dst:
+                    swing = min(b.left for b in between) - 40 - up_count * 18
+                    x0, x1 = src.left, dst.left
+                    left_extent = min(left_extent, swing - 20)
+                else:
+                    swing = max(b.right for b in between) + 40 + up_count * 18
+                    x0, x1 = src.right, dst.right
+                    right_extent = max(right_extent, swing + 20)
+                up_count += 1
+                y0, y1 = src.mid + (spread / 3), dst.mid + dup * 6
+                c1, c2 = (swing, y0), (swing, y1)
+            d = f"M{x0:.1f} {y0:.1f} C{c1[0]:.1f} {c1[1]:.1f} {c2[0]:.1f} {c2[1]:.1f} {x1:.1f} {y1:.1f}"
+            guard = t["guard"]
+            title = escape(f"{s['name']} → {t['target']} (transition {t['index']}): {guard}")
+            edges.append(
+                f'<path class="transition" data-machine="{mid}" data-source="{escape(s["name"])}" '
+                f'data-target="{escape(t["target"])}" data-index="{t["index"]}" d="{d}" '
+                f'marker-end="url(#{marker})"><title>{title}</title></path>'
+            )
+            lx, ly = _bezier_mid((x0, y0), c1, c2, (x1, y1))
+            text = _label(t["index"], guard) if guard else str(t["index"])
+            tw = LABEL_CHAR_W * len(text) + 8
+            for _ in range(8):  # step down past labels already placed (or past a state)
+                hit = any(abs(lx - ox) < (tw + ow) / 2 + 2 and abs(ly - oy) < 17 for ox, oy, ow in placed) or any(
+                    b.left - tw / 2 < lx < b.right + tw / 2 and b.y - 9 < ly < b.bottom + 9 for b in boxes.values()
+                )
+                if not hit:
+                    break
+                ly += 17
+            placed.append((lx, ly, tw))
+            right_extent = max(right_extent, lx + tw / 2 + 4)
+            left_extent = min(left_extent, lx - tw / 2 - 4)
+            labels.append(
+                f'<g class="guard"><title>{title}</title>'
+                f'<rect x="{lx - tw / 2:.1f}" y="{ly - 8:.1f}" width="{tw:.1f}" height="16" rx="3"/>'
+                f'<text x="{lx:.1f}" y="{ly + 4:.1f}">{escape(text)}</text></g>'
+            )
+    init = boxes.get(desc["initial"])
+    if init is not None:
+        edges.append(
+            f'<circle class="initial-dot" cx="{init.x:.1f}" cy="{init.y - 26:.1f}" r="5"/>'
+            f'<path class="transition initial" d="M{init.x:.1f} {init.y - 21:.1f} L{init.x:.1f} {init.y:.1f}" '
+            f'marker-end="url(#{marker})"/>'
+        )
+    accepting = {s["name"] for s in desc["states"] if s.get("accepting")}
+    for s in desc["states"]:
+        b = boxes[s["name"]]
+        name = s["name"]
+        kind = ["state"]
+        if name == desc.get("suspend"):
+            kind.append("suspend-state")
+        if name in accepting:
+            kind.append("accepting")
+        if name == desc["initial"]:
+            kind.append("initial-state")
+        inner = ""
+        if name in accepting:
+            inner = (
+                f'<rect class="inner" x="{b.left + 4:.1f}" y="{b.y + 4:.1f}" width="{b.w - 8:.1f}" '
+                f'height="{NODE_H - 8}" rx="7"/>'
+            )
+        cur = "true" if name == current else "false"
+        parts.append(
+            f'<g class="{" ".join(kind)}" data-machine="{mid}" data-state="{escape(name, quote=True)}" '
+            f'aria-current="{cur}" role="listitem" aria-label="state {escape(name, quote=True)}">'
+            f'<rect x="{b.left:.1f}" y="{b.y:.1f}" width="{b.w:.1f}" height="{NODE_H}" rx="10"/>{inner}'
+            f'<text x="{b.x:.1f}" y="{b.mid + 4.5:.1f}">{escape(name)}</text></g>'
+        )
+    x0 = min(0.0, left_extent - MARGIN / 2)
+    w = right_extent + MARGIN / 2 - x0
+    height = max([height] + [ly + 12 for _, ly, _ in placed])
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="diagram" data-machine="{mid}" '
+        f'viewBox="{x0:.0f} 0 {w:.0f} {height:.0f}" width="{w:.0f}" height="{height:.0f}" role="list" '
+        f'aria-label="states of {mid}">'
+        f'<defs><marker id="{marker}" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" markerHeight="7" '
+        f'orient="auto-start-reverse"><path d="M0 0 L10 5 L0 10 z" class="arrowhead"/></marker></defs>'
+        f'<g class="edges">{"".join(edges)}</g><g class="states">{"".join(parts)}</g>'
+        f'<g class="labels">{"".join(labels)}</g></svg>'
+    )

@@ -1,0 +1,331 @@
+"""What the page shows, taken from a run in this process, and the way back into it.
+
+The scheduler never waits on the page and does no work for it: the server's thread samples
+the run (at most 20 times a second, and only while a page is connected) by reading plain
+attributes (a machine's state index, a reader's message count), which is safe under the GIL;
+nothing here ever runs machine code or changes the bus from that thread.  Every change (a
+command, a publish, a service call, a new topic to watch) is handed to the scheduler's thread
+through `Bus.call_soon_threadsafe`, which the bus executor drains between rounds.
+
+Sampling coalesces by nature: a machine that changes state every ringlet shows the state it
+is in when sampled, and the page's list of transitions holds the changes that sampling saw.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+from collections import deque
+from concurrent.futures import Future as ThreadFuture
+from typing import TYPE_CHECKING, Any
+
+from ..msgs import to_yaml
+from ..ros.control import NAMESPACE, description
+from . import values
+
+if TYPE_CHECKING:
+    from ..ros.bus import Bus
+    from ..ros.node import Node
+    from ..runtime.scheduler import Arrangement
+
+#: Transitions kept for the page, per machine.
+HISTORY = 12
+#: The turtle world is redrawn at most this often (it is the biggest part of a snapshot).
+WORLD_PERIOD = 0.25
+#: How long a service called from the page may take.
+CALL_TIMEOUT = 5.0
+
+
+class CommandError(Exception):
+    """A request from the page that cannot be carried out (shown to the user as one line)."""
+
+
+class _TopicStats:
+    __slots__ = ("last_count", "rate", "samples", "text")
+
+    def __init__(self) -> None:
+        self.samples: deque[tuple[float, int]] = deque()
+        self.rate = 0.0
+        self.last_count = -1
+        self.text = ""
+
+    def update(self, now: float, count: int) -> None:
+        """Messages per second over the last two seconds of wall time."""
+        samples = self.samples
+        samples.append((now, count))
+        while len(samples) > 2 and now - samples[0][0] > 2.0:
+            samples.popleft()
+        t0, c0 = samples[0]
+        self.rate = (count - c0) / (now - t0) if now - t0 >= 0.2 else self.rate
+
+
+class Source:
+    """What both sources share: the page's node, topic readers and statistics, publishing and
+    service calls through the bus (on the scheduler's thread), and the machines' commands
+    through their control services."""
+
+    def __init__(self, bus: Bus, node_name: str) -> None:
+        from ..ros.node import Node
+
+        self.bus = bus
+        self.ctx = bus.ctx
+        self.clock = bus.clock
+        self.node: Node = Node(node_name)  # on the scheduler's thread, before the run
+        self._readers: dict[str, Any] = {}
+        self._asked: set[str] = set()
+        self._stats: dict[str, _TopicStats] = {}
+        self._publishers: dict[str, Any] = {}
+        self._clients: dict[tuple[str, str], Any] = {}
+        self.ended = False
+
+    # -- to be provided -----------------------------------------------------------------------------
+    def machines(self) -> list[dict[str, Any]]:
+        """The machines' descriptions (llfsm.ros.control.description), in order."""
+        raise NotImplementedError
+
+    def machine_rows(self) -> list[dict[str, Any]]:
+        """Each machine's name, state, status, pending command, since, transitions."""
+        raise NotImplementedError
+
+    def topic_types(self) -> dict[str, Any]:
+        """Topic name -> message class (or None if llfsm has no class for it)."""
+        raise NotImplementedError
+
+    def service_types(self) -> dict[str, Any]:
+        """Service name -> service class (or None)."""
+        raise NotImplementedError
+
+    def world(self) -> str | None:
+        return None
+
+    def has_machine(self, name: str) -> bool:
+        return any(d["name"] == name for d in self.machines())
+
+    # -- what the page is sent ---------------------------------------------------------------------
+    def sample(self) -> dict[str, Any]:
+        """A snapshot (on the server's thread)."""
+        services = self.service_types()
+        return {
+            "t": round(self.clock.now / 1e9, 3),
+            "clock": self.clock.kind,
+            "ended": self.ended,
+            "machines": self.machine_rows(),
+            "topics": self._topics(),
+            "services": [{"name": n, "type": t._TYPE if t is not None else ""} for n, t in sorted(services.items())],
+            "world": self.world(),
+        }
+
+    # -- what the page asks for ------------------------------------------------------------------------
+    async def command(self, machine: str, verb: str) -> dict[str, Any]:
+        if verb not in ("suspend", "resume", "restart"):
+            raise CommandError(f"unknown command {verb!r}: suspend, resume or restart")
+        if not self.has_machine(machine):
+            raise CommandError(f"no machine named {machine!r} in this run")
+        response = await self._call(f"{NAMESPACE}/{machine}/{verb}", "std_srvs/srv/Trigger", "")
+        return {"success": response.success, "message": response.message}
+
+    async def publish(self, topic: str, type_name: str, text: str) -> dict[str, Any]:
+        from ..ros.names import expand
+
+        try:
+            name = expand(topic.strip(), "llfsm_web", "/")
+        except Exception as e:  # InvalidNameError and friends: one line
+            raise CommandError(str(e)) from None
+        existing = self.topic_types().get(name)
+        if type_name.strip():
+            cls = values.resolve_type(type_name, "msg")
+            if existing is not None and existing is not cls:
+                raise CommandError(f"{name} carries {existing._TYPE}, not {cls._TYPE}")
+        elif existing is not None:
+            cls = existing
+        else:
+            raise CommandError(f"{name} does not exist yet: give its type, such as std_msgs/msg/String")
+        msg = values.message(cls, text)
+        self._on_scheduler(lambda: self._publish(name, cls, msg))
+        return {"success": True, "message": f"published on {name}", "yaml": to_yaml(msg)}
+
+    def _publish(self, name: str, cls: Any, msg: Any) -> None:
+        if name not in self._readers:  # so the page shows this very message as the topic's last
+            self._asked.add(name)
+            self._watch(name, cls)
+        pub = self._publishers.get(name)
+        if pub is None:
+            pub = self._publishers[name] = self.node.create_publisher(cls, name, 10)
+        pub.publish(msg)
+
+    async def call(self, service: str, type_name: str, text: str) -> dict[str, Any]:
+        response = await self._call(service.strip(), type_name, text)
+        return {"success": True, "message": "response", "yaml": to_yaml(response)}
+
+    async def _call(self, service: str, type_name: str, text: str) -> Any:
+        from ..ros.names import expand
+
+        try:
+            name = expand(service, "llfsm_web", "/")
+        except Exception as e:
+            raise CommandError(str(e)) from None
+        known = self.service_types().get(name)
+        if type_name.strip():
+            srv = values.resolve_type(type_name, "srv")
+            if known is not None and known is not srv:
+                raise CommandError(f"{name} is a {known._TYPE} service, not {srv._TYPE}")
+        elif known is not None:
+            srv = known
+        else:
+            raise CommandError(f"no service {name} is known: give its type, such as std_srvs/srv/Trigger")
+        req = values.request(srv, text)
+        done: ThreadFuture[Any] = ThreadFuture()
+
+        def start() -> None:
+            key = (name, srv._TYPE)
+            client = self._clients.get(key)
+            if client is None:
+                client = self._clients[key] = self.node.create_client(srv, name)
+            fut = client.call_async(req)
+            fut.add_done_callback(lambda f: _settle(done, f))
+
+        self._on_scheduler(start)
+        try:
+            return await asyncio.wait_for(asyncio.wrap_future(done), CALL_TIMEOUT)
+        except TimeoutError:
+            raise CommandError(f"no response from {name} within {CALL_TIMEOUT:g} s") from None
+
+    def _on_scheduler(self, fn: Any) -> None:
+        if self.ended:
+            raise CommandError("the run has ended")
+        self.bus.call_soon_threadsafe(fn)
+
+    def _topics(self) -> list[dict[str, Any]]:
+        wall = time.monotonic()
+        out = []
+        for name, type_ in sorted(self.topic_types().items()):
+            entry: dict[str, Any] = {"name": name, "type": type_._TYPE if type_ is not None else ""}
+            if name.startswith(NAMESPACE + "/"):
+                entry.update(count=None, rate=None, last="a machine's state or description: the diagrams show it")
+                out.append(entry)
+                continue
+            reader = self._readers.get(name)
+            if reader is None:
+                if name not in self._asked and type_ is not None:
+                    self._asked.add(name)
+                    self.bus.call_soon_threadsafe(lambda n=name, t=type_: self._watch(n, t))
+                entry.update(count=0, rate=0.0, last="")
+            else:
+                stats = self._stats.setdefault(name, _TopicStats())
+                count = max(reader.count, self._published(name))
+                stats.update(wall, count)
+                if count != stats.last_count:
+                    stats.last_count = count
+                    latest = reader.latest
+                    stats.text = to_yaml(latest) if latest is not None else ""
+                entry.update(count=count, rate=round(stats.rate, 2), last=stats.text)
+            out.append(entry)
+        return out
+
+    def _published(self, name: str) -> int:
+        """Messages published on the topic in this process (also before the page's reader came)."""
+        topic = self.bus.topics.get(name)
+        return topic.published if topic is not None else 0
+
+    def _watch(self, name: str, type_: Any) -> None:
+        """(scheduler thread) A PULL reader for the page: counts messages, keeps the newest."""
+        self._readers[name] = self.node.create_subscription(type_, name, None, 1)
+
+
+class RunSource(Source):
+    """The machines, topics, services and turtle world of the run in this process."""
+
+    def __init__(self, arr: Arrangement, bus: Bus) -> None:
+        super().__init__(bus, "llfsm_web")
+        self.arr = arr
+        self.descriptions = [description(type(m)) for m in arr.machines]
+        self._last: list[tuple[int, int]] = [(-1, -1)] * len(arr.machines)
+        self._since: list[int] = [0] * len(arr.machines)
+        self._history: list[deque[dict[str, Any]]] = [deque(maxlen=HISTORY) for _ in arr.machines]
+        self._world_key: object = None
+        self._world_at = 0.0
+        self._world_svg: str | None = None
+
+    def machines(self) -> list[dict[str, Any]]:
+        return self.descriptions
+
+    def has_machine(self, name: str) -> bool:
+        return name in self.arr.by_name
+
+    def topic_types(self) -> dict[str, Any]:
+        return {name: topic.type for name, topic in list(self.bus.topics.items())}
+
+    def service_types(self) -> dict[str, Any]:
+        return {name: server.type for name, server in list(self.bus.services.items())}
+
+    def machine_rows(self) -> list[dict[str, Any]]:
+        """Each machine as sampled now.  A change of state is a transition for the page's list;
+        its time is the entry time the machine recorded (`_t0`) once that is newer than the
+        last one seen, else the sample's run time (the target's entry is still to come, or the
+        state keeps no entry time)."""
+        now = self.clock.now
+        machines = []
+        for i, m in enumerate(self.arr.machines):
+            state, t0 = m._state, m._t0
+            prev, prev_t0 = self._last[i]
+            if state != prev:
+                since = t0 if t0 > prev_t0 else now
+                if prev >= 0:
+                    self._history[i].appendleft(
+                        {"t": round(since / 1e9, 3), "from": m.STATES[prev], "to": m.STATES[state]}
+                    )
+                self._last[i] = (state, max(t0, prev_t0))
+                self._since[i] = since
+            elif t0 > prev_t0:  # the entry was recorded since (or the state was entered again)
+                self._last[i] = (state, t0)
+                self._since[i] = t0
+            status = "finished" if m._finished else "suspended" if m._suspended else "running"
+            machines.append(
+                {
+                    "name": m.NAME,
+                    "state": m.STATES[state],
+                    "status": status,
+                    "pending": m._pending,
+                    "since": round(self._since[i] / 1e9, 3),
+                    "transitions": list(self._history[i]),
+                }
+            )
+        return machines
+
+    def world(self) -> str | None:
+        sim = self.ctx.extras.get("turtlesim")
+        if sim is None:
+            return None
+        world = sim.world
+        wall = time.monotonic()
+        if self._world_svg is not None and wall - self._world_at < WORLD_PERIOD:
+            return self._world_svg
+        try:
+            key = (world.raster_version, tuple(world.turtle_pixels()), world.background)
+            if key != self._world_key or self._world_svg is None:
+                from ..sim.draw import svg_text
+
+                text = svg_text(world)
+                self._world_svg = text[text.index("<svg") :]
+                self._world_key = key
+        except RuntimeError:  # the scheduler changed the world while it was drawn: next time
+            pass
+        self._world_at = wall
+        return self._world_svg
+
+
+def _settle(done: ThreadFuture[Any], fut: Any) -> None:
+    if done.done():
+        return
+    exc = fut.exception()
+    if exc is not None:
+        done.set_exception(CommandError(f"the service failed: {exc}"))
+    elif fut.cancelled():
+        done.set_exception(CommandError("the call was cancelled"))
+    else:
+        done.set_result(fut.result())
+
+
+def dumps(data: Any) -> str:
+    return json.dumps(data, separators=(",", ":"))

@@ -1,0 +1,116 @@
+"""A private network namespace for DDS tests: several processes share one namespace (so they find
+each other over multicast on its loopback), and nothing they send leaves this machine.
+
+A holder process (`unshare -n`) sets the namespace up (lo up, multicast on, a multicast route)
+and sleeps; every test process enters it with `nsenter --net=/proc/PID/ns/net`.  Where the
+machine does not allow unshare (no root, no user namespaces) the fixture skips with the reason.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import pytest
+
+#: Variables of the host that would change discovery: the tests set them explicitly or not at all.
+ISOLATED = (
+    "CYCLONEDDS_URI",
+    "ROS_DOMAIN_ID",
+    "ROS_AUTOMATIC_DISCOVERY_RANGE",
+    "ROS_STATIC_PEERS",
+    "ROS_LOCALHOST_ONLY",
+)
+SETUP = "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo"
+
+
+class NetNamespace:
+    def __init__(self) -> None:
+        self.holder = subprocess.Popen(
+            ["unshare", "-n", "sh", "-c", f"{SETUP} && echo ready && exec sleep 900"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        line = self.holder.stdout.readline() if self.holder.stdout else ""  # type: ignore[union-attr]
+        if line.strip() != "ready":
+            err = self.holder.stderr.read() if self.holder.stderr else ""  # type: ignore[union-attr]
+            self.holder.kill()
+            raise OSError(f"cannot make a private network namespace: {err.strip() or 'unshare failed'}")
+        self.procs: list[subprocess.Popen[str]] = []
+
+    def popen(
+        self, args: Sequence[str | os.PathLike[str]], env: dict[str, str] | None = None, **kw: object
+    ) -> subprocess.Popen[str]:
+        """Start a process inside the namespace (stdout and stderr piped, text)."""
+        cmd = ["nsenter", f"--net=/proc/{self.holder.pid}/ns/net", *map(str, args)]
+        full_env = {k: v for k, v in os.environ.items() if k not in ISOLATED}  # the host's settings stay out
+        full_env.update(env or {})
+        p = subprocess.Popen(
+            cmd,
+            stdout=kw.pop("stdout", subprocess.PIPE),  # type: ignore[arg-type]
+            stderr=kw.pop("stderr", subprocess.PIPE),  # type: ignore[arg-type]
+            stdin=kw.pop("stdin", subprocess.DEVNULL),  # type: ignore[arg-type]
+            text=True,
+            env=full_env,
+            **kw,  # type: ignore[arg-type]
+        )
+        self.procs.append(p)
+        return p
+
+    def llfsm(self, *args: str | os.PathLike[str], env: dict[str, str] | None = None) -> subprocess.Popen[str]:
+        return self.popen([sys.executable, "-m", "llfsm", *map(str, args)], env=env)
+
+    def python(
+        self, code: str, *, python: str | Path = sys.executable, env: dict[str, str] | None = None
+    ) -> subprocess.Popen[str]:
+        return self.popen([str(python), "-c", code], env=env)
+
+    def close(self) -> None:
+        for p in self.procs:
+            if p.poll() is None:
+                p.kill()
+            try:
+                p.communicate(timeout=10)
+            except subprocess.TimeoutExpired:
+                pass
+        self.holder.kill()
+        self.holder.communicate(timeout=10)
+
+
+def finish(p: subprocess.Popen[str], timeout: float) -> tuple[int, str, str]:
+    """Wait for a process (killed after `timeout` s); its status, stdout and stderr."""
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        out, err = p.communicate(timeout=10)
+        err += f"\n[killed after {timeout} s]"
+    return p.returncode, out, err
+
+
+def interrupt(p: subprocess.Popen[str], after: float, sig: int = signal.SIGINT) -> None:
+    time.sleep(after)
+    if p.poll() is None:
+        p.send_signal(sig)
+
+
+@pytest.fixture
+def netns() -> Iterator[NetNamespace]:
+    pytest.importorskip("cyclonedds", reason="the DDS transport needs the cyclonedds package")
+    if not (shutil.which("unshare") and shutil.which("nsenter") and shutil.which("ip")):
+        pytest.skip("DDS tests need unshare, nsenter and ip (util-linux, iproute2) for a private network")
+    try:
+        ns = NetNamespace()
+    except OSError as e:
+        pytest.skip(f"DDS tests run in a private network namespace, and this machine does not allow one: {e}")
+    try:
+        yield ns
+    finally:
+        ns.close()

@@ -1,0 +1,181 @@
+"""`llfsm run --transport dds` beside real ROS 2: rclpy from the PyPI wheels in `.venv-ros`, on
+Fast DDS (rmw_fastrtps_cpp, rclpy's default), every process in one private network namespace
+(tests/interop/ros2env.py).  Skipped, with the reason, where `.venv-ros` or unshare is missing.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from conftest import MACHINES, write_machine
+from interop.ros2env import llfsm_command, requires_ros, ros_command, run_together
+
+pytestmark = [pytest.mark.interop, requires_ros]
+
+LISTENER = """
+import time, rclpy
+from std_msgs.msg import String
+rclpy.init()
+node = rclpy.create_node("rclpy_listener")
+heard = []
+node.create_subscription(String, "/pingpong", lambda m: heard.append(m.data), 10)
+end = time.monotonic() + 7
+graph_nodes = graph_topics = None
+while time.monotonic() < end and len(heard) < 3:
+    rclpy.spin_once(node, timeout_sec=0.1)
+graph_nodes = node.get_node_names_and_namespaces()
+graph_topics = node.get_topic_names_and_types()
+print("HEARD", heard)
+print("NODES", graph_nodes)
+print("TOPICS", graph_topics)
+"""
+
+
+def test_an_rclpy_subscriber_hears_llfsm_ping_pong_and_sees_it_in_the_graph() -> None:
+    rclpy_sub, llfsm_pub = run_together(
+        [
+            ros_command(LISTENER),
+            llfsm_command(["run", "--transport", "dds", str(MACHINES / "ros2_ping_pong.machine"), "--duration", "9"]),
+        ],
+        timeout=40,
+        stop_after_first=0,
+    )
+    assert rclpy_sub.returncode == 0, rclpy_sub.stderr
+    heard = re.search(r"HEARD \[(.*)\]", rclpy_sub.stdout)
+    assert heard and "'The count is" in heard.group(1), rclpy_sub.stdout + llfsm_pub.stderr
+    assert "('ros_ping_pong', '/')" in rclpy_sub.stdout  # the llfsm node, from ros_discovery_info
+    assert "('/pingpong', ['std_msgs/msg/String'])" in rclpy_sub.stdout
+
+
+TELEOP = """
+import time, rclpy
+from geometry_msgs.msg import Twist
+rclpy.init()
+node = rclpy.create_node("rclpy_driver")
+pub = node.create_publisher(Twist, "/turtle1/cmd_vel", 10)
+end = time.monotonic() + 8
+while time.monotonic() < end and pub.get_subscription_count() == 0:
+    rclpy.spin_once(node, timeout_sec=0.1)
+print("MATCHED", pub.get_subscription_count(), flush=True)
+time.sleep(1.0)  # Fast DDS saw llfsm's reader; give llfsm's side the time to see this writer too
+msg = Twist()
+msg.linear.x = 2.0
+for _ in range(20):  # 2 s at 2 m/s: the turtle goes east by about 4 m
+    pub.publish(msg)
+    rclpy.spin_once(node, timeout_sec=0.1)
+print("NODES", node.get_node_names_and_namespaces())
+print("TOPICS", node.get_topic_names_and_types())
+print("SERVICES", node.get_service_names_and_types())
+"""
+
+
+def test_an_rclpy_publisher_drives_llfsm_turtlesim() -> None:
+    driver, sim = run_together(
+        [
+            ros_command(TELEOP),
+            llfsm_command(
+                ["run", "--transport", "dds", "--node", "turtlesim", "--echo", "/turtle1/pose", "--duration", "14"]
+            ),
+        ],
+        timeout=40,
+        stop_after_first=0,
+    )
+    assert driver.returncode == 0, driver.stderr
+    assert "MATCHED 1" in driver.stdout, driver.stdout + sim.stderr
+    xs = [float(x) for x in re.findall(r"^x: (\S+)$", sim.stdout, re.M)]
+    assert xs and max(xs) > 8.0, f"the turtle did not move east: {xs[-3:]}"
+    assert "('turtlesim', '/')" in driver.stdout
+    assert "('/turtle1/pose', ['turtlesim/msg/Pose'])" in driver.stdout
+    assert "('/spawn', ['turtlesim/srv/Spawn'])" in driver.stdout
+
+
+SERVER = """
+import time, rclpy
+from std_srvs.srv import Trigger
+rclpy.init()
+node = rclpy.create_node("rclpy_greeter")
+def greet(request, response):
+    response.success = True
+    response.message = "hello from rclpy"
+    return response
+node.create_service(Trigger, "/greet", greet)
+end = time.monotonic() + 15
+while time.monotonic() < end:
+    rclpy.spin_once(node, timeout_sec=0.1)
+"""
+
+CALLER = """\
+ros.init()
+node = ros.Node("llfsm_caller")
+client = node.create_client(Trigger, "/greet")
+ready = client.wait_for_service(timeout_sec=8.0)
+future = client.call_async(Trigger.Request())
+code = ros.spin_until_future_complete(node, future, timeout_sec=5.0)
+answer = future.result()
+said = f"success={answer and answer.success} message={answer and answer.message}"
+node.get_logger().info(f"ready={ready} code={code} {said}")
+"""
+
+
+def test_an_llfsm_client_gets_an_answer_from_an_rclpy_service(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "caller",
+        {"INITIAL": [("END", "True")], "END": None},
+        code={"INITIAL_OnEntry": CALLER},
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_srvs.srv import Trigger\n",
+    )
+    caller, _server = run_together(
+        [
+            llfsm_command(["run", "--transport", "dds", str(m), "--duration", "14"]),
+            ros_command(SERVER),
+        ],
+        timeout=40,
+        stop_after_first=0,
+    )
+    assert caller.returncode == 0, caller.stderr
+    assert "ready=True code=SUCCESS success=True message=hello from rclpy" in caller.stderr, caller.stderr
+
+
+SERVED = """\
+ros.init()
+node = ros.Node("llfsm_server")
+node.create_service(Trigger, "/poke", lambda request, response: (node.get_logger().info("poked"), response)[1])
+"""
+
+FAST_CLIENT = """
+import time, rclpy
+from std_srvs.srv import Trigger
+rclpy.init()
+node = rclpy.create_node("rclpy_poker")
+client = node.create_client(Trigger, "/poke")
+print("READY", client.wait_for_service(timeout_sec=10.0), flush=True)
+time.sleep(2.0)  # let the server's side match this client's request writer too
+future = client.call_async(Trigger.Request())
+rclpy.spin_until_future_complete(node, future, timeout_sec=3.0)
+print("ANSWERED", future.done(), flush=True)
+"""
+
+
+def test_a_fast_dds_client_runs_an_llfsm_service_but_gets_no_answer(tmp_path: Path) -> None:
+    """As docs/transports.md says: the callback runs (its side effects happen), the reply is
+    written, and rmw_fastrtps_cpp drops it for want of a related sample identity.  When this
+    starts to get answers, the docs need updating."""
+    m = write_machine(
+        tmp_path,
+        "served",
+        {"INITIAL": [("END", "not ros.ok()")], "END": None},
+        code={"INITIAL_OnEntry": SERVED},
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_srvs.srv import Trigger\n",
+    )
+    client, server = run_together(
+        [ros_command(FAST_CLIENT), llfsm_command(["run", "--transport", "dds", str(m), "--duration", "20"])],
+        timeout=40,
+        stop_after_first=0,
+    )
+    assert client.returncode == 0, client.stderr
+    assert "READY True" in client.stdout, client.stdout + server.stderr
+    assert "poked" in server.stderr, server.stderr
+    assert "ANSWERED False" in client.stdout

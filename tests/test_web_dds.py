@@ -1,0 +1,120 @@
+"""Machines on the graph across processes (SPEC §8 over DDS) and `llfsm view` (SPEC §10).
+
+Every process runs in a private network namespace (tests/dds_netns.py): nothing leaves this
+machine, and the processes find each other as ROS 2 nodes on one host do.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from conftest import MACHINES, write_machine
+from dds_netns import NetNamespace, finish, netns  # noqa: F401  (the fixture)
+
+WATCHER = {
+    "INITIAL": [("JOIN", "after_ms(3000)")],
+    "JOIN": [("ASK", "after_ms(1000)")],
+    "ASK": [("LOOK", "after_ms(1500)")],
+    "LOOK": [("END", "True")],
+    "END": None,
+}
+WATCHER_CODE = {
+    "INITIAL_OnEntry": "ros.init()\nnode = ros.Node('watcher')",
+    "JOIN_OnEntry": (
+        "latched = ros.QoSProfile(depth=1, durability=ros.DurabilityPolicy.TRANSIENT_LOCAL)\n"
+        "sub = node.create_subscription(String, '/llfsm/ros2_ping_pong/state', None, latched)"
+    ),
+    "ASK_OnEntry": (
+        "node.get_logger().info(f'joined: {sub.latest.data if sub.latest is not None else None}')\n"
+        "cli = node.create_client(Trigger, '/llfsm/ros2_ping_pong/suspend')\n"
+        "cli.wait_for_service(timeout_sec=5.0)\n"
+        "fut = cli.call_async(Trigger.Request())\n"
+        "code = ros.spin_until_future_complete(node, fut, timeout_sec=5.0)\n"
+        "node.get_logger().info(f'suspend: {code} {fut.result().success if fut.done() else None}')"
+    ),
+    "LOOK_OnEntry": "node.get_logger().info(f'now: {sub.latest.data if sub.latest is not None else None}')",
+}
+
+
+def test_state_and_control_of_a_machine_in_another_process(netns: NetNamespace, tmp_path: Path) -> None:  # noqa: F811
+    watcher = write_machine(
+        tmp_path,
+        "watcher",
+        WATCHER,
+        WATCHER_CODE,
+        variables="node: ros.Node\nsub: ros.Subscription\n",
+        includes=(
+            "from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import String\n"
+            "from llfsm.msgs.std_srvs.srv import Trigger\n"
+        ),
+    )
+    pp = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "9")
+    w = netns.llfsm("run", "--transport", "dds", watcher, "--duration", "15")
+    w_status, _, w_err = finish(w, 40)
+    p_status, _, p_err = finish(pp, 40)
+    assert w_status == 0 and p_status == 0, w_err + p_err
+    joined = [line for line in w_err.splitlines() if "joined:" in line]
+    assert joined and joined[0].split("joined: ")[1] in ("PUBLISH", "WAIT_AND_COUNT"), w_err  # the current state
+    assert "suspend: SUCCESS True" in w_err
+    assert "now: SUSPENDED" in w_err
+    # suspended from outside, the run waited (it could be resumed) until its --duration
+    assert p_err.count("Publishing:") <= 5
+
+
+CLIENT = r"""
+import asyncio, json, sys, aiohttp
+async def main(url):
+    out = {"machines": [], "states": [], "statuses": []}
+    async with aiohttp.ClientSession() as s:
+        async with s.ws_connect(url.replace("http://", "ws://") + "ws") as ws:
+            loop = asyncio.get_running_loop()
+            end = loop.time() + 25
+            asked = False
+            while loop.time() < end:
+                msg = await asyncio.wait_for(ws.receive(), end - loop.time())
+                data = json.loads(msg.data)
+                if data["type"] == "hello":
+                    out["machines"] = [m["name"] for m in data["machines"]]
+                    out["svg"] = any('data-state="WAIT_AND_COUNT"' in m["svg"] for m in data["machines"])
+                    data = data["snapshot"]
+                for m in data["machines"]:
+                    if m["name"] == "ros2_ping_pong":
+                        if not out["states"] or out["states"][-1] != m["state"]:
+                            out["states"].append(m["state"])
+                        out["statuses"].append(m["status"])
+                if {"PUBLISH", "WAIT_AND_COUNT"} <= set(out["states"]) and not asked:
+                    asked = True
+                    r = await s.post(url + "api/command", json={"machine": "ros2_ping_pong", "command": "suspend"})
+                    out["answer"] = await r.json()
+                if out["statuses"] and out["statuses"][-1] == "suspended":
+                    break
+    print(json.dumps(out))
+asyncio.run(main(sys.argv[1]))
+"""
+
+
+def test_llfsm_view_finds_shows_and_steers_a_machine_of_another_run(netns: NetNamespace) -> None:  # noqa: F811
+    pytest.importorskip("aiohttp")
+    pp = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "30")
+    view = netns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "30")
+    assert view.stderr is not None
+    url = ""
+    for line in view.stderr:
+        if "http://" in line:
+            url = line.split("web view at ", 1)[1].strip()
+            break
+    assert url, "llfsm view printed no address"
+    client = netns.python(CLIENT.replace("sys.argv[1]", repr(url)))
+    c_status, out, c_err = finish(client, 60)
+    pp.terminate()
+    view.terminate()
+    finish(pp, 20)
+    finish(view, 20)
+    assert c_status == 0, c_err
+    got = json.loads(out)
+    assert "ros2_ping_pong" in got["machines"] and got["svg"]
+    assert {"PUBLISH", "WAIT_AND_COUNT"} <= set(got["states"])  # the page follows the other run's state
+    assert got["answer"]["success"] is True and "pending" in got["answer"]["message"]
+    assert got["statuses"][-1] == "suspended" and got["states"][-1] == "SUSPENDED"
