@@ -634,9 +634,10 @@ class _Checker:
                 and (not is_guard or _single_expression(tree))
             ):
                 self.compiles(code, tree)
+            # only a name that nothing outside the file provides needs the scoped walk (where,
+            # and in which scope, the file binds it decides)
             if (not is_guard or _single_expression(tree)) and any(
                 not (name in mapping or name in BUILTINS or (imported is not None and name in imported))
-                or name in scan.bound  # bound here: where, and in which scope, decides
                 for name in scan.loads
             ):
                 known = _Known(mapping, imported)

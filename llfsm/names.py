@@ -26,7 +26,6 @@ _FUNCS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
 _COMPS = (ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp)
 _LOOPS = (ast.For, ast.AsyncFor, ast.While)
 
-_EFFECTS = (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For, ast.AsyncFor, ast.withitem, ast.Import, ast.ImportFrom)
 
 Pos = tuple[int, int]
 
@@ -265,11 +264,7 @@ def unresolved(tree: ast.Module, known: object) -> list[Unresolved]:
     """Names `tree` reads that neither its own bindings (where Python would see them) nor
     `known` (a container: machine variables, imports, builtins, macros) provide."""
     r = _Resolver()
-    r._effect = {}
-    # statements first, so that every Name knows where its binding takes effect
-    for node in ast.walk(tree):
-        if isinstance(node, _EFFECTS):
-            r._note_effects(node)
+    r._effect = {}  # filled as statements are met, before the names inside them
     r.collect(tree)
     r.resolve(tree, known)
     return sorted(r.out.values(), key=lambda u: _start(u.node))
