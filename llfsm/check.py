@@ -9,27 +9,100 @@ from __future__ import annotations
 
 import ast
 import builtins
+import difflib
 import io
+import itertools
 import os
+import re
 import tokenize
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .compiler.rewrite import BadBinding, attribute_of, find, name_map, source_lines
+from .compiler.rewrite import BadBinding, attribute_of, find, line_index, name_map, state_map
 from .deps import undeclared_dependencies
 from .diagnostics import Diagnostic, Severity, diag
 from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
-from .model import Code, Machine, State, is_valid_name
+from .model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
+from .names import Unresolved, section_bindings, unresolved
 from .reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
+from .workers import die_with_parent, usable_cores
 
-BUILTINS = frozenset(dir(builtins))
+#: Builtins, and the globals every module has (the compiled machine is a module).
+BUILTINS = frozenset(dir(builtins)) | {"__file__", "__builtins__", "__cached__", "__loader__", "__spec__"}
 GENERATED_PREFIXES = ("ringlet_", "on_entry_", "internal_", "on_exit_", "on_suspend_", "on_resume_")
 #: Module-level names the compiled module itself uses (templates/machine.py.j2): an import in
 #: Includes.py that rebinds one would break the class the module defines.
 MODULE_NAMES = frozenset({"Machine", "super", "frozenset"})
+
+
+#: Names from C, C++ and clfsm habits, and their Python spelling.
+CPP_NAMES = {
+    "true": "True",
+    "false": "False",
+    "TRUE": "True",
+    "FALSE": "False",
+    "null": "None",
+    "NULL": "None",
+    "nullptr": "None",
+    "this": "a machine variable's bare name (no `this->`)",
+}
+
+
+#: Names rclpy code uses that llfsm spells otherwise (read without an import: LF040's hint).
+ROS_NAMES = {
+    "rclpy": "`from llfsm import ros` in Includes.py, then ros.Node(...), ros.ok()",
+    "qos_profile_sensor_data": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "qos_profile_system_default": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "qos_profile_services_default": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "qos_profile_parameters": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "QoSPresetProfiles": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+}
+_ROS_MESSAGE_MODULE = re.compile(r"(?P<pkg>[a-z][a-z0-9_]*)\.(?P<kind>msg|srv|action)(?:\.(?P<rest>.*))?\Z")
+
+
+def ros_import_hint(module: str, stmt: ast.Import | ast.ImportFrom) -> str | None:
+    """The llfsm spelling of an rclpy-style import, or None if the import is not one."""
+    top = module.split(".")[0]
+    if top == "rclpy":
+        names = [a.name for a in stmt.names] if isinstance(stmt, ast.ImportFrom) else []
+        qos = [n for n in names if n in ROS_NAMES and n != "rclpy"]
+        if qos:
+            return f"`{qos[0]}` comes from rclpy, which llfsm machines do not use: pass {ROS_NAMES[qos[0]]}"
+        return f"`{module}` is rclpy; llfsm machines use `from llfsm import ros` (ros.Node, ros.ok(), ...)"
+    m = _ROS_MESSAGE_MODULE.match(module)
+    if m is None:
+        return None
+    if isinstance(stmt, ast.ImportFrom):
+        names = ", ".join(a.name for a in stmt.names)
+        spelled = f"from llfsm.msgs.{module} import {names}"
+    else:
+        spelled = f"import llfsm.msgs.{module}"
+    return f"ROS messages of {m['pkg']} come from llfsm.msgs: `{spelled}`"
+
+
+def _ros_time_has(attr: str) -> bool:
+    """Whether llfsm's run-clock time has `attr` (read from llfsm's own code, not the user's)."""
+    from .ros.node import Time
+
+    return hasattr(Time, attr)
+
+
+class _Known:
+    """What machine code may read without binding it: machine and state variables, macros,
+    names imported by Includes.py, builtins.  A view, not a set: building a set per file
+    would cost the machine's variables once per file."""
+
+    __slots__ = ("imported", "mapping")
+
+    def __init__(self, mapping: Mapping[str, str], imported: set[str] | None) -> None:
+        self.mapping = mapping
+        self.imported = imported or set()
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.mapping or name in self.imported or name in BUILTINS
 
 
 @dataclass
@@ -54,18 +127,67 @@ class MachineCheck:
 
 
 def check_machine(path: str | Path, within: Path | None = None) -> MachineCheck:
-    """Check one machine directory.  `within`: the folder it was found in by searching; a
-    machine directory that is a symlink leading out of that folder is refused, not read (an
-    untrusted pull request must not get `llfsm check` to read files from elsewhere)."""
+    """Check one machine directory.  A machine directory that is a symlink leading out of the
+    folder holding it is refused, not read, however it was named (discover.refused_link):
+    an untrusted pull request must not get `llfsm check` to read files from elsewhere.
+    `within` (the folder searched) is accepted for callers that pass it; the rule needs none."""
     path = Path(path)
-    if within is not None and _leads_out(path, within):
-        refused = diag("LF037", path, 1, 1, f"{path.name} is a symlink leading out of {within}; refused")
-        return MachineCheck(path, ReadResult(path, None, [refused]), [refused])
-    read = read_machine(path)
+    _suggester.left = SUGGEST_AT_MOST  # a budget per machine
+    read = read_machine(path)  # refuses a linked directory by discover.refused_link, as everything does
     result = MachineCheck(path, read, list(read.diagnostics))
     _Checker(result).run()
-    result.diagnostics = sorted(set(result.diagnostics), key=Diagnostic.sort_key)
+    result.diagnostics = sorted(set(_without_cascade(result.diagnostics)), key=Diagnostic.sort_key)
     return result
+
+
+#: Diagnostics that follow from an earlier one rather than from a mistake of their own: one
+#: typo in machine.yaml (`transition:` for `transitions:`, a misspelt target) must give one
+#: diagnostic, not that one plus an orphan file for each guard and an unreachable state for
+#: each target.  They come back, if still true, once the first is fixed.
+#: (A misspelt target is followed to the state it was meant for by `reachability` instead.)
+_CASCADES = {
+    "LF004": frozenset({"LF020", "LF021", "LF022", "LF101", "LF102", "LF104"}),
+}
+
+
+#: "Did you mean" is for hand-written machines: difflib compares a name with every candidate,
+#: so a machine.yaml with 100,000 misspelt targets among 100,000 states would take hours.
+#: Beyond these bounds, no suggestion (the diagnostic itself stays).
+SUGGEST_AMONG = 1000
+SUGGEST_AT_MOST = 100
+
+
+class _Suggester:
+    def __init__(self) -> None:
+        self.left = SUGGEST_AT_MOST
+
+    def close(self, name: str, names: Iterable[str]) -> list[str]:
+        names = names if isinstance(names, list | set | frozenset | dict) else list(names)
+        if self.left <= 0 or len(names) > SUGGEST_AMONG or len(name) > 200:
+            return []
+        self.left -= 1
+        return difflib.get_close_matches(name, [n for n in names if len(n) <= 200], n=1, cutoff=0.6)
+
+
+_suggester = _Suggester()
+
+
+def _close_names(name: str, names: Iterable[str]) -> list[str]:
+    return _suggester.close(name, names)
+
+
+def did_you_mean(name: str, names: Iterable[str]) -> str:
+    """` (did you mean 'END'?)` when a known name is close to `name`, else nothing."""
+    close = _close_names(name, names)
+    if not close:
+        return ""
+    return f" (did you mean {' or '.join(repr(c) for c in close)}?)"
+
+
+def _without_cascade(diags: list[Diagnostic]) -> list[Diagnostic]:
+    codes = {d.code for d in diags}
+    drop = frozenset().union(*(_CASCADES[c] for c in codes if c in _CASCADES))
+    return [d for d in diags if d.code not in drop] if drop else diags
 
 
 def check_paths(paths: Iterable[Path]) -> list[MachineCheck]:
@@ -73,12 +195,6 @@ def check_paths(paths: Iterable[Path]) -> list[MachineCheck]:
     for p in paths:
         out.extend(check_machine(m, p) for m in find_machines(p))
     return out
-
-
-def _leads_out(path: Path, root: Path) -> bool:
-    if not os.path.islink(path):
-        return False
-    return not Path(os.path.realpath(path)).is_relative_to(os.path.realpath(root))
 
 
 #: From this many machines on, `diagnose` spreads the work over worker processes.
@@ -98,15 +214,20 @@ def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[
     """
     found = [(m, p) for p in paths for m in find_machines(p)]
     machines, roots = [m for m, _ in found], [p for _, p in found]
+    cores = usable_cores()
     if jobs is None:
-        jobs = (os.cpu_count() or 1) if len(machines) >= PARALLEL_FROM else 1
+        jobs = cores if len(machines) >= PARALLEL_FROM else 1
+    # more workers than cores only add memory and switching: `-j 10000` must not fork 10,000
+    jobs = min(jobs, cores, len(machines))
     if jobs <= 1 or len(machines) < 2:
         return len(machines), [d for m, p in found for d in check_machine(m, p).diagnostics]
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+    with ProcessPoolExecutor(
+        max_workers=jobs, mp_context=ctx, initializer=die_with_parent, initargs=(os.getpid(),)
+    ) as pool:
         chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
         return len(machines), [d for chunk in chunks for d in chunk]
 
@@ -119,6 +240,9 @@ class _Checker:
         #: so that a machine.yaml with 100 000 transitions is checked in linear time
         self.unreadable = {os.path.basename(d.file) for d in result.read.diagnostics}
         self.always_true: set[str] = set()  # states whose LF104 warnings are already given
+        self._base: Mapping[str, str] | None = None  # the machine-level name map
+        self._imported: set[str] | None = set()
+        self._locals: dict[str, str] | None = None  # name -> a section file binding it
 
     def add(self, code: str, file: str, line: int, col: int, msg: str) -> None:
         self.r.diagnostics.append(diag(code, self.path / file, line, col, msg))
@@ -140,6 +264,15 @@ class _Checker:
         elif not is_valid_name(name):
             self.add(
                 "LF010", "machine.yaml", 1, 1, f"machine name {name!r} must be a Python identifier and not a keyword"
+            )
+        elif len(name) > MAX_MACHINE_NAME:
+            self.add(
+                "LF014",
+                "machine.yaml",
+                1,
+                1,
+                f"machine name {name[:20]}... is {len(name)} characters long; at most {MAX_MACHINE_NAME} "
+                "fit the file names a build writes",
             )
         m = self.r.machine
         if m is None:
@@ -183,6 +316,7 @@ class _Checker:
     def states(self, m: Machine) -> None:
         seen: dict[str, State] = {}
         names = {s.name for s in m.states}
+        declared = [s.name for s in m.states if not s.implicit]  # what "did you mean" offers
         for s in m.states:
             if s.implicit:
                 continue
@@ -194,12 +328,25 @@ class _Checker:
                 seen[s.name] = s
             for t in s.transitions:
                 if t.target not in names:
-                    self.at("LF020", t.loc, f"transition {t.index} of {s.name} goes to unknown state {t.target!r}")
+                    self.at(
+                        "LF020",
+                        t.loc,
+                        f"transition {t.index} of {s.name} goes to unknown state {t.target!r}"
+                        + did_you_mean(t.target, declared),
+                    )
                 self.guard(s, t.index, t.guard)
         if m.initial not in names:
-            self.at("LF021", m.initial_loc, f"initial state {m.initial!r} is not a state of this machine")
+            self.at(
+                "LF021",
+                m.initial_loc,
+                f"initial state {m.initial!r} is not a state of this machine" + did_you_mean(m.initial, declared),
+            )
         if m.suspended not in names:
-            self.at("LF022", m.suspended_loc, f"suspend state {m.suspended!r} is not a state of this machine")
+            self.at(
+                "LF022",
+                m.suspended_loc,
+                f"suspend state {m.suspended!r} is not a state of this machine" + did_you_mean(m.suspended, declared),
+            )
 
     def guard(self, s: State, index: int, code: Code | None) -> None:
         fname = f"State_{s.name}_Transition_{index}.expr"
@@ -257,6 +404,9 @@ class _Checker:
         tree = self.r.read.trees.get("Includes.py")
         if tree is None or m.includes is None:
             return
+        self.ros_habits(
+            m.includes, _Scanned(imports=[s for s in tree.body if isinstance(s, ast.Import | ast.ImportFrom)])
+        )
         for stmt in tree.body:
             col = node_col(m.includes.text, stmt)
             if not isinstance(stmt, ast.Import | ast.ImportFrom):
@@ -291,6 +441,45 @@ class _Checker:
                             f"Includes.py binds `{bound}`, which the compiled module uses itself; "
                             "import it under another name (`import x as y`)",
                         )
+
+    def ros_habits(self, code: Code, scan: _Scanned) -> None:
+        """LF041: rclpy spellings that llfsm does not take, with the llfsm spelling."""
+        for stmt in scan.imports:
+            modules = [stmt.module or ""] if isinstance(stmt, ast.ImportFrom) else [a.name for a in stmt.names]
+            if isinstance(stmt, ast.ImportFrom) and stmt.level:
+                continue
+            for mod in modules:
+                if self.is_helper(mod):
+                    continue
+                hint = ros_import_hint(mod, stmt)
+                if hint is not None:
+                    self.add("LF041", code.file, stmt.lineno, node_col(code.text, stmt), hint)
+                    break
+        for attr in scan.to_msg:
+            now = attr.value
+            if (
+                isinstance(now, ast.Call)
+                and isinstance(now.func, ast.Attribute)
+                and now.func.attr == "now"
+                and not _ros_time_has("to_msg")
+            ):
+                self.add(
+                    "LF041",
+                    code.file,
+                    attr.lineno,
+                    node_col(code.text, attr),
+                    "llfsm's clock time has no to_msg(): `s, ns = node.get_clock().now().seconds_nanoseconds()` "
+                    "then `Time(sec=s, nanosec=ns)` (from llfsm.msgs.builtin_interfaces.msg import Time)",
+                )
+
+    def is_helper(self, module: str) -> bool:
+        """Whether `module` names a helper module or package of the user's, beside the machine
+        (where `llfsm run` lets machines import them): `my_msgs.msg` is then theirs, not ROS's."""
+        top = module.split(".")[0]
+        if not top.isidentifier():
+            return False
+        parent = self.path.parent
+        return (parent / top).is_dir() or (parent / f"{top}.py").is_file()
 
     def imported_names(self) -> set[str] | None:
         """Names Includes.py binds; None if it star-imports (then any name may exist)."""
@@ -402,10 +591,11 @@ class _Checker:
             self.add("LF030", code.file, line, col, f"cannot be compiled: {error.msg}")
 
     def code_of(self, m: Machine, s: State) -> None:
-        mvars = [v.name for v in m.variables]
-        svars = [v.name for v in s.variables]
-        mapping = name_map(mvars, s.name, svars, MACROS)
-        imported = self.imported_names()
+        if self._base is None:  # once per machine: per state it would cost states x variables
+            self._base = name_map([v.name for v in m.variables], None, [], MACROS)
+            self._imported = self.imported_names()
+        mapping = state_map(self._base, s.name, [v.name for v in s.variables])
+        imported = self._imported
         files = list(s.sections.values()) + [t.guard for t in s.transitions if t.guard is not None]
         for code in files:
             tree = self.r.read.trees.get(code.file)
@@ -421,27 +611,78 @@ class _Checker:
             if scan.may_bind_variable:  # rare: only then pay for the scoped walk
                 _edits, bad = find(tree, mapping)
                 for b in bad:
-                    self.bad_binding(code, b)
+                    if b.how == "self":
+                        self.add(
+                            "LF013",
+                            code.file,
+                            b.line,
+                            _col(code.text, b.line, b.col),
+                            f"`{b.name}` here would be an attribute of this function's `self`, not the machine's "
+                            "variable: name the parameter `this`",
+                        )
+                    else:
+                        self.bad_binding(code, b)
             for n in scan.reserved:
                 self.reserved_use(code, n)
+            self.ros_habits(code, scan)
+            if not is_guard and ";" in code.text:
+                for line, col in _trailing_semicolons(code.text):
+                    self.add("LF108", code.file, line, col, "Python needs no `;` at the end of a statement; drop it")
             if (
                 not scan.escapes
                 and (not scan.plain or "__debug__" in code.text)  # `__debug__` cannot be assigned
                 and (not is_guard or _single_expression(tree))
             ):
                 self.compiles(code, tree)
-            if imported is not None and (not is_guard or _single_expression(tree)):
-                known = set(mapping) | imported | scan.bound | BUILTINS
-                for name, n in scan.loads.items():
-                    if name not in known:
-                        self.add(
-                            "LF105",
-                            code.file,
-                            n.lineno,
-                            node_col(code.text, n),
-                            f"name {name!r} is not a variable of this machine or state, an import, a builtin "
-                            "or a macro, and is not assigned in this file",
-                        )
+            # only a name that nothing outside the file provides needs the scoped walk (where,
+            # and in which scope, the file binds it decides)
+            if (not is_guard or _single_expression(tree)) and any(
+                not (name in mapping or name in BUILTINS or (imported is not None and name in imported))
+                for name in scan.loads
+            ):
+                known = _Known(mapping, imported)
+                for u in unresolved(tree, known):
+                    self.undefined(m, s, code, u, star=imported is None)
+
+    def undefined(self, m: Machine, s: State, code: Code, u: Unresolved, star: bool) -> None:
+        """LF040 for a name nothing provides (LF105, a warning, when Includes.py star-imports,
+        since the star may provide it), with the likeliest cause and its fix."""
+        name, n = u.name, u.node
+        declare = (
+            f"declare it in Variables.py (`{name}: int = 0`) to keep a value between sections and read it in guards"
+        )
+        other = self.locals_elsewhere(m).get(name)
+        if u.assigned_at is not None:
+            msg = f"name {name!r} is read before it is assigned (line {u.assigned_at}); assign it first, or {declare}"
+        elif name in CPP_NAMES:
+            msg = f"name {name!r} is not defined: Python spells it `{CPP_NAMES[name]}`"
+        elif name in ROS_NAMES:
+            msg = f"name {name!r} is not defined: llfsm spells it {ROS_NAMES[name]}"
+        elif other is not None and other != code.file:
+            msg = f"name {name!r} is a local of {other}: a section's locals last one section, as in clfsm; {declare}"
+        elif _suggester.left <= 0 or len(m.variables) + len(s.variables) > SUGGEST_AMONG:
+            msg = f"name {name!r} is not defined: not a variable, an import, a builtin or a macro; {declare}"
+        else:
+            candidates = [k for k in self._base or {} if k not in MACROS] + [v.name for v in s.variables]
+            candidates += sorted(self._imported or ()) + sorted(MACROS)
+            close = _close_names(name, candidates)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            msg = f"name {name!r} is not defined{hint}: not a variable, an import, a builtin or a macro; {declare}"
+        if star:
+            msg = f"{msg} (unless the star import of Includes.py provides it)"
+        self.add("LF105" if star else "LF040", code.file, n.lineno, node_col(code.text, n), msg)
+
+    def locals_elsewhere(self, m: Machine) -> dict[str, str]:
+        """name -> the first code file of the machine that binds it at its own level."""
+        if self._locals is None:
+            self._locals = {}
+            for st in m.states:
+                for c in st.sections.values():
+                    tree = self.r.read.trees.get(c.file)
+                    if tree is not None:
+                        for name in section_bindings(tree):
+                            self._locals.setdefault(name, c.file)
+        return self._locals
 
     def bad_binding(self, code: Code, b: BadBinding) -> None:
         kind = "macro" if b.name in MACROS else "variable"
@@ -481,11 +722,18 @@ class _Checker:
             return
         seen = {m.initial}
         todo = [m.initial]
+        meant: dict[str, str | None] = {}  # a misspelt target -> the state it was meant for
         while todo:
             for t in names[todo.pop()].transitions:
-                if t.target in names and t.target not in seen:
-                    seen.add(t.target)
-                    todo.append(t.target)
+                target = t.target
+                if target not in names:  # already LF020: follow it where it was meant to go
+                    if target not in meant:
+                        close = _close_names(target, names)
+                        meant[target] = close[0] if close else None
+                    target = meant[target]
+                if target is not None and target not in seen:
+                    seen.add(target)
+                    todo.append(target)
         for s in m.states:
             if s.name not in seen and s.name != m.suspended and not s.implicit:
                 self.at("LF102", s.loc, f"state {s.name} cannot be reached from the initial state {m.initial}")
@@ -553,6 +801,8 @@ class _Scanned:
     may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping somewhere
     too_deep: ast.AST | None = None  # the first node nested deeper than MAX_CODE_DEPTH: stop there
     plain: bool = True  # only `_PLAIN` nodes, used as it allows: compiling to bytecode cannot fail
+    imports: list[ast.Import | ast.ImportFrom] = field(default_factory=list)  # for LF041
+    to_msg: list[ast.Attribute] = field(default_factory=list)  # `x.to_msg`, for LF041
 
 
 def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
@@ -577,15 +827,25 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
             if isinstance(child, ast.Name):
                 if child.id == "self" or child.id.startswith("_llfsm"):
                     out.reserved.append(child)
-                elif isinstance(child.ctx, ast.Load):
+                elif isinstance(child.ctx, ast.Load | ast.Del):  # `del x` reads x as well
                     out.loads.setdefault(child.id, child)
                 else:
                     bound.add(child.id)
                     if child.id in MACROS:
                         out.reserved.append(child)
                 continue
+            if isinstance(child, ast.Import | ast.ImportFrom):
+                out.imports.append(child)
+            elif isinstance(child, ast.Attribute) and child.attr == "to_msg":
+                out.to_msg.append(child)
             if isinstance(child, ast.arg):
                 bound.add(child.arg)
+                if child.arg == "self":  # the scoped walk looks for machine names it would hide
+                    out.may_bind_variable = True
+                elif child.arg.startswith("_llfsm"):
+                    out.reserved.append(
+                        ast.Name(id=child.arg, ctx=ast.Store(), lineno=child.lineno, col_offset=child.col_offset)
+                    )
             elif isinstance(child, ast.alias):
                 bound.add((child.asname or child.name).split(".")[0])
             elif (
@@ -666,12 +926,25 @@ def _semicolon(text: str) -> tuple[int, int] | None:
     return None
 
 
+def _trailing_semicolons(text: str) -> list[tuple[int, int]]:
+    """(line, column) of each `;` that ends a line's code (C++'s habit); `a = 1; b = 2` is left
+    alone.  At most a few: one per line is enough to make the point."""
+    out: list[tuple[int, int]] = []
+    try:
+        toks = list(tokenize.generate_tokens(io.StringIO(text).readline))
+    except (tokenize.TokenError, SyntaxError):
+        return out
+    for tok, nxt in itertools.pairwise(toks):
+        if tok.type == tokenize.OP and tok.string == ";" and nxt.type in (tokenize.NEWLINE, tokenize.COMMENT):
+            out.append((tok.start[0], tok.start[1] + 1))
+            if len(out) >= 20:
+                break
+    return out
+
+
 def _single_expression(tree: ast.Module) -> bool:
     return len(tree.body) == 1 and isinstance(tree.body[0], ast.Expr)
 
 
 def _col(text: str, line: int, byte_col: int) -> int:
-    lines = source_lines(text)
-    if 1 <= line <= len(lines):
-        return len(lines[line - 1].encode("utf-8")[:byte_col].decode("utf-8", "replace")) + 1
-    return byte_col + 1
+    return line_index(text).char_col(line, byte_col)

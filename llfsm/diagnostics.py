@@ -6,6 +6,8 @@ Codes never change meaning once published: CI configurations and suppressions re
 from __future__ import annotations
 
 import json
+import os
+import urllib.parse
 from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import StrEnum
@@ -45,6 +47,7 @@ RULES: dict[str, Rule] = {
         _r("LF011", E, "invalid-state-name", "A state name is not an identifier, or is a Python keyword."),
         _r("LF012", E, "duplicate-state", "Two states have the same name."),
         _r("LF013", E, "reserved-name", "A name is reserved by llfsm (self, the macros, `_llfsm*`)."),
+        _r("LF014", E, "name-too-long", "The machine name is too long for the file names a build writes."),
         _r("LF020", E, "unknown-target", "A transition names a state that does not exist."),
         _r("LF021", E, "unknown-initial", "`initial` names a state that does not exist."),
         _r("LF022", E, "unknown-suspended", "`suspended` names a state that does not exist."),
@@ -59,11 +62,15 @@ RULES: dict[str, Rule] = {
         _r("LF036", E, "return-in-section", "`return`, `yield` or `await` at the top level of a section."),
         _r("LF038", E, "bad-binding", "A machine variable is bound by `:=`, import, def, class, except-as or match."),
         _r("LF037", E, "unsafe-path", "A file is a symlink leading out of the machine directory."),
+        _r("LF040", E, "undeclared-name", "Code reads a name that nothing defines where it is read."),
+        _r("LF041", E, "ros-habit", "An rclpy spelling llfsm does not take (rclpy, std_msgs.msg...)."),
+        _r("LF039", E, "too-complex", "Code beyond a size or shape limit that keeps parsing it fast."),
         _r("LF101", W, "orphan-file", "A code file belongs to a state or transition that does not exist."),
         _r("LF102", W, "unreachable-state", "No path of transitions leads from the initial state to this state."),
         _r("LF103", W, "guard-always-false", "A guard is the constant False: the transition never fires."),
         _r("LF104", W, "unreachable-transition", "An earlier guard of the state is the constant True."),
-        _r("LF105", W, "undefined-name", "A name is neither a variable, an import, a builtin, a macro nor assigned."),
+        _r("LF105", W, "undefined-name", "A name nothing defines, unless a star import of Includes.py does."),
+        _r("LF108", W, "semicolon", "A statement ends with `;`, a C++ habit Python does not need."),
         _r(
             "LF107",
             W,
@@ -103,7 +110,7 @@ class Diagnostic:
         return {
             "code": self.code,
             "severity": str(self.severity),
-            "file": self.file,
+            "file": unicode_text(self.file),
             "line": self.line,
             "column": self.column,
             "message": self.message,
@@ -126,6 +133,39 @@ def shown(text: str) -> str:
     if text.isprintable():
         return text
     return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text)
+
+
+def _path_bytes(path: str) -> bytes:
+    """The bytes of a file name as the file system has them: a name that is not UTF-8 reaches
+    Python with its bytes as lone surrogates (surrogateescape), and gets them back here."""
+    try:
+        return os.fsencode(path)
+    except UnicodeEncodeError:  # a surrogate that no byte made (a name built in Python)
+        return path.encode("utf-8", "surrogatepass")
+
+
+def unicode_text(path: str) -> str:
+    """`path` as valid Unicode for JSON: bytes that are not UTF-8 become `\\xNN` escapes
+    instead of lone surrogates, which JSON parsers of other languages refuse."""
+    try:
+        path.encode("utf-8")
+        return path
+    except UnicodeEncodeError:
+        return _path_bytes(path).decode("utf-8", "backslashreplace")
+
+
+def file_uri(path: str) -> str:
+    """An RFC 3986 reference for a file name, as SARIF's `artifactLocation.uri` requires.
+
+    Every byte but unreserved characters and `/` is percent-encoded (UTF-8 for text, the raw
+    byte for a name that is not UTF-8), so `#`, `?`, `%`, spaces and a `:` that would read as
+    a scheme all stay part of the path.  A relative name stays a relative reference (to the
+    folder `llfsm check` ran in); an absolute one becomes a `file:` URI."""
+    raw = _path_bytes(path)
+    quoted = urllib.parse.quote(raw, safe="/")
+    if raw.startswith(b"/"):
+        return "file://" + ("/" + quoted.lstrip("/") if raw.startswith(b"//") else quoted)
+    return quoted
 
 
 FORMATS = ("text", "json", "github", "sarif")
@@ -180,7 +220,7 @@ def format_sarif(diags: Iterable[Diagnostic], version: str) -> str:
             "locations": [
                 {
                     "physicalLocation": {
-                        "artifactLocation": {"uri": Path(d.file).as_posix()},
+                        "artifactLocation": {"uri": file_uri(Path(d.file).as_posix())},
                         "region": {"startLine": d.line, "startColumn": d.column},
                     }
                 }

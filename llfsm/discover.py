@@ -32,6 +32,25 @@ def machine_name_of(path: Path) -> str:
     return name[: -len(MACHINE_SUFFIX)] if name.endswith(MACHINE_SUFFIX) else name
 
 
+def refused_link(path: Path) -> str | None:
+    """Why the machine directory `path` must not be read, or None if it may.
+
+    The one rule of every entry point (check, build, run, graph, a path found by searching or
+    named on the command line or by a shell glob): a machine directory that is a symlink is
+    read only if it leads to a place inside the folder that holds the link.  A pull request
+    can add `evil.machine -> /home/ci/secrets`; neither `llfsm check .` nor
+    `llfsm check */*.machine` nor `llfsm build` may then read, report or compile that folder.
+    """
+    if not os.path.islink(path):
+        return None
+    # os.path.realpath, not Path.resolve: it never raises on a symlink loop (Python 3.11)
+    real = Path(os.path.realpath(path))
+    home = Path(os.path.realpath(path.parent))
+    if real.is_relative_to(home):
+        return None
+    return f"{path.name} is a symlink leading out of {path.parent}; refused"
+
+
 def is_machine_dir(path: Path) -> bool:
     return path.name.endswith(MACHINE_SUFFIX) and path.is_dir()
 

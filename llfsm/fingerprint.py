@@ -12,6 +12,7 @@ from functools import cache
 from pathlib import Path
 
 from . import __version__
+from .discover import refused_link
 
 HEADER_KEY = "# Fingerprint: "
 _PKG = Path(__file__).parent
@@ -29,6 +30,8 @@ def compiler_id() -> str:
 
 def machine_fingerprint(path: Path) -> str:
     """Hash of every regular file of a machine directory (names and bytes) and the compiler id."""
+    if refused_link(path) is not None:  # never read; the build then reports it (LF037)
+        raise OSError(f"{path} is a symlink leading out of its folder")
     h = hashlib.sha256(compiler_id().encode())
     h.update(os.fsencode(os.path.abspath(path)))
     for name in sorted(os.listdir(path)):

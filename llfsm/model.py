@@ -15,6 +15,11 @@ from pydantic import BaseModel, ConfigDict, Field
 
 NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
+#: Longest machine name (characters; names are ASCII).  The name becomes file names: the
+#: module NAME.py and `build`'s temporary `.NAME.py.<pid>.<random>.tmp` beside it, which must
+#: stay within the file system's 255-byte NAME_MAX.  Check and build agree through this rule.
+MAX_MACHINE_NAME = 200
+
 #: The five code sections a state may have, in the order they are documented.
 SECTIONS = ("OnEntry", "OnExit", "Internal", "OnSuspend", "OnResume")
 

@@ -8,17 +8,19 @@ alias bombs, deep nesting, symlinks out of the directory), it returns diagnostic
 from __future__ import annotations
 
 import ast
+import io
 import os
 import re
 import stat
+import tokenize
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 
-from .compiler.rewrite import source_lines
+from .compiler.rewrite import line_index, source_segment
 from .diagnostics import Diagnostic, diag
-from .discover import machine_name_of
+from .discover import machine_name_of, refused_link
 from .model import (
     IMPLICIT_SUSPENDED,
     SECTIONS,
@@ -35,6 +37,10 @@ MAX_YAML_DEPTH = 32
 #: Deepest `ast` nesting accepted in a code file.  Hand-written code stays far below; the
 #: compiler's tree walks recurse, and a deeper tree would exhaust Python's stack in them.
 MAX_CODE_DEPTH = 200
+#: Most replacement fields in one f-string.  CPython 3.11 parses an f-string in time quadratic
+#: in its fields (80,000 take seconds, a 1 MiB one minutes), so a bigger one is refused (LF039)
+#: before `ast.parse` sees it; hand-written code has a handful.
+MAX_FSTRING_FIELDS = 1000
 #: Open without blocking on a FIFO and without taking a terminal as controlling tty.
 _OPEN_FLAGS = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
 #: A form feed in the indentation resets CPython's column count: re-indented into a method,
@@ -120,12 +126,23 @@ class _Reader:
             line = text.count("\n", 0, ff.start()) + 1
             self.report("LF030", name, line, 1, "a form feed in the indentation; put it on a line of its own")
             return None
+        big = _huge_fstring(text)
+        if big is not None:
+            self.report(
+                "LF039",
+                name,
+                big[0],
+                big[1] + 1,
+                f"an f-string with more than {MAX_FSTRING_FIELDS} replacement fields; build the text in steps",
+            )
+            return None
         try:
             tree = ast.parse(text, filename=name)
         except SyntaxError as e:
             line = e.lineno or 1
             col = _char_col(text, line, (e.offset or 1) - 1, is_bytes=False) if e.offset else 1
-            self.report("LF030", name, line, col, f"syntax error: {e.msg}")
+            hint = cpp_hint(line_index(text).lines[line - 1] if 1 <= line <= text.count("\n") + 1 else "")
+            self.report("LF030", name, line, col, f"syntax error: {e.msg}" + (f"; {hint}" if hint else ""))
             return None
         except (RecursionError, MemoryError, ValueError) as e:
             self.report("LF030", name, 1, 1, f"cannot parse {name}: {type(e).__name__}")
@@ -158,10 +175,10 @@ class _Reader:
         out: list[Variable] = []
         for stmt in tree.body:
             if isinstance(stmt, ast.AnnAssign) and isinstance(stmt.target, ast.Name) and stmt.simple:
-                ann = ast.get_source_segment(text, stmt.annotation) or ast.unparse(stmt.annotation)
+                ann = source_segment(text, stmt.annotation) or ast.unparse(stmt.annotation)
                 init = None
                 if stmt.value is not None:
-                    init = ast.get_source_segment(text, stmt.value) or ast.unparse(stmt.value)
+                    init = source_segment(text, stmt.value) or ast.unparse(stmt.value)
                 out.append(
                     Variable(
                         name=stmt.target.id,
@@ -255,6 +272,10 @@ class _Reader:
     def run(self) -> ReadResult:
         name = machine_name_of(self.path)
         result = ReadResult(self.path, None, self.diags, self.trees)
+        refused = refused_link(self.path)
+        if refused is not None:  # the directory itself: nothing in it is read
+            self.diags.append(diag("LF037", self.path, 1, 1, refused))
+            return result
         if not (self.path / "machine.yaml").exists() and not (self.path / "machine.yaml").is_symlink():
             self.report("LF001", "machine.yaml", 1, 1, f"{self.path} has no machine.yaml")
             return result
@@ -305,10 +326,14 @@ class _Reader:
                 if not isinstance(tnode, yaml.SequenceNode):
                     self.structure_error(tnode, f"`transitions` of {sname} must be a list of state names")
                 else:
-                    for t in tnode.value:
+                    for position, t in enumerate(tnode.value):
                         tname = self.scalar(t, "a transition target")
                         if tname is not None:
                             targets.append((tname, _mark_loc(t)))
+                        elif isinstance(t, yaml.ScalarNode):  # `[~, END]`: never dropped in silence
+                            self.structure_error(
+                                t, f"transition {position} of {sname} has no target (`~` or empty); name a state"
+                            )
             states.append(self.state(sname, sloc, targets, entry_set))
 
         if not states:
@@ -394,6 +419,61 @@ def read_machine(path: str | Path) -> ReadResult:
 # -- helpers ---------------------------------------------------------------------------------
 
 
+#: C++ (clfsm) habits and their Python spelling, tried in order on the line of a syntax error.
+_CPP_HINTS: list[tuple[re.Pattern[str], str]] = [
+    (re.compile(r"^\s*//"), "comments start with `#` in Python"),
+    (re.compile(r"/\*|\*/"), "comments start with `#` in Python (no /* */)"),
+    (re.compile(r"\b(?P<v>[A-Za-z_]\w*)\s*\+\+|\+\+\s*(?P<w>[A-Za-z_]\w*)"), "Python has no `++`: write `{v} += 1`"),
+    (
+        re.compile(r"\b(?P<v>[A-Za-z_]\w*)\s*--(?!-)|(?<!-)--\s*(?P<w>[A-Za-z_]\w*)"),
+        "Python has no `--`: write `{v} -= 1`",
+    ),
+    (re.compile(r"&&"), "Python writes `and` for `&&`"),
+    (re.compile(r"\|\|"), "Python writes `or` for `||`"),
+    (
+        re.compile(
+            r"^\s*(?:const\s+|static\s+|unsigned\s+|signed\s+)*(?:int|float|double|bool|char|long|short|auto|"
+            r"string|std::string|size_t|u?int(?:8|16|32|64)_t)\s*[*&]?\s+(?P<v>[A-Za-z_]\w*)\s*(?:=|;|\[|$)"
+        ),
+        "Python declares no types in code: write `{v} = ...`; a machine variable is declared in "
+        "Variables.py as `{v}: int = 0`",
+    ),
+    (re.compile(r"\belse\s+if\b"), "Python writes `elif` for `else if`"),
+    (re.compile(r"^\s*(?:if|while|for)\b.*\{\s*$|^\s*\}"), "Python blocks are a colon and indentation, not `{{ }}`"),
+    (re.compile(r"->"), "Python reaches attributes with `.`, not `->`"),
+    (re.compile(r"(?<![=!<>])!(?!=)\s*[A-Za-z_(]"), "Python writes `not x` for `!x`"),
+]
+
+
+def cpp_hint(line: str) -> str | None:
+    """The Python spelling of a C++ habit on the line of a syntax error, if one is there."""
+    if len(line) > 10_000:
+        return None
+    for rx, hint in _CPP_HINTS:
+        m = rx.search(line)
+        if m:
+            groups = m.groupdict()
+            v = groups.get("v") or groups.get("w") or "x"
+            return hint.format(v=v)
+    return None
+
+
+def _huge_fstring(text: str) -> tuple[int, int] | None:
+    """(line, 0-based column) of an f-string with more than MAX_FSTRING_FIELDS fields, if any.
+    Tokenized only when the file holds that many braces at all: the common case costs a count."""
+    if text.count("{") <= MAX_FSTRING_FIELDS:
+        return None
+    try:
+        for tok in tokenize.generate_tokens(io.StringIO(text).readline):
+            if tok.type == tokenize.STRING and tok.string.count("{") > MAX_FSTRING_FIELDS:
+                quote = min(i for i in (tok.string.find("'"), tok.string.find('"')) if i >= 0)
+                if "f" in tok.string[:quote].lower():
+                    return tok.start
+    except (tokenize.TokenError, SyntaxError):
+        return None  # the parser reports it, in linear time: a broken token ends the string early
+    return None
+
+
 def _mark_loc(node: yaml.Node) -> Loc:
     return Loc(file="machine.yaml", line=node.start_mark.line + 1, column=node.start_mark.column + 1)
 
@@ -404,13 +484,9 @@ def _kind(node: yaml.Node) -> str:
 
 def _char_col(text: str, line: int, offset: int, is_bytes: bool = True) -> int:
     """1-based character column of a 0-based offset on a 1-based line (ast offsets are UTF-8 bytes)."""
-    lines = source_lines(text)  # the lines `ast` counts: not str.splitlines, which also splits on \f
-    if not 1 <= line <= len(lines):
+    if not is_bytes:
         return offset + 1
-    src = lines[line - 1]
-    if is_bytes:
-        return len(src.encode("utf-8")[:offset].decode("utf-8", "replace")) + 1
-    return offset + 1
+    return line_index(text).char_col(line, offset)
 
 
 def _node_col(text: str, node: ast.AST) -> int:

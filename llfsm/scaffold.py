@@ -39,9 +39,9 @@ DEFAULT_LICENSE = "TODO: License declaration"  # what ros2 pkg create writes whe
 PACKAGE_VERSION = "0.0.0"
 # REP 144 and ros2 pkg create: lower case, digits and single underscores, a letter first.
 # No trailing underscore either: llfsm.msgs.<pkg> refuses such names for the package's interfaces.
-_PACKAGE_NAME = re.compile(r"^[a-z](?:[a-z0-9]|_(?=[a-z0-9]))+$")
+_PACKAGE_NAME = re.compile(r"^[a-z](?:[a-z0-9]|_(?=[a-z0-9]))+\Z")  # \Z: `$` would pass "name\n"
 # A dependency is a ROS package or a rosdep key (python3-pytest, libboost-dev): no spaces, no markup.
-_DEPENDENCY = re.compile(r"^[a-z0-9][a-z0-9_.+-]*$")
+_DEPENDENCY = re.compile(r"^[a-z0-9][a-z0-9_.+-]*\Z")
 _EMAIL_LOCAL = re.compile(r"[^A-Za-z0-9_%+-]+")
 
 

@@ -747,3 +747,62 @@ def copy_case(src: Path, dst: Path) -> None:
             os.mkfifo(d)
         else:
             shutil.copyfile(s, d)
+
+
+# -- hostile paths -------------------------------------------------------------------------------
+
+#: Pieces of folder names that try to change what generated code means or what an output format
+#: says: line breaks (a header comment would end and code start), encoding declarations
+#: (PEP 263 reads lines 1-2), quotes and backslashes (string literals), URI delimiters (SARIF),
+#: terminal escapes, Unicode line separators, bytes that are not UTF-8.
+HOSTILE_FRAGMENTS = (
+    "\n",
+    "\r",
+    "\r\n",
+    "coding=utf_7",
+    "# -*- coding: latin-1 -*-",
+    "vim: set fileencoding=utf_7 :",
+    "+AGEAYQ-",
+    "'",
+    '"',
+    '"""',
+    "\\",
+    "\\n",
+    "#",
+    "%",
+    "%2F",
+    "?",
+    ":",
+    " ",
+    "\t",
+    "\x1b[31m",
+    "\u2028",
+    "\x85",
+    "\x0c",
+    "é",
+    "{",
+    "}",
+    "$(touch x)",
+    "raise SystemExit(7)",
+)
+
+
+def _fs_text(data: bytes) -> str:
+    """Bytes as a file-name component: no `/` and no NUL, decoded as the file system does."""
+    return os.fsdecode(data.replace(b"/", b"_").replace(b"\0", b"_"))
+
+
+@st.composite
+def hostile_folder_names(draw: st.DrawFn) -> str:
+    """A folder name (one path component) made of hostile pieces, at most 200 bytes."""
+    piece = st.one_of(
+        st.sampled_from(HOSTILE_FRAGMENTS),
+        st.text(st.characters(blacklist_characters="/\0", blacklist_categories=("Cs",)), max_size=4),
+        st.binary(min_size=1, max_size=3).map(_fs_text),
+    )
+    name = "".join(draw(st.lists(piece, min_size=1, max_size=6)))
+    if name in ("", ".", ".."):
+        name = f"x{name}"
+    while len(os.fsencode(name)) > 200:
+        name = name[:-1]
+    return name or "x"

@@ -292,7 +292,7 @@ def test_LF103_LF104_constant_guards(tmp_path: Path) -> None:
     assert got == [("LF103", "State_INITIAL_Transition_0.expr", 1), ("LF104", "machine.yaml", 3)]
 
 
-def test_LF105_undefined_names_including_another_sections_locals(tmp_path: Path) -> None:
+def test_LF040_undefined_names_including_another_sections_locals(tmp_path: Path) -> None:
     m = write_machine(
         tmp_path,
         "m",
@@ -301,7 +301,7 @@ def test_LF105_undefined_names_including_another_sections_locals(tmp_path: Path)
         includes="import math\n",
     )
     got = sorted((c, f, line, col) for c, f, line, col in codes(m))
-    assert got == [("LF105", "State_INITIAL_OnEntry.py", 2, 22), ("LF105", "State_INITIAL_Transition_0.expr", 1, 11)]
+    assert got == [("LF040", "State_INITIAL_OnEntry.py", 2, 22), ("LF040", "State_INITIAL_Transition_0.expr", 1, 11)]
 
 
 def test_every_rule_is_documented() -> None:

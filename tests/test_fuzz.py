@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import ast
 import atexit
+import json
 import os
 import sys
 import sysconfig
@@ -39,6 +40,7 @@ from strategies import (
     apply_mutation,
     arrangements,
     copy_case,
+    hostile_folder_names,
     machine_specs,
     mutated_machines,
     write_spec,
@@ -57,6 +59,7 @@ SMALL_MUTATED = settings(SMALL, max_examples=150)
 LARGE = settings(max_examples=2000, deadline=None, suppress_health_check=_QUIET)
 LARGE_MUTATED = settings(LARGE, max_examples=3000)
 SMALL_ARRANGEMENTS = settings(SMALL, max_examples=20)
+SMALL_HOSTILE = settings(SMALL, max_examples=20)
 LARGE_ARRANGEMENTS = settings(LARGE, max_examples=1000)
 
 #: Examples tried per property in this session, printed to stderr when the session ends.
@@ -537,3 +540,64 @@ def test_a_base_exception_from_machine_code_is_reported(tmp_path: Path) -> None:
     )
     result = _run_in_process(tmp_path, m)
     assert result.error is not None and result.error.line == 1  # type: ignore[attr-defined]
+
+
+# -- hostile paths (issue 12): every entry point and output format ------------------------------
+
+
+def hostile_path_property(spec: MachineSpec, folder: str) -> None:
+    """A valid machine under a hostile folder: check is clean and every format is valid, the
+    module's header carries no code, the machine builds, runs and draws; a broken copy beside
+    it gets diagnostics that every format renders validly for the same folder."""
+    from test_hardening_check import _header_ok, _only_expected_statements, _sarif_validator, _strings
+
+    from llfsm.graph import dot, mermaid
+
+    TRIED["hostile path"] += 1
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp) / folder
+        try:
+            root.mkdir()
+        except OSError:
+            event("folder refused by the file system")
+            return
+        machine = write_spec(spec, root)
+        checked = check_machine(machine)
+        assert checked.ok, format_text(checked.errors)
+        broken = write_spec(spec, root, dirname=f"{spec.name}_broken.machine")
+        (broken / "machine.yaml").write_text("states:\n  - name: A\n    transitions: [ENDD]\n  - name: B\n")
+        diags = [d for r in check_paths([root]) for d in r.diagnostics]
+        assert diags, "the broken copy has problems"
+        for fmt in FORMATS:
+            text = render(diags, fmt, "0")
+            text.encode("utf-8")  # no lone surrogate in any format
+            if fmt in ("text", "github"):
+                assert len(text.splitlines()) == len(diags)
+        sarif = json.loads(render(diags, "sarif", "0"))
+        errors = list(_sarif_validator().iter_errors(sarif))
+        assert not errors, errors[0]
+        for s in _strings(json.loads(render(diags, "json", "0"))):
+            s.encode("utf-8")
+        out = Path(tmp) / "out"
+        cls = build_and_import(machine, out)
+        source = (out / f"{spec.name}.py").read_text(encoding="utf-8")
+        _header_ok(source)
+        _only_expected_statements(ast.parse(source))
+        if cls is not None:
+            event(f"ended: {runs([cls], [machine])}")
+        assert checked.machine is not None
+        for drawing in (mermaid(checked.machine), dot(checked.machine)):
+            drawing.encode("utf-8")
+
+
+@SMALL_HOSTILE
+@given(machine_specs(), hostile_folder_names())
+def test_hostile_paths_through_check_build_run_graph_and_every_format(spec: MachineSpec, folder: str) -> None:
+    hostile_path_property(spec, folder)
+
+
+@pytest.mark.slow
+@LARGE
+@given(machine_specs(), hostile_folder_names())
+def test_hostile_paths_at_volume(spec: MachineSpec, folder: str) -> None:
+    hostile_path_property(spec, folder)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import ast
 import io
-import json
 import os
 import tokenize
 from dataclasses import dataclass, field
@@ -23,7 +22,7 @@ from ..diagnostics import Diagnostic, diag
 from ..model import Code, Machine, State
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
-from .rewrite import Edit, apply, attribute_of, find, name_map, own_locals, used_names
+from .rewrite import Edit, apply, attribute_of, find, name_map, own_locals, state_map, used_names
 from .templating import environment
 
 # -- text helpers ------------------------------------------------------------------------------
@@ -147,7 +146,7 @@ class StateView:
 def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Edit] | None = None) -> Block | None:
     if not tree.body:
         return None  # empty, or only comments: costs nothing at run time
-    edits, _bad = find(tree, mapping)
+    edits, _bad = find(tree, mapping, code.text)
     text = apply(code.text, edits + (extra or []))
     lines = text.split("\n")
     first = 0
@@ -195,9 +194,10 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
     names = [s.name for s in m.states]
     index = {n: i for i, n in enumerate(names)}
     susp = index[m.suspended]
+    base = name_map(mvars, None, [], MACROS)  # once: per state it would cost states x variables
 
     def view(s: State) -> StateView:
-        mapping = name_map(mvars, s.name, [v.name for v in s.variables], MACROS)
+        mapping = state_map(base, s.name, [v.name for v in s.variables])
 
         def sec(name: str) -> Block | None:
             code = s.sections.get(name)
@@ -226,7 +226,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         parts.update({f"guard{t.index}": trees[t.guard.file] for t in s.transitions if t.guard is not None})
         for part in ("OnEntry", "Internal"):
             if part in parts and not sv.is_suspend:
-                mine = own_locals(parts[part]) - set(mapping)
+                mine = {n for n in own_locals(parts[part]) if n not in mapping}
                 others = set().union(*(used_names(tr) for k, tr in parts.items() if k != part))
                 if mine & others:
                     if part == "OnEntry":
@@ -250,13 +250,13 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         includes = _block(m.includes, trees["Includes.py"], {})
     variables = None
     if m.variables_file is not None and "Variables.py" in trees:
-        variables = _variables_block(m.variables_file, trees["Variables.py"], name_map(mvars, None, [], MACROS))
+        variables = _variables_block(m.variables_file, trees["Variables.py"], base)
     state_variables = []
     for s in m.states:
         code = s.variables_file
         if code is not None and code.file in trees:
             svars = [v.name for v in s.variables]
-            b = _variables_block(code, trees[code.file], name_map(mvars, s.name, svars, MACROS))
+            b = _variables_block(code, trees[code.file], state_map(base, s.name, svars))
             if b is not None:
                 state_variables.append(b)
 
@@ -267,7 +267,6 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         "fingerprint": fingerprint,
         "m": {
             "name": m.name,
-            "dirname": _doc(m.path.name),
             "class_name": class_name(m.name),
             "docstring": _doc(f"{m.name}: {m.description}" if m.description else f"The machine {m.name}."),
             "class_doc": _doc(m.description or f"The machine {m.name}."),
@@ -283,7 +282,6 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
                 tuple((index[t.target], t.guard.text.strip() if t.guard is not None else "") for t in s.transitions)
                 for s in m.states
             ),
-            "source_dir_json": json.dumps(source_dir)[1:-1],
             "includes": includes,
             "variables": variables,
             "state_variables": state_variables,

@@ -14,9 +14,12 @@ C++ lambda capturing `this`): `def on_pose(msg): x = msg.x` sets the machine var
 from __future__ import annotations
 
 import ast
+import bisect
 import re
+from collections import ChainMap
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import lru_cache
 
 _SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
 _COMPS = (ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp)
@@ -37,6 +40,62 @@ def source_lines(text: str) -> list[str]:
         pos = m.end()
     out.append(text[pos:])
     return out
+
+
+class LineIndex:
+    """The lines of one text, split once, and byte -> character columns on them.
+
+    `ast` reports columns as UTF-8 byte offsets; diagnostics give character columns.  Finding
+    the line anew for each diagnostic re-splits the whole file each time: a file with N
+    problems then costs N times its size (20,000 lines took minutes).  One index per text
+    makes every conversion O(1) on ASCII lines, O(log n) on others."""
+
+    def __init__(self, text: str) -> None:
+        self.lines = source_lines(text)
+        self._offsets: dict[int, list[int] | None] = {}
+
+    def char_col(self, line: int, byte_offset: int) -> int:
+        """1-based character column of a 0-based UTF-8 byte offset on a 1-based line."""
+        if not 1 <= line <= len(self.lines):
+            return byte_offset + 1
+        offsets = self._offsets.get(line, ())
+        if offsets == ():
+            src = self.lines[line - 1]
+            offsets = None
+            if not src.isascii():
+                offsets, pos = [], 0
+                for ch in src:
+                    pos += len(ch.encode("utf-8", "surrogatepass"))
+                    offsets.append(pos)
+            self._offsets[line] = offsets
+        if offsets is None:
+            return byte_offset + 1
+        return bisect.bisect_right(offsets, byte_offset) + 1  # type: ignore[arg-type]
+
+
+@lru_cache(maxsize=16)
+def line_index(text: str) -> LineIndex:
+    """The `LineIndex` of `text`, made once however many diagnostics point into it (a str
+    caches its hash, so a lookup costs nothing like the text's length)."""
+    return LineIndex(text)
+
+
+def source_segment(text: str, node: ast.AST) -> str | None:
+    """`ast.get_source_segment`, on the file's `LineIndex`: the standard one splits the whole
+    source anew for every node, so a Variables.py of N lines cost N squared."""
+    try:
+        l0, l1 = node.lineno - 1, node.end_lineno - 1  # type: ignore[attr-defined]
+        c0, c1 = node.col_offset, node.end_col_offset  # type: ignore[attr-defined]
+    except AttributeError:
+        return None
+    if l1 is None or c1 is None:
+        return None
+    lines = line_index(text).lines
+    if l0 == l1:
+        return lines[l0].encode("utf-8")[c0:c1].decode("utf-8")
+    first = lines[l0].encode("utf-8")[c0:].decode("utf-8")
+    last = lines[l1].encode("utf-8")[:c1].decode("utf-8")
+    return first + "".join(lines[l0 + 1 : l1]) + last
 
 
 @dataclass(frozen=True)
@@ -70,67 +129,96 @@ def _targets(node: ast.AST) -> set[str]:
     return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
 
 
+class _Scope:
+    """What one scope of user code hides of the machine's names.
+
+    `here`: the names that code directly in this scope does not resolve to the machine (its
+    parameters, comprehension variables, class attributes, and those of the scopes around).
+    `inner`: what scopes nested in it inherit.  They differ for a class body only: as in
+    Python, a name bound in a class body is visible in that body and nowhere else, not in its
+    methods, lambdas or comprehensions (beyond the first iterable, evaluated in the class)."""
+
+    __slots__ = ("function", "here", "inner", "self_param")
+
+    def __init__(self, here: frozenset[str], inner: frozenset[str], function: bool, self_param: bool = False) -> None:
+        self.here = here
+        self.inner = inner
+        self.function = function  # a def or lambda, or the section itself: where := binds
+        self.self_param = self_param  # a parameter `self` (here or around) hides the machine's
+
+
 class _Finder(ast.NodeVisitor):
-    def __init__(self, mapping: Mapping[str, str]) -> None:
+    def __init__(self, mapping: Mapping[str, str], text: str | None = None) -> None:
         self.mapping = mapping
-        self.shadow: list[frozenset[str]] = [frozenset()]
+        self.text = text
+        self.scopes: list[_Scope] = [_Scope(frozenset(), frozenset(), True)]
         self.edits: list[Edit] = []
         self.bad: list[BadBinding] = []
 
     def _hidden(self, name: str) -> bool:
-        return name in self.shadow[-1]
+        return name in self.scopes[-1].here
 
-    def _with(self, names: set[str]) -> None:
-        self.shadow.append(self.shadow[-1] | names)
+    def _push(self, names: set[str] | frozenset[str], function: bool = True) -> None:
+        """A function-like scope (def, lambda, comprehension) nested in the current one."""
+        outer = self.scopes[-1]
+        inherited = outer.inner
+        seen = inherited | names if names else inherited
+        self.scopes.append(_Scope(seen, seen, function, outer.self_param or "self" in names))
 
     def visit_Name(self, node: ast.Name) -> None:
         attr = self.mapping.get(node.id)
         if attr is not None and not self._hidden(node.id):
+            if self.scopes[-1].self_param and attr.startswith("self."):
+                # `def get(self): return count` -> `self.count`: the instance's, not the machine's
+                self.bad.append(BadBinding(node.id, "self", node.lineno, node.col_offset))
             self.edits.append(Edit(node.lineno, node.col_offset, node.end_col_offset or node.col_offset, attr))
 
-    def _bind(self, name: str | None, how: str, node: ast.AST) -> None:
-        if name and name in self.mapping and not self._hidden(name):
+    def _bind(self, name: str | None, how: str, node: ast.AST, hidden: bool | None = None) -> None:
+        if name and name in self.mapping and not (self._hidden(name) if hidden is None else hidden):
             self.bad.append(BadBinding(name, how, node.lineno, node.col_offset))  # type: ignore[attr-defined]
 
     def _function(self, node: ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) -> None:
+        # decorators, defaults and annotations are evaluated where the def stands
         for d in getattr(node, "decorator_list", []):
             self.visit(d)
         for d in node.args.defaults + [d for d in node.args.kw_defaults if d is not None]:
             self.visit(d)
         if not isinstance(node, ast.Lambda):
             self._bind(node.name, "def", node)
-            for a in node.args.posonlyargs + node.args.args + node.args.kwonlyargs:
-                if a.annotation:
+            a_ = node.args
+            for a in [*a_.posonlyargs, *a_.args, *a_.kwonlyargs, a_.vararg, a_.kwarg]:
+                if a is not None and a.annotation:
                     self.visit(a.annotation)
             if node.returns:
                 self.visit(node.returns)
-        self._with(_params(node.args))
+        self._push(_params(node.args))
         body = node.body if isinstance(node.body, list) else [node.body]
         for stmt in body:
             self.visit(stmt)
-        self.shadow.pop()
+        self.scopes.pop()
 
     visit_FunctionDef = visit_AsyncFunctionDef = visit_Lambda = _function  # type: ignore[assignment]
 
     def _comprehension(self, node: ast.ListComp | ast.SetComp | ast.GeneratorExp | ast.DictComp) -> None:
         gens = node.generators
-        self.visit(gens[0].iter)  # evaluated in the enclosing scope
+        self.visit(gens[0].iter)  # evaluated in the enclosing scope (a class body's included)
         bound: set[str] = set()
-        for i, g in enumerate(gens):
+        for g in gens:
             bound |= _targets(g.target)
-            self._with(bound)
+        # the comprehension's own scope: all its targets, wherever they stand (Python's symbol
+        # table binds them for the whole comprehension); a class body's names are not seen
+        self._push(bound, function=False)
+        for i, g in enumerate(gens):
             if i:
                 self.visit(g.iter)
             for cond in g.ifs:
                 self.visit(cond)
-            self.shadow.pop()
-        self._with(bound)
         if isinstance(node, ast.DictComp):
             self.visit(node.key)
             self.visit(node.value)
         else:
             self.visit(node.elt)
-        self.shadow.pop()
+        self.scopes.pop()
 
     visit_ListComp = visit_SetComp = visit_GeneratorExp = visit_DictComp = _comprehension  # type: ignore[assignment]
 
@@ -138,22 +226,32 @@ class _Finder(ast.NodeVisitor):
         self._bind(node.name, "class", node)
         for d in node.decorator_list + node.bases + [k.value for k in node.keywords]:
             self.visit(d)
-        own = set()
-        for stmt in node.body:  # names assigned in a class body are class attributes
-            if isinstance(stmt, ast.Assign | ast.AnnAssign | ast.AugAssign):
-                tgts = stmt.targets if isinstance(stmt, ast.Assign) else [stmt.target]
-                for t in tgts:
-                    own |= _targets(t)
-            elif isinstance(stmt, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
-                own.add(stmt.name)
-        self._with(own)
+        outer = self.scopes[-1]  # a class in a class body does not see that body's names either
+        own = own_locals(ast.Module(body=node.body, type_ignores=[]))
+        # the body sees its own names; what is nested in it sees only what the class's
+        # surroundings see
+        self.scopes.append(_Scope(outer.inner | own, outer.inner, False, outer.self_param))
         for stmt in node.body:
             self.visit(stmt)
-        self.shadow.pop()
+        self.scopes.pop()
 
     def visit_NamedExpr(self, node: ast.NamedExpr) -> None:
-        self._bind(node.target.id, ":=", node.target)
+        # `:=` in a comprehension binds in the enclosing function (PEP 572), so whether its
+        # target is the machine's is decided there, not by the comprehension's variables
+        function = next(s for s in reversed(self.scopes) if s.function)
+        self._bind(node.target.id, ":=", node.target, hidden=node.target.id in function.here)
         self.visit(node.value)
+
+    def visit_JoinedStr(self, node: ast.JoinedStr) -> None:
+        for value in node.values:
+            if not isinstance(value, ast.FormattedValue):
+                continue
+            before = len(self.edits)
+            self.visit(value.value)
+            if len(self.edits) > before and self.text is not None:
+                self.edits.extend(_self_documenting(self.text, value))
+            if value.format_spec is not None:
+                self.visit(value.format_spec)
 
     def visit_ExceptHandler(self, node: ast.ExceptHandler) -> None:
         self._bind(node.name, "except ... as", node)
@@ -177,6 +275,41 @@ class _Finder(ast.NodeVisitor):
         self.generic_visit(node)
 
 
+def _self_documenting(text: str, field: ast.FormattedValue) -> list[Edit]:
+    """Edits that keep `f"{x=}"` printing `x=` once `x` becomes `self.x`.
+
+    Python prints the text of the field as written, so `{x=}` rewritten to `{self.x=}` would
+    print `self.x=`.  The field becomes the same text as a literal followed by a plain field:
+    `x={self.x!r}` (repr, as `=` implies without a conversion or format spec).  No edit when
+    the field is not self-documenting, or when its text cannot be found on one line."""
+    expr = field.value
+    lines = line_index(text).lines
+    if expr.lineno != expr.end_lineno or not 1 <= expr.lineno <= len(lines):
+        return []
+    raw = lines[expr.lineno - 1].encode("utf-8")
+    brace = expr.col_offset - 1
+    while brace >= 0 and raw[brace : brace + 1] in (b" ", b"\t", b"("):
+        brace -= 1
+    if brace < 0 or raw[brace : brace + 1] != b"{":
+        return []
+    eq = expr.end_col_offset or 0
+    while eq < len(raw) and raw[eq : eq + 1] in (b" ", b"\t", b")"):
+        eq += 1
+    if raw[eq : eq + 1] != b"=" or raw[eq + 1 : eq + 2] == b"=":
+        return []
+    after = eq + 1
+    while after < len(raw) and raw[after : after + 1] in (b" ", b"\t"):
+        after += 1
+    nxt = raw[after : after + 1]
+    if nxt not in (b"}", b"!", b":"):
+        return []
+    literal = raw[brace + 1 : after].decode("utf-8").replace("{", "{{").replace("}", "}}")
+    return [
+        Edit(expr.lineno, brace, brace, literal),
+        Edit(expr.lineno, eq, after, "!r" if nxt == b"}" else ""),
+    ]
+
+
 def attribute_of(state: str, variable: str) -> str:
     """The machine attribute holding variable `variable` of state `state`."""
     return f"{state}__{variable}"
@@ -193,9 +326,17 @@ def name_map(
     return m
 
 
-def find(tree: ast.AST, mapping: Mapping[str, str]) -> tuple[list[Edit], list[BadBinding]]:
-    """Where `tree` uses a name of `mapping` (bare name -> replacement text)."""
-    f = _Finder(mapping)
+def state_map(base: Mapping[str, str], state: str, state_vars: list[str]) -> Mapping[str, str]:
+    """`name_map` for the code of `state`, given the machine-level map: a view over both, so
+    that a machine with many states and many variables costs states + variables, not their
+    product."""
+    return ChainMap({v: f"self.{attribute_of(state, v)}" for v in state_vars}, base)  # type: ignore[arg-type]
+
+
+def find(tree: ast.AST, mapping: Mapping[str, str], text: str | None = None) -> tuple[list[Edit], list[BadBinding]]:
+    """Where `tree` uses a name of `mapping` (bare name -> replacement text).  With the source
+    `text`, self-documenting f-string fields (`{x=}`) keep printing what the user wrote."""
+    f = _Finder(mapping, text)
     f.visit(tree)
     return f.edits, f.bad
 
@@ -218,7 +359,7 @@ def apply(text: str, edits: list[Edit]) -> str:
 
 def rewrite(text: str, mapping: Mapping[str, str], tree: ast.AST | None = None) -> str:
     tree = tree if tree is not None else ast.parse(text)
-    edits, _ = find(tree, mapping)
+    edits, _ = find(tree, mapping, text)
     return apply(text, edits)
 
 
