@@ -31,9 +31,7 @@ class BuildOutcome:
 
 
 #: Signals held back while a module is written: Ctrl-C, `kill` and a closed terminal.
-_DEFERRED = frozenset(
-    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
-)
+_DEFERRED = frozenset(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 @contextlib.contextmanager

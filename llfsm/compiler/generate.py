@@ -85,6 +85,30 @@ def class_name(machine: str) -> str:
     return (camel or "M") + "Machine"
 
 
+AFTER = frozenset({"after", "after_ms", "after_us"})
+
+
+def _after_use(tree: ast.AST) -> tuple[bool, bool]:
+    """(uses an after* macro, uses one where it may run in another state): a use that is not a
+    direct call (`f = after_ms`), or one inside a function or lambda (a callback may run later,
+    in any state).  Only states that use after* need their entry time recorded."""
+    used = escaped = False
+    calls = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            calls.add(id(node.func))
+        elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) and any(
+            isinstance(n, ast.Name) and n.id in AFTER for n in ast.walk(node)
+        ):
+            escaped = True
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and node.id in AFTER:
+            used = True
+            if id(node) not in calls:
+                escaped = True
+    return used, escaped
+
+
 # -- the view the template renders -------------------------------------------------------------
 
 
@@ -115,7 +139,7 @@ class GuardView:
         """Lines after the first, indented under `if (`: kept line for line so run-time errors map
         to the right line, and indented knowing the whole guard, so a string that spans lines
         keeps its value."""
-        return indent_code(self.text, 12).split("\n", 1)[1] if "\n" in self.text else ""
+        return indent_code(self.text, 8).split("\n", 1)[1] if "\n" in self.text else ""
 
 
 @dataclass
@@ -134,6 +158,8 @@ class StateView:
     #: that its locals stay its own, as the locals of a clfsm section do.
     entry_method: bool = False
     internal_method: bool = False
+    #: The entry ringlet records the entry time: only states whose code uses after* need it.
+    stamp: bool = False
 
     @property
     def has_on_suspend(self) -> bool:
@@ -195,6 +221,21 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
     names = [s.name for s in m.states]
     index = {n: i for i, n in enumerate(names)}
     susp = index[m.suspended]
+    stamp_all = False
+    after_states: set[str] = set()
+    for s in m.states:
+        files = [c.file for c in s.sections.values()] + [t.guard.file for t in s.transitions if t.guard is not None]
+        for f in files:
+            tree = trees.get(f)
+            if tree is not None:
+                used, escaped = _after_use(tree)
+                if used:
+                    after_states.add(s.name)
+                stamp_all = stamp_all or escaped
+    for f in ("Includes.py", "Variables.py", *(s.variables_file.file for s in m.states if s.variables_file)):
+        tree = trees.get(f)
+        if tree is not None and any(_after_use(tree)):
+            stamp_all = True
 
     def view(s: State) -> StateView:
         mapping = name_map(mvars, s.name, [v.name for v in s.variables], MACROS)
@@ -211,6 +252,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             entry=sec("OnEntry"),
             internal=sec("Internal"),
             exit=sec("OnExit"),
+            stamp=stamp_all or s.name in after_states,
         )
         if not sv.is_suspend:
             targets = ", ".join(t.target for t in s.transitions) or "none: accepting"
@@ -284,7 +326,6 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             "slots": tuple(
                 [v.name for v in m.variables] + [attribute_of(s.name, v.name) for s in m.states for v in s.variables]
             ),
-            "ringlets": [f"ringlet_{v.name}" for v in views],
             "on_suspend": [f"on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
             "on_resume": [f"on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
         },

@@ -170,6 +170,12 @@ class Bus:
     # -- timers ------------------------------------------------------------------------------
     def add_timer(self, timer: Timer, due: int) -> None:
         heapq.heappush(self.timers, (due, next(self._seq), timer))
+        self.ctx.wake_at(due)  # attention: the scheduler spins the executor when it falls due
+
+    def queue(self, work: Any) -> None:
+        """Queue work (a subscription with messages, a service request) for the executor."""
+        self.ready.append(work)
+        self.ctx.wake = 0  # attention: the scheduler spins the executor after this round
 
     def watch(self, name: str, fn: Callable[[Topic], None]) -> None:
         """Call fn(topic) once the topic exists (now, if it already does)."""
@@ -196,6 +202,7 @@ class Bus:
                 nxt = now + timer.period_ns - (now - due) % timer.period_ns
             timer._due = nxt
             heapq.heappush(timers, (nxt, next(self._seq), timer))
+            self.ctx.wake_at(nxt)
             fired = True
             timer._call()
         return fired
@@ -208,6 +215,14 @@ class Bus:
         ready = self.ready
         for _ in range(len(ready)):
             ready.popleft()._run()
+        self._rearm()
+
+    def _rearm(self) -> None:
+        """Tell the scheduler when the executor has work again (RunContext.wake)."""
+        if self.ready:
+            self.ctx.wake = 0
+        elif self.timers:
+            self.ctx.wake_at(self.timers[0][0])
 
     def spin_once(self, timeout_ns: int) -> bool:
         """One piece of work: a due timer, or the oldest queued item; else wait up to timeout_ns
@@ -257,7 +272,7 @@ class Bus:
     # -- services ----------------------------------------------------------------------------
     def call(self, service: str, request: Message) -> Future:
         future = Future(service)
-        self.ready.append(_Request(self, service, request, future))
+        self.queue(_Request(self, service, request, future))
         return future
 
     # -- logging -------------------------------------------------------------------------------

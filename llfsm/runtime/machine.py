@@ -1,10 +1,12 @@
 """The base class of every compiled machine, and the clfsm macros machine code calls.
 
-A compiled machine is a subclass with one method per state (its ringlet).  The scheduler calls
-`RINGLETS[state](machine)`; the method runs OnEntry if the state was just entered, evaluates
-the guards in order, and either fires one (running OnExit and moving to the target) or runs
-Internal.  It returns the index of the transition that fired, None if none did, or FINISHED in
-an accepting state.  Everything here is kept small because it sits on the hot path.
+A compiled machine is a subclass plus two functions per state (its ringlets): ENTER[state]
+runs OnEntry and then what STEADY[state] runs, the guards in order, firing the first true one
+(OnExit, then the target becomes current and its ENTER ringlet is next) or else Internal.  The
+scheduler calls `machine._run(machine)`: `_run` is the function for the machine's next ringlet,
+so a state that was not just entered never tests an "entered" flag, and a round is a list of
+plain calls.  A ringlet returns the index of the transition that fired, or None; an accepting
+state finishes the machine itself.  Everything here is small because it sits on the hot path.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ FINISHED = -1
 # Control commands a machine can have pending (SPEC section 2, step 1).
 SUSPEND, RESUME, RESTART = "suspend", "resume", "restart"
 
-Ringlet = Callable[["Machine"], int | None]
+Ringlet = Callable[["Machine"], "int | None"]
 Hook = Callable[["Machine"], None] | None
 
 
@@ -37,7 +39,10 @@ class Machine:
     INITIAL: ClassVar[int] = 0
     SUSPENDED: ClassVar[int] = 0
     ACCEPTING: ClassVar[tuple[int, ...]] = ()
-    RINGLETS: ClassVar[tuple[Ringlet, ...]] = ()
+    #: The ringlet that enters each state (OnEntry, then the steady part) ...
+    ENTER: ClassVar[tuple[Ringlet, ...]] = ()
+    #: ... and the ringlet of a state already entered (guards, OnExit, Internal).
+    STEADY: ClassVar[tuple[Ringlet, ...]] = ()
     ON_SUSPEND: ClassVar[tuple[Hook, ...]] = ()
     ON_RESUME: ClassVar[tuple[Hook, ...]] = ()
     #: The machine directory the class was compiled from.
@@ -48,13 +53,13 @@ class Machine:
     __slots__ = (
         "_arr",
         "_clock",
-        "_entered",
         "_finished",
         "_held",
         "_id",
+        "_next",
         "_pending",
         "_resume_to",
-        "_ringlets",
+        "_run",
         "_state",
         "_suspended",
         "_t0",
@@ -64,18 +69,33 @@ class Machine:
         self._arr = arrangement
         self._clock = arrangement.clock
         self._id = machine_id
-        self._state = self.INITIAL
-        self._entered = True  # the initial state counts as entered
-        self._t0 = 0  # run-clock time (ns) the current state was entered
+        self._state: int = self.INITIAL
+        self._t0: int = 0  # run-clock time (ns) the current state was entered (states using after*)
         self._pending: str | None = None
-        self._suspended = False
+        self._suspended: bool = False
         self._resume_to: int | None = None
-        self._finished = False
-        #: What the scheduler calls, `_ringlets[_state](self)`: the state ringlets, or, while a
-        #: command is pending or the machine is suspended, `_held`, whose every entry is the
-        #: scheduler's gate.  So the round loop needs no test at all for the common case.
-        self._ringlets = self.RINGLETS
-        self._held = (arrangement._gate,) * len(self.STATES)
+        self._finished: bool = False
+        #: What the scheduler calls, `_run(self)`: the ringlet of the next turn (the initial
+        #: state counts as entered), or, while a command is pending or the machine is suspended,
+        #: `_held`, the scheduler's gate, with the real ringlet kept in `_next`.  So the round loop
+        #: needs no test at all for the common case.
+        self._held: Ringlet = arrangement._gate_fn
+        self._run: Ringlet = self.ENTER[self.INITIAL]
+        self._next: Ringlet = self._run
+
+    @property
+    def _entered(self) -> bool:
+        """The current state was entered since the last ringlet: its next ringlet runs OnEntry."""
+        run = self._next if self._run is self._held else self._run
+        return run is self.ENTER[self._state]
+
+    @_entered.setter
+    def _entered(self, value: bool) -> None:
+        fn = (self.ENTER if value else self.STEADY)[self._state]
+        if self._run is self._held:
+            self._next = fn
+        else:
+            self._run = fn
 
     def _initialise(self) -> None:
         """Set the machine and state variables (generated classes override this).  Called once
