@@ -9,6 +9,7 @@ so a warm start pays for hashing the machine's files and nothing more.
 from __future__ import annotations
 
 import hashlib
+import importlib
 import importlib.util
 import os
 import sys
@@ -116,8 +117,37 @@ def resolve(target: str) -> Path:
     raise TargetError(f"{target}: no such machine directory, module or installed PKG/NAME")
 
 
+def _native_module(module_path: Path) -> str | None:
+    """The compiled module of a built module in this process's native build (LLFSM_NATIVE),
+    or None: no native build, or one that left this machine plain Python."""
+    folder = os.environ.get("LLFSM_NATIVE")
+    if not folder:
+        return None
+    import json
+
+    try:
+        manifest = json.loads(Path(folder, "manifest.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    try:
+        data = module_path.read_bytes()
+    except OSError:
+        return None
+    return manifest.get("modules", {}).get(hashlib.sha256(data).hexdigest()[:32])
+
+
 def load_class(module_path: Path) -> type[Machine]:
     """Import a built module and return its machine class."""
+    native = _native_module(module_path)
+    if native is not None:
+        module = importlib.import_module(native)
+        found = [
+            v
+            for v in vars(module).values()
+            if isinstance(v, type) and issubclass(v, Machine) and v is not Machine and v.__module__ == native
+        ]
+        if len(found) == 1:
+            return found[0]
     key = hashlib.sha256(os.fsencode(module_path.resolve())).hexdigest()[:10]
     mod_name = f"llfsm_machine_{module_path.stem}_{key}"
     spec = importlib.util.spec_from_file_location(mod_name, module_path)

@@ -25,7 +25,8 @@ from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail
 )
 @click.option("--force", is_flag=True, help="Rewrite modules even when they are up to date.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
-def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
+@click.option("--native", is_flag=True, help="Also compile the modules and the runtime with mypyc (docs/native.md).")
+def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool, native: bool = False) -> None:
     """Compile machines into importable modules (incremental; atomic writes).
 
     With no PATH, every machine below the current folder (e.g. a package root) is built.
@@ -61,4 +62,23 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
         if not quiet:
             where = f" -> {outcome.module}" if outcome.module else ""
             click.echo(f"[{i}/{len(machines)}] {outcome.name}: {outcome.status}{where}", err=True)
+    if native and not failed:
+        _native(sorted((out_dir / f"{name}.py").resolve() for name in names), quiet)
     sys.exit(EXIT_ERRORS if failed else EXIT_OK)
+
+
+def _native(modules: list[Path], quiet: bool) -> None:
+    """One mypyc compile for every module of the build (cached in the llfsm cache)."""
+    from ..compiler.native import NativeUnavailable, native_build
+    from ..targets import cache_root
+
+    try:
+        nb = native_build(modules, cache_root())
+    except NativeUnavailable as e:
+        fail(f"--native: {e}")
+    for w in nb.warnings:
+        click.echo(w, err=True)
+    if not quiet:
+        done = sum(1 for v in nb.modules.values() if v)
+        how = "found in the cache" if nb.cached else "compiled"
+        click.echo(f"native: {done} of {len(modules)} machines {how} ({nb.folder})", err=True)

@@ -65,6 +65,7 @@ if TYPE_CHECKING:
 )
 @click.option("--view", is_flag=True, help="turtlesim: open a live window (needs pygame).")
 @click.option("--introspect", is_flag=True, help="At the end, print the nodes, topics and services on stderr.")
+@click.option("--native", is_flag=True, help="Run machines compiled with mypyc (see docs/native.md).")
 def run(
     targets: tuple[str, ...],
     verbose: bool,
@@ -83,6 +84,7 @@ def run(
     image: str | None = None,
     view: bool = False,
     introspect: bool = False,
+    native: bool = False,
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
@@ -95,6 +97,8 @@ def run(
 
     if period is not None and period <= 0:
         fail("--period must be greater than 0")
+    if native and not os.environ.get("LLFSM_NATIVE"):
+        _run_native(targets)  # compiles (or finds) the native build, then runs in a fresh process
     from ..msgs import add_search_path
 
     for t in targets:  # user interfaces (PKG/msg/*.msg) beside or above the machines import too
@@ -159,6 +163,36 @@ def run(
     if introspect and bus is not None:
         click.echo(_graph_text(bus.graph()), nl=False, err=True)
     sys.exit(result.status)
+
+
+def _run_native(targets: tuple[str, ...]) -> None:
+    """`--native`: build the targets' modules natively (one compile, cached), then start the
+    same command again with LLFSM_NATIVE set, so that the compiled runtime is the one imported.
+    Returns only when nothing could be compiled (the run then goes on as plain Python)."""
+    from ..compiler.native import ENV, NativeUnavailable, native_build
+    from ..targets import InvalidMachine, MachineLoadError, TargetError, cache_root, resolve
+
+    main = sys.modules.get("__main__")
+    spec = getattr(main, "__spec__", None)
+    if getattr(spec, "name", None) != "llfsm.__main__" and Path(getattr(main, "__file__", "") or "").name != "llfsm":
+        fail("--native starts the run in a fresh process: use it from the llfsm command")
+    modules = []
+    for t in targets:
+        try:
+            modules.append(resolve(t).resolve())
+        except (TargetError, InvalidMachine, MachineLoadError):
+            return  # the ordinary path reports it
+    try:
+        build = native_build(modules, cache_root())
+    except NativeUnavailable as e:
+        fail(f"--native: {e}")
+    for w in build.warnings:
+        click.echo(w, err=True)
+    if not any(build.modules.values()):
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os.execve(sys.executable, [sys.executable, *sys.orig_argv[1:]], {**os.environ, ENV: str(build.folder)})
 
 
 def _start_bus(

@@ -153,6 +153,9 @@ class StateView:
     exit: Block | None
     guards: list[GuardView] = field(default_factory=list)
     hooks: list[tuple[str, Block]] = field(default_factory=list)
+    #: OnSuspend / OnResume: functions beside the ringlets, which the ON_SUSPEND / ON_RESUME
+    #: tables name (a class body cannot name its own methods once mypyc compiles it).
+    command_hooks: list[tuple[str, Block]] = field(default_factory=list)
     #: OnEntry / Internal are inlined into the ringlet (one call per ringlet) unless one binds a
     #: local that another part of the ringlet also uses; then it gets a method of its own, so
     #: that its locals stay its own, as the locals of a clfsm section do.
@@ -163,11 +166,11 @@ class StateView:
 
     @property
     def has_on_suspend(self) -> bool:
-        return any(h == "on_suspend" for h, _ in self.hooks)
+        return any(h == "on_suspend" for h, _ in self.command_hooks)
 
     @property
     def has_on_resume(self) -> bool:
-        return any(h == "on_resume" for h, _ in self.hooks)
+        return any(h == "on_resume" for h, _ in self.command_hooks)
 
 
 def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Edit] | None = None) -> Block | None:
@@ -284,7 +287,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         for hook, secname in (("on_suspend", "OnSuspend"), ("on_resume", "OnResume")):
             b = sec(secname)
             if b is not None:
-                sv.hooks.append((hook, b))
+                sv.command_hooks.append((hook, b))
         return sv
 
     includes = None
@@ -326,8 +329,8 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             "slots": tuple(
                 [v.name for v in m.variables] + [attribute_of(s.name, v.name) for s in m.states for v in s.variables]
             ),
-            "on_suspend": [f"on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
-            "on_resume": [f"on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
+            "on_suspend": [f"_llfsm_on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
+            "on_resume": [f"_llfsm_on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
         },
     }
     source = _with_source_map(_env().get_template("machine.py.j2").render(ctx))

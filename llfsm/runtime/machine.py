@@ -12,7 +12,15 @@ state finishes the machine itself.  Everything here is small because it sits on 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
+
+try:  # mypyc reads this decorator when it compiles the runtime (`--native`, the `native` extra)
+    from mypy_extensions import mypyc_attr
+except ImportError:  # plain Python has nothing to do with it
+
+    def mypyc_attr(*_args: object, **_kwargs: object) -> Callable[[type], type]:  # type: ignore[misc]
+        return lambda cls: cls
+
 
 if TYPE_CHECKING:
     from .scheduler import Arrangement
@@ -23,14 +31,33 @@ FINISHED = -1
 # Control commands a machine can have pending (SPEC section 2, step 1).
 SUSPEND, RESUME, RESTART = "suspend", "resume", "restart"
 
-Ringlet = Callable[["Machine"], "int | None"]
-Hook = Callable[["Machine"], None] | None
+#: A ringlet takes the machine (typed Any: each generated class types its own ringlets).
+Ringlet = Callable[[Any], "int | None"]
+Hook = Callable[[Any], None] | None
+
+
+#: The instance attributes of the base class (its __slots__; reserved names for user variables).
+_SLOTS = (
+    "_arr",
+    "_clock",
+    "_finished",
+    "_held",
+    "_id",
+    "_next",
+    "_pending",
+    "_resume_to",
+    "_run",
+    "_state",
+    "_suspended",
+    "_t0",
+)
 
 
 class UnknownMachineError(LookupError):
     """A macro named a machine that is not part of the arrangement."""
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)  # a machine mypyc could not compile stays plain
 class Machine:
     """Base of generated machines.  Class attributes are filled in by the generated subclass."""
 
@@ -50,20 +77,7 @@ class Machine:
 
     # Slots make attribute access on the hot path as cheap as CPython allows; generated classes
     # add their variables to them.
-    __slots__ = (
-        "_arr",
-        "_clock",
-        "_finished",
-        "_held",
-        "_id",
-        "_next",
-        "_pending",
-        "_resume_to",
-        "_run",
-        "_state",
-        "_suspended",
-        "_t0",
-    )
+    __slots__ = _SLOTS
 
     def __init__(self, arrangement: Arrangement, machine_id: int = 0) -> None:
         self._arr = arrangement
@@ -155,7 +169,7 @@ class Machine:
 
 #: Names generated code and the runtime use on a machine instance: user variables must not
 #: take them (checked by `llfsm check`, rule LF013).
-RESERVED = frozenset({"self"} | {n for n in vars(Machine) if not n.startswith("__")} | set(Machine.__slots__))
+RESERVED = frozenset({"self"} | {n for n in vars(Machine) if not n.startswith("__")} | set(_SLOTS))
 
 #: The macros: bare names in machine code that the compiler turns into `self.<name>`.
 MACROS = frozenset(

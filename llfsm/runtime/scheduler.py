@@ -24,7 +24,7 @@ from .trace import Tracer
 
 #: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
-EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
+EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
 @dataclass
@@ -256,6 +256,8 @@ class Arrangement:
             rep = report_for(exc)
             if rep is None:
                 raise
+            if rep.machine_id is None and rep.machine in self.by_name:  # compiled frames hold no `self`
+                rep.machine_id = self.by_name[rep.machine]._id
             if self.tracer is not None:
                 self.tracer.error(None, rep.as_dict())
             return RunResult("error", self.rounds, self.clock.now, EXIT_ERROR, rep)
