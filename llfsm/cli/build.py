@@ -26,12 +26,17 @@ from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail
 @click.option("--force", is_flag=True, help="Rewrite modules even when they are up to date.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
 @click.option("--native", is_flag=True, help="Also compile the modules and the runtime with mypyc (docs/native.md).")
-def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool, native: bool = False) -> None:
+@click.option(
+    "-j", "--jobs", type=int, default=None, help="Worker processes (default: one per core from 32 stale machines on)."
+)
+def build(
+    paths: tuple[str, ...], out: str, force: bool, quiet: bool, native: bool = False, jobs: int | None = None
+) -> None:
     """Compile machines into importable modules (incremental; atomic writes).
 
     With no PATH, every machine below the current folder (e.g. a package root) is built.
     """
-    from ..compiler.build import build_machine
+    from ..compiler.build import build_all
     from ..discover import find_machines
 
     roots = _existing(paths) if paths else [Path(".")]
@@ -44,15 +49,15 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool, native: bo
         if name in names:
             fail(f"{m} and {names[name]} would both be built as {name}.py")
         names[name] = m
+    if jobs is not None and jobs < 1:
+        fail("--jobs must be at least 1")
     out_dir = Path(out)
     failed = 0
-    for i, path in enumerate(machines, 1):
-        try:
-            outcome = build_machine(path, out_dir, force=force)
-        except OSError as e:  # the output cannot be written: not the machine's fault, still a failure
+    for i, (path, outcome) in enumerate(zip(machines, build_all(machines, out_dir, force, jobs), strict=True), 1):
+        if isinstance(outcome, str):  # the output cannot be written: not the machine's fault, still a failure
             failed += 1
             target = out_dir / f"{path.name.removesuffix('.machine')}.py"
-            click.echo(f"llfsm: cannot write {target}: {e.strerror or e}", err=True)
+            click.echo(f"llfsm: cannot write {target}: {outcome}", err=True)
             continue
         if outcome.status == "failed":
             from ..diagnostics import format_text

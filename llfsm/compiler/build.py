@@ -7,7 +7,7 @@ import contextlib
 import os
 import secrets
 import signal
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -66,9 +66,7 @@ def write_atomic_bytes(target: Path, data: bytes) -> None:
             fd = os.open(tmp, flags, 0o666)  # the umask applies, as for any file the user writes
             with os.fdopen(fd, "wb") as f:
                 f.write(data)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, target)
+            os.replace(tmp, target)  # atomic for every reader; no fsync: a build can be redone
         except BaseException:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
@@ -102,3 +100,64 @@ def build_machine(path: Path, out_dir: Path, force: bool = False) -> BuildOutcom
         return BuildOutcome(path, None, "failed", checked.diagnostics + e.diagnostics, name=name)
     write_atomic(target, source)
     return BuildOutcome(path, target, "compiled", checked.diagnostics, name=name)
+
+
+#: From this many machines to compile on, `build_all` spreads the work over worker processes.
+PARALLEL_FROM = 32
+
+
+def _build_or_error(path: Path, out_dir: Path, force: bool) -> BuildOutcome | str:
+    """build_machine in a worker: an output that cannot be written comes back as its message."""
+    try:
+        return build_machine(path, out_dir, force)
+    except OSError as e:
+        return str(e.strerror or e)
+
+
+def build_all(
+    paths: Sequence[Path], out_dir: Path, force: bool = False, jobs: int | None = None
+) -> Iterator[BuildOutcome | str]:
+    """build_machine for each path, in order (a str for an output that cannot be written).
+
+    Machines whose module is up to date are found in this process (a fingerprint each); the
+    rest are compiled by worker processes, one per core, when there are many of them."""
+    stale = []
+    for path in paths:
+        if not force:
+            target = out_dir / f"{machine_name_of(path)}.py"
+            try:
+                fp = machine_fingerprint(path)
+            except OSError:
+                fp = ""
+            if fp and module_fingerprint(target) == fp:
+                continue
+        stale.append(path)
+    if jobs is None:
+        jobs = (os.cpu_count() or 1) if len(stale) >= PARALLEL_FROM else 1
+    results: Iterator[BuildOutcome | str]
+    if jobs > 1 and len(stale) > 1:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        from ..check import check_machine  # noqa: F401 (imported once, before the workers fork)
+        from .generate import compile_machine  # noqa: F401
+
+        ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+        chunk = max(1, len(stale) // (jobs * 8))
+        results = pool.map(_build_or_error, stale, [out_dir] * len(stale), [force] * len(stale), chunksize=chunk)
+    else:
+        pool = None
+        results = (_build_or_error(p, out_dir, force) for p in stale)
+    try:
+        todo = set(stale)
+        for path in paths:
+            if path in todo:
+                yield next(results)
+            else:
+                yield BuildOutcome(
+                    path, out_dir / f"{machine_name_of(path)}.py", "unchanged", name=machine_name_of(path)
+                )
+    finally:
+        if pool is not None:
+            pool.shutdown(cancel_futures=True)

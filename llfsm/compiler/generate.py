@@ -32,6 +32,8 @@ from .templating import environment
 def _string_continuation_lines(text: str) -> set[int]:
     """Lines (1-based) that start inside a multi-line string: indenting them would change it."""
     out: set[int] = set()
+    if '"""' not in text and "'''" not in text and "\\\n" not in text and "\\\r" not in text:
+        return out  # only a triple-quoted string or a backslash-continued one spans lines
     try:
         for tok in tokenize.generate_tokens(io.StringIO(text).readline):
             if (tok.type == tokenize.STRING and tok.end[0] > tok.start[0]) or (
@@ -191,7 +193,9 @@ def _guard_view(
 ) -> GuardView:
     block = _block(code, tree, mapping)
     assert block is not None  # the checker guarantees one expression
-    has_comment = any(t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline))
+    has_comment = "#" in block.text and any(
+        t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline)
+    )
     multiline = "\n" in block.text or has_comment
     return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend)
 
@@ -227,18 +231,24 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
     stamp_all = False
     after_states: set[str] = set()
     for s in m.states:
-        files = [c.file for c in s.sections.values()] + [t.guard.file for t in s.transitions if t.guard is not None]
-        for f in files:
-            tree = trees.get(f)
-            if tree is not None:
+        codes = [*s.sections.values(), *(t.guard for t in s.transitions if t.guard is not None)]
+        for code in codes:
+            tree = trees.get(code.file)
+            if tree is not None and "after" in code.text:  # the text first: most code never says it
                 used, escaped = _after_use(tree)
                 if used:
                     after_states.add(s.name)
                 stamp_all = stamp_all or escaped
-    for f in ("Includes.py", "Variables.py", *(s.variables_file.file for s in m.states if s.variables_file)):
-        tree = trees.get(f)
-        if tree is not None and any(_after_use(tree)):
+    for code in (m.includes, m.variables_file, *(s.variables_file for s in m.states)):
+        tree = trees.get(code.file) if code is not None else None
+        if tree is not None and code is not None and "after" in code.text and any(_after_use(tree)):
             stamp_all = True
+    names_of: dict[int, set[str]] = {}  # used_names per tree: each guard is asked about twice
+
+    def used(tree: ast.Module) -> set[str]:
+        if id(tree) not in names_of:
+            names_of[id(tree)] = used_names(tree)
+        return names_of[id(tree)]
 
     def view(s: State) -> StateView:
         mapping = name_map(mvars, s.name, [v.name for v in s.variables], MACROS)
@@ -272,8 +282,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         for part in ("OnEntry", "Internal"):
             if part in parts and not sv.is_suspend:
                 mine = own_locals(parts[part]) - set(mapping)
-                others = set().union(*(used_names(tr) for k, tr in parts.items() if k != part))
-                if mine & others:
+                if mine and mine & set().union(*(used(tr) for k, tr in parts.items() if k != part)):
                     if part == "OnEntry":
                         sv.entry_method = sv.entry is not None
                     else:
