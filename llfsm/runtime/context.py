@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from .clock import Clock, WallClock
+from .clock import Clock, SimClock, WallClock
 
 #: A run time no run reaches: "never" for wake times and durations.
 FOREVER = 1 << 62
@@ -19,6 +19,8 @@ FOREVER = 1 << 62
 class RunContext:
     def __init__(self, clock: Clock | None = None) -> None:
         self.clock: Clock = clock if clock is not None else WallClock()
+        if isinstance(self.clock, SimClock):
+            self.clock.context = self  # a jump of the sim clock (a spin call) raises attention
         #: Set on the first SIGINT/SIGTERM: `ros.ok()` is false from then on.
         self.interrupted = False
         #: Called between rounds, in order, once the run time reaches `wake`: the bus executor
