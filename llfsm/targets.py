@@ -8,16 +8,13 @@ so a warm start pays for hashing the machine's files and nothing more.
 
 from __future__ import annotations
 
-import hashlib
 import importlib
 import importlib.util
 import os
 import sys
-import tempfile
 from pathlib import Path
 
 from .discover import MACHINE_SUFFIX, machine_name_of
-from .fingerprint import machine_fingerprint, module_fingerprint
 from .runtime.errors import ErrorReport, report_for
 from .runtime.machine import Machine
 
@@ -58,11 +55,17 @@ def _writable(p: Path) -> Path:
             return p
     except OSError:
         pass
+    import tempfile
+
     return Path(tempfile.gettempdir()) / f"llfsm-cache-{os.getuid()}" / p.name
 
 
 def compiled_module_for(machine_dir: Path) -> Path:
     """The cached module of a machine directory, compiled first if missing or stale."""
+    import hashlib
+
+    from .fingerprint import machine_fingerprint, module_fingerprint  # hashlib: only for folders
+
     key = hashlib.sha256(os.fsencode(machine_dir.resolve())).hexdigest()[:16]
     out = _writable(cache_root() / key)
     module = out / f"{machine_name_of(machine_dir)}.py"
@@ -133,6 +136,8 @@ def _native_module(module_path: Path) -> str | None:
         data = module_path.read_bytes()
     except OSError:
         return None
+    import hashlib
+
     return manifest.get("modules", {}).get(hashlib.sha256(data).hexdigest()[:32])
 
 
@@ -148,7 +153,9 @@ def load_class(module_path: Path) -> type[Machine]:
         ]
         if len(found) == 1:
             return found[0]
-    key = hashlib.sha256(os.fsencode(module_path.resolve())).hexdigest()[:10]
+    import zlib  # not hashlib: a run that loads built modules does not need it
+
+    key = f"{zlib.crc32(os.fsencode(module_path.resolve())):08x}"  # the same name in every run
     mod_name = f"llfsm_machine_{module_path.stem}_{key}"
     spec = importlib.util.spec_from_file_location(mod_name, module_path)
     if spec is None or spec.loader is None:

@@ -10,14 +10,15 @@ through being imported (a bad include).
 from __future__ import annotations
 
 import bisect
-import json
-import linecache
 import os
 import re
 from dataclasses import asdict, dataclass
 from types import TracebackType
 
 from .machine import Machine
+
+# linecache (and the tokenize module it imports) and json are imported when an error is reported:
+# a run that raises nothing does not pay for them at start-up.
 
 POINTER_RE = re.compile(
     r"^\s*# (?P<file>Includes\.py|Variables\.py|State_\w+?_(?:OnEntry|OnExit|Internal|OnSuspend|"
@@ -62,12 +63,17 @@ class ErrorReport:
 
 
 def is_generated(filename: str) -> bool:
+    import linecache
+
     return linecache.getline(filename, 1).startswith(GENERATED_MARK)
 
 
 def source_dir_of(filename: str) -> str | None:
     """The machine folder named in a generated module's header (written JSON-escaped, so that
     any folder name fits on one comment line)."""
+    import json
+    import linecache
+
     for i in range(1, 6):
         m = SOURCE_RE.match(linecache.getline(filename, i).rstrip("\n"))
         if m:
@@ -86,6 +92,8 @@ def map_line(filename: str, lineno: int, source_map: SourceMap | None = None) ->
 
     The module's own `_LLFSM_SOURCE_MAP` (pointer line, file, first line) is the truth; a module
     that failed while being imported has none yet, and then the pointer comments are read."""
+    import linecache
+
     if source_map:
         i = bisect.bisect_left(source_map, (lineno,)) - 1
         if i < 0:
@@ -121,6 +129,8 @@ def _exception_text(exc: BaseException) -> str:
 
 def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorReport | None:
     """The report for an exception raised in machine code, or None if no frame is the user's."""
+    import linecache
+
     tb: TracebackType | None = exc.__traceback__
     found = None
     while tb is not None:
