@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
+from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
+
+if TYPE_CHECKING:
+    from ..compiler.build import BuildOutcome
 
 from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail
 
@@ -36,7 +42,7 @@ def build(
 
     With no PATH, every machine below the current folder (e.g. a package root) is built.
     """
-    from ..compiler.build import build_all
+    from ..compiler.build import build_all, terminated_as_exception
     from ..discover import find_machines
 
     roots = _existing(paths) if paths else [Path(".")]
@@ -52,8 +58,18 @@ def build(
     if jobs is not None and jobs < 1:
         fail("--jobs must be at least 1")
     out_dir = Path(out)
+    outcomes = build_all(machines, out_dir, force, jobs)
+    with terminated_as_exception(), contextlib.closing(outcomes):  # an interrupt stops the workers first
+        failed = _report(machines, outcomes, out_dir, quiet)
+    if native and not failed:
+        _native(sorted((out_dir / f"{name}.py").resolve() for name in names), quiet)
+    sys.exit(EXIT_ERRORS if failed else EXIT_OK)
+
+
+def _report(machines: list[Path], outcomes: Iterator[BuildOutcome | str], out_dir: Path, quiet: bool) -> int:
+    """One progress line per machine (in order), diagnostics of failures; the number failed."""
     failed = 0
-    for i, (path, outcome) in enumerate(zip(machines, build_all(machines, out_dir, force, jobs), strict=True), 1):
+    for i, (path, outcome) in enumerate(zip(machines, outcomes, strict=True), 1):
         if isinstance(outcome, str):  # the output cannot be written: not the machine's fault, still a failure
             failed += 1
             target = out_dir / f"{path.name.removesuffix('.machine')}.py"
@@ -67,9 +83,7 @@ def build(
         if not quiet:
             where = f" -> {outcome.module}" if outcome.module else ""
             click.echo(f"[{i}/{len(machines)}] {outcome.name}: {outcome.status}{where}", err=True)
-    if native and not failed:
-        _native(sorted((out_dir / f"{name}.py").resolve() for name in names), quiet)
-    sys.exit(EXIT_ERRORS if failed else EXIT_OK)
+    return failed
 
 
 def _native(modules: list[Path], quiet: bool) -> None:

@@ -165,7 +165,7 @@ def build_all(
         from .generate import compile_machine  # noqa: F401
 
         ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init)
         chunk = max(1, len(stale) // (jobs * 8))
         results = pool.map(_build_or_error, stale, [out_dir] * len(stale), [force] * len(stale), fps, chunksize=chunk)
     else:
@@ -183,10 +183,47 @@ def build_all(
                 yield BuildOutcome(
                     path, out_dir / f"{machine_name_of(path)}.py", "unchanged", name=machine_name_of(path)
                 )
+    except BaseException:
+        if pool is not None:  # Ctrl-C, SIGTERM: stop the workers (each finishes the module it writes)
+            for proc in list(getattr(pool, "_processes", {}).values()):
+                proc.terminate()
+            pool.shutdown(wait=False, cancel_futures=True)
+            pool = None
+        raise
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
     stats.save()
+
+
+def _worker_init() -> None:
+    """Workers leave Ctrl-C to the parent (no traceback from each of them); the parent stops
+    them with SIGTERM, which write_atomic_bytes holds back until a module is whole."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+class _Terminated(BaseException):
+    """SIGTERM while workers build: unwinds like Ctrl-C, so that the workers are stopped."""
+
+
+@contextlib.contextmanager
+def terminated_as_exception() -> Iterator[None]:
+    """While a parallel build runs, SIGTERM raises _Terminated instead of killing this process
+    outright (which would leave its workers running); afterwards the process ends by SIGTERM."""
+
+    def handler(_signum: int, _frame: object) -> None:
+        raise _Terminated
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    except _Terminated:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        raise
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 class _StatCache:
