@@ -308,12 +308,16 @@ class Native:
     """The native contestants, timed by a worker process that runs the compiled runtime."""
 
     def __init__(self, toggles: list[Path], idles: list[Path]) -> None:
-        from llfsm.compiler.native import ENV, available, native_build
         from llfsm.targets import cache_root
 
-        self.why = available()
         self.proc: subprocess.Popen[str] | None = None
         self.cached, self.build_seconds = False, 0.0
+        try:
+            from llfsm.compiler.native import ENV, available, native_build
+        except ImportError:  # an llfsm from before native builds (measuring a baseline)
+            self.why: str | None = "this llfsm has no native builds"
+            return
+        self.why = available()
         if self.why is not None:
             return
         t = time.perf_counter()
@@ -480,7 +484,7 @@ def wheel_venv(tmp: Path) -> Path:
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     wheels = tmp / "wheel"
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
-    subprocess.run([*pip, "wheel", "--no-deps", "--no-build-isolation", "-w", str(wheels), str(repo)], check=True)
+    subprocess.run([*pip, "wheel", "--no-deps", "-w", str(wheels), str(repo)], check=True, stderr=subprocess.DEVNULL)
     py = venv / "bin" / "python"
     subprocess.run([*pip, "--python", str(py), "install", "--no-deps", *map(str, wheels.glob("*.whl"))], check=True)
     site = next(venv.glob("lib/python*/site-packages"))
@@ -496,6 +500,7 @@ def section_startup(tmp: Path) -> list[Table]:
     (m / "machine.yaml").write_text("states:\n  - name: INITIAL\n")
     (m / "State_INITIAL_OnEntry.py").write_text("print('hello')\n")
     env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)  # as for a user: bytecode is written and reused
     llfsm = wheel_venv(tmp)
     python = str(llfsm.parent / "python")
     subprocess.run([str(llfsm), "build", str(m), "-o", str(tmp / "out"), "-q"], check=True, env=env)
