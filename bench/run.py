@@ -483,7 +483,7 @@ def wheel_venv(tmp: Path) -> Path:
     venv = tmp / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     wheels = tmp / "wheel"
-    pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
+    pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "--no-cache-dir", "-q"]  # nothing in ~/.cache
     subprocess.run([*pip, "wheel", "--no-deps", "-w", str(wheels), str(repo)], check=True, stderr=subprocess.DEVNULL)
     py = venv / "bin" / "python"
     subprocess.run([*pip, "--python", str(py), "install", "--no-deps", *map(str, wheels.glob("*.whl"))], check=True)
