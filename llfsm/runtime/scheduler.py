@@ -27,8 +27,9 @@ EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
-#: The wall clock is read at least once per FAST ns of rounds, and at most every BATCH rounds.
-FAST, BATCH = 20_000, 64
+#: Back-to-back firing rounds read the wall clock every BATCH rounds at most, while BATCH
+#: rounds take less than FAST ns (see Arrangement._wall_rounds).
+FAST, BATCH = 20_000, 16
 
 
 @dataclass
@@ -353,10 +354,11 @@ class Arrangement:
 
     def _wall_rounds(self, live: list[Machine]) -> int:
         """The wall clock without a period: sleep `idle` after a round in which no transition
-        fired, then read the clock.  Rounds that run back to back read it in batches: every
-        round while a round takes long, then every 2, 4, ... up to BATCH rounds while rounds
-        take less than FAST together, so the run time machines see is never more than about
-        FAST behind (a clock read costs as much as a whole plain ringlet)."""
+        fired, then read the clock.  Rounds that each fire a transition, back to back, read it
+        in batches (a clock read costs as much as a whole plain ringlet): every 2, 4, ... up to
+        BATCH rounds while the rounds since the last read took less than FAST, else every
+        round.  So the run clock lags only during a stretch of firing rounds, by at most
+        BATCH - 1 rounds, and a round in which nothing fires always reads it."""
         clock, ctx = self.clock, self.ctx
         read, start = time.monotonic_ns, clock._start  # type: ignore[attr-defined]
         idle: float = clock.idle / 1e9  # type: ignore[attr-defined]
