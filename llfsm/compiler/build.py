@@ -157,19 +157,20 @@ def build_all(
     if jobs is None:
         jobs = (os.cpu_count() or 1) if len(stale) >= PARALLEL_FROM else 1
     results: Iterator[BuildOutcome | str]
+    pool = None
     if jobs > 1 and len(stale) > 1:
         import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
 
         from ..check import check_machine  # noqa: F401 (imported once, before the workers fork)
         from .generate import compile_machine  # noqa: F401
 
         ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init)
+        with _signals_deferred():  # an interrupt never lands between two forks: every worker is known
+            pool = ctx.Pool(jobs, initializer=_worker_init)
         chunk = max(1, len(stale) // (jobs * 8))
-        results = pool.map(_build_or_error, stale, [out_dir] * len(stale), [force] * len(stale), fps, chunksize=chunk)
+        work = [(p, out_dir, force, fp) for p, fp in zip(stale, fps, strict=True)]
+        results = pool.imap(_build_star, work, chunk)
     else:
-        pool = None
         results = (_build_or_error(p, out_dir, force, fp) for p, fp in zip(stale, fps, strict=True))
     try:
         todo = set(stale)
@@ -185,15 +186,18 @@ def build_all(
                 )
     except BaseException:
         if pool is not None:  # Ctrl-C, SIGTERM: stop the workers (each finishes the module it writes)
-            for proc in list(getattr(pool, "_processes", {}).values()):
-                proc.terminate()
-            pool.shutdown(wait=False, cancel_futures=True)
+            pool.terminate()
             pool = None
         raise
     finally:
         if pool is not None:
-            pool.shutdown(cancel_futures=True)
+            pool.close()
+            pool.join()
     stats.save()
+
+
+def _build_star(args: tuple[Path, Path, bool, str | None]) -> BuildOutcome | str:
+    return _build_or_error(*args)
 
 
 def _worker_init() -> None:
@@ -201,6 +205,8 @@ def _worker_init() -> None:
     them with SIGTERM, which write_atomic_bytes holds back until a module is whole."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if hasattr(signal, "pthread_sigmask"):  # forked while the parent held signals back
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _DEFERRED)
 
 
 class _Terminated(BaseException):
