@@ -165,6 +165,9 @@ def build_all(
         from .generate import compile_machine  # noqa: F401
 
         ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+        import gc
+
+        gc.freeze()  # the workers' collector leaves the inherited objects alone: fewer pages copied
         with _signals_deferred():  # an interrupt never lands between two forks: every worker is known
             pool = ctx.Pool(jobs, initializer=_worker_init)
         chunk = max(1, len(stale) // (jobs * 8))
