@@ -1,11 +1,20 @@
 """llfsm benchmarks: every number is printed in a table, never asserted.
 
     python bench/run.py              all sections, also written to bench/results.md
-    python bench/run.py toggle build one or more sections
+    python bench/run.py speed build  one or more sections
     python bench/run.py --quick      smaller sizes (a smoke run)
 
-The machines are shared and noisy, so comparisons are measured side by side in one process
-and reported as ratios; each rate is the best of several repeats.
+The machines are shared and noisy, so speed is compared, not quoted: every contestant of the
+`speed` section (the plain-Python bounds, llfsm's pure-Python path, llfsm's native build, other
+libraries) runs once per round, the rounds interleave them in a rotated order, and a ratio is
+the median over the rounds of (contestant / its bound in the same round), printed with the
+spread (min-max).  One plain-Python bound per workload serves every table that uses it.  Times
+are CPU time of the process doing the work (time.process_time), which other processes on the
+machine disturb far less than wall time.  Arrangements, clocks and buses are made before the
+timer starts.  The native contestants run in a worker process started with LLFSM_NATIVE (the
+compiled runtime can only be imported by a process of its own), driven round by round from here.
+
+Every cache (compiled modules, native builds, mypy's cache) goes to a temporary folder.
 """
 
 from __future__ import annotations
@@ -28,21 +37,10 @@ sys.path.insert(0, str(HERE))
 
 from gen import write_big, write_idle, write_toggle  # noqa: E402
 
-from llfsm.runtime import Arrangement, SimClock  # noqa: E402
-from llfsm.targets import load  # noqa: E402
-
 Table = tuple[str, list[str], list[list[str]]]
 QUICK = False
-
-
-def best_rate(fn: Callable[[int], None], n: int, repeats: int = 3) -> float:
-    """Operations per second: the best of `repeats` timed runs of fn(n)."""
-    best = float("inf")
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn(n)
-        best = min(best, time.perf_counter() - t)
-    return n / best
+#: (work done, CPU seconds) for a workload of size n
+Timed = Callable[[int], tuple[int, float]]
 
 
 def fmt_rate(x: float) -> str:
@@ -54,10 +52,26 @@ def llfsm_cmd() -> list[str]:
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "llfsm"]
 
 
-# -- the toggle machine against plain Python and other libraries -------------------------------
+# -- the contestants of the speed section ----------------------------------------------------------
 
 
-def plain_toggle(n: int) -> None:
+def best_rate(fn: Callable[[int], None], n: int, repeats: int = 3) -> float:
+    """Operations per second: the best of `repeats` timed runs of fn(n) (the bus section)."""
+    best = float("inf")
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn(n)
+        best = min(best, time.perf_counter() - t)
+    return n / best
+
+
+def cpu(fn: Callable[[], object]) -> float:
+    t = time.process_time()
+    fn()
+    return time.process_time() - t
+
+
+def plain_toggle(n: int) -> tuple[int, float]:
     """The CPython bound: a hand-written two-state toggle, one function call per step."""
 
     class T:
@@ -73,134 +87,15 @@ def plain_toggle(n: int) -> None:
         t.count += 1
         return a
 
-    s = a
-    for _ in range(n):
-        s = s(t)
+    def run() -> None:
+        s = a
+        for _ in range(n):
+            s = s(t)
+
+    return n, cpu(run)
 
 
-def llfsm_runner(classes: list[type]) -> Callable[[int], None]:
-    """n ringlets of an arrangement of the given machines, under the sim clock."""
-
-    def run(n: int) -> None:
-        Arrangement(classes, clock=SimClock(1)).run(duration_ns=n // len(classes))
-
-    return run
-
-
-def compiled(tmp: Path, writer: Callable[[Path, str], Path], count: int) -> list[type]:
-    """`count` separately compiled machines (each its own module, as in a real arrangement)."""
-    prefix = writer.__name__.removeprefix("write_")
-    return [load(str(writer(tmp, f"{prefix}_{i}"))) for i in range(count)]
-
-
-def transitions_toggle(n: int) -> None:
-    from transitions import Machine as TMachine
-
-    class Model:
-        count = 0
-
-        def inc(self) -> None:
-            self.count += 1
-
-    m = Model()
-    TMachine(
-        m,
-        states=["A", "B"],
-        initial="A",
-        transitions=[
-            {"trigger": "go", "source": "A", "dest": "B", "after": "inc"},
-            {"trigger": "go", "source": "B", "dest": "A", "after": "inc"},
-        ],
-    )
-    for _ in range(n):
-        m.go()  # type: ignore[attr-defined]
-
-
-def statemachine_toggle(n: int) -> None:
-    from statemachine import State, StateMachine
-
-    class Toggle(StateMachine):
-        a = State(initial=True)
-        b = State()
-        go = a.to(b) | b.to(a)
-
-        def __init__(self) -> None:
-            self.count = 0
-            super().__init__()
-
-        def on_enter_state(self) -> None:
-            self.count += 1
-
-    s = Toggle()
-    for _ in range(n):
-        s.go()
-
-
-SISMIC_YAML = """
-statechart:
-  name: toggle
-  preamble: count = 0
-  root state:
-    name: root
-    initial: A
-    states:
-      - name: A
-        on entry: count += 1
-        transitions:
-          - {target: B, event: go}
-      - name: B
-        on entry: count += 1
-        transitions:
-          - {target: A, event: go}
-"""
-
-
-def sismic_toggle(n: int) -> None:
-    from sismic.interpreter import Interpreter
-    from sismic.io import import_from_yaml
-
-    it = Interpreter(import_from_yaml(SISMIC_YAML))
-    it.execute_once()
-    for _ in range(n):
-        it.queue("go")
-        it.execute_once()
-
-
-def section_toggle(tmp: Path) -> list[Table]:
-
-    n = 200_000 if QUICK else 1_000_000
-    base = best_rate(plain_toggle, n)
-    ours = best_rate(llfsm_runner(compiled(tmp, write_toggle, 1)), n)
-    rows = [
-        ["plain Python (CPython bound)", fmt_rate(base), "1.00", ""],
-        ["llfsm, compiled, sim clock", fmt_rate(ours), f"{ours / base:.2f}", "≥ 0.25 (≥ 1/3 in issue 5)"],
-    ]
-    others = [
-        ("transitions", transitions_toggle, 20_000),
-        ("python-statemachine", statemachine_toggle, 5_000),
-        ("sismic", sismic_toggle, 2_000),
-    ]
-    for name, fn, m in others:
-        try:
-            rate = best_rate(fn, m // (5 if QUICK else 1))
-        except ImportError:
-            rows.append([name, "not installed (pip install -e '.[bench]')", "", ""])
-            continue
-        target = "llfsm ≥ 20x" if name == "transitions" else ""
-        rows.append([name, fmt_rate(rate), f"{rate / base:.4f}", f"llfsm is {ours / rate:,.0f}x {target}".strip()])
-    return [
-        (
-            "Fired transitions per second: two-state toggle (guards True, OnEntry count += 1)",
-            ["implementation", "transitions/s", "ratio to plain", "note / target"],
-            rows,
-        )
-    ]
-
-
-# -- ringlets for arrangements of 1, 10 and 100 machines ---------------------------------------
-
-
-def plain_arrangement(machines: int, fired: bool) -> Callable[[int], None]:
+def plain_arrangement(machines: int, fired: bool) -> Timed:
     """The plain-Python bound for n ringlets: a list of objects, each with a current state
     function called once per round.  Fired: every call increments a counter and switches state
     (the toggle).  Idle: every call tests a false guard and returns."""
@@ -224,111 +119,454 @@ def plain_arrangement(machines: int, fired: bool) -> Callable[[int], None]:
             return 0
         return None
 
-    def run(n: int) -> None:
+    def timed(n: int) -> tuple[int, float]:
         objs = [T() for _ in range(machines)]
         for o in objs:
             o.state = a if fired else idle
-        for _ in range(n // machines):
-            for o in objs:
-                o.state(o)
 
-    return run
+        def run() -> None:
+            for _ in range(n // machines):
+                for o in objs:
+                    o.state(o)
+
+        return n // machines * machines, cpu(run)
+
+    return timed
 
 
-def section_ringlets(tmp: Path) -> list[Table]:
-    toggles = compiled(tmp, write_toggle, 100)
-    idles = compiled(tmp, write_idle, 100)
+def llfsm_timed(classes: list[type], clock: str = "sim", bus: bool = False) -> Timed:
+    """n ringlets of an arrangement of `classes`: the sim clock (1 us rounds), the wall clock
+    (rounds back to back: every machine here fires), or the sim clock with a live bus (a node
+    with a 10 ms timer, a publisher and a callback subscriber, as every ROS run has)."""
+    from llfsm.runtime import Arrangement, RunContext, SimClock, WallClock
+
+    def timed(n: int) -> tuple[int, float]:
+        ctx = RunContext(SimClock(1_000) if clock == "sim" else WallClock(idle_ns=0))
+        if bus:
+            from llfsm import ros
+            from llfsm.msgs.std_msgs.msg import String
+            from llfsm.runtime.context import activate
+
+            prev = activate(ctx)
+            try:
+                ros.init()
+                node = ros.Node("bench")
+                node.create_timer(0.01, lambda: None)
+                node.create_publisher(String, "/chatter", 10)
+                node.create_subscription(String, "/chatter", lambda m: None, 10)
+            finally:
+                activate(prev)
+        arr = Arrangement(classes, context=ctx)
+        rounds = n // len(classes)
+        if clock == "sim":
+            t = cpu(lambda: arr.run(duration_ns=rounds * 1_000))
+            return arr.rounds * len(classes), t
+        # the wall clock: run for about as long as the sim run takes, count the rounds
+        t = cpu(lambda: arr.run(duration_ns=rounds * 150))
+        return arr.rounds * len(classes), t
+
+    return timed
+
+
+def transitions_toggle(n: int) -> tuple[int, float]:
+    from transitions import Machine as TMachine
+
+    class Model:
+        count = 0
+
+        def inc(self) -> None:
+            self.count += 1
+
+    m = Model()
+    TMachine(
+        m,
+        states=["A", "B"],
+        initial="A",
+        transitions=[
+            {"trigger": "go", "source": "A", "dest": "B", "after": "inc"},
+            {"trigger": "go", "source": "B", "dest": "A", "after": "inc"},
+        ],
+    )
+
+    def run() -> None:
+        for _ in range(n):
+            m.go()  # type: ignore[attr-defined]
+
+    return n, cpu(run)
+
+
+def statemachine_toggle(n: int) -> tuple[int, float]:
+    from statemachine import State, StateMachine
+
+    class Toggle(StateMachine):
+        a = State(initial=True)
+        b = State()
+        go = a.to(b) | b.to(a)
+
+        def __init__(self) -> None:
+            self.count = 0
+            super().__init__()
+
+        def on_enter_state(self) -> None:
+            self.count += 1
+
+    s = Toggle()
+
+    def run() -> None:
+        for _ in range(n):
+            s.go()
+
+    return n, cpu(run)
+
+
+SISMIC_YAML = """
+statechart:
+  name: toggle
+  preamble: count = 0
+  root state:
+    name: root
+    initial: A
+    states:
+      - name: A
+        on entry: count += 1
+        transitions:
+          - {target: B, event: go}
+      - name: B
+        on entry: count += 1
+        transitions:
+          - {target: A, event: go}
+"""
+
+
+def sismic_toggle(n: int) -> tuple[int, float]:
+    from sismic.interpreter import Interpreter
+    from sismic.io import import_from_yaml
+
+    it = Interpreter(import_from_yaml(SISMIC_YAML))
+    it.execute_once()
+
+    def run() -> None:
+        for _ in range(n):
+            it.queue("go")
+            it.execute_once()
+
+    return n, cpu(run)
+
+
+def machine_paths(tmp: Path) -> tuple[list[Path], list[Path]]:
+    """100 toggles and 100 idle machines, each its own module, built into tmp/out."""
+    for i in range(100):
+        write_toggle(tmp / "src", f"toggle_{i}")
+        write_idle(tmp / "src", f"idle_{i}")
+    out = tmp / "out"
+    subprocess.run([*llfsm_cmd(), "build", "-q", str(tmp / "src"), "-o", str(out)], check=True)
+    return [out / f"toggle_{i}.py" for i in range(100)], [out / f"idle_{i}.py" for i in range(100)]
+
+
+def contestants(toggles: list[Path], idles: list[Path], prefix: str = "") -> dict[str, Timed]:
+    """llfsm's contestants, by name; `prefix` tells the pure ones from the native ones."""
+    from llfsm.targets import load
+
+    tog = [load(str(p)) for p in toggles]
+    idl = [load(str(p)) for p in idles]
+    out: dict[str, Timed] = {
+        f"{prefix}toggle sim": llfsm_timed(tog[:1]),
+        f"{prefix}toggle wall": llfsm_timed(tog[:1], "wall"),
+        f"{prefix}toggle bus": llfsm_timed(tog[:1], bus=True),
+    }
+    for k in (10, 100):
+        out[f"{prefix}fired {k}"] = llfsm_timed(tog[:k])
+        out[f"{prefix}idle {k}"] = llfsm_timed(idl[:k])
+    return out
+
+
+def bounds() -> dict[str, Timed]:
+    out: dict[str, Timed] = {"plain toggle": plain_toggle}
+    for k in (10, 100):
+        out[f"plain fired {k}"] = plain_arrangement(k, True)
+        out[f"plain idle {k}"] = plain_arrangement(k, False)
+    return out
+
+
+def worker() -> None:
+    """`run.py --worker` in a process with LLFSM_NATIVE set: reads the module paths (toggles,
+    then as many idle machines) on its first line, then times the native contestants it is
+    asked for ("name n"), one line back each ("work seconds")."""
+    paths = [Path(p) for p in sys.stdin.readline().split()]
+    half = len(paths) // 2
+    mine = contestants(paths[:half], paths[half:], "native ")
+    import llfsm.runtime.scheduler as sched
+
+    print("compiled" if (sched.__file__ or "").endswith(".so") else "plain", flush=True)
+    for line in sys.stdin:
+        name, _, n = line.strip().rpartition(" ")
+        work, t = mine[name](int(n))
+        print(f"{work} {t}", flush=True)
+
+
+class Native:
+    """The native contestants, timed by a worker process that runs the compiled runtime."""
+
+    def __init__(self, toggles: list[Path], idles: list[Path]) -> None:
+        from llfsm.targets import cache_root
+
+        self.proc: subprocess.Popen[str] | None = None
+        self.cached, self.build_seconds = False, 0.0
+        try:
+            from llfsm.compiler.native import ENV, available, native_build
+        except ImportError:  # an llfsm from before native builds (measuring a baseline)
+            self.why: str | None = "this llfsm has no native builds"
+            return
+        self.why = available()
+        if self.why is not None:
+            return
+        t = time.perf_counter()
+        nb = native_build([p.resolve() for p in toggles + idles], cache_root())
+        self.build_seconds = time.perf_counter() - t
+        self.cached = nb.cached
+        env = dict(os.environ, **{ENV: str(nb.folder)})
+        self.proc = subprocess.Popen(
+            [sys.executable, __file__, "--worker"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.proc.stdin.write(" ".join(str(p) for p in toggles + idles) + "\n")
+        self.proc.stdin.flush()
+        kind = self.proc.stdout.readline().strip()
+        if kind != "compiled":
+            self.close()
+            self.why = "the native build did not compile the runtime"
+
+    def timed(self, name: str) -> Timed:
+        def run(n: int) -> tuple[int, float]:
+            assert self.proc is not None and self.proc.stdin and self.proc.stdout
+            self.proc.stdin.write(f"{name} {n}\n")
+            self.proc.stdin.flush()
+            work, t = self.proc.stdout.readline().split()
+            return int(work), float(t)
+
+        return run
+
+    def close(self) -> None:
+        if self.proc is not None:
+            assert self.proc.stdin is not None
+            self.proc.stdin.close()
+            self.proc.wait(timeout=60)
+            self.proc = None
+
+
+def interleaved(named: dict[str, Timed], sizes: dict[str, int], rounds: int) -> dict[str, list[float]]:
+    """Rates (work per CPU second) of every contestant, `rounds` times, in rotated order."""
+    names = list(named)
+    rates: dict[str, list[float]] = {n: [] for n in names}
+    for r in range(rounds):
+        k = r % len(names)
+        for name in names[k:] + names[:k]:
+            work, t = named[name](sizes[name])
+            rates[name].append(work / t)
+    return rates
+
+
+def ratio(rates: dict[str, list[float]], name: str, bound: str) -> tuple[float, float, float]:
+    """Median, min and max over the rounds of contestant / bound in the same round."""
+    rs = [a / b for a, b in zip(rates[name], rates[bound], strict=True)]
+    return statistics.median(rs), min(rs), max(rs)
+
+
+def fmt_ratio(r: tuple[float, float, float], digits: int = 2) -> str:
+    return f"{r[0]:.{digits}f} ({r[1]:.{digits}f}-{r[2]:.{digits}f})"
+
+
+def section_speed(tmp: Path) -> list[Table]:
+    toggles, idles = machine_paths(tmp)
     n = 200_000 if QUICK else 1_000_000
-    rows = []
-    for machines in (1, 10, 100):
-        for kind, classes, fired in (("fired transitions", toggles, True), ("idle ringlets", idles, False)):
-            base = best_rate(plain_arrangement(machines, fired), n)
-            ours = best_rate(llfsm_runner(classes[:machines]), n)
-            target = "≥ 1/3" if fired else "≥ 1/2"
-            rows.append([kind, str(machines), fmt_rate(ours), fmt_rate(base), f"{ours / base:.2f}", target])
+    rounds = 7 if QUICK else 9
+    named: dict[str, Timed] = {**bounds(), **contestants(toggles, idles)}
+    native = Native(toggles, idles)
+    if native.proc is not None:
+        for name in list(named):  # the same workloads, compiled
+            if not name.startswith("plain"):
+                named[f"native {name}"] = native.timed(f"native {name}")
+    others = {"transitions": (transitions_toggle, 20_000), "python-statemachine": (statemachine_toggle, 5_000)}
+    others["sismic"] = (sismic_toggle, 2_000)
+    missing = []
+    for name, (fn, _m) in others.items():
+        try:
+            fn(10)
+        except ImportError:
+            missing.append(name)
+            continue
+        named[name] = fn
+    sizes = {name: n for name in named}
+    for name, (_fn, m) in others.items():
+        sizes[name] = m // (5 if QUICK else 1)
+    try:
+        rates = interleaved(named, sizes, rounds)
+    finally:
+        native.close()
+    med = {k: statistics.median(v) for k, v in rates.items()}
+
+    def row(label: str, name: str, bound: str, target: str) -> list[str]:
+        if name not in rates:
+            return [label, f"not measured ({native.why})", "", target]
+        return [label, fmt_rate(med[name]), fmt_ratio(ratio(rates, name, bound)), target]
+
+    toggle_rows = [
+        ["plain Python (the bound)", fmt_rate(med["plain toggle"]), "1.00", ""],
+        row("llfsm, sim clock", "toggle sim", "plain toggle", "≥ 0.5"),
+        row("llfsm, wall clock", "toggle wall", "plain toggle", "≥ 0.4"),
+        row("llfsm, sim clock, a bus live", "toggle bus", "plain toggle", "≥ 0.45"),
+        row("llfsm --native, sim clock", "native toggle sim", "plain toggle", "≥ 1.0"),
+        row("llfsm --native, wall clock", "native toggle wall", "plain toggle", "≥ 1.0"),
+        row("llfsm --native, sim clock, a bus live", "native toggle bus", "plain toggle", "≥ 1.0"),
+    ]
+    for name in others:
+        if name in missing:
+            toggle_rows.append([name, "not installed (pip install -e '.[bench]')", "", ""])
+        else:
+            r = ratio(rates, name, "plain toggle")
+            toggle_rows.append(
+                [name, fmt_rate(med[name]), fmt_ratio(r, 4), f"llfsm is {med['toggle sim'] / med[name]:,.0f}x"]
+            )
+    ring_rows = []
+    for k in (10, 100):
+        for kind, target in (("fired", "≥ 1/3"), ("idle", "≥ 0.6")):
+            bound = f"plain {kind} {k}"
+            ring_rows.append(
+                [
+                    f"{'fired transitions' if kind == 'fired' else 'idle ringlets'}",
+                    str(k),
+                    fmt_rate(med[bound]),
+                    row("", f"{kind} {k}", bound, "")[1],
+                    row("", f"{kind} {k}", bound, "")[2],
+                    row("", f"native {kind} {k}", bound, "")[2] or "not measured",
+                    f"{target}; native ≥ 1.0",
+                ]
+            )
+    note = f"median of {rounds} interleaved rounds (min-max); CPU time; n = {n:,} ringlets"
+    build_note = (
+        f"native build: {'found in the cache' if native.cached else f'{native.build_seconds:.0f} s, one compile'}"
+        if native.why is None
+        else f"native: {native.why}"
+    )
     return [
         (
-            "Ringlets per second, sim clock: llfsm against the plain-Python bound in the same process",
-            ["kind", "machines", "llfsm /s", "plain Python /s", "ratio", "target"],
-            rows,
-        )
+            f"Fired transitions per second: two-state toggle (guards True, OnEntry count += 1); {note}",
+            ["implementation", "transitions/s", "ratio to plain", "target"],
+            toggle_rows,
+        ),
+        (
+            f"Ringlets per second, sim clock, against the plain-Python bound of the same size; {note}; {build_note}",
+            ["kind", "machines", "plain Python /s", "llfsm /s", "llfsm ratio", "native ratio", "target"],
+            ring_rows,
+        ),
     ]
 
 
 # -- start-up ------------------------------------------------------------------------------------
 
 
-def first_line_time(cmd: list[str], env: dict[str, str]) -> float:
+def wall(cmd: list[str], env: dict[str, str]) -> float:
     t = time.perf_counter()
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env, text=True)
-    assert p.stdout is not None
-    p.stdout.readline()
-    elapsed = time.perf_counter() - t
-    p.kill()
-    p.wait()
-    return elapsed
+    subprocess.run(cmd, check=False, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=600)
+    return time.perf_counter() - t
+
+
+def wheel_venv(tmp: Path) -> Path:
+    """llfsm installed from a wheel into a fresh virtual environment (pip compiles the bytecode
+    at install, as for any user); its dependencies come from this environment's site-packages
+    through a .pth file, so nothing is downloaded.  Returns the venv's `llfsm` script."""
+    repo = HERE.parent
+    venv = tmp / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
+    wheels = tmp / "wheel"
+    pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "--no-cache-dir", "-q"]  # nothing in ~/.cache
+    subprocess.run([*pip, "wheel", "--no-deps", "-w", str(wheels), str(repo)], check=True, stderr=subprocess.DEVNULL)
+    py = venv / "bin" / "python"
+    subprocess.run([*pip, "--python", str(py), "install", "--no-deps", *map(str, wheels.glob("*.whl"))], check=True)
+    site = next(venv.glob("lib/python*/site-packages"))
+    import sysconfig
+
+    (site / "_llfsm_bench_deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    return venv / "bin" / "llfsm"
 
 
 def section_startup(tmp: Path) -> list[Table]:
     m = tmp / "hello.machine"
     m.mkdir()
     (m / "machine.yaml").write_text("states:\n  - name: INITIAL\n")
-    (m / "State_INITIAL_OnEntry.py").write_text("print('first ringlet', flush=True)\n")
-    env = dict(os.environ, LLFSM_CACHE_DIR=str(tmp / "cache"))
-    subprocess.run([*llfsm_cmd(), "build", str(m), "-o", str(tmp / "out"), "-q"], check=True, env=env)
-    reps = 5 if QUICK else 15
-    rows = []
-    bare = statistics.median(
-        first_line_time([sys.executable, "-c", "print('x', flush=True)"], env) for _ in range(reps)
-    )
-    rows.append(["python -c print (interpreter alone)", f"{bare * 1000:.0f}", ""])
-    for label, target in (
-        ("llfsm run build/hello.py", str(tmp / "out" / "hello.py")),
-        ("llfsm run hello.machine (warm cache)", str(m)),
-    ):
-        first_line_time([*llfsm_cmd(), "run", "--clock", "sim", target], env)  # warm caches
-        t = statistics.median(
-            first_line_time([*llfsm_cmd(), "run", "--clock", "sim", target], env) for _ in range(reps)
+    (m / "State_INITIAL_OnEntry.py").write_text("print('hello')\n")
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)  # as for a user: bytecode is written and reused
+    llfsm = wheel_venv(tmp)
+    python = str(llfsm.parent / "python")
+    subprocess.run([str(llfsm), "build", str(m), "-o", str(tmp / "out"), "-q"], check=True, env=env)
+    runs = {
+        "python -c pass": [python, "-c", "pass"],
+        "llfsm run build/hello.py": [str(llfsm), "run", "--clock", "sim", str(tmp / "out" / "hello.py")],
+        "llfsm run hello.machine (warm cache)": [str(llfsm), "run", "--clock", "sim", str(m)],
+    }
+    for cmd in runs.values():
+        wall(cmd, env)  # the first run writes the caches (bytecode of the compiled module)
+    reps = 7 if QUICK else 15
+    times: dict[str, list[float]] = {k: [] for k in runs}
+    names = list(runs)
+    for r in range(reps):
+        k = r % len(names)
+        for name in names[k:] + names[:k]:
+            times[name].append(wall(runs[name], env))
+    bare = times["python -c pass"]
+    rows = [["python -c pass (the interpreter alone)", f"{statistics.median(bare) * 1000:.0f}", "1.00", ""]]
+    for name in names[1:]:
+        rs = [a / b for a, b in zip(times[name], bare, strict=True)]
+        ms = statistics.median(times[name]) * 1000
+        rows.append([name, f"{ms:.0f}", fmt_ratio((statistics.median(rs), min(rs), max(rs))), "≤ 2.5"])
+    shutil.rmtree(Path(env["LLFSM_CACHE_DIR"]), ignore_errors=True)
+    t = wall([str(llfsm), "run", "--clock", "sim", str(m)], env)
+    rows.append(["llfsm run hello.machine (cold: compiles first)", f"{t * 1000:.0f}", "", ""])
+    return [
+        (
+            f"`llfsm run` start-up to exit, from a wheel installed by pip (bytecode compiled at install); "
+            f"wall time, median of {reps} interleaved runs (ratio min-max)",
+            ["command", "ms", "ratio to python -c pass", "target"],
+            rows,
         )
-        rows.append([label, f"{t * 1000:.0f}", "< 150"])
-    shutil.rmtree(tmp / "cache", ignore_errors=True)
-    t = first_line_time([*llfsm_cmd(), "run", "--clock", "sim", str(m)], env)
-    rows.append(["llfsm run hello.machine (cold: compiles first)", f"{t * 1000:.0f}", ""])
-    return [("`llfsm run` start-up to the first ringlet (median of runs, ms)", ["command", "ms", "target"], rows)]
+    ]
 
 
 # -- check and build -----------------------------------------------------------------------------
 
 
-def timed(cmd: list[str], env: dict[str, str]) -> float:
-    t = time.perf_counter()
-    subprocess.run(cmd, check=False, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t
-
-
 def section_build(tmp: Path, sizes: tuple[int, ...] = (10, 100, 1000)) -> list[Table]:
     rows = []
     env = dict(os.environ)
-    targets = {100: ("< 1.5", "< 3", "< 0.3"), 1000: ("< 5", "", "")}
+    targets = {100: ("< 1.5", "< 3", "< 0.3"), 1000: ("< 5", "< 8", "< 1")}
     if QUICK:
         sizes = tuple(x for x in sizes if x <= 100)
     for count in sizes:
         root = tmp / f"m{count}"
         for i in range(count):
             write_big(root, f"machine_{i:04d}", 10)
-        out = tmp / f"out{count}"
-        check = min(timed([*llfsm_cmd(), "check", "-q", str(root)], env) for _ in range(2))
-        cold = timed([*llfsm_cmd(), "build", "-q", str(root), "-o", str(out)], env)
-        warm = min(timed([*llfsm_cmd(), "build", "-q", str(root), "-o", str(out)], env) for _ in range(3))
+        check = statistics.median(wall([*llfsm_cmd(), "check", "-q", str(root)], env) for _ in range(3))
+        colds = []
+        for k in range(3 if count < 1000 else 2):
+            colds.append(wall([*llfsm_cmd(), "build", "-q", str(root), "-o", str(tmp / f"out{count}-{k}")], env))
+        cold = statistics.median(colds)
+        out = tmp / f"out{count}-0"
+        warm = statistics.median(wall([*llfsm_cmd(), "build", "-q", str(root), "-o", str(out)], env) for _ in range(5))
         tc, tb, tw = targets.get(count, ("", "", ""))
         rows += [
             [f"check {count} machines", f"{check:.2f}", tc],
-            [f"cold build {count}", f"{cold:.2f}", tb],
+            [f"cold build {count}", f"{cold:.2f} ({min(colds):.2f}-{max(colds):.2f})", tb],
             [f"warm build {count} (nothing changed)", f"{warm:.2f}", tw],
         ]
     return [
         (
-            "`llfsm check` and `llfsm build` of generated 10-state machines (s, whole command)",
+            f"`llfsm check` and `llfsm build` of generated 10-state machines (s, whole command, wall time, "
+            f"median; {os.cpu_count()} cores)",
             ["what", "seconds", "target"],
             rows,
         )
@@ -343,7 +581,7 @@ def section_bus(tmp: Path) -> list[Table]:
     from llfsm.msgs.geometry_msgs.msg import Twist
     from llfsm.msgs.std_msgs.msg import String
     from llfsm.ros.bus import bus_of
-    from llfsm.runtime import RunContext
+    from llfsm.runtime import RunContext, SimClock
     from llfsm.runtime.context import activate
 
     ctx = RunContext(SimClock())
@@ -395,7 +633,7 @@ def turtlesim_rtf(turtles: int, seconds: float) -> float:
     from llfsm.nodes import NodeOptions
     from llfsm.nodes.turtlesim import Turtlesim
     from llfsm.ros.bus import bus_of
-    from llfsm.runtime import RunContext
+    from llfsm.runtime import RunContext, SimClock
     from llfsm.runtime.context import activate
 
     ctx = RunContext(SimClock())
@@ -455,8 +693,7 @@ def section_soak(tmp: Path) -> list[Table]:
 
 
 SECTIONS: dict[str, Callable[[Path], list[Table]]] = {
-    "toggle": section_toggle,
-    "ringlets": section_ringlets,
+    "speed": section_speed,
     "startup": section_startup,
     "build": section_build,
     "bus": section_bus,
@@ -476,8 +713,32 @@ def render(tables: list[Table]) -> str:
     return "\n".join(out)
 
 
+def machine_description() -> str:
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    bytecode = (
+        "not written (PYTHONDONTWRITEBYTECODE)" if sys.dont_write_bytecode else "cached (.pyc files written and reused)"
+    )
+    return (
+        f"- machine: {os.cpu_count()} CPUs (nproc), {model}, {platform.system()} {platform.release()}\n"
+        f"- Python: {platform.python_implementation()} {platform.python_version()} ({sys.executable})\n"
+        f"- bytecode: {bytecode}; start-up is measured from a wheel that pip installed (bytecode compiled at install)\n"
+        f"- run on {time.strftime('%Y-%m-%d %H:%M %Z')}{' (quick)' if QUICK else ''}; the machine is shared with other "
+        "jobs, so compare ratios, not rates\n"
+    )
+
+
 def main() -> None:
     global QUICK
+    if sys.argv[1:2] == ["--worker"]:
+        worker()
+        return
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("sections", nargs="*", choices=[*SECTIONS, []], help="default: all")
     ap.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run")
@@ -485,17 +746,17 @@ def main() -> None:
     args = ap.parse_args()
     QUICK = args.quick
     chosen = args.sections or list(SECTIONS)
-    header = (
-        f"llfsm benchmarks: Python {platform.python_version()}, {platform.machine()}, "
-        f"{os.cpu_count()} CPUs, {time.strftime('%Y-%m-%d')}{' (quick)' if QUICK else ''}\n"
-    )
+    header = machine_description()
     print(header)
     tables: list[Table] = []
-    for name in chosen:
-        with tempfile.TemporaryDirectory(prefix=f"llfsm-bench-{name}-") as tmp:
-            new = SECTIONS[name](Path(tmp))
-        print(render(new), flush=True)
-        tables += new
+    with tempfile.TemporaryDirectory(prefix="llfsm-bench-cache-") as cache:
+        # every cache of the benchmark (compiled modules, native builds, mypy) is temporary
+        os.environ["LLFSM_CACHE_DIR"] = cache
+        for name in chosen:
+            with tempfile.TemporaryDirectory(prefix=f"llfsm-bench-{name}-") as tmp:
+                new = SECTIONS[name](Path(tmp))
+            print(render(new), flush=True)
+            tables += new
     if not args.no_write and not QUICK and set(chosen) == set(SECTIONS):
         (HERE / "results.md").write_text("# Benchmark results\n\n" + header + "\n" + render(tables))
 

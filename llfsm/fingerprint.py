@@ -28,8 +28,9 @@ def compiler_id() -> str:
     return h.hexdigest()[:16]
 
 
-def machine_fingerprint(path: Path) -> str:
-    """Hash of every regular file of a machine directory (names and bytes) and the compiler id."""
+def machine_fingerprint(path: Path, known: dict[str, bytes] | None = None) -> str:
+    """Hash of every regular file of a machine directory (names and bytes) and the compiler id.
+    `known`: bytes already read (by the checker), by file name: only the others are read."""
     if refused_link(path) is not None:  # never read; the build then reports it (LF037)
         raise OSError(f"{path} is a symlink leading out of its folder")
     h = hashlib.sha256(compiler_id().encode())
@@ -40,7 +41,7 @@ def machine_fingerprint(path: Path) -> str:
         p = path / name
         if not p.is_file():
             continue
-        data = p.read_bytes()
+        data = known[name] if known is not None and name in known else p.read_bytes()
         h.update(b"\0%s\0%d\0" % (os.fsencode(name), len(data)))
         h.update(data)
     return h.hexdigest()

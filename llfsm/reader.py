@@ -63,6 +63,8 @@ class ReadResult:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     trees: dict[str, ast.Module] = field(default_factory=dict)  # file name -> parsed code
     orphans: list[str] = field(default_factory=list)  # state code files matching no state
+    #: file name -> the bytes read (a build fingerprints them without reading them again)
+    raw: dict[str, bytes] = field(default_factory=dict)
 
 
 class _Reader:
@@ -72,6 +74,7 @@ class _Reader:
         self.real = Path(os.path.realpath(path))
         self.diags: list[Diagnostic] = []
         self.trees: dict[str, ast.Module] = {}
+        self.raw: dict[str, bytes] = {}
 
     # -- files ---------------------------------------------------------------------------
     def where(self, name: str) -> str:
@@ -104,6 +107,7 @@ class _Reader:
         except OSError as e:
             self.report("LF002", name, 1, 1, f"cannot read {name}: {e.strerror or e}")
             return None
+        self.raw[name] = data
         if len(data) > MAX_FILE_BYTES:
             self.report("LF002", name, 1, 1, f"{name} is larger than {MAX_FILE_BYTES // 1024} KiB; refused")
             return None
@@ -271,7 +275,7 @@ class _Reader:
     # -- the whole directory ---------------------------------------------------------------
     def run(self) -> ReadResult:
         name = machine_name_of(self.path)
-        result = ReadResult(self.path, None, self.diags, self.trees)
+        result = ReadResult(self.path, None, self.diags, self.trees, raw=self.raw)
         refused = refused_link(self.path)
         if refused is not None:  # the directory itself: nothing in it is read
             self.diags.append(diag("LF037", self.path, 1, 1, refused))

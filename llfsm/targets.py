@@ -8,7 +8,7 @@ so a warm start pays for hashing the machine's files and nothing more.
 
 from __future__ import annotations
 
-import hashlib
+import importlib
 import importlib.util
 import os
 import sys
@@ -17,7 +17,6 @@ from pathlib import Path
 from .cachedir import cache_dir
 from .cachedir import problem as cache_problem
 from .discover import MACHINE_SUFFIX, machine_name_of
-from .fingerprint import machine_fingerprint, module_fingerprint
 from .runtime.errors import ErrorReport, passes_through, report_for
 from .runtime.machine import Machine
 
@@ -52,6 +51,10 @@ def cache_root() -> Path:
 
 def compiled_module_for(machine_dir: Path) -> Path:
     """The cached module of a machine directory, compiled first if missing or stale."""
+    import hashlib
+
+    from .fingerprint import machine_fingerprint, module_fingerprint  # hashlib: only for folders
+
     key = hashlib.sha256(os.fsencode(machine_dir.resolve())).hexdigest()[:16]
     out = Path(cache_dir(str(cache_root()), key))  # a folder of ours that no one else can write
     module = out / f"{machine_name_of(machine_dir)}.py"
@@ -187,9 +190,42 @@ def helper_folder(target: str) -> Path | None:
     return None
 
 
+def _native_module(module_path: Path) -> str | None:
+    """The compiled module of a built module in this process's native build (LLFSM_NATIVE),
+    or None: no native build, or one that left this machine plain Python."""
+    folder = os.environ.get("LLFSM_NATIVE")
+    if not folder:
+        return None
+    import json
+
+    try:
+        manifest = json.loads(Path(folder, "manifest.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    try:
+        data = module_path.read_bytes()
+    except OSError:
+        return None
+    import hashlib
+
+    return manifest.get("modules", {}).get(hashlib.sha256(data).hexdigest()[:32])
+
+
 def load_class(module_path: Path) -> type[Machine]:
     """Import a built module and return its machine class."""
-    key = hashlib.sha256(os.fsencode(module_path.resolve())).hexdigest()[:10]
+    native = _native_module(module_path)
+    if native is not None:
+        module = importlib.import_module(native)
+        found = [
+            v
+            for v in vars(module).values()
+            if isinstance(v, type) and issubclass(v, Machine) and v is not Machine and v.__module__ == native
+        ]
+        if len(found) == 1:
+            return found[0]
+    import zlib  # not hashlib: a run that loads built modules does not need it
+
+    key = f"{zlib.crc32(os.fsencode(module_path.resolve())):08x}"  # the same name in every run
     mod_name = f"llfsm_machine_{module_path.stem}_{key}"
     spec = importlib.util.spec_from_file_location(mod_name, module_path)
     if spec is None or spec.loader is None:

@@ -67,7 +67,11 @@ class Run:
 
 
 def llfsm(*args: str | os.PathLike[str]) -> Run:
-    """Run the CLI in-process (fast); stdout and stderr kept apart."""
+    """Run the CLI in-process (fast); stdout and stderr kept apart.  With LLFSM_TEST_NATIVE=1
+    in the environment, `run` goes through a process of its own with --native instead (the
+    slow test in test_native.py runs the semantics suite that way)."""
+    if os.environ.get("LLFSM_TEST_NATIVE") and args and args[0] == "run":
+        return llfsm_process("run", "--native", *args[1:], timeout=900)
     runner = CliRunner()
     res = runner.invoke(cli, [str(a) for a in args], catch_exceptions=False)
     return Run(res.exit_code, res.stdout, res.stderr)

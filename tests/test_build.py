@@ -41,10 +41,11 @@ def test_generated_module_reads_like_hand_written_code_and_is_ruff_clean(tmp_pat
     outcome = build_machine(m, tmp_path / "out")
     text = outcome.module.read_text()  # type: ignore[union-attr]
     assert "class PingMachine(Machine):" in text
-    assert "    def ringlet_PING(self):" in text
-    assert "            # State_PING_OnEntry.py:1\n            # say it\n            self.count += 1\n" in text
-    assert "        # State_PING_Transition_0.expr:1\n        if self.count >= 3 or not self.ok:\n" in text
-    assert "            self.on_exit_PING()\n" in text
+    assert 'def _llfsm_enter_PING(self: "PingMachine") -> "int | None":' in text
+    assert 'def _llfsm_steady_PING(self: "PingMachine") -> "int | None":' in text
+    assert "    # State_PING_OnEntry.py:1\n    # say it\n    self.count += 1\n" in text
+    assert "    # State_PING_Transition_0.expr:1\n    if self.count >= 3 or not self.ok:\n" in text
+    assert "        self.on_exit_PING()\n" in text
     assert "        # Variables.py:1\n        self.count: int = 0\n        self.ok: bool = True\n" in text
     ruff = shutil.which("ruff", path=str(Path(sys.executable).parent)) or "ruff"
     proc = subprocess.run(

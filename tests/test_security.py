@@ -119,7 +119,7 @@ def test_hostile_machine_directory_names_are_refused(tmp_path: Path, dirname: st
 
 @pytest.mark.parametrize(
     "name",
-    ["__class__", "__dict__", "__slots__", "__init__", "__x", "self", "_llfsm_state", "NAME", "RINGLETS", "_arr"],
+    ["__class__", "__dict__", "__slots__", "__init__", "__x", "self", "_llfsm_state", "NAME", "ENTER", "_arr"],
 )
 def test_hostile_variable_names_are_refused(tmp_path: Path, name: str) -> None:
     m = write_machine(tmp_path, "m", OK, variables=f"{name}: int = 0\n")
@@ -152,10 +152,14 @@ def test_descriptions_never_escape_their_docstrings(description: str) -> None:
         machine, result = build_load_run(m, out)
         assert result.reason == "finished" and not marker.exists()
         tree = ast.parse((out / "m.py").read_text(encoding="utf-8"))
-        # the module holds its docstring, one import, one class and its source map: nothing else got in
-        assert [type(n).__name__ for n in tree.body] == ["Expr", "ImportFrom", "ClassDef", "Assign"]
-        assert [t.id for t in tree.body[3].targets] == ["_LLFSM_SOURCE_MAP"]  # type: ignore[attr-defined]
-        cls = tree.body[2]
+        # the module holds its docstring, one import, the ringlets, one class and its source map:
+        # nothing else got in
+        kinds = [type(n).__name__ for n in tree.body]
+        assert kinds == ["Expr", "ImportFrom", *["FunctionDef"] * 4, "ClassDef", "Assign"]
+        ringlets = [n.name for n in tree.body if isinstance(n, ast.FunctionDef)]
+        assert ringlets == ["_llfsm_enter_A", "_llfsm_steady_A", "_llfsm_enter_SUSPENDED", "_llfsm_steady_SUSPENDED"]
+        assert [t.id for t in tree.body[-1].targets] == ["_LLFSM_SOURCE_MAP"]  # type: ignore[attr-defined]
+        cls = tree.body[-2]
         assert isinstance(cls, ast.ClassDef)
         want = " ".join((description + payload(marker)).split())
         assert ast.get_docstring(cls, clean=False) == want
@@ -166,7 +170,7 @@ def test_descriptions_never_escape_their_docstrings(description: str) -> None:
         assert members == {
             *("NAME", "STATES", "INITIAL", "SUSPENDED", "ACCEPTING", "SOURCE_DIR", "__slots__"),
             *("DESCRIPTION", "TRANSITIONS"),  # what /llfsm/M/description publishes (a literal, like NAME)
-            *("ringlet_A", "ringlet_SUSPENDED", "RINGLETS", "ON_SUSPEND", "ON_RESUME"),
+            *("ENTER", "STEADY", "ON_SUSPEND", "ON_RESUME"),
         }
         assert " ".join(type(machine).DESCRIPTION.split()) == want
 

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
+from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
+
+if TYPE_CHECKING:
+    from ..compiler.build import BuildOutcome
 
 from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail, progress
 
@@ -25,12 +31,18 @@ from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail, progress
 )
 @click.option("--force", is_flag=True, help="Rewrite modules even when they are up to date.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
-def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
+@click.option("--native", is_flag=True, help="Also compile the modules and the runtime with mypyc (docs/native.md).")
+@click.option(
+    "-j", "--jobs", type=int, default=None, help="Worker processes (default: one per core from 32 stale machines on)."
+)
+def build(
+    paths: tuple[str, ...], out: str, force: bool, quiet: bool, native: bool = False, jobs: int | None = None
+) -> None:
     """Compile machines into importable modules (incremental; atomic writes).
 
     With no PATH, every machine below the current folder (e.g. a package root) is built.
     """
-    from ..compiler.build import build_machine
+    from ..compiler.build import build_all, terminated_as_exception
     from ..discover import find_machines
 
     roots = _existing(paths) if paths else [Path(".")]
@@ -43,15 +55,25 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
         if name in names:
             fail(f"{m} and {names[name]} would both be built as {name}.py")
         names[name] = m
+    if jobs is not None and jobs < 1:
+        fail("--jobs must be at least 1")
     out_dir = Path(out)
+    outcomes = build_all(machines, out_dir, force, jobs)
+    with terminated_as_exception(), contextlib.closing(outcomes):  # an interrupt stops the workers first
+        failed = _report(machines, outcomes, out_dir, quiet)
+    if native and not failed:
+        _native(sorted((out_dir / f"{name}.py").resolve() for name in names), quiet)
+    sys.exit(EXIT_ERRORS if failed else EXIT_OK)
+
+
+def _report(machines: list[Path], outcomes: Iterator[BuildOutcome | str], out_dir: Path, quiet: bool) -> int:
+    """One progress line per machine (in order), diagnostics of failures; the number failed."""
     failed = 0
-    for i, path in enumerate(machines, 1):
-        try:
-            outcome = build_machine(path, out_dir, force=force)
-        except OSError as e:  # the output cannot be written: not the machine's fault, still a failure
+    for i, (path, outcome) in enumerate(zip(machines, outcomes, strict=True), 1):
+        if isinstance(outcome, str):  # the output cannot be written: not the machine's fault, still a failure
             failed += 1
             target = out_dir / f"{path.name.removesuffix('.machine')}.py"
-            progress(f"llfsm: cannot write {target}: {e.strerror or e}\n")
+            progress(f"llfsm: cannot write {target}: {outcome}\n")
             continue
         if outcome.status == "failed":
             from ..diagnostics import format_text
@@ -61,4 +83,21 @@ def build(paths: tuple[str, ...], out: str, force: bool, quiet: bool) -> None:
         if not quiet:
             where = f" -> {outcome.module}" if outcome.module else ""
             progress(f"[{i}/{len(machines)}] {outcome.name}: {outcome.status}{where}\n")
-    sys.exit(EXIT_ERRORS if failed else EXIT_OK)
+    return failed
+
+
+def _native(modules: list[Path], quiet: bool) -> None:
+    """One mypyc compile for every module of the build (cached in the llfsm cache)."""
+    from ..compiler.native import NativeUnavailable, native_build
+    from ..targets import cache_root
+
+    try:
+        nb = native_build(modules, cache_root())
+    except NativeUnavailable as e:
+        fail(f"--native: {e}")
+    for w in nb.warnings:
+        progress(w + "\n")
+    if not quiet:
+        done = sum(1 for v in nb.modules.values() if v)
+        how = "found in the cache" if nb.cached else "compiled"
+        progress(f"native: {done} of {len(modules)} machines {how} ({nb.folder})\n")

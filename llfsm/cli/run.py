@@ -93,6 +93,7 @@ if TYPE_CHECKING:
 @click.option("--play", "play", metavar="DIR", help="Publish the messages of the bag DIR at their recorded times.")
 @click.option("--play-topic", "play_topics", multiple=True, metavar="TOPIC", help="Play only TOPIC (repeatable).")
 @click.option("--play-rate", type=float, default=1.0, show_default=True, help="--play: time scale (2 = twice as fast).")
+@click.option("--native", is_flag=True, help="Run machines compiled with mypyc (see docs/native.md).")
 def run(
     targets: tuple[str, ...],
     verbose: bool,
@@ -119,6 +120,7 @@ def run(
     play: str | None = None,
     play_topics: tuple[str, ...] = (),
     play_rate: float = 1.0,
+    native: bool = False,
 ) -> None:
     """Run an arrangement of machines, round-robin, in command-line order.
 
@@ -139,6 +141,8 @@ def run(
             "--clock sim cannot be used with --transport dds: DDS peers live on the wall clock (their messages "
             "come in real time), so simulated time would neither keep pace with them nor be reproducible"
         )
+    if native and not os.environ.get("LLFSM_NATIVE"):
+        _run_native(targets)  # compiles (or finds) the native build, then runs in a fresh process
     from ..msgs import add_search_path
 
     for t in targets:  # user interfaces (PKG/msg/*.msg) beside or above the machines import too
@@ -274,6 +278,36 @@ def _attach_bags(bags: Any, bus: Bus) -> None:
     except BagError as e:
         bags.close()
         fail(f"--play {e}")
+
+
+def _run_native(targets: tuple[str, ...]) -> None:
+    """`--native`: build the targets' modules natively (one compile, cached), then start the
+    same command again with LLFSM_NATIVE set, so that the compiled runtime is the one imported.
+    Returns only when nothing could be compiled (the run then goes on as plain Python)."""
+    from ..compiler.native import ENV, NativeUnavailable, native_build
+    from ..targets import InvalidMachine, MachineLoadError, TargetError, cache_root, resolve
+
+    main = sys.modules.get("__main__")
+    spec = getattr(main, "__spec__", None)
+    if getattr(spec, "name", None) != "llfsm.__main__" and Path(getattr(main, "__file__", "") or "").name != "llfsm":
+        fail("--native starts the run in a fresh process: use it from the llfsm command")
+    modules = []
+    for t in targets:
+        try:
+            modules.append(resolve(t).resolve())
+        except (TargetError, InvalidMachine, MachineLoadError):
+            return  # the ordinary path reports it
+    try:
+        build = native_build(modules, cache_root())
+    except NativeUnavailable as e:
+        fail(f"--native: {e}")
+    for w in build.warnings:
+        click.echo(w, err=True)
+    if not any(build.modules.values()):
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os.execve(sys.executable, [sys.executable, *sys.orig_argv[1:]], {**os.environ, ENV: str(build.folder)})
 
 
 def _start_bus(

@@ -7,13 +7,13 @@ import contextlib
 import os
 import secrets
 import signal
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..discover import machine_name_of
-from ..fingerprint import machine_fingerprint, module_fingerprint
+from ..fingerprint import compiler_id, machine_fingerprint, module_fingerprint
 
 if TYPE_CHECKING:
     from ..diagnostics import Diagnostic
@@ -28,6 +28,7 @@ class BuildOutcome:
     status: str  # compiled | unchanged | failed
     diagnostics: list[Diagnostic] = field(default_factory=list)
     name: str = ""
+    fingerprint: str = ""  # of the machine's files, as written into the module
 
 
 #: Signals held back while a module is written: Ctrl-C, `kill` and a closed terminal.
@@ -66,9 +67,7 @@ def write_atomic_bytes(target: Path, data: bytes) -> None:
             fd = os.open(tmp, flags, 0o666)  # the umask applies, as for any file the user writes
             with os.fdopen(fd, "wb") as f:
                 f.write(data)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, target)
+            os.replace(tmp, target)  # atomic for every reader; no fsync: a build can be redone
         except BaseException:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
@@ -79,16 +78,18 @@ def write_atomic(target: Path, text: str) -> None:
     write_atomic_bytes(target, text.encode("utf-8"))
 
 
-def build_machine(path: Path, out_dir: Path, force: bool = False) -> BuildOutcome:
-    """Compile one machine into out_dir/NAME.py unless the module there is already up to date."""
+def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None = None) -> BuildOutcome:
+    """Compile one machine into out_dir/NAME.py unless the module there is already up to date
+    (`fp`: the machine's fingerprint, when the caller has it already)."""
     name = machine_name_of(path)
     target = out_dir / f"{name}.py"
-    try:
-        fp = machine_fingerprint(path)
-    except OSError:
-        fp = ""
+    if fp is None and not force and target.exists():
+        try:
+            fp = machine_fingerprint(path)
+        except OSError:
+            fp = ""
     if not force and fp and module_fingerprint(target) == fp:
-        return BuildOutcome(path, target, "unchanged", name=name)
+        return BuildOutcome(path, target, "unchanged", name=name, fingerprint=fp)
     # only now the checker and the code generator (pydantic, yaml, jinja2): warm builds skip them
     from ..check import check_machine
     from .generate import CompileError, compile_machine
@@ -96,9 +97,191 @@ def build_machine(path: Path, out_dir: Path, force: bool = False) -> BuildOutcom
     checked = check_machine(path)
     if not checked.ok:
         return BuildOutcome(path, None, "failed", checked.diagnostics, name=name)
+    if not fp:  # no module to compare with: hash the bytes the checker has read
+        try:
+            fp = machine_fingerprint(path, checked.read.raw)
+        except OSError:
+            fp = ""
     try:
         source = compile_machine(checked, fp)
     except CompileError as e:
         return BuildOutcome(path, None, "failed", checked.diagnostics + e.diagnostics, name=name)
     write_atomic(target, source)
-    return BuildOutcome(path, target, "compiled", checked.diagnostics, name=name)
+    return BuildOutcome(path, target, "compiled", checked.diagnostics, name=name, fingerprint=fp)
+
+
+#: From this many machines to compile on, `build_all` spreads the work over worker processes.
+PARALLEL_FROM = 32
+
+
+def _build_or_error(path: Path, out_dir: Path, force: bool, fp: str | None = None) -> BuildOutcome | str:
+    """build_machine in a worker: an output that cannot be written comes back as its message."""
+    try:
+        return build_machine(path, out_dir, force, fp)
+    except OSError as e:
+        return str(e.strerror or e)
+
+
+def build_all(
+    paths: Sequence[Path], out_dir: Path, force: bool = False, jobs: int | None = None
+) -> Iterator[BuildOutcome | str]:
+    """build_machine for each path, in order (a str for an output that cannot be written).
+
+    Machines whose module is up to date are found in this process (a fingerprint each); the
+    rest are compiled by worker processes, one per core, when there are many of them.  A
+    machine whose files have the same names, sizes, modification times and inodes as at its last
+    build (recorded in the llfsm cache) is not even read again."""
+    stats = _StatCache(out_dir)
+    stale: list[Path] = []
+    fps: list[str | None] = []
+    sigs: dict[Path, str] = {}
+    for path in paths:
+        target = out_dir / f"{machine_name_of(path)}.py"
+        sig = stats.signature(path)
+        if not force and sig and stats.known.get(str(path)) == [sig, module_fingerprint(target)]:
+            stats.keep(path, sig)
+            continue
+        old = module_fingerprint(target)
+        fp: str | None = None
+        if old is not None and not force:  # a module to compare with: hash the machine's files
+            try:
+                fp = machine_fingerprint(path)
+            except OSError:
+                fp = ""
+            if fp and old == fp:
+                stats.record(path, sig, fp)
+                continue
+        stale.append(path)
+        fps.append(fp)
+        sigs[path] = sig  # taken before anything was read: an edit during the build is seen next time
+    if jobs is None:
+        jobs = (os.cpu_count() or 1) if len(stale) >= PARALLEL_FROM else 1
+    results: Iterator[BuildOutcome | str]
+    pool = None
+    if jobs > 1 and len(stale) > 1:
+        import multiprocessing
+
+        from ..check import check_machine  # noqa: F401 (imported once, before the workers fork)
+        from .generate import compile_machine  # noqa: F401
+
+        ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+        import gc
+
+        gc.freeze()  # the workers' collector leaves the inherited objects alone: fewer pages copied
+        with _signals_deferred():  # an interrupt never lands between two forks: every worker is known
+            pool = ctx.Pool(jobs, initializer=_worker_init)
+        chunk = max(1, len(stale) // (jobs * 8))
+        work = [(p, out_dir, force, fp) for p, fp in zip(stale, fps, strict=True)]
+        results = pool.imap(_build_star, work, chunk)
+    else:
+        results = (_build_or_error(p, out_dir, force, fp) for p, fp in zip(stale, fps, strict=True))
+    try:
+        todo = set(stale)
+        for path in paths:
+            if path in todo:
+                outcome = next(results)
+                if isinstance(outcome, BuildOutcome) and outcome.status != "failed":
+                    stats.record(path, sigs[path], outcome.fingerprint)
+                yield outcome
+            else:
+                yield BuildOutcome(
+                    path, out_dir / f"{machine_name_of(path)}.py", "unchanged", name=machine_name_of(path)
+                )
+    except BaseException:
+        if pool is not None:  # Ctrl-C, SIGTERM: stop the workers (each finishes the module it writes)
+            pool.terminate()
+            pool = None
+        raise
+    finally:
+        if pool is not None:
+            pool.close()
+            pool.join()
+    stats.save()
+
+
+def _build_star(args: tuple[Path, Path, bool, str | None]) -> BuildOutcome | str:
+    return _build_or_error(*args)
+
+
+def _worker_init() -> None:
+    """Workers leave Ctrl-C to the parent (no traceback from each of them); the parent stops
+    them with SIGTERM, which write_atomic_bytes holds back until a module is whole."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if hasattr(signal, "pthread_sigmask"):  # forked while the parent held signals back
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _DEFERRED)
+
+
+class _Terminated(BaseException):
+    """SIGTERM while workers build: unwinds like Ctrl-C, so that the workers are stopped."""
+
+
+@contextlib.contextmanager
+def terminated_as_exception() -> Iterator[None]:
+    """While a parallel build runs, SIGTERM raises _Terminated instead of killing this process
+    outright (which would leave its workers running); afterwards the process ends by SIGTERM."""
+
+    def handler(_signum: int, _frame: object) -> None:
+        raise _Terminated
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    except _Terminated:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        raise
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+class _StatCache:
+    """What each machine's files looked like (names, sizes, mtimes, inodes) when its module was
+    last found or made up to date, with that module's fingerprint: a warm build of a thousand
+    machines then stats their files instead of reading them.  Kept in the llfsm cache, per
+    output folder; any difference (a touched file, another output) falls back to the contents."""
+
+    def __init__(self, out_dir: Path) -> None:
+        import hashlib
+        import json
+
+        from ..targets import cache_root
+
+        key = hashlib.sha256(os.fsencode(os.path.abspath(out_dir))).hexdigest()[:16]
+        self.file = cache_root() / "buildstat" / f"{key}.json"
+        try:
+            self.known: dict[str, list[str | None]] = json.loads(self.file.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            self.known = {}
+        self.now: dict[str, list[str | None]] = {}
+
+    @staticmethod
+    def signature(path: Path) -> str:
+        import hashlib
+
+        h = hashlib.sha256(compiler_id().encode())
+        try:
+            with os.scandir(path) as it:
+                for e in sorted(it, key=lambda e: e.name):
+                    if e.name.startswith(".") or not e.is_file():
+                        continue
+                    st = e.stat()
+                    h.update(f"{e.name}\0{st.st_size}\0{st.st_mtime_ns}\0{st.st_ino}\0".encode())
+        except OSError:
+            return ""
+        return h.hexdigest()
+
+    def keep(self, path: Path, sig: str) -> None:
+        self.now[str(path)] = self.known[str(path)]
+
+    def record(self, path: Path, sig: str, fp: str) -> None:
+        if sig and fp:
+            self.now[str(path)] = [sig, fp]
+
+    def save(self) -> None:
+        import json
+
+        if self.now == self.known:
+            return
+        with contextlib.suppress(OSError):
+            write_atomic(self.file, json.dumps(self.now))

@@ -31,6 +31,8 @@ from .templating import environment
 def _string_continuation_lines(text: str) -> set[int]:
     """Lines (1-based) that start inside a multi-line string: indenting them would change it."""
     out: set[int] = set()
+    if '"""' not in text and "'''" not in text and "\\\n" not in text and "\\\r" not in text:
+        return out  # only a triple-quoted string or a backslash-continued one spans lines
     try:
         for tok in tokenize.generate_tokens(io.StringIO(text).readline):
             if (tok.type == tokenize.STRING and tok.end[0] > tok.start[0]) or (
@@ -84,6 +86,30 @@ def class_name(machine: str) -> str:
     return (camel or "M") + "Machine"
 
 
+AFTER = frozenset({"after", "after_ms", "after_us"})
+
+
+def _after_use(tree: ast.AST) -> tuple[bool, bool]:
+    """(uses an after* macro, uses one where it may run in another state): a use that is not a
+    direct call (`f = after_ms`), or one inside a function or lambda (a callback may run later,
+    in any state).  Only states that use after* need their entry time recorded."""
+    used = escaped = False
+    calls = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            calls.add(id(node.func))
+        elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) and any(
+            isinstance(n, ast.Name) and n.id in AFTER for n in ast.walk(node)
+        ):
+            escaped = True
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and node.id in AFTER:
+            used = True
+            if id(node) not in calls:
+                escaped = True
+    return used, escaped
+
+
 # -- the view the template renders -------------------------------------------------------------
 
 
@@ -114,7 +140,7 @@ class GuardView:
         """Lines after the first, indented under `if (`: kept line for line so run-time errors map
         to the right line, and indented knowing the whole guard, so a string that spans lines
         keeps its value."""
-        return indent_code(self.text, 12).split("\n", 1)[1] if "\n" in self.text else ""
+        return indent_code(self.text, 8).split("\n", 1)[1] if "\n" in self.text else ""
 
 
 @dataclass
@@ -128,19 +154,24 @@ class StateView:
     exit: Block | None
     guards: list[GuardView] = field(default_factory=list)
     hooks: list[tuple[str, Block]] = field(default_factory=list)
+    #: OnSuspend / OnResume: functions beside the ringlets, which the ON_SUSPEND / ON_RESUME
+    #: tables name (a class body cannot name its own methods once mypyc compiles it).
+    command_hooks: list[tuple[str, Block]] = field(default_factory=list)
     #: OnEntry / Internal are inlined into the ringlet (one call per ringlet) unless one binds a
     #: local that another part of the ringlet also uses; then it gets a method of its own, so
     #: that its locals stay its own, as the locals of a clfsm section do.
     entry_method: bool = False
     internal_method: bool = False
+    #: The entry ringlet records the entry time: only states whose code uses after* need it.
+    stamp: bool = False
 
     @property
     def has_on_suspend(self) -> bool:
-        return any(h == "on_suspend" for h, _ in self.hooks)
+        return any(h == "on_suspend" for h, _ in self.command_hooks)
 
     @property
     def has_on_resume(self) -> bool:
-        return any(h == "on_resume" for h, _ in self.hooks)
+        return any(h == "on_resume" for h, _ in self.command_hooks)
 
 
 def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Edit] | None = None) -> Block | None:
@@ -161,7 +192,9 @@ def _guard_view(
 ) -> GuardView:
     block = _block(code, tree, mapping)
     assert block is not None  # the checker guarantees one expression
-    has_comment = any(t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline))
+    has_comment = "#" in block.text and any(
+        t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline)
+    )
     multiline = "\n" in block.text or has_comment
     return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend)
 
@@ -195,6 +228,27 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
     index = {n: i for i, n in enumerate(names)}
     susp = index[m.suspended]
     base = name_map(mvars, None, [], MACROS)  # once: per state it would cost states x variables
+    stamp_all = False
+    after_states: set[str] = set()
+    for s in m.states:
+        codes = [*s.sections.values(), *(t.guard for t in s.transitions if t.guard is not None)]
+        for code in codes:
+            tree = trees.get(code.file)
+            if tree is not None and "after" in code.text:  # the text first: most code never says it
+                used, escaped = _after_use(tree)
+                if used:
+                    after_states.add(s.name)
+                stamp_all = stamp_all or escaped
+    for code in (m.includes, m.variables_file, *(s.variables_file for s in m.states)):
+        tree = trees.get(code.file) if code is not None else None
+        if tree is not None and code is not None and "after" in code.text and any(_after_use(tree)):
+            stamp_all = True
+    names_of: dict[int, set[str]] = {}  # used_names per tree: each guard is asked about twice
+
+    def used(tree: ast.Module) -> set[str]:
+        if id(tree) not in names_of:
+            names_of[id(tree)] = used_names(tree)
+        return names_of[id(tree)]
 
     def view(s: State) -> StateView:
         mapping = state_map(base, s.name, [v.name for v in s.variables])
@@ -211,6 +265,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             entry=sec("OnEntry"),
             internal=sec("Internal"),
             exit=sec("OnExit"),
+            stamp=stamp_all or s.name in after_states,
         )
         if not sv.is_suspend:
             targets = ", ".join(t.target for t in s.transitions) or "none: accepting"
@@ -227,8 +282,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         for part in ("OnEntry", "Internal"):
             if part in parts and not sv.is_suspend:
                 mine = {n for n in own_locals(parts[part]) if n not in mapping}
-                others = set().union(*(used_names(tr) for k, tr in parts.items() if k != part))
-                if mine & others:
+                if mine and mine & set().union(*(used(tr) for k, tr in parts.items() if k != part)):
                     if part == "OnEntry":
                         sv.entry_method = sv.entry is not None
                     else:
@@ -242,7 +296,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         for hook, secname in (("on_suspend", "OnSuspend"), ("on_resume", "OnResume")):
             b = sec(secname)
             if b is not None:
-                sv.hooks.append((hook, b))
+                sv.command_hooks.append((hook, b))
         return sv
 
     includes = None
@@ -289,9 +343,8 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             "slots": tuple(
                 [v.name for v in m.variables] + [attribute_of(s.name, v.name) for s in m.states for v in s.variables]
             ),
-            "ringlets": [f"ringlet_{v.name}" for v in views],
-            "on_suspend": [f"on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
-            "on_resume": [f"on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
+            "on_suspend": [f"_llfsm_on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
+            "on_resume": [f"_llfsm_on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
         },
     }
     source = _with_source_map(_env().get_template("machine.py.j2").render(ctx))

@@ -32,6 +32,10 @@ from .names import Remap
 from .transports.base import RemoteClient, Transport
 from .transports.inproc import InProcess
 
+#: With a remote transport, how often (run time) the executor looks for data from other
+#: processes between back-to-back rounds: the look is a cheap status check of one wait set.
+POLL_NS = 100_000
+
 if TYPE_CHECKING:
     from ..msgs._message import Message
     from .node import Node, Subscription, Timer
@@ -182,6 +186,8 @@ class Bus:
         self._poll = self.transport.poll if self.transport.remote else None
         self.transport.start(self)
         ctx.between_rounds.append(self.spin_some)
+        if self._poll is not None:
+            ctx.wake = 0  # look at the transport after the first round, then every POLL_NS
 
     # -- lifecycle ---------------------------------------------------------------------------
     def init(self) -> None:
@@ -197,8 +203,9 @@ class Bus:
     def call_soon_threadsafe(self, fn: Callable[[], object]) -> None:
         """Run fn() on the scheduler's thread, between rounds (or inside a spin call), in the
         order of the calls.  The one door for other threads (the web view's server) into the
-        bus: deque.append is atomic, and the executor drains `ready` anyway."""
-        self.ready.append(_Call(fn))
+        bus: deque.append is atomic, and setting the wake time to 0 (one store) makes the
+        scheduler spin the executor after its current round."""
+        self.queue(_Call(fn))
 
     def ok(self) -> bool:
         return self.initialised and not self.shut and not self.ctx.interrupted
@@ -219,6 +226,12 @@ class Bus:
     # -- timers ------------------------------------------------------------------------------
     def add_timer(self, timer: Timer, due: int) -> None:
         heapq.heappush(self.timers, (due, next(self._seq), timer))
+        self.ctx.wake_at(due)  # attention: the scheduler spins the executor when it falls due
+
+    def queue(self, work: Any) -> None:
+        """Queue work (a subscription with messages, a service request) for the executor."""
+        self.ready.append(work)
+        self.ctx.wake = 0  # attention: the scheduler spins the executor after this round
 
     def watch(self, name: str, fn: Callable[[Topic], None]) -> None:
         """Call fn(topic) once the topic exists (now, if it already does), in this process or,
@@ -260,6 +273,7 @@ class Bus:
                 nxt = now + timer.period_ns - (now - due) % timer.period_ns
             timer._due = nxt
             heapq.heappush(timers, (nxt, next(self._seq), timer))
+            self.ctx.wake_at(nxt)
             fired = True
             timer._call()
         return fired
@@ -275,6 +289,19 @@ class Bus:
         ready = self.ready
         for _ in range(len(ready)):
             ready.popleft()._run()
+        self._rearm()
+
+    def _rearm(self) -> None:
+        """Tell the scheduler when the executor has work again (RunContext.wake).  With a
+        remote transport, data from other processes arrives without telling anyone: look again
+        after POLL_NS of run time (the poll between rounds is a cheap status check)."""
+        if self.ready:
+            self.ctx.wake = 0
+            return
+        if self.timers:
+            self.ctx.wake_at(self.timers[0][0])
+        if self._poll is not None:
+            self.ctx.wake_at(self.clock.now + POLL_NS)
 
     def spin_once(self, timeout_ns: int) -> bool:
         """One piece of work: a due timer, or the oldest queued item; else wait up to timeout_ns
@@ -354,7 +381,7 @@ class Bus:
     # -- services ----------------------------------------------------------------------------
     def call(self, service: str, request: Message) -> Future:
         future = Future(service)
-        self.ready.append(_Request(self, service, request, future))
+        self.queue(_Request(self, service, request, future))
         return future
 
     # -- logging -------------------------------------------------------------------------------

@@ -183,7 +183,7 @@ class Subscription:
         self._queue.append(msg)  # a full queue drops its oldest message
         if not self._scheduled:
             self._scheduled = True
-            self._bus.ready.append(self)
+            self._bus.queue(self)
 
     def _run(self) -> None:
         """Executor work: hand the messages queued so far to the callback, oldest first.  What

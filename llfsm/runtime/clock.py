@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import Any
 
 
 def parse_duration(text: str) -> int:
@@ -49,6 +50,8 @@ class SimClock(Clock):
             raise ValueError("the sim clock needs a period > 0")
         self.now = 0
         self.period = period_ns
+        #: The run context using this clock (RunContext sets it): told when the time jumps.
+        self.context: Any = None
 
     def advance(self, fired: bool) -> None:
         self.now += self.period
@@ -56,6 +59,8 @@ class SimClock(Clock):
     def sleep_until(self, t: int) -> None:
         if t > self.now:
             self.now = t
+            if self.context is not None:
+                self.context.wake = 0  # the scheduler keeps the time in a local during rounds
 
 
 class WallClock(Clock):

@@ -10,16 +10,30 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from .clock import Clock, WallClock
+from .clock import Clock, SimClock, WallClock
+
+#: A run time no run reaches: "never" for wake times and durations.
+FOREVER = 1 << 62
 
 
 class RunContext:
     def __init__(self, clock: Clock | None = None) -> None:
         self.clock: Clock = clock if clock is not None else WallClock()
+        if isinstance(self.clock, SimClock):
+            self.clock.context = self  # a jump of the sim clock (a spin call) raises attention
         #: Set on the first SIGINT/SIGTERM: `ros.ok()` is false from then on.
         self.interrupted = False
-        #: Called after every round, in order: the bus executor dispatches callbacks and timers.
+        #: Called between rounds, in order, once the run time reaches `wake`: the bus executor
+        #: dispatches callbacks and timers.
         self.between_rounds: list[Callable[[], None]] = []
+        #: The run time from which the scheduler must call `between_rounds` after a round; until
+        #: then a round costs nothing beyond the machines' own ringlets.  Whoever queues work
+        #: raises the scheduler's attention by lowering it: `wake = 0` for work to do after this
+        #: round (a message for a callback, a service request), `wake_at(t)` for a timer.  The
+        #: scheduler sets it to FOREVER just before it calls the hooks, and the hooks arm it
+        #: again for whatever they still hold.  A hook that must run after every round sets
+        #: `wake = 0` each time it runs.  Setting it is atomic, so another thread may do it.
+        self.wake: int = FOREVER
         #: Called once when the run ends (nodes write their pictures, close windows).
         self.at_end: list[Callable[[], None]] = []
         #: Free slots for the bus and nodes (`bus`, `remaps`, ...).
@@ -28,6 +42,11 @@ class RunContext:
         #: Run time at which the run will end (--duration), if any: blocking waits inside
         #: machine code (spin calls) never wait past it.
         self.deadline: int | None = None
+
+    def wake_at(self, t: int) -> None:
+        """Make the scheduler call the between-round hooks once the run time reaches t."""
+        if t < self.wake:
+            self.wake = t
 
 
 _current: RunContext | None = None

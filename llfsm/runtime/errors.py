@@ -20,6 +20,9 @@ from types import TracebackType
 
 from .machine import Machine
 
+# linecache (and the tokenize module it imports) and json are imported when an error is reported:
+# a run that raises nothing does not pay for them at start-up.
+
 POINTER_RE = re.compile(
     r"^\s*# (?P<file>Includes\.py|Variables\.py|State_\w+?_(?:OnEntry|OnExit|Internal|OnSuspend|"
     r"OnResume|Variables)\.py|State_\w+?_Transition_\d+\.expr):(?P<line>\d+)\s*$"
@@ -118,12 +121,15 @@ class ErrorReport:
 
 
 def is_generated(filename: str) -> bool:
+
     return linecache.getline(filename, 1).startswith(GENERATED_MARK)
 
 
 def source_dir_of(filename: str) -> str | None:
     """The machine folder named in a generated module's header (written JSON-escaped, so that
     any folder name fits on one comment line)."""
+    import linecache
+
     for i in range(1, 6):
         m = SOURCE_RE.match(linecache.getline(filename, i).rstrip("\n"))
         if m:
@@ -142,6 +148,7 @@ def map_line(filename: str, lineno: int, source_map: SourceMap | None = None) ->
 
     The module's own `_LLFSM_SOURCE_MAP` (pointer line, file, first line) is the truth; a module
     that failed while being imported has none yet, and then the pointer comments are read."""
+
     if source_map:
         i = bisect.bisect_left(source_map, (lineno,)) - 1
         if i < 0:
@@ -199,6 +206,7 @@ def _reentrant_call_hint(tb: TracebackType | None) -> str:
 
 def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorReport | None:
     """The report for an exception raised in machine code, or None if no frame is the user's."""
+
     tb: TracebackType | None = exc.__traceback__
     found = None
     while tb is not None:

@@ -1,16 +1,26 @@
 """The base class of every compiled machine, and the clfsm macros machine code calls.
 
-A compiled machine is a subclass with one method per state (its ringlet).  The scheduler calls
-`RINGLETS[state](machine)`; the method runs OnEntry if the state was just entered, evaluates
-the guards in order, and either fires one (running OnExit and moving to the target) or runs
-Internal.  It returns the index of the transition that fired, None if none did, or FINISHED in
-an accepting state.  Everything here is kept small because it sits on the hot path.
+A compiled machine is a subclass plus two functions per state (its ringlets): ENTER[state]
+runs OnEntry and then what STEADY[state] runs, the guards in order, firing the first true one
+(OnExit, then the target becomes current and its ENTER ringlet is next) or else Internal.  The
+scheduler calls `machine._run(machine)`: `_run` is the function for the machine's next ringlet,
+so a state that was not just entered never tests an "entered" flag, and a round is a list of
+plain calls.  A ringlet returns the index of the transition that fired, or None; an accepting
+state finishes the machine itself.  Everything here is small because it sits on the hot path.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
+
+try:  # mypyc reads this decorator when it compiles the runtime (`--native`, the `native` extra)
+    from mypy_extensions import mypyc_attr
+except ImportError:  # plain Python has nothing to do with it
+
+    def mypyc_attr(*_args: object, **_kwargs: object) -> Callable[[type], type]:  # type: ignore[misc]
+        return lambda cls: cls
+
 
 if TYPE_CHECKING:
     from .scheduler import Arrangement
@@ -21,14 +31,33 @@ FINISHED = -1
 # Control commands a machine can have pending (SPEC section 2, step 1).
 SUSPEND, RESUME, RESTART = "suspend", "resume", "restart"
 
-Ringlet = Callable[["Machine"], int | None]
-Hook = Callable[["Machine"], None] | None
+#: A ringlet takes the machine (typed Any: each generated class types its own ringlets).
+Ringlet = Callable[[Any], "int | None"]
+Hook = Callable[[Any], None] | None
+
+
+#: The instance attributes of the base class (its __slots__; reserved names for user variables).
+_SLOTS = (
+    "_arr",
+    "_clock",
+    "_finished",
+    "_held",
+    "_id",
+    "_next",
+    "_pending",
+    "_resume_to",
+    "_run",
+    "_state",
+    "_suspended",
+    "_t0",
+)
 
 
 class UnknownMachineError(LookupError):
     """A macro named a machine that is not part of the arrangement."""
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)  # a machine mypyc could not compile stays plain
 class Machine:
     """Base of generated machines.  Class attributes are filled in by the generated subclass."""
 
@@ -37,7 +66,10 @@ class Machine:
     INITIAL: ClassVar[int] = 0
     SUSPENDED: ClassVar[int] = 0
     ACCEPTING: ClassVar[tuple[int, ...]] = ()
-    RINGLETS: ClassVar[tuple[Ringlet, ...]] = ()
+    #: The ringlet that enters each state (OnEntry, then the steady part) ...
+    ENTER: ClassVar[tuple[Ringlet, ...]] = ()
+    #: ... and the ringlet of a state already entered (guards, OnExit, Internal).
+    STEADY: ClassVar[tuple[Ringlet, ...]] = ()
     ON_SUSPEND: ClassVar[tuple[Hook, ...]] = ()
     ON_RESUME: ClassVar[tuple[Hook, ...]] = ()
     #: The machine directory the class was compiled from.
@@ -49,37 +81,39 @@ class Machine:
 
     # Slots make attribute access on the hot path as cheap as CPython allows; generated classes
     # add their variables to them.
-    __slots__ = (
-        "_arr",
-        "_clock",
-        "_entered",
-        "_finished",
-        "_held",
-        "_id",
-        "_pending",
-        "_resume_to",
-        "_ringlets",
-        "_state",
-        "_suspended",
-        "_t0",
-    )
+    __slots__ = _SLOTS
 
     def __init__(self, arrangement: Arrangement, machine_id: int = 0) -> None:
         self._arr = arrangement
         self._clock = arrangement.clock
         self._id = machine_id
-        self._state = self.INITIAL
-        self._entered = True  # the initial state counts as entered
-        self._t0 = 0  # run-clock time (ns) the current state was entered
+        self._state: int = self.INITIAL
+        self._t0: int = 0  # run-clock time (ns) the current state was entered (states using after*)
         self._pending: str | None = None
-        self._suspended = False
+        self._suspended: bool = False
         self._resume_to: int | None = None
-        self._finished = False
-        #: What the scheduler calls, `_ringlets[_state](self)`: the state ringlets, or, while a
-        #: command is pending or the machine is suspended, `_held`, whose every entry is the
-        #: scheduler's gate.  So the round loop needs no test at all for the common case.
-        self._ringlets = self.RINGLETS
-        self._held = (arrangement._gate,) * len(self.STATES)
+        self._finished: bool = False
+        #: What the scheduler calls, `_run(self)`: the ringlet of the next turn (the initial
+        #: state counts as entered), or, while a command is pending or the machine is suspended,
+        #: `_held`, the scheduler's gate, with the real ringlet kept in `_next`.  So the round loop
+        #: needs no test at all for the common case.
+        self._held: Ringlet = arrangement._gate_fn
+        self._run: Ringlet = self.ENTER[self.INITIAL]
+        self._next: Ringlet = self._run
+
+    @property
+    def _entered(self) -> bool:
+        """The current state was entered since the last ringlet: its next ringlet runs OnEntry."""
+        run = self._next if self._run is self._held else self._run
+        return run is self.ENTER[self._state]
+
+    @_entered.setter
+    def _entered(self, value: bool) -> None:
+        fn = (self.ENTER if value else self.STEADY)[self._state]
+        if self._run is self._held:
+            self._next = fn
+        else:
+            self._run = fn
 
     def _initialise(self) -> None:
         """Set the machine and state variables (generated classes override this).  Called once
@@ -139,7 +173,7 @@ class Machine:
 
 #: Names generated code and the runtime use on a machine instance: user variables must not
 #: take them (checked by `llfsm check`, rule LF013).
-RESERVED = frozenset({"self"} | {n for n in vars(Machine) if not n.startswith("__")} | set(Machine.__slots__))
+RESERVED = frozenset({"self"} | {n for n in vars(Machine) if not n.startswith("__")} | set(_SLOTS))
 
 #: The macros: bare names in machine code that the compiler turns into `self.<name>`.
 MACROS = frozenset(

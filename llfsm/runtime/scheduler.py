@@ -1,8 +1,11 @@
 """The ringlet scheduler: one thread runs an arrangement of machines round-robin (SPEC §2).
 
-Two loops do the same thing: `_round` is the fast path (no hooks beyond what the semantics
-need), `_traced_round` also reports entries and transitions for `-v` and `--trace`.  Keeping
-them apart means an untraced run pays nothing for tracing.
+The untraced loops (`_sim_rounds`, `_wall_rounds`, `_rounds`) are the fast path: a round is a
+plain call per live machine, `m._run(m)`, and nothing else runs between rounds unless something
+asked for it: `_attention` (a command, an unload, a signal) or the run context's `wake` time
+(the bus: a message queued for a callback, a timer falling due; see RunContext).
+`_traced_round` also reports entries and transitions for `-v` and `--trace`.  Keeping them
+apart means an untraced run pays nothing for tracing.
 """
 
 from __future__ import annotations
@@ -13,14 +16,13 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from types import FrameType
+from typing import Final
 
-from .clock import Clock, SimClock
-from .context import RunContext, activate
+from .clock import Clock, SimClock, WallClock
+from .context import FOREVER, RunContext, activate
 from .errors import ErrorReport, RunStopped, is_generated, passes_through, report_for, signal_name
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
-
-FOREVER = 1 << 62
 
 #: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
@@ -31,6 +33,12 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: After a first interrupt, machine code that still holds the run this long (seconds of real
 #: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
 STUCK_SLACK_S = 0.5
+
+
+#: Back-to-back firing rounds read the wall clock every BATCH rounds at most, while BATCH
+#: rounds take less than FAST ns (see Arrangement._wall_rounds).
+FAST: Final = 20_000
+BATCH: Final = 16
 
 
 @dataclass
@@ -67,7 +75,7 @@ class Arrangement:
         self.tracer = tracer
         self.machines: list[Machine] = []
         self.by_name: dict[str, Machine] = {}
-        self._attention = True  # something to look at before the next round
+        self._attn = True  # something to look at before the next round (see _attention)
         self._interrupts = 0
         self._signal: int | None = None
         self._grace_end: int | None = None
@@ -75,6 +83,8 @@ class Arrangement:
         self._grace_ns = 1_000_000_000
         self.running = False  # inside run(): a stop may be raised into the running code
         self.rounds = 0
+        #: The gate every held machine's `_run` points at (one bound method, compared with `is`).
+        self._gate_fn: Callable[[Machine], int | None] = self._gate
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
         #: SPEC §2 ends a run whose machines are all suspended: nothing could resume them.  A run
@@ -102,10 +112,20 @@ class Arrangement:
             activate(prev)
         for n in suspended:
             m = self.by_name[n]
-            m._state, m._suspended, m._entered = m.SUSPENDED, True, True
-            m._resume_to = None
-            m._ringlets = m._held
+            m._state, m._suspended, m._resume_to = m.SUSPENDED, True, None
+            m._next, m._run = m.ENTER[m.SUSPENDED], m._held
         self._live: list[Machine] = list(self.machines)
+
+    @property
+    def _attention(self) -> bool:
+        """Something to look at before the next round: a command, an unload, an interrupt."""
+        return self._attn
+
+    @_attention.setter
+    def _attention(self, value: bool) -> None:
+        self._attn = value
+        if value:
+            self.ctx.wake = 0  # the round loops watch only the context's wake time
 
     # -- what machines call --------------------------------------------------------------
     def machine(self, name: str) -> Machine:
@@ -121,7 +141,7 @@ class Arrangement:
         if m._finished and cmd != RESTART:
             return  # a finished machine can only be restarted; it stays finished until then
         m._pending = cmd  # a later command replaces an earlier pending one
-        m._ringlets = m._held
+        _hold(m)  # a machine commanding itself may still fire a transition: _rehold fixes that
         self._attention = True
 
     def suspend_now(self, m: Machine, remember: int | None) -> None:
@@ -129,12 +149,13 @@ class Arrangement:
         m._resume_to = remember
         m._state = m.SUSPENDED
         m._suspended = True
-        m._ringlets = m._held
-        m._entered = True
         if self.tracer is not None:
             self.tracer.command("suspend", m, m.SUSPENDED)
             self.tracer.entry(m, m.SUSPENDED)
-        m.RINGLETS[m.SUSPENDED](m)  # the suspend state's ringlet is its OnEntry only
+        enter = m.ENTER[m.SUSPENDED]
+        m._run = enter
+        enter(m)  # the suspend state's ringlet is its OnEntry only
+        _hold(m)
         self._attention = True
 
     def set_tracer(self, tracer: Tracer | None) -> None:
@@ -187,13 +208,23 @@ class Arrangement:
         if m._pending is None or not self._apply(m):
             return None  # suspended: no ringlet; or the command (suspend) ended it
         _regate(m)
-        return m.RINGLETS[m._state](m)
+        return m._run(m)
 
     def _finish(self, m: Machine) -> None:
+        """Called by the ringlet of an accepting state (unless --keep-accepting): unload m."""
+        if self.tracer is not None:
+            self.tracer.finish(m)
         m._finished = True
         m._suspended = False
         _regate(m)
         self._attention = True
+
+    def _rehold(self) -> None:
+        """Between rounds: a machine that commanded itself and then fired a transition in the
+        same ringlet pointed `_run` past its gate; put the gate back in front."""
+        for m in self.machines:
+            if m._pending is not None or m._suspended:
+                _hold(m)
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
         """Ctrl-C / SIGTERM / SIGHUP: `ros.ok()` turns false, rounds go on for the grace time (run
@@ -211,21 +242,17 @@ class Arrangement:
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
         for m in live:
-            if m._ringlets is m._held:
+            if m._run is m._held:
                 if m._pending is None or not self._apply(m):
                     continue
                 _regate(m)
             s = m._state
             if m._entered:
                 tr.entry(m, s)
-            r = m._ringlets[s](m)
+            r = m._run(m)
             if r is not None:
-                if r >= 0:
-                    fired = True
-                    tr.transition(m, s, m._state, r)
-                elif not self.keep_accepting:
-                    tr.finish(m)
-                    self._finish(m)
+                fired = True
+                tr.transition(m, s, m._state, r)
         return fired
 
     def _attend(self, now: int, grace: int) -> RunResult | None:
@@ -279,6 +306,8 @@ class Arrangement:
             rep = report_for(exc)
             if rep is None:
                 raise
+            if rep.machine_id is None and rep.machine in self.by_name:  # compiled frames hold no `self`
+                rep.machine_id = self.by_name[rep.machine]._id
             if self.tracer is not None:
                 self.tracer.error(None, rep.as_dict())
             return RunResult("error", self.rounds, self.clock.now, EXIT_ERROR, rep)
@@ -293,71 +322,161 @@ class Arrangement:
                 activate(prev)
 
     def _run(self, end: int, grace: int) -> RunResult:
-        """The round loop.  Deliberately flat: this is the hot path of every run."""
+        """The round loop: attend to whatever asked for it, then run rounds until something
+        asks again.  Between-round hooks (the bus executor) run only when the context's `wake`
+        time has come: a quiet bus costs a round nothing."""
         clock, ctx, tr = self.clock, self.ctx, self.tracer
         hooks = ctx.between_rounds
-        keep = self.keep_accepting
         sim = type(clock) is SimClock
-        period = clock.period if sim else 0  # type: ignore[attr-defined]
-        live = self._live
+        wall = type(clock) is WallClock and not clock.period  # type: ignore[attr-defined]
         rounds = self.rounds
         try:
             while True:
                 now = clock.now
-                if self._attention:
+                if self._attn:
+                    self._rehold()
                     done = self._attend(now, grace)
                     if done is not None:
                         return done
-                    live = self._live
                     tr = self.tracer  # set_tracer() may have changed it
                 if now >= end:
                     return self._result("duration", EXIT_OK)
-                if tr is None and sim and not hooks:
-                    # the common simulated case: plain rounds back to back until something
-                    # needs attention (a command, an unload, a signal, the bus appearing)
-                    while True:
-                        for m in live:
-                            r = m._ringlets[m._state](m)
-                            if r is not None and r < 0 and not keep:
-                                self._finish(m)
-                        rounds += 1
-                        now = clock.now + period
-                        clock.now = now
-                        if self._attention or now >= end or hooks:
-                            break
-                    continue
-                fired = False
-                if tr is None:
-                    for m in live:
-                        r = m._ringlets[m._state](m)
-                        if r is not None:
-                            if r >= 0:
-                                fired = True
-                            elif not keep:
-                                self._finish(m)
-                else:
+                if end < ctx.wake:
+                    ctx.wake = end  # one test a round covers the end of the run as well
+                live = self._live
+                if tr is not None:
                     tr.round, tr.now = rounds, now
                     ctx.round = rounds
                     fired = self._traced_round(live, tr)
-                rounds += 1
-                if sim:
-                    clock.now += period  # a spin call inside machine code may have moved it on
+                    rounds += 1
+                    if sim:
+                        clock.now += clock.period  # type: ignore[attr-defined]
+                    else:
+                        clock.advance(fired)
+                elif sim:
+                    rounds += self._sim_rounds(live)
+                elif wall:
+                    rounds += self._wall_rounds(live)
                 else:
-                    clock.advance(fired)
-                if hooks:
+                    rounds += self._rounds(live)
+                if clock.now >= ctx.wake:
+                    ctx.wake = FOREVER  # the hooks arm it again for whatever they still hold
                     ctx.round = rounds
                     for h in hooks:
                         h()
         finally:
             self.rounds = rounds
 
+    # The three untraced loops run rounds back to back until the context's wake time comes (it
+    # covers the end of the run, attention and the bus); each returns how many rounds it ran.
+    # They are deliberately flat (and repeat themselves): this is the hot path of every run.
+
+    def _sim_rounds(self, live: list[Machine]) -> int:
+        """The sim clock: the time is kept in a local and stored after each round.  A spin call
+        inside machine code that moves the clock on also sets the wake time to 0 (SimClock
+        tells the context), so the loop stops after that round without overwriting the jump,
+        and the clock moves on by one period from wherever the jump left it.  The number of
+        rounds follows from the time: no counter."""
+        clock, ctx = self.clock, self.ctx
+        period: int = clock.period  # type: ignore[attr-defined]
+        start = now = clock.now
+        if len(live) == 1:
+            m = live[0]
+            while True:
+                m._run(m)
+                now += period
+                if now >= ctx.wake:
+                    break
+                clock.now = now
+        else:
+            while True:
+                for m in live:
+                    m._run(m)
+                now += period
+                if now >= ctx.wake:
+                    break
+                clock.now = now
+        clock.now += period  # the last round's step (from the jump, if there was one)
+        return (now - start) // period
+
+    def _wall_rounds(self, live: list[Machine]) -> int:
+        """The wall clock without a period: sleep `idle` after a round in which no transition
+        fired, then read the clock.  Rounds that each fire a transition, back to back, read it
+        in batches (a clock read costs as much as a whole plain ringlet): every 2, 4, ... up to
+        BATCH rounds while the rounds since the last read took less than FAST, else every
+        round.  So the run clock lags only during a stretch of firing rounds, by at most
+        BATCH - 1 rounds, and a round in which nothing fires always reads it."""
+        clock, ctx = self.clock, self.ctx
+        read, start = time.monotonic_ns, clock._start  # type: ignore[attr-defined]
+        idle: float = clock.idle / 1e9  # type: ignore[attr-defined]
+        idle_ns: int = clock.idle  # type: ignore[attr-defined]
+        waiter = clock.waiter if idle_ns else None  # type: ignore[attr-defined]
+        sleep = time.sleep
+        now = clock.now
+        every = left = 1
+        n = 0
+        single = live[0] if len(live) == 1 else None
+        while True:  # not `for n in range(...)`: compiled (--native), a plain counter is cheaper
+            n += 1
+            if single is not None:
+                fired = single._run(single) is not None
+            else:
+                fired = False
+                for m in live:
+                    if m._run(m) is not None:
+                        fired = True
+            if not fired:
+                if waiter is not None:
+                    waiter(idle_ns)  # a remote transport ends the wait early when data comes in
+                elif idle:
+                    sleep(idle)
+                left = 1
+            left -= 1
+            if not left:
+                t = read() - start
+                if t - now >= FAST:
+                    every = 1
+                elif every < BATCH:
+                    every *= 2
+                left = every
+                now = t
+                clock.now = t
+            if now >= ctx.wake:
+                break
+        return n
+
+    def _rounds(self, live: list[Machine]) -> int:
+        """Any other clock (the wall clock with a period): the clock decides how to advance."""
+        clock, ctx = self.clock, self.ctx
+        n = 0
+        while True:
+            n += 1
+            fired = False
+            for m in live:
+                if m._run(m) is not None:
+                    fired = True
+            clock.advance(fired)
+            now = clock.now
+            if now >= ctx.wake:
+                break
+        return n
+
     def _result(self, reason: str, status: int) -> RunResult:
         return RunResult(reason, self.rounds, self.clock.now, status)
 
 
+def _hold(m: Machine) -> None:
+    """Put the gate in front of the machine's next ringlet (kept in `_next`)."""
+    if m._run is not m._held:
+        m._next, m._run = m._run, m._held
+
+
 def _regate(m: Machine) -> None:
-    """Point the machine's ringlet table at the gate while it is held, at its states otherwise."""
-    m._ringlets = m._held if (m._pending is not None or m._suspended) else m.RINGLETS
+    """Point the machine's `_run` at the gate while it is held, at its next ringlet otherwise."""
+    if m._pending is not None or m._suspended:
+        _hold(m)
+    elif m._run is m._held:
+        m._run = m._next
 
 
 def _in_machine_code(frame: FrameType | None) -> bool:

@@ -6,7 +6,6 @@ nothing for this module.
 
 from __future__ import annotations
 
-import json
 import sys
 from typing import IO, TYPE_CHECKING
 
@@ -23,6 +22,8 @@ class Tracer:
 
     def _event(self, kind: str, m: Machine, **fields: object) -> None:
         if self.jsonl is not None:
+            import json  # only when tracing: a plain run does not import it at start-up
+
             rec = {"t": self.now / 1e9, "round": self.round, "event": kind, "machine": m.NAME, "id": m._id, **fields}
             self.jsonl.write(json.dumps(rec) + "\n")
 
@@ -46,6 +47,8 @@ class Tracer:
 
     def error(self, m: Machine | None, report: dict[str, object]) -> None:
         if self.jsonl is not None:
+            import json
+
             fields = {("id" if k == "machine_id" else k): v for k, v in report.items()}
             rec = {"t": self.now / 1e9, "round": self.round, "event": "error", **fields}
             if m is not None:

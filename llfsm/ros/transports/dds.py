@@ -290,7 +290,7 @@ class _Server(_Endpoint):
             except ValueError as e:
                 self.t.warn(f"{self.srv.srv_name}: dropped a request that is not a {cls._TYPE}: {e}")
                 continue
-            self.t.bus.ready.append(_RemoteRequest(self, guid, seq, request, info.publication_handle))
+            self.t.bus.queue(_RemoteRequest(self, guid, seq, request, info.publication_handle))
 
     def _client_present(self, writer_handle: int) -> str:
         """rmw_cyclonedds_cpp's check before answering: is the client's reply reader matched yet?"""
@@ -352,7 +352,7 @@ class _BareRequests:
             except ValueError as e:
                 srv.t.warn(f"{srv.srv.srv_name}: dropped a request that is not a {cls._TYPE}: {e}")
                 continue
-            srv.t.bus.ready.append(_RemoteRequest(srv, None, 0, request, info.publication_handle))
+            srv.t.bus.queue(_RemoteRequest(srv, None, 0, request, info.publication_handle))
 
     def close(self) -> None:
         self.server.t.waits.detach(self.cond, self.token)
