@@ -27,7 +27,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 from ._writer_process import FRAME, RECORD
 from .errors import BagError
-from .typesupport import TypeSupport
+from .typesupport import TypeSupport, loaded_message_classes, preload_native
 from .writer import qos_profile
 
 if TYPE_CHECKING:
@@ -54,19 +54,27 @@ QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
 class _Tap:
     """The recorder's reader on one topic: what `Publisher.publish` hands a copy to.  It keeps
     the message's CDR bytes, not the message: one small object per message waits in the
-    queue instead of a tree of them (which costs a busy run more than the encoding does)."""
+    queue instead of a tree of them (which costs a busy run more than the encoding does).
+    `_deliver` is a closure made for the topic: one call, no attribute look-ups, per message."""
 
-    __slots__ = ("_cdr", "_clock", "_queue", "_wall", "key")
+    __slots__ = ("_deliver", "key")
 
     def __init__(self, recorder: Recorder, topic: Topic, cdr: Callable[[Any], bytes]) -> None:
-        self._queue = recorder.queue
-        self._clock = recorder.clock
-        self._wall = recorder.wall
-        self._cdr = cdr
         self.key = topic
+        append = recorder.queue.append
+        if recorder.wall:
+            now = time.time_ns
 
-    def _deliver(self, msg: Any) -> None:
-        self._queue.append((time.time_ns() if self._wall else self._clock.now, self.key, self._cdr(msg)))
+            def deliver(msg: Any) -> None:
+                append((now(), topic, cdr(msg)))
+
+        else:
+            clock = recorder.clock
+
+            def deliver(msg: Any) -> None:
+                append((clock.now, topic, cdr(msg)))
+
+        self._deliver = deliver
 
 
 class Recorder:
@@ -108,7 +116,9 @@ class Recorder:
         )
         assert self._proc.stdin is not None and self._proc.stdout is not None
         self._pipe: IO[bytes] = self._proc.stdin
-        self.types.store  # noqa: B018  (loaded while the writer starts: before the first round, not mid-run)
+        # loaded while the writer starts: before the first round, not mid-run
+        self.types.store  # noqa: B018
+        preload_native(loaded_message_classes())
         first = self._proc.stdout.readline()
         reply = json.loads(first) if first else {"error": "the bag writer did not start"}
         if "error" in reply:
