@@ -2,12 +2,16 @@
 
 The recorder is a tap on the bus (`Bus.add_tap`): a reader on every topic, those that exist and
 those made later, like `ros2 bag record -a`.  (On the DDS transport it subscribes to each topic
-instead, so that what other processes publish is recorded too.)  Delivery costs the round one
-append of (time, topic, message) to a queue; the message is the copy the bus makes for each
-reader, so nobody changes it afterwards.  A thread of the run serialises the queued messages to CDR and
-sends them in batches to the bag writer process (`_writer_process`), which writes the bag on
-another core: neither the disk nor the storage libraries hold up a round.  While the run is
-busy the thread works in short slices with pauses, so the rounds keep most of the interpreter.
+instead, so that what other processes publish is recorded too.)  Delivery costs the round the
+message's CDR encoding (one `struct.pack` of the generated encoder, done on the copy the bus
+makes for each reader) and one append of the finished pipe record to a list: nothing else
+happens per message in this process.  A thread of the run takes the records in batches, joins
+them and writes them to the bag writer process (`_writer_process`), which writes the bag on
+another core: neither the disk nor the storage libraries hold up a round.  A topic is
+described to the writer (definition, type hash, QoS) once, by the thread; the writer makes
+its connection when the topic's first message comes, so connections and their ids follow the
+order of first messages, as the same run always has them.  While the run is busy the thread
+works in short slices with pauses, so the rounds keep most of the interpreter.
 
 Timestamps are the run clock under `--clock sim` (nanoseconds from the start of the run: two
 runs give the same bag, byte for byte) and the wall clock (nanoseconds since the epoch)
@@ -22,7 +26,6 @@ import subprocess
 import sys
 import threading
 import time
-from collections import deque
 from typing import IO, TYPE_CHECKING, Any
 
 from ._writer_process import FRAME, RECORD
@@ -36,7 +39,7 @@ if TYPE_CHECKING:
     from ..ros.bus import Bus, Topic
 
 SIM_CLOCK_KEY = "llfsm.clock"  # in the bag's custom_data
-BATCH_S = 0.05  # how often an idle thread looks at the queue
+BATCH_S = 0.05  # how often an idle thread looks at the records
 # The thread works in slices and pauses between them while a backlog lasts: Python's GIL lets
 # one thread run at a time, and the rounds must keep most of it.  A slice starts small; after
 # a pause, a thread that gets the interpreter back at once (the run is sleeping between
@@ -52,28 +55,15 @@ QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
 
 
 class _Tap:
-    """The recorder's reader on one topic: what `Publisher.publish` hands a copy to.  It keeps
-    the message's CDR bytes, not the message: one small object per message waits in the
-    queue instead of a tree of them (which costs a busy run more than the encoding does).
-    `_deliver` is a closure made for the topic: one call, no attribute look-ups, per message."""
+    """The recorder's reader on one topic: what `Publisher.publish` hands a copy to.  Its
+    `_deliver` is a closure made for the topic that appends the message's finished pipe record
+    (`RECORD` header and CDR bytes) to the recorder's list: one small bytes object waits per
+    message instead of a tree of them, and the thread has nothing left to do per message."""
 
     __slots__ = ("_deliver", "key")
 
-    def __init__(self, recorder: Recorder, topic: Topic, cdr: Callable[[Any], bytes]) -> None:
+    def __init__(self, topic: Topic, deliver: Callable[[Any], None]) -> None:
         self.key = topic
-        append = recorder.queue.append
-        if recorder.wall:
-            now = time.time_ns
-
-            def deliver(msg: Any) -> None:
-                append((now(), topic, cdr(msg)))
-
-        else:
-            clock = recorder.clock
-
-            def deliver(msg: Any) -> None:
-                append((clock.now, topic, cdr(msg)))
-
         self._deliver = deliver
 
 
@@ -91,13 +81,16 @@ class Recorder:
         self.selected = {t if t.startswith("/") else "/" + t for t in topics} or None
         self.path = path
         self.types = TypeSupport()
-        self.queue: deque[tuple[int, Topic, Any]] = deque()
+        # finished pipe records, appended by the run's thread, taken from the front by the
+        # sending thread (list appends and slice deletions are atomic under the GIL)
+        self.records: list[bytes] = []
+        self._ids: dict[Topic, int] = {}
+        self._undescribed: list[tuple[int, Topic]] = []  # topics the writer has not heard of
         self.clock: Any = None
         self.wall = True
         self.error: str | None = None
         self.count: int | None = None  # messages in the closed bag
         self._report = report
-        self._conns: dict[Topic, Any] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._listener: threading.Thread | None = None
@@ -133,7 +126,7 @@ class Recorder:
 
     def start(self, bus: Bus, tap: bool) -> None:
         """Start the sending thread; with `tap`, record every topic of the bus.  Without it,
-        whoever feeds `queue` with (time, topic, message) decides (`llfsm bag record`)."""
+        whoever subscribes with `reader(topic)` decides (`llfsm bag record`)."""
         self.clock = bus.clock
         self.wall = bus.clock.kind != "sim"
         if not self.wall:  # the times are run times: --play keeps them as they are
@@ -158,12 +151,10 @@ class Recorder:
         if self._bus is not None and self._bus.transport.remote:
             self._subscribe(topic)
             return
-        try:
-            cdr = self.types.serializer(topic.type)
-        except BagError as e:
-            self._say(f"--record: {topic.name} is not recorded: {e}")
+        deliver = self.reader(topic, wall=self.wall)
+        if deliver is None:
             return
-        tap = _Tap(self, topic, cdr)
+        tap = _Tap(topic, deliver)
         topic.readers.append(tap)  # type: ignore[arg-type]  # a reader as far as publish() is concerned
         self._taps.append((topic, tap))
 
@@ -178,12 +169,42 @@ class Recorder:
         try:
             if self._node is None:
                 self._node = Node("rosbag2_recorder")
-            queue = self.queue
-            self._node.create_subscription(
-                topic.type, topic.name, lambda msg: queue.append((time.time_ns(), topic, msg)), QUEUE_DEPTH
-            )
+            deliver = self.reader(topic, wall=True)
+            if deliver is not None:
+                self._node.create_subscription(topic.type, topic.name, deliver, QUEUE_DEPTH)
         finally:
             activate(prev)
+
+    def reader(self, topic: Topic, wall: bool) -> Callable[[Any], None] | None:
+        """What records a message of `topic` (a tap's delivery, or a subscription's callback),
+        stamped with the wall clock or the run clock; None (said) if its type cannot be
+        encoded.  The first reader of a topic gives it its id in the pipe."""
+        try:
+            cdr = self.types.serializer(topic.type)
+        except BagError as e:
+            self._say(f"--record: {topic.name} is not recorded: {e}")
+            return None
+        key = self._ids.get(topic)
+        if key is None:
+            key = self._ids[topic] = len(self._ids) + 1
+            self._undescribed.append((key, topic))
+        append = self.records.append
+        pack = RECORD.pack
+        if wall:
+            now = time.time_ns
+
+            def deliver(msg: Any) -> None:
+                data = cdr(msg)
+                append(pack(key, now(), len(data)) + data)
+
+        else:
+            clock = self.clock
+
+            def deliver(msg: Any) -> None:
+                data = cdr(msg)
+                append(pack(key, clock.now, len(data)) + data)
+
+        return deliver
 
     # -- the sending thread -------------------------------------------------------------------------
     def _send(self, kind: bytes, payload: bytes) -> None:
@@ -217,39 +238,32 @@ class Recorder:
             self._detach()  # the writer has gone (its reply says why)
 
     def _drain(self, limit: int | None) -> bool:
-        """Serialise and send queued messages: at most `limit` (None: all).  True if some
-        are left."""
-        queue, conns = self.queue, self._conns
-        parts: list[bytes] = []
-        pack = RECORD.pack
-        n = len(queue) if limit is None else min(limit, len(queue))
-        for _ in range(n):
-            t, topic, msg = queue.popleft()
-            entry = conns.get(topic)
-            if entry is None:
-                entry = conns[topic] = self._connection(topic)
-            if entry is not False:
-                cid, serialize = entry
-                data = msg if msg.__class__ is bytes else serialize(msg)  # a tap's bytes, or a message
-                parts.append(pack(cid, t, len(data)))
-                parts.append(data)
-        if parts:
-            self._send(b"M", b"".join(parts))
-        return bool(queue) and limit is not None
+        """Send the records waiting: at most `limit` (None: all).  True if some are left."""
+        records = self.records
+        n = len(records) if limit is None else min(limit, len(records))
+        batch = records[:n]
+        del records[:n]
+        # after taking the batch: every topic with a record in it is in the list by now
+        if self._undescribed:
+            self._describe()
+        if batch:
+            self._send(b"M", b"".join(batch))
+        return bool(records) and limit is not None
 
-    def _connection(self, topic: Topic) -> Any:
-        try:
-            definition, type_hash = self.types.definition(topic.type._TYPE)
-            serialize = self.types.serializer(topic.type)
-        except BagError as e:
-            self._say(f"--record: {topic.name} is not recorded: {e}")
-            return False
-        cid = len(self._conns) + 1
-        qos = [qos_profile() for _ in range(max(1, topic.publishers))]
-        info = {"id": cid, "topic": topic.name, "type": topic.type._TYPE, "definition": definition}
-        info.update(hash=type_hash, qos=qos)
-        self._send(b"T", json.dumps(info).encode())
-        return cid, serialize
+    def _describe(self) -> None:
+        """Tell the writer about the topics it has not heard of (before their records)."""
+        todo = self._undescribed[:]
+        del self._undescribed[: len(todo)]
+        for key, topic in todo:
+            info: dict[str, Any] = {"id": key, "topic": topic.name, "type": topic.type._TYPE}
+            try:
+                definition, type_hash = self.types.definition(topic.type._TYPE)
+            except BagError as e:  # said by the writer when the first message comes, if one does
+                info["error"] = f"--record: {topic.name} is not recorded: {e}"
+            else:
+                qos = [qos_profile() for _ in range(max(1, topic.publishers))]
+                info.update(definition=definition, hash=type_hash, qos=qos)
+            self._send(b"T", json.dumps(info).encode())
 
     # -- replies -------------------------------------------------------------------------------------
     def _listen(self) -> None:
@@ -267,6 +281,8 @@ class Recorder:
                 self._say(self.error)
             elif "count" in reply:
                 self.count = int(reply["count"])
+            elif "warning" in reply:
+                self._say(str(reply["warning"]))
 
     def _say(self, text: str) -> None:
         if self._report is not None:
@@ -277,11 +293,11 @@ class Recorder:
             if tap in topic.readers:
                 topic.readers.remove(tap)  # type: ignore[arg-type]
         self._taps.clear()
-        self.queue.clear()
+        del self.records[:]
 
     # -- the end -----------------------------------------------------------------------------------
     def close(self) -> str | None:
-        """Send what is queued, close the bag and wait for the writer.  Returns the error
+        """Send what is waiting, close the bag and wait for the writer.  Returns the error
         message if recording failed (it was reported when it happened), else None."""
         if self._thread is not None:
             self._stop.set()
