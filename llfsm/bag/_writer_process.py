@@ -18,12 +18,15 @@ Replies on standard output, one JSON line each: `{"ok": true}` once the bag is c
 `{"error": ...}`), `{"error": ...}` as soon as writing fails (the bag is then closed around
 what is on disk), `{"warning": ...}` when the first message of a topic that cannot be
 recorded comes, `{"ok": true, "count": N}` when the bag is closed.
-Signals: Ctrl-C and SIGTERM are ignored here; the run asks for the close.
+Signals: Ctrl-C and SIGTERM are ignored here; the run asks for the close.  The process runs
+at a lower priority (nice 10) than the run: with a core to spare it changes nothing, without
+one the rounds go first and the records wait in the pipe and the run's buffer.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import signal
 import struct
 import sys
@@ -31,6 +34,7 @@ from typing import IO, Any
 
 FRAME = struct.Struct("<cI")
 RECORD = struct.Struct("<IqI")
+NICE = 10  # the writer's scheduling priority below the run's
 
 
 def _reply(out: IO[bytes], **fields: Any) -> None:
@@ -126,6 +130,10 @@ def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
 def main() -> int:
     for s in (signal.SIGINT, signal.SIGTERM):
         signal.signal(s, signal.SIG_IGN)
+    try:  # the run first: on a machine with no core to spare, the bag waits (in the pipe)
+        os.nice(NICE)
+    except OSError:
+        pass
     path, storage = sys.argv[1], sys.argv[2]
     return serve(path, storage, sys.stdin.buffer, sys.stdout.buffer)
 

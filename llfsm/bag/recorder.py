@@ -39,16 +39,12 @@ if TYPE_CHECKING:
     from ..ros.bus import Bus, Topic
 
 SIM_CLOCK_KEY = "llfsm.clock"  # in the bag's custom_data
-BATCH_S = 0.05  # how often an idle thread looks at the records
-# The thread works in slices and pauses between them while a backlog lasts: Python's GIL lets
-# one thread run at a time, and the rounds must keep most of it.  A slice starts small; after
-# a pause, a thread that gets the interpreter back at once (the run is sleeping between
-# rounds, or over) doubles its slice, one that had to wait for it (the rounds are busy) goes
-# back to the smallest.
-SLICE_MIN = 32  # messages
-SLICE_MAX = 8192
-PAUSE_S = 0.002
-BUSY_S = 0.0005  # a pause this much longer than asked for: the rounds had the interpreter
+BATCH_S = 0.05  # how often the thread takes the records waiting
+# The thread takes every record waiting and writes them in pieces of this many: Python's GIL
+# lets one thread run at a time, and the rounds must keep most of it.  Joining a piece is one
+# C call of some 0.1 ms; writing it to the pipe releases the GIL (and waits there while the
+# writer process is behind), so the rounds run between pieces.
+PIECE = 2048  # records
 CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
 START_TIMEOUT_S = 60.0
 QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
@@ -213,42 +209,33 @@ class Recorder:
 
     def _run(self) -> None:
         last_chunk = time.monotonic()
-        slice_ = SLICE_MIN
         try:
             while True:
                 stopping = self._stop.wait(BATCH_S)  # a batch every BATCH_S; everything at the end
-                while True:
-                    more = self._drain(None if stopping else slice_)
-                    now = time.monotonic()
-                    end_chunk = self.wall and now - last_chunk >= CHUNK_S
-                    if end_chunk:
-                        last_chunk = now
-                    if not more or end_chunk:
-                        self._send(b"S", b"\x01" if end_chunk else b"\x00")
-                    self._pipe.flush()
-                    if not more:
-                        break
-                    t = time.perf_counter()
-                    time.sleep(PAUSE_S)  # rounds first
-                    late = time.perf_counter() - t - PAUSE_S
-                    slice_ = SLICE_MIN if late > BUSY_S else min(2 * slice_, SLICE_MAX)
+                self._drain()
+                now = time.monotonic()
+                end_chunk = self.wall and now - last_chunk >= CHUNK_S
+                if end_chunk:
+                    last_chunk = now
+                self._send(b"S", b"\x01" if end_chunk else b"\x00")
+                self._pipe.flush()
                 if stopping:
                     return
         except (BrokenPipeError, OSError, ValueError):
             self._detach()  # the writer has gone (its reply says why)
 
-    def _drain(self, limit: int | None) -> bool:
-        """Send the records waiting: at most `limit` (None: all).  True if some are left."""
+    def _drain(self) -> None:
+        """Send every record waiting.  They are taken from the front of the list, all at once
+        (deleting a short prefix of a long list would move the rest each time)."""
         records = self.records
-        n = len(records) if limit is None else min(limit, len(records))
+        n = len(records)
         batch = records[:n]
         del records[:n]
         # after taking the batch: every topic with a record in it is in the list by now
         if self._undescribed:
             self._describe()
-        if batch:
-            self._send(b"M", b"".join(batch))
-        return bool(records) and limit is not None
+        for i in range(0, n, PIECE):
+            self._send(b"M", b"".join(batch[i : i + PIECE]))
 
     def _describe(self) -> None:
         """Tell the writer about the topics it has not heard of (before their records)."""
