@@ -10,8 +10,9 @@ them and writes them to the bag writer process (`_writer_process`), which writes
 another core: neither the disk nor the storage libraries hold up a round.  A topic is
 described to the writer (definition, type hash, QoS) once, by the thread; the writer makes
 its connection when the topic's first message comes, so connections and their ids follow the
-order of first messages, as the same run always has them.  While the run is busy the thread
-works in short slices with pauses, so the rounds keep most of the interpreter.
+order of first messages, as the same run always has them.  The thread holds the interpreter
+only to join a piece of records (C, a fraction of a millisecond); it writes with the GIL
+released, and the writer process runs at a lower priority than the run.
 
 Timestamps are the run clock under `--clock sim` (nanoseconds from the start of the run: two
 runs give the same bag, byte for byte) and the wall clock (nanoseconds since the epoch)
@@ -78,7 +79,7 @@ class Recorder:
         self.path = path
         self.types = TypeSupport()
         # finished pipe records, appended by the run's thread, taken from the front by the
-        # sending thread (list appends and slice deletions are atomic under the GIL)
+        # sending thread (a list append and a slice deletion are each atomic under the GIL)
         self.records: list[bytes] = []
         self._ids: dict[Topic, int] = {}
         self._undescribed: list[tuple[int, Topic]] = []  # topics the writer has not heard of
