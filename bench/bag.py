@@ -122,7 +122,9 @@ WORKLOADS = (  # (label, machines: a list of paths, or (count, publish every N r
 def section_recording(tmp: Path, quick: bool) -> Table:
     from llfsm.targets import load
 
-    seconds = 10.0 if quick else 30.0
+    # Long enough that a run takes a second or so of wall time: shorter runs measure the
+    # start of a run (imports, the first batches) more than its rounds.
+    seconds = 30.0 if quick else 120.0
     repeats = 3 if quick else 7
     rows = []
     for label, machines in WORKLOADS:

@@ -7,20 +7,26 @@ makes the bag outlive its run: if the run dies (even `kill -9`), the pipe closes
 is closed properly with everything sent so far.
 
 Protocol, on standard input, frames of one kind byte and a 4-byte little-endian length:
-- `T` a topic (JSON: id, topic, type, definition, hash, qos),
-- `M` messages: records of <uint32 topic id><int64 time ns><uint32 size><CDR bytes>,
+- `T` a topic (JSON: id, topic, type, definition, hash, qos; or id, topic, type, error if it
+  cannot be recorded), sent before any message of it,
+- `M` messages: records of <uint32 topic id><int64 time ns><uint32 size><CDR bytes>; a topic's
+  connection is made when its first message comes (so connections follow first messages),
 - `S` a batch ends (one byte: 1 = also end the MCAP chunk in progress),
 - `X` the bag's custom_data (JSON),
 - `C` close.  End of input without `C` closes the bag as well.
 Replies on standard output, one JSON line each: `{"ok": true}` once the bag is created (or
 `{"error": ...}`), `{"error": ...}` as soon as writing fails (the bag is then closed around
-what is on disk), `{"ok": true, "count": N}` when the bag is closed.
-Signals: Ctrl-C and SIGTERM are ignored here; the run asks for the close.
+what is on disk), `{"warning": ...}` when the first message of a topic that cannot be
+recorded comes, `{"ok": true, "count": N}` when the bag is closed.
+Signals: Ctrl-C and SIGTERM are ignored here; the run asks for the close.  The process runs
+at a lower priority (nice 10) than the run: with a core to spare it changes nothing, without
+one the rounds go first and the records wait in the pipe and the run's buffer.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import signal
 import struct
 import sys
@@ -28,6 +34,7 @@ from typing import IO, Any
 
 FRAME = struct.Struct("<cI")
 RECORD = struct.Struct("<IqI")
+NICE = 10  # the writer's scheduling priority below the run's
 
 
 def _reply(out: IO[bytes], **fields: Any) -> None:
@@ -45,6 +52,14 @@ def _read(inp: IO[bytes], n: int) -> bytes | None:
     return data
 
 
+def _connection(writer: Any, t: dict[str, Any], out: IO[bytes]) -> Any:
+    """The connection of a topic at its first message (None, said, if it cannot be recorded)."""
+    if "error" in t:
+        _reply(out, warning=t["error"])
+        return None
+    return writer.connection(t["topic"], t["type"], t["definition"], t["hash"], t["qos"])
+
+
 def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
     from .errors import BagError
     from .writer import BagWriter
@@ -55,7 +70,8 @@ def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
         _reply(out, error=str(e))
         return 1
     _reply(out, ok=True)
-    conns: dict[int, Any] = {}
+    topics: dict[int, dict[str, Any]] = {}
+    conns: dict[int, Any] = {}  # a topic's connection, or None if it cannot be recorded
     failed = False
     unpack = RECORD.unpack_from
     size = RECORD.size
@@ -74,14 +90,19 @@ def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
         try:
             if kind == b"T":
                 t = json.loads(payload)
-                conns[t["id"]] = writer.connection(t["topic"], t["type"], t["definition"], t["hash"], t["qos"])
+                topics[t["id"]] = t
             elif kind == b"M":
                 view = memoryview(payload)
                 pos, end = 0, len(payload)
                 while pos < end:
                     cid, stamp, n = unpack(view, pos)
                     pos += size
-                    writer.write(conns[cid], stamp, bytes(view[pos : pos + n]))
+                    try:
+                        c = conns[cid]
+                    except KeyError:
+                        c = conns[cid] = _connection(writer, topics[cid], out)
+                    if c is not None:
+                        writer.write(c, stamp, bytes(view[pos : pos + n]))
                     pos += n
             elif kind == b"S":
                 writer.sync(end_chunk=payload == b"\x01")
@@ -109,6 +130,10 @@ def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
 def main() -> int:
     for s in (signal.SIGINT, signal.SIGTERM):
         signal.signal(s, signal.SIG_IGN)
+    try:  # the run first: on a machine with no core to spare, the bag waits (in the pipe)
+        os.nice(NICE)
+    except OSError:
+        pass
     path, storage = sys.argv[1], sys.argv[2]
     return serve(path, storage, sys.stdin.buffer, sys.stdout.buffer)
 

@@ -121,19 +121,15 @@ def record(
         bus = session.bus
         recorder.start(bus, tap=False)
         node = Node("rosbag2_recorder")
-        queue = recorder.queue
         subscribed: set[str] = set()
 
         def subscribe(topic: Topic) -> None:
             if topic.name in subscribed:
                 return
             subscribed.add(topic.name)
-            node.create_subscription(
-                topic.type,
-                topic.name,
-                lambda msg, topic=topic: queue.append((time.time_ns(), topic, msg)),
-                QUEUE_DEPTH,
-            )
+            deliver = recorder.reader(topic, wall=True)
+            if deliver is not None:
+                node.create_subscription(topic.type, topic.name, deliver, QUEUE_DEPTH)
 
         for name in names:
             bus.watch(name, subscribe)

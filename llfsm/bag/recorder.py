@@ -2,12 +2,17 @@
 
 The recorder is a tap on the bus (`Bus.add_tap`): a reader on every topic, those that exist and
 those made later, like `ros2 bag record -a`.  (On the DDS transport it subscribes to each topic
-instead, so that what other processes publish is recorded too.)  Delivery costs the round one
-append of (time, topic, message) to a queue; the message is the copy the bus makes for each
-reader, so nobody changes it afterwards.  A thread of the run serialises the queued messages to CDR and
-sends them in batches to the bag writer process (`_writer_process`), which writes the bag on
-another core: neither the disk nor the storage libraries hold up a round.  While the run is
-busy the thread works in short slices with pauses, so the rounds keep most of the interpreter.
+instead, so that what other processes publish is recorded too.)  Delivery costs the round the
+message's CDR encoding (one `struct.pack` of the generated encoder, done on the copy the bus
+makes for each reader) and one append of the finished pipe record to a list: nothing else
+happens per message in this process.  A thread of the run takes the records in batches, joins
+them and writes them to the bag writer process (`_writer_process`), which writes the bag on
+another core: neither the disk nor the storage libraries hold up a round.  A topic is
+described to the writer (definition, type hash, QoS) once, by the thread; the writer makes
+its connection when the topic's first message comes, so connections and their ids follow the
+order of first messages, as the same run always has them.  The thread holds the interpreter
+only to join a piece of records (C, a fraction of a millisecond); it writes with the GIL
+released, and the writer process runs at a lower priority than the run.
 
 Timestamps are the run clock under `--clock sim` (nanoseconds from the start of the run: two
 runs give the same bag, byte for byte) and the wall clock (nanoseconds since the epoch)
@@ -22,12 +27,11 @@ import subprocess
 import sys
 import threading
 import time
-from collections import deque
 from typing import IO, TYPE_CHECKING, Any
 
 from ._writer_process import FRAME, RECORD
 from .errors import BagError
-from .typesupport import TypeSupport
+from .typesupport import TypeSupport, loaded_message_classes, preload_native
 from .writer import qos_profile
 
 if TYPE_CHECKING:
@@ -36,37 +40,28 @@ if TYPE_CHECKING:
     from ..ros.bus import Bus, Topic
 
 SIM_CLOCK_KEY = "llfsm.clock"  # in the bag's custom_data
-BATCH_S = 0.05  # how often an idle thread looks at the queue
-# The thread works in slices and pauses between them while a backlog lasts: Python's GIL lets
-# one thread run at a time, and the rounds must keep most of it.  A slice starts small; after
-# a pause, a thread that gets the interpreter back at once (the run is sleeping between
-# rounds, or over) doubles its slice, one that had to wait for it (the rounds are busy) goes
-# back to the smallest.
-SLICE_MIN = 32  # messages
-SLICE_MAX = 8192
-PAUSE_S = 0.002
-BUSY_S = 0.0005  # a pause this much longer than asked for: the rounds had the interpreter
+BATCH_S = 0.05  # how often the thread takes the records waiting
+# The thread takes every record waiting and writes them in pieces of this many: Python's GIL
+# lets one thread run at a time, and the rounds must keep most of it.  Joining a piece is one
+# C call of some 0.1 ms; writing it to the pipe releases the GIL (and waits there while the
+# writer process is behind), so the rounds run between pieces.
+PIECE = 2048  # records
 CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
 START_TIMEOUT_S = 60.0
 QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
 
 
 class _Tap:
-    """The recorder's reader on one topic: what `Publisher.publish` hands a copy to.  It keeps
-    the message's CDR bytes, not the message: one small object per message waits in the
-    queue instead of a tree of them (which costs a busy run more than the encoding does)."""
+    """The recorder's reader on one topic: what `Publisher.publish` hands a copy to.  Its
+    `_deliver` is a closure made for the topic that appends the message's finished pipe record
+    (`RECORD` header and CDR bytes) to the recorder's list: one small bytes object waits per
+    message instead of a tree of them, and the thread has nothing left to do per message."""
 
-    __slots__ = ("_cdr", "_clock", "_queue", "_wall", "key")
+    __slots__ = ("_deliver", "key")
 
-    def __init__(self, recorder: Recorder, topic: Topic, cdr: Callable[[Any], bytes]) -> None:
-        self._queue = recorder.queue
-        self._clock = recorder.clock
-        self._wall = recorder.wall
-        self._cdr = cdr
+    def __init__(self, topic: Topic, deliver: Callable[[Any], None]) -> None:
         self.key = topic
-
-    def _deliver(self, msg: Any) -> None:
-        self._queue.append((time.time_ns() if self._wall else self._clock.now, self.key, self._cdr(msg)))
+        self._deliver = deliver
 
 
 class Recorder:
@@ -83,13 +78,16 @@ class Recorder:
         self.selected = {t if t.startswith("/") else "/" + t for t in topics} or None
         self.path = path
         self.types = TypeSupport()
-        self.queue: deque[tuple[int, Topic, Any]] = deque()
+        # finished pipe records, appended by the run's thread, taken from the front by the
+        # sending thread (a list append and a slice deletion are each atomic under the GIL)
+        self.records: list[bytes] = []
+        self._ids: dict[Topic, int] = {}
+        self._undescribed: list[tuple[int, Topic]] = []  # topics the writer has not heard of
         self.clock: Any = None
         self.wall = True
         self.error: str | None = None
         self.count: int | None = None  # messages in the closed bag
         self._report = report
-        self._conns: dict[Topic, Any] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._listener: threading.Thread | None = None
@@ -108,7 +106,9 @@ class Recorder:
         )
         assert self._proc.stdin is not None and self._proc.stdout is not None
         self._pipe: IO[bytes] = self._proc.stdin
-        self.types.store  # noqa: B018  (loaded while the writer starts: before the first round, not mid-run)
+        # loaded while the writer starts: before the first round, not mid-run
+        self.types.store  # noqa: B018
+        preload_native(loaded_message_classes())
         first = self._proc.stdout.readline()
         reply = json.loads(first) if first else {"error": "the bag writer did not start"}
         if "error" in reply:
@@ -123,7 +123,7 @@ class Recorder:
 
     def start(self, bus: Bus, tap: bool) -> None:
         """Start the sending thread; with `tap`, record every topic of the bus.  Without it,
-        whoever feeds `queue` with (time, topic, message) decides (`llfsm bag record`)."""
+        whoever subscribes with `reader(topic)` decides (`llfsm bag record`)."""
         self.clock = bus.clock
         self.wall = bus.clock.kind != "sim"
         if not self.wall:  # the times are run times: --play keeps them as they are
@@ -148,12 +148,10 @@ class Recorder:
         if self._bus is not None and self._bus.transport.remote:
             self._subscribe(topic)
             return
-        try:
-            cdr = self.types.serializer(topic.type)
-        except BagError as e:
-            self._say(f"--record: {topic.name} is not recorded: {e}")
+        deliver = self.reader(topic, wall=self.wall)
+        if deliver is None:
             return
-        tap = _Tap(self, topic, cdr)
+        tap = _Tap(topic, deliver)
         topic.readers.append(tap)  # type: ignore[arg-type]  # a reader as far as publish() is concerned
         self._taps.append((topic, tap))
 
@@ -168,12 +166,42 @@ class Recorder:
         try:
             if self._node is None:
                 self._node = Node("rosbag2_recorder")
-            queue = self.queue
-            self._node.create_subscription(
-                topic.type, topic.name, lambda msg: queue.append((time.time_ns(), topic, msg)), QUEUE_DEPTH
-            )
+            deliver = self.reader(topic, wall=True)
+            if deliver is not None:
+                self._node.create_subscription(topic.type, topic.name, deliver, QUEUE_DEPTH)
         finally:
             activate(prev)
+
+    def reader(self, topic: Topic, wall: bool) -> Callable[[Any], None] | None:
+        """What records a message of `topic` (a tap's delivery, or a subscription's callback),
+        stamped with the wall clock or the run clock; None (said) if its type cannot be
+        encoded.  The first reader of a topic gives it its id in the pipe."""
+        try:
+            cdr = self.types.serializer(topic.type)
+        except BagError as e:
+            self._say(f"--record: {topic.name} is not recorded: {e}")
+            return None
+        key = self._ids.get(topic)
+        if key is None:
+            key = self._ids[topic] = len(self._ids) + 1
+            self._undescribed.append((key, topic))
+        append = self.records.append
+        pack = RECORD.pack
+        if wall:
+            now = time.time_ns
+
+            def deliver(msg: Any) -> None:
+                data = cdr(msg)
+                append(pack(key, now(), len(data)) + data)
+
+        else:
+            clock = self.clock
+
+            def deliver(msg: Any) -> None:
+                data = cdr(msg)
+                append(pack(key, clock.now, len(data)) + data)
+
+        return deliver
 
     # -- the sending thread -------------------------------------------------------------------------
     def _send(self, kind: bytes, payload: bytes) -> None:
@@ -182,64 +210,48 @@ class Recorder:
 
     def _run(self) -> None:
         last_chunk = time.monotonic()
-        slice_ = SLICE_MIN
         try:
             while True:
                 stopping = self._stop.wait(BATCH_S)  # a batch every BATCH_S; everything at the end
-                while True:
-                    more = self._drain(None if stopping else slice_)
-                    now = time.monotonic()
-                    end_chunk = self.wall and now - last_chunk >= CHUNK_S
-                    if end_chunk:
-                        last_chunk = now
-                    if not more or end_chunk:
-                        self._send(b"S", b"\x01" if end_chunk else b"\x00")
-                    self._pipe.flush()
-                    if not more:
-                        break
-                    t = time.perf_counter()
-                    time.sleep(PAUSE_S)  # rounds first
-                    late = time.perf_counter() - t - PAUSE_S
-                    slice_ = SLICE_MIN if late > BUSY_S else min(2 * slice_, SLICE_MAX)
+                self._drain()
+                now = time.monotonic()
+                end_chunk = self.wall and now - last_chunk >= CHUNK_S
+                if end_chunk:
+                    last_chunk = now
+                self._send(b"S", b"\x01" if end_chunk else b"\x00")
+                self._pipe.flush()
                 if stopping:
                     return
         except (BrokenPipeError, OSError, ValueError):
             self._detach()  # the writer has gone (its reply says why)
 
-    def _drain(self, limit: int | None) -> bool:
-        """Serialise and send queued messages: at most `limit` (None: all).  True if some
-        are left."""
-        queue, conns = self.queue, self._conns
-        parts: list[bytes] = []
-        pack = RECORD.pack
-        n = len(queue) if limit is None else min(limit, len(queue))
-        for _ in range(n):
-            t, topic, msg = queue.popleft()
-            entry = conns.get(topic)
-            if entry is None:
-                entry = conns[topic] = self._connection(topic)
-            if entry is not False:
-                cid, serialize = entry
-                data = msg if msg.__class__ is bytes else serialize(msg)  # a tap's bytes, or a message
-                parts.append(pack(cid, t, len(data)))
-                parts.append(data)
-        if parts:
-            self._send(b"M", b"".join(parts))
-        return bool(queue) and limit is not None
+    def _drain(self) -> None:
+        """Send every record waiting.  They are taken from the front of the list, all at once
+        (deleting a short prefix of a long list would move the rest each time)."""
+        records = self.records
+        n = len(records)
+        batch = records[:n]
+        del records[:n]
+        # after taking the batch: every topic with a record in it is in the list by now
+        if self._undescribed:
+            self._describe()
+        for i in range(0, n, PIECE):
+            self._send(b"M", b"".join(batch[i : i + PIECE]))
 
-    def _connection(self, topic: Topic) -> Any:
-        try:
-            definition, type_hash = self.types.definition(topic.type._TYPE)
-            serialize = self.types.serializer(topic.type)
-        except BagError as e:
-            self._say(f"--record: {topic.name} is not recorded: {e}")
-            return False
-        cid = len(self._conns) + 1
-        qos = [qos_profile() for _ in range(max(1, topic.publishers))]
-        info = {"id": cid, "topic": topic.name, "type": topic.type._TYPE, "definition": definition}
-        info.update(hash=type_hash, qos=qos)
-        self._send(b"T", json.dumps(info).encode())
-        return cid, serialize
+    def _describe(self) -> None:
+        """Tell the writer about the topics it has not heard of (before their records)."""
+        todo = self._undescribed[:]
+        del self._undescribed[: len(todo)]
+        for key, topic in todo:
+            info: dict[str, Any] = {"id": key, "topic": topic.name, "type": topic.type._TYPE}
+            try:
+                definition, type_hash = self.types.definition(topic.type._TYPE)
+            except BagError as e:  # said by the writer when the first message comes, if one does
+                info["error"] = f"--record: {topic.name} is not recorded: {e}"
+            else:
+                qos = [qos_profile() for _ in range(max(1, topic.publishers))]
+                info.update(definition=definition, hash=type_hash, qos=qos)
+            self._send(b"T", json.dumps(info).encode())
 
     # -- replies -------------------------------------------------------------------------------------
     def _listen(self) -> None:
@@ -257,6 +269,8 @@ class Recorder:
                 self._say(self.error)
             elif "count" in reply:
                 self.count = int(reply["count"])
+            elif "warning" in reply:
+                self._say(str(reply["warning"]))
 
     def _say(self, text: str) -> None:
         if self._report is not None:
@@ -267,11 +281,11 @@ class Recorder:
             if tap in topic.readers:
                 topic.readers.remove(tap)  # type: ignore[arg-type]
         self._taps.clear()
-        self.queue.clear()
+        del self.records[:]
 
     # -- the end -----------------------------------------------------------------------------------
     def close(self) -> str | None:
-        """Send what is queued, close the bag and wait for the writer.  Returns the error
+        """Send what is waiting, close the bag and wait for the writer.  Returns the error
         message if recording failed (it was reported when it happened), else None."""
         if self._thread is not None:
             self._stop.set()

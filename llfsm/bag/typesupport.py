@@ -29,7 +29,7 @@ from ..msgs import Message, is_message_class, search_path
 from .errors import BagError
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Iterable
 
     from rosbags.typesys.store import Typestore
 
@@ -196,16 +196,37 @@ def _base_store() -> Typestore:
 
 
 def _native_serializer(cls: type[Message]) -> Callable[[Any], bytes] | None:
-    """llfsm's own XCDR1 encoder of the class (llfsm.msgs._dds), if it has one."""
+    """llfsm's own XCDR1 encoder of the class (llfsm.msgs._dds), if it has one: the class's
+    generated function itself (what `_dds.cdr` calls after looking the class up), since a
+    recorder calls it once per message and knows the class already."""
     try:
-        from ..msgs._dds import cdr, codec
+        from ..msgs._dds import codec
     except ImportError:  # pragma: no cover - the DDS type support is part of llfsm
         return None
     try:
-        codec(cls)
+        return codec(cls).cdr  # type: ignore[no-any-return]
     except TypeError:
         return None
-    return cdr
+
+
+def loaded_message_classes() -> list[type[Message]]:
+    """Every message class imported so far (the machines of a run import theirs when they load)."""
+    found: list[type[Message]] = []
+    todo = list(Message.__subclasses__())
+    while todo:
+        cls = todo.pop()
+        found.append(cls)
+        todo += cls.__subclasses__()
+    return found
+
+
+def preload_native(classes: Iterable[type[Message]]) -> None:
+    """Import the generated DDS forms of these message classes now.  The first import pulls in
+    cyclonedds and builds its types (a quarter of a second): a recorder does it before the
+    first round for every class loaded so far, not when a machine makes its publisher mid-run."""
+    for cls in classes:
+        if getattr(cls, "_TYPE", None):
+            _native_serializer(cls)
 
 
 def _native_deserializer(cls: type[Message]) -> Callable[[bytes], Any] | None:
