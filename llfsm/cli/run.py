@@ -385,7 +385,6 @@ def _start_web(address: tuple[str, int], arr: Any, bus: Bus) -> Any:
     services exist), and a run that waits, rather than ends, when every machine is suspended:
     the page can resume them."""
     from ..runtime.context import activate
-    from ..web.server import AddressError, WebServer
     from ..web.source import RunSource
 
     prev = activate(arr.ctx)
@@ -395,6 +394,14 @@ def _start_web(address: tuple[str, int], arr: Any, bus: Bus) -> Any:
     finally:
         activate(prev)
     arr.end_when_suspended = False
+    return _serve_web(source, address)
+
+
+def _serve_web(source: Any, address: tuple[str, int]) -> Any:
+    """Start the page's server for a source (a run, or the DDS graph for `llfsm view`) and print
+    its address: one line holding `http://` (SPEC 10)."""
+    from ..web.server import AddressError, WebServer
+
     server = WebServer(source, *address)
     try:
         url = server.start()

@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from ._common import DURATION, cli, fail
+from ._common import DURATION, cli
 
 
 @cli.command()
@@ -29,14 +29,13 @@ def view(web: str, duration: int | None) -> None:
     """
     from ..runtime import Arrangement, RunContext, WallClock, signals_handled
     from ..runtime.context import activate
-    from .run import _open_transport, _web_address
+    from .run import _open_transport, _serve_web, _web_address
 
     address = _web_address(web)
     ctx = RunContext(WallClock(10_000_000, None))
     ctx.extras["transport"] = _open_transport("dds")
     from ..ros.bus import bus_of
     from ..web.graph import GraphSource
-    from ..web.server import AddressError, WebServer
 
     prev = activate(ctx)
     try:
@@ -47,12 +46,7 @@ def view(web: str, duration: int | None) -> None:
         activate(prev)
     arr = Arrangement([], context=ctx)
     arr.serve_forever = True  # no machines of its own: it runs until Ctrl-C or --duration
-    server = WebServer(source, *address)
-    try:
-        url = server.start()
-    except AddressError as e:
-        fail(str(e))
-    click.echo(f"llfsm: web view at {url}", err=True)
+    server = _serve_web(source, address)
     try:
         with signals_handled(arr):
             result = arr.run(duration, 0)
