@@ -17,7 +17,6 @@ from __future__ import annotations
 import os
 import stat
 import sys
-import tempfile
 
 _fresh: str | None = None
 _warned: set[str] = set()
@@ -55,6 +54,7 @@ def fresh_private() -> str:
     if _fresh is None:
         import atexit
         import shutil
+        import tempfile
 
         _fresh = tempfile.mkdtemp(prefix="llfsm-cache-")
         atexit.register(shutil.rmtree, _fresh, True)
@@ -74,6 +74,8 @@ def _make(path: str) -> str | None:
 
 def fallback_root() -> str:
     """TMPDIR/llfsm-cache-UID when it is this user's private folder, else a fresh private one."""
+    import tempfile  # only when the normal cache cannot be written: not on every run's start-up
+
     root = os.path.join(tempfile.gettempdir(), f"llfsm-cache-{os.getuid()}")
     why = _make(root)
     if why is None:

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import bisect
 import errno
-import json
-import linecache
 import os
 import re
 from dataclasses import asdict, dataclass
@@ -121,6 +119,7 @@ class ErrorReport:
 
 
 def is_generated(filename: str) -> bool:
+    import linecache  # error paths only: a run's start-up does not pay for them
 
     return linecache.getline(filename, 1).startswith(GENERATED_MARK)
 
@@ -128,7 +127,8 @@ def is_generated(filename: str) -> bool:
 def source_dir_of(filename: str) -> str | None:
     """The machine folder named in a generated module's header (written JSON-escaped, so that
     any folder name fits on one comment line)."""
-    import linecache
+    import json
+    import linecache  # error paths only: a run's start-up does not pay for them
 
     for i in range(1, 6):
         m = SOURCE_RE.match(linecache.getline(filename, i).rstrip("\n"))
@@ -148,6 +148,7 @@ def map_line(filename: str, lineno: int, source_map: SourceMap | None = None) ->
 
     The module's own `_LLFSM_SOURCE_MAP` (pointer line, file, first line) is the truth; a module
     that failed while being imported has none yet, and then the pointer comments are read."""
+    import linecache  # error paths only: a run's start-up does not pay for them
 
     if source_map:
         i = bisect.bisect_left(source_map, (lineno,)) - 1
@@ -206,6 +207,7 @@ def _reentrant_call_hint(tb: TracebackType | None) -> str:
 
 def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorReport | None:
     """The report for an exception raised in machine code, or None if no frame is the user's."""
+    import linecache  # error paths only: a run's start-up does not pay for them
 
     tb: TracebackType | None = exc.__traceback__
     found = None
