@@ -33,7 +33,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-Table = tuple[str, list[str], list[list[str]]]
+from run import Table, render  # noqa: E402  (one table renderer for every benchmark)
 
 PUBLISHER = """\
 states:
@@ -255,17 +255,6 @@ def section_writers(tmp: Path, quick: bool) -> Table:
         ["writer", "messages/s", "vs rosbags"],
         rows,
     )
-
-
-def render(tables: list[Table]) -> str:
-    out = []
-    for title, header, rows in tables:
-        out.append(f"### {title}\n")
-        out.append("| " + " | ".join(header) + " |")
-        out.append("|" + "|".join("---" for _ in header) + "|")
-        out += ["| " + " | ".join(r) + " |" for r in rows]
-        out.append("")
-    return "\n".join(out)
 
 
 def main() -> None:
