@@ -3,56 +3,57 @@ verb group): `check`, `build`, `run`, `new`, `graph`.  Each command imports what
 it runs: `llfsm run` must start fast and never load the compiler's libraries when its cached
 modules are fresh.  Every failure the user can cause ends in a one-line-per-problem message and
 an exit status (1 or 2), never a traceback.
+
+This package itself imports nothing heavy: `main` runs a plain `llfsm run ...` without click
+(a third of the start-up time), parsing its arguments with llfsm.cli.run_args, which is built
+from the same table of options as the click command; anything that parser does not fully
+understand (--help, a mistake, another verb) goes to click.  `cli`, the click group, is
+imported on first use (`from llfsm.cli import cli`).
 """
 
 from __future__ import annotations
 
-import os
 import sys
+from typing import TYPE_CHECKING, Any
 
-import click
+if TYPE_CHECKING:
+    from click import Group
 
-from . import (  # noqa: F401  (each registers its commands)
-    bag,
-    build,
-    check,
-    graph,
-    interface,
-    new,
-    node,
-    run,
-    service,
-    topic,
-    view,
-)
-from ._common import EXIT_USAGE, _quiet_broken_pipe, cli
+    cli: Group
 
 __all__ = ["cli", "main"]
 
 
 def main() -> None:
-    """Entry point: turns what escapes the commands into a message and a status, not a traceback."""
+    """Entry point of the `llfsm` command (after llfsm.__main__ has checked the streams)."""
+    args = sys.argv[1:]
     try:
-        cli.main(prog_name="llfsm", standalone_mode=False)
-    except click.exceptions.Exit as e:
-        sys.exit(e.exit_code)
-    except click.ClickException as e:
-        e.show()
-        sys.exit(EXIT_USAGE)
-    except click.exceptions.Abort:
+        options = _fast_run_options(args)
+        if options is None:
+            from ._click import main as click_main
+        else:
+            from ._base import run_guarded
+            from ._run import run
+    except KeyboardInterrupt:  # while importing: as llfsm.__main__ does
         sys.exit(130)
-    except BrokenPipeError:
-        _quiet_broken_pipe()
-    except KeyboardInterrupt:
-        sys.exit(130)
-    except SystemExit:
-        raise
-    except Exception as exc:  # an llfsm bug: say so plainly
-        if os.environ.get("LLFSM_DEBUG"):
-            raise
-        click.echo(f"llfsm: internal error: {type(exc).__name__}: {exc} (set LLFSM_DEBUG=1 for a traceback)", err=True)
-        sys.exit(70)
+    if options is None:
+        click_main()
+    else:
+        run_guarded(lambda: run(**options))
 
 
-if __name__ == "__main__":
-    main()
+def _fast_run_options(args: list[str]) -> dict[str, Any] | None:
+    """The run's keyword arguments when `args` is a run the fast path can take, else None."""
+    if not args or args[0] != "run":
+        return None
+    from .run_args import parse
+
+    return parse(args[1:])
+
+
+def __getattr__(name: str) -> Any:
+    if name == "cli":
+        from ._click import cli
+
+        return cli
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -7,28 +7,24 @@ ends in a one-line-per-problem message and an exit status (1 or 2), never a trac
 
 from __future__ import annotations
 
-import contextlib
-import errno
 import os
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn
 
 import click
 
 from .. import __version__
-
-if TYPE_CHECKING:
-    pass
-
-EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
-#: The longest duration accepted (100 years): run-time arithmetic stays in 64-bit nanoseconds.
-MAX_DURATION_NS = 100 * 365 * 24 * 3600 * 1_000_000_000
-
-
-def fail(message: str, status: int = EXIT_USAGE) -> NoReturn:
-    click.echo(f"llfsm: {message}", err=True)
-    sys.exit(status)
+from ._base import (  # noqa: F401  (shared with the click-free fast path of `llfsm run`)
+    EXIT_ERRORS,
+    EXIT_OK,
+    EXIT_USAGE,
+    MAX_DURATION_NS,
+    _output_failed,
+    _quiet_broken_pipe,
+    duration_ns,
+    fail,
+    output_errors,
+)
 
 
 class Duration(click.ParamType):
@@ -39,17 +35,10 @@ class Duration(click.ParamType):
     def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> int:
         if isinstance(value, int):
             return value
-        from ..runtime.clock import parse_duration
-
         try:
-            ns = parse_duration(str(value))
+            return duration_ns(str(value))
         except ValueError as e:
             self.fail(str(e), param, ctx)
-        except OverflowError:  # 1e308min: finite as a number, infinite in nanoseconds
-            ns = MAX_DURATION_NS + 1
-        if ns > MAX_DURATION_NS:
-            self.fail(f"{value}: too long (at most 100 years)", param, ctx)
-        return ns
 
 
 DURATION = Duration()
@@ -82,17 +71,6 @@ def progress(text: str) -> None:
             os.close(devnull)
 
 
-def _quiet_broken_pipe() -> NoReturn:
-    """Our reader went away (`llfsm run ... | head -1`): end quietly, as `cat` would."""
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            os.dup2(devnull, stream.fileno())  # later flushes (and interpreter exit) write nowhere
-        except (OSError, ValueError):
-            pass
-    sys.exit(EXIT_OK)
-
-
 def _existing(paths: tuple[str, ...]) -> list[Path]:
     out = []
     for p in paths:
@@ -111,27 +89,9 @@ class _Group(click.Group):
     def invoke(self, ctx: click.Context) -> object:
         try:
             return super().invoke(ctx)
-        except BrokenPipeError:
-            _quiet_broken_pipe()
-        except OSError as e:
-            if e.errno in _OUTPUT_ERRNOS:  # stdout on a full disk, /dev/full: not an llfsm bug
-                _output_failed(e)
+        except OSError as e:  # a closed pipe, a full disk under stdout (as the fast path: _base)
+            output_errors(e)
             raise
-
-
-#: Errors that only a write can get: the output (stdout) could not be written.
-_OUTPUT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
-
-
-def _output_failed(e: OSError) -> NoReturn:
-    """One line on stderr, status 1; what is still buffered for stdout is dropped, so that
-    Python's exit does not fail on it a second time."""
-    with contextlib.suppress(OSError):
-        os.write(2, f"llfsm: cannot write the output: {e.strerror or e}\n".encode())
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    with contextlib.suppress(OSError, ValueError):
-        os.dup2(devnull, sys.stdout.fileno())
-    sys.exit(EXIT_ERRORS)
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})

@@ -29,7 +29,7 @@ def view(web: str, duration: int | None) -> None:
     """
     from ..runtime import Arrangement, RunContext, WallClock, signals_handled
     from ..runtime.context import activate
-    from .run import _open_transport, _serve_web, _web_address
+    from ._run import _open_transport, _serve_web, _web_address
 
     address = _web_address(web)
     ctx = RunContext(WallClock(10_000_000, None))

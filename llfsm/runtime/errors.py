@@ -214,7 +214,9 @@ def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorRepor
     while tb is not None:
         fname = tb.tb_frame.f_code.co_filename
         linecache.checkcache(fname)
-        if is_generated(fname):
+        # a message class's module is generated too, but it is not the user's code: the report
+        # names the machine line that led there (where the stack ends depends on its depth)
+        if is_generated(fname) and not str(tb.tb_frame.f_globals.get("__name__")).startswith("llfsm.msgs."):
             found = tb
         tb = tb.tb_next
     if found is None:

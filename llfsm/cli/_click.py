@@ -1,0 +1,47 @@
+"""The click side of the `llfsm` command: every verb registered on the group, and the entry
+point that turns what escapes the commands into a message and a status, not a traceback."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from . import (  # noqa: F401  (each registers its commands)
+    bag,
+    build,
+    check,
+    graph,
+    interface,
+    new,
+    node,
+    run,
+    service,
+    topic,
+    view,
+)
+from ._base import EXIT_USAGE, _quiet_broken_pipe, internal_error
+from ._common import cli
+
+__all__ = ["cli", "main"]
+
+
+def main() -> None:
+    """Entry point: turns what escapes the commands into a message and a status, not a traceback."""
+    try:
+        cli.main(prog_name="llfsm", standalone_mode=False)
+    except click.exceptions.Exit as e:
+        sys.exit(e.exit_code)
+    except click.ClickException as e:
+        e.show()
+        sys.exit(EXIT_USAGE)
+    except click.exceptions.Abort:
+        sys.exit(130)
+    except BrokenPipeError:
+        _quiet_broken_pipe()
+    except KeyboardInterrupt:
+        sys.exit(130)
+    except SystemExit:
+        raise
+    except Exception as exc:  # an llfsm bug: say so plainly
+        internal_error(exc)
