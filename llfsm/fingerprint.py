@@ -1,36 +1,61 @@
-"""Content fingerprints for incremental builds.
+"""Content fingerprints for incremental builds, and the stat record that spares a warm run
+from hashing.
 
-Deliberately light (hashlib and os only): `llfsm run DIR.machine` calls it to decide whether
-the cached module is fresh, and must not import the compiler to find out that it is.
+Deliberately light: `llfsm run DIR.machine` calls it to decide whether the cached module is
+fresh, and must not import the compiler to find out that it is.  Importing this module costs
+nothing (hashlib and pathlib are imported by the functions that hash); `unchanged_since_record`,
+the test of a warm run, only lists and stats files.
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
-from functools import cache
-from pathlib import Path
+import stat
 
 from . import __version__
 from .discover import refused_link
 
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from pathlib import Path
+
 HEADER_KEY = "# Fingerprint: "
-_PKG = Path(__file__).parent
+_PKG = os.path.dirname(os.path.abspath(__file__))
+#: A file changed this recently (ns) may change again within the same clock tick unseen: a stat
+#: record is written only when every file is older than this (git's "racily clean" rule).
+RACY_NS = 2_000_000_000
+_compiler_id: str | None = None
 
 
-@cache
+def _compiler_files() -> list[str]:
+    """What shapes generated code besides the version: the machine templates and the compiler."""
+    templates = os.path.join(_PKG, "templates")
+    compiler = os.path.join(_PKG, "compiler")
+    return sorted(
+        os.path.join(templates, n) for n in os.listdir(templates) if n.startswith("machine") and n.endswith(".j2")
+    ) + sorted(os.path.join(compiler, n) for n in os.listdir(compiler) if n.endswith(".py") and not n.startswith("."))
+
+
 def compiler_id() -> str:
     """Changes whenever anything that shapes generated code changes: version, templates, compiler."""
-    h = hashlib.sha256(__version__.encode())
-    for p in sorted((_PKG / "templates").glob("machine*.j2")) + sorted((_PKG / "compiler").glob("*.py")):
-        h.update(p.name.encode())
-        h.update(p.read_bytes())
-    return h.hexdigest()[:16]
+    global _compiler_id
+    if _compiler_id is None:
+        import hashlib
+
+        h = hashlib.sha256(__version__.encode())
+        for p in _compiler_files():
+            h.update(os.path.basename(p).encode())
+            with open(p, "rb") as f:
+                h.update(f.read())
+        _compiler_id = h.hexdigest()[:16]
+    return _compiler_id
 
 
 def machine_fingerprint(path: Path, known: dict[str, bytes] | None = None) -> str:
     """Hash of every regular file of a machine directory (names and bytes) and the compiler id.
     `known`: bytes already read (by the checker), by file name: only the others are read."""
+    import hashlib
+
     if refused_link(path) is not None:  # never read; the build then reports it (LF037)
         raise OSError(f"{path} is a symlink leading out of its folder")
     h = hashlib.sha256(compiler_id().encode())
@@ -47,7 +72,7 @@ def machine_fingerprint(path: Path, known: dict[str, bytes] | None = None) -> st
     return h.hexdigest()
 
 
-def module_fingerprint(module: Path) -> str | None:
+def module_fingerprint(module: str | os.PathLike[str]) -> str | None:
     """The fingerprint recorded in a generated module's header, if it has one."""
     try:
         with open(module, encoding="utf-8", errors="replace") as f:
@@ -58,3 +83,70 @@ def module_fingerprint(module: Path) -> str | None:
     except OSError:
         return None
     return None
+
+
+# -- the stat record of a warm run ---------------------------------------------------------------
+
+
+def stat_signature(machine_dir: str) -> tuple[str, int] | None:
+    """What the machine's files and the compiler look like to stat (names, sizes, times, inodes),
+    with the newest change time among them; None when the folder cannot be listed or is a link
+    (the hashing path decides about those).  The same files as machine_fingerprint reads."""
+    if os.path.islink(machine_dir):
+        return None
+    lines = [__version__, os.path.abspath(machine_dir)]
+    newest = 0
+    try:
+        with os.scandir(machine_dir) as it:
+            entries = sorted((e.name, e.path) for e in it if not e.name.startswith("."))
+        files = [(name, path) for name, path in entries] + [(p, p) for p in _compiler_files()]
+    except OSError:
+        return None
+    for name, path in files:
+        try:
+            st = os.stat(path)
+        except OSError:
+            continue  # a dangling link: machine_fingerprint skips it too
+        if not stat.S_ISREG(st.st_mode):
+            continue
+        lines.append(f"{name}\0{st.st_size}\0{st.st_mtime_ns}\0{st.st_ctime_ns}\0{st.st_ino}\0{st.st_dev}")
+        newest = max(newest, st.st_ctime_ns, st.st_mtime_ns)
+    return "\n".join(lines), newest
+
+
+def _record_file(module: str) -> str:
+    return module + ".stat"
+
+
+def unchanged_since_record(machine_dir: str, module: str) -> bool:
+    """True when the module's fingerprint and the machine's stat signature are those recorded
+    by record_fresh: the module is up to date without reading or hashing a file."""
+    try:
+        with open(_record_file(module), encoding="utf-8", errors="replace") as f:
+            recorded = f.read()
+    except OSError:
+        return False
+    fp, _, sig = recorded.partition("\n")
+    now = stat_signature(machine_dir)
+    return now is not None and sig == now[0] and fp != "" and fp == module_fingerprint(module)
+
+
+def record_fresh(machine_dir: str, module: str, fp: str) -> None:
+    """After the module was found (by hashing) or made up to date: remember the stat signature,
+    unless a file changed so recently that a change within the same clock tick could be missed."""
+    import time
+
+    now = stat_signature(machine_dir)
+    if now is None or now[1] > time.time_ns() - RACY_NS:
+        return
+    record = _record_file(module)
+    tmp = f"{record}.{os.getpid()}.tmp"
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(f"{fp}\n{now[0]}")
+        os.replace(tmp, record)
+    except OSError:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass

@@ -3,22 +3,29 @@
 A target is a machine directory (compiled into a cache, never into the source tree), a built
 module (`build/ping.py`), or `PKG/NAME` of a package installed by colcon (found through
 AMENT_PREFIX_PATH).  The compiler is imported only when a cached module is missing or stale,
-so a warm start pays for hashing the machine's files and nothing more.
+so a warm start pays for stat-ing the machine's files (hashing them only when they changed
+recently) and nothing more.
+
+The run's path through this module (`load` of a machine directory or a built module) imports
+neither pathlib nor hashlib nor importlib.util: each is a tenth of `llfsm run`'s start-up.  The
+functions that return a Path (`resolve`, `compiled_module_for`, `cache_root`) import it.
 """
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
 import os
 import sys
-from pathlib import Path
 
 from .cachedir import cache_dir
 from .cachedir import problem as cache_problem
-from .discover import MACHINE_SUFFIX, machine_name_of
+from .discover import MACHINE_SUFFIX
 from .runtime.errors import ErrorReport, passes_through, report_for
 from .runtime.machine import Machine
+
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from pathlib import Path
+    from types import ModuleType
 
 
 class TargetError(Exception):
@@ -41,45 +48,92 @@ class MachineLoadError(Exception):
         self.report = report
 
 
-def cache_root() -> Path:
+def _cache_root() -> str:
     env = os.environ.get("LLFSM_CACHE_DIR")
     if env:
-        return Path(env)
+        return env
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "llfsm"
+    return os.path.join(base, "llfsm")
+
+
+def cache_root() -> Path:
+    from pathlib import Path
+
+    return Path(_cache_root())
+
+
+def _path_str(p: str) -> str:
+    """str(Path(p)), without pathlib: repeated and trailing slashes and `.` parts dropped."""
+    lead = "//" if p.startswith("//") and not p.startswith("///") else "/" if p.startswith("/") else ""
+    return lead + "/".join(x for x in p.split("/") if x and x != ".") or "."
+
+
+def _name(p: str) -> str:
+    """Path(p).name, without pathlib."""
+    parts = [x for x in p.split("/") if x and x != "."]
+    return parts[-1] if parts else ""
+
+
+def _cache_key(machine_dir: str) -> str:
+    """The machine's folder in the cache: named after its real path (zlib's checksums, not
+    hashlib's: a different key only costs a compile, and hashlib costs every run's start-up)."""
+    import zlib
+
+    b = os.fsencode(os.path.realpath(machine_dir))
+    return f"{zlib.crc32(b):08x}{zlib.adler32(b):08x}"
 
 
 def compiled_module_for(machine_dir: Path) -> Path:
     """The cached module of a machine directory, compiled first if missing or stale."""
-    import hashlib
+    from pathlib import Path
 
-    from .fingerprint import machine_fingerprint, module_fingerprint  # hashlib: only for folders
+    return Path(_compiled_module(os.fspath(machine_dir)))
 
-    key = hashlib.sha256(os.fsencode(machine_dir.resolve())).hexdigest()[:16]
-    out = Path(cache_dir(str(cache_root()), key))  # a folder of ours that no one else can write
-    module = out / f"{machine_name_of(machine_dir)}.py"
+
+def _compiled_module(machine_dir: str) -> str:
+    from .fingerprint import module_fingerprint, record_fresh, unchanged_since_record
+
+    out = cache_dir(_cache_root(), _cache_key(machine_dir))  # a folder of ours that no one else can write
+    name = _name(machine_dir)
+    module = os.path.join(out, f"{name.removesuffix(MACHINE_SUFFIX)}.py")
+    trusted = cache_problem(module, directory=False) is None
+    if trusted and unchanged_since_record(machine_dir, module):
+        return module  # the warm run: the files look exactly as when the module was last found fresh
+    from pathlib import Path
+
+    from .fingerprint import machine_fingerprint  # hashes the files
+
     try:
-        fresh = module_fingerprint(module) == machine_fingerprint(machine_dir)
+        fp: str | None = machine_fingerprint(Path(machine_dir))
+        fresh = module_fingerprint(module) == fp
     except OSError:
-        fresh = False
-    untrusted = fresh and cache_problem(module, directory=False) is not None
+        fp, fresh = None, False
+    untrusted = fresh and not trusted
     if untrusted:
         fresh = False  # not written by us for us: compile again (the atomic write replaces it)
     if fresh:
+        assert fp is not None
+        record_fresh(machine_dir, module, fp)
         return module
     from .compiler.build import build_machine  # only now: the compiler is not needed to run
 
     try:
-        outcome = build_machine(machine_dir, out, force=untrusted)
+        outcome = build_machine(Path(machine_dir), Path(out), force=untrusted)
     except OSError as e:
-        raise TargetError(f"{machine_dir}: cannot write its compiled module into {out}: {e.strerror or e}") from None
+        raise TargetError(
+            f"{_path_str(machine_dir)}: cannot write its compiled module into {out}: {e.strerror or e}"
+        ) from None
     if outcome.status == "failed" or outcome.module is None:
         raise InvalidMachine(outcome.diagnostics)
-    return outcome.module
+    if outcome.fingerprint:
+        record_fresh(machine_dir, os.fspath(outcome.module), outcome.fingerprint)
+    return os.fspath(outcome.module)
 
 
 def find_installed(spec: str) -> Path:
     """`PKG/NAME` -> the machine installed by colcon under some prefix of AMENT_PREFIX_PATH."""
+    from pathlib import Path
+
     pkg, _, name = spec.partition("/")
     prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
     for prefix in prefixes:
@@ -106,6 +160,8 @@ def find_installed(spec: str) -> Path:
 
 def _installed_machines(prefixes: list[str], pkg: str) -> set[str]:
     """The machines a package installs: share/PKG/llfsm/NAME.py and share/PKG/machine/NAME.machine."""
+    from pathlib import Path
+
     out: set[str] = set()
     for prefix in prefixes:
         share = Path(prefix) / "share" / pkg
@@ -117,6 +173,8 @@ def _installed_machines(prefixes: list[str], pkg: str) -> set[str]:
 
 
 def _installed_packages(prefixes: list[str]) -> set[str]:
+    from pathlib import Path
+
     return {
         p.name
         for prefix in prefixes
@@ -127,6 +185,8 @@ def _installed_packages(prefixes: list[str]) -> set[str]:
 
 def _listing(folder: Path, limit: int = 2000) -> list[Path]:
     """A folder's entries (at most `limit`: a hint must not cost a scan of a huge folder)."""
+    from pathlib import Path
+
     try:
         with os.scandir(folder) as it:
             return [Path(e.path) for _, e in zip(range(limit), it, strict=False)]
@@ -144,6 +204,8 @@ def _did_you_mean(name: str, choices: set[str] | list[str]) -> str:
 def _not_found(target: str) -> str:
     """What to say about a target that names nothing: the NAME.machine folder it probably meant,
     or close names of machines and modules beside it."""
+    from pathlib import Path
+
     p = Path(target)
     bare = p.name.removesuffix(MACHINE_SUFFIX).removesuffix(".py")
     for guess in (p.with_name(bare + MACHINE_SUFFIX), p.with_name(bare + ".py")):
@@ -161,36 +223,52 @@ def _not_found(target: str) -> str:
 
 def resolve(target: str) -> Path:
     """The module file to load for a target."""
-    p = Path(target)
-    if p.is_dir():
-        if p.name.endswith(MACHINE_SUFFIX) or (p / "machine.yaml").exists():
-            return compiled_module_for(p)
+    from pathlib import Path
+
+    return Path(_resolve(target))
+
+
+def _resolve(target: str) -> str:
+    """resolve(), as a str: the run's own path (no pathlib)."""
+    p = _path_str(target)
+    if os.path.isdir(p):
+        if _name(p).endswith(MACHINE_SUFFIX) or os.path.exists(os.path.join(p, "machine.yaml")):
+            return _compiled_module(p)
         raise TargetError(f"{target}: a directory, but not a NAME.machine directory")
-    if p.is_file():
-        if p.suffix == ".py":
+    if os.path.isfile(p):
+        if os.path.splitext(_name(p))[1] == ".py":
             return p
         raise TargetError(f"{target}: not a machine directory or a built module (.py)")
     if target.count("/") == 1 and not target.startswith((".", "/")) and not target.endswith((".py", MACHINE_SUFFIX)):
         found = find_installed(target)
-        return compiled_module_for(found) if found.is_dir() else found
+        return _compiled_module(os.fspath(found)) if found.is_dir() else os.fspath(found)
     raise TargetError(_not_found(target))
 
 
 def helper_folder(target: str) -> Path | None:
     """Where a machine's helper modules live: the folder that holds NAME.machine (or the built
     module).  Its modules can be imported from Includes.py without setting PYTHONPATH."""
-    p = Path(target)
-    if p.exists():
-        return Path(os.path.realpath(p)).parent
+    folder = _helper_folder(target)
+    if folder is None:
+        return None
+    from pathlib import Path
+
+    return Path(folder)
+
+
+def _helper_folder(target: str) -> str | None:
+    p = _path_str(target)
+    if os.path.exists(p):
+        return os.path.dirname(os.path.realpath(p))
     if target.count("/") == 1:
         try:
-            return find_installed(target).parent
+            return os.fspath(find_installed(target).parent)
         except TargetError:
             return None
     return None
 
 
-def _native_module(module_path: Path) -> str | None:
+def _native_module(module_path: str | Path) -> str | None:
     """The compiled module of a built module in this process's native build (LLFSM_NATIVE),
     or None: no native build, or one that left this machine plain Python."""
     folder = os.environ.get("LLFSM_NATIVE")
@@ -199,11 +277,13 @@ def _native_module(module_path: Path) -> str | None:
     import json
 
     try:
-        manifest = json.loads(Path(folder, "manifest.json").read_text(encoding="utf-8"))
+        with open(os.path.join(folder, "manifest.json"), encoding="utf-8") as f:
+            manifest = json.load(f)
     except (OSError, ValueError):
         return None
     try:
-        data = module_path.read_bytes()
+        with open(module_path, "rb") as f:
+            data = f.read()
     except OSError:
         return None
     import hashlib
@@ -211,10 +291,12 @@ def _native_module(module_path: Path) -> str | None:
     return manifest.get("modules", {}).get(hashlib.sha256(data).hexdigest()[:32])
 
 
-def load_class(module_path: Path) -> type[Machine]:
+def load_class(module_path: str | Path) -> type[Machine]:
     """Import a built module and return its machine class."""
     native = _native_module(module_path)
     if native is not None:
+        import importlib
+
         module = importlib.import_module(native)
         found = [
             v
@@ -225,15 +307,13 @@ def load_class(module_path: Path) -> type[Machine]:
             return found[0]
     import zlib  # not hashlib: a run that loads built modules does not need it
 
-    key = f"{zlib.crc32(os.fsencode(module_path.resolve())):08x}"  # the same name in every run
-    mod_name = f"llfsm_machine_{module_path.stem}_{key}"
-    spec = importlib.util.spec_from_file_location(mod_name, module_path)
-    if spec is None or spec.loader is None:
-        raise TargetError(f"{module_path}: cannot be imported")
-    module = importlib.util.module_from_spec(spec)
+    path = os.fspath(module_path)
+    key = f"{zlib.crc32(os.fsencode(os.path.realpath(path))):08x}"  # the same name in every run
+    mod_name = f"llfsm_machine_{os.path.splitext(_name(path))[0]}_{key}"
+    module = _new_module(mod_name, path)
     sys.modules[mod_name] = module
     try:
-        spec.loader.exec_module(module)
+        module.__loader__.exec_module(module)
     except SyntaxError as e:
         sys.modules.pop(mod_name, None)
         raise TargetError(f"{module_path}:{e.lineno}: not a valid module: {e.msg}") from None
@@ -255,11 +335,28 @@ def load_class(module_path: Path) -> type[Machine]:
     return classes[0]
 
 
+def _new_module(name: str, path: str) -> ModuleType:
+    """What importlib.util.spec_from_file_location and module_from_spec make of a source file,
+    from importlib.machinery alone (importlib.util imports contextlib and functools)."""
+    from importlib.machinery import ModuleSpec, SourceFileLoader
+
+    loader = SourceFileLoader(name, path)
+    spec = ModuleSpec(name, loader, origin=path)
+    spec.has_location = True
+    module = type(sys)(name)
+    module.__spec__ = spec
+    module.__loader__ = loader
+    module.__package__ = ""
+    module.__file__ = path
+    module.__cached__ = spec.cached  # type: ignore[attr-defined]
+    return module
+
+
 def load(target: str) -> type[Machine]:
-    module = resolve(target)
-    folder = helper_folder(target)
-    if folder is not None and str(folder) not in sys.path:
+    module = _resolve(target)
+    folder = _helper_folder(target)
+    if folder is not None and folder not in sys.path:
         # last: a helper never hides an installed module of the same name (a `yaml.py` beside
         # the machines stays a helper for them, pyyaml stays pyyaml)
-        sys.path.append(str(folder))
+        sys.path.append(folder)
     return load_class(module)

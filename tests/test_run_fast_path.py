@@ -8,12 +8,14 @@ way a command goes, the user sees the same output and exit status.
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import click
 import pytest
 from click.testing import CliRunner
-from conftest import llfsm_process, write_machine
+from conftest import MACHINES, llfsm_process, write_machine
 
 from llfsm.cli import cli
 from llfsm.cli.run_args import COMPLETE_VAR, RUN_OPTIONS, TARGETS, parse
@@ -151,3 +153,70 @@ def test_the_command_gives_what_the_click_command_gives(tmp_path: Path) -> None:
     assert expected[2][0] == 1 and "ZeroDivisionError" in expected[2][2]
     assert expected[6][0] == 2 and "No such option" in expected[6][2]
     assert expected[9][0] == 0 and "Usage: llfsm run" in expected[9][1]
+
+
+def test_a_warm_run_imports_neither_click_nor_the_bus(tmp_path: Path) -> None:
+    """What the start-up target rests on: a plain run of a machine directory with a fresh cache
+    imports nothing of the command-line library, the compiler, the bus or the messages."""
+    m = MACHINES / "counter.machine"
+    probe = (
+        "import atexit, sys\n"
+        "heavy = ('click', 'yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.ros', 'llfsm.msgs', 'hashlib')\n"
+        "atexit.register(lambda: sys.stderr.write('HEAVY %s\\n' % sorted(m for m in heavy if m in sys.modules)))\n"
+        "from llfsm.__main__ import main\n"
+        f"sys.argv = ['llfsm', 'run', '--clock', 'sim', {str(m)!r}]\n"
+        "main()\n"
+    )
+    env = dict(os.environ, LLFSM_CACHE_DIR=str(tmp_path / "cache"))
+    cold = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, timeout=120)
+    warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, timeout=120)
+    assert "click" not in cold.stderr.split("HEAVY")[1]  # compiling does not need click either
+    assert "HEAVY []" in warm.stderr, warm.stderr
+    assert warm.stdout == cold.stdout and "done" in warm.stdout
+
+
+def test_a_warm_run_trusts_its_stat_record_and_sees_changes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A warm run of a machine directory stats its files instead of hashing them, once a stat
+    record says how they looked when the module was last found fresh; an edit that keeps the
+    size and puts the modification time back, a new file, a removed file: each is seen."""
+    import llfsm.fingerprint as fingerprint
+
+    monkeypatch.setattr(fingerprint, "RACY_NS", 0)  # record files however recently they changed
+    m = write_machine(tmp_path, "rec", {"A": None}, {"A_OnEntry": "print('one')"})
+    assert in_process("run", "--clock", "sim", m)[1] == "one\n"
+    records = list(Path(os.environ["LLFSM_CACHE_DIR"]).rglob("rec.py.stat"))
+    assert len(records) == 1
+
+    real_fingerprint = fingerprint.machine_fingerprint
+
+    def no_hashing(*args: object, **kw: object) -> str:
+        raise AssertionError("a warm run with a stat record hashed the machine's files")
+
+    monkeypatch.setattr(fingerprint, "machine_fingerprint", no_hashing)
+    assert in_process("run", "--clock", "sim", m)[1] == "one\n"
+    monkeypatch.setattr(fingerprint, "machine_fingerprint", real_fingerprint)
+
+    f = m / "State_A_OnEntry.py"
+    st = f.stat()
+    f.write_text("print('two')\n")  # same size
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))  # and the same modification time
+    assert in_process("run", "--clock", "sim", m)[1] == "two\n"
+    (m / "State_A_OnExit.py").write_text("print('bye')\n")
+    assert in_process("run", "--clock", "sim", m)[1] == "two\n"  # A is accepting: no OnExit
+    (m / "State_A_OnExit.py").unlink()
+    (m / "Variables.py").write_text("x: int = 1\n")
+    f.write_text("print(x)\n")
+    assert in_process("run", "--clock", "sim", m)[1] == "1\n"
+
+
+def test_no_stat_record_for_files_that_just_changed(tmp_path: Path) -> None:
+    """A file changed within the last two seconds could change again in the same clock tick
+    without its stat changing: such a machine is hashed on every run until it settles."""
+    from llfsm.fingerprint import record_fresh, unchanged_since_record
+
+    m = write_machine(tmp_path, "new", {"A": None})
+    module = tmp_path / "new.py"
+    module.write_text("# Fingerprint: abc\n")
+    record_fresh(str(m), str(module), "abc")
+    assert not (tmp_path / "new.py.stat").exists()
+    assert not unchanged_since_record(str(m), str(module))

@@ -14,9 +14,11 @@ imported on first use (`from llfsm.cli import cli`).
 from __future__ import annotations
 
 import sys
-from typing import TYPE_CHECKING, Any
 
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
+    from typing import Any
+
     from click import Group
 
     cli: Group

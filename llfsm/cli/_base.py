@@ -8,12 +8,14 @@ same functions, so a message reads the same whichever way it was reached.
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import os
 import sys
-from collections.abc import Callable
-from typing import NoReturn
+
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import NoReturn
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
 #: The longest duration accepted (100 years): run-time arithmetic stays in 64-bit nanoseconds.
@@ -66,11 +68,15 @@ _OUTPUT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
 def _output_failed(e: OSError) -> NoReturn:
     """One line on stderr, status 1; what is still buffered for stdout is dropped, so that
     Python's exit does not fail on it a second time."""
-    with contextlib.suppress(OSError):
+    try:
         os.write(2, f"llfsm: cannot write the output: {e.strerror or e}\n".encode())
+    except OSError:
+        pass
     devnull = os.open(os.devnull, os.O_WRONLY)
-    with contextlib.suppress(OSError, ValueError):
+    try:
         os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
     sys.exit(EXIT_ERRORS)
 
 

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import TYPE_CHECKING, Any
 
 from ._base import EXIT_ERRORS, echo, fail
 
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
+    from typing import Any
+
     from ..ros.bus import Bus
     from ..runtime import RunContext
 
@@ -62,7 +64,7 @@ def run(
         )
     if native and not os.environ.get("LLFSM_NATIVE"):
         _run_native(targets)  # compiles (or finds) the native build, then runs in a fresh process
-    from ..msgs import add_search_path
+    from ..interface_paths import add_search_path  # not llfsm.msgs: a run without messages never imports it
 
     for t in targets:  # user interfaces (PKG/msg/*.msg) beside or above the machines import too
         folder = os.path.realpath(t)  # realpath: no error on a loop

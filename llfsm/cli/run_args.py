@@ -13,8 +13,11 @@ from __future__ import annotations
 
 import os
 import stat
-from collections.abc import Mapping, Sequence
-from typing import Any
+
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from collections.abc import Mapping, Sequence
+    from typing import Any
 
 #: Kinds of option: how the value is converted (click: is_flag, str, click.Path(dir_okay=False),
 #: click.Choice, Duration, float).

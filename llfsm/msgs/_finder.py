@@ -40,6 +40,18 @@ def add_search_path(path: str | os.PathLike[str]) -> None:
         _added.append(p)
 
 
+def _take_pending() -> None:
+    """The folders named before this module was imported (llfsm.interface_paths)."""
+    from .. import interface_paths
+
+    for p in interface_paths.pending:
+        add_search_path(p)
+    interface_paths.pending.clear()
+
+
+_take_pending()
+
+
 def _roots() -> list[str]:
     roots = list(_added)
     roots += [os.path.abspath(p) for p in _env_list("LLFSM_INTERFACE_PATH")]

@@ -4,8 +4,11 @@ comparisons are exact and a simulated run is reproducible byte for byte."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
-from typing import Any
+
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import Any
 
 
 def parse_duration(text: str) -> int:

@@ -7,10 +7,12 @@ from here so that `ros.ok()` turns false on Ctrl-C exactly as rclpy's does.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
 from .clock import Clock, SimClock, WallClock
+
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import Any
 
 #: A run time no run reaches: "never" for wake times and durations.
 FOREVER = 1 << 62

@@ -11,19 +11,20 @@ state finishes the machine itself.  Everything here is small because it sits on 
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, ClassVar
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import Any, ClassVar
 
-try:  # mypyc reads this decorator when it compiles the runtime (`--native`, the `native` extra)
+    from .scheduler import Arrangement
+
+if not __file__.endswith(".py"):  # compiled by mypyc (`--native`), which reads this decorator
     from mypy_extensions import mypyc_attr
-except ImportError:  # plain Python has nothing to do with it
+else:  # plain Python has nothing to do with it (and mypy_extensions would import typing)
 
     def mypyc_attr(*_args: object, **_kwargs: object) -> Callable[[type], type]:  # type: ignore[misc]
         return lambda cls: cls
 
-
-if TYPE_CHECKING:
-    from .scheduler import Arrangement
 
 #: Returned by the ringlet of an accepting state: the machine has finished.
 FINISHED = -1
@@ -31,9 +32,10 @@ FINISHED = -1
 # Control commands a machine can have pending (SPEC section 2, step 1).
 SUSPEND, RESUME, RESTART = "suspend", "resume", "restart"
 
-#: A ringlet takes the machine (typed Any: each generated class types its own ringlets).
-Ringlet = Callable[[Any], "int | None"]
-Hook = Callable[[Any], None] | None
+if TYPE_CHECKING:
+    #: A ringlet takes the machine (typed Any: each generated class types its own ringlets).
+    Ringlet = Callable[[Any], "int | None"]
+    Hook = Callable[[Any], None] | None
 
 
 #: The instance attributes of the base class (its __slots__; reserved names for user variables).

@@ -10,19 +10,22 @@ apart means an untraced run pays nothing for tracing.
 
 from __future__ import annotations
 
-import signal
+import _signal as signal  # the signal module without its enums: enum is a tenth of a run's start-up
 import time
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
-from dataclasses import dataclass
-from types import FrameType
-from typing import Final
 
 from .clock import Clock, SimClock, WallClock
 from .context import FOREVER, RunContext, activate
 from .errors import ErrorReport, RunStopped, is_generated, passes_through, report_for, signal_name
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
+
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+    from types import FrameType, TracebackType
+    from typing import Final
+
+    SignalHandler = Callable[[int, FrameType | None], None]
 
 #: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
@@ -41,13 +44,21 @@ FAST: Final = 20_000
 BATCH: Final = 16
 
 
-@dataclass
 class RunResult:
-    reason: str  # finished | suspended | duration | interrupted | killed | error
-    rounds: int
-    time_ns: int
-    status: int
-    error: ErrorReport | None = None
+    """How a run ended.  (A plain class: dataclasses would cost a run's start-up.)"""
+
+    def __init__(self, reason: str, rounds: int, time_ns: int, status: int, error: ErrorReport | None = None) -> None:
+        self.reason = reason  # finished | suspended | duration | interrupted | killed | error
+        self.rounds = rounds
+        self.time_ns = time_ns
+        self.status = status
+        self.error = error
+
+    def __repr__(self) -> str:
+        return (
+            f"RunResult(reason={self.reason!r}, rounds={self.rounds!r}, time_ns={self.time_ns!r}, "
+            f"status={self.status!r}, error={self.error!r})"
+        )
 
 
 class ArrangementError(ValueError):
@@ -488,9 +499,8 @@ def _in_machine_code(frame: FrameType | None) -> bool:
     return False
 
 
-@contextmanager
-def signals_handled(arr: Arrangement) -> Iterator[None]:
-    """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run.
+def signals_handled(arr: Arrangement) -> _SignalsHandled:
+    """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run (a `with`).
 
     The first one asks the machines to finish (the scheduler sees it between rounds).  A second
     one, or the grace time passing in real time while machine code still loops or blocks (a real
@@ -519,11 +529,23 @@ def signals_handled(arr: Arrangement) -> Iterator[None]:
             held = grace + STUCK_SLACK_S
             stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
 
-    old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
-    old[signal.SIGALRM] = signal.signal(signal.SIGALRM, alarm)
-    try:
-        yield
-    finally:
+    return _SignalsHandled(handler, alarm)
+
+
+class _SignalsHandled:
+    """The handlers of signals_handled, installed on entry and the old ones put back on exit.
+    (Not contextlib.contextmanager: contextlib is a tenth of a run's start-up.)"""
+
+    def __init__(self, handler: SignalHandler, alarm: SignalHandler) -> None:
+        self.handler = handler
+        self.alarm = alarm
+        self.old: dict[int, object] = {}
+
+    def __enter__(self) -> None:
+        self.old = {s: signal.signal(s, self.handler) for s in STOP_SIGNALS}
+        self.old[signal.SIGALRM] = signal.signal(signal.SIGALRM, self.alarm)
+
+    def __exit__(self, t: type[BaseException] | None, e: BaseException | None, tb: TracebackType | None) -> None:
         signal.setitimer(signal.ITIMER_REAL, 0)
-        for s, h in old.items():
+        for s, h in self.old.items():
             signal.signal(s, h)

@@ -7,9 +7,11 @@ nothing for this module.
 from __future__ import annotations
 
 import sys
-from typing import IO, TYPE_CHECKING
 
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
+    from typing import IO
+
     from .machine import Machine
 
 
