@@ -191,7 +191,7 @@ def parse(args: Sequence[str], environ: Mapping[str, str] | None = None) -> dict
     """The keyword arguments of the run for `llfsm run ARGS`, exactly as click would make them,
     or None when click should handle ARGS (help, errors, forms this parser does not take)."""
     environ = os.environ if environ is None else environ
-    if COMPLETE_VAR in environ:
+    if COMPLETE_VAR in environ or os.name == "nt":  # completion; Windows, where click expands globs
         return None
     try:
         return _parse(args, environ)
