@@ -252,7 +252,7 @@ def _start_bus(
     from pathlib import Path
 
     from ..nodes import NodeError, NodeOptions, start
-    from ..nodes.echo import echo
+    from ..nodes.echo import echo as echo_topic
     from ..ros import InvalidNameError, Remap, bus_of, parse_param
     from ..runtime.context import activate
 
@@ -265,7 +265,7 @@ def _start_bus(
                 node, name, value = parse_param(text)
                 bus.parameters[(node, name)] = value
             for topic in echoes:
-                echo(bus, topic)
+                echo_topic(bus, topic)
         except (InvalidNameError, ValueError) as e:
             fail(str(e))
         if nodes:
