@@ -512,13 +512,22 @@ def section_startup(tmp: Path) -> list[Table]:
     llfsm = wheel_venv(tmp)
     python = str(llfsm.parent / "python")
     subprocess.run([str(llfsm), "build", str(m), "-o", str(tmp / "out"), "-q"], check=True, env=env)
+    hashing = "llfsm run hello.machine (warm cache, no stat record: hashes the files)"
     runs = {
         "python -c pass": [python, "-c", "pass"],
         "llfsm run build/hello.py": [str(llfsm), "run", "--clock", "sim", str(tmp / "out" / "hello.py")],
         "llfsm run hello.machine (warm cache)": [str(llfsm), "run", "--clock", "sim", str(m)],
+        hashing: [str(llfsm), "run", "--clock", "sim", str(m)],
     }
     for cmd in runs.values():
         wall(cmd, env)  # the first run writes the caches (bytecode of the compiled module)
+    # A warm run stats the machine's files (and llfsm's compiler) instead of hashing them once
+    # a stat record says they are as they were; a record is written only for files that have
+    # not changed for 2 s (llfsm.fingerprint.RACY_NS): llfsm was installed a moment ago.
+    time.sleep(2.1)
+    for cmd in runs.values():
+        wall(cmd, env)
+    records = list(Path(env["LLFSM_CACHE_DIR"]).rglob("hello.py.stat"))
     reps = 7 if QUICK else 15
     times: dict[str, list[float]] = {k: [] for k in runs}
     names = list(runs)
@@ -526,13 +535,17 @@ def section_startup(tmp: Path) -> list[Table]:
     for r in range(reps):
         k = r % len(names)
         for name in names[k:] + names[:k]:
+            if name == hashing:  # outside the timed region: this run finds no record (and writes it)
+                for record in records:
+                    record.unlink(missing_ok=True)
             times[name].append(wall(runs[name], env))
     bare = times["python -c pass"]
     rows = [["python -c pass (the interpreter alone)", f"{statistics.median(bare) * 1000:.0f}", "1.00", ""]]
     for name in names[1:]:
         rs = [a / b for a, b in zip(times[name], bare, strict=True)]
         ms = statistics.median(times[name]) * 1000
-        rows.append([name, f"{ms:.0f}", fmt_ratio((statistics.median(rs), min(rs), max(rs))), "≤ 2.5"])
+        target = "" if name == hashing else "≤ 2.5"
+        rows.append([name, f"{ms:.0f}", fmt_ratio((statistics.median(rs), min(rs), max(rs))), target])
     load = f"load average {load_before} before, {_load_average()} after, on {os.cpu_count()} cores"
     shutil.rmtree(Path(env["LLFSM_CACHE_DIR"]), ignore_errors=True)
     t = wall([str(llfsm), "run", "--clock", "sim", str(m)], env)

@@ -51,22 +51,30 @@ def compiler_id() -> str:
     return _compiler_id
 
 
-def machine_fingerprint(path: Path, known: dict[str, bytes] | None = None) -> str:
+def machine_fingerprint(path: str | Path, known: dict[str, bytes] | None = None) -> str:
     """Hash of every regular file of a machine directory (names and bytes) and the compiler id.
-    `known`: bytes already read (by the checker), by file name: only the others are read."""
+    `known`: bytes already read (by the checker), by file name: only the others are read.
+    (os.path, not pathlib: a run after an edit hashes the files and should not pay for it.)"""
     import hashlib
 
-    if refused_link(path) is not None:  # never read; the build then reports it (LF037)
-        raise OSError(f"{path} is a symlink leading out of its folder")
+    if os.path.islink(path):
+        from pathlib import Path
+
+        if refused_link(Path(path)) is not None:  # never read; the build then reports it (LF037)
+            raise OSError(f"{path} is a symlink leading out of its folder")
     h = hashlib.sha256(compiler_id().encode())
     h.update(os.fsencode(os.path.abspath(path)))
     for name in sorted(os.listdir(path)):
         if name.startswith("."):
             continue
-        p = path / name
-        if not p.is_file():
+        p = os.path.join(path, name)
+        if not os.path.isfile(p):
             continue
-        data = known[name] if known is not None and name in known else p.read_bytes()
+        if known is not None and name in known:
+            data = known[name]
+        else:
+            with open(p, "rb") as f:
+                data = f.read()
         h.update(b"\0%s\0%d\0" % (os.fsencode(name), len(data)))
         h.update(data)
     return h.hexdigest()

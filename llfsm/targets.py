@@ -99,12 +99,10 @@ def _compiled_module(machine_dir: str) -> str:
     trusted = cache_problem(module, directory=False) is None
     if trusted and unchanged_since_record(machine_dir, module):
         return module  # the warm run: the files look exactly as when the module was last found fresh
-    from pathlib import Path
-
     from .fingerprint import machine_fingerprint  # hashes the files
 
     try:
-        fp: str | None = machine_fingerprint(Path(machine_dir))
+        fp: str | None = machine_fingerprint(machine_dir)
         fresh = module_fingerprint(module) == fp
     except OSError:
         fp, fresh = None, False
@@ -115,6 +113,8 @@ def _compiled_module(machine_dir: str) -> str:
         assert fp is not None
         record_fresh(machine_dir, module, fp)
         return module
+    from pathlib import Path
+
     from .compiler.build import build_machine  # only now: the compiler is not needed to run
 
     try:
