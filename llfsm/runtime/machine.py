@@ -18,9 +18,9 @@ if TYPE_CHECKING:
 
     from .scheduler import Arrangement
 
-if not __file__.endswith(".py"):  # compiled by mypyc (`--native`), which reads this decorator
+if __file__.endswith((".so", ".pyd")):  # compiled by mypyc (`--native`), which reads this decorator
     from mypy_extensions import mypyc_attr
-else:  # plain Python has nothing to do with it (and mypy_extensions would import typing)
+else:  # plain Python (source or bytecode) has nothing to do with it, and mypy_extensions imports typing
 
     def mypyc_attr(*_args: object, **_kwargs: object) -> Callable[[type], type]:  # type: ignore[misc]
         return lambda cls: cls
