@@ -156,23 +156,37 @@ def test_the_command_gives_what_the_click_command_gives(tmp_path: Path) -> None:
 
 
 def test_a_warm_run_imports_neither_click_nor_the_bus(tmp_path: Path) -> None:
-    """What the start-up target rests on: a plain run of a machine directory with a fresh cache
-    imports nothing of the command-line library, the compiler, the bus or the messages."""
+    """What the start-up target rests on: a plain run of a machine directory with a fresh cache,
+    or of a built module, imports nothing of the command-line library, the compiler, the bus or
+    the messages, and hashes nothing."""
     m = MACHINES / "counter.machine"
-    probe = (
-        "import atexit, sys\n"
-        "heavy = ('click', 'yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.ros', 'llfsm.msgs', 'hashlib')\n"
-        "atexit.register(lambda: sys.stderr.write('HEAVY %s\\n' % sorted(m for m in heavy if m in sys.modules)))\n"
-        "from llfsm.__main__ import main\n"
-        f"sys.argv = ['llfsm', 'run', '--clock', 'sim', {str(m)!r}]\n"
-        "main()\n"
-    )
+    built = tmp_path / "build"
+    assert in_process("build", m, "-o", built, "-q")[0] == 0
+
+    def probe(target: Path) -> str:
+        return (
+            "import atexit, sys\n"
+            "heavy = ('click', 'yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.ros', 'llfsm.msgs', 'hashlib')\n"
+            "atexit.register(lambda: sys.stderr.write('HEAVY %s\\n' % sorted(m for m in heavy if m in sys.modules)))\n"
+            "import llfsm.fingerprint\n"
+            "llfsm.fingerprint.RACY_NS = 0  # a stat record even for files just checked out or merged\n"
+            "from llfsm.__main__ import main\n"
+            f"sys.argv = ['llfsm', 'run', '--clock', 'sim', {str(target)!r}]\n"
+            "main()\n"
+        )
+
     env = dict(os.environ, LLFSM_CACHE_DIR=str(tmp_path / "cache"))
-    cold = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, timeout=120)
-    warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, timeout=120)
+    run = [sys.executable, "-c", probe(m)]
+    cold = subprocess.run(run, capture_output=True, text=True, env=env, timeout=120)
+    warm = subprocess.run(run, capture_output=True, text=True, env=env, timeout=120)
     assert "click" not in cold.stderr.split("HEAVY")[1]  # compiling does not need click either
     assert "HEAVY []" in warm.stderr, warm.stderr
     assert warm.stdout == cold.stdout and "done" in warm.stdout
+    module = subprocess.run(
+        [sys.executable, "-c", probe(built / "counter.py")], capture_output=True, text=True, env=env, timeout=120
+    )
+    assert "HEAVY []" in module.stderr, module.stderr
+    assert module.stdout == warm.stdout
 
 
 def test_a_warm_run_trusts_its_stat_record_and_sees_changes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
