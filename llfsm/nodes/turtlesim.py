@@ -29,7 +29,7 @@ class _Turtle:
 
         node, world = sim.node, sim.world
         self.name = name
-        self.pose_type, self.color_type = Pose, Color
+        self.pose_type = Pose
 
         def on_cmd(msg: Any) -> None:
             world.command(name, msg.linear.x, msg.linear.y, msg.angular.z, sim.clock.now)
@@ -55,6 +55,9 @@ class _Turtle:
         self.pose_pub = node.create_publisher(Pose, f"{name}/pose", 10)
         self.color_pub = node.create_publisher(Color, f"{name}/color_sensor", 10)
         self.entities += [self.pose_pub, self.color_pub]
+        # One Color, filled in and published each update (publishing copies it for each
+        # subscription), as a machine may keep one message: it is sent as often as poses are.
+        self.color = Color()
 
     def publish(self, world: TurtleWorld) -> None:
         p = world.pose(self.name)
@@ -64,8 +67,9 @@ class _Turtle:
             )
         )
         if self.color_pub.get_subscription_count():
-            r, g, b = world.color_under(self.name)
-            self.color_pub.publish(self.color_type(r=r, g=g, b=b))
+            color = self.color
+            color.r, color.g, color.b = world.color_under(self.name)
+            self.color_pub.publish(color)
 
     def destroy(self) -> None:
         for e in self.entities:

@@ -7,7 +7,10 @@ reproducible byte for byte.
 
 Delivery: publishing copies the message once per reader (so a machine may keep mutating and
 re-publishing one object, as the seed machines do); a PULL reader keeps only the newest
-message; a PUSH subscription queues up to its QoS depth, dropping the oldest.
+message; a PUSH subscription queues up to its QoS depth, dropping the oldest.  A topic's taps
+(`Topic.taps`) are the exception: readers that take what they need from the message during
+`publish` and keep nothing (a recorder encodes it at once) are handed the message itself,
+since a copy would only be thrown away.
 
 The bus delivers within its process itself; the run's transport (transports/) carries traffic
 to and from other processes.  With the in-process transport nothing else happens; with DDS the
@@ -114,12 +117,16 @@ class Future:
 class Topic:
     """A named channel: its type and the readers attached to it."""
 
-    __slots__ = ("latched", "name", "on_readers", "published", "publishers", "readers", "type")
+    __slots__ = ("latched", "name", "on_readers", "published", "publishers", "readers", "taps", "type")
 
     def __init__(self, name: str, type_: type[Message]) -> None:
         self.name = name
         self.type = type_
         self.readers: list[Subscription] = []
+        #: Called as fn(msg) with each published message itself, not a copy, while `publish`
+        #: runs: for readers that must not keep it (`--record` encodes it there and then).  They
+        #: count as subscriptions.
+        self.taps: list[Callable[[Message], None]] = []
         self.publishers = 0
         self.published = 0
         #: What TRANSIENT_LOCAL publishers kept for late subscribers: publisher -> last messages.
@@ -404,7 +411,7 @@ class Bus:
                 name: {
                     "type": t.type._TYPE,
                     "publishers": t.publishers,
-                    "subscriptions": len(t.readers),
+                    "subscriptions": len(t.readers) + len(t.taps),
                     "messages": t.published,
                 }
                 for name, t in sorted(self.topics.items())
