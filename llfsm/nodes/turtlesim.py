@@ -68,7 +68,8 @@ class _Turtle:
         )
         if self.color_pub.get_subscription_count():
             color = self.color
-            color.r, color.g, color.b = world.color_under(self.name)
+            # bytes of the path image, 0..255 each: what the setters would check cannot fail
+            color._r, color._g, color._b = world.color_under(self.name)
             self.color_pub.publish(color)
 
     def destroy(self) -> None:
