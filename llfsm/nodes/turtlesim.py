@@ -157,7 +157,11 @@ class Turtlesim:
 
     # -- the 16 ms update ---------------------------------------------------------------------------
     def update(self) -> None:
-        sense = any(t.color_pub.get_subscription_count() for t in self.turtles.values())
+        sense = False
+        for t in self.turtles.values():
+            if t.color_pub.get_subscription_count():
+                sense = True
+                break
         for warning in self.world.update(self.clock.now, UPDATE_PERIOD, sense=sense):
             self.log.warning(warning)
         for t in self.turtles.values():
