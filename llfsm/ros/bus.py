@@ -181,7 +181,7 @@ class Bus:
         self.parameters: dict[tuple[str | None, str], Any] = {}  # (node or None, name) -> override
         #: Called with each new topic whose name is a key here (`--echo` waits for its topic).
         self.watchers: dict[str, list[Callable[[Topic], None]]] = {}
-        #: Called with every topic, those made later too (`add_tap`: `--record` attaches its readers).
+        #: Called with every topic, those made later too (`add_tap`: `--record` puts its taps on them).
         self.taps: list[Callable[[Topic], None]] = []
         self._seq = itertools.count()
         self.log_to_stdout = os.environ.get("RCUTILS_LOGGING_USE_STDOUT", "0") == "1"
@@ -257,7 +257,7 @@ class Bus:
 
     def add_tap(self, fn: Callable[[Topic], None]) -> None:
         """Call fn(topic) for every topic: each existing one now, each new one when it is made.
-        A recorder attaches its reader to each topic this way (llfsm.bag.recorder)."""
+        A recorder puts its tap in each topic's `Topic.taps` this way (llfsm.bag.recorder)."""
         self.taps.append(fn)
         for t in list(self.topics.values()):
             fn(t)
