@@ -7,8 +7,10 @@
    busy, under the sim clock (rounds back to back, never sleeping: the hardest case for a
    writer that must share the interpreter).  A third run has a do-nothing subscriber on every
    topic instead of the recorder: any recorder makes turtlesim sense colours (it does only while
-   the colour sensor has a subscriber), so "ratio to subscribed" is what the recorder itself
-   costs.  Runs alternate and each reports its median.  The time the writer needs after the
+   the colour sensor has a subscriber), so "ratio to subscribed" is what the recorder costs
+   beside the cheapest ordinary subscriber (which the bus hands a copy of each message; the
+   recorder's taps take the message itself, so the ratio may pass 1 where messages are many).
+   Runs alternate and each reports its median.  The time the writer needs after the
    last round to empty its queue and close the bag is shown apart.  Goal: ratio >= 0.8.
 2. Messages written per second to an MCAP bag, the same Twist payload (CDR bytes, made once)
    written by rosbags' writer, by the mcap library's writer, and by llfsm's BagWriter (the

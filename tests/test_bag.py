@@ -423,6 +423,37 @@ def _spawn(*args: str | os.PathLike[str], cwd: Path) -> subprocess.Popen[str]:
     )
 
 
+def test_the_writer_joins_records_cut_between_frames(tmp_path: Path) -> None:
+    """The run sends what it has in pieces of a size, cutting records anywhere (even inside a
+    header): the bag holds every message, whole, in order."""
+    import io
+    import json
+
+    from llfsm.bag._writer_process import FRAME, RECORD, serve
+    from llfsm.bag.typesupport import TypeSupport
+    from llfsm.bag.writer import qos_profile
+    from llfsm.msgs.std_msgs.msg import String
+
+    ts = TypeSupport()
+    definition, type_hash = ts.definition("std_msgs/msg/String")
+    cdr = ts.serializer(String)
+    topic = {"id": 1, "topic": "/chat", "type": "std_msgs/msg/String", "definition": definition}
+    topic.update(hash=type_hash, qos=[qos_profile()])
+    stream = b"".join(
+        RECORD.pack(1, 1000 * k, len(d)) + d for k, d in enumerate(cdr(String(data="x" * k)) for k in range(40))
+    )
+    frames = [(b"T", json.dumps(topic).encode())]
+    for a, b in zip([0, 3, 17, 18, 100, 101, 700], [3, 17, 18, 100, 101, 700, len(stream)], strict=True):
+        frames.append((b"M", stream[a:b]))
+    frames += [(b"S", b"\x00"), (b"C", b"")]
+    inp = io.BytesIO(b"".join(FRAME.pack(kind, len(data)) + data for kind, data in frames))
+    out = io.BytesIO()
+    assert serve(str(tmp_path / "cut"), "mcap", inp, out) == 0
+    assert json.loads(out.getvalue().splitlines()[-1]) == {"ok": True, "count": 40}
+    got = rosbags_messages(tmp_path / "cut")["/chat"]
+    assert [(t, m.data) for t, m in got] == [(1000 * k, "x" * k) for k in range(40)]  # type: ignore[attr-defined]
+
+
 @pytest.mark.parametrize("signum", ["SIGINT", "SIGTERM"])
 def test_interrupted_recording_is_a_closed_readable_bag(tmp_path: Path, signum: str) -> None:
     import signal

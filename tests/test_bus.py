@@ -170,6 +170,29 @@ def test_subscribers_get_a_copy_so_publishers_may_reuse_their_message(bus: Bus) 
     assert reader.latest.linear.x == 2.0
 
 
+def test_taps_see_the_message_itself_while_subscribers_still_get_a_copy(bus: Bus) -> None:
+    """A tap (what --record uses) takes what it needs during publish(): it is handed the very
+    object published, no copy; a subscription on the same topic still gets its own copy, and a
+    tap counts as a subscription (turtlesim senses colours while its topic has one)."""
+    n = ros.Node("n")
+    pub = n.create_publisher(Twist, "/turtle1/cmd_vel", 10)
+    seen: list[tuple[object, float]] = []
+    bus.add_tap(lambda topic: topic.taps.append(lambda m: seen.append((m, m.linear.x))))
+    assert pub.get_subscription_count() == 1
+    reader = n.create_subscription(Twist, "/turtle1/cmd_vel", None, 10)
+    assert pub.get_subscription_count() == 2
+    assert bus.graph()["topics"]["/turtle1/cmd_vel"]["subscriptions"] == 2
+    msg = Twist()
+    msg.linear.x = 2.0
+    pub.publish(msg)
+    msg.linear.x = -5.0
+    pub.publish(msg)
+    assert [x for _, x in seen] == [2.0, -5.0]  # each value as it was published
+    assert all(m is msg for m, _ in seen)  # the object itself
+    assert reader.latest is not msg and reader.latest.linear.x == -5.0
+    assert reader.count == 2
+
+
 def test_publishing_the_wrong_type_is_a_clear_error(bus: Bus) -> None:
     n = ros.Node("n")
     pub = n.create_publisher(Twist, "/turtle1/cmd_vel", 10)

@@ -461,3 +461,77 @@ def test_numbered_turtles_are_drawn_in_different_colours() -> None:
     colours = [turtle_color(f"turtle{i}") for i in range(1, 7)]
     assert len(set(colours)) == 6
     assert turtle_color("leader") == turtle_color("leader")
+
+
+def _reference_fill(buf: bytearray, x0: float, y0: float, x1: float, y1: float, rgba: bytes, width: int) -> None:
+    """The stroke painter as first written (one general loop): the faster painter in
+    llfsm.sim.world must paint exactly these pixels, or a colour sensor would read another
+    colour somewhere."""
+    if not (math.isfinite(x0) and math.isfinite(y0) and math.isfinite(x1) and math.isfinite(y1)):
+        return
+    half = width / 2.0
+    dx, dy = x1 - x0, y1 - y0
+    length = math.hypot(dx, dy)
+    ux, uy = (dx / length, dy / length) if length > 0.0 else (1.0, 0.0)
+    cx, cy = (x0 + x1) / 2.0, (y0 + y1) / 2.0
+    along = length / 2.0 + half
+    ey = abs(uy) * along + abs(ux) * half
+    for j in range(max(0, math.ceil(cy - ey - 0.5)), min(499, math.ceil(cy + ey - 0.5) - 1) + 1):
+        d = j + 0.5 - cy
+        xl, xr = -math.inf, math.inf
+        if ux != 0.0:
+            a, b = sorted(((-along - d * uy) / ux, (along - d * uy) / ux))
+            xl, xr = a, b
+        elif abs(d * uy) > along:
+            continue
+        if uy != 0.0:
+            a, b = sorted(((half - d * ux) / -uy, (-half - d * ux) / -uy))
+            xl, xr = max(xl, a), min(xr, b)
+        elif abs(d * ux) > half:
+            continue
+        i0, i1 = max(0, math.ceil(cx + xl - 0.5)), min(499, math.ceil(cx + xr - 0.5) - 1)
+        if i0 <= i1:
+            buf[(j * 500 + i0) * 4 : (j * 500 + i1 + 1) * 4] = rgba * (i1 - i0 + 1)
+
+
+@pytest.mark.parametrize("kind", ["short", "long", "axis", "edge"])
+def test_the_stroke_painter_paints_the_reference_pixels(kind: str) -> None:
+    import random
+
+    from llfsm.sim import world
+
+    rnd = random.Random(kind)
+    strokes = []
+    for _ in range(400):
+        x, y = rnd.uniform(-20, 520), rnd.uniform(-20, 520)
+        if kind == "edge":  # ends on pixel centres and edges, where rounding decides
+            x, y = round(x * 2) / 2, round(y * 2) / 2
+        a = rnd.choice([0.0, math.pi / 2, math.pi, -math.pi / 2]) if kind == "axis" else rnd.uniform(-4, 4)
+        n = rnd.uniform(0.0, 2.0) if kind in ("short", "edge") else rnd.uniform(0, 400)
+        rgba = bytes((rnd.randrange(256), rnd.randrange(256), rnd.randrange(256), 255))
+        strokes.append((x, y, x + n * math.cos(a), y + n * math.sin(a), rgba, rnd.choice([1, 2, 3, 4, 7, 12])))
+    mine, ref = bytearray(world._TRANSPARENT * 250_000), bytearray(world._TRANSPARENT * 250_000)
+    for s in strokes:
+        world._fill_stroke(mine, *s)
+        _reference_fill(ref, *s)
+        assert mine == ref, s
+
+
+def test_a_turtle_standing_still_senses_what_is_drawn_under_it_and_the_new_background() -> None:
+    w = TurtleWorld(sensor_sees_background=True)
+    w.update(TICK, sense=True)
+    assert w.color_under("turtle1") == BACKGROUND
+    w.set_background(1, 2, 3)  # repainted at once: the sensor sees it at the next update
+    w.update(2 * TICK, sense=True)
+    assert w.color_under("turtle1") == (1, 2, 3)
+    # another turtle draws a red line through turtle1's place, turtle1 never moving
+    w.spawn(CENTRE - 1.0, CENTRE, 0.0, "crosser")
+    w.set_pen("crosser", 200, 0, 0, 3, 0)
+    now = 2 * TICK
+    seen = []
+    for _ in range(60):
+        w.command("crosser", 2.0, 0.0, 0.0, now)
+        now += TICK
+        w.update(now, sense=True)
+        seen.append(w.color_under("turtle1"))
+    assert seen[0] == (1, 2, 3) and seen[-1] == (200, 0, 0)

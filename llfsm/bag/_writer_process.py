@@ -9,8 +9,11 @@ is closed properly with everything sent so far.
 Protocol, on standard input, frames of one kind byte and a 4-byte little-endian length:
 - `T` a topic (JSON: id, topic, type, definition, hash, qos; or id, topic, type, error if it
   cannot be recorded), sent before any message of it,
-- `M` messages: records of <uint32 topic id><int64 time ns><uint32 size><CDR bytes>; a topic's
-  connection is made when its first message comes (so connections follow first messages),
+- `M` messages: records of <uint32 topic id><int64 time ns><uint32 size><CDR bytes>, one
+  stream cut into frames anywhere (a record may begin in one `M` frame and end in the next:
+  the run sends what it has in pieces of a size, never looking for where records end); a
+  topic's connection is made when its first message comes (so connections follow first
+  messages),
 - `S` a batch ends (one byte: 1 = also end the MCAP chunk in progress),
 - `X` the bag's custom_data (JSON),
 - `C` close.  End of input without `C` closes the bag as well.
@@ -75,6 +78,7 @@ def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
     failed = False
     unpack = RECORD.unpack_from
     size = RECORD.size
+    rest = b""  # the start of a record whose end is in the next `M` frame
     while True:
         head = _read(inp, FRAME.size)
         if head is None:
@@ -92,10 +96,14 @@ def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
                 t = json.loads(payload)
                 topics[t["id"]] = t
             elif kind == b"M":
+                if rest:
+                    payload = rest + payload
                 view = memoryview(payload)
                 pos, end = 0, len(payload)
-                while pos < end:
+                while pos + size <= end:
                     cid, stamp, n = unpack(view, pos)
+                    if pos + size + n > end:
+                        break
                     pos += size
                     try:
                         c = conns[cid]
@@ -104,6 +112,7 @@ def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
                     if c is not None:
                         writer.write(c, stamp, bytes(view[pos : pos + n]))
                     pos += n
+                rest = bytes(view[pos:])
             elif kind == b"S":
                 writer.sync(end_chunk=payload == b"\x01")
             elif kind == b"X":

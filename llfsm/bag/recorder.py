@@ -1,18 +1,21 @@
 """`--record`: a bus subscriber that sees every topic and writes a rosbag2 bag beside the run.
 
-The recorder is a tap on the bus (`Bus.add_tap`): a reader on every topic, those that exist and
-those made later, like `ros2 bag record -a`.  (On the DDS transport it subscribes to each topic
-instead, so that what other processes publish is recorded too.)  Delivery costs the round the
-message's CDR encoding (one `struct.pack` of the generated encoder, done on the copy the bus
-makes for each reader) and one append of the finished pipe record to a list: nothing else
-happens per message in this process.  A thread of the run takes the records in batches, joins
-them and writes them to the bag writer process (`_writer_process`), which writes the bag on
-another core: neither the disk nor the storage libraries hold up a round.  A topic is
+The recorder taps the bus (`Bus.add_tap`): a tap on every topic (`Topic.taps`), those that exist
+and those made later, like `ros2 bag record -a`.  (On the DDS transport it subscribes to each
+topic instead, so that what other processes publish is recorded too.)  A tap is handed the
+published message itself, not the copy a subscription gets: its encoding is the snapshot.
+Delivery costs the round the message's CDR encoding (one `struct.pack` of the generated
+encoder), the pipe record's header (one more) and one extend of a bytearray (whole records
+only, so that a run stopped by a signal mid-message leaves none half-written): no object waits
+per message, and nothing else happens per message in this process.  A thread of the run takes
+what the bytearray holds in batches and writes it to the bag writer process
+(`_writer_process`), which writes the bag on another core: neither the disk nor the storage
+libraries hold up a round.  A topic is
 described to the writer (definition, type hash, QoS) once, by the thread; the writer makes
 its connection when the topic's first message comes, so connections and their ids follow the
 order of first messages, as the same run always has them.  The thread holds the interpreter
-only to join a piece of records (C, a fraction of a millisecond); it writes with the GIL
-released, and the writer process runs at a lower priority than the run.
+only to copy the bytes waiting and cut them off (two C calls, nothing per message); it writes
+with the GIL released, and the writer process runs at a lower priority than the run.
 
 Timestamps are the run clock under `--clock sim` (nanoseconds from the start of the run: two
 runs give the same bag, byte for byte) and the wall clock (nanoseconds since the epoch)
@@ -41,27 +44,12 @@ if TYPE_CHECKING:
 
 SIM_CLOCK_KEY = "llfsm.clock"  # in the bag's custom_data
 BATCH_S = 0.05  # how often the thread takes the records waiting
-# The thread takes every record waiting and writes them in pieces of this many: Python's GIL
-# lets one thread run at a time, and the rounds must keep most of it.  Joining a piece is one
-# C call of some 0.1 ms; writing it to the pipe releases the GIL (and waits there while the
-# writer process is behind), so the rounds run between pieces.
-PIECE = 2048  # records
+# The thread takes all the bytes waiting and writes them in frames of at most this many:
+# writing to the pipe releases the GIL (and waits there while the writer process is behind).
+PIECE = 1 << 20  # bytes
 CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
 START_TIMEOUT_S = 60.0
 QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
-
-
-class _Tap:
-    """The recorder's reader on one topic: what `Publisher.publish` hands a copy to.  Its
-    `_deliver` is a closure made for the topic that appends the message's finished pipe record
-    (`RECORD` header and CDR bytes) to the recorder's list: one small bytes object waits per
-    message instead of a tree of them, and the thread has nothing left to do per message."""
-
-    __slots__ = ("_deliver", "key")
-
-    def __init__(self, topic: Topic, deliver: Callable[[Any], None]) -> None:
-        self.key = topic
-        self._deliver = deliver
 
 
 class Recorder:
@@ -78,9 +66,10 @@ class Recorder:
         self.selected = {t if t.startswith("/") else "/" + t for t in topics} or None
         self.path = path
         self.types = TypeSupport()
-        # finished pipe records, appended by the run's thread, taken from the front by the
-        # sending thread (a list append and a slice deletion are each atomic under the GIL)
-        self.records: list[bytes] = []
+        # the messages' pipe records (RECORD header, CDR bytes), appended by the run's thread,
+        # taken from the front by the sending thread: a bytearray's extend, slice and front
+        # deletion are each atomic under the GIL (and cheap: no object per message).
+        self.records = bytearray()
         self._ids: dict[Topic, int] = {}
         self._undescribed: list[tuple[int, Topic]] = []  # topics the writer has not heard of
         self.clock: Any = None
@@ -91,7 +80,7 @@ class Recorder:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._listener: threading.Thread | None = None
-        self._taps: list[tuple[Topic, _Tap]] = []
+        self._taps: list[tuple[Topic, Callable[[Any], None]]] = []
         self._bus: Bus | None = None
         self._started = False
         self._node: Any = None  # with a remote transport: the recorder's node and subscriptions
@@ -151,9 +140,8 @@ class Recorder:
         deliver = self.reader(topic, wall=self.wall)
         if deliver is None:
             return
-        tap = _Tap(topic, deliver)
-        topic.readers.append(tap)  # type: ignore[arg-type]  # a reader as far as publish() is concerned
-        self._taps.append((topic, tap))
+        topic.taps.append(deliver)
+        self._taps.append((topic, deliver))
 
     def _subscribe(self, topic: Topic) -> None:
         """With a transport that reaches other processes (DDS), a tap would see only what this
@@ -173,9 +161,9 @@ class Recorder:
             activate(prev)
 
     def reader(self, topic: Topic, wall: bool) -> Callable[[Any], None] | None:
-        """What records a message of `topic` (a tap's delivery, or a subscription's callback),
-        stamped with the wall clock or the run clock; None (said) if its type cannot be
-        encoded.  The first reader of a topic gives it its id in the pipe."""
+        """What records a message of `topic` (a tap, or a subscription's callback), stamped with
+        the wall clock or the run clock; None (said) if its type cannot be encoded.  The first
+        reader of a topic gives it its id in the pipe."""
         try:
             cdr = self.types.serializer(topic.type)
         except BagError as e:
@@ -185,21 +173,21 @@ class Recorder:
         if key is None:
             key = self._ids[topic] = len(self._ids) + 1
             self._undescribed.append((key, topic))
-        append = self.records.append
+        extend = self.records.extend
         pack = RECORD.pack
         if wall:
             now = time.time_ns
 
             def deliver(msg: Any) -> None:
                 data = cdr(msg)
-                append(pack(key, now(), len(data)) + data)
+                extend(pack(key, now(), len(data)) + data)
 
         else:
             clock = self.clock
 
             def deliver(msg: Any) -> None:
                 data = cdr(msg)
-                append(pack(key, clock.now, len(data)) + data)
+                extend(pack(key, clock.now, len(data)) + data)
 
         return deliver
 
@@ -226,8 +214,7 @@ class Recorder:
             self._detach()  # the writer has gone (its reply says why)
 
     def _drain(self) -> None:
-        """Send every record waiting.  They are taken from the front of the list, all at once
-        (deleting a short prefix of a long list would move the rest each time)."""
+        """Send every byte waiting, taken from the front of the bytearray all at once."""
         records = self.records
         n = len(records)
         batch = records[:n]
@@ -236,7 +223,7 @@ class Recorder:
         if self._undescribed:
             self._describe()
         for i in range(0, n, PIECE):
-            self._send(b"M", b"".join(batch[i : i + PIECE]))
+            self._send(b"M", batch[i : i + PIECE])
 
     def _describe(self) -> None:
         """Tell the writer about the topics it has not heard of (before their records)."""
@@ -278,8 +265,8 @@ class Recorder:
 
     def _detach(self) -> None:
         for topic, tap in list(self._taps):
-            if tap in topic.readers:
-                topic.readers.remove(tap)  # type: ignore[arg-type]
+            if tap in topic.taps:
+                topic.taps.remove(tap)
         self._taps.clear()
         del self.records[:]
 

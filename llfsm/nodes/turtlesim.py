@@ -29,7 +29,7 @@ class _Turtle:
 
         node, world = sim.node, sim.world
         self.name = name
-        self.pose_type, self.color_type = Pose, Color
+        self.pose_type = Pose
 
         def on_cmd(msg: Any) -> None:
             world.command(name, msg.linear.x, msg.linear.y, msg.angular.z, sim.clock.now)
@@ -55,6 +55,9 @@ class _Turtle:
         self.pose_pub = node.create_publisher(Pose, f"{name}/pose", 10)
         self.color_pub = node.create_publisher(Color, f"{name}/color_sensor", 10)
         self.entities += [self.pose_pub, self.color_pub]
+        # One Color, filled in and published each update (publishing copies it for each
+        # subscription), as a machine may keep one message: it is sent as often as poses are.
+        self.color = Color()
 
     def publish(self, world: TurtleWorld) -> None:
         p = world.pose(self.name)
@@ -64,8 +67,10 @@ class _Turtle:
             )
         )
         if self.color_pub.get_subscription_count():
-            r, g, b = world.color_under(self.name)
-            self.color_pub.publish(self.color_type(r=r, g=g, b=b))
+            color = self.color
+            # bytes of the path image, 0..255 each: what the setters would check cannot fail
+            color._r, color._g, color._b = world.color_under(self.name)
+            self.color_pub.publish(color)
 
     def destroy(self) -> None:
         for e in self.entities:
@@ -152,7 +157,11 @@ class Turtlesim:
 
     # -- the 16 ms update ---------------------------------------------------------------------------
     def update(self) -> None:
-        sense = any(t.color_pub.get_subscription_count() for t in self.turtles.values())
+        sense = False
+        for t in self.turtles.values():
+            if t.color_pub.get_subscription_count():
+                sense = True
+                break
         for warning in self.world.update(self.clock.now, UPDATE_PERIOD, sense=sense):
             self.log.warning(warning)
         for t in self.turtles.values():

@@ -7,7 +7,10 @@ reproducible byte for byte.
 
 Delivery: publishing copies the message once per reader (so a machine may keep mutating and
 re-publishing one object, as the seed machines do); a PULL reader keeps only the newest
-message; a PUSH subscription queues up to its QoS depth, dropping the oldest.
+message; a PUSH subscription queues up to its QoS depth, dropping the oldest.  A topic's taps
+(`Topic.taps`) are the exception: readers that take what they need from the message during
+`publish` and keep nothing (a recorder encodes it at once) are handed the message itself,
+since a copy would only be thrown away.
 
 The bus delivers within its process itself; the run's transport (transports/) carries traffic
 to and from other processes.  With the in-process transport nothing else happens; with DDS the
@@ -114,12 +117,16 @@ class Future:
 class Topic:
     """A named channel: its type and the readers attached to it."""
 
-    __slots__ = ("latched", "name", "on_readers", "published", "publishers", "readers", "type")
+    __slots__ = ("latched", "name", "on_readers", "published", "publishers", "readers", "taps", "type")
 
     def __init__(self, name: str, type_: type[Message]) -> None:
         self.name = name
         self.type = type_
         self.readers: list[Subscription] = []
+        #: Called as fn(msg) with each published message itself, not a copy, while `publish`
+        #: runs: for readers that must not keep it (`--record` encodes it there and then).  They
+        #: count as subscriptions.
+        self.taps: list[Callable[[Message], None]] = []
         self.publishers = 0
         self.published = 0
         #: What TRANSIENT_LOCAL publishers kept for late subscribers: publisher -> last messages.
@@ -174,7 +181,7 @@ class Bus:
         self.parameters: dict[tuple[str | None, str], Any] = {}  # (node or None, name) -> override
         #: Called with each new topic whose name is a key here (`--echo` waits for its topic).
         self.watchers: dict[str, list[Callable[[Topic], None]]] = {}
-        #: Called with every topic, those made later too (`add_tap`: `--record` attaches its readers).
+        #: Called with every topic, those made later too (`add_tap`: `--record` puts its taps on them).
         self.taps: list[Callable[[Topic], None]] = []
         self._seq = itertools.count()
         self.log_to_stdout = os.environ.get("RCUTILS_LOGGING_USE_STDOUT", "0") == "1"
@@ -250,7 +257,7 @@ class Bus:
 
     def add_tap(self, fn: Callable[[Topic], None]) -> None:
         """Call fn(topic) for every topic: each existing one now, each new one when it is made.
-        A recorder attaches its reader to each topic this way (llfsm.bag.recorder)."""
+        A recorder puts its tap in each topic's `Topic.taps` this way (llfsm.bag.recorder)."""
         self.taps.append(fn)
         for t in list(self.topics.values()):
             fn(t)
@@ -404,7 +411,7 @@ class Bus:
                 name: {
                     "type": t.type._TYPE,
                     "publishers": t.publishers,
-                    "subscriptions": len(t.readers),
+                    "subscriptions": len(t.readers) + len(t.taps),
                     "messages": t.published,
                 }
                 for name, t in sorted(self.topics.items())

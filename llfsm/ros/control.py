@@ -149,7 +149,7 @@ class MachineGraph(Tracer):
                 self._publish(entry, current)
             entry.listened = True
         else:
-            entry.listened = self.always or bool(topic.readers)
+            entry.listened = self.always or bool(topic.readers) or bool(topic.taps)
         self._update_tracer()
 
     def _update_tracer(self) -> None:

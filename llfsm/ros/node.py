@@ -83,12 +83,15 @@ class Publisher:
         topic.published += 1
         for reader in topic.readers:
             reader._deliver(msg._copy())
+        if topic.taps:
+            for tap in topic.taps:
+                tap(msg)
         if self._remote is not None:
             self._remote.write(msg)
 
     def get_subscription_count(self) -> int:
         remote = self._remote.subscription_count() if self._remote is not None else 0
-        return len(self._topic.readers) + remote
+        return len(self._topic.readers) + len(self._topic.taps) + remote
 
     def destroy(self) -> None:
         if not self._destroyed:

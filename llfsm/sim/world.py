@@ -140,6 +140,10 @@ class _Turtle:
         "qy",
         "sensed",
         "sensed_at",
+        "sensed_bg",
+        "sensed_version",
+        "sensed_x",
+        "sensed_y",
         "teleports",
     )
 
@@ -161,6 +165,11 @@ class _Turtle:
         self.last_stroke = -1
         self.sensed: tuple[int, int, int] = (255, 255, 255)
         self.sensed_at = -1
+        # where `sensed` was read, and what the picture was then: a turtle standing still on a
+        # picture that has not changed reads the same pixel again
+        self.sensed_x = self.sensed_y = math.nan
+        self.sensed_version = -1
+        self.sensed_bg: tuple[int, int, int] | None = None
 
 
 class TurtleWorld:
@@ -351,7 +360,17 @@ class TurtleWorld:
             t.qx = x
             t.qy = y
             if sense:
-                t.sensed = self._pixel(x, y)
+                if not (
+                    x == t.sensed_x
+                    and y == t.sensed_y
+                    and t.sensed_version == self._version
+                    and t.sensed_bg is self._background
+                ):
+                    t.sensed = self._pixel(x, y)
+                    t.sensed_x = x
+                    t.sensed_y = y
+                    t.sensed_version = self._version
+                    t.sensed_bg = self._background
                 t.sensed_at = self._updates
             if (x != ox or y != oy) and t.pen_on:
                 x0 = ox * PIXELS_PER_METRE
@@ -514,7 +533,13 @@ def _check_rgb(rgb: Sequence[int], what: str) -> tuple[int, int, int]:
 def _fill_stroke(buf: bytearray, x0: float, y0: float, x1: float, y1: float, rgba: bytes, width: int) -> None:
     """Paint one stroke as an aliased QPainter line with a square cap: the rectangle around the
     segment, `width` wide and extended `width/2` past both ends.  A pixel is painted when its
-    centre lies inside; each pixel row is the intersection of the rectangle's two slabs."""
+    centre lies inside; each pixel row is the intersection of the rectangle's two slabs.
+
+    The colour sensor paints a stroke per turtle per update, so the common case (a slanted
+    stroke) has its own loop: each slab's two edges come out of its division in an order fixed
+    by the signs of the direction (rounding is monotonic), so the loop divides without the
+    comparisons and swaps; the operations and their order are the general loop's, so every
+    pixel is the same."""
     if not (math.isfinite(x0) and math.isfinite(y0) and math.isfinite(x1) and math.isfinite(y1)):
         return
     half = width / 2.0
@@ -534,6 +559,36 @@ def _fill_stroke(buf: bytearray, x0: float, y0: float, x1: float, y1: float, rgb
     j0 = max(0, math.ceil(cy - ey - 0.5))
     j1 = min(CANVAS_PX - 1, math.ceil(cy + ey - 0.5) - 1)
     last = CANVAS_PX - 1
+    if ux != 0.0 and uy != 0.0:
+        # Slab 1: |(x - cx) * ux + d * uy| <= along, edges (-along - d * uy) / ux and
+        # (along - d * uy) / ux; slab 2: |-(x - cx) * uy + d * ux| <= half, edges
+        # (half - d * ux) / -uy and (-half - d * ux) / -uy.  lo1/hi1, lo2/hi2: which is which.
+        nuy = -uy
+        lo1, hi1 = (-along, along) if ux > 0.0 else (along, -along)
+        lo2, hi2 = (-half, half) if nuy > 0.0 else (half, -half)
+        ceil = math.ceil
+        for j in range(j0, j1 + 1):
+            d = j + 0.5 - cy
+            t1 = d * uy
+            t2 = d * ux
+            xl = (lo1 - t1) / ux
+            a = (lo2 - t2) / nuy
+            if a > xl:
+                xl = a
+            xr = (hi1 - t1) / ux
+            b = (hi2 - t2) / nuy
+            if b < xr:
+                xr = b
+            i0 = ceil(cx + xl - 0.5)
+            i1 = ceil(cx + xr - 0.5) - 1
+            if i0 < 0:
+                i0 = 0
+            if i1 > last:
+                i1 = last
+            if i0 <= i1:
+                base = j * CANVAS_PX
+                buf[(base + i0) * 4 : (base + i1 + 1) * 4] = rgba * (i1 - i0 + 1)
+        return
     for j in range(j0, j1 + 1):
         d = j + 0.5 - cy
         # Slab 1: |(x - cx) * ux + d * uy| <= along.  Slab 2: |-(x - cx) * uy + d * ux| <= half.
