@@ -12,6 +12,7 @@ import io
 import os
 import re
 import tokenize
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache
 
@@ -175,10 +176,83 @@ class StateView:
         return any(h == "on_resume" for h, _ in self.command_hooks)
 
 
-def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Edit] | None = None) -> Block | None:
+#: Nodes that give names a scope or bind them otherwise than as a plain `Name` (or, for an
+#: f-string, need the text to rewrite): a tree without them is rewritten from its names alone.
+_SCOPED: frozenset[type[ast.AST]] = frozenset(
+    {
+        ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef, ast.ListComp, ast.SetComp,
+        ast.GeneratorExp, ast.DictComp, ast.NamedExpr, ast.JoinedStr, ast.ExceptHandler, ast.Import,
+        ast.ImportFrom, ast.alias, ast.Match, ast.MatchAs, ast.MatchStar, ast.MatchMapping, ast.Global,
+        ast.Nonlocal,
+    }
+)  # fmt: skip
+
+
+def _flat_names(tree: ast.AST) -> list[ast.Name] | None:
+    """Every `Name` of a tree that has no `_SCOPED` node, else None: one walk that serves the
+    rewrite, `used_names` and `own_locals` (which then agree with the scoped walks by
+    construction: with no scope and no other binder, each name is the section's own)."""
+    out: list[ast.Name] = []
+    stack = [tree]
+    name, scoped = ast.Name, _SCOPED
+    while stack:
+        for child in ast.iter_child_nodes(stack.pop()):
+            t = type(child)
+            if t is name:
+                out.append(child)  # type: ignore[arg-type]
+            elif t in scoped:
+                return None
+            else:
+                stack.append(child)
+    return out
+
+
+class _Trees:
+    """What the generator asks of each code tree, walked once per tree."""
+
+    def __init__(self) -> None:
+        self._flat: dict[int, list[ast.Name] | None] = {}
+        self._used: dict[int, set[str]] = {}
+
+    def flat(self, tree: ast.AST) -> list[ast.Name] | None:
+        key = id(tree)
+        if key not in self._flat:
+            self._flat[key] = _flat_names(tree)
+        return self._flat[key]
+
+    def edits(self, tree: ast.AST, mapping: Mapping[str, str], text: str) -> list[Edit]:
+        flat = self.flat(tree)
+        if flat is None:
+            return find(tree, mapping, text)[0]
+        out = []
+        for n in flat:
+            attr = mapping.get(n.id)
+            if attr is not None:
+                out.append(Edit(n.lineno, n.col_offset, n.end_col_offset or n.col_offset, attr))
+        return out
+
+    def used(self, tree: ast.AST) -> set[str]:
+        key = id(tree)
+        if key not in self._used:
+            flat = self.flat(tree)
+            self._used[key] = used_names(tree) if flat is None else {n.id for n in flat}
+        return self._used[key]
+
+    def own_locals(self, tree: ast.AST) -> set[str]:
+        flat = self.flat(tree)
+        return own_locals(tree) if flat is None else {n.id for n in flat if type(n.ctx) is not ast.Load}
+
+
+def _block(
+    code: Code,
+    tree: ast.Module,
+    mapping: Mapping[str, str],
+    extra: list[Edit] | None = None,
+    walks: _Trees | None = None,
+) -> Block | None:
     if not tree.body:
         return None  # empty, or only comments: costs nothing at run time
-    edits, _bad = find(tree, mapping, code.text)
+    edits = (walks or _Trees()).edits(tree, mapping, code.text)
     text = apply(code.text, edits + (extra or []))
     lines = text.split("\n")
     first = 0
@@ -189,9 +263,16 @@ def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Ed
 
 
 def _guard_view(
-    code: Code, tree: ast.Module, mapping: dict[str, str], index: int, target: int, target_name: str, to_suspend: bool
+    code: Code,
+    tree: ast.Module,
+    mapping: Mapping[str, str],
+    index: int,
+    target: int,
+    target_name: str,
+    to_suspend: bool,
+    walks: _Trees | None = None,
 ) -> GuardView:
-    block = _block(code, tree, mapping)
+    block = _block(code, tree, mapping, walks=walks)
     assert block is not None  # the checker guarantees one expression
     has_comment = "#" in block.text and any(
         t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline)
@@ -200,7 +281,7 @@ def _guard_view(
     return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend)
 
 
-def _variables_block(code: Code, tree: ast.Module, mapping: dict[str, str]) -> Block | None:
+def _variables_block(code: Code, tree: ast.Module, mapping: Mapping[str, str]) -> Block | None:
     """Variables.py as `self.name: type = value` lines, kept line for line; no value means None."""
     extra: list[Edit] = []
     for stmt in tree.body:
@@ -244,19 +325,14 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         tree = trees.get(code.file) if code is not None else None
         if tree is not None and code is not None and "after" in code.text and any(_after_use(tree)):
             stamp_all = True
-    names_of: dict[int, set[str]] = {}  # used_names per tree: each guard is asked about twice
-
-    def used(tree: ast.Module) -> set[str]:
-        if id(tree) not in names_of:
-            names_of[id(tree)] = used_names(tree)
-        return names_of[id(tree)]
+    walks = _Trees()  # each tree walked once for the rewrite, its names and its locals
 
     def view(s: State) -> StateView:
         mapping = state_map(base, s.name, [v.name for v in s.variables])
 
         def sec(name: str) -> Block | None:
             code = s.sections.get(name)
-            return _block(code, trees[code.file], mapping) if code is not None else None
+            return _block(code, trees[code.file], mapping, walks=walks) if code is not None else None
 
         sv = StateView(
             name=s.name,
@@ -275,15 +351,22 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             assert t.guard is not None
             sv.guards.append(
                 _guard_view(
-                    t.guard, trees[t.guard.file], mapping, t.index, index[t.target], t.target, index[t.target] == susp
+                    t.guard,
+                    trees[t.guard.file],
+                    mapping,
+                    t.index,
+                    index[t.target],
+                    t.target,
+                    index[t.target] == susp,
+                    walks,
                 )
             )
         parts = {sec: trees[c.file] for sec, c in s.sections.items() if sec in ("OnEntry", "Internal")}
         parts.update({f"guard{t.index}": trees[t.guard.file] for t in s.transitions if t.guard is not None})
         for part in ("OnEntry", "Internal"):
             if part in parts and not sv.is_suspend:
-                mine = {n for n in own_locals(parts[part]) if n not in mapping}
-                if mine and mine & set().union(*(used(tr) for k, tr in parts.items() if k != part)):
+                mine = {n for n in walks.own_locals(parts[part]) if n not in mapping}
+                if mine and mine & set().union(*(walks.used(tr) for k, tr in parts.items() if k != part)):
                     if part == "OnEntry":
                         sv.entry_method = sv.entry is not None
                     else:
