@@ -778,6 +778,29 @@ _PLAIN_DEPTH = 20  # CPython refuses more than 20 statically nested blocks
 
 
 _PLAIN_IF_CHECKED = (ast.ImportFrom, ast.Call, ast.Try, ast.comprehension)
+_PLAIN_IF_CHECKED_T: frozenset[type[ast.AST]] = frozenset(_PLAIN_IF_CHECKED)
+_NESTS_T: frozenset[type[ast.AST]] = frozenset(_NESTS)
+#: The node types `_scan` notes something about (besides `Name`): every other node is only
+#: walked through.  (`ast.parse` makes nodes of these exact classes, never of subclasses.)
+_SPECIAL: frozenset[type[ast.AST]] = frozenset(
+    {ast.Import, ast.ImportFrom, ast.Attribute, ast.arg, ast.alias, ast.Global, ast.Nonlocal}
+    | {ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.ExceptHandler, ast.MatchAs, ast.MatchStar}
+    | {ast.MatchMapping, *_BINDERS, *_ESCAPES}
+)
+
+
+def _children(node: ast.AST, _ast: type[ast.AST] = ast.AST) -> list[ast.AST]:
+    """`ast.iter_child_nodes` as a list, in the same order, without its two generators."""
+    out: list[ast.AST] = []
+    for name in node._fields:
+        v = getattr(node, name, None)
+        if isinstance(v, _ast):
+            out.append(v)
+        elif type(v) is list:
+            for item in v:
+                if isinstance(item, _ast):
+                    out.append(item)
+    return out
 
 
 def _plain_as_used(node: ast.AST) -> bool:
@@ -811,20 +834,23 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
     out = _Scanned()
     bound = out.bound
     stack: list[tuple[ast.AST, bool, int]] = [(tree, False, 0)]
+    name_t, plain_t, checked_t, special_t, nests_t = ast.Name, _PLAIN, _PLAIN_IF_CHECKED_T, _SPECIAL, _NESTS_T
     while stack:
         node, nested, depth = stack.pop()
         if depth > MAX_CODE_DEPTH:
             # the compiler's walks recurse: a deeper tree would exhaust Python's stack in them
             out.too_deep = node
             return out
-        for child in ast.iter_child_nodes(node):
+        for child in _children(node):
+            t = type(child)
             if out.plain and (
-                type(child) not in _PLAIN
-                or depth >= _PLAIN_DEPTH
-                or (isinstance(child, _PLAIN_IF_CHECKED) and not _plain_as_used(child))
+                t not in plain_t or depth >= _PLAIN_DEPTH or (t in checked_t and not _plain_as_used(child))
             ):
                 out.plain = False
-            if isinstance(child, ast.Name):
+            if t is not name_t and t not in special_t:  # most nodes: nothing to note, only to walk
+                stack.append((child, nested or t in nests_t, depth + 1))
+                continue
+            if t is name_t:
                 if child.id == "self" or child.id.startswith("_llfsm"):
                     out.reserved.append(child)
                 elif isinstance(child.ctx, ast.Load | ast.Del):  # `del x` reads x as well
