@@ -25,7 +25,7 @@ from .deps import undeclared_dependencies
 from .diagnostics import Diagnostic, Severity, diag
 from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
 from .model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
-from .names import Unresolved, section_bindings, unresolved
+from .names import Unresolved, child_nodes, section_bindings, unresolved
 from .reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
 from .workers import die_with_parent, usable_cores
@@ -789,20 +789,6 @@ _SPECIAL: frozenset[type[ast.AST]] = frozenset(
 )
 
 
-def _children(node: ast.AST, _ast: type[ast.AST] = ast.AST) -> list[ast.AST]:
-    """`ast.iter_child_nodes` as a list, in the same order, without its two generators."""
-    out: list[ast.AST] = []
-    for name in node._fields:
-        v = getattr(node, name, None)
-        if isinstance(v, _ast):
-            out.append(v)
-        elif type(v) is list:
-            for item in v:
-                if isinstance(item, _ast):
-                    out.append(item)
-    return out
-
-
 def _plain_as_used(node: ast.AST) -> bool:
     """For a `_PLAIN_IF_CHECKED` node: whether none of its compile-time-only errors applies."""
     if isinstance(node, ast.ImportFrom):
@@ -841,7 +827,7 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
             # the compiler's walks recurse: a deeper tree would exhaust Python's stack in them
             out.too_deep = node
             return out
-        for child in _children(node):
+        for child in child_nodes(node):
             t = type(child)
             if out.plain and (
                 t not in plain_t or depth >= _PLAIN_DEPTH or (t in checked_t and not _plain_as_used(child))

@@ -22,6 +22,7 @@ from .. import __version__
 from ..check import MachineCheck
 from ..diagnostics import Diagnostic, diag
 from ..model import Code, Machine, State
+from ..names import child_nodes
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
 from .rewrite import Edit, apply, attribute_of, find, name_map, own_locals, state_map, used_names
@@ -196,7 +197,7 @@ def _flat_names(tree: ast.AST) -> list[ast.Name] | None:
     stack = [tree]
     name, scoped = ast.Name, _SCOPED
     while stack:
-        for child in ast.iter_child_nodes(stack.pop()):
+        for child in child_nodes(stack.pop()):
             t = type(child)
             if t is name:
                 out.append(child)  # type: ignore[arg-type]
