@@ -35,13 +35,17 @@ def machine_fingerprint(path: Path, known: dict[str, bytes] | None = None) -> st
         raise OSError(f"{path} is a symlink leading out of its folder")
     h = hashlib.sha256(compiler_id().encode())
     h.update(os.fsencode(os.path.abspath(path)))
-    for name in sorted(os.listdir(path)):
-        if name.startswith("."):
+    with os.scandir(path) as it:  # file types from the listing: no stat per file
+        entries = sorted((e for e in it if not e.name.startswith(".")), key=lambda e: e.name)
+    for e in entries:
+        name = e.name
+        try:
+            regular = e.is_file()
+        except OSError:  # as Path.is_file decides (a symlink loop is no file)
+            regular = (path / name).is_file()
+        if not regular:
             continue
-        p = path / name
-        if not p.is_file():
-            continue
-        data = known[name] if known is not None and name in known else p.read_bytes()
+        data = known[name] if known is not None and name in known else (path / name).read_bytes()
         h.update(b"\0%s\0%d\0" % (os.fsencode(name), len(data)))
         h.update(data)
     return h.hexdigest()
