@@ -29,6 +29,7 @@ class BuildOutcome:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     name: str = ""
     fingerprint: str = ""  # of the machine's files, as written into the module
+    signature: str = ""  # _StatCache.signature, when the worker took it (before reading)
 
 
 #: Signals held back while a module is written: Ctrl-C, `kill` and a closed terminal.
@@ -114,12 +115,19 @@ def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None
 PARALLEL_FROM = 32
 
 
-def _build_or_error(path: Path, out_dir: Path, force: bool, fp: str | None = None) -> BuildOutcome | str:
-    """build_machine in a worker: an output that cannot be written comes back as its message."""
+def _build_or_error(
+    path: Path, out_dir: Path, force: bool, fp: str | None = None, sign: bool = False
+) -> BuildOutcome | str:
+    """build_machine in a worker: an output that cannot be written comes back as its message.
+    `sign`: take the machine's stat signature first (before anything is read, so that an edit
+    during the build is seen next time), here rather than serially in the parent."""
+    sig = _StatCache.signature(path) if sign else ""
     try:
-        return build_machine(path, out_dir, force, fp)
+        outcome = build_machine(path, out_dir, force, fp)
     except OSError as e:
         return str(e.strerror or e)
+    outcome.signature = sig
+    return outcome
 
 
 def build_all(
@@ -134,14 +142,16 @@ def build_all(
     stats = _StatCache(out_dir)
     stale: list[Path] = []
     fps: list[str | None] = []
-    sigs: dict[Path, str] = {}
+    sigs: dict[Path, str | None] = {}
     for path in paths:
         target = out_dir / f"{machine_name_of(path)}.py"
-        sig = stats.signature(path)
-        if not force and sig and stats.known.get(str(path)) == [sig, module_fingerprint(target)]:
+        known = stats.known.get(str(path))
+        old = module_fingerprint(target)
+        # with neither a record nor a module, the worker that builds the machine signs it
+        sig = stats.signature(path) if known is not None or old is not None else None
+        if not force and sig and known == [sig, old]:
             stats.keep(path, sig)
             continue
-        old = module_fingerprint(target)
         fp: str | None = None
         if old is not None and not force:  # a module to compare with: hash the machine's files
             try:
@@ -149,7 +159,7 @@ def build_all(
             except OSError:
                 fp = ""
             if fp and old == fp:
-                stats.record(path, sig, fp)
+                stats.record(path, sig or "", fp)
                 continue
         stale.append(path)
         fps.append(fp)
@@ -164,6 +174,7 @@ def build_all(
         from ..check import check_machine  # noqa: F401 (imported once, before the workers fork)
         from .generate import compile_machine  # noqa: F401
 
+        compiler_id()  # read once here, not by every worker
         ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
         import gc
 
@@ -171,17 +182,17 @@ def build_all(
         with _signals_deferred():  # an interrupt never lands between two forks: every worker is known
             pool = ctx.Pool(jobs, initializer=_worker_init)
         chunk = max(1, len(stale) // (jobs * 8))
-        work = [(p, out_dir, force, fp) for p, fp in zip(stale, fps, strict=True)]
+        work = [(p, out_dir, force, fp, sigs[p] is None) for p, fp in zip(stale, fps, strict=True)]
         results = pool.imap(_build_star, work, chunk)
     else:
-        results = (_build_or_error(p, out_dir, force, fp) for p, fp in zip(stale, fps, strict=True))
+        results = (_build_or_error(p, out_dir, force, fp, sigs[p] is None) for p, fp in zip(stale, fps, strict=True))
     try:
         todo = set(stale)
         for path in paths:
             if path in todo:
                 outcome = next(results)
                 if isinstance(outcome, BuildOutcome) and outcome.status != "failed":
-                    stats.record(path, sigs[path], outcome.fingerprint)
+                    stats.record(path, sigs[path] or outcome.signature, outcome.fingerprint)
                 yield outcome
             else:
                 yield BuildOutcome(
@@ -199,7 +210,7 @@ def build_all(
     stats.save()
 
 
-def _build_star(args: tuple[Path, Path, bool, str | None]) -> BuildOutcome | str:
+def _build_star(args: tuple[Path, Path, bool, str | None, bool]) -> BuildOutcome | str:
     return _build_or_error(*args)
 
 
@@ -259,17 +270,17 @@ class _StatCache:
     def signature(path: Path) -> str:
         import hashlib
 
-        h = hashlib.sha256(compiler_id().encode())
+        parts = []
         try:
             with os.scandir(path) as it:
                 for e in sorted(it, key=lambda e: e.name):
                     if e.name.startswith(".") or not e.is_file():
                         continue
                     st = e.stat()
-                    h.update(f"{e.name}\0{st.st_size}\0{st.st_mtime_ns}\0{st.st_ino}\0".encode())
+                    parts.append(f"{e.name}\0{st.st_size}\0{st.st_mtime_ns}\0{st.st_ino}\0")
         except OSError:
             return ""
-        return h.hexdigest()
+        return hashlib.sha256((compiler_id() + "".join(parts)).encode()).hexdigest()
 
     def keep(self, path: Path, sig: str) -> None:
         self.now[str(path)] = self.known[str(path)]
