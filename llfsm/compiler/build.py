@@ -164,8 +164,10 @@ def build_all(
         stale.append(path)
         fps.append(fp)
         sigs[path] = sig  # taken before anything was read: an edit during the build is seen next time
-    if jobs is None:
-        jobs = (os.cpu_count() or 1) if len(stale) >= PARALLEL_FROM else 1
+    if jobs is None:  # the cores this process may use (taskset, a container's cpuset), as check does
+        from ..workers import usable_cores
+
+        jobs = usable_cores() if len(stale) >= PARALLEL_FROM else 1
     results: Iterator[BuildOutcome | str]
     pool = None
     if jobs > 1 and len(stale) > 1:
