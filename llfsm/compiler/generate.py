@@ -179,32 +179,50 @@ class StateView:
 
 #: Nodes that give names a scope or bind them otherwise than as a plain `Name` (or, for an
 #: f-string, need the text to rewrite): a tree without them is rewritten from its names alone.
+#: (Comprehensions are walked: their scope only hides their own targets, see `_Flat`.)
 _SCOPED: frozenset[type[ast.AST]] = frozenset(
     {
-        ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef, ast.ListComp, ast.SetComp,
-        ast.GeneratorExp, ast.DictComp, ast.NamedExpr, ast.JoinedStr, ast.ExceptHandler, ast.Import,
-        ast.ImportFrom, ast.alias, ast.Match, ast.MatchAs, ast.MatchStar, ast.MatchMapping, ast.Global,
-        ast.Nonlocal,
+        ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef, ast.NamedExpr, ast.JoinedStr,
+        ast.ExceptHandler, ast.Import, ast.ImportFrom, ast.alias, ast.Match, ast.MatchAs, ast.MatchStar,
+        ast.MatchMapping, ast.Global, ast.Nonlocal,
     }
 )  # fmt: skip
+_COMPREHENSIONS: frozenset[type[ast.AST]] = frozenset({ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp})
 
 
-def _flat_names(tree: ast.AST) -> list[ast.Name] | None:
-    """Every `Name` of a tree that has no `_SCOPED` node, else None: one walk that serves the
-    rewrite, `used_names` and `own_locals` (which then agree with the scoped walks by
-    construction: with no scope and no other binder, each name is the section's own)."""
-    out: list[ast.Name] = []
-    stack = [tree]
-    name, scoped = ast.Name, _SCOPED
+@dataclass
+class _Flat:
+    """The names of a tree with no `_SCOPED` node: all of them (what `used_names` gives), and
+    those outside comprehensions (the section's own level, where `own_locals` looks).  With
+    no other scope and no other binder, a name is the section's own unless a comprehension
+    binds it as a target: the rewrite may then take every name it maps, provided no
+    comprehension target is one of them (else the scoped walk decides)."""
+
+    names: list[ast.Name]
+    outer: list[ast.Name]
+    targets: set[str]  # names comprehensions bind (only their targets can, without `:=`)
+
+
+def _flat_names(tree: ast.AST) -> _Flat | None:
+    """One walk of a tree for the rewrite, `used_names` and `own_locals`; None if it has a
+    `_SCOPED` node (then the scoped walks answer)."""
+    out = _Flat([], [], set())
+    stack: list[tuple[ast.AST, bool]] = [(tree, False)]
+    name, scoped, comps, load = ast.Name, _SCOPED, _COMPREHENSIONS, ast.Load
     while stack:
-        for child in child_nodes(stack.pop()):
+        node, in_comp = stack.pop()
+        for child in child_nodes(node):
             t = type(child)
             if t is name:
-                out.append(child)  # type: ignore[arg-type]
+                out.names.append(child)  # type: ignore[arg-type]
+                if not in_comp:
+                    out.outer.append(child)  # type: ignore[arg-type]
+                elif type(child.ctx) is not load:  # type: ignore[attr-defined]
+                    out.targets.add(child.id)  # type: ignore[attr-defined]
             elif t in scoped:
                 return None
             else:
-                stack.append(child)
+                stack.append((child, in_comp or t in comps))
     return out
 
 
@@ -212,10 +230,10 @@ class _Trees:
     """What the generator asks of each code tree, walked once per tree."""
 
     def __init__(self) -> None:
-        self._flat: dict[int, list[ast.Name] | None] = {}
+        self._flat: dict[int, _Flat | None] = {}
         self._used: dict[int, set[str]] = {}
 
-    def flat(self, tree: ast.AST) -> list[ast.Name] | None:
+    def flat(self, tree: ast.AST) -> _Flat | None:
         key = id(tree)
         if key not in self._flat:
             self._flat[key] = _flat_names(tree)
@@ -223,10 +241,10 @@ class _Trees:
 
     def edits(self, tree: ast.AST, mapping: Mapping[str, str], text: str) -> list[Edit]:
         flat = self.flat(tree)
-        if flat is None:
+        if flat is None or any(t in mapping for t in flat.targets):
             return find(tree, mapping, text)[0]
         out = []
-        for n in flat:
+        for n in flat.names:
             attr = mapping.get(n.id)
             if attr is not None:
                 out.append(Edit(n.lineno, n.col_offset, n.end_col_offset or n.col_offset, attr))
@@ -236,12 +254,12 @@ class _Trees:
         key = id(tree)
         if key not in self._used:
             flat = self.flat(tree)
-            self._used[key] = used_names(tree) if flat is None else {n.id for n in flat}
+            self._used[key] = used_names(tree) if flat is None else {n.id for n in flat.names}
         return self._used[key]
 
     def own_locals(self, tree: ast.AST) -> set[str]:
         flat = self.flat(tree)
-        return own_locals(tree) if flat is None else {n.id for n in flat if type(n.ctx) is not ast.Load}
+        return own_locals(tree) if flat is None else {n.id for n in flat.outer if type(n.ctx) is not ast.Load}
 
 
 def _block(
