@@ -228,11 +228,14 @@ def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[
     import gc
 
     gc.freeze()  # the workers' collector leaves the inherited objects alone: fewer pages copied
-    with ProcessPoolExecutor(
-        max_workers=jobs, mp_context=ctx, initializer=die_with_parent, initargs=(os.getpid(),)
-    ) as pool:
-        chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
-        return len(machines), [d for chunk in chunks for d in chunk]
+    try:
+        with ProcessPoolExecutor(
+            max_workers=jobs, mp_context=ctx, initializer=die_with_parent, initargs=(os.getpid(),)
+        ) as pool:
+            chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
+            return len(machines), [d for chunk in chunks for d in chunk]
+    finally:
+        gc.unfreeze()  # every worker is forked by now; a caller that goes on collects as before
 
 
 class _Checker:
