@@ -182,7 +182,7 @@ def build_all(
 
         gc.freeze()  # the workers' collector leaves the inherited objects alone: fewer pages copied
         with _signals_deferred():  # an interrupt never lands between two forks: every worker is known
-            pool = ctx.Pool(jobs, initializer=_worker_init)
+            pool = ctx.Pool(jobs, initializer=_worker_init, initargs=(os.getpid(),))
         chunk = max(1, len(stale) // (jobs * 8))
         work = [(p, out_dir, force, fp, sigs[p] is None) for p, fp in zip(stale, fps, strict=True)]
         results = pool.imap(_build_star, work, chunk)
@@ -216,9 +216,14 @@ def _build_star(args: tuple[Path, Path, bool, str | None, bool]) -> BuildOutcome
     return _build_or_error(*args)
 
 
-def _worker_init() -> None:
+def _worker_init(parent: int | None = None) -> None:
     """Workers leave Ctrl-C to the parent (no traceback from each of them); the parent stops
-    them with SIGTERM, which write_atomic_bytes holds back until a module is whole."""
+    them with SIGTERM, which write_atomic_bytes holds back until a module is whole.  A parent
+    killed outright (SIGKILL, the OOM killer) sends them SIGTERM too, as check's workers end."""
+    if parent is not None:
+        from ..workers import die_with_parent
+
+        die_with_parent(parent, signal.SIGTERM)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     if hasattr(signal, "pthread_sigmask"):  # forked while the parent held signals back
