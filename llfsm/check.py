@@ -25,7 +25,7 @@ from .deps import undeclared_dependencies
 from .diagnostics import Diagnostic, Severity, diag
 from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
 from .model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
-from .names import Unresolved, section_bindings, unresolved
+from .names import Unresolved, child_nodes, section_bindings, unresolved
 from .reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
 from .runtime.machine import MACROS, RESERVED
 from .workers import die_with_parent, usable_cores
@@ -225,11 +225,17 @@ def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    with ProcessPoolExecutor(
-        max_workers=jobs, mp_context=ctx, initializer=die_with_parent, initargs=(os.getpid(),)
-    ) as pool:
-        chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
-        return len(machines), [d for chunk in chunks for d in chunk]
+    import gc
+
+    gc.freeze()  # the workers' collector leaves the inherited objects alone: fewer pages copied
+    try:
+        with ProcessPoolExecutor(
+            max_workers=jobs, mp_context=ctx, initializer=die_with_parent, initargs=(os.getpid(),)
+        ) as pool:
+            chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
+            return len(machines), [d for chunk in chunks for d in chunk]
+    finally:
+        gc.unfreeze()  # every worker is forked by now; a caller that goes on collects as before
 
 
 class _Checker:
@@ -778,6 +784,15 @@ _PLAIN_DEPTH = 20  # CPython refuses more than 20 statically nested blocks
 
 
 _PLAIN_IF_CHECKED = (ast.ImportFrom, ast.Call, ast.Try, ast.comprehension)
+_PLAIN_IF_CHECKED_T: frozenset[type[ast.AST]] = frozenset(_PLAIN_IF_CHECKED)
+_NESTS_T: frozenset[type[ast.AST]] = frozenset(_NESTS)
+#: The node types `_scan` notes something about (besides `Name`): every other node is only
+#: walked through.  (`ast.parse` makes nodes of these exact classes, never of subclasses.)
+_SPECIAL: frozenset[type[ast.AST]] = frozenset(
+    {ast.Import, ast.ImportFrom, ast.Attribute, ast.arg, ast.alias, ast.Global, ast.Nonlocal}
+    | {ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.ExceptHandler, ast.MatchAs, ast.MatchStar}
+    | {ast.MatchMapping, *_BINDERS, *_ESCAPES}
+)
 
 
 def _plain_as_used(node: ast.AST) -> bool:
@@ -811,20 +826,23 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
     out = _Scanned()
     bound = out.bound
     stack: list[tuple[ast.AST, bool, int]] = [(tree, False, 0)]
+    name_t, plain_t, checked_t, special_t, nests_t = ast.Name, _PLAIN, _PLAIN_IF_CHECKED_T, _SPECIAL, _NESTS_T
     while stack:
         node, nested, depth = stack.pop()
         if depth > MAX_CODE_DEPTH:
             # the compiler's walks recurse: a deeper tree would exhaust Python's stack in them
             out.too_deep = node
             return out
-        for child in ast.iter_child_nodes(node):
+        for child in child_nodes(node):
+            t = type(child)
             if out.plain and (
-                type(child) not in _PLAIN
-                or depth >= _PLAIN_DEPTH
-                or (isinstance(child, _PLAIN_IF_CHECKED) and not _plain_as_used(child))
+                t not in plain_t or depth >= _PLAIN_DEPTH or (t in checked_t and not _plain_as_used(child))
             ):
                 out.plain = False
-            if isinstance(child, ast.Name):
+            if t is not name_t and t not in special_t:  # most nodes: nothing to note, only to walk
+                stack.append((child, nested or t in nests_t, depth + 1))
+                continue
+            if t is name_t:
                 if child.id == "self" or child.id.startswith("_llfsm"):
                     out.reserved.append(child)
                 elif isinstance(child.ctx, ast.Load | ast.Del):  # `del x` reads x as well

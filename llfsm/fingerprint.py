@@ -25,10 +25,19 @@ _PKG = os.path.dirname(os.path.abspath(__file__))
 #: record is written only when every file is older than this (git's "racily clean" rule).
 RACY_NS = 2_000_000_000
 _compiler_id: str | None = None
+_compiler_paths: list[str] | None = None
 
 
 def _compiler_files() -> list[str]:
-    """What shapes generated code besides the version: the machine templates and the compiler."""
+    """What shapes generated code besides the version: the machine templates and the compiler
+    (listed once per process: a warm build stats them for each of its machines)."""
+    global _compiler_paths
+    if _compiler_paths is None:
+        _compiler_paths = _list_compiler_files()
+    return _compiler_paths
+
+
+def _list_compiler_files() -> list[str]:
     templates = os.path.join(_PKG, "templates")
     compiler = os.path.join(_PKG, "compiler")
     return sorted(
@@ -64,12 +73,17 @@ def machine_fingerprint(path: str | Path, known: dict[str, bytes] | None = None)
             raise OSError(f"{path} is a symlink leading out of its folder")
     h = hashlib.sha256(compiler_id().encode())
     h.update(os.fsencode(os.path.abspath(path)))
-    for name in sorted(os.listdir(path)):
-        if name.startswith("."):
+    with os.scandir(path) as it:  # file types from the listing: no stat per file
+        entries = sorted((e for e in it if not e.name.startswith(".")), key=lambda e: e.name)
+    for e in entries:
+        name = e.name
+        try:
+            regular = e.is_file()
+        except OSError:  # as os.path.isfile decides (a symlink loop is no file)
+            regular = os.path.isfile(os.path.join(path, name))
+        if not regular:
             continue
         p = os.path.join(path, name)
-        if not os.path.isfile(p):
-            continue
         if known is not None and name in known:
             data = known[name]
         else:

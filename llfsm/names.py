@@ -45,6 +45,20 @@ class _Scope:
     parent: _Scope | None = None
 
 
+def child_nodes(node: ast.AST, _ast: type[ast.AST] = ast.AST) -> list[ast.AST]:
+    """`ast.iter_child_nodes` as a list, in the same order, without its two generators."""
+    out: list[ast.AST] = []
+    for name in node._fields:
+        v = getattr(node, name, None)
+        if isinstance(v, _ast):
+            out.append(v)
+        elif type(v) is list:
+            for item in v:
+                if isinstance(item, _ast):
+                    out.append(item)
+    return out
+
+
 def _params(args: ast.arguments) -> set[str]:
     names = {a.arg for a in args.posonlyargs + args.args + args.kwonlyargs}
     for a in (args.vararg, args.kwarg):
@@ -113,7 +127,7 @@ class _Resolver:
             self.scopes[id(child)] = inner
             # decorators, defaults, bases: in the enclosing scope; the body: in the new one
             body_ids = _body_ids(child)
-            for sub in ast.iter_child_nodes(child):
+            for sub in child_nodes(child):
                 if id(sub) in body_ids:
                     stack.append((sub, inner, ()))
                 elif not isinstance(sub, ast.arguments):
@@ -130,7 +144,7 @@ class _Resolver:
                     if isinstance(n, ast.Name):
                         inner.bound.add(n.id)
             stack.append((child.generators[0].iter, scope, loops))
-            for sub in ast.iter_child_nodes(child):
+            for sub in child_nodes(child):
                 if sub is not child.generators[0]:
                     stack.append((sub, inner, loops))
             g0 = child.generators[0]
@@ -160,7 +174,7 @@ class _Resolver:
             self._bind(scope, child.rest, _end(child), loops)
         self._note_effects(child)
         inner_loops = (*loops, child) if isinstance(child, _LOOPS) and scope.kind == "section" else loops
-        for sub in ast.iter_child_nodes(child):
+        for sub in child_nodes(child):
             stack.append((sub, scope, inner_loops))
 
     _effect: dict[int, Pos]
@@ -203,7 +217,7 @@ class _Resolver:
                 if isinstance(child, _COMPS):
                     # the first iterable runs in the enclosing scope
                     stack.append((child.generators[0].iter, scope, loops))
-                    for sub in ast.iter_child_nodes(child):
+                    for sub in child_nodes(child):
                         if sub is not child.generators[0]:
                             stack.append((sub, inner, loops))
                     stack.append((child.generators[0].target, inner, loops))
@@ -211,7 +225,7 @@ class _Resolver:
                         stack.append((cond, inner, loops))
                 else:
                     body_ids = _body_ids(child)
-                    for sub in ast.iter_child_nodes(child):
+                    for sub in child_nodes(child):
                         if id(sub) in body_ids:
                             stack.append((sub, inner, ()))
                         else:
@@ -224,7 +238,7 @@ class _Resolver:
             if isinstance(child, ast.AugAssign) and isinstance(child.target, ast.Name):
                 self.read(child.target, scope, loops, known)  # `x += 1` reads x first
             inner_loops = (*loops, child) if isinstance(child, _LOOPS) and scope.kind == "section" else loops
-            for sub in ast.iter_child_nodes(child):
+            for sub in child_nodes(child):
                 stack.append((sub, scope, inner_loops))
 
     def read(self, node: ast.Name, scope: _Scope, loops: tuple[ast.AST, ...], known: object) -> None:

@@ -75,6 +75,8 @@ class _Reader:
         self.diags: list[Diagnostic] = []
         self.trees: dict[str, ast.Module] = {}
         self.raw: dict[str, bytes] = {}
+        self.links: set[str] | frozenset[str] | None = None  # names that are symlinks, once listed
+        self.nofollow = getattr(os, "O_NOFOLLOW", 0)
 
     # -- files ---------------------------------------------------------------------------
     def where(self, name: str) -> str:
@@ -87,23 +89,27 @@ class _Reader:
         """The text of a file of the machine directory, or None (with a diagnostic) if unusable."""
         p = os.path.join(self.path, name)  # plain strings: this runs for every file of every machine
         try:
-            if os.path.islink(p):
-                target = Path(os.path.realpath(p))
-                if not target.is_relative_to(self.real):
-                    self.report(
-                        "LF037", name, 1, 1, f"{name} is a symlink leading out of the machine directory; refused"
-                    )
-                    return None
-            # never block: a FIFO (or a device) where a file is expected would hang `llfsm check`
-            fd = os.open(p, _OPEN_FLAGS)
-            with os.fdopen(fd, "rb") as f:
+            fd = self._open_plain(name, p)
+            if fd is None:  # a symlink (or not known not to be one): where does it lead?
+                if os.path.islink(p):
+                    target = Path(os.path.realpath(p))
+                    if not target.is_relative_to(self.real):
+                        self.report(
+                            "LF037", name, 1, 1, f"{name} is a symlink leading out of the machine directory; refused"
+                        )
+                        return None
+                # never block: a FIFO (or a device) where a file is expected would hang `llfsm check`
+                fd = os.open(p, _OPEN_FLAGS)
+            try:
                 st = os.fstat(fd)
                 if not stat.S_ISREG(st.st_mode):
                     self.report("LF002", name, 1, 1, f"{name} is not a regular file")
                     return None
                 # ask for what the file holds (plus one byte, to see one that grew past the limit):
                 # read(MAX) would allocate a megabyte for every three-line section
-                data = f.read(min(st.st_size, MAX_FILE_BYTES) + 1)
+                data = _read_fd(fd, min(st.st_size, MAX_FILE_BYTES) + 1)
+            finally:
+                os.close(fd)
         except OSError as e:
             self.report("LF002", name, 1, 1, f"cannot read {name}: {e.strerror or e}")
             return None
@@ -122,6 +128,24 @@ class _Reader:
             return None
         # one line ending: CPython counts \r and \r\n as line ends, and so must every later step
         return text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n")
+
+    def _open_plain(self, name: str, p: str) -> int | None:
+        """`name` opened, if the directory listed it as no symlink and it still is none
+        (O_NOFOLLOW); else None, and `read` takes the careful way.  One listing (file types
+        from the directory itself) saves a `lstat` per file of every machine."""
+        if self.links is None:
+            try:
+                with os.scandir(self.path) as it:
+                    self.links = {e.name for e in it if e.is_symlink()}
+            except OSError:
+                self.links = frozenset({name})  # unknown: the careful way for every file
+                self.nofollow = 0
+        if not self.nofollow or name in self.links:
+            return None
+        try:
+            return os.open(p, _OPEN_FLAGS | self.nofollow)
+        except OSError:
+            return None  # a symlink by now, or unreadable: the careful way reports it as before
 
     # -- python --------------------------------------------------------------------------
     def parse(self, name: str, text: str) -> ast.Module | None:
@@ -476,6 +500,20 @@ def _huge_fstring(text: str) -> tuple[int, int] | None:
     except (tokenize.TokenError, SyntaxError):
         return None  # the parser reports it, in linear time: a broken token ends the string early
     return None
+
+
+def _read_fd(fd: int, n: int) -> bytes:
+    """Up to `n` bytes of an open file (fewer only at its end): no buffered file object, which
+    costs more than the read for a three-line section."""
+    chunks: list[bytes] = []
+    got = 0
+    while got < n:
+        more = os.read(fd, n - got)
+        if not more:
+            break
+        chunks.append(more)
+        got += len(more)
+    return chunks[0] if len(chunks) == 1 else b"".join(chunks)
 
 
 def _mark_loc(node: yaml.Node) -> Loc:

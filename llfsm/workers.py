@@ -19,12 +19,14 @@ def usable_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def die_with_parent(parent: int) -> None:
+def die_with_parent(parent: int, signum: int | None = None) -> None:
     """Worker initializer: end this worker when the command that forked it ends, however it ends.
 
     A worker forked by ProcessPoolExecutor waits on a pipe whose writing end it inherited
     itself, so a parent killed by SIGKILL (or the OOM killer) would leave it waiting forever.
-    Linux ends it by PR_SET_PDEATHSIG; elsewhere a thread watches for the parent's exit."""
+    Linux ends it by PR_SET_PDEATHSIG (`signum`, SIGKILL unless given: a build's workers ask
+    for SIGTERM, which they hold back until the module they write is whole); elsewhere a
+    thread watches for the parent's exit."""
     import signal
 
     try:
@@ -32,7 +34,7 @@ def die_with_parent(parent: int) -> None:
 
         libc = ctypes.CDLL(None, use_errno=True)
         pr_set_pdeathsig = 1
-        if libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0) != 0:
+        if libc.prctl(pr_set_pdeathsig, signal.SIGKILL if signum is None else signum, 0, 0, 0) != 0:
             raise OSError(ctypes.get_errno(), "prctl")
         watch = False
     except (OSError, AttributeError, ImportError):

@@ -246,3 +246,88 @@ def test_readme_starts_with_the_two_setup_commands() -> None:
     text = (REPO / "README.md").read_text()
     head = text[: text.index("\n## ")]
     assert "make demo" in head and "make test" in head
+
+
+def _ring(root: Path, name: str, entry: str = "count += 1\n", guard: str = "count > -1") -> Path:
+    return write_machine(
+        root,
+        name,
+        {"A": [("B", guard)], "B": [("END", "True")], "END": None},
+        {"A_OnEntry": entry, "END_OnEntry": "print(machine_name(), count)\n"},
+        variables="count: int = 0\n",
+    )
+
+
+def test_a_parallel_build_writes_what_a_serial_one_does_and_its_rebuild_reads_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Workers build (and sign, for the next build's stat check) what a single process does:
+    the same modules byte for byte, the same outcomes and diagnostics, in the machines' order."""
+    monkeypatch.setattr(build_mod, "RACY_NS", 0)  # trust the stats of files written just now
+    src = tmp_path / "src"
+    machines = [_ring(src, f"m{i}", entry=f"count += {i}\nscratch = [x for x in range(3)]\n") for i in range(5)]
+    machines.insert(2, write_machine(src, "broken", {"A": [("NOPE", "True")]}))
+    serial = list(build_mod.build_all(machines, tmp_path / "one", jobs=1))
+    parallel = list(build_mod.build_all(machines, tmp_path / "two", jobs=2))
+    assert [(o.name, o.status, o.diagnostics) for o in serial] == [(o.name, o.status, o.diagnostics) for o in parallel]  # type: ignore[union-attr]
+    assert [o.status for o in parallel] == ["compiled", "compiled", "failed", "compiled", "compiled", "compiled"]  # type: ignore[union-attr]
+    for m in machines:
+        name = m.name.removesuffix(".machine")
+        if name != "broken":
+            assert (tmp_path / "one" / f"{name}.py").read_bytes() == (tmp_path / "two" / f"{name}.py").read_bytes()
+
+    def no_reading(*_args: object) -> str:
+        raise AssertionError("an unchanged machine was read again")
+
+    monkeypatch.setattr(build_mod, "machine_fingerprint", no_reading)
+    again = list(build_mod.build_all([m for m in machines if m.name != "broken.machine"], tmp_path / "two", jobs=2))
+    assert [o.status for o in again] == ["unchanged"] * 5  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize(
+    ("entry", "guard", "verified"),
+    [
+        ("count += 1\nscratch = [x * 2 for x in range(3)]\n", "count > -1", False),
+        ("if count:\n\tcount = 0\n", "count > -1", True),  # a tab: indenting must keep the blocks
+        ("print(f'{count=}')\n", "count > -1", True),  # rewritten inside an f-string
+        ("text = '''a\n  b'''\n", "count > -1", True),  # a string over two lines keeps its text
+        ("count = 1 + \\\n    2\n", "count > -1", True),  # a backslash continuation
+        ("count += 1\n", "(count >\n -1)", True),  # a guard on two lines
+        ("count += 1\n", "count > -1  # enough", True),  # a guard with a comment
+    ],
+)
+def test_the_module_is_compiled_at_build_time_when_its_assembly_could_go_wrong(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, entry: str, guard: str, verified: bool
+) -> None:
+    """check proves every piece compiles where the module puts it; the build compiles the whole
+    module only when indenting or joining the pieces could still break it.  Either way the
+    module compiles and runs."""
+    from llfsm.compiler import generate
+
+    calls: list[str] = []
+    real = generate._verify
+    monkeypatch.setattr(generate, "_verify", lambda source, m: calls.append(m.name) or real(source, m))
+    m = _ring(tmp_path, "ring", entry, guard)
+    outcome = build_machine(m, tmp_path / "out")
+    assert outcome.status == "compiled", outcome.diagnostics
+    assert calls == (["ring"] if verified else [])
+    assert outcome.module is not None
+    compile(outcome.module.read_text(encoding="utf-8"), str(outcome.module), "exec", dont_inherit=True)
+    assert run_sim(outcome.module).status == 0
+
+
+def test_a_rebuild_sees_an_edit_that_keeps_the_size_and_the_modification_time(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The warm build's stat record includes change times (as `llfsm run`'s does): an edit that
+    puts the old modification time back is still seen, and the machine is compiled again."""
+    monkeypatch.setattr(build_mod, "RACY_NS", 0)
+    m = _ring(tmp_path / "src", "m", entry="count += 1\n")
+    assert [o.status for o in build_mod.build_all([m], tmp_path / "out")] == ["compiled"]  # type: ignore[union-attr]
+    assert [o.status for o in build_mod.build_all([m], tmp_path / "out")] == ["unchanged"]  # type: ignore[union-attr]
+    f = m / "State_A_OnEntry.py"
+    st = f.stat()
+    f.write_text("count += 2\n")  # same size
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))
+    assert [o.status for o in build_mod.build_all([m], tmp_path / "out")] == ["compiled"]  # type: ignore[union-attr]
+    assert "count += 2" in (tmp_path / "out" / "m.py").read_text()

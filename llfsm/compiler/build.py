@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..discover import machine_name_of
-from ..fingerprint import compiler_id, machine_fingerprint, module_fingerprint
+from ..fingerprint import RACY_NS, compiler_id, machine_fingerprint, module_fingerprint, stat_signature
 
 if TYPE_CHECKING:
     from ..diagnostics import Diagnostic
@@ -29,6 +29,7 @@ class BuildOutcome:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     name: str = ""
     fingerprint: str = ""  # of the machine's files, as written into the module
+    signature: str = ""  # _StatCache.signature, when the worker took it (before reading)
 
 
 #: Signals held back while a module is written: Ctrl-C, `kill` and a closed terminal.
@@ -114,12 +115,19 @@ def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None
 PARALLEL_FROM = 32
 
 
-def _build_or_error(path: Path, out_dir: Path, force: bool, fp: str | None = None) -> BuildOutcome | str:
-    """build_machine in a worker: an output that cannot be written comes back as its message."""
+def _build_or_error(
+    path: Path, out_dir: Path, force: bool, fp: str | None = None, sign: bool = False
+) -> BuildOutcome | str:
+    """build_machine in a worker: an output that cannot be written comes back as its message.
+    `sign`: take the machine's stat signature first (before anything is read, so that an edit
+    during the build is seen next time), here rather than serially in the parent."""
+    sig = _StatCache.signature(path) if sign else ""
     try:
-        return build_machine(path, out_dir, force, fp)
+        outcome = build_machine(path, out_dir, force, fp)
     except OSError as e:
         return str(e.strerror or e)
+    outcome.signature = sig
+    return outcome
 
 
 def build_all(
@@ -134,14 +142,16 @@ def build_all(
     stats = _StatCache(out_dir)
     stale: list[Path] = []
     fps: list[str | None] = []
-    sigs: dict[Path, str] = {}
+    sigs: dict[Path, str | None] = {}
     for path in paths:
         target = out_dir / f"{machine_name_of(path)}.py"
-        sig = stats.signature(path)
-        if not force and sig and stats.known.get(str(path)) == [sig, module_fingerprint(target)]:
+        known = stats.known.get(str(path))
+        old = module_fingerprint(target)
+        # with neither a record nor a module, the worker that builds the machine signs it
+        sig = stats.signature(path) if known is not None or old is not None else None
+        if not force and sig and known == [sig, old]:
             stats.keep(path, sig)
             continue
-        old = module_fingerprint(target)
         fp: str | None = None
         if old is not None and not force:  # a module to compare with: hash the machine's files
             try:
@@ -149,13 +159,15 @@ def build_all(
             except OSError:
                 fp = ""
             if fp and old == fp:
-                stats.record(path, sig, fp)
+                stats.record(path, sig or "", fp)
                 continue
         stale.append(path)
         fps.append(fp)
         sigs[path] = sig  # taken before anything was read: an edit during the build is seen next time
-    if jobs is None:
-        jobs = (os.cpu_count() or 1) if len(stale) >= PARALLEL_FROM else 1
+    if jobs is None:  # the cores this process may use (taskset, a container's cpuset), as check does
+        from ..workers import usable_cores
+
+        jobs = usable_cores() if len(stale) >= PARALLEL_FROM else 1
     results: Iterator[BuildOutcome | str]
     pool = None
     if jobs > 1 and len(stale) > 1:
@@ -164,24 +176,25 @@ def build_all(
         from ..check import check_machine  # noqa: F401 (imported once, before the workers fork)
         from .generate import compile_machine  # noqa: F401
 
+        compiler_id()  # read once here, not by every worker
         ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
         import gc
 
         gc.freeze()  # the workers' collector leaves the inherited objects alone: fewer pages copied
         with _signals_deferred():  # an interrupt never lands between two forks: every worker is known
-            pool = ctx.Pool(jobs, initializer=_worker_init)
+            pool = ctx.Pool(jobs, initializer=_worker_init, initargs=(os.getpid(),))
         chunk = max(1, len(stale) // (jobs * 8))
-        work = [(p, out_dir, force, fp) for p, fp in zip(stale, fps, strict=True)]
+        work = [(p, out_dir, force, fp, sigs[p] is None) for p, fp in zip(stale, fps, strict=True)]
         results = pool.imap(_build_star, work, chunk)
     else:
-        results = (_build_or_error(p, out_dir, force, fp) for p, fp in zip(stale, fps, strict=True))
+        results = (_build_or_error(p, out_dir, force, fp, sigs[p] is None) for p, fp in zip(stale, fps, strict=True))
     try:
         todo = set(stale)
         for path in paths:
             if path in todo:
                 outcome = next(results)
                 if isinstance(outcome, BuildOutcome) and outcome.status != "failed":
-                    stats.record(path, sigs[path], outcome.fingerprint)
+                    stats.record(path, sigs[path] or outcome.signature, outcome.fingerprint)
                 yield outcome
             else:
                 yield BuildOutcome(
@@ -199,13 +212,18 @@ def build_all(
     stats.save()
 
 
-def _build_star(args: tuple[Path, Path, bool, str | None]) -> BuildOutcome | str:
+def _build_star(args: tuple[Path, Path, bool, str | None, bool]) -> BuildOutcome | str:
     return _build_or_error(*args)
 
 
-def _worker_init() -> None:
+def _worker_init(parent: int | None = None) -> None:
     """Workers leave Ctrl-C to the parent (no traceback from each of them); the parent stops
-    them with SIGTERM, which write_atomic_bytes holds back until a module is whole."""
+    them with SIGTERM, which write_atomic_bytes holds back until a module is whole.  A parent
+    killed outright (SIGKILL, the OOM killer) sends them SIGTERM too, as check's workers end."""
+    if parent is not None:
+        from ..workers import die_with_parent
+
+        die_with_parent(parent, signal.SIGTERM)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     if hasattr(signal, "pthread_sigmask"):  # forked while the parent held signals back
@@ -257,19 +275,16 @@ class _StatCache:
 
     @staticmethod
     def signature(path: Path) -> str:
+        """The stat signature that `llfsm run`'s record uses too (fingerprint.stat_signature:
+        names, sizes, times, inodes, the compiler's files), hashed; "" when a file changed too
+        recently to be trusted (a change within the same clock tick could go unseen)."""
         import hashlib
+        import time
 
-        h = hashlib.sha256(compiler_id().encode())
-        try:
-            with os.scandir(path) as it:
-                for e in sorted(it, key=lambda e: e.name):
-                    if e.name.startswith(".") or not e.is_file():
-                        continue
-                    st = e.stat()
-                    h.update(f"{e.name}\0{st.st_size}\0{st.st_mtime_ns}\0{st.st_ino}\0".encode())
-        except OSError:
+        sig = stat_signature(str(path))
+        if sig is None or sig[1] > time.time_ns() - RACY_NS:
             return ""
-        return h.hexdigest()
+        return hashlib.sha256(sig[0].encode()).hexdigest()
 
     def keep(self, path: Path, sig: str) -> None:
         self.now[str(path)] = self.known[str(path)]

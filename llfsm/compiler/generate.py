@@ -10,7 +10,9 @@ from __future__ import annotations
 import ast
 import io
 import os
+import re
 import tokenize
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache
 
@@ -20,6 +22,7 @@ from .. import __version__
 from ..check import MachineCheck
 from ..diagnostics import Diagnostic, diag
 from ..model import Code, Machine, State
+from ..names import child_nodes
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
 from .rewrite import Edit, apply, attribute_of, find, name_map, own_locals, state_map, used_names
@@ -174,10 +177,101 @@ class StateView:
         return any(h == "on_resume" for h, _ in self.command_hooks)
 
 
-def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Edit] | None = None) -> Block | None:
+#: Nodes that give names a scope or bind them otherwise than as a plain `Name` (or, for an
+#: f-string, need the text to rewrite): a tree without them is rewritten from its names alone.
+#: (Comprehensions are walked: their scope only hides their own targets, see `_Flat`.)
+_SCOPED: frozenset[type[ast.AST]] = frozenset(
+    {
+        ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef, ast.NamedExpr, ast.JoinedStr,
+        ast.ExceptHandler, ast.Import, ast.ImportFrom, ast.alias, ast.Match, ast.MatchAs, ast.MatchStar,
+        ast.MatchMapping, ast.Global, ast.Nonlocal,
+    }
+)  # fmt: skip
+_COMPREHENSIONS: frozenset[type[ast.AST]] = frozenset({ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp})
+
+
+@dataclass
+class _Flat:
+    """The names of a tree with no `_SCOPED` node: all of them (what `used_names` gives), and
+    those outside comprehensions (the section's own level, where `own_locals` looks).  With
+    no other scope and no other binder, a name is the section's own unless a comprehension
+    binds it as a target: the rewrite may then take every name it maps, provided no
+    comprehension target is one of them (else the scoped walk decides)."""
+
+    names: list[ast.Name]
+    outer: list[ast.Name]
+    targets: set[str]  # names comprehensions bind (only their targets can, without `:=`)
+
+
+def _flat_names(tree: ast.AST) -> _Flat | None:
+    """One walk of a tree for the rewrite, `used_names` and `own_locals`; None if it has a
+    `_SCOPED` node (then the scoped walks answer)."""
+    out = _Flat([], [], set())
+    stack: list[tuple[ast.AST, bool]] = [(tree, False)]
+    name, scoped, comps, load = ast.Name, _SCOPED, _COMPREHENSIONS, ast.Load
+    while stack:
+        node, in_comp = stack.pop()
+        for child in child_nodes(node):
+            t = type(child)
+            if t is name:
+                out.names.append(child)  # type: ignore[arg-type]
+                if not in_comp:
+                    out.outer.append(child)  # type: ignore[arg-type]
+                elif type(child.ctx) is not load:  # type: ignore[attr-defined]
+                    out.targets.add(child.id)  # type: ignore[attr-defined]
+            elif t in scoped:
+                return None
+            else:
+                stack.append((child, in_comp or t in comps))
+    return out
+
+
+class _Trees:
+    """What the generator asks of each code tree, walked once per tree."""
+
+    def __init__(self) -> None:
+        self._flat: dict[int, _Flat | None] = {}
+        self._used: dict[int, set[str]] = {}
+
+    def flat(self, tree: ast.AST) -> _Flat | None:
+        key = id(tree)
+        if key not in self._flat:
+            self._flat[key] = _flat_names(tree)
+        return self._flat[key]
+
+    def edits(self, tree: ast.AST, mapping: Mapping[str, str], text: str) -> list[Edit]:
+        flat = self.flat(tree)
+        if flat is None or any(t in mapping for t in flat.targets):
+            return find(tree, mapping, text)[0]
+        out = []
+        for n in flat.names:
+            attr = mapping.get(n.id)
+            if attr is not None:
+                out.append(Edit(n.lineno, n.col_offset, n.end_col_offset or n.col_offset, attr))
+        return out
+
+    def used(self, tree: ast.AST) -> set[str]:
+        key = id(tree)
+        if key not in self._used:
+            flat = self.flat(tree)
+            self._used[key] = used_names(tree) if flat is None else {n.id for n in flat.names}
+        return self._used[key]
+
+    def own_locals(self, tree: ast.AST) -> set[str]:
+        flat = self.flat(tree)
+        return own_locals(tree) if flat is None else {n.id for n in flat.outer if type(n.ctx) is not ast.Load}
+
+
+def _block(
+    code: Code,
+    tree: ast.Module,
+    mapping: Mapping[str, str],
+    extra: list[Edit] | None = None,
+    walks: _Trees | None = None,
+) -> Block | None:
     if not tree.body:
         return None  # empty, or only comments: costs nothing at run time
-    edits, _bad = find(tree, mapping, code.text)
+    edits = (walks or _Trees()).edits(tree, mapping, code.text)
     text = apply(code.text, edits + (extra or []))
     lines = text.split("\n")
     first = 0
@@ -188,9 +282,16 @@ def _block(code: Code, tree: ast.Module, mapping: dict[str, str], extra: list[Ed
 
 
 def _guard_view(
-    code: Code, tree: ast.Module, mapping: dict[str, str], index: int, target: int, target_name: str, to_suspend: bool
+    code: Code,
+    tree: ast.Module,
+    mapping: Mapping[str, str],
+    index: int,
+    target: int,
+    target_name: str,
+    to_suspend: bool,
+    walks: _Trees | None = None,
 ) -> GuardView:
-    block = _block(code, tree, mapping)
+    block = _block(code, tree, mapping, walks=walks)
     assert block is not None  # the checker guarantees one expression
     has_comment = "#" in block.text and any(
         t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline)
@@ -199,7 +300,7 @@ def _guard_view(
     return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend)
 
 
-def _variables_block(code: Code, tree: ast.Module, mapping: dict[str, str]) -> Block | None:
+def _variables_block(code: Code, tree: ast.Module, mapping: Mapping[str, str]) -> Block | None:
     """Variables.py as `self.name: type = value` lines, kept line for line; no value means None."""
     extra: list[Edit] = []
     for stmt in tree.body:
@@ -243,19 +344,14 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         tree = trees.get(code.file) if code is not None else None
         if tree is not None and code is not None and "after" in code.text and any(_after_use(tree)):
             stamp_all = True
-    names_of: dict[int, set[str]] = {}  # used_names per tree: each guard is asked about twice
-
-    def used(tree: ast.Module) -> set[str]:
-        if id(tree) not in names_of:
-            names_of[id(tree)] = used_names(tree)
-        return names_of[id(tree)]
+    walks = _Trees()  # each tree walked once for the rewrite, its names and its locals
 
     def view(s: State) -> StateView:
         mapping = state_map(base, s.name, [v.name for v in s.variables])
 
         def sec(name: str) -> Block | None:
             code = s.sections.get(name)
-            return _block(code, trees[code.file], mapping) if code is not None else None
+            return _block(code, trees[code.file], mapping, walks=walks) if code is not None else None
 
         sv = StateView(
             name=s.name,
@@ -274,15 +370,22 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             assert t.guard is not None
             sv.guards.append(
                 _guard_view(
-                    t.guard, trees[t.guard.file], mapping, t.index, index[t.target], t.target, index[t.target] == susp
+                    t.guard,
+                    trees[t.guard.file],
+                    mapping,
+                    t.index,
+                    index[t.target],
+                    t.target,
+                    index[t.target] == susp,
+                    walks,
                 )
             )
         parts = {sec: trees[c.file] for sec, c in s.sections.items() if sec in ("OnEntry", "Internal")}
         parts.update({f"guard{t.index}": trees[t.guard.file] for t in s.transitions if t.guard is not None})
         for part in ("OnEntry", "Internal"):
             if part in parts and not sv.is_suspend:
-                mine = {n for n in own_locals(parts[part]) if n not in mapping}
-                if mine and mine & set().union(*(used(tr) for k, tr in parts.items() if k != part)):
+                mine = {n for n in walks.own_locals(parts[part]) if n not in mapping}
+                if mine and mine & set().union(*(walks.used(tr) for k, tr in parts.items() if k != part)):
                     if part == "OnEntry":
                         sv.entry_method = sv.entry is not None
                     else:
@@ -348,8 +451,41 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         },
     }
     source = _with_source_map(_env().get_template("machine.py.j2").render(ctx))
-    _verify(source, m)
+    if not _pieces_are_safe([includes, variables, *state_variables], views):
+        _verify(source, m)
     return source
+
+
+#: Text in user code that the assembly of the module (indenting it, joining a guard's lines)
+#: must take care over: tabs, form feeds, backslash continuations, strings that span lines.
+_ASSEMBLY_RISKS = ("\t", "\f", "\\", '"""', "'''")
+
+
+#: The start of an f-string (a prefix with f, then a quote, not inside a longer name); it may
+#: also match inside a string or a comment, which only costs the compile.
+_FSTRING = re.compile(r"(?<!\w)(?:[rR][fF]|[fF][rR]?)['\"]")
+
+
+def _pieces_are_safe(blocks: list[Block | None], views: list[StateView]) -> bool:
+    """Whether the module is known to compile without compiling it (about a quarter of the CPU a
+    cold build spends per machine).
+
+    `check` has proved every piece compiles where the module puts it (a method body, a guard
+    as an `if` condition): a plain piece cannot fail (check._PLAIN), the rest check compiled.
+    The rewrite to `self.name` cannot break one (check refuses the bindings that cannot take an
+    attribute, LF038).  What is left is the assembly: indenting a piece into the template, and
+    rewriting inside f-strings, whose positions CPython 3.11 reports loosely.  A piece with any
+    of those risks, or a guard on several lines, has the whole module compiled as before."""
+    texts = [b.text for b in blocks if b is not None]
+    for v in views:
+        for b in (v.entry, v.internal, v.exit, *(b for _, b in v.command_hooks)):
+            if b is not None:
+                texts.append(b.text)
+        for g in v.guards:
+            if g.multiline:
+                return False
+            texts.append(g.text)
+    return not any(risk in t for t in texts for risk in _ASSEMBLY_RISKS) and not any(_FSTRING.search(t) for t in texts)
 
 
 POINTER_MARK = "\0"  # ends a pointer line while rendering; the reader refuses NUL in user files

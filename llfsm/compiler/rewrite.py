@@ -21,6 +21,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 
+from ..names import child_nodes
+
 _SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
 _COMPS = (ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp)
 _EOL = re.compile(r"\r\n|\r|\n")
@@ -330,7 +332,22 @@ def state_map(base: Mapping[str, str], state: str, state_vars: list[str]) -> Map
     """`name_map` for the code of `state`, given the machine-level map: a view over both, so
     that a machine with many states and many variables costs states + variables, not their
     product."""
-    return ChainMap({v: f"self.{attribute_of(state, v)}" for v in state_vars}, base)  # type: ignore[arg-type]
+    return _StateMap({v: f"self.{attribute_of(state, v)}" for v in state_vars}, base)  # type: ignore[arg-type]
+
+
+class _StateMap(ChainMap):  # type: ignore[type-arg]
+    """A ChainMap of a state's own map over the machine's, whose lookups ask the two maps
+    directly: ChainMap's own `in` and `get` build a generator each, and every name of every
+    code file is looked up (by check, then by the rewrite)."""
+
+    def __contains__(self, key: object) -> bool:
+        own, base = self.maps
+        return key in own or key in base
+
+    def get(self, key: str, default: str | None = None) -> str | None:  # type: ignore[override]
+        own, base = self.maps
+        value = own.get(key)
+        return value if value is not None else base.get(key, default)
 
 
 def find(tree: ast.AST, mapping: Mapping[str, str], text: str | None = None) -> tuple[list[Edit], list[BadBinding]]:
@@ -370,7 +387,7 @@ def own_locals(tree: ast.AST) -> set[str]:
     stack: list[ast.AST] = [tree]
     while stack:
         node = stack.pop()
-        for child in ast.iter_child_nodes(node):
+        for child in child_nodes(node):
             if isinstance(child, ast.Name) and not isinstance(child.ctx, ast.Load):
                 out.add(child.id)
             elif isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
