@@ -9,6 +9,7 @@ rclpy's default QoS event handler does; the endpoints carry the reliability they
 from __future__ import annotations
 
 import textwrap
+import time
 
 import pytest
 from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
@@ -82,3 +83,30 @@ def test_best_effort_reaches_best_effort_and_a_reliable_reader_is_told_it_cannot
         "No messages will be received from it. Last incompatible policy: RELIABILITY"
     )
     assert err.count(warning) == 1 and "[WARN]" in err, err
+
+
+IDLE_PUBLISHER = """
+pub = node.create_publisher(String, "/scan_like", ros.qos_profile_sensor_data)
+keep_all = ros.QoSProfile(depth=1, history=ros.HistoryPolicy.KEEP_ALL)
+sub = node.create_subscription(String, "/scan_like", None, keep_all)
+print("ready", flush=True)
+spin(25)
+transport.close()
+"""
+
+
+def test_topic_info_verbose_shows_the_reliability_and_history_llfsm_endpoints_asked_for(netns: NetNamespace) -> None:
+    """As `ros2 topic info -v` prints them: the publisher BEST_EFFORT, KEEP_LAST (5)."""
+    holder = netns.python(_code("sensor", IDLE_PUBLISHER))
+    assert holder.stdout is not None and holder.stdout.readline().strip() == "ready"
+    deadline = time.monotonic() + 30
+    while True:
+        code, out, err = finish(netns.llfsm("topic", "info", "/scan_like", "-v"), 30)
+        if ("Subscription count: 1" in out and "Publisher count: 1" in out) or time.monotonic() > deadline:
+            break
+        time.sleep(0.3)
+    assert code == 0, err
+    publisher, subscription = out.split("Endpoint type: PUBLISHER")[1].split("Endpoint type: SUBSCRIPTION")
+    assert "  Reliability: BEST_EFFORT\n  History (Depth): KEEP_LAST (5)\n  Durability: VOLATILE\n" in publisher, out
+    assert "  Reliability: RELIABLE\n  History (Depth): KEEP_ALL\n" in subscription, out
+    holder.kill()
