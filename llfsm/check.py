@@ -54,12 +54,26 @@ CPP_NAMES = {
 #: Names rclpy code uses that llfsm spells otherwise (read without an import: LF040's hint).
 ROS_NAMES = {
     "rclpy": "`from llfsm import ros` in Includes.py, then ros.Node(...), ros.ok()",
-    "qos_profile_sensor_data": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
-    "qos_profile_system_default": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
-    "qos_profile_services_default": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
-    "qos_profile_parameters": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
-    "QoSPresetProfiles": "a queue depth (`10`) or `ros.QoSProfile(depth=10)`",
+    "QoSPresetProfiles": "a preset such as `ros.qos_profile_sensor_data`, or `ros.QoSProfile(depth=10)`",
 }
+#: rclpy.qos names that `llfsm.ros` has under the same name (tests/test_qos.py keeps this in
+#: step with ros.__all__; a list, so `check` never imports the bus).
+ROS_QOS_NAMES = frozenset(
+    {
+        "QoSProfile",
+        "ReliabilityPolicy",
+        "HistoryPolicy",
+        "DurabilityPolicy",
+        "QoSReliabilityPolicy",
+        "QoSHistoryPolicy",
+        "QoSDurabilityPolicy",
+        "qos_profile_sensor_data",
+        "qos_profile_system_default",
+        "qos_profile_services_default",
+        "qos_profile_parameters",
+        "qos_profile_parameter_events",
+    }
+)
 _ROS_MESSAGE_MODULE = re.compile(r"(?P<pkg>[a-z][a-z0-9_]*)\.(?P<kind>msg|srv|action)(?:\.(?P<rest>.*))?\Z")
 
 
@@ -68,6 +82,10 @@ def ros_import_hint(module: str, stmt: ast.Import | ast.ImportFrom) -> str | Non
     top = module.split(".")[0]
     if top == "rclpy":
         names = [a.name for a in stmt.names] if isinstance(stmt, ast.ImportFrom) else []
+        same = [n for n in names if n in ROS_QOS_NAMES]
+        if same:
+            name = same[0]
+            return f"`{name}` comes from rclpy, which llfsm machines do not use: `from llfsm import ros`, then `ros.{name}`"  # noqa: E501
         qos = [n for n in names if n in ROS_NAMES and n != "rclpy"]
         if qos:
             return f"`{qos[0]}` comes from rclpy, which llfsm machines do not use: pass {ROS_NAMES[qos[0]]}"
@@ -664,6 +682,8 @@ class _Checker:
             msg = f"name {name!r} is not defined: Python spells it `{CPP_NAMES[name]}`"
         elif name in ROS_NAMES:
             msg = f"name {name!r} is not defined: llfsm spells it {ROS_NAMES[name]}"
+        elif name in ROS_QOS_NAMES:
+            msg = f"name {name!r} is not defined: llfsm spells it `ros.{name}` (after `from llfsm import ros`)"
         elif other is not None and other != code.file:
             msg = f"name {name!r} is a local of {other}: a section's locals last one section, as in clfsm; {declare}"
         elif _suggester.left <= 0 or len(m.variables) + len(s.variables) > SUGGEST_AMONG:

@@ -804,7 +804,8 @@ class TestOtherLanguagesHabits:
             ("Includes.py", "import rclpy\n", "from llfsm import ros"),
             ("Includes.py", "from std_msgs.msg import String\n", "from llfsm.msgs.std_msgs.msg import String"),
             ("Includes.py", "import geometry_msgs.msg\n", "import llfsm.msgs.geometry_msgs.msg"),
-            ("Includes.py", "from rclpy.qos import qos_profile_sensor_data\n", "ros.QoSProfile(depth=10)"),
+            ("Includes.py", "from rclpy.qos import qos_profile_sensor_data\n", "ros.qos_profile_sensor_data"),
+            ("Includes.py", "from rclpy.qos import QoSPresetProfiles\n", "ros.QoSProfile(depth=10)"),
             ("Includes.py", "from rclpy.node import Node\n", "from llfsm import ros"),
             ("State_A_OnEntry.py", "from turtlesim.srv import Spawn\n", "from llfsm.msgs.turtlesim.srv import Spawn"),
         ],
@@ -828,7 +829,7 @@ class TestOtherLanguagesHabits:
         diags = check_machine(m).diagnostics
         assert {(d.code, d.line) for d in diags} == {("LF041", 2), ("LF040", 3)}
         assert "seconds_nanoseconds" in next(d.message for d in diags if d.code == "LF041")
-        assert "QoSProfile" in next(d.message for d in diags if d.code == "LF040")
+        assert "`ros.qos_profile_sensor_data`" in next(d.message for d in diags if d.code == "LF040")
 
     def test_llfsm_spellings_and_helper_modules_pass(self, tmp_path: Path) -> None:
         m = write_machine(

@@ -236,9 +236,33 @@ class Recorder:
             except BagError as e:  # said by the writer when the first message comes, if one does
                 info["error"] = f"--record: {topic.name} is not recorded: {e}"
             else:
-                qos = [qos_profile() for _ in range(max(1, topic.publishers))]
+                qos = self._offered(topic)
                 info.update(definition=definition, hash=type_hash, qos=qos)
             self._send(b"T", json.dumps(info).encode())
+
+    def _offered(self, topic: Topic) -> list[dict[str, Any]]:
+        """Each publisher's offered QoS, as rosbag2 records what discovery reports: its
+        reliability and durability (a best-effort sensor topic is replayed best effort)."""
+        from ..ros.node import Publisher, ReliabilityPolicy
+
+        bus = self._bus
+        pubs = []
+        if bus is not None:  # a snapshot: this runs on the sending thread
+            pubs = [
+                e
+                for n in list(bus.nodes)
+                for e in list(n._entities)
+                if isinstance(e, Publisher) and e._topic is topic and not e._destroyed
+            ]
+        if not pubs:
+            return [qos_profile() for _ in range(max(1, topic.publishers))]
+        return [
+            qos_profile(
+                durability="transient_local" if p.transient_local else "volatile",
+                reliability="best_effort" if p.reliability == ReliabilityPolicy.BEST_EFFORT else "reliable",
+            )
+            for p in pubs
+        ]
 
     # -- replies -------------------------------------------------------------------------------------
     def _listen(self) -> None:

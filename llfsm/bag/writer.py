@@ -40,13 +40,13 @@ RESERVE = 32 * 1024  # bytes the placeholder metadata.yaml keeps free for closin
 INFINITE = {"sec": 9223372036, "nsec": 854775807}  # RMW_DURATION_INFINITE, as rosbag2 writes it
 
 
-def qos_profile(depth: int = 0, durability: str = "volatile") -> dict[str, Any]:
+def qos_profile(depth: int = 0, durability: str = "volatile", reliability: str = "reliable") -> dict[str, Any]:
     """A QoS profile as rosbag2 version 9 writes it (offered QoS as DDS discovery reports it:
     history unknown, depth 0)."""
     return {
         "history": "unknown",
         "depth": depth,
-        "reliability": "reliable",
+        "reliability": reliability,
         "durability": durability,
         "deadline": dict(INFINITE),
         "lifespan": dict(INFINITE),

@@ -14,36 +14,126 @@ from .bus import Bus, Future, bus_of
 from .names import expand, normalise_namespace, remap_name, remap_node, validate_node_name
 
 
+class ReliabilityPolicy(IntEnum):
+    """rclpy's reliability policies (same names and values).  Over DDS a RELIABLE writer
+    resends what a reader missed; a BEST_EFFORT one never does (sensor drivers publish so).  A
+    RELIABLE reader never matches a BEST_EFFORT writer, as in ROS 2; in process nothing is ever
+    lost, so the policy changes nothing there.  SYSTEM_DEFAULT leaves Cyclone's default, as
+    rmw_cyclonedds_cpp does: a writer is reliable, a reader best effort."""
+
+    SYSTEM_DEFAULT = 0
+    RELIABLE = 1
+    BEST_EFFORT = 2
+
+
+class HistoryPolicy(IntEnum):
+    """rclpy's history policies.  KEEP_LAST keeps the newest `depth` messages per queue;
+    KEEP_ALL keeps every message not yet handed on (depth is then ignored); SYSTEM_DEFAULT is
+    KEEP_LAST (of 1 when the depth is 0, Cyclone's default)."""
+
+    SYSTEM_DEFAULT = 0
+    KEEP_LAST = 1
+    KEEP_ALL = 2
+
+
 class DurabilityPolicy(IntEnum):
     """rclpy's durability policies.  TRANSIENT_LOCAL: a publisher keeps its last `depth`
     messages and hands them to subscriptions that join later (and ask for TRANSIENT_LOCAL too),
-    as a latched topic does; VOLATILE (the default): a late subscription gets only new messages."""
+    as a latched topic does; VOLATILE (the default): a late subscription gets only new messages.
+    SYSTEM_DEFAULT is VOLATILE (DDS's default)."""
 
     SYSTEM_DEFAULT = 0
     TRANSIENT_LOCAL = 1
     VOLATILE = 2
 
 
-QoSDurabilityPolicy = DurabilityPolicy  # rclpy's older name
+# rclpy's older names
+QoSReliabilityPolicy = ReliabilityPolicy
+QoSHistoryPolicy = HistoryPolicy
+QoSDurabilityPolicy = DurabilityPolicy
+
+
+def _policy(enum: type[IntEnum], value: Any, keyword: str) -> Any:
+    """`value` as a member of `enum`, or a ValueError naming the keyword and the choices."""
+    try:
+        return enum(value)
+    except (ValueError, TypeError):
+        choices = ", ".join(f"{enum.__name__}.{m.name}" for m in enum)
+        raise ValueError(f"QoSProfile(): {keyword} must be one of {choices}, not {value!r}") from None
 
 
 class QoSProfile:
-    """The history depth and the durability matter in process; other policies are accepted
-    wherever rclpy takes them and ignored (the in-process bus is always reliable)."""
+    """rclpy's QoSProfile: history and depth, reliability and durability.  Depth and durability
+    matter in process too; reliability matters only over DDS (see ReliabilityPolicy).  Other
+    policies (deadline, lifespan, liveliness...) are accepted where rclpy takes them and ignored.
+    Unlike rclpy, `depth` defaults to 10 (rclpy demands history or depth)."""
+
+    _FIELDS = ("history", "depth", "reliability", "durability")
 
     def __init__(
-        self, depth: int = 10, *, durability: DurabilityPolicy = DurabilityPolicy.VOLATILE, **_ignored: Any
+        self,
+        depth: int = 10,
+        *,
+        reliability: ReliabilityPolicy = ReliabilityPolicy.RELIABLE,
+        durability: DurabilityPolicy = DurabilityPolicy.VOLATILE,
+        history: HistoryPolicy = HistoryPolicy.KEEP_LAST,
+        **_ignored: Any,
     ) -> None:
         self.depth = depth
-        self.durability = DurabilityPolicy(durability)
+        self.reliability: ReliabilityPolicy = _policy(ReliabilityPolicy, reliability, "reliability")
+        self.durability: DurabilityPolicy = _policy(DurabilityPolicy, durability, "durability")
+        self.history: HistoryPolicy = _policy(HistoryPolicy, history, "history")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, QoSProfile):
+            return NotImplemented
+        return all(getattr(self, k) == getattr(other, k) for k in self._FIELDS)
+
+    def __hash__(self) -> int:
+        return hash((self.depth, self.reliability, self.durability, self.history))
+
+    def __repr__(self) -> str:
+        return (
+            f"QoSProfile(history={self.history.name}, depth={self.depth}, "
+            f"reliability={self.reliability.name}, durability={self.durability.name})"
+        )
 
 
-def _transient_local(qos: int | QoSProfile) -> bool:
-    return isinstance(qos, QoSProfile) and qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+# rclpy's preset profiles (rmw's qos_profiles.h)
+qos_profile_sensor_data = QoSProfile(5, reliability=ReliabilityPolicy.BEST_EFFORT)
+qos_profile_system_default = QoSProfile(
+    0,
+    reliability=ReliabilityPolicy.SYSTEM_DEFAULT,
+    durability=DurabilityPolicy.SYSTEM_DEFAULT,
+    history=HistoryPolicy.SYSTEM_DEFAULT,
+)
+qos_profile_services_default = QoSProfile(10)
+qos_profile_parameters = QoSProfile(1000)
+qos_profile_parameter_events = QoSProfile(1000)
 
 
-def _depth(qos: int | QoSProfile, where: str) -> int:
-    depth = qos.depth if isinstance(qos, QoSProfile) else qos
+@dataclass(frozen=True, slots=True)
+class _Qos:
+    """A profile (or a bare depth) as an endpoint uses it: `depth` None keeps all."""
+
+    depth: int | None
+    reliability: ReliabilityPolicy
+    transient_local: bool
+
+
+def _resolve(qos: int | QoSProfile, where: str) -> _Qos:
+    if not isinstance(qos, QoSProfile):
+        return _Qos(_depth(qos, where), ReliabilityPolicy.RELIABLE, False)
+    transient_local = qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    if qos.history == HistoryPolicy.KEEP_ALL:
+        return _Qos(None, qos.reliability, transient_local)
+    depth = qos.depth
+    if qos.history == HistoryPolicy.SYSTEM_DEFAULT and depth == 0:
+        depth = 1
+    return _Qos(_depth(depth, where), qos.reliability, transient_local)
+
+
+def _depth(depth: Any, where: str) -> int:
     if isinstance(depth, bool) or not isinstance(depth, int) or depth < 1:
         raise ValueError(f"{where}: the QoS depth must be an integer >= 1, not {depth!r}")
     return depth
@@ -58,19 +148,38 @@ def _type_name(obj: object) -> str:
 
 
 class Publisher:
-    __slots__ = ("_bus", "_destroyed", "_remote", "_topic", "_type", "depth", "msg_type", "node", "topic_name")
+    __slots__ = (
+        "_bus",
+        "_destroyed",
+        "_remote",
+        "_topic",
+        "_type",
+        "depth",
+        "msg_type",
+        "node",
+        "reliability",
+        "topic_name",
+    )
 
     #: TRANSIENT_LOCAL (see _LatchingPublisher): a transport gives its writer that durability.
     transient_local = False
 
-    def __init__(self, node: Node, msg_type: type[Message], topic: str, depth: int = 10) -> None:
+    def __init__(
+        self,
+        node: Node,
+        msg_type: type[Message],
+        topic: str,
+        depth: int | None = 10,
+        reliability: ReliabilityPolicy = ReliabilityPolicy.RELIABLE,
+    ) -> None:
         self._bus = node._bus
         self.node = node
         self.topic_name = node.resolve_topic_name(topic)
         self._topic = node._bus.topic(self.topic_name, msg_type, "publish on")
         self._topic.publishers += 1
         self._type = self.msg_type = msg_type
-        self.depth = depth
+        self.depth = depth  # None: KEEP_ALL
+        self.reliability = reliability  # the transport's writer offers it; in process nothing is lost
         self._destroyed = False
         self._remote = node._bus.transport.publisher(self)  # None unless the transport has one
 
@@ -110,8 +219,15 @@ class _LatchingPublisher(Publisher):
     __slots__ = ()
     transient_local = True
 
-    def __init__(self, node: Node, msg_type: type[Message], topic: str, depth: int) -> None:
-        super().__init__(node, msg_type, topic, depth)
+    def __init__(
+        self,
+        node: Node,
+        msg_type: type[Message],
+        topic: str,
+        depth: int | None,
+        reliability: ReliabilityPolicy = ReliabilityPolicy.RELIABLE,
+    ) -> None:
+        super().__init__(node, msg_type, topic, depth, reliability)
         self._topic.latched[self] = deque(maxlen=depth)
 
     def publish(self, msg: Message) -> None:
@@ -140,6 +256,7 @@ class Subscription:
         "latest",
         "msg_type",
         "node",
+        "reliability",
         "topic_name",
         "transient_local",
     )
@@ -150,8 +267,9 @@ class Subscription:
         msg_type: type[Message],
         topic: str,
         callback: Callable[[Any], Any] | None,
-        depth: int,
+        depth: int | None,
         transient_local: bool = False,
+        reliability: ReliabilityPolicy = ReliabilityPolicy.RELIABLE,
     ) -> None:
         self._bus = node._bus
         self.topic_name = node.resolve_topic_name(topic)
@@ -173,8 +291,9 @@ class Subscription:
                 for msg in kept:
                     self._deliver(msg._copy())
         self.node = node
-        self.depth = depth
+        self.depth = depth  # None: KEEP_ALL
         self.transient_local = transient_local
+        self.reliability = reliability  # what the transport's reader asks for
         self._remote = node._bus.transport.subscription(self)  # brings in other processes' messages
 
     def _deliver(self, msg: Any) -> None:
@@ -529,11 +648,11 @@ class Node:
         self._check()
         if not is_message_class(msg_type):
             raise TypeError(f"create_publisher(): msg_type must be a message class such as Twist, not {msg_type!r}")
-        depth = _depth(qos_profile, "create_publisher()")
-        if _transient_local(qos_profile):
-            pub: Publisher = _LatchingPublisher(self, msg_type, topic, depth)
+        qos = _resolve(qos_profile, "create_publisher()")
+        if qos.transient_local:
+            pub: Publisher = _LatchingPublisher(self, msg_type, topic, qos.depth, qos.reliability)
         else:
-            pub = Publisher(self, msg_type, topic, depth)
+            pub = Publisher(self, msg_type, topic, qos.depth, qos.reliability)
         self._entities.append(pub)
         self._bus.transport.node_changed(self)
         return pub
@@ -551,8 +670,8 @@ class Node:
             raise TypeError(f"create_subscription(): msg_type must be a message class such as Twist, not {msg_type!r}")
         if callback is not None and not callable(callback):
             raise TypeError("create_subscription(): callback must be callable, or None for a PULL reader")
-        depth = _depth(qos_profile, "create_subscription()")
-        sub = Subscription(self, msg_type, topic, callback, depth, _transient_local(qos_profile))
+        qos = _resolve(qos_profile, "create_subscription()")
+        sub = Subscription(self, msg_type, topic, callback, qos.depth, qos.transient_local, qos.reliability)
         self._entities.append(sub)
         self._bus.transport.node_changed(self)
         return sub

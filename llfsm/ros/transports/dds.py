@@ -8,8 +8,10 @@ What a ROS 2 peer sees, as rmw_cyclonedds_cpp makes it (SPEC 6):
   of its readers and writers; reliable, transient local, keep last 1), so `ros2 node list` and
   rclpy's graph API list them;
 - topics `rt/<name>`, services `rq/<name>Request` + `rr/<name>Reply`, type names
-  `pkg::msg::dds_::Name_`; QoS as rclpy's defaults (reliable, keep last depth, volatile, no
-  autodispose), payloads XCDR1;
+  `pkg::msg::dds_::Name_`; QoS as the node asked (rclpy's defaults: reliable, keep last depth,
+  volatile, no autodispose; `ros.qos_profile_sensor_data` best effort), payloads XCDR1; an
+  endpoint elsewhere whose QoS cannot match ours is reported as rclpy does ("New publisher
+  discovered on topic ..., offering incompatible QoS");
 - service endpoints carry `serviceid=` / `clientid=` in USER_DATA and requests carry
   rmw_cyclonedds's header (client id and sequence number) in the payload, so clients and
   servers on rmw_cyclonedds_cpp pair with ours exactly as with their own.
@@ -67,6 +69,8 @@ REPLY_PATIENCE_S = 2.0
 #: How long a client trusts its last look at the server's matches (spin calls ask often).
 READY_CACHE_S = 0.05
 TAKE_BATCH = 256
+#: rclpy's ReliabilityPolicy values (llfsm.ros.node), without importing the node module here.
+SYSTEM_DEFAULT, RELIABLE = 0, 1
 #: History depth of service endpoints: rmw's default service QoS (keep last 10, reliable, volatile).
 SERVICE_DEPTH = 10
 #: Between rounds that run back to back (no idle sleep), look at the wait set at most this often
@@ -103,13 +107,23 @@ def _type_hash(cls: type) -> bytes:
         return b""
 
 
-def _qos(depth: int, user_data: bytes = b"", *, reader: bool = False, transient_local: bool = False) -> Qos:
-    """rclpy's default QoS as rmw_cyclonedds_cpp sets it: reliable, keep last `depth`, volatile
-    (transient local when asked: the machines' state topics), automatic liveliness, no
-    autodispose; XCDR1; a reader ignores its own participant."""
+def _qos(
+    depth: int | None,
+    user_data: bytes = b"",
+    *,
+    reader: bool = False,
+    transient_local: bool = False,
+    reliability: int = RELIABLE,
+) -> Qos:
+    """rclpy's QoS as rmw_cyclonedds_cpp sets it: reliable (or best effort when asked; rclpy's
+    SYSTEM_DEFAULT leaves Cyclone's default, best effort for a reader and reliable for a writer),
+    keep last `depth` (keep all when None), volatile (transient local when asked: the machines'
+    state topics), automatic liveliness, no autodispose; XCDR1; a reader ignores its own
+    participant."""
+    reliable = reliability == RELIABLE or (reliability == SYSTEM_DEFAULT and not reader)
     policies: list[Any] = [
-        Policy.Reliability.Reliable(max_blocking_time=1_000_000_000),
-        Policy.History.KeepLast(depth),
+        Policy.Reliability.Reliable(max_blocking_time=1_000_000_000) if reliable else Policy.Reliability.BestEffort,
+        Policy.History.KeepAll if depth is None else Policy.History.KeepLast(depth),
         Policy.Durability.TransientLocal if transient_local else Policy.Durability.Volatile,
         Policy.DataRepresentation(use_cdrv0_representation=True),
     ]
@@ -120,6 +134,33 @@ def _qos(depth: int, user_data: bytes = b"", *, reader: bool = False, transient_
     if user_data:
         policies.append(Policy.Userdata(user_data))
     return Qos(*policies)
+
+
+#: Cyclone's QoS policy ids, by rclpy's names for them (QoSPolicyKind), for the incompatible QoS
+#: warnings (what rmw_cyclonedds_cpp maps them to).
+_POLICY_NAMES = {2: "DURABILITY", 4: "DEADLINE", 8: "LIVELINESS", 11: "RELIABILITY", 13: "HISTORY"}
+
+
+class _Incompatible:
+    """Tells, as rclpy's default QoS event handler does (a WARN on the node's logger), that an
+    endpoint elsewhere was found whose QoS cannot match ours: a reliable subscription and a
+    best-effort publisher, say.  Without it the subscription would just never receive."""
+
+    def __init__(self, endpoint: Any, topic: str, node: Any, *, reader: bool) -> None:
+        self.endpoint, self.topic, self.node, self.reader = endpoint, topic, node, reader
+
+    def on_trigger(self) -> None:
+        if self.reader:
+            status = self.endpoint.get_requested_incompatible_qos_status()
+            text = "New publisher discovered on topic '{}', offering incompatible QoS. No messages will be received"
+            text += " from it."
+        else:
+            status = self.endpoint.get_offered_incompatible_qos_status()
+            text = "New subscription discovered on topic '{}', requesting incompatible QoS. No messages will be sent"
+            text += " to it."
+        if status.total_count_change > 0:
+            policy = _POLICY_NAMES.get(status.last_policy_id, "INVALID")
+            self.node.get_logger().warn(f"{text.format(self.topic)} Last incompatible policy: {policy}")
 
 
 class _WaitSet:
@@ -177,18 +218,20 @@ class _Writer(_Endpoint):
         self.t, self.node = t, pub.node
         self.cdr = _dds.codec(pub.msg_type).cdr
         topic = t.topic("rt" + pub.topic_name, _dds.dds_type(pub.msg_type))
-        self.writer = DataWriter(
-            t.publisher_, topic, qos=_qos(pub.depth, _type_hash(pub.msg_type), transient_local=pub.transient_local)
-        )
+        hashed = _type_hash(pub.msg_type)
+        qos = _qos(pub.depth, hashed, transient_local=pub.transient_local, reliability=pub.reliability)
+        self.writer = DataWriter(t.publisher_, topic, qos=qos)
         self.writers = (self.writer,)
         self.matched = 0
         self.keeps = pub.transient_local  # the writer keeps its last samples for readers still to come
-        self.writer.set_status_mask(DDSStatus.PublicationMatched)
+        self.incompatible = _Incompatible(self.writer, pub.topic_name, pub.node, reader=False)
+        self.writer.set_status_mask(DDSStatus.PublicationMatched | DDSStatus.OfferedIncompatibleQos)
         self.token = t.waits.attach(self.writer, self)
         t.add_endpoint(self)
 
     def on_trigger(self) -> None:
         self.matched = self.writer.get_publication_matched_status().current_count
+        self.incompatible.on_trigger()
 
     def write(self, msg: Message) -> None:
         if (self.matched or self.keeps) and not self.t.closed:  # nobody elsewhere, nothing kept: no serialisation
@@ -211,11 +254,20 @@ class _Reader(_Endpoint):
         self.reader = DataReader(
             t.subscriber_,
             topic,
-            qos=_qos(sub.depth, _type_hash(sub.msg_type), reader=True, transient_local=sub.transient_local),
+            qos=_qos(
+                sub.depth,
+                _type_hash(sub.msg_type),
+                reader=True,
+                transient_local=sub.transient_local,
+                reliability=sub.reliability,
+            ),
         )
         self.readers = (self.reader,)
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
+        self.reader.set_status_mask(DDSStatus.RequestedIncompatibleQos)
+        incompatible = _Incompatible(self.reader, sub.topic_name, sub.node, reader=True)
+        self.status_token = t.waits.attach(self.reader, incompatible)
         t.add_endpoint(self)
 
     def on_trigger(self) -> None:
@@ -230,6 +282,7 @@ class _Reader(_Endpoint):
 
     def close(self) -> None:
         self.t.waits.detach(self.cond, self.token)
+        self.t.waits.detach(self.reader, self.status_token)
         self.t.remove_endpoint(self)
         _delete(self.cond, self.reader)
 
