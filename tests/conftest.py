@@ -5,13 +5,18 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
 
+from llfsm import ros
 from llfsm.cli import cli
+from llfsm.ros.bus import Bus, bus_of
+from llfsm.runtime import RunContext, SimClock
+from llfsm.runtime.context import activate
 
 REPO = Path(__file__).resolve().parent.parent
 MACHINES = REPO / "machines"
@@ -21,6 +26,18 @@ MACHINES = REPO / "machines"
 def _isolated_cache(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch) -> None:
     """Every test compiles into its own cache, never into ~/.cache."""
     monkeypatch.setenv("LLFSM_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
+
+
+@pytest.fixture
+def bus() -> Iterator[Bus]:
+    """A fresh run context with a sim clock, active for the test."""
+    ctx = RunContext(SimClock())
+    prev = activate(ctx)
+    ros.init()
+    try:
+        yield bus_of(ctx)
+    finally:
+        activate(prev)
 
 
 def write_machine(

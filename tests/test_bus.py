@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -12,21 +11,9 @@ from llfsm import ros
 from llfsm.msgs.geometry_msgs.msg import Twist
 from llfsm.msgs.std_msgs.msg import Int64, String
 from llfsm.msgs.std_srvs.srv import SetBool, Trigger
-from llfsm.ros.bus import Bus, bus_of
+from llfsm.ros.bus import Bus
 from llfsm.runtime import RunContext, SimClock
 from llfsm.runtime.context import activate
-
-
-@pytest.fixture
-def bus() -> Iterator[Bus]:
-    """A fresh run context with a sim clock, active for the test."""
-    ctx = RunContext(SimClock())
-    prev = activate(ctx)
-    ros.init()
-    try:
-        yield bus_of(ctx)
-    finally:
-        activate(prev)
 
 
 def advance(bus: Bus, ms: int) -> None:

@@ -6,7 +6,6 @@ tests/interop/test_rclpy_qos.py."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -16,20 +15,7 @@ from conftest import run_sim, write_machine
 from llfsm import ros
 from llfsm.check import ROS_QOS_NAMES
 from llfsm.msgs.std_msgs.msg import Int64
-from llfsm.ros.bus import Bus, bus_of
-from llfsm.runtime import RunContext, SimClock
-from llfsm.runtime.context import activate
-
-
-@pytest.fixture
-def bus() -> Iterator[Bus]:
-    ctx = RunContext(SimClock())
-    prev = activate(ctx)
-    ros.init()
-    try:
-        yield bus_of(ctx)
-    finally:
-        activate(prev)
+from llfsm.ros.bus import Bus
 
 
 def test_policies_have_rclpys_names_and_values() -> None:
