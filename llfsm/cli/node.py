@@ -25,6 +25,7 @@ def list_(all_: bool, count_nodes: bool, spin_time: float) -> None:
     graph = open_graph()
     try:
         graph.spin(spin_time)
+        graph.settle()  # the nodes of participants already seen
         text = node_list(graph, include_hidden=all_, count=count_nodes, spin_time=spin_time)
         duplicates = duplicate_nodes(graph)
     finally:

@@ -56,6 +56,8 @@ def info(topic_name: str, verbose: bool, timeout: float) -> None:
     try:
         graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True))
         graph.spin(0.2)  # the rest of the topic's endpoints, discovered with the first
+        if verbose:  # each endpoint's node
+            graph.settle()
         text = topic_info(graph, name, verbose=verbose)
     finally:
         graph.close()

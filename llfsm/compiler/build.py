@@ -10,7 +10,7 @@ import signal
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..discover import machine_name_of
 from ..fingerprint import RACY_NS, compiler_id, machine_fingerprint, module_fingerprint, stat_signature
@@ -170,6 +170,7 @@ def build_all(
         jobs = usable_cores() if len(stale) >= PARALLEL_FROM else 1
     results: Iterator[BuildOutcome | str]
     pool = None
+    safe: _SafePoints | None = None
     if jobs > 1 and len(stale) > 1:
         import multiprocessing
 
@@ -183,9 +184,10 @@ def build_all(
         gc.freeze()  # the workers' collector leaves the inherited objects alone: fewer pages copied
         with _signals_deferred():  # an interrupt never lands between two forks: every worker is known
             pool = ctx.Pool(jobs, initializer=_worker_init, initargs=(os.getpid(),))
+            safe = _SafePoints()  # before the signals held back meanwhile arrive
         chunk = max(1, len(stale) // (jobs * 8))
         work = [(p, out_dir, force, fp, sigs[p] is None) for p, fp in zip(stale, fps, strict=True)]
-        results = pool.imap(_build_star, work, chunk)
+        results = _results_of(pool.imap(_build_chunk, [work[i : i + chunk] for i in range(0, len(work), chunk)]), safe)
     else:
         results = (_build_or_error(p, out_dir, force, fp, sigs[p] is None) for p, fp in zip(stale, fps, strict=True))
     try:
@@ -201,6 +203,8 @@ def build_all(
                     path, out_dir / f"{machine_name_of(path)}.py", "unchanged", name=machine_name_of(path)
                 )
     except BaseException:
+        if safe is not None:
+            safe.restore()
         if pool is not None:  # Ctrl-C, SIGTERM: stop the workers (each finishes the module it writes)
             pool.terminate()
             pool = None
@@ -210,10 +214,63 @@ def build_all(
             pool.close()
             pool.join()
     stats.save()
+    if safe is not None:  # an interrupt that came after the last result: taken now, all written
+        safe.take()
+        safe.restore()
 
 
-def _build_star(args: tuple[Path, Path, bool, str | None, bool]) -> BuildOutcome | str:
-    return _build_or_error(*args)
+def _results_of(batches: Any, safe: _SafePoints) -> Iterator[BuildOutcome | str]:
+    """The outcomes of the workers' batches in order (`batches`: Pool.imap's iterator), waited
+    for in short steps that take any interrupt noted meanwhile (see _SafePoints)."""
+    import multiprocessing
+
+    while True:
+        safe.take()
+        try:
+            batch = batches.next(timeout=0.05)
+        except multiprocessing.TimeoutError:
+            continue
+        except StopIteration:
+            return
+        yield from batch
+
+
+class _SafePoints:
+    """While workers build, an interrupting signal (Ctrl-C, SIGTERM, SIGHUP) only notes itself,
+    and the loop that waits for results raises it at a safe point, by its own handler.  Raised
+    where it lands, a KeyboardInterrupt can strike inside the finaliser of one of
+    multiprocessing's pipes, where Python prints "Exception ignored" with a traceback and drops
+    it: the build would go on as if nobody had pressed Ctrl-C.  Installed on first use, in the
+    main thread only (elsewhere signals are not this thread's to handle)."""
+
+    def __init__(self) -> None:
+        import threading
+
+        self.pending: int | None = None
+        self.old: dict[int, Any] = {}
+        if threading.current_thread() is threading.main_thread():
+            for s in _DEFERRED:
+                self.old[s] = signal.signal(s, self._note)
+
+    def _note(self, signum: int, _frame: object) -> None:
+        if self.pending is None:
+            self.pending = signum
+
+    def take(self) -> None:
+        """Raise the noted signal here (its handler runs as if it had just arrived)."""
+        if self.pending is not None:
+            signum, self.pending = self.pending, None
+            self.restore()
+            signal.raise_signal(signum)
+
+    def restore(self) -> None:
+        for s, h in self.old.items():
+            signal.signal(s, h if h is not None else signal.SIG_DFL)
+        self.old = {}
+
+
+def _build_chunk(work: list[tuple[Path, Path, bool, str | None, bool]]) -> list[BuildOutcome | str]:
+    return [_build_or_error(*args) for args in work]
 
 
 def _worker_init(parent: int | None = None) -> None:

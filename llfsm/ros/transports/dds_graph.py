@@ -31,6 +31,9 @@ if TYPE_CHECKING:
 TOPIC_PREFIX = "rt"
 REQUEST_PREFIX, REPLY_PREFIX = "rq", "rr"
 DISCOVERY_TOPIC = "ros_discovery_info"
+#: How long a verb that names nodes waits, after its spin time, for the ros_discovery_info of
+#: participants already seen (Graph.settle).
+SETTLE_S = 5.0
 INFINITE_NS = 0x7FFFFFFFFFFFFFFF  # Cyclone's DDS_INFINITY
 
 
@@ -280,6 +283,20 @@ class Graph:
             if left <= 0:
                 return False
             time.sleep(min(0.05, left))
+
+    def settle(self, seconds: float = SETTLE_S) -> bool:
+        """Wait (at most `seconds`) until every participant seen publishing ros_discovery_info
+        has delivered it: the nodes of a participant are known only from that sample, and a
+        transient-local sample from another vendor can come seconds after its participant and
+        endpoints (Fast DDS resends on its heartbeat).  True when none is missing."""
+        return self.spin(seconds, until=self._nodes_known)
+
+    def _nodes_known(self) -> bool:
+        return all(
+            e.participant in self._nodes
+            for e in self._endpoints.values()
+            if e.kind == "publisher" and e.topic == DISCOVERY_TOPIC and e.participant in self._participants
+        )
 
     # -- queries ----------------------------------------------------------------------------
 
