@@ -194,8 +194,8 @@ def section_writers(tmp: Path, quick: bool) -> Table:
     definition, type_hash = ts.definition("geometry_msgs/msg/Twist")
     counter = iter(range(10**9))
 
-    def rosbags_mcap() -> float:
-        w = RosbagsWriter(tmp / f"r{next(counter)}", version=9, storage_plugin=StoragePlugin.MCAP)
+    def rosbags(plugin: StoragePlugin) -> float:
+        w = RosbagsWriter(tmp / f"r{next(counter)}", version=9, storage_plugin=plugin)
         w.open()
         c = w.add_connection("/cmd_vel", "geometry_msgs/msg/Twist", msgdef=definition, rihs01=type_hash)
         t = time.perf_counter()
@@ -227,21 +227,11 @@ def section_writers(tmp: Path, quick: bool) -> Table:
         w.close()
         return n / (time.perf_counter() - t)
 
-    def rosbags_sqlite3() -> float:
-        w = RosbagsWriter(tmp / f"s{next(counter)}", version=9, storage_plugin=StoragePlugin.SQLITE3)
-        w.open()
-        c = w.add_connection("/cmd_vel", "geometry_msgs/msg/Twist", msgdef=definition, rihs01=type_hash)
-        t = time.perf_counter()
-        for i in range(n):
-            w.write(c, i, data)
-        w.close()
-        return n / (time.perf_counter() - t)
-
     writers: list[tuple[str, Callable[[], float]]] = [
-        ("rosbags Writer, MCAP", rosbags_mcap),
+        ("rosbags Writer, MCAP", lambda: rosbags(StoragePlugin.MCAP)),
         ("mcap Writer (uncompressed 64 KiB chunks, no CRCs)", mcap_library),
         ("llfsm BagWriter (mcap Writer + spool + rosbag2 metadata)", llfsm_writer),
-        ("rosbags Writer, sqlite3 (for comparison)", rosbags_sqlite3),
+        ("rosbags Writer, sqlite3 (for comparison)", lambda: rosbags(StoragePlugin.SQLITE3)),
     ]
     results: dict[str, list[float]] = {name: [] for name, _ in writers}
     for _ in range(3 if quick else 5):  # interleaved rounds of all writers

@@ -20,16 +20,12 @@ def node() -> None:
 @verb
 def list_(all_: bool, count_nodes: bool, spin_time: float) -> None:
     """Output a list of available nodes."""
-    from ..ros2cli.graph import duplicate_nodes, node_list, open_graph
+    from ..ros2cli.graph import discovered, duplicate_nodes, node_list
 
-    graph = open_graph()
-    try:
-        graph.spin(spin_time)
+    with discovered(spin_time) as graph:
         graph.settle()  # the nodes of participants already seen
         text = node_list(graph, include_hidden=all_, count=count_nodes, spin_time=spin_time)
         duplicates = duplicate_nodes(graph)
-    finally:
-        graph.close()
     if duplicates and not count_nodes:
         click.echo(
             "WARNING: Be aware that there are nodes in the graph that share an exact name, "

@@ -21,11 +21,9 @@ def service() -> None:
 @verb
 def list_(show_types: bool, count_services: bool, include_hidden_services: bool, spin_time: float) -> None:
     """Output a list of available services."""
-    from ..ros2cli.graph import open_graph, service_list
+    from ..ros2cli.graph import discovered, service_list
 
-    graph = open_graph()
-    try:
-        graph.spin(spin_time)
+    with discovered(spin_time) as graph:
         text = service_list(
             graph,
             show_types=show_types,
@@ -33,8 +31,6 @@ def list_(show_types: bool, count_services: bool, include_hidden_services: bool,
             include_hidden=include_hidden_services,
             spin_time=spin_time,
         )
-    finally:
-        graph.close()
     click.echo(text, nl=False)
 
 

@@ -23,11 +23,9 @@ def topic() -> None:
 @verb
 def list_(show_types: bool, count_topics: bool, include_hidden_topics: bool, verbose: bool, spin_time: float) -> None:
     """Output a list of available topics."""
-    from ..ros2cli.graph import open_graph, topic_list
+    from ..ros2cli.graph import discovered, topic_list
 
-    graph = open_graph()
-    try:
-        graph.spin(spin_time)
+    with discovered(spin_time) as graph:
         text = topic_list(
             graph,
             show_types=show_types,
@@ -36,8 +34,6 @@ def list_(show_types: bool, count_topics: bool, include_hidden_topics: bool, ver
             verbose=verbose,
             spin_time=spin_time,
         )
-    finally:
-        graph.close()
     click.echo(text, nl=False)
 
 

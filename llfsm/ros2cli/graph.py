@@ -7,11 +7,14 @@ one thing llfsm says where `ros2` prints nothing at all.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 from . import CliError
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
+
     from ..ros.transports.dds_graph import Graph
 
 NOT_FOUND = 1
@@ -30,6 +33,18 @@ def open_graph() -> Graph:
         raise CliError(NEEDS_CYCLONEDDS.format(e)) from None
     except DiscoveryError as e:
         raise CliError(str(e)) from None
+
+
+@contextmanager
+def discovered(spin_time: float) -> Iterator[Graph]:
+    """A graph reader that has listened to discovery for `spin_time` (closed afterwards): what
+    the list verbs print from."""
+    graph = open_graph()
+    try:
+        graph.spin(spin_time)
+        yield graph
+    finally:
+        graph.close()
 
 
 def where() -> str:
