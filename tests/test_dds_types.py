@@ -301,3 +301,33 @@ def test_damaged_payloads_raise_value_error_only(cls: type[Message]) -> None:
         except ValueError:
             continue
         assert type(msg) is cls
+
+
+def test_messages_of_a_fixed_size_have_a_stamped_record() -> None:
+    from llfsm.msgs.geometry_msgs.msg import Twist
+    from llfsm.msgs.std_msgs.msg import Header, String
+    from llfsm.msgs.turtlesim.msg import Color, Pose
+
+    assert all(_dds.codec(c).stamped is not None for c in (Twist, Pose, Color))
+    assert all(_dds.codec(c).stamped is None for c in (String, Header))  # their sizes vary
+
+
+@pytest.mark.parametrize("cls", [c for c in CLASSES if _dds.codec(c).stamped], ids=lambda c: c._TYPE)
+def test_a_stamped_record_is_the_head_then_the_cdr(cls: type[Message]) -> None:
+    """What `--record` writes for a message of a fixed size comes from one generated pack (head
+    and CDR together): its bytes must be the pipe head, then exactly the message's CDR, at the
+    clock's time of the call."""
+    records: list[bytes] = []
+
+    class Clock:
+        now = 0
+
+    clock = Clock()
+    record = _dds.codec(cls).stamped(records.append, 7, clock)
+    rng = random.Random(cls._TYPE + "stamped")
+    for n in range(5):
+        msg = sample(cls, rng)
+        clock.now = -(10**18) + n * 123_456_789_012
+        record(msg)
+        data = _dds.cdr(msg)
+        assert records[-1] == struct.pack("<IqI", 7, clock.now, len(data)) + data

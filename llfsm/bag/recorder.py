@@ -4,9 +4,11 @@ The recorder taps the bus (`Bus.add_tap`): a tap on every topic (`Topic.taps`), 
 and those made later, like `ros2 bag record -a`.  (On the DDS transport it subscribes to each
 topic instead, so that what other processes publish is recorded too.)  A tap is handed the
 published message itself, not the copy a subscription gets: its encoding is the snapshot.
-Delivery costs the round the message's CDR encoding (one `struct.pack` of the generated
-encoder), the pipe record's header (one more) and one extend of a bytearray (whole records
-only, so that a run stopped by a signal mid-message leaves none half-written): no object waits
+Delivery costs the round one call of the generated `_stamped_<Name>` function where the message
+has a fixed size (a Twist, a Pose: one `struct.pack` of the pipe record's head and the CDR
+together, and one extend of a bytearray), or the message's CDR encoding, the head (one more
+pack) and the extend where it does not.  Whole records only are appended, so that a run
+stopped by a signal mid-message leaves none half-written: no object waits
 per message, and nothing else happens per message in this process.  A thread of the run takes
 what the bytearray holds in batches and writes it to the bag writer process
 (`_writer_process`), which writes the bag on another core: neither the disk nor the storage
@@ -50,6 +52,20 @@ PIECE = 1 << 20  # bytes
 CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
 START_TIMEOUT_S = 60.0
 QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
+
+
+class _WallClock:
+    """`now` in wall-clock nanoseconds since the epoch, for a generated record function that
+    reads `clock.now` (the sim clock's own attribute)."""
+
+    __slots__ = ()
+
+    @property
+    def now(self) -> int:
+        return time.time_ns()
+
+
+_WALL = _WallClock()
 
 
 class Recorder:
@@ -174,6 +190,9 @@ class Recorder:
             key = self._ids[topic] = len(self._ids) + 1
             self._undescribed.append((key, topic))
         extend = self.records.extend
+        stamped = self.types.stamped(topic.type)
+        if stamped is not None:  # a fixed-size message: head and CDR in one pack
+            return stamped(extend, key, _WALL if wall else self.clock)  # type: ignore[no-any-return]
         pack = RECORD.pack
         if wall:
             now = time.time_ns

@@ -158,6 +158,20 @@ class TypeSupport:
             fn = self._ser[cls] = _native_serializer(cls) or self._rosbags_serializer(cls)
         return fn
 
+    @staticmethod
+    def stamped(cls: type[Message]) -> Callable[..., Callable[[Any], None]] | None:
+        """The generated `_stamped_<Name>(out, key, clock)` of a fixed-size message (one pack of
+        the record head and the CDR together: what a recorder does per message, in one call),
+        or None (a message whose size varies, or a class without llfsm's DDS form)."""
+        try:
+            from ..msgs._dds import codec
+        except ImportError:  # pragma: no cover - the DDS type support is part of llfsm
+            return None
+        try:
+            return codec(cls).stamped  # type: ignore[no-any-return]
+        except TypeError:
+            return None
+
     def _rosbags_serializer(self, cls: type[Message]) -> Callable[[Any], bytes]:
         self._register(cls._TYPE)
         store, type_name = self.store, cls._TYPE

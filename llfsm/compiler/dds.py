@@ -526,6 +526,7 @@ class _Module:
     def __init__(self, package: str, kind: str, lookup: Lookup) -> None:
         self.package, self.kind, self.lookup = package, kind, lookup
         self.structs: dict[str, str] = {}
+        self.records: dict[str, str] = {}  # the stamped records' structs, _R<n>
         self.imports: set[str] = set()
         self.uses: set[str] = set()  # helpers of the struct module the code calls
         self.n = 0
@@ -538,6 +539,11 @@ class _Module:
         if fmt not in self.structs:
             self.structs[fmt] = f"_S{len(self.structs)}"
         return self.structs[fmt]
+
+    def record_struct(self, fmt: str) -> str:
+        if fmt not in self.records:
+            self.records[fmt] = f"_R{len(self.records)}"
+        return self.records[fmt]
 
     def ref(self, type_name: str, prefix: str) -> str:
         """How this module names `<prefix>_<Name>` of a message: local, or through the `_dds`
@@ -568,6 +574,7 @@ class DdsMessageView:
     wire_line: str  # same for the request/response with rmw_cyclonedds' header
     codec: str  # its entry in CODECS
     cdr: list[str]  # body of _cdr_<Name>(m) -> bytes
+    stamped: list[str]  # body of _stamped_<Name>(out, key, clock), [] if the size varies
     msg: list[str]  # body of _msg_<Name>(d) -> (message, end offset)
     enc: list[str]  # body of _enc_<Name>(m, b)
     dec: list[str]  # body of _dec_<Name>(d, o) -> (message, o)
@@ -618,9 +625,23 @@ def message_view(spec: MessageSpec, module: _Module, type_hash_value: str) -> Dd
     if not top.lines:  # fixed size: one pack, the encapsulation header included
         packer = module.struct("<4s" + "".join(top.fmt))
         cdr = [layout("return ", Call(f"{packer}.pack", ["_HDR", *top.args]))]
+        # the same pack behind a (uint32 key, int64 time, uint32 size) head: 16 bytes, so the
+        # CDR's alignment is unchanged; one call per message for a recorder
+        size = struct.calcsize("<4s" + "".join(top.fmt))
+        stamped_packer = module.record_struct("<IqI4s" + "".join(top.fmt))
+        stamped = [
+            f"pack = {stamped_packer}.pack",
+            "",
+            "def record(m):",
+            _indented(layout("r = ", Call("pack", ["key", "clock.now", str(size), "_HDR", *top.args]), "", 8)),
+            "    out(r)",
+            "",
+            "return record",
+        ]
     else:
         top.flush()
         cdr = ["b = bytearray(_HDR)", *top.lines, "return bytes(b)"]
+        stamped = []
     module.n = 0
     anywhere = _Writer(module, _Alignment(1))
     anywhere.message(spec, "m")
@@ -651,8 +672,9 @@ def message_view(spec: MessageSpec, module: _Module, type_hash_value: str) -> Dd
         mk_def=mk_def,
         class_line=_class_line(f"{name}_", spec.type_name),
         wire_line=_class_line(f"{name}_wire_", spec.type_name),
-        codec=_codec_line(name),
+        codec=_codec_line(name, bool(stamped)),
         cdr=cdr,
+        stamped=stamped,
         msg=msg,
         enc=anywhere.lines or ["pass"],
         dec=dec,
@@ -666,8 +688,9 @@ def _class_line(cls: str, type_name: str) -> str:
     return layout("class ", Call(cls, ["_IdlStruct", f"typename={_str_literal(dds_name(type_name))}"]), ":", 0)
 
 
-def _codec_line(name: str) -> str:
+def _codec_line(name: str, stamped: bool) -> str:
     items = [f"{name}_"] + [f"_{p}_{name}" for p in ("cdr", "msg", "to", "from", "enc", "dec")]
+    items.append(f"_stamped_{name}" if stamped else "None")
     return layout(f"{_str_literal(name)}: ", Call("", items), ",", atom=True)
 
 
@@ -726,6 +749,10 @@ def render_dds_module(package: PackageSpec, kind: str, lookup: Lookup, header: l
         structs=[
             layout(f"{name} = ", Call("_Struct", [_str_literal(fmt)]), indent=0)
             for fmt, name in sorted(module.structs.items(), key=lambda kv: int(kv[1][2:]))
+        ]
+        + [
+            layout(f"{name} = ", Call("_Struct", [_str_literal(fmt)]), indent=0)
+            for fmt, name in sorted(module.records.items(), key=lambda kv: int(kv[1][2:]))
         ],
         messages=views,
         services=[(s.name, s.request.name, s.response.name) for s in package.services] if kind == "srv" else [],

@@ -51,6 +51,10 @@ class Codec(NamedTuple):
     from_dds: Any  # (sample) -> msg
     enc: Any  # (msg, bytearray) -> None, appends at any offset
     dec: Any  # (data, offset) -> (msg, offset)
+    # (out, key, clock) -> (msg) -> None, appending out(head + CDR) with the head
+    # <uint32 key><int64 clock.now><uint32 size>; None where the size varies (or in a module
+    # generated before it existed)
+    stamped: Any = None
 
 
 _codecs: dict[type, Codec] = {}

@@ -17,6 +17,7 @@ _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<4siI")
 _S1 = _Struct("<iI")
+_R0 = _Struct("<IqI4siI")
 
 
 # -- builtin_interfaces/msg/Duration
@@ -39,6 +40,17 @@ def _mk_Duration(a0, a1):
 
 def _cdr_Duration(m):
     return _S0.pack(_HDR, m._sec, m._nanosec)
+
+
+def _stamped_Duration(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 12, _HDR, m._sec, m._nanosec)
+        out(r)
+
+    return record
 
 
 def _msg_Duration(d):
@@ -95,6 +107,17 @@ def _cdr_Time(m):
     return _S0.pack(_HDR, m._sec, m._nanosec)
 
 
+def _stamped_Time(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 12, _HDR, m._sec, m._nanosec)
+        out(r)
+
+    return record
+
+
 def _msg_Time(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -127,10 +150,20 @@ def _from_Time(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
-    "Duration": (Duration_, _cdr_Duration, _msg_Duration, _to_Duration, _from_Duration, _enc_Duration, _dec_Duration),
-    "Time": (Time_, _cdr_Time, _msg_Time, _to_Time, _from_Time, _enc_Time, _dec_Time),
+    "Duration": (
+        Duration_,
+        _cdr_Duration,
+        _msg_Duration,
+        _to_Duration,
+        _from_Duration,
+        _enc_Duration,
+        _dec_Duration,
+        _stamped_Duration,
+    ),
+    "Time": (Time_, _cdr_Time, _msg_Time, _to_Time, _from_Time, _enc_Time, _dec_Time, _stamped_Time),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

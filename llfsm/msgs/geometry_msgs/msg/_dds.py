@@ -35,6 +35,14 @@ _S14 = _Struct("<4sddddddd")
 _S15 = _Struct("<ddddddd")
 _S16 = _Struct("<4sddddddd36d")
 _S17 = _Struct("<ddddddd36d")
+_R0 = _Struct("<IqI4sddd")
+_R1 = _Struct("<IqI4sdddddd")
+_R2 = _Struct("<IqI4sdddddd36d")
+_R3 = _Struct("<IqI4sdddddddddd")
+_R4 = _Struct("<IqI4sfff")
+_R5 = _Struct("<IqI4sdddd")
+_R6 = _Struct("<IqI4sddddddd")
+_R7 = _Struct("<IqI4sddddddd36d")
 
 
 # -- geometry_msgs/msg/Vector3
@@ -59,6 +67,17 @@ def _mk_Vector3(a0, a1, a2):
 
 def _cdr_Vector3(m):
     return _S0.pack(_HDR, m._x, m._y, m._z)
+
+
+def _stamped_Vector3(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 28, _HDR, m._x, m._y, m._z)
+        out(r)
+
+    return record
 
 
 def _msg_Vector3(d):
@@ -114,6 +133,28 @@ def _mk_Accel(a0, a1):
 
 def _cdr_Accel(m):
     return _S2.pack(_HDR, m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
+
+
+def _stamped_Accel(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            52,
+            _HDR,
+            m._linear._x,
+            m._linear._y,
+            m._linear._z,
+            m._angular._x,
+            m._angular._y,
+            m._angular._z,
+        )
+        out(r)
+
+    return record
 
 
 def _msg_Accel(d):
@@ -275,6 +316,29 @@ def _cdr_AccelWithCovariance(m):
         m._accel._angular._z,
         *m._covariance,
     )
+
+
+def _stamped_AccelWithCovariance(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R2.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            340,
+            _HDR,
+            m._accel._linear._x,
+            m._accel._linear._y,
+            m._accel._linear._z,
+            m._accel._angular._x,
+            m._accel._angular._y,
+            m._accel._angular._z,
+            *m._covariance,
+        )
+        out(r)
+
+    return record
 
 
 def _msg_AccelWithCovariance(d):
@@ -459,6 +523,32 @@ def _cdr_Inertia(m):
     return _S7.pack(_HDR, m._m, m._com._x, m._com._y, m._com._z, m._ixx, m._ixy, m._ixz, m._iyy, m._iyz, m._izz)
 
 
+def _stamped_Inertia(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R3.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            84,
+            _HDR,
+            m._m,
+            m._com._x,
+            m._com._y,
+            m._com._z,
+            m._ixx,
+            m._ixy,
+            m._ixz,
+            m._iyy,
+            m._iyz,
+            m._izz,
+        )
+        out(r)
+
+    return record
+
+
 def _msg_Inertia(d):
     o = 4
     t1 = _S8.unpack_from(d, o)
@@ -629,6 +719,17 @@ def _cdr_Point(m):
     return _S0.pack(_HDR, m._x, m._y, m._z)
 
 
+def _stamped_Point(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 28, _HDR, m._x, m._y, m._z)
+        out(r)
+
+    return record
+
+
 def _msg_Point(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -684,6 +785,17 @@ def _mk_Point32(a0, a1, a2):
 
 def _cdr_Point32(m):
     return _S9.pack(_HDR, m._x, m._y, m._z)
+
+
+def _stamped_Point32(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R4.pack
+
+    def record(m):
+        r = pack(key, clock.now, 16, _HDR, m._x, m._y, m._z)
+        out(r)
+
+    return record
 
 
 def _msg_Point32(d):
@@ -998,6 +1110,17 @@ def _cdr_Quaternion(m):
     return _S12.pack(_HDR, m._x, m._y, m._z, m._w)
 
 
+def _stamped_Quaternion(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R5.pack
+
+    def record(m):
+        r = pack(key, clock.now, 36, _HDR, m._x, m._y, m._z, m._w)
+        out(r)
+
+    return record
+
+
 def _msg_Quaternion(d):
     o = 4
     t1 = _S13.unpack_from(d, o)
@@ -1063,6 +1186,29 @@ def _cdr_Pose(m):
     )
 
 
+def _stamped_Pose(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R6.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            60,
+            _HDR,
+            m._position._x,
+            m._position._y,
+            m._position._z,
+            m._orientation._x,
+            m._orientation._y,
+            m._orientation._z,
+            m._orientation._w,
+        )
+        out(r)
+
+    return record
+
+
 def _msg_Pose(d):
     o = 4
     t1 = _S15.unpack_from(d, o)
@@ -1125,6 +1271,17 @@ def _mk_Pose2D(a0, a1, a2):
 
 def _cdr_Pose2D(m):
     return _S0.pack(_HDR, m._x, m._y, m._theta)
+
+
+def _stamped_Pose2D(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 28, _HDR, m._x, m._y, m._theta)
+        out(r)
+
+    return record
 
 
 def _msg_Pose2D(d):
@@ -1388,6 +1545,30 @@ def _cdr_PoseWithCovariance(m):
         m._pose._orientation._w,
         *m._covariance,
     )
+
+
+def _stamped_PoseWithCovariance(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R7.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            348,
+            _HDR,
+            m._pose._position._x,
+            m._pose._position._y,
+            m._pose._position._z,
+            m._pose._orientation._x,
+            m._pose._orientation._y,
+            m._pose._orientation._z,
+            m._pose._orientation._w,
+            *m._covariance,
+        )
+        out(r)
+
+    return record
 
 
 def _msg_PoseWithCovariance(d):
@@ -1654,6 +1835,29 @@ def _cdr_Transform(m):
     )
 
 
+def _stamped_Transform(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R6.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            60,
+            _HDR,
+            m._translation._x,
+            m._translation._y,
+            m._translation._z,
+            m._rotation._x,
+            m._rotation._y,
+            m._rotation._z,
+            m._rotation._w,
+        )
+        out(r)
+
+    return record
+
+
 def _msg_Transform(d):
     o = 4
     t1 = _S15.unpack_from(d, o)
@@ -1845,6 +2049,28 @@ def _cdr_Twist(m):
     return _S2.pack(_HDR, m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
 
 
+def _stamped_Twist(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            52,
+            _HDR,
+            m._linear._x,
+            m._linear._y,
+            m._linear._z,
+            m._angular._x,
+            m._angular._y,
+            m._angular._z,
+        )
+        out(r)
+
+    return record
+
+
 def _msg_Twist(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -2004,6 +2230,29 @@ def _cdr_TwistWithCovariance(m):
         m._twist._angular._z,
         *m._covariance,
     )
+
+
+def _stamped_TwistWithCovariance(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R2.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            340,
+            _HDR,
+            m._twist._linear._x,
+            m._twist._linear._y,
+            m._twist._linear._z,
+            m._twist._angular._x,
+            m._twist._angular._y,
+            m._twist._angular._z,
+            *m._covariance,
+        )
+        out(r)
+
+    return record
 
 
 def _msg_TwistWithCovariance(d):
@@ -2258,6 +2507,19 @@ def _cdr_Wrench(m):
     return _S2.pack(_HDR, m._force._x, m._force._y, m._force._z, m._torque._x, m._torque._y, m._torque._z)
 
 
+def _stamped_Wrench(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(
+            key, clock.now, 52, _HDR, m._force._x, m._force._y, m._force._z, m._torque._x, m._torque._y, m._torque._z
+        )
+        out(r)
+
+    return record
+
+
 def _msg_Wrench(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -2388,10 +2650,20 @@ def _from_WrenchStamped(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
-    "Vector3": (Vector3_, _cdr_Vector3, _msg_Vector3, _to_Vector3, _from_Vector3, _enc_Vector3, _dec_Vector3),
-    "Accel": (Accel_, _cdr_Accel, _msg_Accel, _to_Accel, _from_Accel, _enc_Accel, _dec_Accel),
+    "Vector3": (
+        Vector3_,
+        _cdr_Vector3,
+        _msg_Vector3,
+        _to_Vector3,
+        _from_Vector3,
+        _enc_Vector3,
+        _dec_Vector3,
+        _stamped_Vector3,
+    ),
+    "Accel": (Accel_, _cdr_Accel, _msg_Accel, _to_Accel, _from_Accel, _enc_Accel, _dec_Accel, _stamped_Accel),
     "AccelStamped": (
         AccelStamped_,
         _cdr_AccelStamped,
@@ -2400,6 +2672,7 @@ CODECS = {
         _from_AccelStamped,
         _enc_AccelStamped,
         _dec_AccelStamped,
+        None,
     ),
     "AccelWithCovariance": (
         AccelWithCovariance_,
@@ -2409,6 +2682,7 @@ CODECS = {
         _from_AccelWithCovariance,
         _enc_AccelWithCovariance,
         _dec_AccelWithCovariance,
+        _stamped_AccelWithCovariance,
     ),
     "AccelWithCovarianceStamped": (
         AccelWithCovarianceStamped_,
@@ -2418,8 +2692,18 @@ CODECS = {
         _from_AccelWithCovarianceStamped,
         _enc_AccelWithCovarianceStamped,
         _dec_AccelWithCovarianceStamped,
+        None,
     ),
-    "Inertia": (Inertia_, _cdr_Inertia, _msg_Inertia, _to_Inertia, _from_Inertia, _enc_Inertia, _dec_Inertia),
+    "Inertia": (
+        Inertia_,
+        _cdr_Inertia,
+        _msg_Inertia,
+        _to_Inertia,
+        _from_Inertia,
+        _enc_Inertia,
+        _dec_Inertia,
+        _stamped_Inertia,
+    ),
     "InertiaStamped": (
         InertiaStamped_,
         _cdr_InertiaStamped,
@@ -2428,9 +2712,19 @@ CODECS = {
         _from_InertiaStamped,
         _enc_InertiaStamped,
         _dec_InertiaStamped,
+        None,
     ),
-    "Point": (Point_, _cdr_Point, _msg_Point, _to_Point, _from_Point, _enc_Point, _dec_Point),
-    "Point32": (Point32_, _cdr_Point32, _msg_Point32, _to_Point32, _from_Point32, _enc_Point32, _dec_Point32),
+    "Point": (Point_, _cdr_Point, _msg_Point, _to_Point, _from_Point, _enc_Point, _dec_Point, _stamped_Point),
+    "Point32": (
+        Point32_,
+        _cdr_Point32,
+        _msg_Point32,
+        _to_Point32,
+        _from_Point32,
+        _enc_Point32,
+        _dec_Point32,
+        _stamped_Point32,
+    ),
     "PointStamped": (
         PointStamped_,
         _cdr_PointStamped,
@@ -2439,8 +2733,9 @@ CODECS = {
         _from_PointStamped,
         _enc_PointStamped,
         _dec_PointStamped,
+        None,
     ),
-    "Polygon": (Polygon_, _cdr_Polygon, _msg_Polygon, _to_Polygon, _from_Polygon, _enc_Polygon, _dec_Polygon),
+    "Polygon": (Polygon_, _cdr_Polygon, _msg_Polygon, _to_Polygon, _from_Polygon, _enc_Polygon, _dec_Polygon, None),
     "PolygonStamped": (
         PolygonStamped_,
         _cdr_PolygonStamped,
@@ -2449,6 +2744,7 @@ CODECS = {
         _from_PolygonStamped,
         _enc_PolygonStamped,
         _dec_PolygonStamped,
+        None,
     ),
     "Quaternion": (
         Quaternion_,
@@ -2458,9 +2754,10 @@ CODECS = {
         _from_Quaternion,
         _enc_Quaternion,
         _dec_Quaternion,
+        _stamped_Quaternion,
     ),
-    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose),
-    "Pose2D": (Pose2D_, _cdr_Pose2D, _msg_Pose2D, _to_Pose2D, _from_Pose2D, _enc_Pose2D, _dec_Pose2D),
+    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose, _stamped_Pose),
+    "Pose2D": (Pose2D_, _cdr_Pose2D, _msg_Pose2D, _to_Pose2D, _from_Pose2D, _enc_Pose2D, _dec_Pose2D, _stamped_Pose2D),
     "PoseArray": (
         PoseArray_,
         _cdr_PoseArray,
@@ -2469,6 +2766,7 @@ CODECS = {
         _from_PoseArray,
         _enc_PoseArray,
         _dec_PoseArray,
+        None,
     ),
     "PoseStamped": (
         PoseStamped_,
@@ -2478,6 +2776,7 @@ CODECS = {
         _from_PoseStamped,
         _enc_PoseStamped,
         _dec_PoseStamped,
+        None,
     ),
     "PoseWithCovariance": (
         PoseWithCovariance_,
@@ -2487,6 +2786,7 @@ CODECS = {
         _from_PoseWithCovariance,
         _enc_PoseWithCovariance,
         _dec_PoseWithCovariance,
+        _stamped_PoseWithCovariance,
     ),
     "PoseWithCovarianceStamped": (
         PoseWithCovarianceStamped_,
@@ -2496,6 +2796,7 @@ CODECS = {
         _from_PoseWithCovarianceStamped,
         _enc_PoseWithCovarianceStamped,
         _dec_PoseWithCovarianceStamped,
+        None,
     ),
     "QuaternionStamped": (
         QuaternionStamped_,
@@ -2505,6 +2806,7 @@ CODECS = {
         _from_QuaternionStamped,
         _enc_QuaternionStamped,
         _dec_QuaternionStamped,
+        None,
     ),
     "Transform": (
         Transform_,
@@ -2514,6 +2816,7 @@ CODECS = {
         _from_Transform,
         _enc_Transform,
         _dec_Transform,
+        _stamped_Transform,
     ),
     "TransformStamped": (
         TransformStamped_,
@@ -2523,8 +2826,9 @@ CODECS = {
         _from_TransformStamped,
         _enc_TransformStamped,
         _dec_TransformStamped,
+        None,
     ),
-    "Twist": (Twist_, _cdr_Twist, _msg_Twist, _to_Twist, _from_Twist, _enc_Twist, _dec_Twist),
+    "Twist": (Twist_, _cdr_Twist, _msg_Twist, _to_Twist, _from_Twist, _enc_Twist, _dec_Twist, _stamped_Twist),
     "TwistStamped": (
         TwistStamped_,
         _cdr_TwistStamped,
@@ -2533,6 +2837,7 @@ CODECS = {
         _from_TwistStamped,
         _enc_TwistStamped,
         _dec_TwistStamped,
+        None,
     ),
     "TwistWithCovariance": (
         TwistWithCovariance_,
@@ -2542,6 +2847,7 @@ CODECS = {
         _from_TwistWithCovariance,
         _enc_TwistWithCovariance,
         _dec_TwistWithCovariance,
+        _stamped_TwistWithCovariance,
     ),
     "TwistWithCovarianceStamped": (
         TwistWithCovarianceStamped_,
@@ -2551,6 +2857,7 @@ CODECS = {
         _from_TwistWithCovarianceStamped,
         _enc_TwistWithCovarianceStamped,
         _dec_TwistWithCovarianceStamped,
+        None,
     ),
     "Vector3Stamped": (
         Vector3Stamped_,
@@ -2560,8 +2867,9 @@ CODECS = {
         _from_Vector3Stamped,
         _enc_Vector3Stamped,
         _dec_Vector3Stamped,
+        None,
     ),
-    "Wrench": (Wrench_, _cdr_Wrench, _msg_Wrench, _to_Wrench, _from_Wrench, _enc_Wrench, _dec_Wrench),
+    "Wrench": (Wrench_, _cdr_Wrench, _msg_Wrench, _to_Wrench, _from_Wrench, _enc_Wrench, _dec_Wrench, _stamped_Wrench),
     "WrenchStamped": (
         WrenchStamped_,
         _cdr_WrenchStamped,
@@ -2570,6 +2878,7 @@ CODECS = {
         _from_WrenchStamped,
         _enc_WrenchStamped,
         _dec_WrenchStamped,
+        None,
     ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)

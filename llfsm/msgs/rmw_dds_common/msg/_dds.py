@@ -19,6 +19,7 @@ _S0 = _Struct("<4s16B")
 _S1 = _Struct("<16B")
 _S2 = _Struct("<I")
 _S3 = _Struct("<16BI")
+_R0 = _Struct("<IqI4s16B")
 
 
 # -- rmw_dds_common/msg/Gid
@@ -39,6 +40,17 @@ def _mk_Gid(a0):
 
 def _cdr_Gid(m):
     return _S0.pack(_HDR, *m._data)
+
+
+def _stamped_Gid(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 20, _HDR, *m._data)
+        out(r)
+
+    return record
 
 
 def _msg_Gid(d):
@@ -312,9 +324,10 @@ def _from_ParticipantEntitiesInfo(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
-    "Gid": (Gid_, _cdr_Gid, _msg_Gid, _to_Gid, _from_Gid, _enc_Gid, _dec_Gid),
+    "Gid": (Gid_, _cdr_Gid, _msg_Gid, _to_Gid, _from_Gid, _enc_Gid, _dec_Gid, _stamped_Gid),
     "NodeEntitiesInfo": (
         NodeEntitiesInfo_,
         _cdr_NodeEntitiesInfo,
@@ -323,6 +336,7 @@ CODECS = {
         _from_NodeEntitiesInfo,
         _enc_NodeEntitiesInfo,
         _dec_NodeEntitiesInfo,
+        None,
     ),
     "ParticipantEntitiesInfo": (
         ParticipantEntitiesInfo_,
@@ -332,6 +346,7 @@ CODECS = {
         _from_ParticipantEntitiesInfo,
         _enc_ParticipantEntitiesInfo,
         _dec_ParticipantEntitiesInfo,
+        None,
     ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)

@@ -21,6 +21,7 @@ _S1 = _Struct("<B")
 _S2 = _Struct("<iI16B")
 _S3 = _Struct("<q")
 _S4 = _Struct("<B3xiI16B4xq")
+_R0 = _Struct("<IqI4sB3xiI16B4xq")
 
 
 # -- service_msgs/msg/ServiceEventInfo
@@ -47,6 +48,27 @@ def _mk_ServiceEventInfo(a0, a1, a2, a3):
 
 def _cdr_ServiceEventInfo(m):
     return _S0.pack(_HDR, m._event_type, m._stamp._sec, m._stamp._nanosec, *m._client_gid, m._sequence_number)
+
+
+def _stamped_ServiceEventInfo(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(
+            key,
+            clock.now,
+            44,
+            _HDR,
+            m._event_type,
+            m._stamp._sec,
+            m._stamp._nanosec,
+            *m._client_gid,
+            m._sequence_number,
+        )
+        out(r)
+
+    return record
 
 
 def _msg_ServiceEventInfo(d):
@@ -96,7 +118,8 @@ def _from_ServiceEventInfo(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
     "ServiceEventInfo": (
         ServiceEventInfo_,
@@ -106,6 +129,7 @@ CODECS = {
         _from_ServiceEventInfo,
         _enc_ServiceEventInfo,
         _dec_ServiceEventInfo,
+        _stamped_ServiceEventInfo,
     ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)

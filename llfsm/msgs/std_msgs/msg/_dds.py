@@ -44,6 +44,18 @@ _S22 = _Struct("<H")
 _S23 = _Struct("<4sI")
 _S24 = _Struct("<4sQ")
 _S25 = _Struct("<Q")
+_R0 = _Struct("<IqI4s?")
+_R1 = _Struct("<IqI4sB")
+_R2 = _Struct("<IqI4sffff")
+_R3 = _Struct("<IqI4sf")
+_R4 = _Struct("<IqI4sd")
+_R5 = _Struct("<IqI4sh")
+_R6 = _Struct("<IqI4si")
+_R7 = _Struct("<IqI4sq")
+_R8 = _Struct("<IqI4sb")
+_R9 = _Struct("<IqI4sH")
+_R10 = _Struct("<IqI4sI")
+_R11 = _Struct("<IqI4sQ")
 
 
 # -- std_msgs/msg/Bool
@@ -64,6 +76,17 @@ def _mk_Bool(a0):
 
 def _cdr_Bool(m):
     return _S0.pack(_HDR, m._data)
+
+
+def _stamped_Bool(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, m._data)
+        out(r)
+
+    return record
 
 
 def _msg_Bool(d):
@@ -113,6 +136,17 @@ def _mk_Byte(a0):
 
 def _cdr_Byte(m):
     return _S2.pack(_HDR, m._data)
+
+
+def _stamped_Byte(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, m._data)
+        out(r)
+
+    return record
 
 
 def _msg_Byte(d):
@@ -427,6 +461,17 @@ def _cdr_Char(m):
     return _S2.pack(_HDR, m._data)
 
 
+def _stamped_Char(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, m._data)
+        out(r)
+
+    return record
+
+
 def _msg_Char(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -482,6 +527,17 @@ def _cdr_ColorRGBA(m):
     return _S6.pack(_HDR, m._r, m._g, m._b, m._a)
 
 
+def _stamped_ColorRGBA(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R2.pack
+
+    def record(m):
+        r = pack(key, clock.now, 20, _HDR, m._r, m._g, m._b, m._a)
+        out(r)
+
+    return record
+
+
 def _msg_ColorRGBA(d):
     o = 4
     t1 = _S7.unpack_from(d, o)
@@ -535,6 +591,17 @@ def _cdr_Empty(m):
     return _S2.pack(_HDR, 0)
 
 
+def _stamped_Empty(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
+
+
 def _msg_Empty(d):
     o = 4
     o += 1
@@ -579,6 +646,17 @@ def _mk_Float32(a0):
 
 def _cdr_Float32(m):
     return _S8.pack(_HDR, m._data)
+
+
+def _stamped_Float32(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R3.pack
+
+    def record(m):
+        r = pack(key, clock.now, 8, _HDR, m._data)
+        out(r)
+
+    return record
 
 
 def _msg_Float32(d):
@@ -726,6 +804,17 @@ def _mk_Float64(a0):
 
 def _cdr_Float64(m):
     return _S10.pack(_HDR, m._data)
+
+
+def _stamped_Float64(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R4.pack
+
+    def record(m):
+        r = pack(key, clock.now, 12, _HDR, m._data)
+        out(r)
+
+    return record
 
 
 def _msg_Float64(d):
@@ -951,6 +1040,17 @@ def _cdr_Int16(m):
     return _S13.pack(_HDR, m._data)
 
 
+def _stamped_Int16(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R5.pack
+
+    def record(m):
+        r = pack(key, clock.now, 6, _HDR, m._data)
+        out(r)
+
+    return record
+
+
 def _msg_Int16(d):
     o = 4
     t1 = _S14.unpack_from(d, o)
@@ -1098,6 +1198,17 @@ def _cdr_Int32(m):
     return _S15.pack(_HDR, m._data)
 
 
+def _stamped_Int32(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R6.pack
+
+    def record(m):
+        r = pack(key, clock.now, 8, _HDR, m._data)
+        out(r)
+
+    return record
+
+
 def _msg_Int32(d):
     o = 4
     t1 = _S16.unpack_from(d, o)
@@ -1243,6 +1354,17 @@ def _mk_Int64(a0):
 
 def _cdr_Int64(m):
     return _S17.pack(_HDR, m._data)
+
+
+def _stamped_Int64(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R7.pack
+
+    def record(m):
+        r = pack(key, clock.now, 12, _HDR, m._data)
+        out(r)
+
+    return record
 
 
 def _msg_Int64(d):
@@ -1398,6 +1520,17 @@ def _mk_Int8(a0):
 
 def _cdr_Int8(m):
     return _S19.pack(_HDR, m._data)
+
+
+def _stamped_Int8(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R8.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, m._data)
+        out(r)
+
+    return record
 
 
 def _msg_Int8(d):
@@ -1610,6 +1743,17 @@ def _cdr_UInt16(m):
     return _S21.pack(_HDR, m._data)
 
 
+def _stamped_UInt16(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R9.pack
+
+    def record(m):
+        r = pack(key, clock.now, 6, _HDR, m._data)
+        out(r)
+
+    return record
+
+
 def _msg_UInt16(d):
     o = 4
     t1 = _S22.unpack_from(d, o)
@@ -1757,6 +1901,17 @@ def _cdr_UInt32(m):
     return _S23.pack(_HDR, m._data)
 
 
+def _stamped_UInt32(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R10.pack
+
+    def record(m):
+        r = pack(key, clock.now, 8, _HDR, m._data)
+        out(r)
+
+    return record
+
+
 def _msg_UInt32(d):
     o = 4
     t1 = _S4.unpack_from(d, o)
@@ -1902,6 +2057,17 @@ def _mk_UInt64(a0):
 
 def _cdr_UInt64(m):
     return _S24.pack(_HDR, m._data)
+
+
+def _stamped_UInt64(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R11.pack
+
+    def record(m):
+        r = pack(key, clock.now, 12, _HDR, m._data)
+        out(r)
+
+    return record
 
 
 def _msg_UInt64(d):
@@ -2059,6 +2225,17 @@ def _cdr_UInt8(m):
     return _S2.pack(_HDR, m._data)
 
 
+def _stamped_UInt8(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, m._data)
+        out(r)
+
+    return record
+
+
 def _msg_UInt8(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -2184,10 +2361,11 @@ def _from_UInt8MultiArray(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
-    "Bool": (Bool_, _cdr_Bool, _msg_Bool, _to_Bool, _from_Bool, _enc_Bool, _dec_Bool),
-    "Byte": (Byte_, _cdr_Byte, _msg_Byte, _to_Byte, _from_Byte, _enc_Byte, _dec_Byte),
+    "Bool": (Bool_, _cdr_Bool, _msg_Bool, _to_Bool, _from_Bool, _enc_Bool, _dec_Bool, _stamped_Bool),
+    "Byte": (Byte_, _cdr_Byte, _msg_Byte, _to_Byte, _from_Byte, _enc_Byte, _dec_Byte, _stamped_Byte),
     "MultiArrayDimension": (
         MultiArrayDimension_,
         _cdr_MultiArrayDimension,
@@ -2196,6 +2374,7 @@ CODECS = {
         _from_MultiArrayDimension,
         _enc_MultiArrayDimension,
         _dec_MultiArrayDimension,
+        None,
     ),
     "MultiArrayLayout": (
         MultiArrayLayout_,
@@ -2205,6 +2384,7 @@ CODECS = {
         _from_MultiArrayLayout,
         _enc_MultiArrayLayout,
         _dec_MultiArrayLayout,
+        None,
     ),
     "ByteMultiArray": (
         ByteMultiArray_,
@@ -2214,8 +2394,9 @@ CODECS = {
         _from_ByteMultiArray,
         _enc_ByteMultiArray,
         _dec_ByteMultiArray,
+        None,
     ),
-    "Char": (Char_, _cdr_Char, _msg_Char, _to_Char, _from_Char, _enc_Char, _dec_Char),
+    "Char": (Char_, _cdr_Char, _msg_Char, _to_Char, _from_Char, _enc_Char, _dec_Char, _stamped_Char),
     "ColorRGBA": (
         ColorRGBA_,
         _cdr_ColorRGBA,
@@ -2224,9 +2405,19 @@ CODECS = {
         _from_ColorRGBA,
         _enc_ColorRGBA,
         _dec_ColorRGBA,
+        _stamped_ColorRGBA,
     ),
-    "Empty": (Empty_, _cdr_Empty, _msg_Empty, _to_Empty, _from_Empty, _enc_Empty, _dec_Empty),
-    "Float32": (Float32_, _cdr_Float32, _msg_Float32, _to_Float32, _from_Float32, _enc_Float32, _dec_Float32),
+    "Empty": (Empty_, _cdr_Empty, _msg_Empty, _to_Empty, _from_Empty, _enc_Empty, _dec_Empty, _stamped_Empty),
+    "Float32": (
+        Float32_,
+        _cdr_Float32,
+        _msg_Float32,
+        _to_Float32,
+        _from_Float32,
+        _enc_Float32,
+        _dec_Float32,
+        _stamped_Float32,
+    ),
     "Float32MultiArray": (
         Float32MultiArray_,
         _cdr_Float32MultiArray,
@@ -2235,8 +2426,18 @@ CODECS = {
         _from_Float32MultiArray,
         _enc_Float32MultiArray,
         _dec_Float32MultiArray,
+        None,
     ),
-    "Float64": (Float64_, _cdr_Float64, _msg_Float64, _to_Float64, _from_Float64, _enc_Float64, _dec_Float64),
+    "Float64": (
+        Float64_,
+        _cdr_Float64,
+        _msg_Float64,
+        _to_Float64,
+        _from_Float64,
+        _enc_Float64,
+        _dec_Float64,
+        _stamped_Float64,
+    ),
     "Float64MultiArray": (
         Float64MultiArray_,
         _cdr_Float64MultiArray,
@@ -2245,9 +2446,10 @@ CODECS = {
         _from_Float64MultiArray,
         _enc_Float64MultiArray,
         _dec_Float64MultiArray,
+        None,
     ),
-    "Header": (Header_, _cdr_Header, _msg_Header, _to_Header, _from_Header, _enc_Header, _dec_Header),
-    "Int16": (Int16_, _cdr_Int16, _msg_Int16, _to_Int16, _from_Int16, _enc_Int16, _dec_Int16),
+    "Header": (Header_, _cdr_Header, _msg_Header, _to_Header, _from_Header, _enc_Header, _dec_Header, None),
+    "Int16": (Int16_, _cdr_Int16, _msg_Int16, _to_Int16, _from_Int16, _enc_Int16, _dec_Int16, _stamped_Int16),
     "Int16MultiArray": (
         Int16MultiArray_,
         _cdr_Int16MultiArray,
@@ -2256,8 +2458,9 @@ CODECS = {
         _from_Int16MultiArray,
         _enc_Int16MultiArray,
         _dec_Int16MultiArray,
+        None,
     ),
-    "Int32": (Int32_, _cdr_Int32, _msg_Int32, _to_Int32, _from_Int32, _enc_Int32, _dec_Int32),
+    "Int32": (Int32_, _cdr_Int32, _msg_Int32, _to_Int32, _from_Int32, _enc_Int32, _dec_Int32, _stamped_Int32),
     "Int32MultiArray": (
         Int32MultiArray_,
         _cdr_Int32MultiArray,
@@ -2266,8 +2469,9 @@ CODECS = {
         _from_Int32MultiArray,
         _enc_Int32MultiArray,
         _dec_Int32MultiArray,
+        None,
     ),
-    "Int64": (Int64_, _cdr_Int64, _msg_Int64, _to_Int64, _from_Int64, _enc_Int64, _dec_Int64),
+    "Int64": (Int64_, _cdr_Int64, _msg_Int64, _to_Int64, _from_Int64, _enc_Int64, _dec_Int64, _stamped_Int64),
     "Int64MultiArray": (
         Int64MultiArray_,
         _cdr_Int64MultiArray,
@@ -2276,8 +2480,9 @@ CODECS = {
         _from_Int64MultiArray,
         _enc_Int64MultiArray,
         _dec_Int64MultiArray,
+        None,
     ),
-    "Int8": (Int8_, _cdr_Int8, _msg_Int8, _to_Int8, _from_Int8, _enc_Int8, _dec_Int8),
+    "Int8": (Int8_, _cdr_Int8, _msg_Int8, _to_Int8, _from_Int8, _enc_Int8, _dec_Int8, _stamped_Int8),
     "Int8MultiArray": (
         Int8MultiArray_,
         _cdr_Int8MultiArray,
@@ -2286,9 +2491,10 @@ CODECS = {
         _from_Int8MultiArray,
         _enc_Int8MultiArray,
         _dec_Int8MultiArray,
+        None,
     ),
-    "String": (String_, _cdr_String, _msg_String, _to_String, _from_String, _enc_String, _dec_String),
-    "UInt16": (UInt16_, _cdr_UInt16, _msg_UInt16, _to_UInt16, _from_UInt16, _enc_UInt16, _dec_UInt16),
+    "String": (String_, _cdr_String, _msg_String, _to_String, _from_String, _enc_String, _dec_String, None),
+    "UInt16": (UInt16_, _cdr_UInt16, _msg_UInt16, _to_UInt16, _from_UInt16, _enc_UInt16, _dec_UInt16, _stamped_UInt16),
     "UInt16MultiArray": (
         UInt16MultiArray_,
         _cdr_UInt16MultiArray,
@@ -2297,8 +2503,9 @@ CODECS = {
         _from_UInt16MultiArray,
         _enc_UInt16MultiArray,
         _dec_UInt16MultiArray,
+        None,
     ),
-    "UInt32": (UInt32_, _cdr_UInt32, _msg_UInt32, _to_UInt32, _from_UInt32, _enc_UInt32, _dec_UInt32),
+    "UInt32": (UInt32_, _cdr_UInt32, _msg_UInt32, _to_UInt32, _from_UInt32, _enc_UInt32, _dec_UInt32, _stamped_UInt32),
     "UInt32MultiArray": (
         UInt32MultiArray_,
         _cdr_UInt32MultiArray,
@@ -2307,8 +2514,9 @@ CODECS = {
         _from_UInt32MultiArray,
         _enc_UInt32MultiArray,
         _dec_UInt32MultiArray,
+        None,
     ),
-    "UInt64": (UInt64_, _cdr_UInt64, _msg_UInt64, _to_UInt64, _from_UInt64, _enc_UInt64, _dec_UInt64),
+    "UInt64": (UInt64_, _cdr_UInt64, _msg_UInt64, _to_UInt64, _from_UInt64, _enc_UInt64, _dec_UInt64, _stamped_UInt64),
     "UInt64MultiArray": (
         UInt64MultiArray_,
         _cdr_UInt64MultiArray,
@@ -2317,8 +2525,9 @@ CODECS = {
         _from_UInt64MultiArray,
         _enc_UInt64MultiArray,
         _dec_UInt64MultiArray,
+        None,
     ),
-    "UInt8": (UInt8_, _cdr_UInt8, _msg_UInt8, _to_UInt8, _from_UInt8, _enc_UInt8, _dec_UInt8),
+    "UInt8": (UInt8_, _cdr_UInt8, _msg_UInt8, _to_UInt8, _from_UInt8, _enc_UInt8, _dec_UInt8, _stamped_UInt8),
     "UInt8MultiArray": (
         UInt8MultiArray_,
         _cdr_UInt8MultiArray,
@@ -2327,6 +2536,7 @@ CODECS = {
         _from_UInt8MultiArray,
         _enc_UInt8MultiArray,
         _dec_UInt8MultiArray,
+        None,
     ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)

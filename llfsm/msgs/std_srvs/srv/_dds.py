@@ -21,6 +21,8 @@ _S2 = _Struct("<4s?")
 _S3 = _Struct("<?")
 _S4 = _Struct("<?3xI")
 _S5 = _Struct("<I")
+_R0 = _Struct("<IqI4sB")
+_R1 = _Struct("<IqI4s?")
 
 
 # -- std_srvs/srv/Empty_Request
@@ -49,6 +51,17 @@ def _mk_Empty_Request():
 
 def _cdr_Empty_Request(m):
     return _S0.pack(_HDR, 0)
+
+
+def _stamped_Empty_Request(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
 
 
 def _msg_Empty_Request(d):
@@ -105,6 +118,17 @@ def _cdr_Empty_Response(m):
     return _S0.pack(_HDR, 0)
 
 
+def _stamped_Empty_Response(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
+
+
 def _msg_Empty_Response(d):
     o = 4
     o += 1
@@ -158,6 +182,17 @@ def _mk_SetBool_Request(a0):
 
 def _cdr_SetBool_Request(m):
     return _S2.pack(_HDR, m._data)
+
+
+def _stamped_SetBool_Request(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, m._data)
+        out(r)
+
+    return record
 
 
 def _msg_SetBool_Request(d):
@@ -298,6 +333,17 @@ def _cdr_Trigger_Request(m):
     return _S0.pack(_HDR, 0)
 
 
+def _stamped_Trigger_Request(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
+
+
 def _msg_Trigger_Request(d):
     o = 4
     o += 1
@@ -405,7 +451,8 @@ def _from_Trigger_Response(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
     "Empty_Request": (
         Empty_Request_,
@@ -415,6 +462,7 @@ CODECS = {
         _from_Empty_Request,
         _enc_Empty_Request,
         _dec_Empty_Request,
+        _stamped_Empty_Request,
     ),
     "Empty_Response": (
         Empty_Response_,
@@ -424,6 +472,7 @@ CODECS = {
         _from_Empty_Response,
         _enc_Empty_Response,
         _dec_Empty_Response,
+        _stamped_Empty_Response,
     ),
     "SetBool_Request": (
         SetBool_Request_,
@@ -433,6 +482,7 @@ CODECS = {
         _from_SetBool_Request,
         _enc_SetBool_Request,
         _dec_SetBool_Request,
+        _stamped_SetBool_Request,
     ),
     "SetBool_Response": (
         SetBool_Response_,
@@ -442,6 +492,7 @@ CODECS = {
         _from_SetBool_Response,
         _enc_SetBool_Response,
         _dec_SetBool_Response,
+        None,
     ),
     "Trigger_Request": (
         Trigger_Request_,
@@ -451,6 +502,7 @@ CODECS = {
         _from_Trigger_Request,
         _enc_Trigger_Request,
         _dec_Trigger_Request,
+        _stamped_Trigger_Request,
     ),
     "Trigger_Response": (
         Trigger_Response_,
@@ -460,6 +512,7 @@ CODECS = {
         _from_Trigger_Response,
         _enc_Trigger_Response,
         _dec_Trigger_Response,
+        None,
     ),
 }
 # name -> the IdlStruct of rq/.../rr/... topics, with rmw_cyclonedds_cpp's request header

@@ -19,6 +19,8 @@ _S0 = _Struct("<4sB")
 _S1 = _Struct("<B")
 _S2 = _Struct("<4sddd")
 _S3 = _Struct("<ddd")
+_R0 = _Struct("<IqI4sB")
+_R1 = _Struct("<IqI4sddd")
 
 
 # -- turtle_sensor_interface/srv/TurtlePosition_Request
@@ -47,6 +49,17 @@ def _mk_TurtlePosition_Request():
 
 def _cdr_TurtlePosition_Request(m):
     return _S0.pack(_HDR, 0)
+
+
+def _stamped_TurtlePosition_Request(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
 
 
 def _msg_TurtlePosition_Request(d):
@@ -112,6 +125,17 @@ def _cdr_TurtlePosition_Response(m):
     return _S2.pack(_HDR, m._x, m._y, m._theta)
 
 
+def _stamped_TurtlePosition_Response(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(key, clock.now, 28, _HDR, m._x, m._y, m._theta)
+        out(r)
+
+    return record
+
+
 def _msg_TurtlePosition_Response(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -145,7 +169,8 @@ def _from_TurtlePosition_Response(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
     "TurtlePosition_Request": (
         TurtlePosition_Request_,
@@ -155,6 +180,7 @@ CODECS = {
         _from_TurtlePosition_Request,
         _enc_TurtlePosition_Request,
         _dec_TurtlePosition_Request,
+        _stamped_TurtlePosition_Request,
     ),
     "TurtlePosition_Response": (
         TurtlePosition_Response_,
@@ -164,6 +190,7 @@ CODECS = {
         _from_TurtlePosition_Response,
         _enc_TurtlePosition_Response,
         _dec_TurtlePosition_Response,
+        _stamped_TurtlePosition_Response,
     ),
 }
 # name -> the IdlStruct of rq/.../rr/... topics, with rmw_cyclonedds_cpp's request header

@@ -19,6 +19,8 @@ _S0 = _Struct("<4sBBB")
 _S1 = _Struct("<BBB")
 _S2 = _Struct("<4sfffff")
 _S3 = _Struct("<fffff")
+_R0 = _Struct("<IqI4sBBB")
+_R1 = _Struct("<IqI4sfffff")
 
 
 # -- turtlesim/msg/Color
@@ -43,6 +45,17 @@ def _mk_Color(a0, a1, a2):
 
 def _cdr_Color(m):
     return _S0.pack(_HDR, m._r, m._g, m._b)
+
+
+def _stamped_Color(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 7, _HDR, m._r, m._g, m._b)
+        out(r)
+
+    return record
 
 
 def _msg_Color(d):
@@ -104,6 +117,17 @@ def _cdr_Pose(m):
     return _S2.pack(_HDR, m._x, m._y, m._theta, m._linear_velocity, m._angular_velocity)
 
 
+def _stamped_Pose(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(key, clock.now, 24, _HDR, m._x, m._y, m._theta, m._linear_velocity, m._angular_velocity)
+        out(r)
+
+    return record
+
+
 def _msg_Pose(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -141,10 +165,11 @@ def _from_Pose(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
-    "Color": (Color_, _cdr_Color, _msg_Color, _to_Color, _from_Color, _enc_Color, _dec_Color),
-    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose),
+    "Color": (Color_, _cdr_Color, _msg_Color, _to_Color, _from_Color, _enc_Color, _dec_Color, _stamped_Color),
+    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose, _stamped_Pose),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

@@ -25,6 +25,10 @@ _S6 = _Struct("<4sfff")
 _S7 = _Struct("<fff")
 _S8 = _Struct("<4sff")
 _S9 = _Struct("<ff")
+_R0 = _Struct("<IqI4sB")
+_R1 = _Struct("<IqI4sBBBBB")
+_R2 = _Struct("<IqI4sfff")
+_R3 = _Struct("<IqI4sff")
 
 
 # -- turtlesim/srv/Kill_Request
@@ -129,6 +133,17 @@ def _cdr_Kill_Response(m):
     return _S1.pack(_HDR, 0)
 
 
+def _stamped_Kill_Response(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
+
+
 def _msg_Kill_Response(d):
     o = 4
     o += 1
@@ -196,6 +211,17 @@ def _cdr_SetPen_Request(m):
     return _S3.pack(_HDR, m._r, m._g, m._b, m._width, m._off)
 
 
+def _stamped_SetPen_Request(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R1.pack
+
+    def record(m):
+        r = pack(key, clock.now, 9, _HDR, m._r, m._g, m._b, m._width, m._off)
+        out(r)
+
+    return record
+
+
 def _msg_SetPen_Request(d):
     o = 4
     t1 = _S4.unpack_from(d, o)
@@ -255,6 +281,17 @@ def _mk_SetPen_Response():
 
 def _cdr_SetPen_Response(m):
     return _S1.pack(_HDR, 0)
+
+
+def _stamped_SetPen_Response(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
 
 
 def _msg_SetPen_Response(d):
@@ -478,6 +515,17 @@ def _cdr_TeleportAbsolute_Request(m):
     return _S6.pack(_HDR, m._x, m._y, m._theta)
 
 
+def _stamped_TeleportAbsolute_Request(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R2.pack
+
+    def record(m):
+        r = pack(key, clock.now, 16, _HDR, m._x, m._y, m._theta)
+        out(r)
+
+    return record
+
+
 def _msg_TeleportAbsolute_Request(d):
     o = 4
     t1 = _S7.unpack_from(d, o)
@@ -539,6 +587,17 @@ def _cdr_TeleportAbsolute_Response(m):
     return _S1.pack(_HDR, 0)
 
 
+def _stamped_TeleportAbsolute_Response(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
+
+
 def _msg_TeleportAbsolute_Response(d):
     o = 4
     o += 1
@@ -595,6 +654,17 @@ def _mk_TeleportRelative_Request(a0, a1):
 
 def _cdr_TeleportRelative_Request(m):
     return _S8.pack(_HDR, m._linear, m._angular)
+
+
+def _stamped_TeleportRelative_Request(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R3.pack
+
+    def record(m):
+        r = pack(key, clock.now, 12, _HDR, m._linear, m._angular)
+        out(r)
+
+    return record
 
 
 def _msg_TeleportRelative_Request(d):
@@ -657,6 +727,17 @@ def _cdr_TeleportRelative_Response(m):
     return _S1.pack(_HDR, 0)
 
 
+def _stamped_TeleportRelative_Response(out, key, clock):
+    """What appends a message's record to `out`: key, clock.now, CDR size, CDR (llfsm's bag pipe)."""
+    pack = _R0.pack
+
+    def record(m):
+        r = pack(key, clock.now, 5, _HDR, 0)
+        out(r)
+
+    return record
+
+
 def _msg_TeleportRelative_Response(d):
     o = 4
     o += 1
@@ -683,7 +764,8 @@ def _from_TeleportRelative_Response(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
+#          stamped records or None)
 CODECS = {
     "Kill_Request": (
         Kill_Request_,
@@ -693,6 +775,7 @@ CODECS = {
         _from_Kill_Request,
         _enc_Kill_Request,
         _dec_Kill_Request,
+        None,
     ),
     "Kill_Response": (
         Kill_Response_,
@@ -702,6 +785,7 @@ CODECS = {
         _from_Kill_Response,
         _enc_Kill_Response,
         _dec_Kill_Response,
+        _stamped_Kill_Response,
     ),
     "SetPen_Request": (
         SetPen_Request_,
@@ -711,6 +795,7 @@ CODECS = {
         _from_SetPen_Request,
         _enc_SetPen_Request,
         _dec_SetPen_Request,
+        _stamped_SetPen_Request,
     ),
     "SetPen_Response": (
         SetPen_Response_,
@@ -720,6 +805,7 @@ CODECS = {
         _from_SetPen_Response,
         _enc_SetPen_Response,
         _dec_SetPen_Response,
+        _stamped_SetPen_Response,
     ),
     "Spawn_Request": (
         Spawn_Request_,
@@ -729,6 +815,7 @@ CODECS = {
         _from_Spawn_Request,
         _enc_Spawn_Request,
         _dec_Spawn_Request,
+        None,
     ),
     "Spawn_Response": (
         Spawn_Response_,
@@ -738,6 +825,7 @@ CODECS = {
         _from_Spawn_Response,
         _enc_Spawn_Response,
         _dec_Spawn_Response,
+        None,
     ),
     "TeleportAbsolute_Request": (
         TeleportAbsolute_Request_,
@@ -747,6 +835,7 @@ CODECS = {
         _from_TeleportAbsolute_Request,
         _enc_TeleportAbsolute_Request,
         _dec_TeleportAbsolute_Request,
+        _stamped_TeleportAbsolute_Request,
     ),
     "TeleportAbsolute_Response": (
         TeleportAbsolute_Response_,
@@ -756,6 +845,7 @@ CODECS = {
         _from_TeleportAbsolute_Response,
         _enc_TeleportAbsolute_Response,
         _dec_TeleportAbsolute_Response,
+        _stamped_TeleportAbsolute_Response,
     ),
     "TeleportRelative_Request": (
         TeleportRelative_Request_,
@@ -765,6 +855,7 @@ CODECS = {
         _from_TeleportRelative_Request,
         _enc_TeleportRelative_Request,
         _dec_TeleportRelative_Request,
+        _stamped_TeleportRelative_Request,
     ),
     "TeleportRelative_Response": (
         TeleportRelative_Response_,
@@ -774,6 +865,7 @@ CODECS = {
         _from_TeleportRelative_Response,
         _enc_TeleportRelative_Response,
         _dec_TeleportRelative_Response,
+        _stamped_TeleportRelative_Response,
     ),
 }
 # name -> the IdlStruct of rq/.../rr/... topics, with rmw_cyclonedds_cpp's request header
