@@ -29,7 +29,6 @@ class _Turtle:
 
         node, world = sim.node, sim.world
         self.name = name
-        self.pose_type = Pose
 
         def on_cmd(msg: Any) -> None:
             world.command(name, msg.linear.x, msg.linear.y, msg.angular.z, sim.clock.now)
@@ -55,18 +54,19 @@ class _Turtle:
         self.pose_pub = node.create_publisher(Pose, f"{name}/pose", 10)
         self.color_pub = node.create_publisher(Color, f"{name}/color_sensor", 10)
         self.entities += [self.pose_pub, self.color_pub]
-        # One Color, filled in and published each update (publishing copies it for each
-        # subscription), as a machine may keep one message: it is sent as often as poses are.
+        # One Pose and one Color, filled in and published each update, as a machine may keep
+        # one message: publishing copies it for each subscription, and taps (the recorder) and
+        # other processes take its bytes there and then, so nobody sees it change afterwards.
+        self.pose = Pose()
         self.color = Color()
 
-    def publish(self, world: TurtleWorld) -> None:
-        p = world.pose(self.name)
-        self.pose_pub.publish(
-            self.pose_type(
-                x=p.x, y=p.y, theta=p.theta, linear_velocity=p.linear_velocity, angular_velocity=p.angular_velocity
-            )
-        )
-        if self.color_pub.get_subscription_count():
+    def publish(self, world: TurtleWorld, sensing: bool) -> None:
+        """`sensing`: whether the colour sensor has a subscription (counted once per update)."""
+        pose = self.pose
+        # float32 values already (finite, inf or NaN): what the setters would accept unchanged
+        pose._x, pose._y, pose._theta, pose._linear_velocity, pose._angular_velocity = world.pose(self.name)
+        self.pose_pub.publish(pose)
+        if sensing:
             color = self.color
             # bytes of the path image, 0..255 each: what the setters would check cannot fail
             color._r, color._g, color._b = world.color_under(self.name)
@@ -157,15 +157,13 @@ class Turtlesim:
 
     # -- the 16 ms update ---------------------------------------------------------------------------
     def update(self) -> None:
-        sense = False
-        for t in self.turtles.values():
-            if t.color_pub.get_subscription_count():
-                sense = True
-                break
-        for warning in self.world.update(self.clock.now, UPDATE_PERIOD, sense=sense):
+        turtles = list(self.turtles.values())
+        sensing = [t.color_pub.get_subscription_count() > 0 for t in turtles]
+        for warning in self.world.update(self.clock.now, UPDATE_PERIOD, sense=any(sensing)):
             self.log.warning(warning)
-        for t in self.turtles.values():
-            t.publish(self.world)
+        world = self.world
+        for t, sense in zip(turtles, sensing, strict=True):
+            t.publish(world, sense)
         if self.viewer is not None and not self.viewer.closed:
             self.viewer.draw()
 
