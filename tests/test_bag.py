@@ -247,6 +247,37 @@ def test_two_sim_runs_give_the_same_bag_byte_for_byte(tmp_path: Path, storage: s
     assert raw_messages(bags[0]) == raw_messages(bags[1])
 
 
+def test_a_sim_run_waits_for_a_writer_that_falls_behind(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Under the sim clock a run can make messages faster than the writer stores them: past the
+    high-water mark of bytes waiting, the run waits for the writer between rounds (memory stays
+    bounded), and the bag is the same as a run that never waited."""
+    from llfsm.bag import recorder
+
+    waits: list[int] = []
+    original = recorder.Recorder._backpressure
+
+    def spy(self: recorder.Recorder) -> None:
+        before = self.waited
+        original(self)
+        waits.append(self.waited - before)
+
+    monkeypatch.setattr(recorder.Recorder, "_backpressure", spy)
+    m = driver(tmp_path)
+    bags = []
+    for run, high_water in (("free", recorder.HIGH_WATER), ("held", 100)):
+        monkeypatch.setattr(recorder, "HIGH_WATER", high_water)
+        waits.clear()
+        (tmp_path / run).mkdir()
+        bag = tmp_path / run / "same"
+        r = run_sim(m, "--node", "turtlesim", "--duration", "3s", "--record", bag)
+        assert r.status == 0, r.stderr
+        bags.append(bag)
+        assert len(waits) >= 29  # a look every 100 ms of run time
+        assert (sum(waits) > 0) == (run == "held"), waits
+    for name in sorted(p.name for p in bags[0].iterdir()):
+        assert (bags[0] / name).read_bytes() == (bags[1] / name).read_bytes(), name
+
+
 def test_record_topic_selects_topics(tmp_path: Path) -> None:
     bag = tmp_path / "some"
     r = run_sim(

@@ -51,6 +51,12 @@ BATCH_S = 0.05  # how often the thread takes the records waiting
 PIECE = 1 << 20  # bytes
 CHUNK_S = 1.0  # wall clock: end the MCAP chunk in progress this often, so the file keeps up
 START_TIMEOUT_S = 60.0
+# Under the sim clock a run may make messages faster than any writer stores them (rounds back
+# to back): past this many bytes waiting (the buffer and the batch being piped), the run waits
+# for the writer before its next round, so memory stays bounded.  Under the wall clock the
+# run never waits (a bus would have to pass ~250,000 messages a second of real time).
+HIGH_WATER = 256 << 20  # bytes
+CHECK_NS = 100_000_000  # run time between two looks at the bytes waiting (sim clock)
 QUEUE_DEPTH = 1000  # a subscription's queue between two executor passes (DDS)
 
 
@@ -120,6 +126,10 @@ class Recorder:
             self._proc.wait(START_TIMEOUT_S)
             raise BagError(reply["error"])
         self._replies: list[dict[str, Any]] = []
+        self.high_water = HIGH_WATER
+        self._in_flight = 0  # bytes of the batch the sending thread is piping
+        self.waited = 0  # times the run waited for the writer (sim clock)
+        self._ctx: Any = None
 
     # -- the run's side ------------------------------------------------------------------------
     def attach(self, bus: Bus) -> None:
@@ -136,6 +146,10 @@ class Recorder:
         if tap:
             self._bus = bus
             bus.add_tap(self._on_topic)
+        if not self.wall:
+            self._ctx = bus.ctx
+            self._ctx.between_rounds.append(self._backpressure)
+            self._ctx.wake_at(bus.clock.now + CHECK_NS)
         self._started = True
         self._listener = threading.Thread(target=self._listen, name="llfsm-bag-replies", daemon=True)
         self._listener.start()
@@ -210,6 +224,21 @@ class Recorder:
 
         return deliver
 
+    def _backpressure(self) -> None:
+        """Between rounds (sim clock): wait while more than `high_water` bytes are waiting for
+        the writer.  The bag is the same either way; only the wall time of the run changes."""
+        thread, ctx = self._thread, self._ctx
+        if len(self.records) + self._in_flight > self.high_water and thread is not None:
+            self.waited += 1
+            while (
+                len(self.records) + self._in_flight > self.high_water // 2
+                and thread.is_alive()
+                and self.error is None
+                and not ctx.interrupted  # Ctrl-C: the run ends now, the bag is closed after it
+            ):
+                time.sleep(0.002)  # the sending thread pipes meanwhile (it needs the GIL too)
+        ctx.wake_at(self.clock.now + CHECK_NS)
+
     # -- the sending thread -------------------------------------------------------------------------
     def _send(self, kind: bytes, payload: bytes) -> None:
         self._pipe.write(FRAME.pack(kind, len(payload)))
@@ -237,12 +266,17 @@ class Recorder:
         records = self.records
         n = len(records)
         batch = records[:n]
+        self._in_flight = n  # counted before the cut, so the run never misses these bytes
         del records[:n]
         # after taking the batch: every topic with a record in it is in the list by now
         if self._undescribed:
             self._describe()
-        for i in range(0, n, PIECE):
-            self._send(b"M", batch[i : i + PIECE])
+        try:
+            for i in range(0, n, PIECE):
+                self._send(b"M", batch[i : i + PIECE])
+                self._in_flight = n - i - PIECE
+        finally:
+            self._in_flight = 0
 
     def _describe(self) -> None:
         """Tell the writer about the topics it has not heard of (before their records)."""
@@ -317,6 +351,8 @@ class Recorder:
     def close(self) -> str | None:
         """Send what is waiting, close the bag and wait for the writer.  Returns the error
         message if recording failed (it was reported when it happened), else None."""
+        if self._ctx is not None and self._backpressure in self._ctx.between_rounds:
+            self._ctx.between_rounds.remove(self._backpressure)
         if self._thread is not None:
             self._stop.set()
             self._thread.join()
