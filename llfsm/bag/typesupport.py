@@ -163,14 +163,8 @@ class TypeSupport:
         """The generated `_stamped_<Name>(out, key, clock)` of a fixed-size message (one pack of
         the record head and the CDR together: what a recorder does per message, in one call),
         or None (a message whose size varies, or a class without llfsm's DDS form)."""
-        try:
-            from ..msgs._dds import codec
-        except ImportError:  # pragma: no cover - the DDS type support is part of llfsm
-            return None
-        try:
-            return codec(cls).stamped  # type: ignore[no-any-return]
-        except TypeError:
-            return None
+        c = _codec(cls)
+        return c.stamped if c is not None else None
 
     def _rosbags_serializer(self, cls: type[Message]) -> Callable[[Any], bytes]:
         self._register(cls._TYPE)
@@ -209,18 +203,24 @@ def _base_store() -> Typestore:
     return _BASE_STORE
 
 
-def _native_serializer(cls: type[Message]) -> Callable[[Any], bytes] | None:
-    """llfsm's own XCDR1 encoder of the class (llfsm.msgs._dds), if it has one: the class's
-    generated function itself (what `_dds.cdr` calls after looking the class up), since a
-    recorder calls it once per message and knows the class already."""
+def _codec(cls: type[Message]) -> Any:
+    """The generated DDS functions of the class (llfsm.msgs._dds.Codec), or None if it has none."""
     try:
         from ..msgs._dds import codec
     except ImportError:  # pragma: no cover - the DDS type support is part of llfsm
         return None
     try:
-        return codec(cls).cdr  # type: ignore[no-any-return]
+        return codec(cls)
     except TypeError:
         return None
+
+
+def _native_serializer(cls: type[Message]) -> Callable[[Any], bytes] | None:
+    """llfsm's own XCDR1 encoder of the class (llfsm.msgs._dds), if it has one: the class's
+    generated function itself (what `_dds.cdr` calls after looking the class up), since a
+    recorder calls it once per message and knows the class already."""
+    c = _codec(cls)
+    return c.cdr if c is not None else None
 
 
 def loaded_message_classes() -> list[type[Message]]:
@@ -244,14 +244,10 @@ def preload_native(classes: Iterable[type[Message]]) -> None:
 
 
 def _native_deserializer(cls: type[Message]) -> Callable[[bytes], Any] | None:
-    try:
-        from ..msgs._dds import codec, from_cdr
-    except ImportError:  # pragma: no cover
+    if _codec(cls) is None:
         return None
-    try:
-        codec(cls)
-    except TypeError:
-        return None
+    from ..msgs._dds import from_cdr
+
     return lambda data: from_cdr(data, cls)
 
 
