@@ -494,11 +494,11 @@ def _reference_fill(buf: bytearray, x0: float, y0: float, x1: float, y1: float, 
             buf[(j * 500 + i0) * 4 : (j * 500 + i1 + 1) * 4] = rgba * (i1 - i0 + 1)
 
 
-@pytest.mark.parametrize("kind", ["short", "long", "axis", "edge"])
-def test_the_stroke_painter_paints_the_reference_pixels(kind: str) -> None:
+def random_strokes(kind: str) -> list[tuple[float, float, float, float, bytes, int]]:
+    """400 strokes of one kind, the same each time: "short" and "long" ones in any direction,
+    "axis" ones along the axes, "edge" ones ending on pixel centres and edges (where rounding
+    decides), "steep" ones a hair off an axis (one direction component tiny)."""
     import random
-
-    from llfsm.sim import world
 
     rnd = random.Random(kind)
     strokes = []
@@ -506,10 +506,23 @@ def test_the_stroke_painter_paints_the_reference_pixels(kind: str) -> None:
         x, y = rnd.uniform(-20, 520), rnd.uniform(-20, 520)
         if kind == "edge":  # ends on pixel centres and edges, where rounding decides
             x, y = round(x * 2) / 2, round(y * 2) / 2
-        a = rnd.choice([0.0, math.pi / 2, math.pi, -math.pi / 2]) if kind == "axis" else rnd.uniform(-4, 4)
+        if kind == "axis":
+            a = rnd.choice([0.0, math.pi / 2, math.pi, -math.pi / 2])
+        elif kind == "steep":
+            a = rnd.choice([0.0, math.pi / 2, math.pi, -math.pi / 2]) + rnd.choice([1e-15, -1e-9, 1e-6, 1e-3])
+        else:
+            a = rnd.uniform(-4, 4)
         n = rnd.uniform(0.0, 2.0) if kind in ("short", "edge") else rnd.uniform(0, 400)
         rgba = bytes((rnd.randrange(256), rnd.randrange(256), rnd.randrange(256), 255))
         strokes.append((x, y, x + n * math.cos(a), y + n * math.sin(a), rgba, rnd.choice([1, 2, 3, 4, 7, 12])))
+    return strokes
+
+
+@pytest.mark.parametrize("kind", ["short", "long", "axis", "edge", "steep"])
+def test_the_stroke_painter_paints_the_reference_pixels(kind: str) -> None:
+    from llfsm.sim import world
+
+    strokes = random_strokes(kind)
     mine, ref = bytearray(world._TRANSPARENT * 250_000), bytearray(world._TRANSPARENT * 250_000)
     for s in strokes:
         world._fill_stroke(mine, *s)
