@@ -121,7 +121,7 @@ def stat_signature(machine_dir: str) -> tuple[str, int] | None:
     try:
         with os.scandir(machine_dir) as it:
             entries = sorted((e.name, e.path) for e in it if not e.name.startswith("."))
-        files = [(name, path) for name, path in entries] + [(p, p) for p in _compiler_files()]
+        files = entries + [(p, p) for p in _compiler_files()]
     except OSError:
         return None
     for name, path in files:

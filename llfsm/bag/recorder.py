@@ -8,16 +8,16 @@ Delivery costs the round one call of the generated `_stamped_<Name>` function wh
 has a fixed size (a Twist, a Pose: one `struct.pack` of the pipe record's head and the CDR
 together, and one extend of a bytearray), or the message's CDR encoding, the head (one more
 pack) and the extend where it does not.  Whole records only are appended, so that a run
-stopped by a signal mid-message leaves none half-written: no object waits
-per message, and nothing else happens per message in this process.  A thread of the run takes
-what the bytearray holds in batches and writes it to the bag writer process
-(`_writer_process`), which writes the bag on another core: neither the disk nor the storage
-libraries hold up a round.  A topic is
-described to the writer (definition, type hash, QoS) once, by the thread; the writer makes
-its connection when the topic's first message comes, so connections and their ids follow the
-order of first messages, as the same run always has them.  The thread holds the interpreter
-only to copy the bytes waiting and cut them off (two C calls, nothing per message); it writes
-with the GIL released, and the writer process runs at a lower priority than the run.
+stopped by a signal mid-message leaves none half-written: no object waits per message, and
+nothing else happens per message in this process.  A thread of the run takes what the
+bytearray holds in batches and writes it to the bag writer process (`_writer_process`), which
+writes the bag on another core: neither the disk nor the storage libraries hold up a round.
+A topic is described to the writer (definition, type hash, QoS) once, by the thread; the
+writer makes its connection when the topic's first message comes, so connections and their
+ids follow the order of first messages, as the same run always has them.  The thread holds
+the interpreter only to copy the bytes waiting and cut them off (two C calls, nothing per
+message); it writes with the GIL released, and the writer process runs at a lower priority
+than the run.
 
 Timestamps are the run clock under `--clock sim` (nanoseconds from the start of the run: two
 runs give the same bag, byte for byte) and the wall clock (nanoseconds since the epoch)
@@ -204,23 +204,15 @@ class Recorder:
             key = self._ids[topic] = len(self._ids) + 1
             self._undescribed.append((key, topic))
         extend = self.records.extend
+        clock = _WALL if wall else self.clock  # either has the time in `now`
         stamped = self.types.stamped(topic.type)
         if stamped is not None:  # a fixed-size message: head and CDR in one pack
-            return stamped(extend, key, _WALL if wall else self.clock)  # type: ignore[no-any-return]
+            return stamped(extend, key, clock)  # type: ignore[no-any-return]
         pack = RECORD.pack
-        if wall:
-            now = time.time_ns
 
-            def deliver(msg: Any) -> None:
-                data = cdr(msg)
-                extend(pack(key, now(), len(data)) + data)
-
-        else:
-            clock = self.clock
-
-            def deliver(msg: Any) -> None:
-                data = cdr(msg)
-                extend(pack(key, clock.now, len(data)) + data)
+        def deliver(msg: Any) -> None:
+            data = cdr(msg)
+            extend(pack(key, clock.now, len(data)) + data)
 
         return deliver
 

@@ -98,8 +98,9 @@ def internal_error(exc: Exception) -> NoReturn:
 
 
 def run_guarded(command: Callable[[], object]) -> None:
-    """Run a command outside click exactly as the click group runs one (llfsm.cli._click.main
-    and _common._Group): the same message and exit status for whatever escapes it."""
+    """Run a command so that whatever escapes it ends in a message and an exit status, never a
+    traceback: the fast path of `llfsm run`, and every click command (llfsm.cli._click.main),
+    so that both say the same."""
     try:
         try:
             command()

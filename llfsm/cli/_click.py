@@ -20,28 +20,26 @@ from . import (  # noqa: F401  (each registers its commands)
     topic,
     view,
 )
-from ._base import EXIT_USAGE, _quiet_broken_pipe, internal_error
+from ._base import EXIT_USAGE, run_guarded
 from ._common import cli
 
 __all__ = ["cli", "main"]
 
 
 def main() -> None:
-    """Entry point: turns what escapes the commands into a message and a status, not a traceback."""
-    try:
-        cli.main(prog_name="llfsm", standalone_mode=False)
-    except click.exceptions.Exit as e:
-        sys.exit(e.exit_code)
-    except click.ClickException as e:
-        e.show()
-        sys.exit(EXIT_USAGE)
-    except click.exceptions.Abort:
-        sys.exit(130)
-    except BrokenPipeError:
-        _quiet_broken_pipe()
-    except KeyboardInterrupt:
-        sys.exit(130)
-    except SystemExit:
-        raise
-    except Exception as exc:  # an llfsm bug: say so plainly
-        internal_error(exc)
+    """Entry point: click's own outcomes become a status here; whatever else escapes the
+    commands (a closed pipe, Ctrl-C, an llfsm bug) is handled as on the fast path of `llfsm
+    run`, by run_guarded: a message and a status, not a traceback."""
+
+    def invoke() -> None:
+        try:
+            cli.main(prog_name="llfsm", standalone_mode=False)
+        except click.exceptions.Exit as e:
+            sys.exit(e.exit_code)
+        except click.ClickException as e:
+            e.show()
+            sys.exit(EXIT_USAGE)
+        except click.exceptions.Abort:
+            sys.exit(130)
+
+    run_guarded(invoke)

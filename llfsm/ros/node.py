@@ -84,13 +84,16 @@ class QoSProfile:
         self.durability: DurabilityPolicy = _policy(DurabilityPolicy, durability, "durability")
         self.history: HistoryPolicy = _policy(HistoryPolicy, history, "history")
 
+    def _key(self) -> tuple[Any, ...]:
+        return tuple(getattr(self, k) for k in self._FIELDS)
+
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, QoSProfile):
             return NotImplemented
-        return all(getattr(self, k) == getattr(other, k) for k in self._FIELDS)
+        return self._key() == other._key()
 
     def __hash__(self) -> int:
-        return hash((self.depth, self.reliability, self.durability, self.history))
+        return hash(self._key())
 
     def __repr__(self) -> str:
         return (

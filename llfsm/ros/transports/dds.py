@@ -139,6 +139,9 @@ def _qos(
 #: Cyclone's QoS policy ids, by rclpy's names for them (QoSPolicyKind), for the incompatible QoS
 #: warnings (what rmw_cyclonedds_cpp maps them to).
 _POLICY_NAMES = {2: "DURABILITY", 4: "DEADLINE", 8: "LIVELINESS", 11: "RELIABILITY", 13: "HISTORY"}
+# rclpy's words (its default QoS event handlers)
+_OFFERING = "New publisher discovered on topic '{}', offering incompatible QoS. No messages will be received from it."
+_REQUESTING = "New subscription discovered on topic '{}', requesting incompatible QoS. No messages will be sent to it."
 
 
 class _Incompatible:
@@ -152,15 +155,13 @@ class _Incompatible:
     def on_trigger(self) -> None:
         if self.reader:
             status = self.endpoint.get_requested_incompatible_qos_status()
-            text = "New publisher discovered on topic '{}', offering incompatible QoS. No messages will be received"
-            text += " from it."
+            said = _OFFERING
         else:
             status = self.endpoint.get_offered_incompatible_qos_status()
-            text = "New subscription discovered on topic '{}', requesting incompatible QoS. No messages will be sent"
-            text += " to it."
+            said = _REQUESTING
         if status.total_count_change > 0:
             policy = _POLICY_NAMES.get(status.last_policy_id, "INVALID")
-            self.node.get_logger().warn(f"{text.format(self.topic)} Last incompatible policy: {policy}")
+            self.node.get_logger().warn(f"{said.format(self.topic)} Last incompatible policy: {policy}")
 
 
 class _WaitSet:
