@@ -536,9 +536,9 @@ def _fill_stroke(buf: bytearray, x0: float, y0: float, x1: float, y1: float, rgb
     centre lies inside; each pixel row is the intersection of the rectangle's two slabs.
 
     The colour sensor paints a stroke per turtle per update, so the common case (a slanted
-    stroke) has its own loop: each slab's two edges come out of its division in an order fixed
-    by the signs of the direction (rounding is monotonic), so the loop divides without the
-    comparisons and swaps; the operations and their order are the general loop's, so every
+    stroke) has its own branch: each slab's two edges come out of its division in an order
+    fixed by the signs of the direction (rounding is monotonic), so it divides without the
+    comparisons and swaps; the operations and their order are the general branch's, so every
     pixel is the same."""
     if not (math.isfinite(x0) and math.isfinite(y0) and math.isfinite(x1) and math.isfinite(y1)):
         return
@@ -559,16 +559,18 @@ def _fill_stroke(buf: bytearray, x0: float, y0: float, x1: float, y1: float, rgb
     j0 = max(0, math.ceil(cy - ey - 0.5))
     j1 = min(CANVAS_PX - 1, math.ceil(cy + ey - 0.5) - 1)
     last = CANVAS_PX - 1
-    if ux != 0.0 and uy != 0.0:
-        # Slab 1: |(x - cx) * ux + d * uy| <= along, edges (-along - d * uy) / ux and
-        # (along - d * uy) / ux; slab 2: |-(x - cx) * uy + d * ux| <= half, edges
-        # (half - d * ux) / -uy and (-half - d * ux) / -uy.  lo1/hi1, lo2/hi2: which is which.
+    ceil = math.ceil
+    # Slab 1: |(x - cx) * ux + d * uy| <= along, edges (-along - d * uy) / ux and
+    # (along - d * uy) / ux; slab 2: |-(x - cx) * uy + d * ux| <= half, edges
+    # (half - d * ux) / -uy and (-half - d * ux) / -uy.
+    slanted = ux != 0.0 and uy != 0.0
+    if slanted:  # which edge of each slab is the lower one: lo1/hi1, lo2/hi2
         nuy = -uy
         lo1, hi1 = (-along, along) if ux > 0.0 else (along, -along)
         lo2, hi2 = (-half, half) if nuy > 0.0 else (half, -half)
-        ceil = math.ceil
-        for j in range(j0, j1 + 1):
-            d = j + 0.5 - cy
+    for j in range(j0, j1 + 1):
+        d = j + 0.5 - cy
+        if slanted:
             t1 = d * uy
             t2 = d * ux
             xl = (lo1 - t1) / ux
@@ -579,42 +581,30 @@ def _fill_stroke(buf: bytearray, x0: float, y0: float, x1: float, y1: float, rgb
             b = (hi2 - t2) / nuy
             if b < xr:
                 xr = b
-            i0 = ceil(cx + xl - 0.5)
-            i1 = ceil(cx + xr - 0.5) - 1
-            if i0 < 0:
-                i0 = 0
-            if i1 > last:
-                i1 = last
-            if i0 <= i1:
-                base = j * CANVAS_PX
-                buf[(base + i0) * 4 : (base + i1 + 1) * 4] = rgba * (i1 - i0 + 1)
-        return
-    for j in range(j0, j1 + 1):
-        d = j + 0.5 - cy
-        # Slab 1: |(x - cx) * ux + d * uy| <= along.  Slab 2: |-(x - cx) * uy + d * ux| <= half.
-        xl = -math.inf
-        xr = math.inf
-        if ux != 0.0:
-            a = (-along - d * uy) / ux
-            b = (along - d * uy) / ux
-            if a > b:
-                a, b = b, a
-            xl, xr = a, b
-        elif abs(d * uy) > along:
-            continue
-        if uy != 0.0:
-            a = (half - d * ux) / -uy
-            b = (-half - d * ux) / -uy
-            if a > b:
-                a, b = b, a
-            if a > xl:
-                xl = a
-            if b < xr:
-                xr = b
-        elif abs(d * ux) > half:
-            continue
-        i0 = math.ceil(cx + xl - 0.5)
-        i1 = math.ceil(cx + xr - 0.5) - 1
+        else:  # along an axis: one slab may hold every column, or none of this row
+            xl = -math.inf
+            xr = math.inf
+            if ux != 0.0:
+                a = (-along - d * uy) / ux
+                b = (along - d * uy) / ux
+                if a > b:
+                    a, b = b, a
+                xl, xr = a, b
+            elif abs(d * uy) > along:
+                continue
+            if uy != 0.0:
+                a = (half - d * ux) / -uy
+                b = (-half - d * ux) / -uy
+                if a > b:
+                    a, b = b, a
+                if a > xl:
+                    xl = a
+                if b < xr:
+                    xr = b
+            elif abs(d * ux) > half:
+                continue
+        i0 = ceil(cx + xl - 0.5)
+        i1 = ceil(cx + xr - 0.5) - 1
         if i0 < 0:
             i0 = 0
         if i1 > last:
