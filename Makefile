@@ -13,7 +13,9 @@ VENV_ROS := .venv-ros
 ROS_WHEELS := ros-rclpy==9.1.2 ros-rmw-fastrtps-cpp==9.3.3 ros-std-msgs==5.5.1 ros-std-srvs==5.5.1 \
 	ros-geometry-msgs==5.5.1 ros-test-msgs==2.3.0
 
-$(VENV)/.installed: pyproject.toml
+# setup.py builds the recorder's tap and turtlesim's painter in C into the source tree: a changed
+# C file reinstalls.
+$(VENV)/.installed: pyproject.toml setup.py llfsm/bag/_tap.c llfsm/sim/_paint.c
 	$(PYTHON) -m venv $(VENV)
 	$(PIP) install -e .
 	touch $@
@@ -76,3 +78,4 @@ msgs: $(VENV)/.installed-dev
 
 clean:
 	rm -rf $(VENV) $(VENV_ROS) build demo-output .pytest_cache .ruff_cache
+	find llfsm -name '*.so' -delete

@@ -203,11 +203,11 @@ class Recorder:
         if key is None:
             key = self._ids[topic] = len(self._ids) + 1
             self._undescribed.append((key, topic))
-        extend = self.records.extend
         clock = _WALL if wall else self.clock  # either has the time in `now`
         stamped = self.types.stamped(topic.type)
-        if stamped is not None:  # a fixed-size message: head and CDR in one pack
-            return stamped(extend, key, clock)  # type: ignore[no-any-return]
+        if stamped is not None:  # a fixed-size message: head and CDR at once
+            return stamped(self.records, key, clock)
+        extend = self.records.extend
         pack = RECORD.pack
 
         def deliver(msg: Any) -> None:

@@ -33,6 +33,11 @@ if TYPE_CHECKING:
 
     from rosbags.typesys.store import Typestore
 
+try:  # the recorder's tap in C (setup.py builds it where a C compiler is; optional)
+    from ._tap import Tap as _Tap
+except ImportError:  # pragma: no cover - installs without a compiler
+    _Tap = None
+
 DELIMITER = "=" * 80 + "\n"
 _MSG_FIELD_TYPE = re.compile(r"(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+")
 _PRIMITIVES = frozenset(
@@ -159,12 +164,24 @@ class TypeSupport:
         return fn
 
     @staticmethod
-    def stamped(cls: type[Message]) -> Callable[..., Callable[[Any], None]] | None:
-        """The generated `_stamped_<Name>(out, key, clock)` of a fixed-size message (one pack of
-        the record head and the CDR together: what a recorder does per message, in one call),
-        or None (a message whose size varies, or a class without llfsm's DDS form)."""
+    def stamped(cls: type[Message]) -> Callable[[bytearray, int, Any], Callable[[Any], None]] | None:
+        """What makes a recorder's tap for a fixed-size message, `(records, key, clock) -> tap`:
+        the C tap (llfsm.bag._tap) where it is built, else the generated
+        `_stamped_<Name>(out, key, clock)` (one pack of the record head and the CDR together).
+        Both append the same bytes; the C tap hands anything unusual to the Python one.  None
+        for a message whose size varies, or a class without llfsm's DDS form."""
         c = _codec(cls)
-        return c.stamped if c is not None else None
+        if c is None or c.stamped is None:
+            return None
+        python, layout = c.stamped, c.tap_layout
+        if _Tap is None or layout is None:
+            return lambda records, key, clock: python(records.extend, key, clock)  # type: ignore[no-any-return]
+        tap = _Tap
+
+        def make(records: bytearray, key: int, clock: Any) -> Callable[[Any], None]:
+            return tap(records, key, clock, layout, python(records.extend, key, clock))  # type: ignore[no-any-return]
+
+        return make
 
     def _rosbags_serializer(self, cls: type[Message]) -> Callable[[Any], bytes]:
         self._register(cls._TYPE)

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -575,6 +576,7 @@ class DdsMessageView:
     codec: str  # its entry in CODECS
     cdr: list[str]  # body of _cdr_<Name>(m) -> bytes
     stamped: list[str]  # body of _stamped_<Name>(out, key, clock), [] if the size varies
+    tap_layout: str | None  # `_TAP_<Name> = ...`: the same record for the C tap (llfsm/bag/_tap.c)
     msg: list[str]  # body of _msg_<Name>(d) -> (message, end offset)
     enc: list[str]  # body of _enc_<Name>(m, b)
     dec: list[str]  # body of _dec_<Name>(d, o) -> (message, o)
@@ -638,10 +640,12 @@ def message_view(spec: MessageSpec, module: _Module, type_hash_value: str) -> Dd
             "",
             "return record",
         ]
+        tap_layout = _tap_layout(name, top.fmt, top.args)
     else:
         top.flush()
         cdr = ["b = bytearray(_HDR)", *top.lines, "return bytes(b)"]
         stamped = []
+        tap_layout = None
     module.n = 0
     anywhere = _Writer(module, _Alignment(1))
     anywhere.message(spec, "m")
@@ -672,9 +676,10 @@ def message_view(spec: MessageSpec, module: _Module, type_hash_value: str) -> Dd
         mk_def=mk_def,
         class_line=_class_line(f"{name}_", spec.type_name),
         wire_line=_class_line(f"{name}_wire_", spec.type_name),
-        codec=_codec_line(name, bool(stamped)),
+        codec=_codec_line(name, bool(stamped), tap_layout is not None),
         cdr=cdr,
         stamped=stamped,
+        tap_layout=tap_layout,
         msg=msg,
         enc=anywhere.lines or ["pass"],
         dec=dec,
@@ -688,9 +693,34 @@ def _class_line(cls: str, type_name: str) -> str:
     return layout("class ", Call(cls, ["_IdlStruct", f"typename={_str_literal(dds_name(type_name))}"]), ":", 0)
 
 
-def _codec_line(name: str, stamped: bool) -> str:
+_TAP_ARG = re.compile(r"\*?m((?:\._\w+)+)")
+
+
+def _tap_layout(name: str, fmt: list[str], args: list[str]) -> str | None:
+    """The fixed-size record as (format, path) items for the recorder's C tap: one per item
+    of the pack, pads with an empty path, `*` where the value is a list of `count` values
+    (`("36d", "*_covariance")`); None if some value is not a plain attribute path (the empty
+    message's constant 0)."""
+    items: list[str] = []
+    values = iter(args)
+    for piece in fmt:
+        if piece.endswith("x"):
+            items.append(f'({_str_literal(piece)}, "")')
+            continue
+        m = _TAP_ARG.fullmatch(next(values))
+        if m is None:
+            return None
+        star = "*" if m.group(0).startswith("*") else ""
+        items.append(f"({_str_literal(piece)}, {_str_literal(star + m.group(1)[1:])})")
+    if len(items) == 1:
+        return f"_TAP_{name} = ({items[0]},)"
+    return layout(f"_TAP_{name} = ", Call("", items), "", 0, atom=True)
+
+
+def _codec_line(name: str, stamped: bool, tap: bool) -> str:
     items = [f"{name}_"] + [f"_{p}_{name}" for p in ("cdr", "msg", "to", "from", "enc", "dec")]
     items.append(f"_stamped_{name}" if stamped else "None")
+    items.append(f"_TAP_{name}" if tap else "None")
     return layout(f"{_str_literal(name)}: ", Call("", items), ",", atom=True)
 
 

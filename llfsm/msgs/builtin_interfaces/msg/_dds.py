@@ -53,6 +53,10 @@ def _stamped_Duration(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Duration = (("i", "_sec"), ("I", "_nanosec"))
+
+
 def _msg_Duration(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -118,6 +122,10 @@ def _stamped_Time(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Time = (("i", "_sec"), ("I", "_nanosec"))
+
+
 def _msg_Time(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -151,7 +159,7 @@ def _from_Time(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
     "Duration": (
         Duration_,
@@ -162,8 +170,9 @@ CODECS = {
         _enc_Duration,
         _dec_Duration,
         _stamped_Duration,
+        _TAP_Duration,
     ),
-    "Time": (Time_, _cdr_Time, _msg_Time, _to_Time, _from_Time, _enc_Time, _dec_Time, _stamped_Time),
+    "Time": (Time_, _cdr_Time, _msg_Time, _to_Time, _from_Time, _enc_Time, _dec_Time, _stamped_Time, _TAP_Time),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

@@ -80,6 +80,10 @@ def _stamped_Vector3(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Vector3 = (("d", "_x"), ("d", "_y"), ("d", "_z"))
+
+
 def _msg_Vector3(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -155,6 +159,17 @@ def _stamped_Accel(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Accel = (
+    ("d", "_linear._x"),
+    ("d", "_linear._y"),
+    ("d", "_linear._z"),
+    ("d", "_angular._x"),
+    ("d", "_angular._y"),
+    ("d", "_angular._z"),
+)
 
 
 def _msg_Accel(d):
@@ -339,6 +354,18 @@ def _stamped_AccelWithCovariance(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_AccelWithCovariance = (
+    ("d", "_accel._linear._x"),
+    ("d", "_accel._linear._y"),
+    ("d", "_accel._linear._z"),
+    ("d", "_accel._angular._x"),
+    ("d", "_accel._angular._y"),
+    ("d", "_accel._angular._z"),
+    ("36d", "*_covariance"),
+)
 
 
 def _msg_AccelWithCovariance(d):
@@ -549,6 +576,21 @@ def _stamped_Inertia(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Inertia = (
+    ("d", "_m"),
+    ("d", "_com._x"),
+    ("d", "_com._y"),
+    ("d", "_com._z"),
+    ("d", "_ixx"),
+    ("d", "_ixy"),
+    ("d", "_ixz"),
+    ("d", "_iyy"),
+    ("d", "_iyz"),
+    ("d", "_izz"),
+)
+
+
 def _msg_Inertia(d):
     o = 4
     t1 = _S8.unpack_from(d, o)
@@ -730,6 +772,10 @@ def _stamped_Point(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Point = (("d", "_x"), ("d", "_y"), ("d", "_z"))
+
+
 def _msg_Point(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -796,6 +842,10 @@ def _stamped_Point32(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Point32 = (("f", "_x"), ("f", "_y"), ("f", "_z"))
 
 
 def _msg_Point32(d):
@@ -1121,6 +1171,10 @@ def _stamped_Quaternion(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Quaternion = (("d", "_x"), ("d", "_y"), ("d", "_z"), ("d", "_w"))
+
+
 def _msg_Quaternion(d):
     o = 4
     t1 = _S13.unpack_from(d, o)
@@ -1209,6 +1263,18 @@ def _stamped_Pose(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Pose = (
+    ("d", "_position._x"),
+    ("d", "_position._y"),
+    ("d", "_position._z"),
+    ("d", "_orientation._x"),
+    ("d", "_orientation._y"),
+    ("d", "_orientation._z"),
+    ("d", "_orientation._w"),
+)
+
+
 def _msg_Pose(d):
     o = 4
     t1 = _S15.unpack_from(d, o)
@@ -1282,6 +1348,10 @@ def _stamped_Pose2D(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Pose2D = (("d", "_x"), ("d", "_y"), ("d", "_theta"))
 
 
 def _msg_Pose2D(d):
@@ -1571,6 +1641,19 @@ def _stamped_PoseWithCovariance(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_PoseWithCovariance = (
+    ("d", "_pose._position._x"),
+    ("d", "_pose._position._y"),
+    ("d", "_pose._position._z"),
+    ("d", "_pose._orientation._x"),
+    ("d", "_pose._orientation._y"),
+    ("d", "_pose._orientation._z"),
+    ("d", "_pose._orientation._w"),
+    ("36d", "*_covariance"),
+)
+
+
 def _msg_PoseWithCovariance(d):
     o = 4
     t1 = _S17.unpack_from(d, o)
@@ -1858,6 +1941,18 @@ def _stamped_Transform(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Transform = (
+    ("d", "_translation._x"),
+    ("d", "_translation._y"),
+    ("d", "_translation._z"),
+    ("d", "_rotation._x"),
+    ("d", "_rotation._y"),
+    ("d", "_rotation._z"),
+    ("d", "_rotation._w"),
+)
+
+
 def _msg_Transform(d):
     o = 4
     t1 = _S15.unpack_from(d, o)
@@ -2071,6 +2166,17 @@ def _stamped_Twist(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Twist = (
+    ("d", "_linear._x"),
+    ("d", "_linear._y"),
+    ("d", "_linear._z"),
+    ("d", "_angular._x"),
+    ("d", "_angular._y"),
+    ("d", "_angular._z"),
+)
+
+
 def _msg_Twist(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -2253,6 +2359,18 @@ def _stamped_TwistWithCovariance(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_TwistWithCovariance = (
+    ("d", "_twist._linear._x"),
+    ("d", "_twist._linear._y"),
+    ("d", "_twist._linear._z"),
+    ("d", "_twist._angular._x"),
+    ("d", "_twist._angular._y"),
+    ("d", "_twist._angular._z"),
+    ("36d", "*_covariance"),
+)
 
 
 def _msg_TwistWithCovariance(d):
@@ -2520,6 +2638,17 @@ def _stamped_Wrench(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Wrench = (
+    ("d", "_force._x"),
+    ("d", "_force._y"),
+    ("d", "_force._z"),
+    ("d", "_torque._x"),
+    ("d", "_torque._y"),
+    ("d", "_torque._z"),
+)
+
+
 def _msg_Wrench(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -2651,7 +2780,7 @@ def _from_WrenchStamped(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
     "Vector3": (
         Vector3_,
@@ -2662,8 +2791,19 @@ CODECS = {
         _enc_Vector3,
         _dec_Vector3,
         _stamped_Vector3,
+        _TAP_Vector3,
     ),
-    "Accel": (Accel_, _cdr_Accel, _msg_Accel, _to_Accel, _from_Accel, _enc_Accel, _dec_Accel, _stamped_Accel),
+    "Accel": (
+        Accel_,
+        _cdr_Accel,
+        _msg_Accel,
+        _to_Accel,
+        _from_Accel,
+        _enc_Accel,
+        _dec_Accel,
+        _stamped_Accel,
+        _TAP_Accel,
+    ),
     "AccelStamped": (
         AccelStamped_,
         _cdr_AccelStamped,
@@ -2672,6 +2812,7 @@ CODECS = {
         _from_AccelStamped,
         _enc_AccelStamped,
         _dec_AccelStamped,
+        None,
         None,
     ),
     "AccelWithCovariance": (
@@ -2683,6 +2824,7 @@ CODECS = {
         _enc_AccelWithCovariance,
         _dec_AccelWithCovariance,
         _stamped_AccelWithCovariance,
+        _TAP_AccelWithCovariance,
     ),
     "AccelWithCovarianceStamped": (
         AccelWithCovarianceStamped_,
@@ -2692,6 +2834,7 @@ CODECS = {
         _from_AccelWithCovarianceStamped,
         _enc_AccelWithCovarianceStamped,
         _dec_AccelWithCovarianceStamped,
+        None,
         None,
     ),
     "Inertia": (
@@ -2703,6 +2846,7 @@ CODECS = {
         _enc_Inertia,
         _dec_Inertia,
         _stamped_Inertia,
+        _TAP_Inertia,
     ),
     "InertiaStamped": (
         InertiaStamped_,
@@ -2713,8 +2857,19 @@ CODECS = {
         _enc_InertiaStamped,
         _dec_InertiaStamped,
         None,
+        None,
     ),
-    "Point": (Point_, _cdr_Point, _msg_Point, _to_Point, _from_Point, _enc_Point, _dec_Point, _stamped_Point),
+    "Point": (
+        Point_,
+        _cdr_Point,
+        _msg_Point,
+        _to_Point,
+        _from_Point,
+        _enc_Point,
+        _dec_Point,
+        _stamped_Point,
+        _TAP_Point,
+    ),
     "Point32": (
         Point32_,
         _cdr_Point32,
@@ -2724,6 +2879,7 @@ CODECS = {
         _enc_Point32,
         _dec_Point32,
         _stamped_Point32,
+        _TAP_Point32,
     ),
     "PointStamped": (
         PointStamped_,
@@ -2734,8 +2890,19 @@ CODECS = {
         _enc_PointStamped,
         _dec_PointStamped,
         None,
+        None,
     ),
-    "Polygon": (Polygon_, _cdr_Polygon, _msg_Polygon, _to_Polygon, _from_Polygon, _enc_Polygon, _dec_Polygon, None),
+    "Polygon": (
+        Polygon_,
+        _cdr_Polygon,
+        _msg_Polygon,
+        _to_Polygon,
+        _from_Polygon,
+        _enc_Polygon,
+        _dec_Polygon,
+        None,
+        None,
+    ),
     "PolygonStamped": (
         PolygonStamped_,
         _cdr_PolygonStamped,
@@ -2744,6 +2911,7 @@ CODECS = {
         _from_PolygonStamped,
         _enc_PolygonStamped,
         _dec_PolygonStamped,
+        None,
         None,
     ),
     "Quaternion": (
@@ -2755,9 +2923,20 @@ CODECS = {
         _enc_Quaternion,
         _dec_Quaternion,
         _stamped_Quaternion,
+        _TAP_Quaternion,
     ),
-    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose, _stamped_Pose),
-    "Pose2D": (Pose2D_, _cdr_Pose2D, _msg_Pose2D, _to_Pose2D, _from_Pose2D, _enc_Pose2D, _dec_Pose2D, _stamped_Pose2D),
+    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose, _stamped_Pose, _TAP_Pose),
+    "Pose2D": (
+        Pose2D_,
+        _cdr_Pose2D,
+        _msg_Pose2D,
+        _to_Pose2D,
+        _from_Pose2D,
+        _enc_Pose2D,
+        _dec_Pose2D,
+        _stamped_Pose2D,
+        _TAP_Pose2D,
+    ),
     "PoseArray": (
         PoseArray_,
         _cdr_PoseArray,
@@ -2766,6 +2945,7 @@ CODECS = {
         _from_PoseArray,
         _enc_PoseArray,
         _dec_PoseArray,
+        None,
         None,
     ),
     "PoseStamped": (
@@ -2777,6 +2957,7 @@ CODECS = {
         _enc_PoseStamped,
         _dec_PoseStamped,
         None,
+        None,
     ),
     "PoseWithCovariance": (
         PoseWithCovariance_,
@@ -2787,6 +2968,7 @@ CODECS = {
         _enc_PoseWithCovariance,
         _dec_PoseWithCovariance,
         _stamped_PoseWithCovariance,
+        _TAP_PoseWithCovariance,
     ),
     "PoseWithCovarianceStamped": (
         PoseWithCovarianceStamped_,
@@ -2796,6 +2978,7 @@ CODECS = {
         _from_PoseWithCovarianceStamped,
         _enc_PoseWithCovarianceStamped,
         _dec_PoseWithCovarianceStamped,
+        None,
         None,
     ),
     "QuaternionStamped": (
@@ -2807,6 +2990,7 @@ CODECS = {
         _enc_QuaternionStamped,
         _dec_QuaternionStamped,
         None,
+        None,
     ),
     "Transform": (
         Transform_,
@@ -2817,6 +3001,7 @@ CODECS = {
         _enc_Transform,
         _dec_Transform,
         _stamped_Transform,
+        _TAP_Transform,
     ),
     "TransformStamped": (
         TransformStamped_,
@@ -2827,8 +3012,19 @@ CODECS = {
         _enc_TransformStamped,
         _dec_TransformStamped,
         None,
+        None,
     ),
-    "Twist": (Twist_, _cdr_Twist, _msg_Twist, _to_Twist, _from_Twist, _enc_Twist, _dec_Twist, _stamped_Twist),
+    "Twist": (
+        Twist_,
+        _cdr_Twist,
+        _msg_Twist,
+        _to_Twist,
+        _from_Twist,
+        _enc_Twist,
+        _dec_Twist,
+        _stamped_Twist,
+        _TAP_Twist,
+    ),
     "TwistStamped": (
         TwistStamped_,
         _cdr_TwistStamped,
@@ -2837,6 +3033,7 @@ CODECS = {
         _from_TwistStamped,
         _enc_TwistStamped,
         _dec_TwistStamped,
+        None,
         None,
     ),
     "TwistWithCovariance": (
@@ -2848,6 +3045,7 @@ CODECS = {
         _enc_TwistWithCovariance,
         _dec_TwistWithCovariance,
         _stamped_TwistWithCovariance,
+        _TAP_TwistWithCovariance,
     ),
     "TwistWithCovarianceStamped": (
         TwistWithCovarianceStamped_,
@@ -2857,6 +3055,7 @@ CODECS = {
         _from_TwistWithCovarianceStamped,
         _enc_TwistWithCovarianceStamped,
         _dec_TwistWithCovarianceStamped,
+        None,
         None,
     ),
     "Vector3Stamped": (
@@ -2868,8 +3067,19 @@ CODECS = {
         _enc_Vector3Stamped,
         _dec_Vector3Stamped,
         None,
+        None,
     ),
-    "Wrench": (Wrench_, _cdr_Wrench, _msg_Wrench, _to_Wrench, _from_Wrench, _enc_Wrench, _dec_Wrench, _stamped_Wrench),
+    "Wrench": (
+        Wrench_,
+        _cdr_Wrench,
+        _msg_Wrench,
+        _to_Wrench,
+        _from_Wrench,
+        _enc_Wrench,
+        _dec_Wrench,
+        _stamped_Wrench,
+        _TAP_Wrench,
+    ),
     "WrenchStamped": (
         WrenchStamped_,
         _cdr_WrenchStamped,
@@ -2878,6 +3088,7 @@ CODECS = {
         _from_WrenchStamped,
         _enc_WrenchStamped,
         _dec_WrenchStamped,
+        None,
         None,
     ),
 }

@@ -53,6 +53,10 @@ def _stamped_Gid(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Gid = (("16B", "*_data"),)
+
+
 def _msg_Gid(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -325,9 +329,9 @@ def _from_ParticipantEntitiesInfo(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
-    "Gid": (Gid_, _cdr_Gid, _msg_Gid, _to_Gid, _from_Gid, _enc_Gid, _dec_Gid, _stamped_Gid),
+    "Gid": (Gid_, _cdr_Gid, _msg_Gid, _to_Gid, _from_Gid, _enc_Gid, _dec_Gid, _stamped_Gid, _TAP_Gid),
     "NodeEntitiesInfo": (
         NodeEntitiesInfo_,
         _cdr_NodeEntitiesInfo,
@@ -336,6 +340,7 @@ CODECS = {
         _from_NodeEntitiesInfo,
         _enc_NodeEntitiesInfo,
         _dec_NodeEntitiesInfo,
+        None,
         None,
     ),
     "ParticipantEntitiesInfo": (
@@ -346,6 +351,7 @@ CODECS = {
         _from_ParticipantEntitiesInfo,
         _enc_ParticipantEntitiesInfo,
         _dec_ParticipantEntitiesInfo,
+        None,
         None,
     ),
 }

@@ -71,6 +71,18 @@ def _stamped_ServiceEventInfo(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_ServiceEventInfo = (
+    ("B", "_event_type"),
+    ("3x", ""),
+    ("i", "_stamp._sec"),
+    ("I", "_stamp._nanosec"),
+    ("16B", "*_client_gid"),
+    ("4x", ""),
+    ("q", "_sequence_number"),
+)
+
+
 def _msg_ServiceEventInfo(d):
     o = 4
     t1 = _S4.unpack_from(d, o)
@@ -119,7 +131,7 @@ def _from_ServiceEventInfo(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
     "ServiceEventInfo": (
         ServiceEventInfo_,
@@ -130,6 +142,7 @@ CODECS = {
         _enc_ServiceEventInfo,
         _dec_ServiceEventInfo,
         _stamped_ServiceEventInfo,
+        _TAP_ServiceEventInfo,
     ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)

@@ -89,6 +89,10 @@ def _stamped_Bool(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Bool = (("?", "_data"),)
+
+
 def _msg_Bool(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -147,6 +151,10 @@ def _stamped_Byte(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Byte = (("B", "_data"),)
 
 
 def _msg_Byte(d):
@@ -472,6 +480,10 @@ def _stamped_Char(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Char = (("B", "_data"),)
+
+
 def _msg_Char(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -536,6 +548,10 @@ def _stamped_ColorRGBA(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_ColorRGBA = (("f", "_r"), ("f", "_g"), ("f", "_b"), ("f", "_a"))
 
 
 def _msg_ColorRGBA(d):
@@ -657,6 +673,10 @@ def _stamped_Float32(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Float32 = (("f", "_data"),)
 
 
 def _msg_Float32(d):
@@ -815,6 +835,10 @@ def _stamped_Float64(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Float64 = (("d", "_data"),)
 
 
 def _msg_Float64(d):
@@ -1051,6 +1075,10 @@ def _stamped_Int16(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Int16 = (("h", "_data"),)
+
+
 def _msg_Int16(d):
     o = 4
     t1 = _S14.unpack_from(d, o)
@@ -1209,6 +1237,10 @@ def _stamped_Int32(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Int32 = (("i", "_data"),)
+
+
 def _msg_Int32(d):
     o = 4
     t1 = _S16.unpack_from(d, o)
@@ -1365,6 +1397,10 @@ def _stamped_Int64(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Int64 = (("q", "_data"),)
 
 
 def _msg_Int64(d):
@@ -1531,6 +1567,10 @@ def _stamped_Int8(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Int8 = (("b", "_data"),)
 
 
 def _msg_Int8(d):
@@ -1754,6 +1794,10 @@ def _stamped_UInt16(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_UInt16 = (("H", "_data"),)
+
+
 def _msg_UInt16(d):
     o = 4
     t1 = _S22.unpack_from(d, o)
@@ -1912,6 +1956,10 @@ def _stamped_UInt32(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_UInt32 = (("I", "_data"),)
+
+
 def _msg_UInt32(d):
     o = 4
     t1 = _S4.unpack_from(d, o)
@@ -2068,6 +2116,10 @@ def _stamped_UInt64(out, key, clock):
         out(r)
 
     return record
+
+
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_UInt64 = (("Q", "_data"),)
 
 
 def _msg_UInt64(d):
@@ -2236,6 +2288,10 @@ def _stamped_UInt8(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_UInt8 = (("B", "_data"),)
+
+
 def _msg_UInt8(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -2362,10 +2418,10 @@ def _from_UInt8MultiArray(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
-    "Bool": (Bool_, _cdr_Bool, _msg_Bool, _to_Bool, _from_Bool, _enc_Bool, _dec_Bool, _stamped_Bool),
-    "Byte": (Byte_, _cdr_Byte, _msg_Byte, _to_Byte, _from_Byte, _enc_Byte, _dec_Byte, _stamped_Byte),
+    "Bool": (Bool_, _cdr_Bool, _msg_Bool, _to_Bool, _from_Bool, _enc_Bool, _dec_Bool, _stamped_Bool, _TAP_Bool),
+    "Byte": (Byte_, _cdr_Byte, _msg_Byte, _to_Byte, _from_Byte, _enc_Byte, _dec_Byte, _stamped_Byte, _TAP_Byte),
     "MultiArrayDimension": (
         MultiArrayDimension_,
         _cdr_MultiArrayDimension,
@@ -2374,6 +2430,7 @@ CODECS = {
         _from_MultiArrayDimension,
         _enc_MultiArrayDimension,
         _dec_MultiArrayDimension,
+        None,
         None,
     ),
     "MultiArrayLayout": (
@@ -2385,6 +2442,7 @@ CODECS = {
         _enc_MultiArrayLayout,
         _dec_MultiArrayLayout,
         None,
+        None,
     ),
     "ByteMultiArray": (
         ByteMultiArray_,
@@ -2395,8 +2453,9 @@ CODECS = {
         _enc_ByteMultiArray,
         _dec_ByteMultiArray,
         None,
+        None,
     ),
-    "Char": (Char_, _cdr_Char, _msg_Char, _to_Char, _from_Char, _enc_Char, _dec_Char, _stamped_Char),
+    "Char": (Char_, _cdr_Char, _msg_Char, _to_Char, _from_Char, _enc_Char, _dec_Char, _stamped_Char, _TAP_Char),
     "ColorRGBA": (
         ColorRGBA_,
         _cdr_ColorRGBA,
@@ -2406,8 +2465,9 @@ CODECS = {
         _enc_ColorRGBA,
         _dec_ColorRGBA,
         _stamped_ColorRGBA,
+        _TAP_ColorRGBA,
     ),
-    "Empty": (Empty_, _cdr_Empty, _msg_Empty, _to_Empty, _from_Empty, _enc_Empty, _dec_Empty, _stamped_Empty),
+    "Empty": (Empty_, _cdr_Empty, _msg_Empty, _to_Empty, _from_Empty, _enc_Empty, _dec_Empty, _stamped_Empty, None),
     "Float32": (
         Float32_,
         _cdr_Float32,
@@ -2417,6 +2477,7 @@ CODECS = {
         _enc_Float32,
         _dec_Float32,
         _stamped_Float32,
+        _TAP_Float32,
     ),
     "Float32MultiArray": (
         Float32MultiArray_,
@@ -2426,6 +2487,7 @@ CODECS = {
         _from_Float32MultiArray,
         _enc_Float32MultiArray,
         _dec_Float32MultiArray,
+        None,
         None,
     ),
     "Float64": (
@@ -2437,6 +2499,7 @@ CODECS = {
         _enc_Float64,
         _dec_Float64,
         _stamped_Float64,
+        _TAP_Float64,
     ),
     "Float64MultiArray": (
         Float64MultiArray_,
@@ -2447,9 +2510,20 @@ CODECS = {
         _enc_Float64MultiArray,
         _dec_Float64MultiArray,
         None,
+        None,
     ),
-    "Header": (Header_, _cdr_Header, _msg_Header, _to_Header, _from_Header, _enc_Header, _dec_Header, None),
-    "Int16": (Int16_, _cdr_Int16, _msg_Int16, _to_Int16, _from_Int16, _enc_Int16, _dec_Int16, _stamped_Int16),
+    "Header": (Header_, _cdr_Header, _msg_Header, _to_Header, _from_Header, _enc_Header, _dec_Header, None, None),
+    "Int16": (
+        Int16_,
+        _cdr_Int16,
+        _msg_Int16,
+        _to_Int16,
+        _from_Int16,
+        _enc_Int16,
+        _dec_Int16,
+        _stamped_Int16,
+        _TAP_Int16,
+    ),
     "Int16MultiArray": (
         Int16MultiArray_,
         _cdr_Int16MultiArray,
@@ -2459,8 +2533,19 @@ CODECS = {
         _enc_Int16MultiArray,
         _dec_Int16MultiArray,
         None,
+        None,
     ),
-    "Int32": (Int32_, _cdr_Int32, _msg_Int32, _to_Int32, _from_Int32, _enc_Int32, _dec_Int32, _stamped_Int32),
+    "Int32": (
+        Int32_,
+        _cdr_Int32,
+        _msg_Int32,
+        _to_Int32,
+        _from_Int32,
+        _enc_Int32,
+        _dec_Int32,
+        _stamped_Int32,
+        _TAP_Int32,
+    ),
     "Int32MultiArray": (
         Int32MultiArray_,
         _cdr_Int32MultiArray,
@@ -2470,8 +2555,19 @@ CODECS = {
         _enc_Int32MultiArray,
         _dec_Int32MultiArray,
         None,
+        None,
     ),
-    "Int64": (Int64_, _cdr_Int64, _msg_Int64, _to_Int64, _from_Int64, _enc_Int64, _dec_Int64, _stamped_Int64),
+    "Int64": (
+        Int64_,
+        _cdr_Int64,
+        _msg_Int64,
+        _to_Int64,
+        _from_Int64,
+        _enc_Int64,
+        _dec_Int64,
+        _stamped_Int64,
+        _TAP_Int64,
+    ),
     "Int64MultiArray": (
         Int64MultiArray_,
         _cdr_Int64MultiArray,
@@ -2481,8 +2577,9 @@ CODECS = {
         _enc_Int64MultiArray,
         _dec_Int64MultiArray,
         None,
+        None,
     ),
-    "Int8": (Int8_, _cdr_Int8, _msg_Int8, _to_Int8, _from_Int8, _enc_Int8, _dec_Int8, _stamped_Int8),
+    "Int8": (Int8_, _cdr_Int8, _msg_Int8, _to_Int8, _from_Int8, _enc_Int8, _dec_Int8, _stamped_Int8, _TAP_Int8),
     "Int8MultiArray": (
         Int8MultiArray_,
         _cdr_Int8MultiArray,
@@ -2492,9 +2589,20 @@ CODECS = {
         _enc_Int8MultiArray,
         _dec_Int8MultiArray,
         None,
+        None,
     ),
-    "String": (String_, _cdr_String, _msg_String, _to_String, _from_String, _enc_String, _dec_String, None),
-    "UInt16": (UInt16_, _cdr_UInt16, _msg_UInt16, _to_UInt16, _from_UInt16, _enc_UInt16, _dec_UInt16, _stamped_UInt16),
+    "String": (String_, _cdr_String, _msg_String, _to_String, _from_String, _enc_String, _dec_String, None, None),
+    "UInt16": (
+        UInt16_,
+        _cdr_UInt16,
+        _msg_UInt16,
+        _to_UInt16,
+        _from_UInt16,
+        _enc_UInt16,
+        _dec_UInt16,
+        _stamped_UInt16,
+        _TAP_UInt16,
+    ),
     "UInt16MultiArray": (
         UInt16MultiArray_,
         _cdr_UInt16MultiArray,
@@ -2504,8 +2612,19 @@ CODECS = {
         _enc_UInt16MultiArray,
         _dec_UInt16MultiArray,
         None,
+        None,
     ),
-    "UInt32": (UInt32_, _cdr_UInt32, _msg_UInt32, _to_UInt32, _from_UInt32, _enc_UInt32, _dec_UInt32, _stamped_UInt32),
+    "UInt32": (
+        UInt32_,
+        _cdr_UInt32,
+        _msg_UInt32,
+        _to_UInt32,
+        _from_UInt32,
+        _enc_UInt32,
+        _dec_UInt32,
+        _stamped_UInt32,
+        _TAP_UInt32,
+    ),
     "UInt32MultiArray": (
         UInt32MultiArray_,
         _cdr_UInt32MultiArray,
@@ -2515,8 +2634,19 @@ CODECS = {
         _enc_UInt32MultiArray,
         _dec_UInt32MultiArray,
         None,
+        None,
     ),
-    "UInt64": (UInt64_, _cdr_UInt64, _msg_UInt64, _to_UInt64, _from_UInt64, _enc_UInt64, _dec_UInt64, _stamped_UInt64),
+    "UInt64": (
+        UInt64_,
+        _cdr_UInt64,
+        _msg_UInt64,
+        _to_UInt64,
+        _from_UInt64,
+        _enc_UInt64,
+        _dec_UInt64,
+        _stamped_UInt64,
+        _TAP_UInt64,
+    ),
     "UInt64MultiArray": (
         UInt64MultiArray_,
         _cdr_UInt64MultiArray,
@@ -2526,8 +2656,19 @@ CODECS = {
         _enc_UInt64MultiArray,
         _dec_UInt64MultiArray,
         None,
+        None,
     ),
-    "UInt8": (UInt8_, _cdr_UInt8, _msg_UInt8, _to_UInt8, _from_UInt8, _enc_UInt8, _dec_UInt8, _stamped_UInt8),
+    "UInt8": (
+        UInt8_,
+        _cdr_UInt8,
+        _msg_UInt8,
+        _to_UInt8,
+        _from_UInt8,
+        _enc_UInt8,
+        _dec_UInt8,
+        _stamped_UInt8,
+        _TAP_UInt8,
+    ),
     "UInt8MultiArray": (
         UInt8MultiArray_,
         _cdr_UInt8MultiArray,
@@ -2536,6 +2677,7 @@ CODECS = {
         _from_UInt8MultiArray,
         _enc_UInt8MultiArray,
         _dec_UInt8MultiArray,
+        None,
         None,
     ),
 }

@@ -195,6 +195,10 @@ def _stamped_SetBool_Request(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_SetBool_Request = (("?", "_data"),)
+
+
 def _msg_SetBool_Request(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -452,7 +456,7 @@ def _from_Trigger_Response(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
     "Empty_Request": (
         Empty_Request_,
@@ -463,6 +467,7 @@ CODECS = {
         _enc_Empty_Request,
         _dec_Empty_Request,
         _stamped_Empty_Request,
+        None,
     ),
     "Empty_Response": (
         Empty_Response_,
@@ -473,6 +478,7 @@ CODECS = {
         _enc_Empty_Response,
         _dec_Empty_Response,
         _stamped_Empty_Response,
+        None,
     ),
     "SetBool_Request": (
         SetBool_Request_,
@@ -483,6 +489,7 @@ CODECS = {
         _enc_SetBool_Request,
         _dec_SetBool_Request,
         _stamped_SetBool_Request,
+        _TAP_SetBool_Request,
     ),
     "SetBool_Response": (
         SetBool_Response_,
@@ -492,6 +499,7 @@ CODECS = {
         _from_SetBool_Response,
         _enc_SetBool_Response,
         _dec_SetBool_Response,
+        None,
         None,
     ),
     "Trigger_Request": (
@@ -503,6 +511,7 @@ CODECS = {
         _enc_Trigger_Request,
         _dec_Trigger_Request,
         _stamped_Trigger_Request,
+        None,
     ),
     "Trigger_Response": (
         Trigger_Response_,
@@ -512,6 +521,7 @@ CODECS = {
         _from_Trigger_Response,
         _enc_Trigger_Response,
         _dec_Trigger_Response,
+        None,
         None,
     ),
 }

@@ -136,6 +136,10 @@ def _stamped_TurtlePosition_Response(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_TurtlePosition_Response = (("d", "_x"), ("d", "_y"), ("d", "_theta"))
+
+
 def _msg_TurtlePosition_Response(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -170,7 +174,7 @@ def _from_TurtlePosition_Response(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
     "TurtlePosition_Request": (
         TurtlePosition_Request_,
@@ -181,6 +185,7 @@ CODECS = {
         _enc_TurtlePosition_Request,
         _dec_TurtlePosition_Request,
         _stamped_TurtlePosition_Request,
+        None,
     ),
     "TurtlePosition_Response": (
         TurtlePosition_Response_,
@@ -191,6 +196,7 @@ CODECS = {
         _enc_TurtlePosition_Response,
         _dec_TurtlePosition_Response,
         _stamped_TurtlePosition_Response,
+        _TAP_TurtlePosition_Response,
     ),
 }
 # name -> the IdlStruct of rq/.../rr/... topics, with rmw_cyclonedds_cpp's request header

@@ -58,6 +58,10 @@ def _stamped_Color(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Color = (("B", "_r"), ("B", "_g"), ("B", "_b"))
+
+
 def _msg_Color(d):
     o = 4
     t1 = _S1.unpack_from(d, o)
@@ -128,6 +132,10 @@ def _stamped_Pose(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_Pose = (("f", "_x"), ("f", "_y"), ("f", "_theta"), ("f", "_linear_velocity"), ("f", "_angular_velocity"))
+
+
 def _msg_Pose(d):
     o = 4
     t1 = _S3.unpack_from(d, o)
@@ -166,10 +174,20 @@ def _from_Pose(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
-    "Color": (Color_, _cdr_Color, _msg_Color, _to_Color, _from_Color, _enc_Color, _dec_Color, _stamped_Color),
-    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose, _stamped_Pose),
+    "Color": (
+        Color_,
+        _cdr_Color,
+        _msg_Color,
+        _to_Color,
+        _from_Color,
+        _enc_Color,
+        _dec_Color,
+        _stamped_Color,
+        _TAP_Color,
+    ),
+    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose, _stamped_Pose, _TAP_Pose),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

@@ -222,6 +222,10 @@ def _stamped_SetPen_Request(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_SetPen_Request = (("B", "_r"), ("B", "_g"), ("B", "_b"), ("B", "_width"), ("B", "_off"))
+
+
 def _msg_SetPen_Request(d):
     o = 4
     t1 = _S4.unpack_from(d, o)
@@ -526,6 +530,10 @@ def _stamped_TeleportAbsolute_Request(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_TeleportAbsolute_Request = (("f", "_x"), ("f", "_y"), ("f", "_theta"))
+
+
 def _msg_TeleportAbsolute_Request(d):
     o = 4
     t1 = _S7.unpack_from(d, o)
@@ -667,6 +675,10 @@ def _stamped_TeleportRelative_Request(out, key, clock):
     return record
 
 
+# the same record for the C tap (llfsm/bag/_tap.c): (format, path) per item of the pack
+_TAP_TeleportRelative_Request = (("f", "_linear"), ("f", "_angular"))
+
+
 def _msg_TeleportRelative_Request(d):
     o = 4
     t1 = _S9.unpack_from(d, o)
@@ -765,7 +777,7 @@ def _from_TeleportRelative_Response(s):
 
 
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None)
+#          stamped records or None, the C tap's layout or None)
 CODECS = {
     "Kill_Request": (
         Kill_Request_,
@@ -775,6 +787,7 @@ CODECS = {
         _from_Kill_Request,
         _enc_Kill_Request,
         _dec_Kill_Request,
+        None,
         None,
     ),
     "Kill_Response": (
@@ -786,6 +799,7 @@ CODECS = {
         _enc_Kill_Response,
         _dec_Kill_Response,
         _stamped_Kill_Response,
+        None,
     ),
     "SetPen_Request": (
         SetPen_Request_,
@@ -796,6 +810,7 @@ CODECS = {
         _enc_SetPen_Request,
         _dec_SetPen_Request,
         _stamped_SetPen_Request,
+        _TAP_SetPen_Request,
     ),
     "SetPen_Response": (
         SetPen_Response_,
@@ -806,6 +821,7 @@ CODECS = {
         _enc_SetPen_Response,
         _dec_SetPen_Response,
         _stamped_SetPen_Response,
+        None,
     ),
     "Spawn_Request": (
         Spawn_Request_,
@@ -815,6 +831,7 @@ CODECS = {
         _from_Spawn_Request,
         _enc_Spawn_Request,
         _dec_Spawn_Request,
+        None,
         None,
     ),
     "Spawn_Response": (
@@ -826,6 +843,7 @@ CODECS = {
         _enc_Spawn_Response,
         _dec_Spawn_Response,
         None,
+        None,
     ),
     "TeleportAbsolute_Request": (
         TeleportAbsolute_Request_,
@@ -836,6 +854,7 @@ CODECS = {
         _enc_TeleportAbsolute_Request,
         _dec_TeleportAbsolute_Request,
         _stamped_TeleportAbsolute_Request,
+        _TAP_TeleportAbsolute_Request,
     ),
     "TeleportAbsolute_Response": (
         TeleportAbsolute_Response_,
@@ -846,6 +865,7 @@ CODECS = {
         _enc_TeleportAbsolute_Response,
         _dec_TeleportAbsolute_Response,
         _stamped_TeleportAbsolute_Response,
+        None,
     ),
     "TeleportRelative_Request": (
         TeleportRelative_Request_,
@@ -856,6 +876,7 @@ CODECS = {
         _enc_TeleportRelative_Request,
         _dec_TeleportRelative_Request,
         _stamped_TeleportRelative_Request,
+        _TAP_TeleportRelative_Request,
     ),
     "TeleportRelative_Response": (
         TeleportRelative_Response_,
@@ -866,6 +887,7 @@ CODECS = {
         _enc_TeleportRelative_Response,
         _dec_TeleportRelative_Response,
         _stamped_TeleportRelative_Response,
+        None,
     ),
 }
 # name -> the IdlStruct of rq/.../rr/... topics, with rmw_cyclonedds_cpp's request header
