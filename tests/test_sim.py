@@ -518,16 +518,49 @@ def random_strokes(kind: str) -> list[tuple[float, float, float, float, bytes, i
     return strokes
 
 
+@pytest.mark.parametrize("painter", ["python", "c"])
 @pytest.mark.parametrize("kind", ["short", "long", "axis", "edge", "steep"])
-def test_the_stroke_painter_paints_the_reference_pixels(kind: str) -> None:
+def test_the_stroke_painter_paints_the_reference_pixels(kind: str, painter: str) -> None:
+    """Both painters: the Python one, and the C one (llfsm/sim/_paint.c) that a world uses
+    where it is built; the C one takes every one of these strokes itself."""
     from llfsm.sim import world
 
     strokes = random_strokes(kind)
     mine, ref = bytearray(world._TRANSPARENT * 250_000), bytearray(world._TRANSPARENT * 250_000)
     for s in strokes:
-        world._fill_stroke(mine, *s)
+        if painter == "python":
+            world._fill_stroke(mine, *s)
+        else:
+            assert world._c_fill_stroke(mine, *s) is True, s
         _reference_fill(ref, *s)
         assert mine == ref, s
+
+
+def test_the_c_painter_is_built_and_leaves_the_unusual_to_python() -> None:
+    """setup.py builds it wherever a C compiler is.  Whatever is not an ordinary stroke on the
+    500 x 500 image it declines, painting nothing, and the Python painter does what it always
+    did with it (here: a ValueError from rounding a NaN)."""
+    from llfsm.sim import world
+
+    fill = world._c_fill_stroke
+    assert fill is not None, "llfsm/sim/_paint.c was not built: is gcc there? (pip install -e . says why)"
+    red = b"\xff\x00\x00\xff"
+    blank = bytes(world._TRANSPARENT * 250_000)
+    for buf, stroke in [
+        (bytearray(blank), (1e308, 5.0, -1e308, 5.0, red, 3)),  # its length overflows
+        (bytearray(blank), (10, 10.0, 20.0, 10.0, red, 3)),  # an int
+        (bytearray(blank), (10.0, 10.0, 20.0, 10.0, red[:3], 3)),  # not RGBA
+        (bytearray(blank), (10.0, 10.0, 20.0, 10.0, red, 2**40)),
+        (bytearray(100), (10.0, 10.0, 20.0, 10.0, red, 3)),  # another image
+    ]:
+        assert fill(buf, *stroke) is False
+        assert buf == (blank if len(buf) == len(blank) else bytearray(100))
+    with pytest.raises(ValueError):
+        world._fill_stroke(bytearray(blank), 1e308, 5.0, -1e308, 5.0, red, 3)
+    w = TurtleWorld()
+    w._strokes.append((1e308, 5.0, -1e308, 5.0, red, 3))
+    with pytest.raises(ValueError):  # a world hands it on to the Python painter
+        w.path_rgba()
 
 
 def test_a_turtle_standing_still_senses_what_is_drawn_under_it_and_the_new_background() -> None:

@@ -31,6 +31,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
+try:  # the stroke painter in C (setup.py builds it where a C compiler is; optional)
+    from ._paint import fill_stroke as _c_fill_stroke
+except ImportError:  # pragma: no cover - installs without a compiler
+    _c_fill_stroke = None
+
 __all__ = [
     "BACKGROUND",
     "CANVAS_PX",
@@ -488,8 +493,11 @@ class TurtleWorld:
         if self._rastered == len(strokes):
             return
         buf = self._raster
+        fill = _c_fill_stroke
         for i in range(self._rastered, len(strokes)):
-            _fill_stroke(buf, *strokes[i])
+            s = strokes[i]
+            if fill is None or not fill(buf, *s):
+                _fill_stroke(buf, *s)
         self._rastered = len(strokes)
 
     def _pixel(self, qx: float, qy: float) -> tuple[int, int, int]:
