@@ -16,7 +16,7 @@ from conftest import run_sim
 from test_bag import driver
 from test_dds_types import CLASSES, sample
 
-from llfsm.bag import typesupport
+from llfsm.bag import recorder, typesupport
 from llfsm.msgs import _dds
 from llfsm.msgs._message import Message
 
@@ -34,14 +34,30 @@ def test_the_c_tap_is_built() -> None:
     assert typesupport._Tap is not None, "llfsm/bag/_tap.c was not built: is gcc there? (pip install -e . says why)"
 
 
-def both(cls: type[Message], key: int = 7) -> tuple[Any, Any, bytearray, bytearray, Clock]:
-    """A C tap and a Python tap of `cls` on two bytearrays, sharing one clock."""
+class Out:
+    """What a tap appended: the C tap's Spool, or the Python tap's bytearray."""
+
+    def __init__(self, spool: Any) -> None:
+        self.spool, self.got = spool, bytearray()
+
+    def __call__(self) -> bytes:
+        """Everything appended so far."""
+        if isinstance(self.spool, bytearray):
+            self.got += self.spool
+            self.spool.clear()
+        else:
+            self.got += self.spool.take()
+        return bytes(self.got)
+
+
+def both(cls: type[Message], key: int = 7) -> tuple[Any, Any, Out, Out, Clock]:
+    """A C tap on a Spool and a Python tap on a bytearray, for `cls`, sharing one clock."""
     c = _dds.codec(cls)
     clock = Clock()
-    python_out, c_out = bytearray(), bytearray()
+    python_out, c_out = bytearray(), typesupport.Spool()
     python = c.stamped(python_out.extend, key, clock)
     tap = typesupport._Tap(c_out, key, clock, c.tap_layout, c.stamped(c_out.extend, key, clock))
-    return tap, python, c_out, python_out, clock
+    return tap, python, Out(c_out), Out(python_out), clock
 
 
 def test_every_fixed_size_message_has_a_layout_for_the_c_tap() -> None:
@@ -62,9 +78,9 @@ def test_the_c_tap_appends_what_the_python_tap_appends(cls: type[Message]) -> No
         clock.now = rng.choice([0, -(2**63), 2**63 - 1, n * 987_654_321])
         tap(msg)
         python(msg)
-        assert bytes(c_out) == bytes(python_out)
+        assert c_out() == python_out()
     assert tap.fallbacks == 0
-    assert len(c_out) == 40 * (16 + len(_dds.cdr(sample(cls, rng))))
+    assert len(c_out()) == 40 * (16 + len(_dds.cdr(sample(cls, rng))))
 
 
 def _odd_floats(msg: Message, rng: random.Random) -> None:
@@ -105,7 +121,7 @@ def test_a_value_struct_refuses_raises_the_same_error_and_appends_nothing() -> N
         with pytest.raises(type(python_error.value)) as c_error:
             tap(msg)
         assert str(c_error.value) == str(python_error.value), (cls, value)
-        assert c_out == python_out == b"", (cls, value)
+        assert c_out() == python_out() == b"", (cls, value)
         assert tap.fallbacks == 1
 
 
@@ -137,7 +153,7 @@ def test_values_the_python_tap_converts_go_through_it() -> None:
         object.__setattr__(msg, slot, value)
         tap(msg)
         python(msg)
-        assert bytes(c_out) == bytes(python_out), (cls, value)
+        assert c_out() == python_out(), (cls, value)
     ordinary = Twist()
     tap, python, c_out, python_out, _ = both(Twist)
     tap(ordinary)
@@ -145,7 +161,7 @@ def test_values_the_python_tap_converts_go_through_it() -> None:
     tap(ordinary)  # another class than the one it learnt: handed over
     python(Twist())
     python(ordinary)
-    assert bytes(c_out) == bytes(python_out)
+    assert c_out() == python_out()
     assert tap.fallbacks == 1
 
 
@@ -153,18 +169,42 @@ def test_a_bad_layout_is_refused_when_the_tap_is_made() -> None:
     tap = typesupport._Tap
     for layout in ((("z", "_x"),), (("d", ""),), (("2d", "_x"),), (("3x", "_x"),), (("d", "_a.._b"),), (("d",),)):
         with pytest.raises((ValueError, TypeError)):
-            tap(bytearray(), 1, Clock(), layout, print)
+            tap(typesupport.Spool(), 1, Clock(), layout, print)
     with pytest.raises(TypeError):
-        tap(b"not a bytearray", 1, Clock(), (("d", "_x"),), print)
+        tap(bytearray(), 1, Clock(), (("d", "_x"),), print)  # not a Spool
     with pytest.raises(ValueError):
-        tap(bytearray(), 2**32, Clock(), (("d", "_x"),), print)
+        tap(typesupport.Spool(), 2**32, Clock(), (("d", "_x"),), print)
+
+
+@pytest.mark.parametrize("spool", ["c", "python"])
+def test_a_spool_gives_what_was_appended_in_order_once(spool: str) -> None:
+    s = typesupport.Spool() if spool == "c" else typesupport.ByteSpool()
+    assert len(s) == 0 and s.take() == b""
+    chunks = [bytes([i % 256]) * (i * 37 % 5000) for i in range(300)]
+    got = b""
+    for i, chunk in enumerate(chunks):
+        s.extend(chunk)
+        s.extend(memoryview(chunk))
+        if i % 7 == 0:
+            assert len(s) > 0 or not chunk
+            got += s.take()
+            assert len(s) == 0
+    got += s.take()
+    assert got == b"".join(c + c for c in chunks)
+    s.extend(b"x" * (20 << 20))  # a burst past its usual size, then small batches again
+    assert s.take() == b"x" * (20 << 20)
+    s.extend(b"abc")
+    assert s.take() == b"abc"
+    with pytest.raises(TypeError):
+        s.extend("text")
 
 
 def test_a_recorded_run_gives_the_same_bag_with_either_tap(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     m = driver(tmp_path)
     bags = []
-    for run, tap in (("c", typesupport._Tap), ("python", None)):
+    for run, tap, spool in (("c", typesupport._Tap, typesupport.Spool), ("python", None, typesupport.ByteSpool)):
         monkeypatch.setattr(typesupport, "_Tap", tap)
+        monkeypatch.setattr(recorder, "Spool", spool)
         (tmp_path / run).mkdir()
         bag = tmp_path / run / "same"
         r = run_sim(m, "--node", "turtlesim", "--duration", "2s", "--record", bag)
@@ -182,4 +222,4 @@ def test_the_record_head_is_little_endian() -> None:
     msg = UInt8()
     msg.data = 9
     tap(msg)
-    assert bytes(c_out) == struct.pack("<IqI", 0x01020304, clock.now, 5) + b"\x00\x01\x00\x00\x09"
+    assert c_out() == struct.pack("<IqI", 0x01020304, clock.now, 5) + b"\x00\x01\x00\x00\x09"

@@ -1,13 +1,13 @@
-/* llfsm.bag._tap: the recorder's tap for a message of a fixed size, in C.
+/* llfsm.bag._tap: the recorder's tap for a message of a fixed size, and its buffer, in C.
  *
  * Why this exists: under --record every published message is appended to the recorder's
- * bytearray as one pipe record (uint32 key, int64 clock.now, uint32 size, the CDR with its
+ * buffer as one pipe record (uint32 key, int64 clock.now, uint32 size, the CDR with its
  * encapsulation header).  The generated Python function `_stamped_<Name>` does it in one
  * struct.pack, but on a busy bus that call is most of what recording costs a round (about
- * 0.2 us a message beside ~0.17 us per machine ringlet).  This type does the same work in
- * one C call: it reads the message's slots directly (at the offsets of the member descriptors
- * of the exact classes it saw first), packs with the struct module's own conversions
- * (PyFloat_Pack4/8, exact integer ranges) and appends to the bytearray.
+ * 0.2 us a message beside ~0.17 us per machine ringlet).  A Tap does the same work in one C
+ * call: it reads the message's slots directly (at the offsets of the member descriptors of
+ * the exact classes it saw first), packs as struct.pack does (the same integer ranges, the
+ * same float rounding) and appends to a Spool, which keeps its memory between batches.
  *
  * It never decides a message is wrong: whenever anything is not as expected (another class at
  * some level, an unset slot, a value struct.pack would refuse or convert some other way), it
@@ -22,10 +22,96 @@
 #include <Python.h>
 #include <structmember.h>
 #include <stdint.h>
+#include <math.h>
 #include <string.h>
 
 #define HEAD 16 /* uint32 key, int64 time, uint32 size */
 static const unsigned char CDR_LE[4] = {0, 1, 0, 0}; /* encapsulation: CDR, little endian */
+
+/* The recorder's buffer of pipe records: appended to by the taps (and the Python code for
+ * messages of varying size) in the run's thread, taken whole by the recorder's sending thread
+ * (both under the GIL).  Unlike a bytearray it keeps its memory between batches, so the pages
+ * are not faulted in again each time, and a batch leaves it in one copy. */
+typedef struct {
+    PyObject_HEAD
+    char *data;
+    Py_ssize_t len, cap;
+} SpoolObject;
+
+static PyTypeObject SpoolType;
+
+/* Room for `n` more bytes at data + len; -1 with MemoryError set. */
+static int spool_reserve(SpoolObject *s, Py_ssize_t n) {
+    if (s->cap - s->len >= n) return 0;
+    if (n > PY_SSIZE_T_MAX / 2 - s->len) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    Py_ssize_t cap = s->cap ? s->cap : 1 << 16;
+    while (cap - s->len < n) cap *= 2;
+    char *data = PyMem_Realloc(s->data, (size_t)cap);
+    if (data == NULL) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    s->data = data;
+    s->cap = cap;
+    return 0;
+}
+
+static PyObject *spool_extend(SpoolObject *s, PyObject *arg) {
+    Py_buffer view;
+    if (PyObject_GetBuffer(arg, &view, PyBUF_SIMPLE) < 0) return NULL;
+    if (spool_reserve(s, view.len) < 0) {
+        PyBuffer_Release(&view);
+        return NULL;
+    }
+    memcpy(s->data + s->len, view.buf, (size_t)view.len);
+    s->len += view.len;
+    PyBuffer_Release(&view);
+    Py_RETURN_NONE;
+}
+
+static PyObject *spool_take(SpoolObject *s, PyObject *Py_UNUSED(ignored)) {
+    PyObject *batch = PyBytes_FromStringAndSize(s->data, s->len);
+    if (batch == NULL) return NULL;
+    s->len = 0;
+    if (s->cap > (1 << 23) && PyBytes_GET_SIZE(batch) < s->cap / 4) { /* a burst is over: give half back */
+        char *data = PyMem_Realloc(s->data, (size_t)(s->cap / 2));
+        if (data != NULL) {
+            s->data = data;
+            s->cap /= 2;
+        }
+    }
+    return batch;
+}
+
+static Py_ssize_t spool_length(SpoolObject *s) { return s->len; }
+
+static void spool_dealloc(SpoolObject *s) {
+    PyMem_Free(s->data);
+    Py_TYPE(s)->tp_free((PyObject *)s);
+}
+
+static PyMethodDef spool_methods[] = {
+    {"extend", (PyCFunction)spool_extend, METH_O, "Append the bytes of a bytes-like object."},
+    {"take", (PyCFunction)spool_take, METH_NOARGS, "Everything waiting, as bytes, leaving the spool empty."},
+    {NULL},
+};
+
+static PySequenceMethods spool_as_sequence = {.sq_length = (lenfunc)spool_length};
+
+static PyTypeObject SpoolType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "llfsm.bag._tap.Spool",
+    .tp_doc = PyDoc_STR("Spool(): the recorder's buffer of pipe records (extend, take, len)."),
+    .tp_basicsize = sizeof(SpoolObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_new = PyType_GenericNew,
+    .tp_dealloc = (destructor)spool_dealloc,
+    .tp_methods = spool_methods,
+    .tp_as_sequence = &spool_as_sequence,
+};
 
 typedef struct {
     char code;            /* one of ? b B h H i I q Q f d x */
@@ -40,7 +126,7 @@ typedef struct {
 typedef struct {
     PyObject_HEAD
     vectorcallfunc vectorcall;
-    PyObject *out;      /* the recorder's bytearray */
+    SpoolObject *out;   /* the recorder's spool */
     PyObject *clock;    /* anything with an int `now` */
     PyObject *fallback; /* the generated Python tap: same bytes, or the error */
     uint32_t key;
@@ -48,7 +134,6 @@ typedef struct {
     Py_ssize_t nitems;
     Item *items;
     int resolved;       /* 0 not yet, 1 yes, -1 never (always the fallback) */
-    unsigned char *buf; /* HEAD + size */
     unsigned long long fallbacks; /* calls handed to the fallback (tests read it) */
 } TapObject;
 
@@ -85,7 +170,18 @@ static int put_value(char code, PyObject *v, unsigned char *p) {
             if (x == -1.0 && PyErr_Occurred()) goto error;
         } else
             return -1;
+#if PY_LITTLE_ENDIAN
+        /* what PyFloat_Pack8/4(x, p, 1) do on a little-endian IEEE machine, without the calls */
+        if (code == 'd') {
+            memcpy(p, &x, 8);
+        } else {
+            float y = (float)x;
+            if (isinf(y) && !isinf(x)) return -1; /* struct: "float too large to pack with f format" */
+            memcpy(p, &y, 4);
+        }
+#else
         if ((code == 'd' ? PyFloat_Pack8(x, (char *)p, 1) : PyFloat_Pack4(x, (char *)p, 1)) < 0) goto error;
+#endif
         return 0;
     }
     if (code == '?') {
@@ -203,7 +299,7 @@ static PyObject *tap_vectorcall(PyObject *callable, PyObject *const *args, size_
     }
     PyObject *m = args[0];
     if (self->resolved == 0) self->resolved = resolve(self, m) == 0 ? 1 : -1;
-    if (self->resolved < 0 || pack_body(self, m, self->buf + HEAD + 4) < 0) return tap_fallback(self, m);
+    if (self->resolved < 0) return tap_fallback(self, m);
 
     PyObject *now = PyObject_GetAttr(self->clock, str_now);
     if (now == NULL) return NULL;
@@ -215,13 +311,16 @@ static PyObject *tap_vectorcall(PyObject *callable, PyObject *const *args, size_
         PyErr_Clear();
         return tap_fallback(self, m);
     }
-    put_u32(self->buf, self->key);
-    put_u64(self->buf + 4, (uint64_t)t);
-    put_u32(self->buf + 12, self->size);
-
-    Py_ssize_t total = HEAD + self->size, n = PyByteArray_GET_SIZE(self->out);
-    if (PyByteArray_Resize(self->out, n + total) < 0) return NULL;
-    memcpy(PyByteArray_AS_STRING(self->out) + n, self->buf, (size_t)total);
+    SpoolObject *out = self->out;
+    Py_ssize_t total = HEAD + self->size;
+    if (spool_reserve(out, total) < 0) return NULL;
+    unsigned char *p = (unsigned char *)out->data + out->len; /* committed only when whole */
+    if (pack_body(self, m, p + HEAD + 4) < 0) return tap_fallback(self, m);
+    put_u32(p, self->key);
+    put_u64(p + 4, (uint64_t)t);
+    put_u32(p + 12, self->size);
+    memcpy(p + HEAD, CDR_LE, 4);
+    out->len += total;
     Py_RETURN_NONE;
 }
 
@@ -277,7 +376,7 @@ static int tap_init(TapObject *self, PyObject *args, PyObject *kwds) {
     static char *kwlist[] = {"out", "key", "clock", "layout", "fallback", NULL};
     PyObject *out, *clock, *layout, *fallback;
     unsigned long key;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O!kOO!O:Tap", kwlist, &PyByteArray_Type, &out, &key, &clock,
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O!kOO!O:Tap", kwlist, &SpoolType, &out, &key, &clock,
                                      &PyTuple_Type, &layout, &fallback))
         return -1;
     if (!PyCallable_Check(fallback) || key > UINT32_MAX) {
@@ -326,15 +425,8 @@ static int tap_init(TapObject *self, PyObject *args, PyObject *kwds) {
         return -1;
     }
     Py_ssize_t size = 4 + body;
-    PyMem_Free(self->buf);
-    self->buf = PyMem_Malloc(HEAD + size);
-    if (self->buf == NULL) {
-        PyErr_NoMemory();
-        return -1;
-    }
-    memcpy(self->buf + HEAD, CDR_LE, 4);
     Py_INCREF(out);
-    Py_XSETREF(self->out, out);
+    Py_XSETREF(self->out, (SpoolObject *)out);
     Py_INCREF(clock);
     Py_XSETREF(self->clock, clock);
     Py_INCREF(fallback);
@@ -347,7 +439,7 @@ static int tap_init(TapObject *self, PyObject *args, PyObject *kwds) {
 }
 
 static int tap_traverse(TapObject *self, visitproc visit, void *arg) {
-    Py_VISIT(self->out);
+    Py_VISIT((PyObject *)self->out);
     Py_VISIT(self->clock);
     Py_VISIT(self->fallback);
     return 0;
@@ -364,7 +456,6 @@ static void tap_dealloc(TapObject *self) {
     PyObject_GC_UnTrack(self);
     tap_clear(self);
     free_items(self);
-    PyMem_Free(self->buf);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -381,7 +472,7 @@ static PyTypeObject TapType = {
     PyVarObject_HEAD_INIT(NULL, 0)
     .tp_name = "llfsm.bag._tap.Tap",
     .tp_doc = PyDoc_STR("Tap(out, key, clock, layout, fallback): appends a fixed-size message's pipe record "
-                        "to the bytearray `out`, as the generated _stamped_<Name> does."),
+                        "to the Spool `out`, as the generated _stamped_<Name> does."),
     .tp_basicsize = sizeof(TapObject),
     .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
     .tp_new = PyType_GenericNew,
@@ -403,12 +494,18 @@ static struct PyModuleDef tapmodule = {
 
 PyMODINIT_FUNC PyInit__tap(void) {
     str_now = PyUnicode_InternFromString("now");
-    if (str_now == NULL || PyType_Ready(&TapType) < 0) return NULL;
+    if (str_now == NULL || PyType_Ready(&TapType) < 0 || PyType_Ready(&SpoolType) < 0) return NULL;
     PyObject *m = PyModule_Create(&tapmodule);
     if (m == NULL) return NULL;
     Py_INCREF(&TapType);
     if (PyModule_AddObject(m, "Tap", (PyObject *)&TapType) < 0) {
         Py_DECREF(&TapType);
+        Py_DECREF(m);
+        return NULL;
+    }
+    Py_INCREF(&SpoolType);
+    if (PyModule_AddObject(m, "Spool", (PyObject *)&SpoolType) < 0) {
+        Py_DECREF(&SpoolType);
         Py_DECREF(m);
         return NULL;
     }

@@ -4,18 +4,19 @@ The recorder taps the bus (`Bus.add_tap`): a tap on every topic (`Topic.taps`), 
 and those made later, like `ros2 bag record -a`.  (On the DDS transport it subscribes to each
 topic instead, so that what other processes publish is recorded too.)  A tap is handed the
 published message itself, not the copy a subscription gets: its encoding is the snapshot.
-Delivery costs the round one call of the generated `_stamped_<Name>` function where the message
-has a fixed size (a Twist, a Pose: one `struct.pack` of the pipe record's head and the CDR
-together, and one extend of a bytearray), or the message's CDR encoding, the head (one more
-pack) and the extend where it does not.  Whole records only are appended, so that a run
+Delivery costs the round one C call where the message has a fixed size (a Twist, a Pose: the
+tap of llfsm/bag/_tap.c reads the message's slots and appends the pipe record, head and CDR, to
+the recorder's Spool; where the C part is not built, the generated `_stamped_<Name>` does the
+same with one `struct.pack`), or the message's CDR encoding, the head (one more pack) and an
+extend of the Spool where it does not.  Whole records only are appended, so that a run
 stopped by a signal mid-message leaves none half-written: no object waits per message, and
-nothing else happens per message in this process.  A thread of the run takes what the
-bytearray holds in batches and writes it to the bag writer process (`_writer_process`), which
-writes the bag on another core: neither the disk nor the storage libraries hold up a round.
+nothing else happens per message in this process.  A thread of the run takes what the Spool
+holds in batches and writes it to the bag writer process (`_writer_process`), which writes the
+bag on another core: neither the disk nor the storage libraries hold up a round.
 A topic is described to the writer (definition, type hash, QoS) once, by the thread; the
 writer makes its connection when the topic's first message comes, so connections and their
 ids follow the order of first messages, as the same run always has them.  The thread holds
-the interpreter only to copy the bytes waiting and cut them off (two C calls, nothing per
+the interpreter only to take the bytes waiting (one C call and one copy, nothing per
 message); it writes with the GIL released, and the writer process runs at a lower priority
 than the run.
 
@@ -36,7 +37,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 from ._writer_process import FRAME, RECORD
 from .errors import BagError
-from .typesupport import TypeSupport, loaded_message_classes, preload_native
+from .typesupport import Spool, TypeSupport, loaded_message_classes, preload_native
 from .writer import qos_profile
 
 if TYPE_CHECKING:
@@ -89,9 +90,9 @@ class Recorder:
         self.path = path
         self.types = TypeSupport()
         # the messages' pipe records (RECORD header, CDR bytes), appended by the run's thread,
-        # taken from the front by the sending thread: a bytearray's extend, slice and front
-        # deletion are each atomic under the GIL (and cheap: no object per message).
-        self.records = bytearray()
+        # taken whole by the sending thread: each append and each take is one C call, atomic
+        # under the GIL (and cheap: no object per message).
+        self.records = Spool()
         self._ids: dict[Topic, int] = {}
         self._undescribed: list[tuple[int, Topic]] = []  # topics the writer has not heard of
         self.clock: Any = None
@@ -232,7 +233,7 @@ class Recorder:
         ctx.wake_at(self.clock.now + CHECK_NS)
 
     # -- the sending thread -------------------------------------------------------------------------
-    def _send(self, kind: bytes, payload: bytes) -> None:
+    def _send(self, kind: bytes, payload: bytes | memoryview) -> None:
         self._pipe.write(FRAME.pack(kind, len(payload)))
         self._pipe.write(payload)
 
@@ -254,12 +255,11 @@ class Recorder:
             self._detach()  # the writer has gone (its reply says why)
 
     def _drain(self) -> None:
-        """Send every byte waiting, taken from the front of the bytearray all at once."""
+        """Send every byte waiting, taken all at once (one copy), in pieces of the one copy."""
         records = self.records
-        n = len(records)
-        batch = records[:n]
-        self._in_flight = n  # counted before the cut, so the run never misses these bytes
-        del records[:n]
+        self._in_flight = len(records)  # counted before the take, so the run never misses these bytes
+        batch = memoryview(records.take())
+        n = self._in_flight = len(batch)
         # after taking the batch: every topic with a record in it is in the list by now
         if self._undescribed:
             self._describe()
@@ -337,7 +337,7 @@ class Recorder:
             if tap in topic.taps:
                 topic.taps.remove(tap)
         self._taps.clear()
-        del self.records[:]
+        self.records.take()  # dropped: the writer has gone
 
     # -- the end -----------------------------------------------------------------------------------
     def close(self) -> str | None:

@@ -33,10 +33,24 @@ if TYPE_CHECKING:
 
     from rosbags.typesys.store import Typestore
 
-try:  # the recorder's tap in C (setup.py builds it where a C compiler is; optional)
+
+class ByteSpool(bytearray):
+    """The recorder's buffer where the C one (llfsm.bag._tap.Spool) is not built: a bytearray
+    that gives away what it holds, as the C one does."""
+
+    def take(self) -> bytes:
+        batch = bytes(self)  # one C call: atomic under the GIL, as the deletion is
+        del self[: len(batch)]  # not more: the run's thread may have appended in between
+        return batch
+
+
+# The recorder's tap and buffer in C (setup.py builds them where a C compiler is; optional).
+Spool: Any
+try:
+    from ._tap import Spool
     from ._tap import Tap as _Tap
 except ImportError:  # pragma: no cover - installs without a compiler
-    _Tap = None
+    Spool, _Tap = ByteSpool, None
 
 DELIMITER = "=" * 80 + "\n"
 _MSG_FIELD_TYPE = re.compile(r"(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+")
@@ -164,8 +178,8 @@ class TypeSupport:
         return fn
 
     @staticmethod
-    def stamped(cls: type[Message]) -> Callable[[bytearray, int, Any], Callable[[Any], None]] | None:
-        """What makes a recorder's tap for a fixed-size message, `(records, key, clock) -> tap`:
+    def stamped(cls: type[Message]) -> Callable[[Any, int, Any], Callable[[Any], None]] | None:
+        """What makes a recorder's tap for a fixed-size message, `(spool, key, clock) -> tap`:
         the C tap (llfsm.bag._tap) where it is built, else the generated
         `_stamped_<Name>(out, key, clock)` (one pack of the record head and the CDR together).
         Both append the same bytes; the C tap hands anything unusual to the Python one.  None
@@ -178,7 +192,7 @@ class TypeSupport:
             return lambda records, key, clock: python(records.extend, key, clock)  # type: ignore[no-any-return]
         tap = _Tap
 
-        def make(records: bytearray, key: int, clock: Any) -> Callable[[Any], None]:
+        def make(records: Any, key: int, clock: Any) -> Callable[[Any], None]:
             return tap(records, key, clock, layout, python(records.extend, key, clock))  # type: ignore[no-any-return]
 
         return make
