@@ -276,7 +276,12 @@ def main() -> None:
     args = ap.parse_args()
     os.environ.setdefault("LLFSM_CACHE_DIR", tempfile.mkdtemp(prefix="llfsm-bench-cache-"))
     stamp = time.strftime("%Y-%m-%d")
-    print(f"llfsm bag benchmarks: Python {platform.python_version()}, {os.cpu_count()} CPUs, {stamp}\n")
+    from llfsm.bag import typesupport
+    from llfsm.sim import world
+
+    built = {"the recorder's tap": typesupport._Tap is not None, "the stroke painter": world._c_fill_stroke is not None}
+    parts = ", ".join(f"{name} {'in C' if c else 'in Python (the C part is not built)'}" for name, c in built.items())
+    print(f"llfsm bag benchmarks: Python {platform.python_version()}, {os.cpu_count()} CPUs, {stamp}; {parts}\n")
     with tempfile.TemporaryDirectory(prefix="llfsm-bench-bag-") as tmp:
         for section in (section_recording, section_writers):
             folder = Path(tmp) / section.__name__
