@@ -6,9 +6,12 @@ import importlib
 import math
 import sys
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from pathlib import Path
 
+import hypothesis
 import pytest
+from hypothesis import strategies as st
 from PIL import Image
 
 from llfsm.sim import draw
@@ -581,3 +584,33 @@ def test_a_turtle_standing_still_senses_what_is_drawn_under_it_and_the_new_backg
         w.update(now, sense=True)
         seen.append(w.color_under("turtle1"))
     assert seen[0] == (1, 2, 3) and seen[-1] == (200, 0, 0)
+
+
+@hypothesis.settings(max_examples=300, deadline=None)
+@hypothesis.given(
+    ends=st.tuples(*[st.floats(allow_nan=True, allow_infinity=True, width=64)] * 4)
+    | st.tuples(*[st.floats(min_value=-600.0, max_value=600.0)] * 4),
+    width=st.integers(min_value=0, max_value=40),
+)
+def test_the_c_painter_paints_or_fails_as_the_reference_on_any_floats(
+    ends: tuple[float, float, float, float], width: int
+) -> None:
+    """Any four floats (huge, tiny, infinite, NaN): the world's painter (C, handing what it
+    declines to Python) leaves the same pixels as the reference and fails where it fails."""
+    from llfsm.sim import world
+
+    rgba = b"\x10\x20\x30\xff"
+
+    def paint(fill: Callable[..., object]) -> tuple[bytes, str | None]:
+        buf = bytearray(world._TRANSPARENT * 250_000)
+        try:
+            fill(buf, *ends, rgba, width)
+        except (ValueError, OverflowError) as e:
+            return bytes(buf), type(e).__name__
+        return bytes(buf), None
+
+    def c_then_python(buf: bytearray, *stroke: object) -> None:
+        if not world._c_fill_stroke(buf, *stroke):
+            world._fill_stroke(buf, *stroke)
+
+    assert paint(c_then_python) == paint(_reference_fill)
