@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 PIP := $(PY) -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint fuzz bench clean msgs ros-venv chromium
+.PHONY: demo test lint fuzz bench clean msgs ros-venv chromium asan
 
 # Real ROS 2 for the interop tests (pytest -m interop): rclpy, message packages and Fast DDS as
 # wheels from PyPI, in a virtualenv of their own (they bring numpy, lark, empy...).  There is
@@ -69,6 +69,20 @@ test: $(VENV)/.installed-dev lint ros-venv chromium
 
 fuzz: $(VENV)/.installed-dev
 	$(PY) -m pytest -q -m slow tests
+
+# The C parts (setup.py) built with AddressSanitizer and UBSan into a copy of the tree, and the
+# tests that drive them run against those builds.  Not part of `make test`: run it after
+# changing a .c file.
+ASAN_TESTS := tests/test_bag_tap.py tests/test_sim.py tests/test_bag.py tests/test_turtlesim_node.py
+asan: $(VENV)/.installed-dev
+	rm -rf build/asan && git clone -q . build/asan && cp llfsm/bag/_tap.c build/asan/llfsm/bag/ && cp llfsm/sim/_paint.c build/asan/llfsm/sim/
+	for m in bag/_tap sim/_paint; do \
+		gcc -g -O1 -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer \
+			-ffp-contract=off -fPIC -shared -I"$$($(PY) -c 'import sysconfig; print(sysconfig.get_paths()["include"])')" \
+			build/asan/llfsm/$$m.c -o build/asan/llfsm/$$m$$($(PY) -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))') || exit 1; \
+	done
+	cd build/asan && LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libubsan.so)" \
+		ASAN_OPTIONS=detect_leaks=0 PYTHONMALLOC=malloc PYTHONPATH=. ../../$(PY) -m pytest -q -p no:cacheprovider $(ASAN_TESTS)
 
 bench: $(VENV)/.installed-bench
 	$(PY) bench/run.py

@@ -66,8 +66,10 @@ static PyObject *spool_extend(SpoolObject *s, PyObject *arg) {
         PyBuffer_Release(&view);
         return NULL;
     }
-    memcpy(s->data + s->len, view.buf, (size_t)view.len);
-    s->len += view.len;
+    if (view.len > 0) { /* (a fresh spool has no memory yet) */
+        memcpy(s->data + s->len, view.buf, (size_t)view.len);
+        s->len += view.len;
+    }
     PyBuffer_Release(&view);
     Py_RETURN_NONE;
 }
