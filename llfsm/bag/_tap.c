@@ -288,6 +288,19 @@ static int pack_body(TapObject *self, PyObject *m, unsigned char *p) {
     return 0;
 }
 
+/* clock.now as an int64: 1; 0 (no error set) if it is not an int that fits; -1 if reading it
+ * raised. */
+static int read_now(PyObject *clock, long long *t) {
+    PyObject *now = PyObject_GetAttr(clock, str_now);
+    if (now == NULL) return -1;
+    int overflow = 0;
+    *t = PyLong_Check(now) ? PyLong_AsLongLongAndOverflow(now, &overflow) : 0;
+    int fits = PyLong_Check(now) && !overflow && !(*t == -1 && PyErr_Occurred());
+    Py_DECREF(now);
+    PyErr_Clear();
+    return fits;
+}
+
 static PyObject *tap_fallback(TapObject *self, PyObject *m) {
     self->fallbacks++;
     return PyObject_CallOneArg(self->fallback, m);
@@ -303,16 +316,10 @@ static PyObject *tap_vectorcall(PyObject *callable, PyObject *const *args, size_
     if (self->resolved == 0) self->resolved = resolve(self, m) == 0 ? 1 : -1;
     if (self->resolved < 0) return tap_fallback(self, m);
 
-    PyObject *now = PyObject_GetAttr(self->clock, str_now);
-    if (now == NULL) return NULL;
-    int overflow = 0;
-    long long t = PyLong_Check(now) ? PyLong_AsLongLongAndOverflow(now, &overflow) : 0;
-    int plain = PyLong_Check(now) && !overflow && !(t == -1 && PyErr_Occurred());
-    Py_DECREF(now);
-    if (!plain) {
-        PyErr_Clear();
-        return tap_fallback(self, m);
-    }
+    long long t;
+    int got = read_now(self->clock, &t);
+    if (got < 0) return NULL;
+    if (got == 0) return tap_fallback(self, m);
     SpoolObject *out = self->out;
     Py_ssize_t total = HEAD + self->size;
     if (spool_reserve(out, total) < 0) return NULL;
@@ -374,6 +381,35 @@ static int split_path(const char *path, Item *it) {
     return 0;
 }
 
+/* One ("36d", "*_covariance") pair of a layout into `it`: the bytes it packs, or -1 with
+ * TypeError/ValueError set. */
+static Py_ssize_t parse_item(PyObject *pair, Item *it) {
+    const char *fmt, *path;
+    if (!PyTuple_Check(pair) || !PyArg_ParseTuple(pair, "ss", &fmt, &path)) {
+        if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "a tap item is a (format, path) tuple");
+        return -1;
+    }
+    Py_ssize_t count = 0;
+    const char *c = fmt;
+    for (; *c >= '0' && *c <= '9' && count <= (1 << 20); c++) count = count * 10 + (*c - '0');
+    if (c == fmt) count = 1;
+    if (count < 1 || count > (1 << 20) || item_width(c[0]) < 0 || c[1] != '\0') {
+        PyErr_Format(PyExc_ValueError, "a tap item's format must be [count]code: %s", fmt);
+        return -1;
+    }
+    it->code = c[0];
+    it->count = count;
+    it->starred = path[0] == '*';
+    if (it->starred) path++;
+    if ((it->code == 'x') != (path[0] == '\0') || (it->code == 'x' && it->starred)
+        || (count > 1 && it->code != 'x' && !it->starred)) {
+        PyErr_Format(PyExc_ValueError, "a tap item's path does not fit its format %s: %s", fmt, path);
+        return -1;
+    }
+    if (split_path(path, it) < 0) return -1;
+    return count * item_width(it->code);
+}
+
 static int tap_init(TapObject *self, PyObject *args, PyObject *kwds) {
     static char *kwlist[] = {"out", "key", "clock", "layout", "fallback", NULL};
     PyObject *out, *clock, *layout, *fallback;
@@ -385,6 +421,7 @@ static int tap_init(TapObject *self, PyObject *args, PyObject *kwds) {
         PyErr_SetString(PyExc_ValueError, "Tap(out, key < 2**32, clock, layout, fallback: a callable)");
         return -1;
     }
+    self->vectorcall = NULL; /* not callable again until the new layout is whole */
     free_items(self);
     Py_ssize_t n = PyTuple_GET_SIZE(layout);
     self->items = PyMem_Calloc((size_t)(n ? n : 1), sizeof(Item));
@@ -395,32 +432,9 @@ static int tap_init(TapObject *self, PyObject *args, PyObject *kwds) {
     self->nitems = n;
     Py_ssize_t body = 0;
     for (Py_ssize_t i = 0; i < n; i++) {
-        Item *it = &self->items[i];
-        const char *fmt, *path;
-        PyObject *pair = PyTuple_GET_ITEM(layout, i);
-        if (!PyTuple_Check(pair) || !PyArg_ParseTuple(pair, "ss", &fmt, &path)) {
-            if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "a tap item is a (format, path) tuple");
-            return -1;
-        }
-        Py_ssize_t count = 0;
-        const char *c = fmt;
-        for (; *c >= '0' && *c <= '9' && count <= (1 << 20); c++) count = count * 10 + (*c - '0');
-        if (c == fmt) count = 1;
-        if (count < 1 || count > (1 << 20) || item_width(c[0]) < 0 || c[1] != '\0') {
-            PyErr_Format(PyExc_ValueError, "a tap item's format must be [count]code: %s", fmt);
-            return -1;
-        }
-        it->code = c[0];
-        it->count = count;
-        it->starred = path[0] == '*';
-        if (it->starred) path++;
-        if ((it->code == 'x') != (path[0] == '\0') || (it->code == 'x' && it->starred)
-            || (count > 1 && it->code != 'x' && !it->starred)) {
-            PyErr_Format(PyExc_ValueError, "a tap item's path does not fit its format %s: %s", fmt, path);
-            return -1;
-        }
-        if (split_path(path, it) < 0) return -1;
-        body += count * item_width(it->code);
+        Py_ssize_t bytes = parse_item(PyTuple_GET_ITEM(layout, i), &self->items[i]);
+        if (bytes < 0) return -1;
+        body += bytes;
     }
     if (body > (1 << 24)) {
         PyErr_SetString(PyExc_ValueError, "a tap's layout is larger than 16 MiB");

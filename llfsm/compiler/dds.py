@@ -693,7 +693,7 @@ def _class_line(cls: str, type_name: str) -> str:
     return layout("class ", Call(cls, ["_IdlStruct", f"typename={_str_literal(dds_name(type_name))}"]), ":", 0)
 
 
-_TAP_ARG = re.compile(r"\*?m((?:\._\w+)+)")
+_TAP_ARG = re.compile(r"(\*?)m\.(_\w+(?:\._\w+)*)")
 
 
 def _tap_layout(name: str, fmt: list[str], args: list[str]) -> str | None:
@@ -710,8 +710,7 @@ def _tap_layout(name: str, fmt: list[str], args: list[str]) -> str | None:
         m = _TAP_ARG.fullmatch(next(values))
         if m is None:
             return None
-        star = "*" if m.group(0).startswith("*") else ""
-        items.append(f"({_str_literal(piece)}, {_str_literal(star + m.group(1)[1:])})")
+        items.append(f"({_str_literal(piece)}, {_str_literal(m.group(1) + m.group(2))})")
     if len(items) == 1:
         return f"_TAP_{name} = ({items[0]},)"
     return layout(f"_TAP_{name} = ", Call("", items), "", 0, atom=True)

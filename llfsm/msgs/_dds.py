@@ -55,7 +55,8 @@ class Codec(NamedTuple):
     # <uint32 key><int64 clock.now><uint32 size>; None where the size varies (or in a module
     # generated before it existed)
     stamped: Any = None
-    # the same record as ((format, path), ...) for llfsm.bag._tap.Tap; None where `stamped` is
+    # the same record as ((format, path), ...) for llfsm.bag._tap.Tap; None where `stamped` is,
+    # and for a message without fields (its CDR is a constant byte)
     tap_layout: Any = None
 
 

@@ -34,6 +34,19 @@ static int py_hypot(double dx, double dy, double *out) {
     return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
 }
 
+/* max(0, ceil(v)) and min(CANVAS_PX - 1, ceil(v) - 1) as the Python painter has them, for a
+ * finite v, held within -1..CANVAS_PX (beyond, a span is empty all the same) so that the
+ * conversion to long cannot overflow. */
+static long first_index(double v) {
+    double f = ceil(v);
+    return f < 0 ? 0 : (f > CANVAS_PX ? CANVAS_PX : (long)f);
+}
+
+static long last_index(double v) {
+    double f = ceil(v) - 1;
+    return f > CANVAS_PX - 1 ? CANVAS_PX - 1 : (f < -1 ? -1 : (long)f);
+}
+
 static PyObject *fill_stroke(PyObject *module, PyObject *const *args, Py_ssize_t nargs) {
     if (nargs != 7) {
         PyErr_SetString(PyExc_TypeError, "fill_stroke(buf, x0, y0, x1, y1, rgba, width)");
@@ -74,9 +87,7 @@ static PyObject *fill_stroke(PyObject *module, PyObject *const *args, Py_ssize_t
     double ey = fabs(uy) * along + fabs(ux) * half;
     double top = cy - ey - 0.5, bottom = cy + ey - 0.5;
     if (!isfinite(top) || !isfinite(bottom)) Py_RETURN_FALSE; /* math.ceil would raise */
-    double fj0 = ceil(top), fj1 = ceil(bottom) - 1;
-    long j0 = fj0 < 0 ? 0 : (fj0 > CANVAS_PX ? CANVAS_PX : (long)fj0);
-    long j1 = fj1 > CANVAS_PX - 1 ? CANVAS_PX - 1 : (fj1 < -1 ? -1 : (long)fj1);
+    long j0 = first_index(top), j1 = last_index(bottom);
 
     /* Every row's span first, painting nothing until all are known to be ordinary. */
     long spans[CANVAS_PX][2];
@@ -112,9 +123,7 @@ static PyObject *fill_stroke(PyObject *module, PyObject *const *args, Py_ssize_t
         }
         double left = cx + xl - 0.5, right = cx + xr - 0.5;
         if (!isfinite(left) || !isfinite(right)) Py_RETURN_FALSE;
-        double fi0 = ceil(left), fi1 = ceil(right) - 1;
-        long i0 = fi0 < 0 ? 0 : (fi0 > CANVAS_PX ? CANVAS_PX : (long)fi0);
-        long i1 = fi1 > CANVAS_PX - 1 ? CANVAS_PX - 1 : (fi1 < -1 ? -1 : (long)fi1);
+        long i0 = first_index(left), i1 = last_index(right);
         if (i0 <= i1) {
             spans[rows][0] = j * CANVAS_PX + i0;
             spans[rows][1] = i1 - i0 + 1;
