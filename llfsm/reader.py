@@ -229,37 +229,21 @@ class _Reader:
     # -- yaml ----------------------------------------------------------------------------
     def yaml_tree(self, text: str) -> yaml.Node | None:
         name = "machine.yaml"
-        depth = 0
         try:
-            for ev in yaml.parse(text, Loader=YAML_LOADER):
-                if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
-                    m = ev.start_mark
-                    self.report(
-                        "LF005", name, m.line + 1, m.column + 1, "anchors and aliases are not allowed in machine.yaml"
-                    )
-                    return None
-                if isinstance(ev, yaml.CollectionStartEvent):
-                    depth += 1
-                    if depth > MAX_YAML_DEPTH:
-                        m = ev.start_mark
-                        self.report(
-                            "LF004",
-                            name,
-                            m.line + 1,
-                            m.column + 1,
-                            f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels",
-                        )
-                        return None
-                elif isinstance(ev, yaml.CollectionEndEvent):
-                    depth -= 1
-            node = yaml.compose(text, Loader=YAML_LOADER)
+            refusal = _structure_refusal(text, YAML_LOADER)
+            node = yaml.compose(text, Loader=YAML_LOADER) if refusal is None else None
         except yaml.MarkedYAMLError as e:
-            m = e.problem_mark or e.context_mark
-            line, col = (m.line + 1, m.column + 1) if m else (1, 1)
-            self.report("LF003", name, line, col, f"invalid YAML: {e.problem or e.context}")
-            return None
+            refusal = _library_limit(text, e)
+            if refusal is None:
+                m = e.problem_mark or e.context_mark
+                line, col = (m.line + 1, m.column + 1) if m else (1, 1)
+                self.report("LF003", name, line, col, f"invalid YAML: {e.problem or e.context}")
+                return None
         except (yaml.YAMLError, RecursionError) as e:
             self.report("LF003", name, 1, 1, f"invalid YAML: {type(e).__name__}")
+            return None
+        if refusal is not None:
+            self.report(refusal[0], name, refusal[1], refusal[2], refusal[3])
             return None
         return node
 
@@ -548,3 +532,49 @@ def _describe(stmt: ast.stmt) -> str:
     if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant) and isinstance(stmt.value.value, str):
         return "a string"
     return f"a `{type(stmt).__name__.lower()}` statement"
+
+
+_Refusal = tuple[str, int, int, str]
+
+
+def _structure_refusal(text: str, loader: type) -> _Refusal | None:
+    """(code, line, column, message) when machine.yaml uses anchors or nests too deep, found on
+    the event stream, before any tree is built: composing a 5,000-deep document would recurse."""
+    depth = 0
+    for ev in yaml.parse(text, Loader=loader):
+        if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
+            m = ev.start_mark
+            return "LF005", m.line + 1, m.column + 1, "anchors and aliases are not allowed in machine.yaml"
+        if isinstance(ev, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_YAML_DEPTH:
+                m = ev.start_mark
+                return "LF004", m.line + 1, m.column + 1, f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels"
+        elif isinstance(ev, yaml.CollectionEndEvent):
+            depth -= 1
+    return None
+
+
+def _library_limit(text: str, error: yaml.MarkedYAMLError) -> _Refusal | None:
+    """Our own refusal when the YAML library refused the text first for one of its own limits;
+    None when the text is simply not YAML.
+
+    libyaml 0.2.6 (in PyYAML 6.0.4) caps nesting at 1,000 levels in its scanner, whose look-ahead
+    reads up to 1,024 characters ahead of our event count: `[[[[...` is refused there, with the
+    library's wording, before our count reaches MAX_YAML_DEPTH.  The pure-Python scanner has no
+    such cap, so it decides (only on this error path, and it stops at our limit); a library
+    whose own scanner also names a nesting or depth limit is taken at its word.
+    """
+    if YAML_LOADER is not yaml.SafeLoader:
+        try:
+            refusal = _structure_refusal(text, yaml.SafeLoader)
+        except (yaml.YAMLError, RecursionError):
+            refusal = None
+        if refusal is not None:
+            return refusal
+    problem = f"{error.problem or ''} {error.context or ''}".lower()
+    if "nesting" in problem or "depth" in problem:
+        m = error.problem_mark or error.context_mark
+        line, col = (m.line + 1, m.column + 1) if m else (1, 1)
+        return "LF004", line, col, f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels"
+    return None

@@ -97,6 +97,58 @@ def test_LF004_deep_yaml_is_refused_without_recursion(tmp_path: Path) -> None:
     assert d.code == "LF004" and "deeper" in d.message
 
 
+@pytest.mark.parametrize("loader", ["CSafeLoader", "SafeLoader"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "states: " + "[" * 33 + "]" * 33,
+        "states: " + "[" * 1001 + "]" * 1001,  # past libyaml 0.2.6's own cap (PyYAML 6.0.4)
+        "states: " + "{a: " * 1200 + "}" * 1200,
+        "states:\n" + "".join("  " * i + "- \n" for i in range(1, 40)),
+    ],
+    ids=["33", "1001", "1200-mappings", "block"],
+)
+def test_LF004_deep_yaml_whichever_yaml_parser_refuses_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, loader: str, text: str
+) -> None:
+    import yaml
+
+    from llfsm import reader
+
+    if not hasattr(yaml, loader):
+        pytest.skip(f"this PyYAML has no {loader}")
+    monkeypatch.setattr(reader, "YAML_LOADER", getattr(yaml, loader))
+    m = write_machine(tmp_path, "m", OK_STATES)
+    (m / "machine.yaml").write_text(text + "\n")
+    d = only(m)
+    assert (d.code, d.line, d.message) == ("LF004", d.line, "machine.yaml nests deeper than 32 levels"), d
+
+
+def test_a_yaml_library_that_refuses_nesting_in_its_own_words_still_gives_LF004(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A later PyYAML may cap nesting where our rescan cannot tell: its wording decides."""
+    import yaml
+
+    from llfsm import reader
+
+    class Capped(yaml.SafeLoader):
+        def __init__(self, stream: str) -> None:
+            super().__init__(stream)
+            mark = yaml.Mark("<unicode string>", 0, 0, 7, stream, 7)
+            raise yaml.scanner.ScannerError(
+                "while increasing flow level", mark, "exceeded maximum nesting depth", mark
+            )
+
+    monkeypatch.setattr(reader, "YAML_LOADER", Capped)
+    m = write_machine(tmp_path, "m", OK_STATES)
+    d = only(m)
+    assert (d.code, d.line, d.column, d.message) == ("LF004", 1, 8, "machine.yaml nests deeper than 32 levels")
+    (m / "machine.yaml").write_text("states: [a\n")  # not a limit: plain bad YAML stays LF003
+    monkeypatch.setattr(reader, "YAML_LOADER", yaml.SafeLoader)
+    assert only(m).code == "LF003"
+
+
 def test_LF005_alias_bombs_are_refused(tmp_path: Path) -> None:
     m = write_machine(tmp_path, "m", OK_STATES)
     bomb = ["a: &a [x, x, x, x, x, x, x, x, x]"]
