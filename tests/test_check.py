@@ -136,9 +136,7 @@ def test_a_yaml_library_that_refuses_nesting_in_its_own_words_still_gives_LF004(
         def __init__(self, stream: str) -> None:
             super().__init__(stream)
             mark = yaml.Mark("<unicode string>", 0, 0, 7, stream, 7)
-            raise yaml.scanner.ScannerError(
-                "while increasing flow level", mark, "exceeded maximum nesting depth", mark
-            )
+            raise yaml.scanner.ScannerError("while increasing flow level", mark, "exceeded maximum nesting depth", mark)
 
     monkeypatch.setattr(reader, "YAML_LOADER", Capped)
     m = write_machine(tmp_path, "m", OK_STATES)
