@@ -1,31 +1,41 @@
 # Two commands set everything up on a fresh clone: `make demo` and `make test`.
 PYTHON ?= python3
-VENV := .venv
+VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP := $(PY) -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint fuzz bench clean msgs ros-venv chromium asan
+.PHONY: demo test test-latest lint fuzz bench clean msgs ros-venv chromium asan lock
+
+# What `make` installs is locked: requirements/lock.txt holds the exact versions of everything
+# .venv gets (llfsm's dependencies, every extra, and the setuptools it is built with), and
+# requirements/ros.lock.txt those of .venv-ros.  They are constraints (`pip install -c`), so
+# pyproject.toml keeps the ranges a user's `pip install llfsm` resolves.  `make lock` regenerates
+# both with uv; `make test-latest` empties LOCK and ROS_LOCK to run the suite on the newest releases.
+LOCK ?= requirements/lock.txt
+ROS_LOCK ?= requirements/ros.lock.txt
+UV_VERSION := 0.13.8
+constrain = $(if $(1),-c $(1))
 
 # Real ROS 2 for the interop tests (pytest -m interop): rclpy, message packages and Fast DDS as
-# wheels from PyPI, in a virtualenv of their own (they bring numpy, lark, empy...).  There is
-# no rmw_cyclonedds wheel.  About 20 s with a warm pip cache.
-VENV_ROS := .venv-ros
-ROS_WHEELS := ros-rclpy==9.1.2 ros-rmw-fastrtps-cpp==9.3.3 ros-std-msgs==5.5.1 ros-std-srvs==5.5.1 \
-	ros-geometry-msgs==5.5.1 ros-test-msgs==2.3.0
+# wheels from PyPI (requirements/ros.in), in a virtualenv of their own (they bring numpy, lark,
+# empy...).  There is no rmw_cyclonedds wheel.  About 20 s with a warm pip cache.
+VENV_ROS ?= .venv-ros
 
 # setup.py builds the recorder's tap and turtlesim's painter in C into the source tree: a changed
-# C file reinstalls.
-$(VENV)/.installed: pyproject.toml setup.py llfsm/bag/_tap.c llfsm/sim/_paint.c
+# C file reinstalls.  llfsm is built without build isolation, with the locked setuptools installed
+# first: an isolated build would fetch whatever setuptools is newest that day.
+$(VENV)/.installed: pyproject.toml setup.py llfsm/bag/_tap.c llfsm/sim/_paint.c requirements/build.in $(LOCK)
 	$(PYTHON) -m venv $(VENV)
-	$(PIP) install -e .
+	$(PIP) install $(call constrain,$(LOCK)) -r requirements/build.in
+	$(PIP) install --no-build-isolation $(call constrain,$(LOCK)) -e .
 	touch $@
 
 $(VENV)/.installed-dev: $(VENV)/.installed
-	$(PIP) install -e '.[dev]'
+	$(PIP) install --no-build-isolation $(call constrain,$(LOCK)) -e '.[dev]'
 	touch $@
 
 $(VENV)/.installed-bench: $(VENV)/.installed-dev
-	$(PIP) install -e '.[dev,bench]'
+	$(PIP) install --no-build-isolation $(call constrain,$(LOCK)) -e '.[dev,bench]'
 	touch $@
 
 DEMO_RUN := $(VENV)/bin/llfsm run --clock sim
@@ -54,9 +64,9 @@ chromium:
 			|| echo "make: could not install chromium: the browser tests will skip"; \
 	else echo "make: no chromium (apt-get install chromium as root): the browser tests will skip"; fi
 
-$(VENV_ROS)/.installed: Makefile
+$(VENV_ROS)/.installed: requirements/ros.in $(ROS_LOCK)
 	$(PYTHON) -m venv $(VENV_ROS)
-	$(VENV_ROS)/bin/python -m pip --disable-pip-version-check -q install $(ROS_WHEELS)
+	$(VENV_ROS)/bin/python -m pip --disable-pip-version-check -q install $(call constrain,$(ROS_LOCK)) -r requirements/ros.in
 	touch $@
 
 # `make test` tries to provide real ROS 2 but goes on without it: the interop tests then skip
@@ -65,7 +75,23 @@ ros-venv:
 	@$(MAKE) --no-print-directory $(VENV_ROS)/.installed || echo "warning: $(VENV_ROS) not installed: interop tests will be skipped"
 
 test: $(VENV)/.installed-dev lint ros-venv chromium
-	$(PY) -m pytest -q
+	LLFSM_ROS_VENV=$(abspath $(VENV_ROS)) $(PY) -m pytest -q
+
+# The same suite on the newest releases of every dependency (no lock), in venvs of its own made
+# anew each time: drift shows up here, as a failing target with this name, before it turns main red.
+test-latest:
+	rm -rf .venv-latest .venv-ros-latest
+	$(MAKE) --no-print-directory test VENV=.venv-latest VENV_ROS=.venv-ros-latest LOCK= ROS_LOCK=
+
+# Regenerates the locks from pyproject.toml (every extra) and requirements/*.in with uv, for
+# Python 3.11 on any platform.
+lock:
+	$(PYTHON) -m venv .venv-lock
+	.venv-lock/bin/python -m pip --disable-pip-version-check -q install uv==$(UV_VERSION)
+	.venv-lock/bin/uv pip compile -q --universal --python-version 3.11 --all-extras --custom-compile-command 'make lock' \
+		pyproject.toml requirements/build.in -o requirements/lock.txt
+	.venv-lock/bin/uv pip compile -q --universal --python-version 3.11 --custom-compile-command 'make lock' \
+		requirements/ros.in -o requirements/ros.lock.txt
 
 fuzz: $(VENV)/.installed-dev
 	$(PY) -m pytest -q -m slow tests
@@ -91,5 +117,5 @@ msgs: $(VENV)/.installed-dev
 	$(PY) -m llfsm.compiler.interfaces
 
 clean:
-	rm -rf $(VENV) $(VENV_ROS) build demo-output .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(VENV_ROS) .venv-latest .venv-ros-latest .venv-lock build demo-output .pytest_cache .ruff_cache
 	find llfsm -name '*.so' -delete

@@ -200,6 +200,8 @@ def test_values_header_auto_is_stamped_at_each_send() -> None:
         (Twist, "{linar: {x: 2.0}}", "geometry_msgs/msg/Twist has no field 'linar'; did you mean 'linear'?"),
         (Twist, "{linear: {x: fast}}", "linear.x: The 'x' field of geometry_msgs/msg/Vector3 must be of type 'float'"),
         (Twist, "{linear: {x: 2.0}", "not valid YAML"),
+        (Twist, "{linear: " + "[" * 5000 + "]" * 5000 + "}", "nests deeper than any message"),
+        (Twist, "linear:\n" + "".join(" " * i + "- \n" for i in range(1, 3000)), "nests deeper than any message"),
         (Twist, "{linear: 3}", "linear: geometry_msgs/msg/Vector3 takes a mapping of its fields, not 3"),
         (Twist, "[1, 2]", "must be a YAML mapping"),
         (Spawn.Request, "{x: true}", "must be of type 'float'"),

@@ -341,6 +341,8 @@ def from_yaml(cls: type[Message], text: str) -> tuple[Message, list[StampSetter]
         where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
         problem = getattr(e, "problem", None) or str(e).splitlines()[0]
         raise ValuesError(f"not valid YAML: {problem}{where}") from None
+    except RecursionError:  # PyYAML's composer recurses once per level: `[[[[...` deep enough
+        raise ValuesError("not valid YAML here: it nests deeper than any message does") from None
     if data is None:
         data = {}
     if not isinstance(data, dict):

@@ -48,7 +48,8 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-VENV_ROS = REPO / ".venv-ros"
+#: `make test` names the venv it made (`make test-latest` makes .venv-ros-latest); .venv-ros by default.
+VENV_ROS = Path(os.environ.get("LLFSM_ROS_VENV") or REPO / ".venv-ros")
 ROS_PYTHON = VENV_ROS / "bin" / "python"
 
 # Set up loopback with multicast inside the new namespace, then run the command.
