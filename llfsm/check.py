@@ -575,6 +575,11 @@ class _Checker:
                 for n in scan.reserved:
                     if id(n) not in declared:  # a declared name is judged by `reserved` above
                         self.reserved_use(code, n)
+                if scan.may_bind_variable:  # `self` somewhere: a lambda's own, or the machine's
+                    at = {(st.target.lineno, st.target.col_offset) for st in tree.body if isinstance(st, ast.AnnAssign)}
+                    for b in find(tree, {})[1]:
+                        if b.how == "self" and (b.line, b.col) not in at:
+                            self.machine_self(code, b)
                 if not scan.escapes:
                     self.compiles(code, tree)
 
@@ -594,6 +599,21 @@ class _Checker:
                 else "reserved by llfsm"
             )
             self.at("LF013", loc, f"variable name {name!r} is {what}; choose another name")
+
+    def machine_self(self, code: Code, b: BadBinding) -> None:
+        """LF013 for `self` where it is the machine: the compiled code runs each section in a
+        function whose `self` is the machine, so reading it would reach llfsm's internals and
+        binding it would break the ringlet.  A `self` the user's code binds (a method's first
+        parameter, a lambda's, a local of a function, a comprehension variable) is theirs."""
+        self.add(
+            "LF013",
+            code.file,
+            b.line,
+            _col(code.text, b.line, b.col),
+            "`self` here would be the machine itself (a section runs in a function whose `self` is the "
+            "machine), which llfsm reserves; use the machine's variables by their bare names (`self` is "
+            "fine where a function, method, lambda or comprehension of yours binds it)",
+        )
 
     def reserved_use(self, code: Code, n: ast.Name) -> None:
         what = "is an llfsm macro and cannot be assigned" if n.id in MACROS else "is reserved by llfsm"
@@ -636,14 +656,7 @@ class _Checker:
                 _edits, bad = find(tree, mapping)
                 for b in bad:
                     if b.how == "self":
-                        self.add(
-                            "LF013",
-                            code.file,
-                            b.line,
-                            _col(code.text, b.line, b.col),
-                            f"`{b.name}` here would be an attribute of this function's `self`, not the machine's "
-                            "variable: name the parameter `this`",
-                        )
+                        self.machine_self(code, b)
                     else:
                         self.bad_binding(code, b)
             for n in scan.reserved:
@@ -831,9 +844,9 @@ def _plain_as_used(node: ast.AST) -> bool:
 class _Scanned:
     loads: dict[str, ast.Name] = field(default_factory=dict)  # first use of each name read
     bound: set[str] = field(default_factory=set)  # every name the code binds, in any scope
-    reserved: list[ast.Name] = field(default_factory=list)  # `self`, `_llfsm*`, or a macro assigned
+    reserved: list[ast.Name] = field(default_factory=list)  # `_llfsm*`, or a macro assigned
     escapes: list[tuple[ast.AST, str]] = field(default_factory=list)  # global/nonlocal; top-level return...
-    may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping somewhere
+    may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping, or `self` is used
     too_deep: ast.AST | None = None  # the first node nested deeper than MAX_CODE_DEPTH: stop there
     plain: bool = True  # only `_PLAIN` nodes, used as it allows: compiling to bytecode cannot fail
     imports: list[ast.Import | ast.ImportFrom] = field(default_factory=list)  # for LF041
@@ -863,7 +876,11 @@ def _scan(tree: ast.AST, mapping: dict[str, str]) -> _Scanned:
                 stack.append((child, nested or t in nests_t, depth + 1))
                 continue
             if t is name_t:
-                if child.id == "self" or child.id.startswith("_llfsm"):
+                if child.id == "self":
+                    # the user's own in a method, lambda or comprehension that binds it, else
+                    # the machine's: the scoped walk decides (LF013 there)
+                    out.may_bind_variable = True
+                elif child.id.startswith("_llfsm"):
                     out.reserved.append(child)
                 elif isinstance(child.ctx, ast.Load | ast.Del):  # `del x` reads x as well
                     out.loads.setdefault(child.id, child)

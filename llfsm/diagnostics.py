@@ -46,7 +46,12 @@ RULES: dict[str, Rule] = {
         _r("LF010", E, "invalid-machine-name", "The machine name is not an identifier, or is a Python keyword."),
         _r("LF011", E, "invalid-state-name", "A state name is not an identifier, or is a Python keyword."),
         _r("LF012", E, "duplicate-state", "Two states have the same name."),
-        _r("LF013", E, "reserved-name", "A name is reserved by llfsm (self, the macros, `_llfsm*`)."),
+        _r(
+            "LF013",
+            E,
+            "reserved-name",
+            "A name is reserved by llfsm (the machine's `self` at a section's level, the macros, `_llfsm*`).",
+        ),
         _r("LF014", E, "name-too-long", "The machine name is too long for the file names a build writes."),
         _r("LF020", E, "unknown-target", "A transition names a state that does not exist."),
         _r("LF021", E, "unknown-initial", "`initial` names a state that does not exist."),

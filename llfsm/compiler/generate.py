@@ -25,8 +25,22 @@ from ..model import Code, Machine, State
 from ..names import child_nodes
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
-from .rewrite import Edit, apply, attribute_of, find, name_map, own_locals, state_map, used_names
+from .rewrite import (
+    ALIAS_LINE,
+    MACHINE_ALIAS,
+    Edit,
+    apply,
+    attribute_of,
+    find,
+    name_map,
+    own_locals,
+    state_map,
+    used_names,
+)
 from .templating import environment
+
+#: How a rewritten name that reaches the machine through its alias starts.
+_ALIASED = MACHINE_ALIAS + "."
 
 # -- text helpers ------------------------------------------------------------------------------
 
@@ -81,7 +95,7 @@ def _doc(text: str) -> str:
 
 @cache
 def _env() -> jinja2.Environment:
-    return environment(py=_py, code=indent_code, pointer=_pointer)
+    return environment(py=_py, code=indent_code, pointer=_pointer, lead=_lead)
 
 
 def class_name(machine: str) -> str:
@@ -122,6 +136,9 @@ class Block:
 
     pointer: str
     text: str
+    #: The code reaches the machine through `MACHINE_ALIAS` (a method or function of the user's
+    #: binds `self`): the alias is bound on the line before the block's pointer.
+    alias: bool = False
 
 
 @dataclass
@@ -133,6 +150,7 @@ class GuardView:
     text: str
     multiline: bool
     to_suspend: bool
+    alias: bool = False
 
     @property
     def first_line(self) -> str:
@@ -241,7 +259,7 @@ class _Trees:
 
     def edits(self, tree: ast.AST, mapping: Mapping[str, str], text: str) -> list[Edit]:
         flat = self.flat(tree)
-        if flat is None or any(t in mapping for t in flat.targets):
+        if flat is None or "self" in flat.targets or any(t in mapping for t in flat.targets):
             return find(tree, mapping, text)[0]
         out = []
         for n in flat.names:
@@ -278,7 +296,8 @@ def _block(
     while first < len(lines) and not lines[first].strip():
         first += 1
     body = "\n".join(lines[first:]).rstrip()
-    return Block(pointer=f"{code.file}:{first + 1}", text=body)
+    alias = any(e.text.startswith(_ALIASED) for e in edits)
+    return Block(pointer=f"{code.file}:{first + 1}", text=body, alias=alias)
 
 
 def _guard_view(
@@ -297,7 +316,7 @@ def _guard_view(
         t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline)
     )
     multiline = "\n" in block.text or has_comment
-    return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend)
+    return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend, block.alias)
 
 
 def _variables_block(code: Code, tree: ast.Module, mapping: Mapping[str, str]) -> Block | None:
@@ -493,6 +512,16 @@ POINTER_MARK = "\0"  # ends a pointer line while rendering; the reader refuses N
 
 def _pointer(where: str) -> str:
     return f"# {where}{POINTER_MARK}"
+
+
+def _lead(block: Block | GuardView, width: int) -> str:
+    """The lines before a block of user code, at its indentation: its pointer, and first the
+    alias of the machine when the block needs it.  The alias line comes before the pointer so
+    that the code still follows its pointer line for line; it is written only for a block in
+    which the user's own `self` hides the machine's, so other modules do not change at all."""
+    pad = " " * width
+    alias = f"{pad}{ALIAS_LINE}\n" if block.alias else ""
+    return f"{alias}{pad}{_pointer(block.pointer)}"
 
 
 def _with_source_map(rendered: str) -> str:

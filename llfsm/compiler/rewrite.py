@@ -8,7 +8,13 @@ user's comments and layout, and keeps every line where it was, which is what let
 error point back at the user's own line.
 
 Machine variables keep their meaning inside nested functions and lambdas (as members do in a
-C++ lambda capturing `this`): `def on_pose(msg): x = msg.x` sets the machine variable x.
+C++ lambda capturing `this`): `def on_pose(msg): x = msg.x` sets the machine variable x.  The
+compiled section runs in a function whose parameter `self` is the machine, so a name becomes
+`self.x` wherever that `self` is visible.  Where the user's code binds `self` itself (the
+first parameter of a method of a class it defines, a lambda's parameter, a local), that
+`self` is theirs, and the machine is reached through `_llfsm_machine`, an alias the generated
+module binds to the machine just before such a block: no parameter name a user may choose
+can hide the machine.
 """
 
 from __future__ import annotations
@@ -24,6 +30,11 @@ from functools import lru_cache
 from ..names import child_nodes
 
 _SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
+#: What the generated code calls the machine where the user's own `self` hides the parameter of
+#: the generated function (names starting with `_llfsm` are refused in machine code, LF013).
+MACHINE_ALIAS = "_llfsm_machine"
+#: The line the generated module puts before a block that reaches the machine through the alias.
+ALIAS_LINE = f"{MACHINE_ALIAS} = self  # the machine, for code below whose own `self` is another object"
 _COMPS = (ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp)
 _EOL = re.compile(r"\r\n|\r|\n")
 
@@ -138,15 +149,44 @@ class _Scope:
     parameters, comprehension variables, class attributes, and those of the scopes around).
     `inner`: what scopes nested in it inherit.  They differ for a class body only: as in
     Python, a name bound in a class body is visible in that body and nowhere else, not in its
-    methods, lambdas or comprehensions (beyond the first iterable, evaluated in the class)."""
+    methods, lambdas or comprehensions (beyond the first iterable, evaluated in the class).
+    `self_here` / `self_inner`: the same question for the name `self` itself, which user code
+    may bind in any scope but the section's own: where it is the user's, the machine is
+    reached through `MACHINE_ALIAS`, and where it is not, a use of `self` would be the machine."""
 
-    __slots__ = ("function", "here", "inner", "self_param")
+    __slots__ = ("function", "here", "inner", "self_here", "self_inner")
 
-    def __init__(self, here: frozenset[str], inner: frozenset[str], function: bool, self_param: bool = False) -> None:
+    def __init__(
+        self,
+        here: frozenset[str],
+        inner: frozenset[str],
+        function: bool,
+        self_here: bool = False,
+        self_inner: bool = False,
+    ) -> None:
         self.here = here
         self.inner = inner
         self.function = function  # a def or lambda, or the section itself: where := binds
-        self.self_param = self_param  # a parameter `self` (here or around) hides the machine's
+        self.self_here = self_here  # `self` in this scope is a name the user's code binds
+        self.self_inner = self_inner  # ... and in the scopes nested in it
+
+
+def _binds_self(nodes: list[ast.AST]) -> bool:
+    """Whether code running in one function scope (a def's body, a lambda's expression) binds
+    the name `self` in that scope: as a local (`self = ...`, `for self in`, import, def, class,
+    except-as, a match pattern) or by `:=` inside a comprehension (PEP 572 binds it in the
+    enclosing function).  Nested defs, lambdas and classes have scopes of their own."""
+    if "self" in own_locals(ast.Module(body=nodes, type_ignores=[])):  # type: ignore[arg-type]
+        return True
+    stack = list(nodes)
+    while stack:
+        node = stack.pop()
+        for child in child_nodes(node):
+            if isinstance(child, ast.NamedExpr) and child.target.id == "self":
+                return True
+            if not isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda | ast.ClassDef):
+                stack.append(child)
+    return False
 
 
 class _Finder(ast.NodeVisitor):
@@ -156,27 +196,43 @@ class _Finder(ast.NodeVisitor):
         self.scopes: list[_Scope] = [_Scope(frozenset(), frozenset(), True)]
         self.edits: list[Edit] = []
         self.bad: list[BadBinding] = []
+        # without the word `self` in the text no scope can bind it: skip `_binds_self`'s walks
+        self.maybe_self = text is None or "self" in text
 
     def _hidden(self, name: str) -> bool:
         return name in self.scopes[-1].here
 
-    def _push(self, names: set[str] | frozenset[str], function: bool = True) -> None:
-        """A function-like scope (def, lambda, comprehension) nested in the current one."""
+    def _push(self, names: set[str] | frozenset[str], function: bool = True, binds_self: bool = False) -> None:
+        """A function-like scope (def, lambda, comprehension) nested in the current one;
+        `binds_self`: its code binds `self` otherwise than as one of `names`."""
         outer = self.scopes[-1]
         inherited = outer.inner
         seen = inherited | names if names else inherited
-        self.scopes.append(_Scope(seen, seen, function, outer.self_param or "self" in names))
+        own_self = outer.self_inner or binds_self or "self" in names
+        self.scopes.append(_Scope(seen, seen, function, own_self, own_self))
+
+    def _machine_self(self, name: str, node: ast.AST, scope: _Scope | None = None) -> None:
+        """`self` used or bound where it is the machine's (the section's own level, or a scope
+        that does not bind it): it would read or replace the compiled code's machine."""
+        if name == "self" and not (scope or self.scopes[-1]).self_here:
+            self.bad.append(BadBinding("self", "self", node.lineno, node.col_offset))  # type: ignore[attr-defined]
 
     def visit_Name(self, node: ast.Name) -> None:
+        if node.id == "self":
+            self._machine_self("self", node)
+            return
         attr = self.mapping.get(node.id)
         if attr is not None and not self._hidden(node.id):
-            if self.scopes[-1].self_param and attr.startswith("self."):
-                # `def get(self): return count` -> `self.count`: the instance's, not the machine's
-                self.bad.append(BadBinding(node.id, "self", node.lineno, node.col_offset))
+            if self.scopes[-1].self_here and attr.startswith("self."):
+                # `def get(self): return count`: that `self` is the user's instance, so the
+                # machine is reached through the alias the module binds before this block
+                attr = f"{MACHINE_ALIAS}.{attr[5:]}"
             self.edits.append(Edit(node.lineno, node.col_offset, node.end_col_offset or node.col_offset, attr))
 
     def _bind(self, name: str | None, how: str, node: ast.AST, hidden: bool | None = None) -> None:
-        if name and name in self.mapping and not (self._hidden(name) if hidden is None else hidden):
+        if name == "self":
+            self._machine_self(name, node)
+        elif name and name in self.mapping and not (self._hidden(name) if hidden is None else hidden):
             self.bad.append(BadBinding(name, how, node.lineno, node.col_offset))  # type: ignore[attr-defined]
 
     def _function(self, node: ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) -> None:
@@ -193,8 +249,8 @@ class _Finder(ast.NodeVisitor):
                     self.visit(a.annotation)
             if node.returns:
                 self.visit(node.returns)
-        self._push(_params(node.args))
         body = node.body if isinstance(node.body, list) else [node.body]
+        self._push(_params(node.args), binds_self=self.maybe_self and _binds_self(body))  # type: ignore[arg-type]
         for stmt in body:
             self.visit(stmt)
         self.scopes.pop()
@@ -232,7 +288,9 @@ class _Finder(ast.NodeVisitor):
         own = own_locals(ast.Module(body=node.body, type_ignores=[]))
         # the body sees its own names; what is nested in it sees only what the class's
         # surroundings see
-        self.scopes.append(_Scope(outer.inner | own, outer.inner, False, outer.self_param))
+        self.scopes.append(
+            _Scope(outer.inner | own, outer.inner, False, outer.self_inner or "self" in own, outer.self_inner)
+        )
         for stmt in node.body:
             self.visit(stmt)
         self.scopes.pop()
@@ -241,7 +299,10 @@ class _Finder(ast.NodeVisitor):
         # `:=` in a comprehension binds in the enclosing function (PEP 572), so whether its
         # target is the machine's is decided there, not by the comprehension's variables
         function = next(s for s in reversed(self.scopes) if s.function)
-        self._bind(node.target.id, ":=", node.target, hidden=node.target.id in function.here)
+        if node.target.id == "self":
+            self._machine_self("self", node.target, function)
+        else:
+            self._bind(node.target.id, ":=", node.target, hidden=node.target.id in function.here)
         self.visit(node.value)
 
     def visit_JoinedStr(self, node: ast.JoinedStr) -> None:
