@@ -11,13 +11,32 @@ layout in the manner of Sugiyama, enough for the few to few dozen states of an L
 
 Every state is a `<g class="state" data-machine=M data-state=S aria-current=...>`: the page
 moves `aria-current="true"` to the current state, and tests find states by these attributes.
+
+Descriptions may come from any peer on a DDS domain (`llfsm view`), so (issue 18):
+
+- a description is checked against llfsm.web.model before anything is drawn (an index is an
+  integer, targets name states...), and every text in it is escaped, attributes included, with
+  characters XML cannot carry replaced: nothing of a peer's making becomes markup;
+- the layout is quadratic in the edges, so what is drawn is bounded (`MAX_DRAWN_STATES`,
+  `MAX_DRAWN_TRANSITIONS`: the states nearest the initial one first) and the diagram says what
+  it left out;
+- the SVG is cached per description (its content, not its object: a latched description
+  delivered again is not laid out again), drawn once without a current state, which is marked
+  afterwards by a string replacement of an attribute this module alone writes.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
+import re
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 from html import escape
 from typing import Any
+
+from .model import validate
 
 NODE_H = 34
 LAYER_GAP = 96
@@ -26,6 +45,24 @@ MARGIN = 24
 CHAR_W = 8.0  # of the 13 px state names
 LABEL_CHAR_W = 6.4  # of the 11 px guard labels
 LABEL_MAX = 34  # characters of guard text shown on an arrow (the whole text is in its tooltip)
+#: At most this many states are drawn (a few dozen is what a diagram can show anyway).
+MAX_DRAWN_STATES = 60
+#: At most this many transitions are drawn (labels are placed in time quadratic in them).
+MAX_DRAWN_TRANSITIONS = 160
+#: Descriptions whose drawing is kept.
+CACHE_SIZE = 32
+TITLE_MAX = 400  # characters of guard text in a transition's tooltip
+
+#: What XML 1.0 cannot carry (control characters, lone surrogates): the page's parser would
+#: refuse the whole diagram.
+_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+_cache: OrderedDict[bytes, str] = OrderedDict()
+_cache_lock = threading.Lock()
+
+
+def _esc(text: object) -> str:
+    """Text of any origin, safe in element content and in a double-quoted attribute."""
+    return escape(_NOT_XML.sub("\ufffd", str(text)), quote=True)
 
 
 @dataclass
@@ -124,11 +161,89 @@ def _bezier_mid(p0: tuple[float, float], c1: tuple[float, float], c2: tuple[floa
 
 
 def svg(desc: dict[str, Any], current: str | None = None) -> str:
-    """The diagram of one machine (the `description` structure of llfsm.ros.control)."""
+    """The diagram of one machine (the `description` structure of llfsm.ros.control), its
+    `current` state marked.  A description that does not fit llfsm.web.model raises
+    llfsm.web.model.DescriptionError before anything is drawn."""
+    key = _key(desc)
+    with _cache_lock:
+        drawn = _cache.get(key) if key is not None else None
+        if drawn is not None:
+            _cache.move_to_end(key)  # type: ignore[arg-type]
+    if drawn is None:
+        drawn = _render(validate(desc))
+        if key is not None:
+            with _cache_lock:
+                _cache[key] = drawn
+                while len(_cache) > CACHE_SIZE:
+                    _cache.popitem(last=False)
+    return mark(drawn, current)
+
+
+def mark(drawn: str, current: str | None) -> str:
+    """A diagram of `svg` with its `current` state marked (it is drawn with none marked)."""
+    if current is None:
+        return drawn
+    # only this module writes `data-state="..." aria-current=`, and escaped text holds no quote
+    attr = f'data-state="{_esc(current)}" aria-current='
+    return drawn.replace(attr + '"false"', attr + '"true"', 1)
+
+
+def _key(desc: Any) -> bytes | None:
+    """A digest of the description's content (None if it is not even JSON: never cached)."""
+    try:
+        text = json.dumps(desc, sort_keys=True, separators=(",", ":"))
+    except (TypeError, ValueError, RecursionError):
+        return None
+    return hashlib.sha256(text.encode("utf-8", "surrogatepass")).digest()
+
+
+def _select(desc: dict[str, Any]) -> tuple[dict[str, Any], int, int]:
+    """The part of a checked description that is drawn, and how many states and transitions
+    are left out: the states nearest the initial one (breadth first, then the rest in order),
+    the suspend state always, and the transitions between them in order, each within bounds."""
+    states = desc["states"]
+    total_t = sum(len(s["transitions"]) for s in states)
+    if len(states) <= MAX_DRAWN_STATES and total_t <= MAX_DRAWN_TRANSITIONS:
+        return desc, 0, 0
+    by_name = {s["name"]: s for s in states}
+    order: dict[str, None] = {desc["initial"]: None}
+    frontier = [desc["initial"]]
+    while frontier and len(order) < MAX_DRAWN_STATES:
+        nxt = []
+        for name in frontier:
+            for t in by_name[name]["transitions"]:
+                if t["target"] not in order:
+                    order[t["target"]] = None
+                    nxt.append(t["target"])
+        frontier = nxt
+    for s in states:
+        if len(order) >= MAX_DRAWN_STATES:
+            break
+        order.setdefault(s["name"], None)
+    chosen = list(order)[:MAX_DRAWN_STATES]
+    suspend = desc.get("suspend")
+    if suspend is not None and suspend not in chosen:
+        chosen[-1] = suspend
+    keep = set(chosen)
+    budget = MAX_DRAWN_TRANSITIONS
+    drawn_states = []
+    for s in states:
+        if s["name"] not in keep:
+            continue
+        ts = [t for t in s["transitions"] if t["target"] in keep][: max(0, budget)]
+        budget -= len(ts)
+        drawn_states.append({**s, "transitions": ts})
+    drawn_t = MAX_DRAWN_TRANSITIONS - max(0, budget)
+    return {**desc, "states": drawn_states}, len(states) - len(drawn_states), total_t - drawn_t
+
+
+def _render(full: dict[str, Any]) -> str:
+    """The SVG of a checked description, no state marked current."""
+    desc, left_states, left_transitions = _select(full)
     machine = desc["name"]
     boxes, width, height = layout(desc)
-    mid = escape(machine, quote=True)
-    marker = f"arrow-{mid}"
+    mid = _esc(machine)
+    marker = "arrow-" + hashlib.sha256(machine.encode("utf-8", "surrogatepass")).hexdigest()[:12]
     parts: list[str] = []
     right_extent = width
     left_extent = 0.0
@@ -177,15 +292,16 @@ def svg(desc: dict[str, Any], current: str | None = None) -> str:
                 y0, y1 = src.mid + (spread / 3), dst.mid + dup * 6
                 c1, c2 = (swing, y0), (swing, y1)
             d = f"M{x0:.1f} {y0:.1f} C{c1[0]:.1f} {c1[1]:.1f} {c2[0]:.1f} {c2[1]:.1f} {x1:.1f} {y1:.1f}"
-            guard = t["guard"]
-            title = escape(f"{s['name']} → {t['target']} (transition {t['index']}): {guard}")
+            guard, index = t["guard"], int(t["index"])
+            shown = guard if len(guard) <= TITLE_MAX else guard[: TITLE_MAX - 1] + "…"
+            title = _esc(f"{s['name']} → {t['target']} (transition {index}): {shown}")
             edges.append(
-                f'<path class="transition" data-machine="{mid}" data-source="{escape(s["name"])}" '
-                f'data-target="{escape(t["target"])}" data-index="{t["index"]}" d="{d}" '
+                f'<path class="transition" data-machine="{mid}" data-source="{_esc(s["name"])}" '
+                f'data-target="{_esc(t["target"])}" data-index="{index:d}" d="{d}" '
                 f'marker-end="url(#{marker})"><title>{title}</title></path>'
             )
             lx, ly = _bezier_mid((x0, y0), c1, c2, (x1, y1))
-            text = _label(t["index"], guard) if guard else str(t["index"])
+            text = _label(index, guard) if guard else str(index)
             tw = LABEL_CHAR_W * len(text) + 8
             for _ in range(8):  # step down past labels already placed (or past a state)
                 hit = any(abs(lx - ox) < (tw + ow) / 2 + 2 and abs(ly - oy) < 17 for ox, oy, ow in placed) or any(
@@ -200,7 +316,7 @@ def svg(desc: dict[str, Any], current: str | None = None) -> str:
             labels.append(
                 f'<g class="guard"><title>{title}</title>'
                 f'<rect x="{lx - tw / 2:.1f}" y="{ly - 8:.1f}" width="{tw:.1f}" height="16" rx="3"/>'
-                f'<text x="{lx:.1f}" y="{ly + 4:.1f}">{escape(text)}</text></g>'
+                f'<text x="{lx:.1f}" y="{ly + 4:.1f}">{_esc(text)}</text></g>'
             )
     init = boxes.get(desc["initial"])
     if init is not None:
@@ -226,16 +342,24 @@ def svg(desc: dict[str, Any], current: str | None = None) -> str:
                 f'<rect class="inner" x="{b.left + 4:.1f}" y="{b.y + 4:.1f}" width="{b.w - 8:.1f}" '
                 f'height="{NODE_H - 8}" rx="7"/>'
             )
-        cur = "true" if name == current else "false"
         parts.append(
-            f'<g class="{" ".join(kind)}" data-machine="{mid}" data-state="{escape(name, quote=True)}" '
-            f'aria-current="{cur}" role="listitem" aria-label="state {escape(name, quote=True)}">'
+            f'<g class="{" ".join(kind)}" data-machine="{mid}" data-state="{_esc(name)}" '
+            f'aria-current="false" role="listitem" aria-label="state {_esc(name)}">'
             f'<rect x="{b.left:.1f}" y="{b.y:.1f}" width="{b.w:.1f}" height="{NODE_H}" rx="10"/>{inner}'
-            f'<text x="{b.x:.1f}" y="{b.mid + 4.5:.1f}">{escape(name)}</text></g>'
+            f'<text x="{b.x:.1f}" y="{b.mid + 4.5:.1f}">{_esc(name)}</text></g>'
         )
     x0 = min(0.0, left_extent - MARGIN / 2)
     w = right_extent + MARGIN / 2 - x0
     height = max([height] + [ly + 12 for _, ly, _ in placed])
+    note = ""
+    if left_states or left_transitions:
+        what = [f"{left_states:,} more states"] if left_states else []
+        what += [f"{left_transitions:,} more transitions"] if left_transitions else []
+        note = (
+            f'<text class="omitted" x="{x0 + MARGIN / 2:.1f}" y="{height + 14:.1f}">{" and ".join(what)} not drawn '
+            f"(a diagram shows at most {MAX_DRAWN_STATES} states and {MAX_DRAWN_TRANSITIONS} transitions)</text>"
+        )
+        height += 28
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" class="diagram" data-machine="{mid}" '
         f'viewBox="{x0:.0f} 0 {w:.0f} {height:.0f}" width="{w:.0f}" height="{height:.0f}" role="list" '
@@ -243,5 +367,5 @@ def svg(desc: dict[str, Any], current: str | None = None) -> str:
         f'<defs><marker id="{marker}" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" markerHeight="7" '
         f'orient="auto-start-reverse"><path d="M0 0 L10 5 L0 10 z" class="arrowhead"/></marker></defs>'
         f'<g class="edges">{"".join(edges)}</g><g class="states">{"".join(parts)}</g>'
-        f'<g class="labels">{"".join(labels)}</g></svg>'
+        f'<g class="labels">{"".join(labels)}</g>{note}</svg>'
     )

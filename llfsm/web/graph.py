@@ -9,17 +9,25 @@ and services by their `rq/NAMERequest` readers.
 
 Everything here runs on the view's scheduler thread (a run with no machines whose bus executor
 spins); the server's thread only reads what the callbacks stored.
+
+The domain is shared, so every peer is untrusted (issue 18): a description is believed only once
+it fits llfsm.web.model (else it is dropped, with one warning per machine topic, and the last
+good one stays), a state's text is bounded, machine names are ROS name tokens, at most
+`MAX_MACHINES` are followed, and nothing a peer sends can raise out of a callback into the bus
+executor (which would end the view).  Samples that cannot be decoded at all never get here:
+the DDS transport's readers drop them with a warning.
 """
 
 from __future__ import annotations
 
-import json
+import re
 from collections import deque
 from typing import TYPE_CHECKING, Any
 
 from ..msgs.std_msgs.msg import String
 from ..ros.control import LATCHED, NAMESPACE
 from ..ros.transports.dds_graph import message_class, service_class
+from .model import MAX_NAME, DescriptionError, parse_description
 from .source import HISTORY, Source
 
 if TYPE_CHECKING:
@@ -28,6 +36,10 @@ if TYPE_CHECKING:
 #: How often discovery is read (run time, seconds).
 DISCOVERY_PERIOD = 0.25
 _SUFFIX = "/description"
+#: Machines followed at most (each costs two readers; a peer could announce thousands).
+MAX_MACHINES = 256
+#: A machine's name, as a ROS name token (what a run's `/llfsm/M/...` topics can carry).
+_MACHINE = re.compile(rf"[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME - 1}}}")
 
 
 class _Machine:
@@ -36,6 +48,8 @@ class _Machine:
     def __init__(self, name: str) -> None:
         self.name = name
         self.desc: dict[str, Any] | None = None
+        self.raw: str | None = None  # the description's text last seen (delivered again: nothing to do)
+        self.accepting: frozenset[str] = frozenset()
         self.state: str | None = None
         self.since = 0.0
         self.history: deque[dict[str, Any]] = deque(maxlen=HISTORY)
@@ -61,6 +75,12 @@ class GraphSource(Source):
 
     # -- discovery (scheduler thread) ------------------------------------------------------------------
     def _discover(self) -> None:
+        try:
+            self._discover_once()
+        except Exception as e:  # a discovery sample the library cannot read: the next round goes on
+            self.warn(f"discovery: dropped what could not be read: {type(e).__name__}: {e}", key="discovery")
+
+    def _discover_once(self) -> None:
         for s in self._pubs.take(N=256):
             name, type_name = getattr(s, "topic_name", "") or "", getattr(s, "type_name", "") or ""
             if not name.startswith("rt/"):
@@ -70,8 +90,11 @@ class GraphSource(Source):
                 self._topics_seen[topic] = message_class(type_name)
             if topic.startswith(NAMESPACE + "/") and topic.endswith(_SUFFIX):
                 machine = topic[len(NAMESPACE) + 1 : -len(_SUFFIX)]
-                if "/" not in machine and machine not in self._machines:
-                    self._follow(machine)
+                if machine not in self._machines and _MACHINE.fullmatch(machine):
+                    if len(self._machines) < MAX_MACHINES:
+                        self._follow(machine)
+                    else:
+                        self.warn(f"more than {MAX_MACHINES} machines on the graph: {topic} not followed", "machines")
         for s in self._subs.take(N=256):
             name, type_name = getattr(s, "topic_name", "") or "", getattr(s, "type_name", "") or ""
             if name.startswith("rq/") and name.endswith("Request") and len(name) > len("rq/Request"):
@@ -82,21 +105,32 @@ class GraphSource(Source):
     def _follow(self, name: str) -> None:
         m = self._machines[name] = _Machine(name)
 
+        topic = f"{NAMESPACE}/{name}{_SUFFIX}"
+
         def on_description(msg: Any) -> None:
-            try:
-                desc = json.loads(msg.data)
-            except ValueError:
+            text = msg.data
+            if text == m.raw:
                 return
-            if isinstance(desc, dict) and desc.get("name") == name and isinstance(desc.get("states"), list):
-                m.desc = desc
-                if name not in self._order:
-                    self._order.append(name)
+            m.raw = text
+            try:
+                desc = parse_description(text, name)
+            except DescriptionError as e:
+                self.warn(f"{topic}: dropped a description that does not fit: {e}", key=topic)
+                return
+            except Exception as e:  # never into the bus executor: it would end the view
+                self.warn(f"{topic}: dropped a description that could not be read: {type(e).__name__}", key=topic)
+                return
+            m.accepting = frozenset(s["name"] for s in desc["states"] if s["accepting"])
+            m.desc = desc
+            if name not in self._order:
+                self._order.append(name)
 
         def on_state(msg: Any) -> None:
+            state = _bounded(msg.data)
             now = round(self.clock.now / 1e9, 3)
             if m.state is not None:
-                m.history.appendleft({"t": now, "from": m.state, "to": msg.data})
-            m.state, m.since = msg.data, now
+                m.history.appendleft({"t": now, "from": m.state, "to": state})
+            m.state, m.since = state, now
 
         base = f"{NAMESPACE}/{name}"
         self._keep.append(self.node.create_subscription(String, base + _SUFFIX, on_description, LATCHED))
@@ -117,10 +151,9 @@ class GraphSource(Source):
             m = self._machines[name]
             desc = m.desc or {}
             state = m.state or desc.get("initial", "")
-            accepting = {s["name"] for s in desc.get("states", []) if s.get("accepting")}
             if state == desc.get("suspend"):
                 status = "suspended"
-            elif state in accepting:
+            elif state in m.accepting:
                 status = "finished"
             else:
                 status = "running"
@@ -146,3 +179,9 @@ class GraphSource(Source):
 
     def _published(self, name: str) -> int:
         return 0  # other processes publish: the page's reader counts what arrives
+
+
+def _bounded(text: Any) -> str:
+    """A state's name as a peer sent it, cut to what a state's name may be (llfsm.web.model)."""
+    text = text if isinstance(text, str) else str(text)
+    return text if len(text) <= MAX_NAME else text[: MAX_NAME - 1] + "…"

@@ -12,6 +12,13 @@ only loopback Host names are served (no DNS rebinding).  A WebSocket or POST who
 the page's own is refused (403), POSTs must be JSON (a cross-site form cannot send that), and
 message values are parsed as YAML and checked by the message classes, as `llfsm topic pub`
 parses them (llfsm.msgs._yaml).
+
+What the page is sent may come from any peer on a DDS domain (`llfsm view`), so nothing a source
+returns may stop the server (issue 18): diagrams are drawn on a worker thread, never on the
+event loop (a big one takes a while even bounded, and pages and snapshots go on meanwhile); a
+machine that cannot be drawn is left out of the page with one warning and the others are drawn;
+a snapshot that fails is skipped with one warning and the push loop goes on.  A page is sent a
+machine's name, description text and SVG only, not the description itself.
 """
 
 from __future__ import annotations
@@ -21,13 +28,16 @@ import hmac
 import ipaddress
 import secrets
 import socket
+import sys
 import threading
+from concurrent.futures import ThreadPoolExecutor
 from importlib import resources
 from typing import Any
 
 from aiohttp import WSMsgType, web
 
 from . import diagram
+from .model import DescriptionError
 from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
@@ -86,6 +96,9 @@ class WebServer:
         self._error: BaseException | None = None
         self._wake: asyncio.Event | None = None
         self._pusher: asyncio.Task[None] | None = None
+        #: Lays diagrams out off the event loop (one at a time: they share a cache).
+        self._drawer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="llfsm-web-draw")
+        self._warned: set[str] = set()
 
     # -- lifecycle (caller's thread) -----------------------------------------------------------------
     def start(self) -> str:
@@ -126,6 +139,18 @@ class WebServer:
             pass
         loop.call_soon_threadsafe(loop.stop)
         thread.join(5)
+        self._drawer.shutdown(wait=False, cancel_futures=True)
+
+    def _warn(self, text: str, key: str | None = None) -> None:
+        """One line per key in the run's log (the source's, which knows the log), never raising."""
+        warn = getattr(self.source, "warn", None)
+        if warn is not None:
+            warn(text, key)
+            return
+        key = text if key is None else key
+        if key not in self._warned:
+            self._warned.add(key)
+            print(f"llfsm: web view: {text}", file=sys.stderr, flush=True)
 
     def _serve(self, sock: socket.socket) -> None:
         loop = self._loop = asyncio.new_event_loop()
@@ -215,25 +240,64 @@ class WebServer:
         data = (resources.files(__package__) / "static" / name).read_bytes()
         return web.Response(body=data, content_type=kind, charset="utf-8")
 
-    def _hello(self) -> dict[str, Any]:
+    async def _hello(self) -> dict[str, Any]:
+        """The page's first message (and every one after the machines changed): the machines'
+        diagrams, drawn on the worker thread, and a snapshot taken once they are."""
+        descriptions = self._descriptions()
+        loop = asyncio.get_running_loop()
+        machines = await loop.run_in_executor(self._drawer, self._draw, descriptions)
         snap = self._snapshot()
-        current = {m["name"]: m["state"] for m in snap["machines"]}
-        return {
-            "type": "hello",
-            "machines": [{**d, "svg": diagram.svg(d, current.get(d["name"]))} for d in self.source.machines()],
-            "snapshot": snap,
-        }
+        current = {m.get("name"): m.get("state") for m in snap.get("machines", []) if isinstance(m, dict)}
+        for m in machines:
+            m["svg"] = diagram.mark(m["svg"], current.get(m["name"]))
+        return {"type": "hello", "machines": machines, "snapshot": snap}
 
-    def _machine_names(self) -> tuple[str, ...]:
-        return tuple(d["name"] for d in self.source.machines())
+    def _draw(self, descriptions: list[Any]) -> list[dict[str, Any]]:
+        """(worker thread) Each machine's name, description text and SVG; one that cannot be
+        drawn is left out, said once, and never stops the others."""
+        out = []
+        for d in descriptions:
+            name = d.get("name") if isinstance(d, dict) else None
+            shown = name if isinstance(name, str) else "?"
+            try:
+                svg = diagram.svg(d)
+            except DescriptionError as e:
+                self._warn(f"machine {shown!r} not shown: its description does not fit: {e}", f"draw {shown}")
+                continue
+            except Exception as e:  # a bug of ours: this machine is not drawn, the page goes on
+                self._warn(f"machine {shown!r} not shown: drawing failed: {type(e).__name__}: {e}", f"draw {shown}")
+                continue
+            text = d.get("description")
+            out.append({"name": name, "description": text if isinstance(text, str) else "", "svg": svg})
+        return out
+
+    def _descriptions(self) -> list[Any]:
+        try:
+            return list(self.source.machines())
+        except Exception as e:
+            self._warn(f"the machines could not be listed: {type(e).__name__}: {e}", "machines")
+            return []
 
     def _snapshot(self) -> dict[str, Any]:
-        return {"type": "snapshot", **self.source.sample()}
+        try:
+            return {"type": "snapshot", **self.source.sample()}
+        except Exception as e:  # this snapshot is skipped; the next one is taken as usual
+            self._warn(f"a snapshot failed: {type(e).__name__}: {e}", "snapshot")
+            raise _NoSnapshot from None
 
     async def _ws(self, request: web.Request) -> web.WebSocketResponse:
         ws = web.WebSocketResponse(heartbeat=20, max_msg_size=64 * 1024)
         await ws.prepare(request)
-        await ws.send_str(dumps(self._hello()))
+        for _ in range(5 * self.rate):
+            try:
+                hello = await self._hello()
+                break
+            except _NoSnapshot:  # the source failed to be sampled just now: try again soon
+                await asyncio.sleep(1 / self.rate)
+        else:  # said already (once); the page shows itself closed, and may reconnect
+            await ws.close()
+            return ws
+        await ws.send_str(dumps(hello))
         self.clients.add(ws)
         if self._wake is not None:
             self._wake.set()
@@ -246,10 +310,14 @@ class WebServer:
         return ws
 
     async def _push(self) -> None:
-        """Sample and push at most RATE times a second, only while a page is connected."""
+        """Sample and push at most RATE times a second, only while a page is connected.  When
+        the machines change (`llfsm view`: a run started, a description was replaced), the
+        pages are sent a new hello once its diagrams are drawn, snapshots going on meanwhile.
+        Nothing that goes wrong in one round ends the loop."""
         last = ""
         assert self._wake is not None
-        machines = self._machine_names()
+        machines = self._descriptions()
+        hello: asyncio.Task[None] | None = None
         while True:
             await asyncio.sleep(1 / self.rate)
             if not self.clients:
@@ -257,14 +325,28 @@ class WebServer:
                 await self._wake.wait()
                 last = ""
                 continue
-            names = self._machine_names()
-            if names != machines:  # machines came (llfsm view): the pages draw them afresh
-                machines = names
-                await self._broadcast(self._hello())
-            text = dumps(self._snapshot())
-            if text != last:
-                last = text
-                await self._broadcast_text(text)
+            try:
+                now = self._descriptions()
+                changed = len(now) != len(machines) or any(a is not b for a, b in zip(now, machines, strict=True))
+                if changed and (hello is None or hello.done()):
+                    machines = now  # objects, not names: a description replaced is drawn afresh
+                    hello = asyncio.get_running_loop().create_task(self._send_hello())
+                text = dumps(self._snapshot())
+                if text != last:
+                    last = text
+                    await self._broadcast_text(text)
+            except _NoSnapshot:
+                continue
+            except Exception as e:  # said once; the next round goes on
+                self._warn(f"the page's update failed: {type(e).__name__}: {e}", "push")
+
+    async def _send_hello(self) -> None:
+        try:
+            await self._broadcast(await self._hello())
+        except _NoSnapshot:
+            pass
+        except Exception as e:
+            self._warn(f"the page's diagrams could not be sent: {type(e).__name__}: {e}", "hello")
 
     async def _broadcast(self, data: dict[str, Any]) -> None:
         await self._broadcast_text(dumps(data))
@@ -309,6 +391,10 @@ class WebServer:
         return await self._answer(
             request, lambda d: self.source.call(_text(d, "service"), _text(d, "type"), _text(d, "values"))
         )
+
+
+class _NoSnapshot(Exception):
+    """The source could not be sampled this time (said once by WebServer._snapshot)."""
 
 
 async def _no_icon(request: web.Request) -> web.Response:

@@ -100,7 +100,25 @@ class Source:
         self._stats: dict[str, _TopicStats] = {}
         self._publishers: dict[str, Any] = {}
         self._clients: dict[tuple[str, str], Any] = {}
+        self._warned: set[str] = set()
         self.ended = False
+
+    def warn(self, text: str, key: str | None = None) -> None:
+        """A problem with what a peer sent or with drawing it: one line in the run's log, once
+        per `key` (the text itself by default), so that a peer repeating itself, or every page
+        that connects, does not repeat the line.  Never raises: it is called where something
+        already went wrong."""
+        key = text if key is None else key
+        if key in self._warned or len(self._warned) > 10_000:
+            return
+        self._warned.add(key)
+        try:
+            sec, nsec = self.bus.stamp()
+            stream = self.bus.log_output()
+            stream.write(f"[WARN] [{sec}.{nsec:09d}] [llfsm.view]: {text}\n")
+            stream.flush()
+        except Exception:  # a closed stream at the end of a run: nothing more to say
+            pass
 
     # -- to be provided -----------------------------------------------------------------------------
     def machines(self) -> list[dict[str, Any]]:
