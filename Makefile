@@ -108,7 +108,8 @@ asan: $(VENV)/.installed-dev
 			build/asan/llfsm/$$m.c -o build/asan/llfsm/$$m$$($(PY) -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))') || exit 1; \
 	done
 	cd build/asan && LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libubsan.so)" \
-		ASAN_OPTIONS=detect_leaks=0 PYTHONMALLOC=malloc PYTHONPATH=. ../../$(PY) -m pytest -q -p no:cacheprovider $(ASAN_TESTS)
+		ASAN_OPTIONS=detect_leaks=0 PYTHONMALLOC=malloc PYTHONPATH=. LLFSM_NO_C= \
+		../../$(PY) -m pytest -q -p no:cacheprovider $(ASAN_TESTS)
 
 bench: $(VENV)/.installed-bench
 	$(PY) bench/run.py

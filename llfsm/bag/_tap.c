@@ -6,8 +6,9 @@
  * struct.pack, but on a busy bus that call is most of what recording costs a round (about
  * 0.2 us a message beside ~0.17 us per machine ringlet).  A Tap does the same work in one C
  * call: it reads the message's slots directly (at the offsets of the member descriptors of
- * the exact classes it saw first), packs as struct.pack does (the same integer ranges, the
- * same float rounding) and appends to a Spool, which keeps its memory between batches.
+ * the exact classes it saw first, where reading the slot is what Python's attribute access
+ * would do: see `resolve`), packs as struct.pack does (the same integer ranges, the same float
+ * rounding) and appends to a Spool, which keeps its memory between batches.
  *
  * It never decides a message is wrong: whenever anything is not as expected (another class at
  * some level, an unset slot, a value struct.pack would refuse or convert some other way), it
@@ -17,10 +18,22 @@
  * A Tap is made from the `layout` of the message's Codec (llfsm/compiler/dds.py writes it):
  * one (format, path) pair per struct item of the CDR after its header, for example
  * ("d", "_linear._x"), ("36d", "*_covariance") or ("3x", "").
+ *
+ * One rule for everything below: nothing borrowed (a pointer into an object, a size, the tap's
+ * own fields) is kept across a call that can run Python code (clock.now, a fallback, a
+ * destructor), since that code may change or free it.  The only such call in the fast path is
+ * clock.now; a call holds its own references to what it uses, and reserves and writes its
+ * record after clock.now, running no Python code in between.
+ *
+ * It needs CPython's full C API (member descriptors, type version tags, _PyType_Lookup: not in
+ * the limited API) and the GIL (setup.py says why, and skips it on free-threaded builds).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <structmember.h>
+#ifdef Py_GIL_DISABLED
+#error "llfsm.bag._tap needs the GIL: free-threaded CPython is not supported (setup.py skips it there)"
+#endif
 #include <stdint.h>
 #include <math.h>
 #include <string.h>
@@ -122,8 +135,23 @@ typedef struct {
     Py_ssize_t hops;      /* attribute names from the message to the value */
     PyObject **names;     /* interned str, owned */
     PyTypeObject **types; /* the class seen at each hop when resolved, owned */
+    unsigned int *versions; /* its tp_version_tag then: any change to the class (or a base) changes it */
     Py_ssize_t *offsets;  /* its slot's offset */
 } Item;
+
+/* A tap's layout: its items and the CDR size they make.  Tap.__init__ builds a new one aside and
+ * swaps it in only when it is whole; nothing changes it after that but what `resolve` learns
+ * (classes and offsets, each hop's three written together).  A call holds a reference to the
+ * layout it started with, whatever Python code it runs meanwhile (clock.now) does to the tap. */
+typedef struct {
+    PyObject_HEAD
+    uint32_t size;      /* CDR size, header included */
+    Py_ssize_t nitems;
+    Item *items;
+    int resolved;       /* 0 not yet, 1 yes, -1 never (always the fallback) */
+} LayoutObject;
+
+static PyTypeObject LayoutType;
 
 typedef struct {
     PyObject_HEAD
@@ -131,11 +159,8 @@ typedef struct {
     SpoolObject *out;   /* the recorder's spool */
     PyObject *clock;    /* anything with an int `now` */
     PyObject *fallback; /* the generated Python tap: same bytes, or the error */
+    LayoutObject *layout; /* NULL until __init__ succeeds */
     uint32_t key;
-    uint32_t size;      /* CDR size, header included */
-    Py_ssize_t nitems;
-    Item *items;
-    int resolved;       /* 0 not yet, 1 yes, -1 never (always the fallback) */
     unsigned long long fallbacks; /* calls handed to the fallback (tests read it) */
 } TapObject;
 
@@ -219,55 +244,87 @@ error:
     return -1;
 }
 
-/* The object at the end of an item's path, borrowed; NULL (no error set) if some level is
- * not the class it was. */
-static PyObject *walk(const Item *it, PyObject *m) {
+/* The object at the end of an item's path, borrowed: 0; -1 if some level is not the class it
+ * was (the fallback's case); -2 if that class has changed since it was resolved (resolve again).
+ * Runs no Python code, so nothing can free what it hands back before the caller has packed it. */
+static int walk(const Item *it, PyObject *m, PyObject **v) {
     PyObject *o = m;
     for (Py_ssize_t j = 0; j < it->hops; j++) {
-        if (Py_TYPE(o) != it->types[j]) return NULL;
+        PyTypeObject *t = it->types[j];
+        if (Py_TYPE(o) != t) return -1; /* (never NULL: an unresolved hop never matches) */
+        if (t->tp_version_tag != it->versions[j]) return -2;
         o = *(PyObject **)((char *)o + it->offsets[j]);
-        if (o == NULL) return NULL;
+        if (o == NULL) return -1;
     }
-    return o;
+    *v = o;
+    return 0;
 }
 
-/* Learn each hop's class and slot offset from this message: 0, or -1 if some attribute on the
- * way is not a slot holding an object (then this tap always falls back).  Sets no error. */
-static int resolve(TapObject *self, PyObject *m) {
-    for (Py_ssize_t i = 0; i < self->nitems; i++) {
-        Item *it = &self->items[i];
+/* 1 if every name in the class dicts of t's MRO is an exact str: looking a name up there then
+ * compares strings only and never runs Python code (a str subclass's __eq__ or an object's
+ * __hash__ could, and change the class under the lookup). */
+static int plain_dicts(PyTypeObject *t) {
+    PyObject *mro = t->tp_mro;
+    if (mro == NULL || !PyTuple_Check(mro)) return 0;
+    for (Py_ssize_t i = 0; i < PyTuple_GET_SIZE(mro); i++) {
+        PyObject *base = PyTuple_GET_ITEM(mro, i);
+        if (!PyType_Check(base)) return 0;
+        PyObject *dict = ((PyTypeObject *)base)->tp_dict, *key, *value;
+        if (dict == NULL || !PyDict_CheckExact(dict)) return 0;
+        Py_ssize_t pos = 0;
+        while (PyDict_Next(dict, &pos, &key, &value))
+            if (!PyUnicode_CheckExact(key)) return 0;
+    }
+    return 1;
+}
+
+/* Learn each hop's class and slot offset from this message: 0, or -1 if at some hop the tap
+ * cannot read what `o.name` gives in Python (then this layout always falls back).  A hop is
+ * read in C only where Python's attribute access would come down to reading that very slot:
+ * the class looks attributes up the ordinary way (no __getattribute__ or __getattr__), `name`
+ * found on it (first in its MRO) is a member descriptor for an object slot, and that
+ * descriptor belongs to the class itself.  A generated message class declares its own slots,
+ * so it passes; a subclass passes only by declaring the slot again itself, and anything else
+ * (a slot descriptor of another class, which would make the offset point into some other
+ * layout; a property; a plain class attribute; an inherited slot) goes to the Python tap.
+ * Runs no Python code (see plain_dicts) and sets no error. */
+static int resolve(LayoutObject *layout, PyObject *m) {
+    for (Py_ssize_t i = 0; i < layout->nitems; i++) {
+        Item *it = &layout->items[i];
         PyObject *o = m;
         for (Py_ssize_t j = 0; j < it->hops; j++) {
             PyTypeObject *t = Py_TYPE(o);
-            PyObject *d = PyObject_GetAttr((PyObject *)t, it->names[j]);
-            if (d == NULL) { PyErr_Clear(); return -1; }
-            int slot = Py_IS_TYPE(d, &PyMemberDescr_Type)
-                && ((PyMemberDescrObject *)d)->d_member->type == T_OBJECT_EX;
-            Py_ssize_t offset = slot ? ((PyMemberDescrObject *)d)->d_member->offset : 0;
-            Py_DECREF(d);
-            if (!slot) return -1;
+            if (t->tp_getattro != PyObject_GenericGetAttr || !plain_dicts(t)) return -1;
+            PyObject *d = _PyType_Lookup(t, it->names[j]); /* borrowed; assigns t a version tag */
+            if (d == NULL || !Py_IS_TYPE(d, &PyMemberDescr_Type)) return -1;
+            PyMemberDef *member = ((PyMemberDescrObject *)d)->d_member;
+            if (PyDescr_TYPE(d) != t || member->type != T_OBJECT_EX || (member->flags & PY_AUDIT_READ)) return -1;
+            if (t->tp_version_tag == 0) return -1; /* no tag to tell a later change by */
             Py_INCREF(t);
             Py_XSETREF(it->types[j], t);
-            it->offsets[j] = offset;
-            o = *(PyObject **)((char *)o + offset);
+            it->versions[j] = t->tp_version_tag;
+            it->offsets[j] = member->offset;
+            o = *(PyObject **)((char *)o + member->offset);
             if (o == NULL) return -1;
         }
     }
     return 0;
 }
 
-/* Pack the CDR body into buf; 0, or -1 (no error set) to fall back. */
-static int pack_body(TapObject *self, PyObject *m, unsigned char *p) {
-    for (Py_ssize_t i = 0; i < self->nitems; i++) {
-        const Item *it = &self->items[i];
+/* Pack the CDR body into p: 0; -1 to fall back; -2 if a class has changed since it was resolved.
+ * Runs no Python code and sets no error. */
+static int pack_body(LayoutObject *layout, PyObject *m, unsigned char *p) {
+    for (Py_ssize_t i = 0; i < layout->nitems; i++) {
+        const Item *it = &layout->items[i];
         Py_ssize_t w = item_width(it->code);
         if (it->code == 'x') {
             memset(p, 0, (size_t)it->count);
             p += it->count;
             continue;
         }
-        PyObject *v = walk(it, m);
-        if (v == NULL) return -1;
+        PyObject *v;
+        int got = walk(it, m, &v);
+        if (got < 0) return got;
         if (!it->starred) {
             if (put_value(it->code, v, p) < 0) return -1;
             p += w;
@@ -289,7 +346,7 @@ static int pack_body(TapObject *self, PyObject *m, unsigned char *p) {
 }
 
 /* clock.now as an int64: 1; 0 (no error set) if it is not an int that fits; -1 if reading it
- * raised. */
+ * raised.  Runs Python code (a property, __getattr__, a destructor...). */
 static int read_now(PyObject *clock, long long *t) {
     PyObject *now = PyObject_GetAttr(clock, str_now);
     if (now == NULL) return -1;
@@ -301,9 +358,35 @@ static int read_now(PyObject *clock, long long *t) {
     return fits;
 }
 
-static PyObject *tap_fallback(TapObject *self, PyObject *m) {
+/* One call, with what the tap held when it began (owned by the caller for the whole call). */
+static PyObject *tap_record(TapObject *self, LayoutObject *layout, SpoolObject *out, PyObject *clock,
+                            PyObject *fallback, uint32_t key, PyObject *m) {
+    if (layout->resolved == 0) layout->resolved = resolve(layout, m) == 0 ? 1 : -1;
+    if (layout->resolved < 0) goto fall_back;
+    long long t;
+    int got = read_now(clock, &t); /* Python code: from here on, nothing borrowed from before */
+    if (got < 0) return NULL;
+    if (got == 0) goto fall_back;
+    Py_ssize_t total = HEAD + layout->size;
+    if (spool_reserve(out, total) < 0) return NULL;
+    /* From the reservation to the commit no Python code runs: p stays valid, and the record is
+     * appended whole or not at all. */
+    unsigned char *p = (unsigned char *)out->data + out->len;
+    int packed = pack_body(layout, m, p + HEAD + 4);
+    if (packed == -2) { /* a class changed (an attribute set on it, say): learn it again */
+        layout->resolved = resolve(layout, m) == 0 ? 1 : -1;
+        packed = layout->resolved > 0 ? pack_body(layout, m, p + HEAD + 4) : -1;
+    }
+    if (packed < 0) goto fall_back;
+    put_u32(p, key);
+    put_u64(p + 4, (uint64_t)t);
+    put_u32(p + 12, layout->size);
+    memcpy(p + HEAD, CDR_LE, 4);
+    out->len += total;
+    Py_RETURN_NONE;
+fall_back:
     self->fallbacks++;
-    return PyObject_CallOneArg(self->fallback, m);
+    return PyObject_CallOneArg(fallback, m);
 }
 
 static PyObject *tap_vectorcall(PyObject *callable, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
@@ -312,42 +395,41 @@ static PyObject *tap_vectorcall(PyObject *callable, PyObject *const *args, size_
         PyErr_SetString(PyExc_TypeError, "a tap takes one message");
         return NULL;
     }
-    PyObject *m = args[0];
-    if (self->resolved == 0) self->resolved = resolve(self, m) == 0 ? 1 : -1;
-    if (self->resolved < 0) return tap_fallback(self, m);
-
-    long long t;
-    int got = read_now(self->clock, &t);
-    if (got < 0) return NULL;
-    if (got == 0) return tap_fallback(self, m);
+    if (self->layout == NULL) {
+        PyErr_SetString(PyExc_TypeError, "this Tap was never initialised");
+        return NULL;
+    }
+    /* Held for the whole call: clock.now runs Python code, which may re-initialise this tap or
+     * drop the last other reference to any of these. */
+    LayoutObject *layout = self->layout;
     SpoolObject *out = self->out;
-    Py_ssize_t total = HEAD + self->size;
-    if (spool_reserve(out, total) < 0) return NULL;
-    unsigned char *p = (unsigned char *)out->data + out->len; /* committed only when whole */
-    if (pack_body(self, m, p + HEAD + 4) < 0) return tap_fallback(self, m);
-    put_u32(p, self->key);
-    put_u64(p + 4, (uint64_t)t);
-    put_u32(p + 12, self->size);
-    memcpy(p + HEAD, CDR_LE, 4);
-    out->len += total;
-    Py_RETURN_NONE;
+    PyObject *clock = self->clock, *fallback = self->fallback;
+    Py_INCREF(layout);
+    Py_INCREF(out);
+    Py_INCREF(clock);
+    Py_INCREF(fallback);
+    PyObject *result = tap_record(self, layout, out, clock, fallback, self->key, args[0]);
+    Py_DECREF(layout);
+    Py_DECREF(out);
+    Py_DECREF(clock);
+    Py_DECREF(fallback);
+    return result;
 }
 
-static void free_items(TapObject *self) {
-    if (self->items == NULL) return;
-    for (Py_ssize_t i = 0; i < self->nitems; i++) {
-        Item *it = &self->items[i];
+static void free_items(Item *items, Py_ssize_t n) {
+    if (items == NULL) return;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        Item *it = &items[i];
         for (Py_ssize_t j = 0; j < it->hops; j++) {
             if (it->names) Py_XDECREF(it->names[j]);
             if (it->types) Py_XDECREF(it->types[j]);
         }
         PyMem_Free(it->names);
         PyMem_Free(it->types);
+        PyMem_Free(it->versions);
         PyMem_Free(it->offsets);
     }
-    PyMem_Free(self->items);
-    self->items = NULL;
-    self->nitems = 0;
+    PyMem_Free(items);
 }
 
 static int split_path(const char *path, Item *it) {
@@ -356,11 +438,12 @@ static int split_path(const char *path, Item *it) {
         hops = 1;
         for (const char *c = path; *c; c++) hops += *c == '.';
     }
-    it->hops = hops;
-    it->names = PyMem_Calloc((size_t)(hops ? hops : 1), sizeof(PyObject *));
-    it->types = PyMem_Calloc((size_t)(hops ? hops : 1), sizeof(PyTypeObject *));
-    it->offsets = PyMem_Calloc((size_t)(hops ? hops : 1), sizeof(Py_ssize_t));
-    if (!it->names || !it->types || !it->offsets) {
+    size_t n = (size_t)(hops ? hops : 1);
+    it->names = PyMem_Calloc(n, sizeof(PyObject *));
+    it->types = PyMem_Calloc(n, sizeof(PyTypeObject *));
+    it->versions = PyMem_Calloc(n, sizeof(unsigned int));
+    it->offsets = PyMem_Calloc(n, sizeof(Py_ssize_t));
+    if (!it->names || !it->types || !it->versions || !it->offsets) {
         PyErr_NoMemory();
         return -1;
     }
@@ -376,6 +459,7 @@ static int split_path(const char *path, Item *it) {
         if (name == NULL) return -1;
         PyUnicode_InternInPlace(&name);
         it->names[j] = name;
+        it->hops = j + 1; /* what free_items releases, should a later name fail */
         start = end ? end + 1 : start + len;
     }
     return 0;
@@ -410,47 +494,102 @@ static Py_ssize_t parse_item(PyObject *pair, Item *it) {
     return count * item_width(it->code);
 }
 
+/* A whole new layout from a tuple of (format, path) pairs, or NULL with the error set. */
+static LayoutObject *layout_from(PyObject *pairs) {
+    LayoutObject *layout = PyObject_GC_New(LayoutObject, &LayoutType);
+    if (layout == NULL) return NULL;
+    Py_ssize_t n = PyTuple_GET_SIZE(pairs);
+    layout->size = 0;
+    layout->resolved = 0;
+    layout->nitems = n;
+    layout->items = PyMem_Calloc((size_t)(n ? n : 1), sizeof(Item));
+    PyObject_GC_Track(layout);
+    if (layout->items == NULL) {
+        Py_DECREF(layout);
+        return (LayoutObject *)PyErr_NoMemory();
+    }
+    Py_ssize_t body = 0;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        Py_ssize_t bytes = parse_item(PyTuple_GET_ITEM(pairs, i), &layout->items[i]);
+        if (bytes < 0) {
+            Py_DECREF(layout);
+            return NULL;
+        }
+        body += bytes; /* at most 2**20 items of 8 bytes each: no overflow before the check below */
+        if (body > (1 << 24)) {
+            PyErr_SetString(PyExc_ValueError, "a tap's layout is larger than 16 MiB");
+            Py_DECREF(layout);
+            return NULL;
+        }
+    }
+    layout->size = (uint32_t)(4 + body);
+    return layout;
+}
+
+static int layout_traverse(LayoutObject *self, visitproc visit, void *arg) {
+    for (Py_ssize_t i = 0; self->items && i < self->nitems; i++)
+        for (Py_ssize_t j = 0; j < self->items[i].hops; j++)
+            Py_VISIT((PyObject *)self->items[i].types[j]);
+    return 0;
+}
+
+static int layout_clear(LayoutObject *self) {
+    for (Py_ssize_t i = 0; self->items && i < self->nitems; i++)
+        for (Py_ssize_t j = 0; j < self->items[i].hops; j++)
+            Py_CLEAR(self->items[i].types[j]); /* walk then never matches: a NULL class */
+    return 0;
+}
+
+static void layout_dealloc(LayoutObject *self) {
+    PyObject_GC_UnTrack(self);
+    free_items(self->items, self->nitems);
+    PyObject_GC_Del(self);
+}
+
+static PyTypeObject LayoutType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "llfsm.bag._tap._Layout",
+    .tp_basicsize = sizeof(LayoutObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC,
+    .tp_dealloc = (destructor)layout_dealloc,
+    .tp_traverse = (traverseproc)layout_traverse,
+    .tp_clear = (inquiry)layout_clear,
+};
+
 static int tap_init(TapObject *self, PyObject *args, PyObject *kwds) {
     static char *kwlist[] = {"out", "key", "clock", "layout", "fallback", NULL};
-    PyObject *out, *clock, *layout, *fallback;
-    unsigned long key;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O!kOO!O:Tap", kwlist, &SpoolType, &out, &key, &clock,
-                                     &PyTuple_Type, &layout, &fallback))
+    PyObject *out, *key_obj, *clock, *pairs, *fallback;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O!O!OO!O:Tap", kwlist, &SpoolType, &out, &PyLong_Type, &key_obj,
+                                     &clock, &PyTuple_Type, &pairs, &fallback))
         return -1;
-    if (!PyCallable_Check(fallback) || key > UINT32_MAX) {
+    unsigned long key = PyLong_AsUnsignedLong(key_obj); /* (not "k", which wraps 2**64 round to 0) */
+    if ((key == (unsigned long)-1 && PyErr_Occurred()) || key > UINT32_MAX || !PyCallable_Check(fallback)) {
+        PyErr_Clear();
         PyErr_SetString(PyExc_ValueError, "Tap(out, key < 2**32, clock, layout, fallback: a callable)");
         return -1;
     }
-    self->vectorcall = NULL; /* not callable again until the new layout is whole */
-    free_items(self);
-    Py_ssize_t n = PyTuple_GET_SIZE(layout);
-    self->items = PyMem_Calloc((size_t)(n ? n : 1), sizeof(Item));
-    if (self->items == NULL) {
-        PyErr_NoMemory();
-        return -1;
-    }
-    self->nitems = n;
-    Py_ssize_t body = 0;
-    for (Py_ssize_t i = 0; i < n; i++) {
-        Py_ssize_t bytes = parse_item(PyTuple_GET_ITEM(layout, i), &self->items[i]);
-        if (bytes < 0) return -1;
-        body += bytes;
-    }
-    if (body > (1 << 24)) {
-        PyErr_SetString(PyExc_ValueError, "a tap's layout is larger than 16 MiB");
-        return -1;
-    }
-    Py_ssize_t size = 4 + body;
+    /* Built aside: a layout that fails leaves the tap as it was (and a call in progress, which
+     * holds its own references, goes on with what it began with). */
+    LayoutObject *layout = layout_from(pairs);
+    if (layout == NULL) return -1;
+    /* Everything swapped in before anything old is released: a destructor that runs when the
+     * old clock goes may call this tap, and finds it whole. */
+    LayoutObject *old_layout = self->layout;
+    SpoolObject *old_out = self->out;
+    PyObject *old_clock = self->clock, *old_fallback = self->fallback;
     Py_INCREF(out);
-    Py_XSETREF(self->out, (SpoolObject *)out);
     Py_INCREF(clock);
-    Py_XSETREF(self->clock, clock);
     Py_INCREF(fallback);
-    Py_XSETREF(self->fallback, fallback);
+    self->layout = layout;
+    self->out = (SpoolObject *)out;
+    self->clock = clock;
+    self->fallback = fallback;
     self->key = (uint32_t)key;
-    self->size = (uint32_t)size;
-    self->resolved = 0;
     self->vectorcall = tap_vectorcall;
+    Py_XDECREF(old_layout);
+    Py_XDECREF(old_out);
+    Py_XDECREF(old_clock);
+    Py_XDECREF(old_fallback);
     return 0;
 }
 
@@ -458,10 +597,12 @@ static int tap_traverse(TapObject *self, visitproc visit, void *arg) {
     Py_VISIT((PyObject *)self->out);
     Py_VISIT(self->clock);
     Py_VISIT(self->fallback);
+    Py_VISIT((PyObject *)self->layout);
     return 0;
 }
 
 static int tap_clear(TapObject *self) {
+    Py_CLEAR(self->layout);
     Py_CLEAR(self->out);
     Py_CLEAR(self->clock);
     Py_CLEAR(self->fallback);
@@ -471,7 +612,6 @@ static int tap_clear(TapObject *self) {
 static void tap_dealloc(TapObject *self) {
     PyObject_GC_UnTrack(self);
     tap_clear(self);
-    free_items(self);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -509,8 +649,18 @@ static struct PyModuleDef tapmodule = {
 };
 
 PyMODINIT_FUNC PyInit__tap(void) {
+    /* LLFSM_NO_C=1: the import fails, so every place that imports this module takes the Python
+     * code it falls back to where the module is not built (tests run that way too).  Read here,
+     * where every import passes, rather than at each import site. */
+    const char *no_c = getenv("LLFSM_NO_C");
+    if (no_c != NULL && no_c[0] != '\0' && strcmp(no_c, "0") != 0) {
+        PyErr_SetString(PyExc_ImportError, "llfsm.bag._tap is disabled by LLFSM_NO_C");
+        return NULL;
+    }
     str_now = PyUnicode_InternFromString("now");
-    if (str_now == NULL || PyType_Ready(&TapType) < 0 || PyType_Ready(&SpoolType) < 0) return NULL;
+    if (str_now == NULL || PyType_Ready(&TapType) < 0 || PyType_Ready(&SpoolType) < 0
+        || PyType_Ready(&LayoutType) < 0)
+        return NULL;
     PyObject *m = PyModule_Create(&tapmodule);
     if (m == NULL) return NULL;
     Py_INCREF(&TapType);

@@ -11,9 +11,17 @@
  * fill_stroke(buf, x0, y0, x1, y1, rgba, width) -> bool: False, having painted nothing, where
  * anything is not the ordinary case (not a 500 x 500 RGBA bytearray, not floats, a rounding of
  * an infinity or NaN); the caller then uses the Python painter, which does what it always did.
+ *
+ * Nothing borrowed is kept across the one call that runs Python code (math.hypot, which is
+ * whatever `math.hypot` was when this module was imported): the image's size is checked again
+ * after it, and the image's memory is taken only then.  It needs the GIL (setup.py skips it on
+ * free-threaded CPython: another thread could resize the image while it paints).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#ifdef Py_GIL_DISABLED
+#error "llfsm.sim._paint needs the GIL: free-threaded CPython is not supported (setup.py skips it there)"
+#endif
 #include <math.h>
 #include <string.h>
 
@@ -130,6 +138,7 @@ static PyObject *fill_stroke(PyObject *module, PyObject *const *args, Py_ssize_t
             rows++;
         }
     }
+    if (PyByteArray_GET_SIZE(buf) != CANVAS_PX * CANVAS_PX * 4) Py_RETURN_FALSE; /* resized meanwhile */
     unsigned char *pixels = (unsigned char *)PyByteArray_AS_STRING(buf);
     const unsigned char *colour = (const unsigned char *)PyBytes_AS_STRING(rgba);
     for (long r = 0; r < rows; r++) {
@@ -155,6 +164,12 @@ static struct PyModuleDef paintmodule = {
 };
 
 PyMODINIT_FUNC PyInit__paint(void) {
+    /* LLFSM_NO_C=1: the import fails and llfsm.sim.world paints in Python (as llfsm.bag._tap) */
+    const char *no_c = getenv("LLFSM_NO_C");
+    if (no_c != NULL && no_c[0] != '\0' && strcmp(no_c, "0") != 0) {
+        PyErr_SetString(PyExc_ImportError, "llfsm.sim._paint is disabled by LLFSM_NO_C");
+        return NULL;
+    }
     PyObject *math = PyImport_ImportModule("math");
     if (math == NULL) return NULL;
     hypot_fn = PyObject_GetAttrString(math, "hypot");
