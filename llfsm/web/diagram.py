@@ -355,11 +355,16 @@ def _render(full: dict[str, Any]) -> str:
     if left_states or left_transitions:
         what = [f"{left_states:,} more states"] if left_states else []
         what += [f"{left_transitions:,} more transitions"] if left_transitions else []
-        note = (
-            f'<text class="omitted" x="{x0 + MARGIN / 2:.1f}" y="{height + 14:.1f}">{" and ".join(what)} not drawn '
-            f"(a diagram shows at most {MAX_DRAWN_STATES} states and {MAX_DRAWN_TRANSITIONS} transitions)</text>"
+        lines = [
+            f"{' and '.join(what)} not drawn",
+            f"(a diagram shows at most {MAX_DRAWN_STATES} states and {MAX_DRAWN_TRANSITIONS} transitions)",
+        ]
+        w = max(w, LABEL_CHAR_W * 1.1 * max(map(len, lines)) + MARGIN)
+        note = "".join(
+            f'<text class="omitted" x="{x0 + MARGIN / 2:.1f}" y="{height + 14 + 16 * i:.1f}">{_esc(line)}</text>'
+            for i, line in enumerate(lines)
         )
-        height += 28
+        height += 44
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" class="diagram" data-machine="{mid}" '
         f'viewBox="{x0:.0f} 0 {w:.0f} {height:.0f}" width="{w:.0f}" height="{height:.0f}" role="list" '

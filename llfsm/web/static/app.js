@@ -1,16 +1,29 @@
 // llfsm view: live over one WebSocket; commands, publishing and service calls as JSON POSTs.
 // Everything user-provided is set with textContent; the only markup inserted is the SVG the
-// server generated (diagrams, turtle world), parsed as SVG, never as HTML.
+// server generated (diagrams, turtle world), parsed as SVG, never as HTML.  The server escapes
+// every text of a peer's in that SVG (llfsm view shows what any DDS peer publishes); the page
+// also keeps only the elements a drawing is made of and drops event handlers and links, so a
+// mistake there still cannot put a peer's element or script into the page.
 "use strict";
 
 const cards = new Map(); // machine name -> {el, states: Map(state -> <g>), current}
 let lastWorld = null;
 const token = new URLSearchParams(location.search).get("token");
 
+const SVG_ELEMENTS = new Set(["svg", "defs", "marker", "path", "g", "title", "rect", "text", "circle", "polygon"]);
+
 function svgNode(text) {
   const doc = new DOMParser().parseFromString(text, "image/svg+xml");
   const root = doc.documentElement;
-  if (root.nodeName !== "svg") return document.createTextNode("(cannot draw)");
+  if (root.nodeName !== "svg" || doc.getElementsByTagName("parsererror").length) {
+    return document.createTextNode("(cannot draw)");
+  }
+  for (const e of [...root.querySelectorAll("*")]) {
+    if (!SVG_ELEMENTS.has(e.localName)) { e.remove(); continue; }
+    for (const a of [...e.attributes]) {
+      if (a.name.startsWith("on") || a.localName === "href" || a.localName === "style") e.removeAttribute(a.name);
+    }
+  }
   return document.importNode(root, true);
 }
 
