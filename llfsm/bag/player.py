@@ -64,7 +64,10 @@ class Player:
                     continue
                 if folder is None:
                     folder = scratch_folder()
-                cls = class_from_definition(c.msgtype, _format_name(c.msgdef.format), c.msgdef.data or "", folder)
+                try:
+                    cls = class_from_definition(c.msgtype, _format_name(c.msgdef.format), c.msgdef.data or "", folder)
+                except BagError as e:  # the type's names and definition come from the bag: say which bag
+                    raise BagError(f"{path}: {e}") from None
                 self.topics[c.topic] = cls
                 decoders[c.id] = types.deserializer(cls)
             # a bag llfsm recorded under the sim clock holds run times: they stay as they are

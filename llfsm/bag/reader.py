@@ -20,6 +20,18 @@ def _one_line(e: BaseException) -> str:
     return " ".join(str(e).split())
 
 
+def _checked_custom_data(folder: Path, path: str | Path) -> dict[str, str]:
+    """Check a bag folder's metadata.yaml (llfsm.bag.info's model: fields, ranges, files inside
+    the folder) before rosbags reads it; its custom_data."""
+    from .info import MetadataError, read_metadata
+
+    try:
+        meta = read_metadata(folder)
+    except MetadataError as e:
+        raise BagError(f"{path}: cannot read the bag: {e.detail}") from None
+    return dict(meta.custom_data or {})
+
+
 class BagReader:
     """A bag folder (with its metadata.yaml) or one storage file (`x.mcap`, `x.db3`)."""
 
@@ -29,8 +41,9 @@ class BagReader:
             self.path = self.path / file_name
         if not self.path.exists():
             raise BagError(f"{path}: no such bag")
-        if self.path.is_dir() and not (self.path / "metadata.yaml").is_file():
-            raise BagError(f"{path}: not a bag (no metadata.yaml in it)")
+        self._custom: dict[str, str] = {}
+        if self.path.is_dir():
+            self._custom = _checked_custom_data(self.path, path)
         try:
             from rosbags.highlevel import AnyReader  # noqa: F401  (rosbags is installed)
             from rosbags.rosbag2 import Reader
@@ -41,6 +54,10 @@ class BagReader:
             self._reader.open()
         except _reader_errors() as e:
             raise BagError(f"{path}: cannot read the bag: {_one_line(e)}") from None
+        except (AttributeError, ArithmeticError, RecursionError, LookupError) as e:
+            # rosbags parses metadata.yaml again (checked above) and the storage files: what it
+            # raises on a file made to break it is the file's fault, never a traceback
+            raise BagError(f"{path}: cannot read the bag: {type(e).__name__}: {_one_line(e)}") from None
 
     def __enter__(self) -> BagReader:
         return self
@@ -65,12 +82,7 @@ class BagReader:
     @property
     def custom_data(self) -> dict[str, str]:
         """The bag's custom_data (metadata.yaml), {} for a lone storage file."""
-        if not self.path.is_dir():
-            return {}
-        from .info import read_metadata
-
-        custom = read_metadata(self.path).get("custom_data")
-        return {str(k): str(v) for k, v in custom.items()} if isinstance(custom, dict) else {}
+        return dict(self._custom)
 
     @property
     def message_count(self) -> int:

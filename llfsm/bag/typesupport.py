@@ -21,6 +21,7 @@ from __future__ import annotations
 import importlib
 import os
 import re
+import stat
 import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -76,14 +77,32 @@ _PRIMITIVES = frozenset(
 _BUILTIN_DIR = Path(__file__).resolve().parent.parent / "msgs" / "_interfaces"
 
 
+# rosidl's rules for names (as llfsm.compiler.interfaces.PACKAGE_NAME and TYPE_NAME, which are
+# not imported here: that module loads jinja2, and a recording run never needs it).  A name a
+# bag brings becomes a folder, a file and a module path: `..`, `/x`, `os.path` must never pass.
+_PACKAGE_NAME = re.compile(r"(?!.*__)(?!.*_\Z)[a-z][a-z0-9_]*\Z")
+_TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*\Z")
+
+
 def _split(type_name: str) -> tuple[str, str]:
-    """`pkg/msg/Name` or `pkg/Name` -> (pkg, Name)."""
+    """`pkg/msg/Name` or `pkg/Name` -> (pkg, Name), both checked against ROS's rules, so that
+    either can be joined to a path or a module name: every name read from a bag passes here
+    before it is used."""
     parts = type_name.split("/")
     if len(parts) == 3 and parts[1] == "msg":
-        return parts[0], parts[2]
-    if len(parts) == 2:
+        parts = [parts[0], parts[2]]
+    if len(parts) == 2 and _PACKAGE_NAME.match(parts[0]) and _TYPE_NAME.match(parts[1]):
         return parts[0], parts[1]
-    raise BagError(f"not a message type name: {type_name!r}")
+    raise BagError(
+        f"not a valid message type name: {_printable(type_name)} (pkg/msg/Name: the package in "
+        "lower_snake_case, the name in CamelCase)"
+    )
+
+
+def _printable(text: str) -> str:
+    """A name from a file, quoted, with anything that is not printable escaped: it is shown on
+    one line of a terminal."""
+    return ascii(text) if not text.isprintable() else repr(text)
 
 
 class TypeSupport:
@@ -354,7 +373,9 @@ def class_from_definition(type_name: str, encoding: str, definition: str, folder
     """The class of a type a bag brings: llfsm's own if it has one, else compiled from the
     definition the bag embeds, through the interface import hook (the compiler's one door):
     the definition is split into PKG/msg/Name.msg files under `folder`, which joins the
-    interface search path."""
+    interface search path.  Every name (the type's, and each `MSG: pkg/Name` in the text) is
+    checked before it is used, and nothing is written outside `folder`."""
+    _split(type_name)  # a bad name is refused as such, before any lookup or message names it
     try:
         return class_for(type_name)
     except BagError:
@@ -369,19 +390,15 @@ def class_from_definition(type_name: str, encoding: str, definition: str, folder
     from ..msgs import add_search_path
 
     root_pkg, root_name = _split(type_name)
-    sections = [(f"{root_pkg}/{root_name}", definition.split("\n" + DELIMITER)[0])]
+    sections = [(root_pkg, root_name, definition.split("\n" + DELIMITER)[0])]
     for part in definition.split(DELIMITER)[1:]:
         header, _, body = part.partition("\n")
         if header.startswith("MSG: "):
             body = body.rsplit("\n\n", 1)[0] + "\n" if body.endswith("\n\n") else body
-            sections.append((header[5:].strip(), body))
-    for dep, text in sections:
-        pkg, name = _split(dep)
-        d = folder / pkg / "msg"
-        d.mkdir(parents=True, exist_ok=True)
-        target = d / f"{name}.msg"
-        if not target.exists():
-            target.write_text(text, encoding="utf-8")
+            sections.append((*_split(header[5:].strip()), body))
+    # every name is checked (above) before the first file is written
+    for pkg, name, text in sections:
+        _write_definition(folder, pkg, name, text)
     add_search_path(folder)
     importlib.invalidate_caches()
     try:
@@ -390,6 +407,35 @@ def class_from_definition(type_name: str, encoding: str, definition: str, folder
         raise BagError(f"{e}; the definition in the bag did not compile") from None
     except Exception as e:  # the interface compiler's own error names the file and line
         raise BagError(f"{type_name}: the definition in the bag does not compile: {e}") from None
+
+
+def _write_definition(folder: Path, pkg: str, name: str, text: str) -> None:
+    """Write `folder/pkg/msg/Name.msg`, where pkg and Name are checked names, without following
+    a link: the folders are made here or must be real folders, the file is created new
+    (O_EXCL | O_NOFOLLOW).  A file already written for the same type is kept, as the first of
+    two definitions of one type in a bag wins."""
+    d = folder
+    for part in (pkg, "msg"):
+        d = d / part
+        try:
+            os.mkdir(d, 0o700)
+        except FileExistsError:
+            if not stat.S_ISDIR(os.lstat(d).st_mode):  # a link, or a file, where a folder goes
+                raise BagError(f"{d}: not a folder of llfsm's; the definitions of the bag are not written") from None
+        except OSError as e:
+            raise BagError(f"{d}: cannot write the definitions of the bag: {e.strerror}") from None
+    target = d / f"{name}.msg"
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC
+    try:
+        fd = os.open(target, flags, 0o600)
+    except FileExistsError:
+        if stat.S_ISREG(os.lstat(target).st_mode):
+            return
+        raise BagError(f"{target}: not a file of llfsm's; the definitions of the bag are not written") from None
+    except OSError as e:
+        raise BagError(f"{target}: cannot write the definitions of the bag: {e.strerror}") from None
+    with os.fdopen(fd, "w", encoding="utf-8") as f:
+        f.write(text)
 
 
 def scratch_folder() -> Path:

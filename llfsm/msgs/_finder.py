@@ -72,6 +72,10 @@ def search_path() -> list[Path]:
 
 
 def _package_dir(package: str) -> str | None:
+    """The folder of the package in the search path.  Only a package name (ROS's rule) is
+    looked for: a name such as `..` or `a/b`, from a file or a peer, never becomes a path."""
+    if not _is_package_name(package):
+        return None
     for root in _roots():
         d = os.path.join(root, package)
         if os.path.isdir(os.path.join(d, "msg")) or os.path.isdir(os.path.join(d, "srv")):
