@@ -311,3 +311,22 @@ def test_the_interface_search_never_joins_a_name_that_is_not_a_package(
     monkeypatch.setenv("LLFSM_INTERFACE_PATH", str(root))
     for name in ("..", "../pkg", "../../pkg", "/tmp", "", "pkg\n", "Pkg"):
         assert find_package(name) is None, name
+
+
+@pytest.mark.parametrize("depth", [30, 5000])
+def test_deep_nesting_is_refused_by_the_pure_python_parser_too(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, depth: int
+) -> None:
+    """Where PyYAML has no libyaml, its parser recurses: a deep nesting is its RecursionError or
+    our depth limit, one MetadataError either way."""
+    from llfsm.bag.info import MetadataError, read_metadata
+
+    monkeypatch.delattr(yaml, "CSafeLoader", raising=False)
+    bag = tmp_path / "bag"
+    _bag(bag)
+    meta = bag / "metadata.yaml"
+    nested = "[" * depth + "]" * depth
+    meta.write_text(meta.read_text().replace("  custom_data: null\n", f"  custom_data: {nested}\n"))
+    with pytest.raises(MetadataError, match=r"metadata\.yaml") as e:
+        read_metadata(bag)
+    assert "\n" not in str(e.value)
