@@ -36,8 +36,6 @@ from dataclasses import dataclass
 from html import escape
 from typing import Any
 
-from .model import validate
-
 NODE_H = 34
 LAYER_GAP = 96
 NODE_GAP = 56
@@ -170,6 +168,8 @@ def svg(desc: dict[str, Any], current: str | None = None) -> str:
         if drawn is not None:
             _cache.move_to_end(key)  # type: ignore[arg-type]
     if drawn is None:
+        from .model import validate  # pydantic: imported when a diagram is first drawn, not with --web
+
         drawn = _render(validate(desc))
         if key is not None:
             with _cache_lock:

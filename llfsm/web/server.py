@@ -37,7 +37,6 @@ from typing import Any
 from aiohttp import WSMsgType, web
 
 from . import diagram
-from .model import DescriptionError
 from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
@@ -255,6 +254,8 @@ class WebServer:
     def _draw(self, descriptions: list[Any]) -> list[dict[str, Any]]:
         """(worker thread) Each machine's name, description text and SVG; one that cannot be
         drawn is left out, said once, and never stops the others."""
+        from .model import DescriptionError  # here, on the worker: pydantic takes a while to import
+
         out = []
         for d in descriptions:
             name = d.get("name") if isinstance(d, dict) else None
