@@ -268,6 +268,34 @@ def test_the_layout_runs_off_the_event_loop(
     assert answered and answered[0] < 1.0, answered  # the page was served while the diagram was laid out
 
 
+def test_a_discovery_sample_that_cannot_be_read_is_dropped_alone() -> None:
+    """(4) cyclonedds turns discovery samples into Python in one batch: one that it cannot read
+    (a topic name that is not UTF-8) raises for the whole batch.  The view takes them one at a
+    time, so only that one is lost, with one warning."""
+    from llfsm.web.graph import GraphSource
+
+    class Reader:
+        def __init__(self) -> None:
+            self.queue: list[Any] = ["a", UnicodeDecodeError("utf-8", b"\xff", 0, 1, "invalid"), "b", "c"]
+
+        def take(self, N: int = 1) -> list[Any]:
+            got, self.queue = self.queue[:N], self.queue[N:]
+            for g in got:
+                if isinstance(g, Exception):
+                    raise g
+            return got
+
+    class Owner:
+        warnings: list[str] = []
+
+        def warn(self, text: str, key: str | None = None) -> None:
+            self.warnings.append(text)
+
+    owner = Owner()
+    assert GraphSource._take(owner, Reader()) == ["a", "b", "c"]  # type: ignore[arg-type]
+    assert len(owner.warnings) == 1 and "could not be read" in owner.warnings[0]
+
+
 # -- over DDS: a hostile peer beside a real run and `llfsm view` ---------------------------------------------
 
 #: A hostile peer: raw samples of its own making on the machines' topics (latched, as a run's),

@@ -74,14 +74,30 @@ class GraphSource(Source):
         self._discover()
 
     # -- discovery (scheduler thread) ------------------------------------------------------------------
+    def _take(self, reader: Any) -> list[Any]:
+        """Discovery samples, taken one at a time: one that the library cannot turn into Python
+        (a peer's name that is not UTF-8) is dropped alone, with one warning, and the rest of the
+        round is read (taken as a batch, they would all be lost with it)."""
+        out = []
+        for _ in range(256):
+            try:
+                got = reader.take(N=1)
+            except Exception as e:
+                self.warn(f"discovery: dropped an endpoint that could not be read: {type(e).__name__}", "discovery")
+                continue
+            if not got:
+                break
+            out.extend(got)
+        return out
+
     def _discover(self) -> None:
         try:
             self._discover_once()
-        except Exception as e:  # a discovery sample the library cannot read: the next round goes on
-            self.warn(f"discovery: dropped what could not be read: {type(e).__name__}: {e}", key="discovery")
+        except Exception as e:  # never into the bus executor: the next round goes on
+            self.warn(f"discovery failed: {type(e).__name__}: {e}", key="discovery failed")
 
     def _discover_once(self) -> None:
-        for s in self._pubs.take(N=256):
+        for s in self._take(self._pubs):
             name, type_name = getattr(s, "topic_name", "") or "", getattr(s, "type_name", "") or ""
             if not name.startswith("rt/"):
                 continue
@@ -95,7 +111,7 @@ class GraphSource(Source):
                         self._follow(machine)
                     else:
                         self.warn(f"more than {MAX_MACHINES} machines on the graph: {topic} not followed", "machines")
-        for s in self._subs.take(N=256):
+        for s in self._take(self._subs):
             name, type_name = getattr(s, "topic_name", "") or "", getattr(s, "type_name", "") or ""
             if name.startswith("rq/") and name.endswith("Request") and len(name) > len("rq/Request"):
                 service = name[2 : -len("Request")]
