@@ -539,3 +539,47 @@ def test_the_page_in_chromium_follows_a_real_run_while_hostile_peers_publish(
     assert shot.exists() and shot.stat().st_size > 10_000
     print(f"screenshot: {shot}")
     assert "Traceback" not in "".join(err)
+
+
+def test_the_view_keeps_good_descriptions_drops_bad_ones_once_and_bounds_what_it_holds(
+    bus: Any, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """GraphSource's callbacks on a bus in this process (the DDS part is the test above): a bad
+    description after a good one leaves the good one, is said once however often it comes, and
+    the total the view holds is bounded."""
+    from llfsm import ros
+    from llfsm.msgs.std_msgs.msg import String
+    from llfsm.ros.control import LATCHED
+    from llfsm.web import graph
+    from llfsm.web.source import Source
+
+    monkeypatch.setattr(graph, "MAX_TOTAL", 100)
+    source = graph.GraphSource.__new__(graph.GraphSource)
+    Source.__init__(source, bus, "llfsm_view")  # the discovery readers are DDS's: not needed here
+    source._machines, source._order, source._keep = {}, [], []
+    node = ros.Node("peer")
+    pubs: dict[str, Any] = {}
+
+    def publish(machine: str, text: str, topic: str = "description") -> None:
+        name = f"/llfsm/{machine}/{topic}"
+        if name not in pubs:
+            pubs[name] = node.create_publisher(String, name, LATCHED)
+        pubs[name].publish(String(data=text))
+        bus.spin_some()
+
+    for m in ("m", "big", "other"):
+        source._follow(m)
+    publish("m", json.dumps(small("m")))
+    assert [d["name"] for d in source.machines()] == ["m"]
+    for _ in range(3):
+        publish("m", json.dumps({**small("m"), "states": [1, 2, 3]}))
+    assert source.machines()[0]["states"][0]["name"] == "A"  # the good one stays
+    publish("big", json.dumps(chain(60, name="big")))  # 120 states and transitions: beyond the total
+    publish("other", json.dumps(chain(40, name="other")))  # 80, and the 3 of m: within
+    assert [d["name"] for d in source.machines()] == ["m", "other"]
+    publish("m", "x" * 300, "state")
+    assert source.machine_rows()[0]["state"] == "x" * 255 + "…"
+    err = capsys.readouterr()
+    text = err.out + err.err
+    assert text.count("/llfsm/m/description: dropped a description that does not fit: states.0") == 1, text
+    assert text.count("/llfsm/big/description: dropped") == 1 and "at most 100" in text, text

@@ -20,6 +20,7 @@ the DDS transport's readers drop them with a warning.
 
 from __future__ import annotations
 
+import hashlib
 import re
 from collections import deque
 from typing import TYPE_CHECKING, Any
@@ -38,6 +39,9 @@ DISCOVERY_PERIOD = 0.25
 _SUFFIX = "/description"
 #: Machines followed at most (each costs two readers; a peer could announce thousands).
 MAX_MACHINES = 256
+#: States and transitions of all the descriptions kept, together: what a crowd of peers each
+#: publishing a description within the model's bounds can make the view hold (some 40 MB).
+MAX_TOTAL = 100_000
 #: A machine's name, as a ROS name token (what a run's `/llfsm/M/...` topics can carry).
 _MACHINE = re.compile(rf"[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME - 1}}}")
 
@@ -48,7 +52,8 @@ class _Machine:
     def __init__(self, name: str) -> None:
         self.name = name
         self.desc: dict[str, Any] | None = None
-        self.raw: str | None = None  # the description's text last seen (delivered again: nothing to do)
+        self.raw: bytes | None = None  # digest of the description's text last seen (the same again: nothing to do)
+        self.size = 0  # states and transitions of `desc`
         self.accepting: frozenset[str] = frozenset()
         self.state: str | None = None
         self.since = 0.0
@@ -125,9 +130,10 @@ class GraphSource(Source):
 
         def on_description(msg: Any) -> None:
             text = msg.data
-            if text == m.raw:
+            digest = hashlib.sha256(text.encode("utf-8", "surrogatepass")).digest()
+            if digest == m.raw:
                 return
-            m.raw = text
+            m.raw = digest
             try:
                 desc = parse_description(text, name)
             except DescriptionError as e:
@@ -136,8 +142,17 @@ class GraphSource(Source):
             except Exception as e:  # never into the bus executor: it would end the view
                 self.warn(f"{topic}: dropped a description that could not be read: {type(e).__name__}", key=topic)
                 return
+            size = len(desc["states"]) + sum(len(s["transitions"]) for s in desc["states"])
+            others = sum(o.size for o in self._machines.values() if o is not m)
+            if others + size > MAX_TOTAL:
+                self.warn(
+                    f"{topic}: dropped a description of {size:,} states and transitions: the view holds "
+                    f"{others:,} already, and at most {MAX_TOTAL:,}",
+                    key=topic,
+                )
+                return
             m.accepting = frozenset(s["name"] for s in desc["states"] if s["accepting"])
-            m.desc = desc
+            m.desc, m.size = desc, size
             if name not in self._order:
                 self._order.append(name)
 

@@ -21,7 +21,7 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 #: Characters of JSON accepted at all (a run's description of a few dozen states is a few KiB).
-MAX_TEXT = 8 << 20
+MAX_TEXT = 4 << 20
 #: States in one description (what is drawn is bounded further: llfsm.web.diagram).
 MAX_STATES = 10_000
 #: Transitions in one description, all states together.
