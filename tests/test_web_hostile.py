@@ -210,7 +210,7 @@ def fake() -> Iterator[tuple[WebServer, FakeSource]]:
 async def _messages(port: int, n: int, timeout: float = 10) -> list[dict[str, Any]]:
     import aiohttp
 
-    out = []
+    out: list[dict[str, Any]] = []
     async with aiohttp.ClientSession() as s, s.ws_connect(f"ws://127.0.0.1:{port}/ws") as ws:
         while len(out) < n:
             msg = await asyncio.wait_for(ws.receive(), timeout)

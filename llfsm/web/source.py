@@ -18,6 +18,7 @@ import json
 import time
 from collections import deque
 from concurrent.futures import Future as ThreadFuture
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from ..msgs import to_yaml
@@ -260,7 +261,7 @@ class Source:
             if reader is None:
                 if name not in self._asked and type_ is not None:
                     self._asked.add(name)
-                    self.bus.call_soon_threadsafe(lambda n=name, t=type_: self._watch(n, t))
+                    self.bus.call_soon_threadsafe(partial(self._watch, name, type_))
                 entry.update(count=0, rate=0.0, last="")
             else:
                 stats = self._stats.setdefault(name, _TopicStats())
