@@ -268,6 +268,42 @@ def test_the_layout_runs_off_the_event_loop(
     assert answered and answered[0] < 1.0, answered  # the page was served while the diagram was laid out
 
 
+def test_a_replaced_description_is_redrawn_but_pages_are_not_rebuilt_at_a_peers_pace(
+    fake: tuple[WebServer, FakeSource],
+) -> None:
+    """A description replaced under the same name is drawn afresh (a run restarted with a new
+    version, or a peer's), and a peer replacing it in a loop gets the pages a new hello at most
+    once a second, not at every snapshot."""
+    srv, source = fake
+    flip = {"n": 0}
+
+    def machines() -> list[Any]:
+        flip["n"] += 1
+        return [small("ok", state="A" if flip["n"] % 2 else "C")]  # a new description every time
+
+    source.machines = machines  # type: ignore[method-assign]
+
+    async def watch() -> list[str]:
+        import aiohttp
+
+        kinds = []
+        async with aiohttp.ClientSession() as s, s.ws_connect(f"ws://127.0.0.1:{srv.port}/ws") as ws:
+            loop = asyncio.get_running_loop()
+            end = loop.time() + 2.5
+            while loop.time() < end:
+                try:
+                    msg = await asyncio.wait_for(ws.receive(), end - loop.time())
+                except TimeoutError:
+                    break
+                kinds.append(json.loads(msg.data)["type"])
+        return kinds
+
+    kinds = asyncio.run(watch())
+    hellos = kinds.count("hello")
+    assert 2 <= hellos <= 5, kinds  # the first, then about one a second
+    assert kinds.count("snapshot") >= 10, kinds
+
+
 def test_a_discovery_sample_that_cannot_be_read_is_dropped_alone() -> None:
     """(4) cyclonedds turns discovery samples into Python in one batch: one that it cannot read
     (a topic name that is not UTF-8) raises for the whole batch.  The view takes them one at a

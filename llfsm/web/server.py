@@ -41,6 +41,9 @@ from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
 RATE = 20
+#: Seconds between two hellos sent because the machines changed (a peer replacing its
+#: description in a loop must not have every page rebuilt 20 times a second).
+HELLO_PERIOD = 1.0
 COOKIE = "llfsm_token"
 LOOPBACK_NAMES = {"localhost", "127.0.0.1", "::1", "[::1]"}
 _STATIC = {"app.js": "text/javascript", "style.css": "text/css"}
@@ -319,6 +322,8 @@ class WebServer:
         assert self._wake is not None
         machines = self._descriptions()
         hello: asyncio.Task[None] | None = None
+        loop = asyncio.get_running_loop()
+        hello_at = -HELLO_PERIOD
         while True:
             await asyncio.sleep(1 / self.rate)
             if not self.clients:
@@ -329,9 +334,10 @@ class WebServer:
             try:
                 now = self._descriptions()
                 changed = len(now) != len(machines) or any(a is not b for a, b in zip(now, machines, strict=True))
-                if changed and (hello is None or hello.done()):
+                if changed and (hello is None or hello.done()) and loop.time() - hello_at >= HELLO_PERIOD:
                     machines = now  # objects, not names: a description replaced is drawn afresh
-                    hello = asyncio.get_running_loop().create_task(self._send_hello())
+                    hello_at = loop.time()
+                    hello = loop.create_task(self._send_hello())
                 text = dumps(self._snapshot())
                 if text != last:
                     last = text
