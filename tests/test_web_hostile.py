@@ -485,7 +485,6 @@ def test_llfsm_view_keeps_serving_and_following_a_real_run_beside_a_hostile_peer
         finish(run, 20)
         finish(view, 20)
     text = "".join(err)
-    print(text)
     assert "Traceback" not in text, text
     for machine in ("evil_states", "evil_index", "deep"):
         warned = [line for line in text.splitlines() if f"/llfsm/{machine}/description" in line]
