@@ -278,6 +278,33 @@ static int plain_dicts(PyTypeObject *t) {
     return 1;
 }
 
+/* The classes a layout stopped referring to during one call, released when the call is done.
+ * A class is kept alive by cycles of its own (its __mro__), so this is caution more than need:
+ * but a Py_DECREF that frees something runs Python code (weak references' callbacks), and no
+ * Python code may run while the call holds borrowed pointers or a reserved record. */
+typedef struct {
+    PyObject **items;
+    Py_ssize_t n, cap;
+} Retired;
+
+static int retire(Retired *r, PyObject *o) {
+    if (o == NULL) return 0;
+    if (r->n == r->cap) {
+        Py_ssize_t cap = r->cap ? 2 * r->cap : 8;
+        PyObject **items = PyMem_Realloc(r->items, (size_t)cap * sizeof(PyObject *));
+        if (items == NULL) return -1;
+        r->items = items;
+        r->cap = cap;
+    }
+    r->items[r->n++] = o;
+    return 0;
+}
+
+static void release(Retired *r) {
+    for (Py_ssize_t i = 0; i < r->n; i++) Py_DECREF(r->items[i]);
+    PyMem_Free(r->items);
+}
+
 /* Learn each hop's class and slot offset from this message: 0, or -1 if at some hop the tap
  * cannot read what `o.name` gives in Python (then this layout always falls back).  A hop is
  * read in C only where Python's attribute access would come down to reading that very slot:
@@ -287,8 +314,9 @@ static int plain_dicts(PyTypeObject *t) {
  * so it passes; a subclass passes only by declaring the slot again itself, and anything else
  * (a slot descriptor of another class, which would make the offset point into some other
  * layout; a property; a plain class attribute; an inherited slot) goes to the Python tap.
- * Runs no Python code (see plain_dicts) and sets no error. */
-static int resolve(LayoutObject *layout, PyObject *m) {
+ * Runs no Python code (see plain_dicts; the classes it stops referring to go to `retired`)
+ * and sets no error. */
+static int resolve(LayoutObject *layout, PyObject *m, Retired *retired) {
     for (Py_ssize_t i = 0; i < layout->nitems; i++) {
         Item *it = &layout->items[i];
         PyObject *o = m;
@@ -300,8 +328,11 @@ static int resolve(LayoutObject *layout, PyObject *m) {
             PyMemberDef *member = ((PyMemberDescrObject *)d)->d_member;
             if (PyDescr_TYPE(d) != t || member->type != T_OBJECT_EX || (member->flags & PY_AUDIT_READ)) return -1;
             if (t->tp_version_tag == 0) return -1; /* no tag to tell a later change by */
-            Py_INCREF(t);
-            Py_XSETREF(it->types[j], t);
+            if (it->types[j] != t) { /* (the hop's class, version and offset change together) */
+                if (retire(retired, (PyObject *)it->types[j]) < 0) return -1;
+                Py_INCREF(t);
+                it->types[j] = t;
+            }
             it->versions[j] = t->tp_version_tag;
             it->offsets[j] = member->offset;
             o = *(PyObject **)((char *)o + member->offset);
@@ -361,20 +392,22 @@ static int read_now(PyObject *clock, long long *t) {
 /* One call, with what the tap held when it began (owned by the caller for the whole call). */
 static PyObject *tap_record(TapObject *self, LayoutObject *layout, SpoolObject *out, PyObject *clock,
                             PyObject *fallback, uint32_t key, PyObject *m) {
-    if (layout->resolved == 0) layout->resolved = resolve(layout, m) == 0 ? 1 : -1;
+    Retired retired = {NULL, 0, 0};
+    PyObject *result = NULL;
+    if (layout->resolved == 0) layout->resolved = resolve(layout, m, &retired) == 0 ? 1 : -1;
     if (layout->resolved < 0) goto fall_back;
     long long t;
     int got = read_now(clock, &t); /* Python code: from here on, nothing borrowed from before */
-    if (got < 0) return NULL;
+    if (got < 0) goto done;
     if (got == 0) goto fall_back;
     Py_ssize_t total = HEAD + layout->size;
-    if (spool_reserve(out, total) < 0) return NULL;
+    if (spool_reserve(out, total) < 0) goto done;
     /* From the reservation to the commit no Python code runs: p stays valid, and the record is
      * appended whole or not at all. */
     unsigned char *p = (unsigned char *)out->data + out->len;
     int packed = pack_body(layout, m, p + HEAD + 4);
     if (packed == -2) { /* a class changed (an attribute set on it, say): learn it again */
-        layout->resolved = resolve(layout, m) == 0 ? 1 : -1;
+        layout->resolved = resolve(layout, m, &retired) == 0 ? 1 : -1;
         packed = layout->resolved > 0 ? pack_body(layout, m, p + HEAD + 4) : -1;
     }
     if (packed < 0) goto fall_back;
@@ -383,10 +416,14 @@ static PyObject *tap_record(TapObject *self, LayoutObject *layout, SpoolObject *
     put_u32(p + 12, layout->size);
     memcpy(p + HEAD, CDR_LE, 4);
     out->len += total;
-    Py_RETURN_NONE;
+    result = Py_NewRef(Py_None);
+    goto done;
 fall_back:
     self->fallbacks++;
-    return PyObject_CallOneArg(fallback, m);
+    result = PyObject_CallOneArg(fallback, m);
+done:
+    release(&retired);
+    return result;
 }
 
 static PyObject *tap_vectorcall(PyObject *callable, PyObject *const *args, size_t nargsf, PyObject *kwnames) {
