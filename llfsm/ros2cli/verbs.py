@@ -137,6 +137,16 @@ def _node(name: str) -> Iterator[tuple[Node, Graph]]:
         activate(prev)
 
 
+def _samples(reader: Any, name: str, cls: type[Message]) -> Any:
+    """The decoded messages of a verb's reader, on llfsm's one decoding path
+    (llfsm/ros/transports/dds_read.py): a sample that is not a `cls` (a string that is not
+    UTF-8) is dropped with one warning on stderr per peer, and the verb goes on."""
+    from ..ros.transports.dds_read import Samples
+
+    decode = _types().from_cdr
+    return Samples(reader, lambda data: decode(data, cls), name, f"a {cls._TYPE}")
+
+
 class _Waiter:
     """Blocks until one of the readers has data, at most a given time (a wait set: no polling)."""
 
@@ -246,6 +256,7 @@ def echo(
         transient = bool(publishers) and all(p.transient_local for p in publishers)
         types = _types()
         reader = _reader(graph, f"rt{name}", types.dds_type(cls), _qos(reliable, transient, ECHO_DEPTH))
+        samples = _samples(reader, name, cls)
         waiter = _Waiter(graph, reader)
         patient = False  # a message was printed, or (streaming) a publisher is there: wait on
         while True:
@@ -256,11 +267,7 @@ def echo(
                 raise CliError(f"no message on '{name}' within {timeout:g} s ({where()})", NOT_FOUND)
             if not waiter.wait(left):
                 continue
-            for sample in reader.take(N=64):
-                info = getattr(sample, "sample_info", None)
-                if info is not None and not info.valid_data:
-                    continue
-                msg = types.from_dds(sample, cls)
+            for msg, _info in samples.take(64):
                 out.write(format_message(msg, path or [], truncate_length, no_arr, no_str))
                 out.flush()
                 patient = True
@@ -433,10 +440,13 @@ def hz(
     try:
         started = time.monotonic()
         readers = {}
+        samples = {}
         for name in names:
             left = max(0.0, timeout - (time.monotonic() - started))
             cls = _class_of_topic(name, wait_for_topic_types(graph, name, left))
-            readers[name] = _reader(graph, f"rt{name}", _types().dds_type(cls), _qos(False, False, ECHO_DEPTH))
+            reader = _reader(graph, f"rt{name}", _types().dds_type(cls), _qos(False, False, ECHO_DEPTH))
+            readers[name] = reader
+            samples[name] = _samples(reader, name, cls)
             if len(names) > 1:
                 out.write(f"Subscribed to [{name}]\n")
         waiter = _Waiter(graph, *readers.values())
@@ -452,10 +462,9 @@ def hz(
                     if meters[name].last_ns is None and not reader.get_subscription_matched_status().current_count:
                         raise CliError(f"no publisher of '{name}' matched within {timeout:g} s ({where()})", NOT_FOUND)
             if waiter.wait(min(next_print, end) - now):
-                for name, reader in readers.items():
-                    for sample in reader.take(N=256):
-                        if sample.sample_info.valid_data:
-                            meters[name].tick(time.monotonic_ns())
+                for name, taken in samples.items():
+                    for _msg, _info in taken.take():  # decoded: what ros2 could not read is not counted
+                        meters[name].tick(time.monotonic_ns())
             if time.monotonic() >= next_print:
                 text = meters[names[0]].report() if len(names) == 1 else rate_table(meters)
                 if text:

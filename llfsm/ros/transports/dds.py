@@ -32,17 +32,14 @@ from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from cyclonedds._clayer import ddspy_take, ddspy_write
+from cyclonedds._clayer import ddspy_write
 from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 from cyclonedds.core import (
     DDSStatus,
     Entity,
-    InstanceState,
     Policy,
     Qos,
     ReadCondition,
-    SampleState,
-    ViewState,
     WaitSet,
 )
 from cyclonedds.pub import DataWriter, Publisher
@@ -54,6 +51,7 @@ from ...msgs.rmw_dds_common.msg import Gid, NodeEntitiesInfo, ParticipantEntitie
 from . import dds_config
 from .base import Transport
 from .dds_graph import message_class, user_data_value
+from .dds_read import ANY, TAKE_BATCH, Samples
 
 if TYPE_CHECKING:
     from ...msgs._message import Message
@@ -61,14 +59,12 @@ if TYPE_CHECKING:
     from ..node import Client, Node, ServiceServer, Subscription
     from ..node import Publisher as RosPublisher
 
-ANY = SampleState.Any | ViewState.Any | InstanceState.Any
 U64 = (1 << 64) - 1
 #: How long a server keeps an answer for a client whose reply reader it has not matched yet
 #: (rmw_cyclonedds_cpp blocks 100 ms for this; we park the reply and go on running rounds).
 REPLY_PATIENCE_S = 2.0
 #: How long a client trusts its last look at the server's matches (spin calls ask often).
 READY_CACHE_S = 0.05
-TAKE_BATCH = 256
 #: rclpy's ReliabilityPolicy values (llfsm.ros.node), without importing the node module here.
 SYSTEM_DEFAULT, RELIABLE = 0, 1
 #: History depth of service endpoints: rmw's default service QoS (keep last 10, reliable, volatile).
@@ -89,14 +85,6 @@ def _write(writer: DataWriter, payload: bytes) -> None:
     ret = ddspy_write(writer._ref, payload)
     if ret < 0:
         raise RuntimeError(f"DDS write failed on {writer.topic.name if writer.topic else '?'} ({ret})")
-
-
-def _take(reader: DataReader) -> list[tuple[bytes, Any]]:
-    """Serialized samples with valid data, and their infos (payloads still to be decoded)."""
-    ret = ddspy_take(reader._ref, ANY, TAKE_BATCH)
-    if isinstance(ret, int):
-        return []
-    return [(data, info) for data, info in ret if info.valid_data]
 
 
 def _type_hash(cls: type) -> bytes:
@@ -264,6 +252,10 @@ class _Reader(_Endpoint):
             ),
         )
         self.readers = (self.reader,)
+        cls = sub.msg_type
+        self.samples = Samples(
+            self.reader, lambda data: _dds.from_cdr(data, cls), sub.topic_name, f"a {cls._TYPE}", t.warn
+        )
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
         self.reader.set_status_mask(DDSStatus.RequestedIncompatibleQos)
@@ -272,13 +264,8 @@ class _Reader(_Endpoint):
         t.add_endpoint(self)
 
     def on_trigger(self) -> None:
-        deliver, cls, decode = self.sub._deliver, self.msg_type, _dds.from_cdr
-        for data, _info in _take(self.reader):
-            try:
-                msg = decode(data, cls)
-            except ValueError as e:
-                self.t.warn(f"{self.sub.topic_name}: dropped a sample that is not a {cls._TYPE}: {e}")
-                continue
+        deliver = self.sub._deliver
+        for msg, _info in self.samples.take():
             deliver(msg)
 
     def close(self) -> None:
@@ -331,19 +318,17 @@ class _Server(_Endpoint):
             t.publisher_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.type.Response)), qos=_qos(SERVICE_DEPTH)
         )
         self.readers, self.writers = (self.reader, self.bare_reader), (self.writer, self.bare_writer)
+        cls = srv.type.Request
+        self.requests = Samples(
+            self.reader, lambda data: _dds.unwrap(data, cls), name, f"a {cls._TYPE}", t.warn, kind="request"
+        )
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
         self.bare = _BareRequests(self)
         t.add_endpoint(self)
 
     def on_trigger(self) -> None:
-        cls = self.srv.type.Request
-        for data, info in _take(self.reader):
-            try:
-                guid, seq, request = _dds.unwrap(data, cls)
-            except ValueError as e:
-                self.t.warn(f"{self.srv.srv_name}: dropped a request that is not a {cls._TYPE}: {e}")
-                continue
+        for (guid, seq, request), info in self.requests.take():
             self.t.bus.queue(_RemoteRequest(self, guid, seq, request, info.publication_handle))
 
     def _client_present(self, writer_handle: int) -> str:
@@ -394,18 +379,21 @@ class _BareRequests:
 
     def __init__(self, server: _Server) -> None:
         self.server = server
+        cls = server.srv.type.Request
+        self.requests = Samples(
+            server.bare_reader,
+            lambda data: _dds.from_cdr(data, cls),
+            server.srv.srv_name,
+            f"a {cls._TYPE}",
+            server.t.warn,
+            kind="request",
+        )
         self.cond = ReadCondition(server.bare_reader, ANY)
         self.token = server.t.waits.attach(self.cond, self)
 
     def on_trigger(self) -> None:
         srv = self.server
-        cls = srv.srv.type.Request
-        for data, info in _take(srv.bare_reader):
-            try:
-                request = _dds.from_cdr(data, cls)
-            except ValueError as e:
-                srv.t.warn(f"{srv.srv.srv_name}: dropped a request that is not a {cls._TYPE}: {e}")
-                continue
+        for request, info in self.requests.take():
             srv.t.bus.queue(_RemoteRequest(srv, None, 0, request, info.publication_handle))
 
     def close(self) -> None:
@@ -438,19 +426,17 @@ class _Client(_Endpoint):
         #: A Fast DDS server (rmw_fastrtps_cpp) was matched: it wants requests without the header.
         self.fast = False
         self.plain: _PlainClient | None = None
+        cls = srv.Response
+        self.replies = Samples(
+            self.reader, lambda data: _dds.unwrap(data, cls), name, f"a {cls._TYPE}", t.warn, kind="reply"
+        )
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
         self.matches = _MatchWatch(self)  # a server coming or going wakes waits at once
         t.add_endpoint(self)
 
     def on_trigger(self) -> None:
-        cls = self.cli.srv_type.Response
-        for data, _info in _take(self.reader):
-            try:
-                guid, seq, response = _dds.unwrap(data, cls)
-            except ValueError as e:
-                self.t.warn(f"{self.cli.srv_name}: dropped a reply that is not a {cls._TYPE}: {e}")
-                continue
+        for (guid, seq, response), _info in self.replies.take():
             if guid & U64 != self.guid:
                 continue  # an answer to another client of the same service
             future = self.pending.pop(seq, None)
@@ -575,6 +561,10 @@ class _PlainClient:
         )
         owner.readers, owner.writers = (owner.reader, self.reader), (owner.writer, self.writer)
         self.waiting: deque[Future] = deque()
+        cls = srv.Response
+        self.replies = Samples(
+            self.reader, lambda data: _dds.from_cdr(data, cls), name, f"a {cls._TYPE}", t.warn, kind="reply"
+        )
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
 
@@ -586,13 +576,7 @@ class _PlainClient:
         _write(self.writer, _dds.cdr(request))
 
     def on_trigger(self) -> None:
-        cls = self.owner.cli.srv_type.Response
-        for data, _info in _take(self.reader):
-            try:
-                response = _dds.from_cdr(data, cls)
-            except ValueError as e:
-                self.t.warn(f"{self.owner.cli.srv_name}: dropped a reply that is not a {cls._TYPE}: {e}")
-                continue
+        for response, _info in self.replies.take():
             while self.waiting:
                 future = self.waiting.popleft()
                 if not future.done():

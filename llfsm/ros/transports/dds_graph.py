@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from cyclonedds.domain import DomainParticipant
 
     from ...msgs._message import Message, Service
+    from .dds_read import Samples
 
 TOPIC_PREFIX = "rt"
 REQUEST_PREFIX, REPLY_PREFIX = "rq", "rr"
@@ -35,6 +36,9 @@ DISCOVERY_TOPIC = "ros_discovery_info"
 #: participants already seen (Graph.settle).
 SETTLE_S = 5.0
 INFINITE_NS = 0x7FFFFFFFFFFFFFFF  # Cyclone's DDS_INFINITY
+#: ros_discovery_info entries kept for participants not (yet) seen alive: a sample can come
+#: before its participant's, but a peer can also write gids of participants that never exist.
+SPARE_NODE_ENTRIES = 64
 
 
 def topic_name(dds_name: str) -> str | None:
@@ -183,7 +187,9 @@ class Graph:
     """A reader of the domain's graph.  `spin(seconds)` waits for discovery; the queries answer
     from what has been seen so far and leave out this reader's own participant."""
 
-    def __init__(self, participant: DomainParticipant | None = None) -> None:
+    def __init__(self, participant: DomainParticipant | None = None, say: Callable[[str], None] | None = None) -> None:
+        """`say` is told what a peer sent that could not be read (once per peer; stderr by
+        default, where a command-line verb's warnings go)."""
         from cyclonedds.builtin import (
             BuiltinDataReader,
             BuiltinTopicDcpsParticipant,
@@ -203,17 +209,21 @@ class Graph:
         self._endpoints: dict[bytes, Endpoint] = {}
         self._participants: set[bytes] = set()
         self._nodes: dict[bytes, list[tuple[NodeName, list[bytes], list[bytes]]]] = {}
-        self._info_reader = self._discovery_info_reader()
+        self._info = self._discovery_info_reader(say)
 
-    def _discovery_info_reader(self) -> Any:
+    def _discovery_info_reader(self, say: Callable[[str], None] | None) -> Samples[Any]:
         """A reader of ros_discovery_info with rmw's QoS (reliable, transient local), but a deep
-        history: the topic has no key, and every participant's last sample must be kept."""
+        history: the topic has no key, and every participant's last sample must be kept.  Its
+        samples are decoded on llfsm's shared path (dds_read): one that is not a
+        ParticipantEntitiesInfo (a node name that is not UTF-8) is dropped, said once per peer,
+        and the rest of the graph is still listed."""
         from cyclonedds.core import Policy, Qos
         from cyclonedds.sub import DataReader
         from cyclonedds.topic import Topic
 
-        from ...msgs._dds import dds_type
+        from ...msgs._dds import dds_type, from_cdr
         from ...msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
+        from .dds_read import Samples, stderr_warning
 
         qos = Qos(
             Policy.Reliability.Reliable(max_blocking_time=100_000_000),
@@ -222,7 +232,14 @@ class Graph:
             Policy.DataRepresentation(use_cdrv0_representation=True),
         )
         topic = Topic(self.participant, DISCOVERY_TOPIC, dds_type(ParticipantEntitiesInfo))
-        return DataReader(self.participant, topic, qos=qos)
+        reader = DataReader(self.participant, topic, qos=qos)
+        return Samples(
+            reader,
+            lambda data: from_cdr(data, ParticipantEntitiesInfo),
+            DISCOVERY_TOPIC,
+            f"a {ParticipantEntitiesInfo._TYPE}",
+            say or stderr_warning,
+        )
 
     # -- collecting -------------------------------------------------------------------------
 
@@ -249,13 +266,8 @@ class Graph:
                 if participant == self._own:
                     continue
                 self._endpoints[gid] = Endpoint(gid, participant, kind, sample.topic_name, sample.type_name, sample.qos)
-        if self._info_reader is not None:
-            from ...msgs._dds import from_dds
-            from ...msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
-
-            for sample in self._info_reader.take(N=256):
-                if sample.sample_info.valid_data:
-                    self._take_discovery_info(from_dds(sample, ParticipantEntitiesInfo))
+        for info, _sample_info in self._info.take():
+            self._take_discovery_info(info)
 
     def _take_discovery_info(self, info: Any) -> None:
         """One participant's nodes (rmw_dds_common/msg/ParticipantEntitiesInfo): each replaces
@@ -263,6 +275,10 @@ class Graph:
         participant = bytes(info.gid.data)[:16]
         if participant == self._own:
             return
+        if participant not in self._nodes and len(self._nodes) >= len(self._participants) + SPARE_NODE_ENTRIES:
+            # a peer naming participants that do not exist (any gid can be written): forget those
+            for key in [k for k in self._nodes if k not in self._participants]:
+                del self._nodes[key]
         self._nodes[participant] = [
             (
                 NodeName(n.node_namespace, n.node_name),
