@@ -363,3 +363,43 @@ def test_a_flooding_peer_neither_stalls_a_run_nor_grows_its_memory(netns: NetNam
         _, err = p.communicate(timeout=30)
         assert "Traceback" not in err and "internal error" not in err, (name, err[-3000:])
         assert err.count("/flood: dropped a") <= 1, (name, err[-3000:])  # one peer: one warning
+
+
+#: Requests to turtlesim's /spawn on rmw_cyclonedds's wire (client id, sequence number, then
+#: x, y, theta and the name), the name not UTF-8; on argv[1] the number to send.
+BAD_REQUESTS = PRELUDE + textwrap.dedent(
+    """
+    from llfsm.msgs._dds import request_type
+    from llfsm.msgs.turtlesim.srv import Spawn
+    qos = Qos(Policy.Reliability.Reliable(max_blocking_time=10**8), Policy.History.KeepLast(100), XCDR1)
+    w = DataWriter(dp, Topic(dp, "rq/spawnRequest", request_type(Spawn)), qos=qos)
+    while not w.get_matched_subscriptions():
+        time.sleep(0.05)
+    for seq in range(int(sys.argv[1])):
+        name = b"t" * (seq % 9) + b"\\xff\\xfe"  # each error its own text
+        write(w, HEAD + struct.pack("<Qq3f", 7, seq, 1.0, 1.0, 0.0) + string(name))
+        time.sleep(0.01)
+    print("sent", flush=True)
+    time.sleep(1)  # reliable: the last ones are acknowledged before the participant goes
+    """
+)
+
+
+def test_a_service_drops_requests_it_cannot_decode_and_answers_the_next(netns: NetNamespace) -> None:
+    sim = netns.popen(
+        [sys.executable, "-m", "llfsm", "run", "--transport", "dds", "--node", "turtlesim", "--duration", "90s"],
+        cwd=REPO,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    wait_until_seen(netns, "/turtle1/pose")
+    bad = netns.popen([sys.executable, "-c", BAD_REQUESTS, "50"], cwd=REPO)
+    status, out, err = finish(bad, 60)
+    assert status == 0 and out.strip() == "sent", err
+    r = llfsm(netns, "service", "call", "/spawn", "turtlesim/srv/Spawn", "{x: 2.0, y: 2.0, name: good}")
+    assert r.status == 0, r.stderr
+    assert "name='good'" in r.stdout, r.stdout
+    sim.send_signal(2)
+    _, err = sim.communicate(timeout=30)
+    assert "Traceback" not in err, err[-3000:]
+    assert err.count("/spawn: dropped a request") == 1, err[-3000:]  # fifty bad requests, one peer
