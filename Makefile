@@ -76,6 +76,8 @@ ros-venv:
 
 test: $(VENV)/.installed-dev lint ros-venv chromium
 	LLFSM_ROS_VENV=$(abspath $(VENV_ROS)) $(PY) -m pytest -q
+	@echo "== the same recorder and painter tests with the C parts disabled (the pure-Python fallback)"
+	LLFSM_NO_C=1 $(PY) -m pytest -q tests/test_bag.py tests/test_sim.py tests/test_bag_tap.py
 
 # The same suite on the newest releases of every dependency (no lock), in venvs of its own made
 # anew each time: drift shows up here, as a failing target with this name, before it turns main red.
