@@ -97,67 +97,84 @@ def run(
     if view and (why := _no_display()) is not None:
         fail(why)
     web_address = _web_address(web) if web is not None else None
-    if transport != "inproc":
-        ctx.extras["transport"] = _open_transport(transport)
-    bags = _open_bags(record, record_topics, storage, play, play_topics, play_rate) if (record or play) else None
-    uses_bus = bool(nodes or remaps or params or echoes or introspect or web or transport != "inproc" or bags)
-    bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
-    if bags is not None and bus is not None:
-        _attach_bags(bags, bus)
-    trace_out = None
-    if trace_file:
-        from ..outputs import OutputError, StreamedOutput
-
-        try:
-            trace_out = StreamedOutput(trace_file, what="--trace")  # write errors kept, not raised mid-run
-        except OutputError as e:
-            fail(str(e), EXIT_ERRORS)
-    tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None  # type: ignore[arg-type]
+    # the watchdog ends a run stuck in a C call (llfsm.runtime.watchdog): forked here, with the
+    # machines loaded and before the transport, the bus, the nodes or the page start a thread
+    watchdog = _start_watchdog(classes, grace if classes else 0)
     try:
-        try:
-            arr = Arrangement(classes, context=ctx, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended)
-        except ArrangementError as e:
-            fail(str(e))
-        except BaseException as exc:  # a variable initialiser raised: machine code may raise anything
-            from ..runtime.errors import passes_through, report_for
+        if transport != "inproc":
+            ctx.extras["transport"] = _open_transport(transport)
+        bags = _open_bags(record, record_topics, storage, play, play_topics, play_rate) if (record or play) else None
+        uses_bus = bool(nodes or remaps or params or echoes or introspect or web or transport != "inproc" or bags)
+        bus = _start_bus(ctx, targets, nodes, remaps, params, echoes, image, view) if uses_bus else None
+        if bags is not None and bus is not None:
+            _attach_bags(bags, bus)
+        trace_out = None
+        if trace_file:
+            from ..outputs import OutputError, StreamedOutput
 
-            rep = None if passes_through(exc) else report_for(exc)
-            if rep is None:
-                raise
-            echo(rep.format(), nl=False)
-            sys.exit(EXIT_ERRORS)
-        _machines_on_graph(ctx)
-        if classes:
-            arr.on_interrupt = lambda grace: echo(
-                f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish "
-                "(interrupt again to stop now)",
-            )
-        else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
-            arr.serve_forever = True
-            grace = 0
-        if transport != "inproc":  # other processes can resume machines (SPEC 8): all suspended is no end
-            arr.end_when_suspended = False
-        web_server = _start_web(web_address, arr, bus) if web_address is not None and bus is not None else None
+            try:
+                trace_out = StreamedOutput(trace_file, what="--trace")  # write errors kept, not raised mid-run
+            except OutputError as e:
+                fail(str(e), EXIT_ERRORS)
+        tracer = Tracer(verbose=sys.stderr if verbose else None, jsonl=trace_out) if (verbose or trace_out) else None  # type: ignore[arg-type]
         try:
-            with signals_handled(arr):
-                result = arr.run(duration, grace)
+            try:
+                arr = Arrangement(
+                    classes, context=ctx, keep_accepting=keep_accepting, tracer=tracer, suspended=suspended
+                )
+                arr.watchdog = watchdog
+            except ArrangementError as e:
+                fail(str(e))
+            except BaseException as exc:  # a variable initialiser raised: machine code may raise anything
+                from ..runtime.errors import passes_through, report_for
+
+                rep = None if passes_through(exc) else report_for(exc)
+                if rep is None:
+                    raise
+                echo(rep.format(), nl=False)
+                sys.exit(EXIT_ERRORS)
+            _machines_on_graph(ctx)
+            if classes:
+                arr.on_interrupt = lambda grace: echo(
+                    f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish "
+                    "(interrupt again to stop now)",
+                )
+            else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
+                arr.serve_forever = True
+                grace = 0
+            if transport != "inproc":  # other processes can resume machines (SPEC 8): all suspended is no end
+                arr.end_when_suspended = False
+            web_server = _start_web(web_address, arr, bus) if web_address is not None and bus is not None else None
+            try:
+                with signals_handled(arr):
+                    result = arr.run(duration, grace)
+            finally:
+                if web_server is not None:
+                    web_server.stop()
         finally:
-            if web_server is not None:
-                web_server.stop()
+            # a named output that could not be written whole is an error, never a silent success
+            failed_outputs: list[str] = list(ctx.extras.get("output_errors", ()))
+            if trace_out is not None and (trace_error := trace_out.finish()) is not None:
+                failed_outputs.append(trace_error)
+            bag_error = bags.close() if bags is not None else None  # the bag is closed whatever happened
+        sys.stdout.flush()
+        if result.error is not None:
+            echo(result.error.format(), nl=False)
+        if introspect and bus is not None:
+            echo(_graph_text(bus.graph()), nl=False)
+        for message in failed_outputs:
+            echo(f"llfsm: {message}")
+        sys.exit(result.status if result.status or not (failed_outputs or bag_error) else EXIT_ERRORS)
     finally:
-        # a named output that could not be written whole is an error, never a silent success
-        failed_outputs: list[str] = list(ctx.extras.get("output_errors", ()))
-        if trace_out is not None and (trace_error := trace_out.finish()) is not None:
-            failed_outputs.append(trace_error)
-        bag_error = bags.close() if bags is not None else None  # the bag is closed whatever happened
-    sys.stdout.flush()
-    if result.error is not None:
-        echo(result.error.format(), nl=False)
-    if introspect and bus is not None:
-        echo(_graph_text(bus.graph()), nl=False)
-    for message in failed_outputs:
-        echo(f"llfsm: {message}")
-    sys.exit(result.status if result.status or not (failed_outputs or bag_error) else EXIT_ERRORS)
+        if watchdog is not None:
+            watchdog.close()  # it ends with the run, never after it
+
+
+def _start_watchdog(classes: list[Any], grace: int) -> Any:
+    """The run's watchdog, or None where there can be none (no fork)."""
+    from ..runtime.watchdog import Watchdog
+
+    return Watchdog.start(grace, classes)
 
 
 def _open_bags(

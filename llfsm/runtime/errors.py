@@ -266,7 +266,16 @@ def report_for(exc: BaseException, machine: Machine | None = None) -> ErrorRepor
     if m is not None:
         rep.machine, rep.machine_id = m.NAME, m._id
         rep.state = m.STATES[m._state] if 0 <= m._state < len(m.STATES) else None
-    mapped = map_line(fname, lineno, frame.f_globals.get("_LLFSM_SOURCE_MAP"))
+    return locate(rep, fname, lineno, frame.f_globals.get("_LLFSM_SOURCE_MAP"))
+
+
+def locate(rep: ErrorReport, fname: str, lineno: int, source_map: SourceMap | None = None) -> ErrorReport:
+    """Fill in the user's file, line, text, state and section of `rep` for a line of a generated
+    module.  Apart from report_for, so that the run's watchdog (llfsm.runtime.watchdog), which
+    knows a place only as a file and a line from a stack dump, reports it the same way."""
+    import linecache  # error paths only: a run's start-up does not pay for them
+
+    mapped = map_line(fname, lineno, source_map)
     if mapped is None:
         rep.text = linecache.getline(fname, lineno).strip() or None
         return rep

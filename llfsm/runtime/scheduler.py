@@ -27,6 +27,8 @@ if TYPE_CHECKING:
 
     SignalHandler = Callable[[int, FrameType | None], None]
 
+    from .watchdog import Watchdog
+
 #: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
@@ -96,6 +98,9 @@ class Arrangement:
         self.rounds = 0
         #: The gate every held machine's `_run` points at (one bound method, compared with `is`).
         self._gate_fn: Callable[[Machine], int | None] = self._gate
+        #: The run's watchdog (llfsm.runtime.watchdog), which ends a run stuck in a C call that
+        #: holds the GIL, where no handler of signals_handled can run; None: no such help.
+        self.watchdog: Watchdog | None = None
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
         #: SPEC §2 ends a run whose machines are all suspended: nothing could resume them.  A run
@@ -515,6 +520,8 @@ def signals_handled(arr: Arrangement) -> _SignalsHandled:
             raise RunStopped(arr._signal or signal.SIGINT, text, in_machine_code=_in_machine_code(frame))
 
     def handler(signum: int, frame: FrameType | None) -> None:
+        if arr.watchdog is not None:
+            arr.watchdog.answer()  # this handler could run: the run is not stuck in a C call
         first = not arr._interrupts
         arr.interrupt(signum)
         if first:
@@ -523,29 +530,36 @@ def signals_handled(arr: Arrangement) -> _SignalsHandled:
             stop(frame, f"stopped by a second {signal_name(signum)}")
 
     def alarm(_signum: int, frame: FrameType | None) -> None:
+        if arr.watchdog is not None:
+            arr.watchdog.answer()
         if arr._interrupts:
             grace = arr._grace_ns / 1e9
             sig = signal_name(arr._signal or 0)
             held = grace + STUCK_SLACK_S
             stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
 
-    return _SignalsHandled(handler, alarm)
+    return _SignalsHandled(handler, alarm, arr.watchdog)
 
 
 class _SignalsHandled:
     """The handlers of signals_handled, installed on entry and the old ones put back on exit.
     (Not contextlib.contextmanager: contextlib is a tenth of a run's start-up.)"""
 
-    def __init__(self, handler: SignalHandler, alarm: SignalHandler) -> None:
+    def __init__(self, handler: SignalHandler, alarm: SignalHandler, watchdog: Watchdog | None) -> None:
         self.handler = handler
         self.alarm = alarm
+        self.watchdog = watchdog
         self.old: dict[int, object] = {}
 
     def __enter__(self) -> None:
         self.old = {s: signal.signal(s, self.handler) for s in STOP_SIGNALS}
         self.old[signal.SIGALRM] = signal.signal(signal.SIGALRM, self.alarm)
+        if self.watchdog is not None:  # after the handlers: every signal it sees is one they answer
+            self.watchdog.arm()
 
     def __exit__(self, t: type[BaseException] | None, e: BaseException | None, tb: TracebackType | None) -> None:
+        if self.watchdog is not None:
+            self.watchdog.disarm()
         signal.setitimer(signal.ITIMER_REAL, 0)
         for s, h in self.old.items():
             signal.signal(s, h)
