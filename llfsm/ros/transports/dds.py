@@ -127,6 +127,10 @@ def _qos(
 #: Cyclone's QoS policy ids, by rclpy's names for them (QoSPolicyKind), for the incompatible QoS
 #: warnings (what rmw_cyclonedds_cpp maps them to).
 _POLICY_NAMES = {2: "DURABILITY", 4: "DEADLINE", 8: "LIVELINESS", 11: "RELIABILITY", 13: "HISTORY"}
+#: Incompatible-QoS warnings one endpoint of ours gives; then one line says the rest go unsaid
+#: (a peer making and deleting endpoints in a loop would otherwise write a line per endpoint,
+#: and a run whose log is a pipe nobody reads would block on them).
+MAX_INCOMPATIBLE_WARNINGS = 10
 # rclpy's words (its default QoS event handlers)
 _OFFERING = "New publisher discovered on topic '{}', offering incompatible QoS. No messages will be received from it."
 _REQUESTING = "New subscription discovered on topic '{}', requesting incompatible QoS. No messages will be sent to it."
@@ -139,6 +143,7 @@ class _Incompatible:
 
     def __init__(self, endpoint: Any, topic: str, node: Any, *, reader: bool) -> None:
         self.endpoint, self.topic, self.node, self.reader = endpoint, topic, node, reader
+        self.said = 0
 
     def on_trigger(self) -> None:
         if self.reader:
@@ -147,9 +152,18 @@ class _Incompatible:
         else:
             status = self.endpoint.get_offered_incompatible_qos_status()
             said = _REQUESTING
-        if status.total_count_change > 0:
+        if status.total_count_change > 0 and self.said <= MAX_INCOMPATIBLE_WARNINGS:
+            self.said += 1
+            logger = self.node.get_logger()
+            if self.said > MAX_INCOMPATIBLE_WARNINGS:
+                kind = "publishers" if self.reader else "subscriptions"
+                logger.warn(
+                    f"New {kind} with incompatible QoS keep being discovered on topic '{self.topic}': "
+                    f"after {MAX_INCOMPATIBLE_WARNINGS} warnings, further ones are not reported."
+                )
+                return
             policy = _POLICY_NAMES.get(status.last_policy_id, "INVALID")
-            self.node.get_logger().warn(f"{said.format(self.topic)} Last incompatible policy: {policy}")
+            logger.warn(f"{said.format(self.topic)} Last incompatible policy: {policy}")
 
 
 class _WaitSet:
