@@ -423,3 +423,35 @@ def test_a_service_drops_requests_it_cannot_decode_and_answers_the_next(netns: N
     _, err = sim.communicate(timeout=30)
     assert "Traceback" not in err, err[-3000:]
     assert err.count("/spawn: dropped a request") == 1, err[-3000:]  # fifty bad requests, one peer
+
+
+def test_warnings_about_undecodable_samples_are_bounded(monkeypatch: pytest.MonkeyPatch) -> None:
+    """One line per peer, at most MAX_WARNED_PEERS peers remembered, then one line for the rest:
+    a peer making writers (or participants) by the thousand neither floods the log nor grows
+    the reader's memory."""
+    from types import SimpleNamespace
+
+    from llfsm.msgs._dds import from_cdr
+    from llfsm.msgs.std_msgs.msg import String
+    from llfsm.ros.transports import dds_read
+
+    bad = b"\0\1\0\0" + (3).to_bytes(4, "little") + b"\xff\xfe\0"
+    good = b"\0\1\0\0" + (3).to_bytes(4, "little") + b"ok\0"
+    batch = [(bad, SimpleNamespace(publication_handle=h % 500)) for h in range(5000)]
+    batch.append((good, SimpleNamespace(publication_handle=1)))
+    monkeypatch.setattr(dds_read, "take_raw", lambda reader, n=dds_read.TAKE_BATCH: batch)
+
+    class Gone:  # every writer has left by the time its sample is looked at
+        def get_matched_publication_data(self, handle: int) -> None:
+            raise RuntimeError("gone")
+
+    said: list[str] = []
+    samples = dds_read.Samples(Gone(), lambda data: from_cdr(data, String), "/t", "a std_msgs/msg/String", said.append)
+    assert [m.data for m, _ in samples.take()] == ["ok"]
+    assert samples.dropped == 5000
+    assert len(said) == dds_read.MAX_WARNED_PEERS + 1, said[-3:]
+    assert said[0].startswith("/t: dropped a sample that is not a std_msgs/msg/String (from writer 0x0): ")
+    assert said[-1].endswith("theirs are dropped without further warnings")
+    assert len(samples._warned) == dds_read.MAX_WARNED_PEERS
+    samples.take()
+    assert len(said) == dds_read.MAX_WARNED_PEERS + 1  # the same peers again: nothing more said
