@@ -297,8 +297,9 @@ FLOOD_WRITERS, FLOOD_TOPICS, HUGE = 50, 1000, 8 << 20
 #: messages, the callback's queue, the allocator's slack), and nothing else grows.
 BOUND_MIB = 64 + 6 * 10 * (HUGE >> 20)
 #: How much more the last third of the flood may take than the rest (no steady growth; the
-#: allocator keeps some freed blocks of huge samples, in steps).
-GROWTH_MIB = 160
+#: allocator keeps some freed blocks of huge samples, in steps: `topic hz` was seen 130 MiB up
+#: once, so the margin is wide; a leak of the flood's 8 MiB samples would take gigabytes).
+GROWTH_MIB = 256
 
 
 def rss_mib(pid: int) -> float:
