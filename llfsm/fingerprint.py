@@ -13,7 +13,7 @@ import os
 import stat
 
 from . import __version__
-from .discover import refused_link
+from .lang.discover import refused_link
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
@@ -38,11 +38,16 @@ def _compiler_files() -> list[str]:
 
 
 def _list_compiler_files() -> list[str]:
+    """The machine template, the compiler, and the front end (lang/) whose reading of a machine
+    the compiler generates from."""
     templates = os.path.join(_PKG, "templates")
-    compiler = os.path.join(_PKG, "compiler")
-    return sorted(
+    out = sorted(
         os.path.join(templates, n) for n in os.listdir(templates) if n.startswith("machine") and n.endswith(".j2")
-    ) + sorted(os.path.join(compiler, n) for n in os.listdir(compiler) if n.endswith(".py") and not n.startswith("."))
+    )
+    for folder in ("compiler", "lang", os.path.join("lang", "check")):
+        d = os.path.join(_PKG, folder)
+        out += sorted(os.path.join(d, n) for n in os.listdir(d) if n.endswith(".py") and not n.startswith("."))
+    return out
 
 
 def compiler_id() -> str:

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import jinja2
 
-from .compiler.templating import environment
-from .model import is_valid_name
+from .lang.model import is_valid_name
+from .templating import environment
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 

@@ -27,7 +27,7 @@ from pathlib import Path
 import yaml
 from hypothesis import strategies as st
 
-from llfsm.reader import MAX_FILE_BYTES, MAX_YAML_DEPTH
+from llfsm.lang.reader import MAX_FILE_BYTES, MAX_YAML_DEPTH
 from llfsm.runtime.machine import MACROS, RESERVED
 
 SECTION_KINDS = ("OnEntry", "OnExit", "Internal", "OnSuspend", "OnResume")

@@ -63,7 +63,7 @@ def test_generated_module_imports_only_the_runtime(tmp_path: Path) -> None:
         "import sys, importlib.util\n"
         f"spec = importlib.util.spec_from_file_location('counter', {str(out / 'counter.py')!r})\n"
         "mod = importlib.util.module_from_spec(spec); spec.loader.exec_module(mod)\n"
-        "names = ('yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.check', 'click')\n"
+        "names = ('yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.lang.check', 'click')\n"
         "heavy = [m for m in names if m in sys.modules]\n"
         "print(heavy)\n"
     )

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from conftest import llfsm, llfsm_process, write_machine
 
-from llfsm.check import check_machine, find_machines
-from llfsm.diagnostics import RULES, Diagnostic
+from llfsm.lang.check import check_machine, find_machines
+from llfsm.lang.diagnostics import RULES, Diagnostic
 
 OK_STATES = {"INITIAL": [("END", "after_ms(10)")], "END": None}
 
@@ -113,7 +113,7 @@ def test_LF004_deep_yaml_whichever_yaml_parser_refuses_it(
 ) -> None:
     import yaml
 
-    from llfsm import reader
+    from llfsm.lang import reader
 
     if not hasattr(yaml, loader):
         pytest.skip(f"this PyYAML has no {loader}")
@@ -130,7 +130,7 @@ def test_a_yaml_library_that_refuses_nesting_in_its_own_words_still_gives_LF004(
     """A later PyYAML may cap nesting where our rescan cannot tell: its wording decides."""
     import yaml
 
-    from llfsm import reader
+    from llfsm.lang import reader
 
     class Capped(yaml.SafeLoader):
         def __init__(self, stream: str) -> None:
@@ -491,7 +491,7 @@ def test_LF107_code_of_the_suspend_state_that_never_runs(tmp_path: Path) -> None
 
 
 def test_parallel_check_gives_the_same_output_in_the_same_order(tmp_path: Path) -> None:
-    from llfsm.check import diagnose
+    from llfsm.lang.check import diagnose
 
     for i in range(12):
         write_machine(tmp_path, f"m{i:02d}", {"INITIAL": [("NOPE" if i % 3 else "END", "x")], "END": None})

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from llfsm.compiler import interfaces
+from llfsm.idl import package as interfaces
 from llfsm.msgs import _dds
 from llfsm.msgs._message import INT_RANGES, Message, Service, is_message_class, is_service_class
 

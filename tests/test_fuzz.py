@@ -46,9 +46,9 @@ from strategies import (
     write_spec,
 )
 
-from llfsm.check import check_machine, check_paths
 from llfsm.compiler.build import build_machine
-from llfsm.diagnostics import FORMATS, format_text, render
+from llfsm.lang.check import check_machine, check_paths
+from llfsm.lang.diagnostics import FORMATS, format_text, render
 from llfsm.runtime import Arrangement, ErrorReport, Machine, SimClock, report_for
 from llfsm.targets import MachineLoadError, load_class
 
@@ -359,7 +359,7 @@ def _stdlib_statements(limit: int | None) -> Iterator[tuple[str, ast.Module]]:
 
 
 def _plain_but_refused(limit: int | None) -> tuple[int, list[str]]:
-    from llfsm.check import _compile_error, _scan
+    from llfsm.lang.check import _compile_error, _scan
 
     plain, refused = 0, []
     for where, module in _stdlib_statements(limit):
@@ -551,7 +551,8 @@ def hostile_path_property(spec: MachineSpec, folder: str) -> None:
     it gets diagnostics that every format renders validly for the same folder."""
     from test_hardening_check import _header_ok, _only_expected_statements, _sarif_validator, _strings
 
-    from llfsm.graph import dot, mermaid
+    from llfsm.diagram.dot import dot
+    from llfsm.diagram.mermaid import mermaid
 
     TRIED["hostile path"] += 1
     with tempfile.TemporaryDirectory() as tmp:

@@ -25,9 +25,9 @@ from pathlib import Path
 import pytest
 from conftest import llfsm, run_sim, write_machine
 
-from llfsm.check import check_machine
 from llfsm.compiler.build import build_machine
-from llfsm.compiler.templating import CODING_LINE
+from llfsm.lang.check import check_machine
+from llfsm.templating import CODING_LINE
 
 #: Folder names that try to change what a generated file means: a line break that would
 #: start code, encoding declarations (PEP 263 reads lines 1-2), quotes, backslashes, bytes
@@ -112,7 +112,7 @@ class TestHeadersCarryNoCode:
 
     @pytest.mark.parametrize("folder", HOSTILE_FOLDERS)
     def test_interface_module(self, tmp_path: Path, folder: str) -> None:
-        from llfsm.compiler.interfaces import build_package
+        from llfsm.idl.package import build_package
 
         pkg = _hostile_dir(tmp_path, folder) / "my_pkg"
         (pkg / "msg").mkdir(parents=True)
@@ -128,8 +128,8 @@ class TestHeadersCarryNoCode:
 
     def test_names_with_a_trailing_newline_are_refused(self, tmp_path: Path) -> None:
         """`$` matches before a final newline: every name rule must end at the end (\\Z)."""
-        from llfsm.compiler.interfaces import FIELD_NAME, PACKAGE_NAME, TYPE_NAME
-        from llfsm.model import is_valid_name
+        from llfsm.idl.package import FIELD_NAME, PACKAGE_NAME, TYPE_NAME
+        from llfsm.lang.model import is_valid_name
         from llfsm.scaffold import ScaffoldError, check_package_name
 
         assert not is_valid_name("count\n")
@@ -245,7 +245,7 @@ class TestLinearWork:
     def test_jobs_are_bounded_by_the_usable_cores(self, tmp_path: Path, monkeypatch) -> None:
         import concurrent.futures
 
-        from llfsm.check import diagnose, usable_cores
+        from llfsm.lang.check import diagnose, usable_cores
 
         seen: list[int] = []
         real = concurrent.futures.ProcessPoolExecutor
@@ -582,7 +582,7 @@ class TestClearMessages:
     """'Should be a clear message' of issue 12, the front end's share."""
 
     def test_a_name_check_accepts_is_a_name_build_can_write(self, tmp_path: Path) -> None:
-        from llfsm.model import MAX_MACHINE_NAME
+        from llfsm.lang.model import MAX_MACHINE_NAME
 
         ok = write_machine(tmp_path, "m" * MAX_MACHINE_NAME, {"A": [("END", "True")], "END": None})
         r = llfsm("build", "-q", "-o", tmp_path / "out", ok)

@@ -19,7 +19,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import llfsm.msgs
-from llfsm.compiler import interfaces
+from llfsm.idl import package as interfaces
 from llfsm.msgs import Message, _finder, is_message_class, is_service_class, to_yaml
 from llfsm.msgs.builtin_interfaces.msg import Time
 from llfsm.msgs.geometry_msgs.msg import Point, PoseWithCovariance, Quaternion, Twist, Vector3
@@ -354,7 +354,7 @@ def test_second_import_uses_the_cache_without_the_compiler(tmp_path: Path) -> No
         import sys
         from llfsm.msgs.llfsm_cached_pkg.srv import Ask
         assert Ask.Response().a == 42
-        heavy = sorted(m for m in ("rosbags", "jinja2", "yaml", "llfsm.compiler.interfaces") if m in sys.modules)
+        heavy = sorted(m for m in ("rosbags", "jinja2", "yaml", "llfsm.idl.package") if m in sys.modules)
         print(",".join(heavy) or "light")
         """
     )
@@ -421,7 +421,7 @@ def test_committed_modules_match_regeneration() -> None:
     sources = interfaces.builtin_sources()
     assert len(sources) >= 13
     stale = [str(p) for p, text in sources.items() if not p.exists() or p.read_text(encoding="utf-8") != text]
-    assert not stale, f"run `python -m llfsm.compiler.interfaces` (make msgs): stale {stale}"
+    assert not stale, f"run `python -m llfsm.idl.package` (make msgs): stale {stale}"
 
 
 def test_generated_modules_import_nothing_heavy() -> None:

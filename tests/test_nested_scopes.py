@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from llfsm.check import check_machine
+from llfsm.lang.check import check_machine
 from tests.conftest import llfsm, run_sim, write_machine
 
 ONE_STATE = {"A": [("END", "True")], "END": None}

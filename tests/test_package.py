@@ -16,8 +16,8 @@ from catkin_pkg.package import parse_package
 from conftest import REPO, llfsm, llfsm_process, write_machine
 
 from llfsm import scaffold
-from llfsm.check import check_machine
-from llfsm.deps import undeclared_dependencies
+from llfsm.lang.check import check_machine
+from llfsm.lang.check.packages import undeclared_dependencies
 
 VENV_BIN = Path(sys.executable).parent
 

@@ -29,9 +29,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from strategies import _yaml_string
 
-from llfsm.check import check_machine, check_paths
 from llfsm.compiler.build import build_machine
-from llfsm.reader import MAX_FILE_BYTES
+from llfsm.lang.check import check_machine, check_paths
+from llfsm.lang.reader import MAX_FILE_BYTES
 from llfsm.runtime import Arrangement, RunResult, SimClock
 from llfsm.runtime.machine import Machine
 from llfsm.targets import load_class
@@ -422,7 +422,8 @@ def test_a_fifo_where_a_file_belongs_is_refused_at_once(tmp_path: Path) -> None:
     os.mkfifo(m / "machine.yaml")
     os.mkfifo(m / "State_A_OnEntry.py")
     code = (
-        f"from llfsm.check import check_machine\nprint(sorted(d.code for d in check_machine({str(m)!r}).diagnostics))"
+        "from llfsm.lang.check import check_machine\n"
+        f"print(sorted(d.code for d in check_machine({str(m)!r}).diagnostics))"
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=20)
     assert proc.stdout.strip() == "['LF002']", proc.stderr

@@ -42,7 +42,7 @@ from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fix
 
 pytest.importorskip("aiohttp")
 
-from llfsm.web import diagram
+from llfsm.diagram import svg as diagram
 from llfsm.web.server import WebServer
 
 MACHINE = "ros2_ping_pong"
@@ -90,7 +90,7 @@ def drawn_states(svg: str) -> int:
 
 
 def test_descriptions_that_do_not_fit_the_model_are_refused_saying_where() -> None:
-    from llfsm.web.model import DescriptionError, parse_description
+    from llfsm.diagram.description import DescriptionError, parse_description
 
     good = small()
     assert parse_description(json.dumps(good), "m")["states"][0]["name"] == "A"
@@ -121,7 +121,7 @@ def test_descriptions_that_do_not_fit_the_model_are_refused_saying_where() -> No
 
 
 def test_a_peers_text_never_becomes_markup_and_a_bad_index_is_refused() -> None:
-    from llfsm.web.model import DescriptionError
+    from llfsm.diagram.description import DescriptionError
 
     with pytest.raises(DescriptionError, match="index"):
         diagram.svg(small(index=EVIL_INDEX))
@@ -308,7 +308,7 @@ def test_a_discovery_sample_that_cannot_be_read_is_dropped_alone() -> None:
     """(4) cyclonedds turns discovery samples into Python in one batch: one that it cannot read
     (a topic name that is not UTF-8) raises for the whole batch.  The view takes them one at a
     time, so only that one is lost, with one warning."""
-    from llfsm.web.graph import GraphSource
+    from llfsm.web.machines import GraphSource
 
     class Reader:
         def __init__(self) -> None:
@@ -585,7 +585,7 @@ def test_the_view_keeps_good_descriptions_drops_bad_ones_once_and_bounds_what_it
     from llfsm import ros
     from llfsm.msgs.std_msgs.msg import String
     from llfsm.ros.control import LATCHED
-    from llfsm.web import graph
+    from llfsm.web import machines as graph
     from llfsm.web.source import Source
 
     monkeypatch.setattr(graph, "MAX_TOTAL", 100)

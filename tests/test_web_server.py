@@ -17,13 +17,13 @@ from conftest import MACHINES, llfsm
 pytest.importorskip("aiohttp")
 
 from llfsm import ros
+from llfsm.diagram import svg as diagram
 from llfsm.msgs.geometry_msgs.msg import PoseStamped, Twist
 from llfsm.msgs.std_msgs.msg import String
 from llfsm.ros.control import description, enable
 from llfsm.runtime import Arrangement, RunContext, SimClock
 from llfsm.runtime.context import activate
 from llfsm.targets import load
-from llfsm.web import diagram
 from llfsm.web.server import WebServer, parse_address
 from llfsm.web.source import CommandError, RunSource, parse_values, type_class
 

@@ -15,7 +15,7 @@
  * calls the generated Python function instead, which appends the same bytes or raises what it
  * always raised.  A record is appended whole or not at all.
  *
- * A Tap is made from the `layout` of the message's Codec (llfsm/compiler/dds.py writes it):
+ * A Tap is made from the `layout` of the message's Codec (llfsm/idl/ddsgen.py writes it):
  * one (format, path) pair per struct item of the CDR after its header, for example
  * ("d", "_linear._x"), ("36d", "*_covariance") or ("3x", "").
  *

@@ -77,7 +77,7 @@ _PRIMITIVES = frozenset(
 _BUILTIN_DIR = Path(__file__).resolve().parent.parent / "msgs" / "_interfaces"
 
 
-# rosidl's rules for names (as llfsm.compiler.interfaces.PACKAGE_NAME and TYPE_NAME, which are
+# rosidl's rules for names (as llfsm.idl.package.PACKAGE_NAME and TYPE_NAME, which are
 # not imported here: that module loads jinja2, and a recording run never needs it).  A name a
 # bag brings becomes a folder, a file and a module path: `..`, `/x`, `os.path` must never pass.
 _PACKAGE_NAME = re.compile(r"(?!.*__)(?!.*_\Z)[a-z][a-z0-9_]*\Z")
@@ -243,7 +243,7 @@ _BASE_STORE: Typestore | None = None
 
 def _base_store() -> Typestore:
     """rosbags' store of the ROS 2 Humble types, which llfsm's built-in classes are generated
-    from (llfsm.compiler.interfaces), with the types of llfsm's .msg files added as they are
+    from (llfsm.idl.package), with the types of llfsm's .msg files added as they are
     needed: one per process (loading it takes a few tenths of a second)."""
     global _BASE_STORE
     if _BASE_STORE is None:

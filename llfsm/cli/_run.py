@@ -64,7 +64,7 @@ def run(
         )
     if native and not os.environ.get("LLFSM_NATIVE"):
         _run_native(targets)  # compiles (or finds) the native build, then runs in a fresh process
-    from ..interface_paths import add_search_path  # not llfsm.msgs: a run without messages never imports it
+    from ..idl.paths import add_search_path  # not llfsm.msgs: a run without messages never imports it
 
     for t in targets:  # user interfaces (PKG/msg/*.msg) beside or above the machines import too
         folder = os.path.realpath(t)  # realpath: no error on a loop
@@ -81,7 +81,7 @@ def run(
         except TargetError as e:
             fail(str(e))
         except InvalidMachine as e:
-            from ..diagnostics import format_text
+            from ..lang.diagnostics import format_text
 
             echo(format_text(e.diagnostics), nl=False)
             fail(f"{t}: the machine has errors; nothing was run")

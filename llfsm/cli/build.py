@@ -43,7 +43,7 @@ def build(
     With no PATH, every machine below the current folder (e.g. a package root) is built.
     """
     from ..compiler.build import build_all, terminated_as_exception
-    from ..discover import find_machines
+    from ..lang.discover import find_machines
 
     roots = _existing(paths) if paths else [Path(".")]
     machines = [m for r in roots for m in find_machines(r)]
@@ -76,7 +76,7 @@ def _report(machines: list[Path], outcomes: Iterator[BuildOutcome | str], out_di
             progress(f"llfsm: cannot write {target}: {outcome}\n")
             continue
         if outcome.status == "failed":
-            from ..diagnostics import format_text
+            from ..lang.diagnostics import format_text
 
             failed += 1
             progress(format_text(outcome.diagnostics))

@@ -49,8 +49,8 @@ def check(paths: tuple[str, ...], fmt: str, strict: bool, output: str | None, qu
     directory (that machine: pre-commit passes files).  Exit status: 0 clean (warnings allowed
     unless --strict), 1 problems found, 2 bad usage.
     """
-    from ..check import diagnose
-    from ..diagnostics import Severity, render
+    from ..lang.check import diagnose
+    from ..lang.diagnostics import Severity, render
 
     roots = _existing(_enclosing_machines(paths))
     if jobs is not None and jobs < 1:

@@ -20,9 +20,10 @@ from ._common import EXIT_ERRORS, cli, fail, write_output
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE (needed for png).")
 def graph(path: str, fmt: str, output: str | None) -> None:
     """The machine's diagram, guards on the arrows."""
-    from ..check import check_machine
-    from ..diagnostics import Severity, format_text
-    from ..graph import GraphError, dot, mermaid, render_image
+    from ..diagram.dot import DiagramError, dot, render_image
+    from ..diagram.mermaid import mermaid
+    from ..lang.check import check_machine
+    from ..lang.diagnostics import Severity, format_text
 
     p = Path(path)
     if not p.is_dir():
@@ -43,7 +44,7 @@ def graph(path: str, fmt: str, output: str | None) -> None:
         data: bytes = (
             mermaid(m).encode() if fmt == "mermaid" else dot(m).encode() if fmt == "dot" else render_image(m, fmt)
         )
-    except GraphError as e:
+    except DiagramError as e:
         fail(str(e), EXIT_ERRORS)
     if output:
         write_output(output, data, "-o")
@@ -56,6 +57,6 @@ def schema() -> None:
     """JSON Schema of machine.yaml."""
     import json
 
-    from ..model import MachineYaml
+    from ..lang.model import MachineYaml
 
     click.echo(json.dumps(MachineYaml.model_json_schema(), indent=2))

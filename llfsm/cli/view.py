@@ -35,7 +35,7 @@ def view(web: str, duration: int | None) -> None:
     ctx = RunContext(WallClock(10_000_000, None))
     ctx.extras["transport"] = _open_transport("dds")
     from ..ros.bus import bus_of
-    from ..web.graph import GraphSource
+    from ..web.machines import GraphSource
 
     prev = activate(ctx)
     try:

@@ -12,11 +12,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..discover import machine_name_of
 from ..fingerprint import RACY_NS, compiler_id, machine_fingerprint, module_fingerprint, stat_signature
+from ..lang.discover import machine_name_of
 
 if TYPE_CHECKING:
-    from ..diagnostics import Diagnostic
+    from ..lang.diagnostics import Diagnostic
 
 # -- builds ------------------------------------------------------------------------------------
 
@@ -92,7 +92,7 @@ def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None
     if not force and fp and module_fingerprint(target) == fp:
         return BuildOutcome(path, target, "unchanged", name=name, fingerprint=fp)
     # only now the checker and the code generator (pydantic, yaml, jinja2): warm builds skip them
-    from ..check import check_machine
+    from ..lang.check import check_machine
     from .generate import CompileError, compile_machine
 
     checked = check_machine(path)
@@ -174,7 +174,7 @@ def build_all(
     if jobs > 1 and len(stale) > 1:
         import multiprocessing
 
-        from ..check import check_machine  # noqa: F401 (imported once, before the workers fork)
+        from ..lang.check import check_machine  # noqa: F401 (imported once, before the workers fork)
         from .generate import compile_machine  # noqa: F401
 
         compiler_id()  # read once here, not by every worker

@@ -19,12 +19,13 @@ from functools import cache
 import jinja2
 
 from .. import __version__
-from ..check import MachineCheck
-from ..diagnostics import Diagnostic, diag
-from ..model import Code, Machine, State
-from ..names import child_nodes
+from ..lang.check import MachineCheck
+from ..lang.diagnostics import Diagnostic, diag
+from ..lang.model import Code, Machine, State
+from ..lang.scopes import child_nodes
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
+from ..templating import environment
 from .rewrite import (
     ALIAS_LINE,
     MACHINE_ALIAS,
@@ -37,7 +38,6 @@ from .rewrite import (
     state_map,
     used_names,
 )
-from .templating import environment
 
 #: How a rewritten name that reaches the machine through its alias starts.
 _ALIASED = MACHINE_ALIAS + "."

@@ -1,6 +1,6 @@
 """Messages on ROS 2's DDS wire: the runtime API over the generated `_dds` modules.
 
-Every message and service class (built in or a user's, compiled by llfsm.compiler.interfaces)
+Every message and service class (built in or a user's, compiled by llfsm.idl.package)
 has a generated DDS form beside it, `llfsm.msgs.<pkg>.<msg|srv>._dds`.  This module finds it
 from the class and offers:
 

@@ -1,7 +1,7 @@
 """The import hook that makes a user's interface package importable as llfsm.msgs.PKG.
 
 A package in ROS layout (PKG/msg/*.msg, PKG/srv/*.srv) found in the search path is compiled by
-llfsm.compiler.interfaces into the cache, in a folder named after a fingerprint of its files,
+llfsm.idl.package into the cache, in a folder named after a fingerprint of its files,
 and imported from there.  A warm import lists and hashes the definition files and nothing more:
 the compiler (and jinja2) are imported only when that folder does not exist yet.  Built-in
 packages never reach this hook: the hook sits at the end of sys.meta_path, after the finder that
@@ -24,8 +24,8 @@ PREFIX = "llfsm.msgs."
 _LLFSM_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # What shapes generated message code: a change to any of these recompiles users' packages.
 _GENERATOR_FILES = (
-    os.path.join(_LLFSM_DIR, "compiler", "interfaces.py"),
-    os.path.join(_LLFSM_DIR, "compiler", "dds.py"),
+    os.path.join(_LLFSM_DIR, "idl", "package.py"),
+    os.path.join(_LLFSM_DIR, "idl", "ddsgen.py"),
     os.path.join(_LLFSM_DIR, "msgs", "_message.py"),
 )
 _added: list[str] = []
@@ -41,8 +41,8 @@ def add_search_path(path: str | os.PathLike[str]) -> None:
 
 
 def _take_pending() -> None:
-    """The folders named before this module was imported (llfsm.interface_paths)."""
-    from .. import interface_paths
+    """The folders named before this module was imported (llfsm.idl.paths)."""
+    from ..idl import paths as interface_paths
 
     for p in interface_paths.pending:
         add_search_path(p)
@@ -135,7 +135,7 @@ def _fingerprint(package_dir: str) -> str:
         from .. import __version__
 
         g.update(__version__.encode())
-        templates = os.path.join(_LLFSM_DIR, "templates")
+        templates = os.path.join(_LLFSM_DIR, "idl", "templates")
         names = sorted(n for n in os.listdir(templates) if n.startswith("msgs") and n.endswith(".j2"))
         for p in (*_GENERATOR_FILES, *(os.path.join(templates, n) for n in names)):
             with open(p, "rb") as f:
@@ -178,7 +178,7 @@ def compiled_package(package: str, package_dir: str) -> str:
     import tempfile
     from pathlib import Path
 
-    from ..compiler.interfaces import build_package
+    from ..idl.package import build_package
 
     tmp = tempfile.mkdtemp(prefix=f".{package}-", dir=cache)
     try:

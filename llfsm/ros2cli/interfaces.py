@@ -161,7 +161,7 @@ def definition_file(pkg: str, kind: str, name: str) -> Path | None:
 
 def _nested_types(path: Path, pkg: str, kind: str, name: str, text: str) -> dict[int, str]:
     """Line number -> the message type its field holds, for the lines that hold a message."""
-    from ..compiler.interfaces import InterfaceError, parse_message, parse_service
+    from ..idl.package import InterfaceError, parse_message, parse_service
 
     local = {p.stem for p in (path.parent.parent / "msg").glob("*.msg")}
     try:
@@ -177,7 +177,7 @@ def _nested_types(path: Path, pkg: str, kind: str, name: str, text: str) -> dict
 
 def _content(line: str) -> str:
     """The line without its comment, stripped ('' for a blank or comment-only line)."""
-    from ..compiler.interfaces import _strip_comment
+    from ..idl.package import _strip_comment
 
     return _strip_comment(line).strip()
 

@@ -2,7 +2,7 @@
 
 One page, live over a WebSocket: each machine's diagram with its current state, commands,
 topics, a form to publish and one to call a service, and the turtle world.  Every script, style
-and font ships in this package (static/); diagrams are laid out here (diagram.py), so the page
+and font ships in this package (static/); diagrams are laid out by llfsm.diagram, so the page
 works with no network at all.
 
 The server stack (aiohttp) is the optional extra `llfsm[web]`; importing this package does not

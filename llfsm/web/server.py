@@ -36,7 +36,7 @@ from typing import Any
 
 from aiohttp import WSMsgType, web
 
-from . import diagram
+from ..diagram import svg as diagram
 from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
@@ -257,7 +257,8 @@ class WebServer:
     def _draw(self, descriptions: list[Any]) -> list[dict[str, Any]]:
         """(worker thread) Each machine's name, description text and SVG; one that cannot be
         drawn is left out, said once, and never stops the others."""
-        from .model import DescriptionError  # here, on the worker: pydantic takes a while to import
+        # deferred: here, on the worker: pydantic (the description model) takes a while to import
+        from ..diagram.description import DescriptionError
 
         out = []
         for d in descriptions:

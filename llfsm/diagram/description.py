@@ -22,7 +22,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 #: Characters of JSON accepted at all (a run's description of a few dozen states is a few KiB).
 MAX_TEXT = 4 << 20
-#: States in one description (what is drawn is bounded further: llfsm.web.diagram).
+#: States in one description (what is drawn is bounded further: llfsm.diagram.svg).
 MAX_STATES = 10_000
 #: Transitions in one description, all states together.
 MAX_TRANSITIONS = 50_000

@@ -38,7 +38,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from .interfaces import (
+from .package import (
     LINE_LIMIT,
     FieldSpec,
     FieldType,

@@ -11,7 +11,7 @@ from typing import Any
 
 import jinja2
 
-TEMPLATES = Path(__file__).resolve().parent.parent / "templates"
+TEMPLATES = Path(__file__).resolve().parent / "templates"
 
 #: Line 2 of every generated Python file.  PEP 263 reads an encoding declaration from line 1
 #: or 2 only, and the first that matches wins: lines 1 and 2 are fixed text, this one declares

@@ -17,7 +17,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .diagnostics import Diagnostic, diag
+from ..diagnostics import Diagnostic, diag
 
 MSGS_PREFIX = "llfsm.msgs."
 MANIFEST = "package.xml"

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import yaml
 
-from .compiler.rewrite import line_index, source_segment
+from ..compiler.rewrite import line_index, source_segment
 from .diagnostics import Diagnostic, diag
 from .discover import machine_name_of, refused_link
 from .model import (

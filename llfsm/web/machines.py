@@ -11,7 +11,7 @@ Everything here runs on the view's scheduler thread (a run with no machines whos
 spins); the server's thread only reads what the callbacks stored.
 
 The domain is shared, so every peer is untrusted (issue 18): a description is believed only once
-it fits llfsm.web.model (else it is dropped, with one warning per machine topic, and the last
+it fits llfsm.diagram.description (else it is dropped, with one warning per machine topic, and the last
 good one stays), a state's text is bounded, machine names are ROS name tokens, at most
 `MAX_MACHINES` are followed, and nothing a peer sends can raise out of a callback into the bus
 executor (which would end the view).  Samples that cannot be decoded at all never get here:
@@ -25,10 +25,10 @@ import re
 from collections import deque
 from typing import TYPE_CHECKING, Any
 
+from ..diagram.description import MAX_NAME, DescriptionError, parse_description
 from ..msgs.std_msgs.msg import String
 from ..ros.control import LATCHED, NAMESPACE
 from ..ros.transports.dds_graph import message_class, service_class
-from .model import MAX_NAME, DescriptionError, parse_description
 from .source import HISTORY, Source
 
 if TYPE_CHECKING:
@@ -213,6 +213,6 @@ class GraphSource(Source):
 
 
 def _bounded(text: Any) -> str:
-    """A state's name as a peer sent it, cut to what a state's name may be (llfsm.web.model)."""
+    """A state's name as a peer sent it, cut to what a state's name may be (llfsm.diagram.description)."""
     text = text if isinstance(text, str) else str(text)
     return text if len(text) <= MAX_NAME else text[: MAX_NAME - 1] + "…"

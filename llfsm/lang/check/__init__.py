@@ -20,15 +20,15 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .compiler.rewrite import BadBinding, attribute_of, find, line_index, name_map, state_map
-from .deps import undeclared_dependencies
-from .diagnostics import Diagnostic, Severity, diag
-from .discover import MACHINE_SUFFIX, find_machines, machine_name_of
-from .model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
-from .names import Unresolved, child_nodes, section_bindings, unresolved
-from .reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
-from .runtime.machine import MACROS, RESERVED
-from .workers import die_with_parent, usable_cores
+from ...compiler.rewrite import BadBinding, attribute_of, find, line_index, name_map, state_map
+from ...runtime.machine import MACROS, RESERVED
+from ...workers import die_with_parent, usable_cores
+from ..diagnostics import Diagnostic, Severity, diag
+from ..discover import MACHINE_SUFFIX, find_machines, machine_name_of
+from ..model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
+from ..reader import MAX_CODE_DEPTH, ReadResult, node_col, read_machine
+from ..scopes import Unresolved, child_nodes, section_bindings, unresolved
+from .packages import undeclared_dependencies
 
 #: Builtins, and the globals every module has (the compiled machine is a module).
 BUILTINS = frozenset(dir(builtins)) | {"__file__", "__builtins__", "__cached__", "__loader__", "__spec__"}
@@ -103,7 +103,7 @@ def ros_import_hint(module: str, stmt: ast.Import | ast.ImportFrom) -> str | Non
 
 def _ros_time_has(attr: str) -> bool:
     """Whether llfsm's run-clock time has `attr` (read from llfsm's own code, not the user's)."""
-    from .ros.node import Time
+    from ...ros.node import Time
 
     return hasattr(Time, attr)
 

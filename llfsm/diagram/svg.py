@@ -1,22 +1,18 @@
-"""A machine's diagram as SVG, laid out here (no Graphviz, nothing fetched): a small layered
-layout in the manner of Sugiyama, enough for the few to few dozen states of an LLFSM.
+"""A machine's diagram as SVG, on the boxes llfsm.diagram.layout places (no Graphviz, nothing
+fetched): the web view's diagrams.
 
-1. Layers: breadth-first depth from the initial state, following transitions in priority
-   order; states it never reaches (the suspend state, usually) go on a layer below.
-2. Order within a layer: a few sweeps of the barycentre heuristic (each state moves towards the
-   mean position of its neighbours), which removes most crossings of small graphs.
-3. Edges: downward ones are vertical S-curves; upward ones (loops back) swing round the right
-   of everything they pass; same-layer ones dip below; a self-transition is a small loop.
-   Each carries `index: guard`, the guard text as written in the machine's files.
+Edges: downward ones are vertical S-curves; upward ones (loops back) swing round the right
+of everything they pass; same-layer ones dip below; a self-transition is a small loop.  Each
+carries `index: guard`, the guard text as written in the machine's files.
 
 Every state is a `<g class="state" data-machine=M data-state=S aria-current=...>`: the page
 moves `aria-current="true"` to the current state, and tests find states by these attributes.
 
 Descriptions may come from any peer on a DDS domain (`llfsm view`), so (issue 18):
 
-- a description is checked against llfsm.web.model before anything is drawn (an index is an
-  integer, targets name states...), and every text in it is escaped, attributes included, with
-  characters XML cannot carry replaced: nothing of a peer's making becomes markup;
+- a description is checked against llfsm.diagram.description before anything is drawn (an
+  index is an integer, targets name states...), and every text in it is escaped, attributes
+  included, with characters XML cannot carry replaced: nothing of a peer's making becomes markup;
 - the layout is quadratic in the edges, so what is drawn is bounded (`MAX_DRAWN_STATES`,
   `MAX_DRAWN_TRANSITIONS`: the states nearest the initial one first) and the diagram says what
   it left out;
@@ -32,15 +28,11 @@ import json
 import re
 import threading
 from collections import OrderedDict
-from dataclasses import dataclass
 from html import escape
 from typing import Any
 
-NODE_H = 34
-LAYER_GAP = 96
-NODE_GAP = 56
-MARGIN = 24
-CHAR_W = 8.0  # of the 13 px state names
+from .layout import MARGIN, NODE_H, layout
+
 LABEL_CHAR_W = 6.4  # of the 11 px guard labels
 LABEL_MAX = 34  # characters of guard text shown on an arrow (the whole text is in its tooltip)
 #: At most this many states are drawn (a few dozen is what a diagram can show anyway).
@@ -63,90 +55,6 @@ def _esc(text: object) -> str:
     return escape(_NOT_XML.sub("\ufffd", str(text)), quote=True)
 
 
-@dataclass
-class Box:
-    name: str
-    layer: int
-    x: float = 0.0  # centre
-    y: float = 0.0  # top
-    w: float = 0.0
-
-    @property
-    def left(self) -> float:
-        return self.x - self.w / 2
-
-    @property
-    def right(self) -> float:
-        return self.x + self.w / 2
-
-    @property
-    def bottom(self) -> float:
-        return self.y + NODE_H
-
-    @property
-    def mid(self) -> float:
-        return self.y + NODE_H / 2
-
-
-def layout(desc: dict[str, Any]) -> tuple[dict[str, Box], float, float]:
-    """Boxes by state name, and the drawing's width and height."""
-    states = [s["name"] for s in desc["states"]]
-    out: dict[str, list[str]] = {s["name"]: [t["target"] for t in s["transitions"]] for s in desc["states"]}
-    layer: dict[str, int] = {}
-    frontier = [desc["initial"]] if desc["initial"] in out else states[:1]
-    for s in frontier:
-        layer[s] = 0
-    while frontier:
-        nxt = []
-        for s in frontier:
-            for t in out.get(s, []):
-                if t not in layer:
-                    layer[t] = layer[s] + 1
-                    nxt.append(t)
-        frontier = nxt
-    bottom = max(layer.values(), default=-1) + 1
-    for s in states:  # unreached: on a layer of their own below the rest
-        layer.setdefault(s, bottom)
-    layers: list[list[str]] = [[] for _ in range(max(layer.values(), default=0) + 1)]
-    for s in states:
-        layers[layer[s]].append(s)
-    layers = [lay for lay in layers if lay]
-    for i, lay in enumerate(layers):
-        for s in lay:
-            layer[s] = i
-    neighbours: dict[str, set[str]] = {s: set() for s in states}
-    for s, targets in out.items():
-        for t in targets:
-            if t != s and t in neighbours:
-                neighbours[s].add(t)
-                neighbours[t].add(s)
-    for _ in range(4):  # barycentre sweeps
-        pos = {s: i / max(1, len(lay) - 1) for lay in layers for i, s in enumerate(lay)}
-        for lay in layers:
-            keyed = []
-            for i, s in enumerate(lay):
-                ns = [pos[n] for n in neighbours[s] if layer[n] != layer[s]]
-                keyed.append((sum(ns) / len(ns) if ns else pos[s], i, s))
-            lay[:] = [s for _, _, s in sorted(keyed)]
-    boxes: dict[str, Box] = {}
-    widths = []
-    for i, lay in enumerate(layers):
-        row = [Box(s, i, w=max(92.0, CHAR_W * len(s) + 30)) for s in lay]
-        widths.append(sum(b.w for b in row) + NODE_GAP * (len(row) - 1))
-        for b in row:
-            boxes[b.name] = b
-    inner = max(widths, default=0.0)
-    for i, lay in enumerate(layers):
-        x = MARGIN + (inner - widths[i]) / 2
-        for s in lay:
-            b = boxes[s]
-            b.x, b.y = x + b.w / 2, MARGIN + 18 + i * (NODE_H + LAYER_GAP)
-            x += b.w + NODE_GAP
-    width = MARGIN * 2 + inner
-    height = MARGIN * 2 + 18 + len(layers) * NODE_H + (len(layers) - 1) * LAYER_GAP
-    return boxes, width, height
-
-
 def _label(index: int, guard: str) -> str:
     text = " ".join(guard.split())
     if len(text) > LABEL_MAX:
@@ -160,15 +68,16 @@ def _bezier_mid(p0: tuple[float, float], c1: tuple[float, float], c2: tuple[floa
 
 def svg(desc: dict[str, Any], current: str | None = None) -> str:
     """The diagram of one machine (the `description` structure of llfsm.ros.control), its
-    `current` state marked.  A description that does not fit llfsm.web.model raises
-    llfsm.web.model.DescriptionError before anything is drawn."""
+    `current` state marked.  A description that does not fit llfsm.diagram.description raises
+    its DescriptionError before anything is drawn."""
     key = _key(desc)
     with _cache_lock:
         drawn = _cache.get(key) if key is not None else None
         if drawn is not None:
             _cache.move_to_end(key)  # type: ignore[arg-type]
     if drawn is None:
-        from .model import validate  # pydantic: imported when a diagram is first drawn, not with --web
+        # deferred: pydantic is imported when a diagram is first drawn (on the drawing thread), not with --web
+        from .description import validate
 
         drawn = _render(validate(desc))
         if key is not None:

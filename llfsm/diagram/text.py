@@ -1,0 +1,19 @@
+"""A guard's text as the label of an arrow: on one line, cut short (`llfsm graph`'s formats)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..lang.model import Machine
+
+#: Characters of guard text on an arrow.
+GUARD_MAX = 60
+
+
+def guard_label(m: Machine, state: str, index: int) -> str:
+    """The guard of transition `index` of `state`, whitespace folded, at most GUARD_MAX long."""
+    st = m.state(state)
+    g = st.transitions[index].guard
+    text = " ".join(g.text.split()) if g is not None else "?"
+    return text if len(text) <= GUARD_MAX else text[: GUARD_MAX - 3] + "..."
