@@ -19,8 +19,9 @@ from llfsm.msgs.geometry_msgs.msg import PoseStamped, Twist
 from llfsm.msgs.std_msgs.msg import Float64MultiArray, String
 from llfsm.msgs.turtlesim.srv import Spawn
 from llfsm.ros2cli import CliError
-from llfsm.ros2cli.interfaces import known_types, message_class, service_class, show
-from llfsm.ros2cli.verbs import RateMeter, format_message, rate_table
+from llfsm.ros2cli.interface import known_types, message_class, service_class, show
+from llfsm.ros2cli.topic.echo import format_message
+from llfsm.ros2cli.topic.hz import RateMeter, rate_table
 
 # -- interface show --------------------------------------------------------------------------------
 

@@ -9,20 +9,14 @@ from typing import Any, TypeVar
 
 import click
 
+from ..ros2cli import SPIN_TIME, TIMEOUT, CliError
 from ._common import fail
 
 F = TypeVar("F", bound=Callable[..., Any])
 
-#: How long a list waits for discovery (`ros2 ... --no-daemon` spins 0.5 s; a loaded machine
-#: needs a little more for the endpoints of every participant to arrive).
-SPIN_TIME = 1.0
-#: How long a verb waits for the topic, service or message it needs before it gives up.
-TIMEOUT = 5.0
-
 
 def verb(fn: F) -> F:
     """Run the command; a CliError ends it with its message and status, Ctrl-C with 130."""
-    from ..ros2cli import CliError
 
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import sys
+import time
 
 import click
 
+from ..bag.errors import BagError
 from ._common import EXIT_ERRORS, cli, fail
 
 
@@ -18,8 +20,7 @@ def bag() -> None:
 @click.argument("bag_path", metavar="DIR")
 def info(bag_path: str) -> None:
     """Print what the bag holds: duration, start and end, messages, topics with types and counts."""
-    from ..bag.errors import BagError
-    from ..bag.info import format_info
+    from ..bag.info import format_info  # deferred: start-up (pydantic reads the bag's metadata)
 
     try:
         text = format_info(bag_path)
@@ -36,16 +37,12 @@ def info(bag_path: str) -> None:
 @click.option("--duration", type=float, metavar="SECONDS", help="Stop after this long (default: at Ctrl-C).")
 def record(topics: tuple[str, ...], all_topics: bool, output: str | None, storage: str, duration: float | None) -> None:
     """Record topics from the DDS graph (llfsm runs on --transport dds, ROS 2 nodes) into a bag."""
-    import time
-
-    from ..bag.errors import BagError
-
     if not topics and not all_topics:
         fail("bag record: name the topics to record, or -a for all of them")
     if topics and all_topics:
         fail("bag record: -a records every topic; give topics or -a, not both")
     out = output or time.strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
-    from ..bag.dds import record as record_dds
+    from ..bag.dds import record as record_dds  # deferred: start-up (recording needs the bus)
 
     def report(text: str) -> None:
         click.echo(f"llfsm: {text}", err=True)
@@ -66,8 +63,7 @@ def record(topics: tuple[str, ...], all_topics: bool, output: str | None, storag
 @click.option("-d", "--delay", type=float, default=0.0, show_default=True, help="Wait this many seconds first.")
 def play(bag_path: str, rate: float, loop: bool, topics: tuple[str, ...], delay: float) -> None:
     """Publish a bag's messages to the DDS graph at their recorded pace."""
-    from ..bag.dds import play as play_dds
-    from ..bag.errors import BagError
+    from ..bag.dds import play as play_dds  # deferred: start-up (playing needs the bus)
 
     try:
         play_dds(bag_path, rate, loop, topics, delay)

@@ -7,6 +7,7 @@ import sys
 
 import click
 
+from ..ros2cli import CliError
 from ._common import cli
 from ._ros2 import verb
 
@@ -24,9 +25,9 @@ def interface() -> None:
 def show(type_name: str, all_comments: bool, no_comments: bool) -> None:
     """Output the definition of TYPE (e.g. geometry_msgs/msg/Twist, turtlesim/srv/Spawn); '-'
     reads TYPE from standard input."""
-    from ..ros2cli import CliError
-    from ..ros2cli.interfaces import show as show_text
-    from ..ros2cli.interfaces import use_working_directory
+    # deferred: start-up (the verb loads the messages)
+    from ..ros2cli.interface import show as show_text
+    from ..ros2cli.interface import use_working_directory
 
     if all_comments and no_comments:
         raise CliError("--all-comments and --no-comments exclude each other")

@@ -20,16 +20,9 @@ def node() -> None:
 @verb
 def list_(all_: bool, count_nodes: bool, spin_time: float) -> None:
     """Output a list of available nodes."""
-    from ..ros2cli.graph import discovered, duplicate_nodes, node_list
+    from ..ros2cli.node import list_ as run_list  # deferred: start-up (the verb loads the bus)
 
-    with discovered(spin_time) as graph:
-        graph.settle()  # the nodes of participants already seen
-        text = node_list(graph, include_hidden=all_, count=count_nodes, spin_time=spin_time)
-        duplicates = duplicate_nodes(graph)
-    if duplicates and not count_nodes:
-        click.echo(
-            "WARNING: Be aware that there are nodes in the graph that share an exact name, "
-            "which can have unintended side effects.",
-            err=True,
-        )
+    text, warning = run_list(include_hidden=all_, count=count_nodes, spin_time=spin_time)
+    if warning is not None:
+        click.echo(warning, err=True)
     click.echo(text, nl=False)

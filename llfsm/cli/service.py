@@ -21,16 +21,14 @@ def service() -> None:
 @verb
 def list_(show_types: bool, count_services: bool, include_hidden_services: bool, spin_time: float) -> None:
     """Output a list of available services."""
-    from ..ros2cli.graph import discovered, service_list
+    from ..ros2cli.service import list_ as run_list  # deferred: start-up (the verb loads the bus)
 
-    with discovered(spin_time) as graph:
-        text = service_list(
-            graph,
-            show_types=show_types,
-            count=count_services,
-            include_hidden=include_hidden_services,
-            spin_time=spin_time,
-        )
+    text = run_list(
+        show_types=show_types,
+        count=count_services,
+        include_hidden=include_hidden_services,
+        spin_time=spin_time,
+    )
     click.echo(text, nl=False)
 
 
@@ -43,6 +41,6 @@ def list_(show_types: bool, count_services: bool, include_hidden_services: bool,
 @verb
 def call(service_name: str, service_type: str, values: str, rate: float | None, timeout: float) -> None:
     """Call a service.  VALUES fill the request, in YAML (e.g. "{x: 2.0, y: 2.0}")."""
-    from ..ros2cli.verbs import call as run_call
+    from ..ros2cli.service import call as run_call  # deferred: start-up (the verb loads the bus)
 
     run_call(service_name, service_type, values, period=1.0 / rate if rate else None, timeout=timeout)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import click
 
+from ..ros2cli import CliError
 from ._common import cli
 from ._ros2 import positive, spin_time_option, timeout_option, verb
 
@@ -23,17 +24,15 @@ def topic() -> None:
 @verb
 def list_(show_types: bool, count_topics: bool, include_hidden_topics: bool, verbose: bool, spin_time: float) -> None:
     """Output a list of available topics."""
-    from ..ros2cli.graph import discovered, topic_list
+    from ..ros2cli.topic.list import list_ as run_list  # deferred: start-up (the verb loads the bus)
 
-    with discovered(spin_time) as graph:
-        text = topic_list(
-            graph,
-            show_types=show_types,
-            count=count_topics,
-            include_hidden=include_hidden_topics,
-            verbose=verbose,
-            spin_time=spin_time,
-        )
+    text = run_list(
+        show_types=show_types,
+        count=count_topics,
+        include_hidden=include_hidden_topics,
+        verbose=verbose,
+        spin_time=spin_time,
+    )
     click.echo(text, nl=False)
 
 
@@ -44,20 +43,9 @@ def list_(show_types: bool, count_topics: bool, include_hidden_topics: bool, ver
 @verb
 def info(topic_name: str, verbose: bool, timeout: float) -> None:
     """Print information about a topic."""
-    from ..ros2cli.graph import open_graph, topic_info
-    from ..ros2cli.verbs import full_name
+    from ..ros2cli.topic.info import info as run_info  # deferred: start-up (the verb loads the bus)
 
-    name = full_name(topic_name, "topic")
-    graph = open_graph()
-    try:
-        graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True))
-        graph.spin(0.2)  # the rest of the topic's endpoints, discovered with the first
-        if verbose:  # each endpoint's node
-            graph.settle()
-        text = topic_info(graph, name, verbose=verbose)
-    finally:
-        graph.close()
-    click.echo(text, nl=False)
+    click.echo(run_info(topic_name, verbose=verbose, timeout=timeout), nl=False)
 
 
 @topic.command("type")
@@ -66,16 +54,9 @@ def info(topic_name: str, verbose: bool, timeout: float) -> None:
 @verb
 def type_(topic_name: str, timeout: float) -> None:
     """Print a topic's type."""
-    from ..ros2cli.graph import open_graph
-    from ..ros2cli.verbs import full_name, wait_for_topic_types
+    from ..ros2cli.topic.type import type_ as run_type  # deferred: start-up (the verb loads the bus)
 
-    name = full_name(topic_name, "topic")
-    graph = open_graph()
-    try:
-        types = wait_for_topic_types(graph, name, timeout)
-    finally:
-        graph.close()
-    click.echo("".join(f"{t}\n" for t in types), nl=False)
+    click.echo(run_type(topic_name, timeout=timeout), nl=False)
 
 
 @topic.command()
@@ -109,7 +90,7 @@ def echo(
 ) -> None:
     """Output messages from a topic as YAML, '---' after each.  TYPE (e.g. std_msgs/msg/String)
     is read from the graph when left out."""
-    from ..ros2cli.verbs import echo as run_echo
+    from ..ros2cli.topic.echo import echo as run_echo  # deferred: start-up (the verb loads the bus)
 
     run_echo(
         topic_name,
@@ -167,13 +148,12 @@ def pub(
     timeout: float,
 ) -> None:
     """Publish a message to a topic.  VALUES fill the message, in YAML (e.g. "{linear: {x: 2.0}}")."""
-    from ..ros2cli import CliError
-    from ..ros2cli.verbs import publish
+    from ..ros2cli.topic.pub import pub as run_pub  # deferred: start-up (the verb loads the bus)
 
     if once and times:
         raise CliError("--once and --times exclude each other")
     times = 1 if once else times
-    publish(
+    run_pub(
         topic_name,
         message_type,
         values,
@@ -196,6 +176,6 @@ def pub(
 @verb
 def hz(topic_names: tuple[str, ...], window: int, duration: float | None, timeout: float) -> None:
     """Print the average publishing rate of topics every second (a table for several)."""
-    from ..ros2cli.verbs import hz as run_hz
+    from ..ros2cli.topic.hz import hz as run_hz  # deferred: start-up (the verb loads the bus)
 
     run_hz(list(topic_names), window=window, duration=duration, timeout=timeout)

@@ -1,20 +1,45 @@
-"""The library under the ros2-style verbs (`llfsm topic|service|node|interface ...`).
+"""The library under the ros2-style verbs (`llfsm topic|node|service|interface ...`), a module
+per verb group as ros2cli has a package per verb group; the commands in llfsm/cli/ are thin
+click layers over it, and tests call it without a subprocess.  No click here.
 
-The commands in llfsm/cli/ are thin: they parse arguments and print.  What they do lives here,
-callable from tests without a subprocess:
+Verb groups (each verb a function named after it, `list_` and `type_` where Python has the
+name):
 
-- `interfaces`: TYPE strings (`pkg/msg/Name`, `pkg/Name`) to llfsm's classes, with a "did you
-  mean" for near misses; `ros2 interface show`'s text of a definition.  Offline.
-- `values`: VALUES (YAML as `ros2 topic pub` takes it) into a message, one clear line per mistake.
-- `graph`: what the DDS graph holds (topics with types, services, nodes), formatted as `ros2 ...
-  list` and `ros2 topic info` print it.  The reading itself is llfsm/ros/transports/dds_graph.py.
-- `verbs`: echo, pub, hz and service call over DDS.
+- `topic/`: `list`, `info`, `type`, `echo`, `pub`, `hz`, a module each (the group is big).
+- `node`: `list`.
+- `service`: `list`, `call`.
+- `interface`: `show`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to llfsm's classes, with
+  a "did you mean" for near misses.  Offline; the web view reads TYPEs through it too.
+
+What the groups share:
+
+- `discovery`: opening the DDS view of the ROS graph (llfsm/ros/transports/dds_graph.py),
+  waiting for discovery, the domain named in "nothing found".
+- `endpoints`: the verbs' own endpoints: a DataReader with ros2's QoS for the verbs that listen,
+  a hidden node of llfsm's bus for the verbs that talk.  cyclonedds is optional and heavy:
+  only here and in the verbs it is imported, inside functions (`llfsm --help` never loads it).
+- `arguments`: topic and service names, VALUES (YAML as `ros2 topic pub` takes it).
+
+Adding a verb (say `service type`): write `def type_(service: str, *, timeout: float = TIMEOUT)
+-> str` in `service.py` (for `topic`, a new module `topic/find.py`), taking typed arguments
+and returning the text `ros2` prints (or, for a verb that streams, writing to `out`); check
+the user's input (names, TYPE, VALUES) before the domain is joined.  Then add its click
+command to llfsm/cli/service.py (a new group: a new llfsm/cli/ module, registered in
+llfsm/cli/_click.py), calling the function and echoing its text; docs/cli.md lists the verbs.
 
 Errors the user causes are `CliError(message, status)`: the command prints the one line and
-exits with the status (2 for bad input, 1 for nothing found).
+exits with the status (2 for bad input, NOT_FOUND (1) for nothing found).
 """
 
 from __future__ import annotations
+
+#: The exit status of a verb that finds nothing (a topic, a message, a server) in time.
+NOT_FOUND = 1
+#: How long a list waits for discovery (`ros2 ... --no-daemon` spins 0.5 s; a loaded machine
+#: needs a little more for the endpoints of every participant to arrive).
+SPIN_TIME = 1.0
+#: How long a verb waits for the topic, service or message it needs before it gives up.
+TIMEOUT = 5.0
 
 
 class CliError(Exception):
@@ -26,4 +51,4 @@ class CliError(Exception):
         self.status = status
 
 
-__all__ = ["CliError"]
+__all__ = ["NOT_FOUND", "SPIN_TIME", "TIMEOUT", "CliError"]

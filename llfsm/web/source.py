@@ -45,7 +45,7 @@ def type_class(type_name: str, kind: str) -> Any:
     """The class a type typed into the page names (`pkg/msg/Name`, `pkg/srv/Name`, or `pkg/Name`),
     read as `llfsm topic pub` and `llfsm service call` read their TYPE."""
     from ..ros2cli import CliError
-    from ..ros2cli.interfaces import message_class, service_class
+    from ..ros2cli.interface import message_class, service_class
 
     try:
         return message_class(type_name.strip()) if kind == "msg" else service_class(type_name.strip())

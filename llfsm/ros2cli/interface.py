@@ -1,5 +1,6 @@
-"""Interface types by name: `pkg/msg/Name` (or `pkg/Name`, as `ros2` accepts) to llfsm's
-message and service classes, and `ros2 interface show`'s text of a definition.
+"""`interface show`, and interface types by name: `pkg/msg/Name` (or `pkg/Name`, as `ros2`
+accepts) to llfsm's message and service classes, which every verb that takes a TYPE (and the
+web view) reads it through.
 
 Built-in packages are the generated modules under llfsm/msgs/; their definitions are the files
 in llfsm/msgs/_interfaces/ (the standard ones, std_msgs, geometry_msgs and builtin_interfaces,
@@ -15,12 +16,9 @@ import importlib
 import os
 import re
 from pathlib import Path
-from typing import TYPE_CHECKING
 
+from ..msgs import Message, Service, add_search_path, find_package, search_path
 from . import CliError
-
-if TYPE_CHECKING:
-    from ..msgs import Message, Service
 
 _MSGS_DIR = Path(__file__).resolve().parent.parent / "msgs"
 _DEFINITIONS = _MSGS_DIR / "_interfaces"
@@ -33,8 +31,6 @@ KINDS = ("msg", "srv")
 def use_working_directory(cwd: str | os.PathLike[str] | None = None) -> None:
     """Search the working directory and its three parents for interface packages, as `llfsm
     run` searches the folders above its machines."""
-    from ..msgs import add_search_path
-
     here = Path(os.path.realpath(cwd or os.getcwd()))
     for folder in [here, *list(here.parents)[:3]]:
         add_search_path(folder)
@@ -61,8 +57,6 @@ def _builtin_packages() -> list[str]:
 
 
 def _user_packages() -> dict[str, Path]:
-    from ..msgs import search_path
-
     found: dict[str, Path] = {}
     for root in search_path():
         try:
@@ -108,9 +102,7 @@ def _unknown(text: str, kind: str) -> CliError:
 
 
 def _import(pkg: str, kind: str, name: str, text: str) -> object:
-    from ..msgs import Message  # noqa: F401  (installs the import hook for user packages)
-
-    try:
+    try:  # llfsm.msgs, imported above, has installed the import hook for user packages
         module = importlib.import_module(f"llfsm.msgs.{pkg}.{kind}")
     except ModuleNotFoundError as e:
         if e.name is not None and e.name.startswith(f"llfsm.msgs.{pkg}"):  # no such package, or no msg/srv in it
@@ -148,8 +140,6 @@ def definition_file(pkg: str, kind: str, name: str) -> Path | None:
     if pkg in _builtin_packages():
         folders = [_DEFINITIONS / pkg / kind, _STANDARD / pkg / kind]
     else:
-        from ..msgs import find_package
-
         d = find_package(pkg)
         folders = [] if d is None else [d / kind]
     for folder in folders:
@@ -161,6 +151,7 @@ def definition_file(pkg: str, kind: str, name: str) -> Path | None:
 
 def _nested_types(path: Path, pkg: str, kind: str, name: str, text: str) -> dict[int, str]:
     """Line number -> the message type its field holds, for the lines that hold a message."""
+    # deferred: start-up (the toolchain loads jinja2; the web view reads TYPEs through this module)
     from ..idl.package import InterfaceError, parse_message, parse_service
 
     local = {p.stem for p in (path.parent.parent / "msg").glob("*.msg")}
@@ -177,7 +168,7 @@ def _nested_types(path: Path, pkg: str, kind: str, name: str, text: str) -> dict
 
 def _content(line: str) -> str:
     """The line without its comment, stripped ('' for a blank or comment-only line)."""
-    from ..idl.package import _strip_comment
+    from ..idl.package import _strip_comment  # deferred: start-up (as in _nested_types)
 
     return _strip_comment(line).strip()
 
