@@ -139,7 +139,7 @@ class _Incompatible:
     endpoint elsewhere was found whose QoS cannot match ours: a reliable subscription and a
     best-effort publisher, say.  Without it the subscription would just never receive."""
 
-    def __init__(self, endpoint: Any, topic: str, node: Any, *, reader: bool) -> None:
+    def __init__(self, endpoint: Any, topic: str, node: NodeView, *, reader: bool) -> None:
         self.endpoint, self.topic, self.node, self.reader = endpoint, topic, node, reader
         self.said = 0
 
@@ -209,7 +209,7 @@ def _delete(*entities: Entity | None) -> None:
 class _Endpoint:
     """One node's DDS reader or writer, as the graph announcement lists it."""
 
-    node: Any
+    node: NodeView
     readers: tuple[Entity, ...] = ()
     writers: tuple[Entity, ...] = ()
 
