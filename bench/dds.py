@@ -38,7 +38,7 @@ TOPIC, PING, PONG = "/bench_twist", "/bench_ping", "/bench_pong"
 
 def _llfsm_node(name: str):
     from llfsm import ros
-    from llfsm.ros.transports.inproc import make
+    from llfsm.ros.transports import make
     from llfsm.runtime import RunContext, WallClock
     from llfsm.runtime.context import activate
 
@@ -146,7 +146,7 @@ def role_idle(transport: str, seconds: float) -> None:
     import tempfile
 
     from llfsm.ros.bus import bus_of
-    from llfsm.ros.transports.inproc import make
+    from llfsm.ros.transports import make
     from llfsm.runtime import Arrangement, RunContext, WallClock
     from llfsm.targets import load
 

@@ -33,7 +33,7 @@ class _Session:
 
     def __init__(self) -> None:
         from ..ros.bus import bus_of
-        from ..ros.transports.inproc import make
+        from ..ros.transports import make
         from ..runtime import RunContext, WallClock
 
         try:

@@ -288,7 +288,8 @@ class Recorder:
     def _offered(self, topic: Topic) -> list[dict[str, Any]]:
         """Each publisher's offered QoS, as rosbag2 records what discovery reports: its
         reliability and durability (a best-effort sensor topic is replayed best effort)."""
-        from ..ros.node import Publisher, ReliabilityPolicy
+        from ..ros.publisher import Publisher
+        from ..ros.qos import ReliabilityPolicy
 
         bus = self._bus
         pubs = []

@@ -204,7 +204,7 @@ def _open_bags(
 
 def _open_transport(name: str) -> Any:
     """The run's transport; a missing package or a bad ROS_* variable is a usage error."""
-    from ..ros.transports.inproc import make
+    from ..ros.transports import make
 
     try:
         return make(name)

@@ -29,7 +29,8 @@ from ..msgs.std_srvs.srv import Trigger
 from ..runtime.context import RunContext, activate
 from ..runtime.machine import RESTART, RESUME, SUSPEND, Machine
 from ..runtime.trace import Tee, Tracer
-from .node import DurabilityPolicy, Node, QoSProfile
+from .node import Node
+from .qos import DurabilityPolicy, QoSProfile
 
 if TYPE_CHECKING:
     from ..runtime.scheduler import Arrangement

@@ -149,3 +149,10 @@ def remap_node(node: str, namespace: str, rules: list[Remap]) -> tuple[str, str]
             elif r.source == "__ns":
                 namespace = normalise_namespace(r.target)
     return node, namespace
+
+
+def type_name(obj: object) -> str:
+    """The ROS type name of a message or service (class or instance), or Python's name for
+    anything else: what the errors of publish() and call_async() say was given instead."""
+    t = obj if isinstance(obj, type) else type(obj)
+    return getattr(t, "_TYPE", "") or t.__name__

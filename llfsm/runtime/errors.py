@@ -226,7 +226,7 @@ def _reentrant_call_hint(tb: TracebackType | None) -> str:
     seen: dict[str, int] = {}
     while tb is not None:
         code = tb.tb_frame.f_code
-        if code.co_name == "call" and code.co_filename.endswith(os.path.join("llfsm", "ros", "node.py")):
+        if code.co_name == "call" and code.co_filename.endswith(os.path.join("llfsm", "ros", "client.py")):
             name = getattr(tb.tb_frame.f_locals.get("self"), "srv_name", None)
             if isinstance(name, str):
                 seen[name] = seen.get(name, 0) + 1

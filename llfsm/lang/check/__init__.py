@@ -103,7 +103,7 @@ def ros_import_hint(module: str, stmt: ast.Import | ast.ImportFrom) -> str | Non
 
 def _ros_time_has(attr: str) -> bool:
     """Whether llfsm's run-clock time has `attr` (read from llfsm's own code, not the user's)."""
-    from ...ros.node import Time
+    from ...ros.clock import Time
 
     return hasattr(Time, attr)
 

@@ -55,9 +55,7 @@ from .dds_read import ANY, TAKE_BATCH, Samples
 
 if TYPE_CHECKING:
     from ...msgs._message import Message
-    from ..bus import Bus, Future
-    from ..node import Client, Node, ServiceServer, Subscription
-    from ..node import Publisher as RosPublisher
+    from .base import BusPort, ClientView, NodeView, PendingReply, PublisherView, ServiceView, SubscriptionView
 
 U64 = (1 << 64) - 1
 #: How long a server keeps an answer for a client whose reply reader it has not matched yet
@@ -65,7 +63,7 @@ U64 = (1 << 64) - 1
 REPLY_PATIENCE_S = 2.0
 #: How long a client trusts its last look at the server's matches (spin calls ask often).
 READY_CACHE_S = 0.05
-#: rclpy's ReliabilityPolicy values (llfsm.ros.node), without importing the node module here.
+#: rclpy's ReliabilityPolicy values (llfsm.ros.qos): a transport imports nothing of the bus above it.
 SYSTEM_DEFAULT, RELIABLE = 0, 1
 #: History depth of service endpoints: rmw's default service QoS (keep last 10, reliable, volatile).
 SERVICE_DEPTH = 10
@@ -141,7 +139,7 @@ class _Incompatible:
     endpoint elsewhere was found whose QoS cannot match ours: a reliable subscription and a
     best-effort publisher, say.  Without it the subscription would just never receive."""
 
-    def __init__(self, endpoint: Any, topic: str, node: Any, *, reader: bool) -> None:
+    def __init__(self, endpoint: Any, topic: str, node: NodeView, *, reader: bool) -> None:
         self.endpoint, self.topic, self.node, self.reader = endpoint, topic, node, reader
         self.said = 0
 
@@ -211,13 +209,13 @@ def _delete(*entities: Entity | None) -> None:
 class _Endpoint:
     """One node's DDS reader or writer, as the graph announcement lists it."""
 
-    node: Any
+    node: NodeView
     readers: tuple[Entity, ...] = ()
     writers: tuple[Entity, ...] = ()
 
 
 class _Writer(_Endpoint):
-    def __init__(self, t: DdsTransport, pub: RosPublisher) -> None:
+    def __init__(self, t: DdsTransport, pub: PublisherView) -> None:
         self.t, self.node = t, pub.node
         self.cdr = _dds.codec(pub.msg_type).cdr
         topic = t.topic("rt" + pub.topic_name, _dds.dds_type(pub.msg_type))
@@ -250,7 +248,7 @@ class _Writer(_Endpoint):
 
 
 class _Reader(_Endpoint):
-    def __init__(self, t: DdsTransport, sub: Subscription) -> None:
+    def __init__(self, t: DdsTransport, sub: SubscriptionView) -> None:
         self.t, self.node, self.sub = t, sub.node, sub
         self.msg_type = sub.msg_type
         topic = t.topic("rt" + sub.topic_name, _dds.dds_type(sub.msg_type))
@@ -305,7 +303,7 @@ class _RemoteRequest:
 
 
 class _Server(_Endpoint):
-    def __init__(self, t: DdsTransport, srv: ServiceServer) -> None:
+    def __init__(self, t: DdsTransport, srv: ServiceView) -> None:
         self.t, self.node, self.srv = t, srv.node, srv
         self.closed = False
         name = srv.srv_name
@@ -416,7 +414,7 @@ class _BareRequests:
 
 
 class _Client(_Endpoint):
-    def __init__(self, t: DdsTransport, cli: Client) -> None:
+    def __init__(self, t: DdsTransport, cli: ClientView) -> None:
         self.t, self.node, self.cli = t, cli.node, cli
         name = cli.srv_name
         user = f"clientid={t.new_csid()};".encode()
@@ -434,7 +432,7 @@ class _Client(_Endpoint):
         self.readers, self.writers = (self.reader,), (self.writer,)
         self.guid = self.writer.get_instance_handle() & U64  # rmw_cyclonedds: the request writer's handle
         self.seq = itertools.count(1)
-        self.pending: dict[int, Future] = {}
+        self.pending: dict[int, PendingReply] = {}
         self._ready_at = -1.0
         self._ready = False
         #: A Fast DDS server (rmw_fastrtps_cpp) was matched: it wants requests without the header.
@@ -505,7 +503,7 @@ class _Client(_Endpoint):
                     break
         return self._ready
 
-    def send(self, request: Message, future: Future) -> None:
+    def send(self, request: Message, future: PendingReply) -> None:
         if self.t.closed or not self.ready():
             # sent to nobody: no process can answer it, so spin calls say TIMEOUT at once (as
             # in process); the future is left to the bus's own rule for a missing server
@@ -519,7 +517,7 @@ class _Client(_Endpoint):
         self.pending[seq] = future
         _write(self.writer, _dds.wrap(request, self.guid, seq))
 
-    def can_still_answer(self, future: Future) -> bool:
+    def can_still_answer(self, future: PendingReply) -> bool:
         if self.t.closed:
             return False
         self._ready_at = -1.0 if time.monotonic() - self._ready_at > 0.2 else self._ready_at
@@ -574,7 +572,7 @@ class _PlainClient:
             t.subscriber_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.Response)), qos=_qos(SERVICE_DEPTH, reader=True)
         )
         owner.readers, owner.writers = (owner.reader, self.reader), (owner.writer, self.writer)
-        self.waiting: deque[Future] = deque()
+        self.waiting: deque[PendingReply] = deque()
         cls = srv.Response
         self.replies = Samples(
             self.reader, lambda data: _dds.from_cdr(data, cls), name, f"a {cls._TYPE}", t.warn, kind="reply"
@@ -585,7 +583,7 @@ class _PlainClient:
     def ready(self) -> bool:
         return bool(self.writer.get_matched_subscriptions()) and bool(self.reader.get_matched_publications())
 
-    def send(self, request: Message, future: Future) -> None:
+    def send(self, request: Message, future: PendingReply) -> None:
         self.waiting.append(future)
         _write(self.writer, _dds.cdr(request))
 
@@ -669,7 +667,7 @@ class DdsTransport(Transport):
             qos=graph_qos,
         )
 
-    def start(self, bus: Bus) -> None:
+    def start(self, bus: BusPort) -> None:
         self.bus = bus
         clock = bus.clock
         if getattr(clock, "kind", "") == "wall" and hasattr(clock, "waiter"):
@@ -704,19 +702,19 @@ class DdsTransport(Transport):
         self._parked.append(retry)
 
     # -- the Transport interface ------------------------------------------------------------------
-    def publisher(self, pub: RosPublisher) -> _Writer:
+    def publisher(self, pub: PublisherView) -> _Writer:
         return _Writer(self, pub)
 
-    def subscription(self, sub: Subscription) -> _Reader:
+    def subscription(self, sub: SubscriptionView) -> _Reader:
         return _Reader(self, sub)
 
-    def service(self, srv: ServiceServer) -> _Server:
+    def service(self, srv: ServiceView) -> _Server:
         return _Server(self, srv)
 
-    def client(self, cli: Client) -> _Client:
+    def client(self, cli: ClientView) -> _Client:
         return _Client(self, cli)
 
-    def node_changed(self, node: Node) -> None:
+    def node_changed(self, node: NodeView) -> None:
         self._dirty = True
 
     def discover(self, topic: str, fn: Callable[[type], None]) -> None:

@@ -145,6 +145,7 @@ def participant(domain_id: int | None = None, env: Mapping[str, str] | None = No
     once); later participants on the same domain share it.  Raises DiscoveryError for a bad
     variable and ImportError when the `cyclonedds` package is missing.
     """
+    # deferred: optional dependency (the settings and the XML above need no cyclonedds)
     from cyclonedds.core import DDSException, Policy, Qos
     from cyclonedds.domain import Domain, DomainParticipant
 

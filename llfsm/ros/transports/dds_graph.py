@@ -18,10 +18,13 @@ transport's discovery settings (dds_config), so it finds what `llfsm run --trans
 
 from __future__ import annotations
 
+import importlib
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
+
+from ...msgs._message import is_service_class
 
 if TYPE_CHECKING:
     from cyclonedds.domain import DomainParticipant
@@ -98,8 +101,6 @@ def message_class(dds_type: str) -> type[Message] | None:
 
 def service_class(dds_type: str) -> type[Service] | None:
     """The service class whose request or reply has this DDS type, or None if llfsm has none."""
-    from ...msgs._message import is_service_class
-
     name = service_type(dds_type)
     cls = None if name is None else _interface(name)
     return cls if is_service_class(cls) and getattr(cls, "_TYPE", None) == name else None
@@ -107,8 +108,6 @@ def service_class(dds_type: str) -> type[Service] | None:
 
 def _interface(ros_name: str) -> Any:
     """The attribute `Name` of `llfsm.msgs.pkg.kind` for "pkg/kind/Name", or None."""
-    import importlib
-
     parts = ros_name.split("/")
     if len(parts) != 3 or not all(p.isidentifier() for p in parts):
         return None
@@ -124,7 +123,7 @@ def user_data_value(qos: Any, key: str) -> str | None:
     `clientid=…;`, `serviceid=…;`), or None."""
     if qos is None:
         return None
-    from cyclonedds.qos import Policy
+    from cyclonedds.qos import Policy  # deferred: optional dependency (the name helpers above need none)
 
     try:
         raw = qos[Policy.Userdata].data
@@ -155,7 +154,7 @@ class Endpoint:
 
     @property
     def reliable(self) -> bool:
-        from cyclonedds.qos import Policy
+        from cyclonedds.qos import Policy  # deferred: optional dependency
 
         return isinstance(self.qos[Policy.Reliability], Policy.Reliability.Reliable)
 
@@ -168,7 +167,7 @@ class Endpoint:
 
     @property
     def transient_local(self) -> bool:
-        from cyclonedds.qos import Policy
+        from cyclonedds.qos import Policy  # deferred: optional dependency
 
         return self.qos[Policy.Durability] == Policy.Durability.TransientLocal
 
@@ -190,6 +189,8 @@ class Graph:
     def __init__(self, participant: DomainParticipant | None = None, say: Callable[[str], None] | None = None) -> None:
         """`say` is told what a peer sent that could not be read (once per peer; stderr by
         default, where a command-line verb's warnings go)."""
+        # deferred: optional dependency (cyclonedds), and start-up: the web view imports this
+        # module for its name helpers alone, and a graph reader is all that needs these
         from cyclonedds.builtin import (
             BuiltinDataReader,
             BuiltinTopicDcpsParticipant,
@@ -217,6 +218,7 @@ class Graph:
         samples are decoded on llfsm's shared path (dds_read): one that is not a
         ParticipantEntitiesInfo (a node name that is not UTF-8) is dropped, said once per peer,
         and the rest of the graph is still listed."""
+        # deferred: optional dependency and start-up, as in __init__
         from cyclonedds.core import Policy, Qos
         from cyclonedds.sub import DataReader
         from cyclonedds.topic import Topic
@@ -245,7 +247,7 @@ class Graph:
 
     def update(self) -> None:
         """Take what discovery has delivered since the last call."""
-        from cyclonedds.core import InstanceState
+        from cyclonedds.core import InstanceState  # deferred: optional dependency
 
         for sample in self._participants_reader.take(N=4096):
             key = sample.key.bytes
@@ -373,7 +375,7 @@ class Graph:
 
     def close(self) -> None:
         """Leave the domain now, so peers see this reader go at once."""
-        from cyclonedds.core import DDSException
+        from cyclonedds.core import DDSException  # deferred: optional dependency
 
         try:
             self.participant.__del__()
@@ -383,7 +385,7 @@ class Graph:
 
 def describe_qos(qos: Any) -> list[str]:
     """rclpy's lines for a QoS profile, as `ros2 topic info -v` prints them."""
-    from cyclonedds.qos import Policy
+    from cyclonedds.qos import Policy  # deferred: optional dependency
 
     rel = qos[Policy.Reliability]
     dur = qos[Policy.Durability]

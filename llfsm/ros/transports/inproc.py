@@ -13,19 +13,3 @@ from .base import Transport
 class InProcess(Transport):
     name = "inproc"
     remote = False
-
-
-def make(name: str) -> Transport:
-    """The transport called `name` (inproc or dds); ValueError for another name, ImportError
-    (with what to install) when dds lacks the cyclonedds package."""
-    if name == "inproc":
-        return InProcess()
-    if name == "dds":
-        try:
-            import cyclonedds  # noqa: F401
-        except ImportError:
-            raise ImportError("--transport dds needs the cyclonedds package (pip install cyclonedds)") from None
-        from .dds import DdsTransport
-
-        return DdsTransport()
-    raise ValueError(f"unknown transport {name!r} (choose inproc or dds)")
