@@ -19,8 +19,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import llfsm.msgs
-from llfsm.idl import package as interfaces
-from llfsm.msgs import Message, _finder, is_message_class, is_service_class, to_yaml
+from llfsm import interface_path
+from llfsm.idl import parser, shipped
+from llfsm.idl.package import MSGS_DIR
+from llfsm.idl.spec import InterfaceError
+from llfsm.msgs import Message, is_message_class, is_service_class, to_yaml
 from llfsm.msgs.builtin_interfaces.msg import Time
 from llfsm.msgs.geometry_msgs.msg import Point, PoseWithCovariance, Quaternion, Twist, Vector3
 from llfsm.msgs.std_msgs.msg import Empty, Float64MultiArray, Header, MultiArrayDimension, String, UInt8MultiArray
@@ -83,7 +86,7 @@ def user_pkg(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[ModuleT
             srv = importlib.import_module("llfsm.msgs.llfsm_test_pkg.srv")
             yield msg, srv, root
         finally:
-            _finder._added.remove(str(root))
+            interface_path._added.remove(str(root))
             forget("llfsm_test_pkg")
 
 
@@ -329,7 +332,7 @@ def test_search_path_order(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> N
     a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
     monkeypatch.setenv("LLFSM_INTERFACE_PATH", os.pathsep.join([str(b), ""]))
     monkeypatch.setenv("AMENT_PREFIX_PATH", str(c))
-    monkeypatch.setattr(_finder, "_added", [])
+    monkeypatch.setattr(interface_path, "_added", [])
     llfsm.msgs.add_search_path(a)
     llfsm.msgs.add_search_path(a)
     assert llfsm.msgs.search_path() == [a, b, c / "share"]
@@ -401,11 +404,11 @@ def test_broken_definition_is_an_import_error_naming_file_and_line(
 
 
 def test_srv_needs_one_separator(tmp_path: Path) -> None:
-    with pytest.raises(interfaces.InterfaceError, match="no '---' line"):
-        interfaces.parse_service("int32 a\n", "p/srv/S", "S.srv")
-    with pytest.raises(interfaces.InterfaceError, match=r"S.srv:3: more than one"):
-        interfaces.parse_service("---\nint32 a\n---\n", "p/srv/S", "S.srv")
-    s = interfaces.parse_service("int32 a # c\n---  # c\n\nint32 b\n", "p/srv/S", "S.srv")
+    with pytest.raises(InterfaceError, match="no '---' line"):
+        parser.parse_service("int32 a\n", "p/srv/S", "S.srv")
+    with pytest.raises(InterfaceError, match=r"S.srv:3: more than one"):
+        parser.parse_service("---\nint32 a\n---\n", "p/srv/S", "S.srv")
+    s = parser.parse_service("int32 a # c\n---  # c\n\nint32 b\n", "p/srv/S", "S.srv")
     assert s.response.fields[0].line == 4
 
 
@@ -418,14 +421,30 @@ def test_unknown_package_is_module_not_found() -> None:
 
 
 def test_committed_modules_match_regeneration() -> None:
-    sources = interfaces.builtin_sources()
+    sources = shipped.shipped_sources()
     assert len(sources) >= 13
     stale = [str(p) for p, text in sources.items() if not p.exists() or p.read_text(encoding="utf-8") != text]
-    assert not stale, f"run `python -m llfsm.idl.package` (make msgs): stale {stale}"
+    assert not stale, f"run `python -m llfsm.idl` (make msgs): stale {stale}"
+
+
+def test_regenerating_into_a_folder_gives_the_committed_tree_byte_for_byte(tmp_path: Path) -> None:
+    """`python -m llfsm.idl --out DIR` from the shipped definitions alone writes every committed
+    module and nothing else: each shipped package comes from its .msg/.srv files (nothing taken
+    from rosbags), and no committed module is left that the definitions no longer make."""
+    code = subprocess.run(
+        [sys.executable, "-m", "llfsm.idl", "--out", str(tmp_path)], capture_output=True, text=True, check=False
+    )
+    assert code.returncode == 0, code.stderr
+    written = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())
+    committed = sorted(p.relative_to(MSGS_DIR) for p in shipped.generated_files())
+    assert written == committed
+    assert {p.parts[0] for p in written} == {d.name for d in shipped.SHIPPED_DIR.iterdir() if d.is_dir()}
+    differ = [str(p) for p in written if (tmp_path / p).read_bytes() != (MSGS_DIR / p).read_bytes()]
+    assert not differ, f"run `python -m llfsm.idl` (make msgs): stale {differ}"
 
 
 def test_generated_modules_import_nothing_heavy() -> None:
-    for path in interfaces.MSGS_DIR.glob("*/*/__init__.py"):
+    for path in MSGS_DIR.glob("*/*/__init__.py"):
         imports = [line for line in path.read_text().splitlines() if line.startswith(("import ", "from "))]
         for line in imports:
             assert line.startswith(("from __future__", "import llfsm.msgs.", "from llfsm.msgs import _message")), line

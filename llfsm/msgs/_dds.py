@@ -1,6 +1,6 @@
 """Messages on ROS 2's DDS wire: the runtime API over the generated `_dds` modules.
 
-Every message and service class (built in or a user's, compiled by llfsm.idl.package)
+Every message and service class (shipped or a user's, compiled by the toolchain, llfsm.idl)
 has a generated DDS form beside it, `llfsm.msgs.<pkg>.<msg|srv>._dds`.  This module finds it
 from the class and offers:
 
@@ -92,7 +92,7 @@ def dds_type_name(cls: type[Message] | type[Service]) -> str:
     """ "geometry_msgs::msg::dds_::Twist_"; for a service class, its Request's type name."""
     if isinstance(cls, type) and issubclass(cls, Service):
         cls = cls.Request
-    return dds_type(cls).__idl_typename__
+    return dds_type(cls).__idl_typename__  # type: ignore[attr-defined]  # set by cyclonedds
 
 
 def to_dds(msg: Message) -> Any:
