@@ -246,12 +246,9 @@ class Writer(_Code):
             return
         self.flush()
         e = self.var("e")
-        inner = Writer(self.module, Alignment(1))
-        if element.is_message:
-            inner.lines.append(f"{self.module.ref(element.base, '_enc')}({e}, b)")
-        else:
-            inner.field(element, e)
-            inner.flush()
+        inner = Writer(self.module, Alignment(1))  # each element starts where the last ended
+        inner.field(element, e)
+        inner.flush()
         self.lines.append(f"for {e} in {v}:")
         self.lines += [indented(line) for line in inner.lines]
         self.at.unknown()
@@ -363,10 +360,9 @@ class Reader(_Code):
             return v
         inner = Reader(self.module, Alignment(1))
         e = self.var("e")
-        if element.is_message:
-            inner.lines.append(f"{e}, o = {self.module.ref(element.base, '_dec')}(d, o)")
-        else:
-            inner.lines.append(layout(f"{e} = ", inner.field(element)))
+        item = inner.field(element)  # each element starts where the last ended
+        inner.flush()
+        inner.lines.append(layout(f"{e} = ", item))
         if t.array != "fixed":  # every element takes a byte at least: a bogus count fails now
             self.lines.append(f"if {n} > len(d) - o:")
             self.lines.append(f'    raise ValueError(f"{{{n}}} elements announced, {{len(d) - o}} bytes left")')

@@ -8,8 +8,9 @@ Each generated module holds, per message:
   samples (`_to_Name`, `_from_Name` convert); for a service's request and response, the same
   with rmw_cyclonedds_cpp's request header (`Name_wire_`);
 - a CDR encoder and decoder written out field by field (llfsm.idl.cdrgen): `_cdr_Name(msg) ->
-  bytes`, `_msg_Name(data) -> (msg, end)`, and `_enc_Name`/`_dec_Name` for a message at any
-  offset; `_mk_Name` builds a decoded message;
+  bytes` and `_msg_Name(data) -> (msg, end)`, the elements of arrays of messages inlined;
+  `_mk_Name` builds a decoded message (nested ones of other packages too); for a service's
+  request and response, `_dec_Name(data, offset)` reads one after rmw_cyclonedds_cpp's header;
 - for a message of a fixed size, `_stamped_Name`, its record for a bag recorder, and `_TAP_Name`,
   the same record for the recorder's C tap (llfsm/bag/_tap.c);
 - its RIHS01 type hash (llfsm.idl.typehash).
@@ -78,8 +79,7 @@ class DdsMessageView:
     stamped: list[str]  # body of _stamped_<Name>(out, key, clock), [] if the size varies
     tap_layout: str | None  # `_TAP_<Name> = ...`: the same record for the C tap (llfsm/bag/_tap.c)
     msg: list[str]  # body of _msg_<Name>(d) -> (message, end offset)
-    enc: list[str]  # body of _enc_<Name>(m, b)
-    dec: list[str]  # body of _dec_<Name>(d, o) -> (message, o)
+    dec: list[str] | None  # body of _dec_<Name>(d, o) -> (message, o), for a request or response
     to_dds: list[str]
     from_dds: list[str]
     type_hash: str
@@ -153,15 +153,13 @@ def message_view(spec: MessageSpec, module: Module, type_hash_value: str) -> Dds
     result = reader.message(spec)
     reader.flush()
     msg = ["o = 4", *reader.lines, layout("m = ", result), "return m, o"]
-    module.n = 0
-    anywhere = Writer(module, Alignment(1))
-    anywhere.message(spec, "m")
-    anywhere.flush()
-    module.n = 0
-    dec_reader = Reader(module, Alignment(1))
-    result = dec_reader.message(spec)
-    dec_reader.flush()
-    dec = [*dec_reader.lines, layout("m = ", result), "return m, o"]
+    dec = None
+    if module.kind == "srv":  # a request or reply, read after rmw_cyclonedds_cpp's header
+        module.n = 0
+        dec_reader = Reader(module, Alignment(1))
+        result = dec_reader.message(spec)
+        dec_reader.flush()
+        dec = [*dec_reader.lines, layout("m = ", result), "return m, o"]
 
     to_args = [f"{f.name}={_conversion(f.type, f'm._{f.name}', module, 'to')}" for f in fields]
     to_dds = [layout("return ", Call(f"{name}_", to_args))]
@@ -176,8 +174,7 @@ def message_view(spec: MessageSpec, module: Module, type_hash_value: str) -> Dds
         mk_def=mk_def,
         class_line=_class_line(f"{name}_", spec.type_name),
         wire_line=_class_line(f"{name}_wire_", spec.type_name),
-        codec=_codec_line(name, bool(stamped), tap_layout is not None),
-        enc=anywhere.lines or ["pass"],
+        codec=_codec_line(name, dec is not None, bool(stamped), tap_layout is not None),
         cdr=cdr,
         stamped=stamped,
         tap_layout=tap_layout,
@@ -217,9 +214,10 @@ def _tap_layout(name: str, fmt: list[str], args: list[str]) -> str | None:
     return layout(f"_TAP_{name} = ", Call("", items), "", 0, atom=True)
 
 
-def _codec_line(name: str, stamped: bool, tap: bool) -> str:
+def _codec_line(name: str, dec: bool, stamped: bool, tap: bool) -> str:
     """Its entry in CODECS, the fields of llfsm.msgs._dds.Codec in order."""
-    items = [f"{name}_"] + [f"_{p}_{name}" for p in ("cdr", "msg", "to", "from", "enc", "dec")]
+    items = [f"{name}_"] + [f"_{p}_{name}" for p in ("cdr", "msg", "to", "from")]
+    items.append(f"_dec_{name}" if dec else "None")
     items.append(f"_stamped_{name}" if stamped else "None")
     items.append(f"_TAP_{name}" if tap else "None")
     return layout(f"{str_literal(name)}: ", Call("", items), ",", atom=True)

@@ -49,8 +49,7 @@ class Codec(NamedTuple):
     from_cdr: Any  # (data) -> (msg, end offset)
     to_dds: Any  # (msg) -> sample
     from_dds: Any  # (sample) -> msg
-    enc: Any  # (msg, bytearray) -> None, appends at any offset
-    dec: Any  # (data, offset) -> (msg, offset)
+    dec: Any  # (data, offset) -> (msg, offset) for a request or reply after its header; else None
     # (out, key, clock) -> (msg) -> None, appending out(head + CDR) with the head
     # <uint32 key><int64 clock.now><uint32 size>; None where the size varies (or in a module
     # generated before it existed)
@@ -181,6 +180,8 @@ def unwrap(data: bytes | bytearray | memoryview, msg_cls: type[Message]) -> tupl
     """(client guid, sequence number, message) of a payload written by `wrap` or by
     rmw_cyclonedds_cpp."""
     c = codec(msg_cls)
+    if c.dec is None:
+        raise TypeError(f"{msg_cls._TYPE} is not a service request or response")
     _check_header(data)
     try:
         guid, seq = _REQUEST_HEADER.unpack_from(data, 4)

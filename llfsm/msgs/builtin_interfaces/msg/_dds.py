@@ -14,7 +14,6 @@ import llfsm.msgs.builtin_interfaces.msg as _classes
 
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
-_Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<4siI")
 _S1 = _Struct("<iI")
 _R0 = _Struct("<IqI4siI")
@@ -59,19 +58,6 @@ _TAP_Duration = (("i", "_sec"), ("I", "_nanosec"))
 
 def _msg_Duration(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
-    o += 8
-    m = _mk_Duration(t1[0], t1[1])
-    return m, o
-
-
-def _enc_Duration(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(m._sec, m._nanosec)
-
-
-def _dec_Duration(d, o):
-    o += (4 - o) & 3
     t1 = _S1.unpack_from(d, o)
     o += 8
     m = _mk_Duration(t1[0], t1[1])
@@ -134,19 +120,6 @@ def _msg_Time(d):
     return m, o
 
 
-def _enc_Time(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(m._sec, m._nanosec)
-
-
-def _dec_Time(d, o):
-    o += (4 - o) & 3
-    t1 = _S1.unpack_from(d, o)
-    o += 8
-    m = _mk_Time(t1[0], t1[1])
-    return m, o
-
-
 def _to_Time(m):
     return Time_(sec=m._sec, nanosec=m._nanosec)
 
@@ -158,8 +131,8 @@ def _from_Time(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
     "Duration": (
         Duration_,
@@ -167,12 +140,11 @@ CODECS = {
         _msg_Duration,
         _to_Duration,
         _from_Duration,
-        _enc_Duration,
-        _dec_Duration,
+        None,
         _stamped_Duration,
         _TAP_Duration,
     ),
-    "Time": (Time_, _cdr_Time, _msg_Time, _to_Time, _from_Time, _enc_Time, _dec_Time, _stamped_Time, _TAP_Time),
+    "Time": (Time_, _cdr_Time, _msg_Time, _to_Time, _from_Time, None, _stamped_Time, _TAP_Time),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

@@ -92,19 +92,6 @@ def _msg_Vector3(d):
     return m, o
 
 
-def _enc_Vector3(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._x, m._y, m._z)
-
-
-def _dec_Vector3(d, o):
-    o += (4 - o) & 7
-    t1 = _S1.unpack_from(d, o)
-    o += 24
-    m = _mk_Vector3(t1[0], t1[1], t1[2])
-    return m, o
-
-
 def _to_Vector3(m):
     return Vector3_(x=m._x, y=m._y, z=m._z)
 
@@ -180,19 +167,6 @@ def _msg_Accel(d):
     return m, o
 
 
-def _enc_Accel(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
-
-
-def _dec_Accel(d, o):
-    o += (4 - o) & 7
-    t1 = _S3.unpack_from(d, o)
-    o += 48
-    m = _mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
-    return m, o
-
-
 def _to_Accel(m):
     return Accel_(linear=_to_Vector3(m._linear), angular=_to_Vector3(m._angular))
 
@@ -242,40 +216,6 @@ def _cdr_AccelStamped(m):
 
 def _msg_AccelStamped(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S3.unpack_from(d, o)
-    o += 48
-    m = _mk_AccelStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        _mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
-    )
-    return m, o
-
-
-def _enc_AccelStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(
-        m._accel._linear._x,
-        m._accel._linear._y,
-        m._accel._linear._z,
-        m._accel._angular._x,
-        m._accel._angular._y,
-        m._accel._angular._z,
-    )
-
-
-def _dec_AccelStamped(d, o):
-    o += (4 - o) & 3
     t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
@@ -378,29 +318,6 @@ def _msg_AccelWithCovariance(d):
     return m, o
 
 
-def _enc_AccelWithCovariance(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S6.pack(
-        m._accel._linear._x,
-        m._accel._linear._y,
-        m._accel._linear._z,
-        m._accel._angular._x,
-        m._accel._angular._y,
-        m._accel._angular._z,
-        *m._covariance,
-    )
-
-
-def _dec_AccelWithCovariance(d, o):
-    o += (4 - o) & 7
-    t1 = _S6.unpack_from(d, o)
-    o += 336
-    m = _mk_AccelWithCovariance(
-        _mk_Accel(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])
-    )
-    return m, o
-
-
 def _to_AccelWithCovariance(m):
     return AccelWithCovariance_(accel=_to_Accel(m._accel), covariance=list(m._covariance))
 
@@ -451,43 +368,6 @@ def _cdr_AccelWithCovarianceStamped(m):
 
 def _msg_AccelWithCovarianceStamped(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S6.unpack_from(d, o)
-    o += 336
-    m = _mk_AccelWithCovarianceStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        _mk_AccelWithCovariance(
-            _mk_Accel(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42])
-        ),
-    )
-    return m, o
-
-
-def _enc_AccelWithCovarianceStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S6.pack(
-        m._accel._accel._linear._x,
-        m._accel._accel._linear._y,
-        m._accel._accel._linear._z,
-        m._accel._accel._angular._x,
-        m._accel._accel._angular._y,
-        m._accel._accel._angular._z,
-        *m._accel._covariance,
-    )
-
-
-def _dec_AccelWithCovarianceStamped(d, o):
-    o += (4 - o) & 3
     t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
@@ -599,19 +479,6 @@ def _msg_Inertia(d):
     return m, o
 
 
-def _enc_Inertia(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S8.pack(m._m, m._com._x, m._com._y, m._com._z, m._ixx, m._ixy, m._ixz, m._iyy, m._iyz, m._izz)
-
-
-def _dec_Inertia(d, o):
-    o += (4 - o) & 7
-    t1 = _S8.unpack_from(d, o)
-    o += 80
-    m = _mk_Inertia(t1[0], _mk_Vector3(t1[1], t1[2], t1[3]), t1[4], t1[5], t1[6], t1[7], t1[8], t1[9])
-    return m, o
-
-
 def _to_Inertia(m):
     return Inertia_(
         m=m._m, com=_to_Vector3(m._com), ixx=m._ixx, ixy=m._ixy, ixz=m._ixz, iyy=m._iyy, iyz=m._iyz, izz=m._izz
@@ -688,44 +555,6 @@ def _msg_InertiaStamped(d):
     return m, o
 
 
-def _enc_InertiaStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S8.pack(
-        m._inertia._m,
-        m._inertia._com._x,
-        m._inertia._com._y,
-        m._inertia._com._z,
-        m._inertia._ixx,
-        m._inertia._ixy,
-        m._inertia._ixz,
-        m._inertia._iyy,
-        m._inertia._iyz,
-        m._inertia._izz,
-    )
-
-
-def _dec_InertiaStamped(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S8.unpack_from(d, o)
-    o += 80
-    m = _mk_InertiaStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        _mk_Inertia(t4[0], _mk_Vector3(t4[1], t4[2], t4[3]), t4[4], t4[5], t4[6], t4[7], t4[8], t4[9]),
-    )
-    return m, o
-
-
 def _to_InertiaStamped(m):
     return InertiaStamped_(header=_std_msgs._to_Header(m._header), inertia=_to_Inertia(m._inertia))
 
@@ -778,19 +607,6 @@ _TAP_Point = (("d", "_x"), ("d", "_y"), ("d", "_z"))
 
 def _msg_Point(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
-    o += 24
-    m = _mk_Point(t1[0], t1[1], t1[2])
-    return m, o
-
-
-def _enc_Point(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._x, m._y, m._z)
-
-
-def _dec_Point(d, o):
-    o += (4 - o) & 7
     t1 = _S1.unpack_from(d, o)
     o += 24
     m = _mk_Point(t1[0], t1[1], t1[2])
@@ -856,19 +672,6 @@ def _msg_Point32(d):
     return m, o
 
 
-def _enc_Point32(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S10.pack(m._x, m._y, m._z)
-
-
-def _dec_Point32(d, o):
-    o += (4 - o) & 3
-    t1 = _S10.unpack_from(d, o)
-    o += 12
-    m = _mk_Point32(t1[0], t1[1], t1[2])
-    return m, o
-
-
 def _to_Point32(m):
     return Point32_(x=m._x, y=m._y, z=m._z)
 
@@ -926,32 +729,6 @@ def _msg_PointStamped(d):
     return m, o
 
 
-def _enc_PointStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._point._x, m._point._y, m._point._z)
-
-
-def _dec_PointStamped(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S1.unpack_from(d, o)
-    o += 24
-    m = _mk_PointStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Point(t4[0], t4[1], t4[2])
-    )
-    return m, o
-
-
 def _to_PointStamped(m):
     return PointStamped_(header=_std_msgs._to_Header(m._header), point=_to_Point(m._point))
 
@@ -984,7 +761,8 @@ def _cdr_Polygon(m):
     v1 = m._points
     b += _S11.pack(len(v1))
     for e2 in v1:
-        _enc_Point32(e2, b)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S10.pack(e2._x, e2._y, e2._z)
     return bytes(b)
 
 
@@ -997,30 +775,10 @@ def _msg_Polygon(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_Point32(d, o)
-        v3.append(e4)
-    m = _mk_Polygon(v3)
-    return m, o
-
-
-def _enc_Polygon(m, b):
-    v1 = m._points
-    b += _Z[(4 - len(b)) & 3]
-    b += _S11.pack(len(v1))
-    for e2 in v1:
-        _enc_Point32(e2, b)
-
-
-def _dec_Polygon(d, o):
-    o += (4 - o) & 3
-    t1 = _S11.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_Point32(d, o)
+        o += (4 - o) & 3
+        t5 = _S10.unpack_from(d, o)
+        o += 12
+        e4 = _mk_Point32(t5[0], t5[1], t5[2])
         v3.append(e4)
     m = _mk_Polygon(v3)
     return m, o
@@ -1064,7 +822,8 @@ def _cdr_PolygonStamped(m):
     b += _Z[(4 - len(b)) & 3]
     b += _S11.pack(len(v2))
     for e3 in v2:
-        _enc_Point32(e3, b)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S10.pack(e3._x, e3._y, e3._z)
     return bytes(b)
 
 
@@ -1083,41 +842,10 @@ def _msg_PolygonStamped(d):
         raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
-        e7, o = _dec_Point32(d, o)
-        v6.append(e7)
-    m = _mk_PolygonStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Polygon(v6))
-    return m, o
-
-
-def _enc_PolygonStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    v2 = m._polygon._points
-    b += _Z[(4 - len(b)) & 3]
-    b += _S11.pack(len(v2))
-    for e3 in v2:
-        _enc_Point32(e3, b)
-
-
-def _dec_PolygonStamped(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 3
-    t4 = _S11.unpack_from(d, o)
-    o += 4
-    n5 = t4[0]
-    if n5 > len(d) - o:
-        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
-    v6 = []
-    for _ in range(n5):
-        e7, o = _dec_Point32(d, o)
+        o += (4 - o) & 3
+        t8 = _S10.unpack_from(d, o)
+        o += 12
+        e7 = _mk_Point32(t8[0], t8[1], t8[2])
         v6.append(e7)
     m = _mk_PolygonStamped(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Polygon(v6))
     return m, o
@@ -1177,19 +905,6 @@ _TAP_Quaternion = (("d", "_x"), ("d", "_y"), ("d", "_z"), ("d", "_w"))
 
 def _msg_Quaternion(d):
     o = 4
-    t1 = _S13.unpack_from(d, o)
-    o += 32
-    m = _mk_Quaternion(t1[0], t1[1], t1[2], t1[3])
-    return m, o
-
-
-def _enc_Quaternion(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S13.pack(m._x, m._y, m._z, m._w)
-
-
-def _dec_Quaternion(d, o):
-    o += (4 - o) & 7
     t1 = _S13.unpack_from(d, o)
     o += 32
     m = _mk_Quaternion(t1[0], t1[1], t1[2], t1[3])
@@ -1283,27 +998,6 @@ def _msg_Pose(d):
     return m, o
 
 
-def _enc_Pose(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S15.pack(
-        m._position._x,
-        m._position._y,
-        m._position._z,
-        m._orientation._x,
-        m._orientation._y,
-        m._orientation._z,
-        m._orientation._w,
-    )
-
-
-def _dec_Pose(d, o):
-    o += (4 - o) & 7
-    t1 = _S15.unpack_from(d, o)
-    o += 56
-    m = _mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6]))
-    return m, o
-
-
 def _to_Pose(m):
     return Pose_(position=_to_Point(m._position), orientation=_to_Quaternion(m._orientation))
 
@@ -1362,19 +1056,6 @@ def _msg_Pose2D(d):
     return m, o
 
 
-def _enc_Pose2D(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._x, m._y, m._theta)
-
-
-def _dec_Pose2D(d, o):
-    o += (4 - o) & 7
-    t1 = _S1.unpack_from(d, o)
-    o += 24
-    m = _mk_Pose2D(t1[0], t1[1], t1[2])
-    return m, o
-
-
 def _to_Pose2D(m):
     return Pose2D_(x=m._x, y=m._y, theta=m._theta)
 
@@ -1415,7 +1096,16 @@ def _cdr_PoseArray(m):
     b += _Z[(4 - len(b)) & 3]
     b += _S11.pack(len(v2))
     for e3 in v2:
-        _enc_Pose(e3, b)
+        b += _Z[(4 - len(b)) & 7]
+        b += _S15.pack(
+            e3._position._x,
+            e3._position._y,
+            e3._position._z,
+            e3._orientation._x,
+            e3._orientation._y,
+            e3._orientation._z,
+            e3._orientation._w,
+        )
     return bytes(b)
 
 
@@ -1434,41 +1124,10 @@ def _msg_PoseArray(d):
         raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
     v6 = []
     for _ in range(n5):
-        e7, o = _dec_Pose(d, o)
-        v6.append(e7)
-    m = _mk_PoseArray(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), v6)
-    return m, o
-
-
-def _enc_PoseArray(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    v2 = m._poses
-    b += _Z[(4 - len(b)) & 3]
-    b += _S11.pack(len(v2))
-    for e3 in v2:
-        _enc_Pose(e3, b)
-
-
-def _dec_PoseArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 3
-    t4 = _S11.unpack_from(d, o)
-    o += 4
-    n5 = t4[0]
-    if n5 > len(d) - o:
-        raise ValueError(f"{n5} elements announced, {len(d) - o} bytes left")
-    v6 = []
-    for _ in range(n5):
-        e7, o = _dec_Pose(d, o)
+        o += (4 - o) & 7
+        t8 = _S15.unpack_from(d, o)
+        o += 56
+        e7 = _mk_Pose(_mk_Point(t8[0], t8[1], t8[2]), _mk_Quaternion(t8[3], t8[4], t8[5], t8[6]))
         v6.append(e7)
     m = _mk_PoseArray(_std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), v6)
     return m, o
@@ -1524,41 +1183,6 @@ def _cdr_PoseStamped(m):
 
 def _msg_PoseStamped(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S15.unpack_from(d, o)
-    o += 56
-    m = _mk_PoseStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        _mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6])),
-    )
-    return m, o
-
-
-def _enc_PoseStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S15.pack(
-        m._pose._position._x,
-        m._pose._position._y,
-        m._pose._position._z,
-        m._pose._orientation._x,
-        m._pose._orientation._y,
-        m._pose._orientation._z,
-        m._pose._orientation._w,
-    )
-
-
-def _dec_PoseStamped(d, o):
-    o += (4 - o) & 3
     t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
@@ -1664,30 +1288,6 @@ def _msg_PoseWithCovariance(d):
     return m, o
 
 
-def _enc_PoseWithCovariance(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S17.pack(
-        m._pose._position._x,
-        m._pose._position._y,
-        m._pose._position._z,
-        m._pose._orientation._x,
-        m._pose._orientation._y,
-        m._pose._orientation._z,
-        m._pose._orientation._w,
-        *m._covariance,
-    )
-
-
-def _dec_PoseWithCovariance(d, o):
-    o += (4 - o) & 7
-    t1 = _S17.unpack_from(d, o)
-    o += 344
-    m = _mk_PoseWithCovariance(
-        _mk_Pose(_mk_Point(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6])), list(t1[7:43])
-    )
-    return m, o
-
-
 def _to_PoseWithCovariance(m):
     return PoseWithCovariance_(pose=_to_Pose(m._pose), covariance=list(m._covariance))
 
@@ -1756,44 +1356,6 @@ def _msg_PoseWithCovarianceStamped(d):
     return m, o
 
 
-def _enc_PoseWithCovarianceStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S17.pack(
-        m._pose._pose._position._x,
-        m._pose._pose._position._y,
-        m._pose._pose._position._z,
-        m._pose._pose._orientation._x,
-        m._pose._pose._orientation._y,
-        m._pose._pose._orientation._z,
-        m._pose._pose._orientation._w,
-        *m._pose._covariance,
-    )
-
-
-def _dec_PoseWithCovarianceStamped(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S17.unpack_from(d, o)
-    o += 344
-    m = _mk_PoseWithCovarianceStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        _mk_PoseWithCovariance(
-            _mk_Pose(_mk_Point(t4[0], t4[1], t4[2]), _mk_Quaternion(t4[3], t4[4], t4[5], t4[6])), list(t4[7:43])
-        ),
-    )
-    return m, o
-
-
 def _to_PoseWithCovarianceStamped(m):
     return PoseWithCovarianceStamped_(header=_std_msgs._to_Header(m._header), pose=_to_PoseWithCovariance(m._pose))
 
@@ -1836,32 +1398,6 @@ def _cdr_QuaternionStamped(m):
 
 def _msg_QuaternionStamped(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S13.unpack_from(d, o)
-    o += 32
-    m = _mk_QuaternionStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Quaternion(t4[0], t4[1], t4[2], t4[3])
-    )
-    return m, o
-
-
-def _enc_QuaternionStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S13.pack(m._quaternion._x, m._quaternion._y, m._quaternion._z, m._quaternion._w)
-
-
-def _dec_QuaternionStamped(d, o):
-    o += (4 - o) & 3
     t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
@@ -1961,27 +1497,6 @@ def _msg_Transform(d):
     return m, o
 
 
-def _enc_Transform(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S15.pack(
-        m._translation._x,
-        m._translation._y,
-        m._translation._z,
-        m._rotation._x,
-        m._rotation._y,
-        m._rotation._z,
-        m._rotation._w,
-    )
-
-
-def _dec_Transform(d, o):
-    o += (4 - o) & 7
-    t1 = _S15.unpack_from(d, o)
-    o += 56
-    m = _mk_Transform(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Quaternion(t1[3], t1[4], t1[5], t1[6]))
-    return m, o
-
-
 def _to_Transform(m):
     return Transform_(translation=_to_Vector3(m._translation), rotation=_to_Quaternion(m._rotation))
 
@@ -2039,53 +1554,6 @@ def _cdr_TransformStamped(m):
 
 def _msg_TransformStamped(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 3
-    t4 = _S11.unpack_from(d, o)
-    o += 4
-    n5 = t4[0]
-    s6 = str(d[o : o + n5 - 1], "utf-8") if n5 else ""
-    o += n5
-    o += (4 - o) & 7
-    t7 = _S15.unpack_from(d, o)
-    o += 56
-    m = _mk_TransformStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        s6,
-        _mk_Transform(_mk_Vector3(t7[0], t7[1], t7[2]), _mk_Quaternion(t7[3], t7[4], t7[5], t7[6])),
-    )
-    return m, o
-
-
-def _enc_TransformStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    s2 = m._child_frame_id.encode()
-    b += _Z[(4 - len(b)) & 3]
-    b += _S11.pack(len(s2) + 1)
-    b += s2
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S15.pack(
-        m._transform._translation._x,
-        m._transform._translation._y,
-        m._transform._translation._z,
-        m._transform._rotation._x,
-        m._transform._rotation._y,
-        m._transform._rotation._z,
-        m._transform._rotation._w,
-    )
-
-
-def _dec_TransformStamped(d, o):
-    o += (4 - o) & 3
     t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
@@ -2185,19 +1653,6 @@ def _msg_Twist(d):
     return m, o
 
 
-def _enc_Twist(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._linear._x, m._linear._y, m._linear._z, m._angular._x, m._angular._y, m._angular._z)
-
-
-def _dec_Twist(d, o):
-    o += (4 - o) & 7
-    t1 = _S3.unpack_from(d, o)
-    o += 48
-    m = _mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
-    return m, o
-
-
 def _to_Twist(m):
     return Twist_(linear=_to_Vector3(m._linear), angular=_to_Vector3(m._angular))
 
@@ -2247,40 +1702,6 @@ def _cdr_TwistStamped(m):
 
 def _msg_TwistStamped(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S3.unpack_from(d, o)
-    o += 48
-    m = _mk_TwistStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        _mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
-    )
-    return m, o
-
-
-def _enc_TwistStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(
-        m._twist._linear._x,
-        m._twist._linear._y,
-        m._twist._linear._z,
-        m._twist._angular._x,
-        m._twist._angular._y,
-        m._twist._angular._z,
-    )
-
-
-def _dec_TwistStamped(d, o):
-    o += (4 - o) & 3
     t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
@@ -2383,29 +1804,6 @@ def _msg_TwistWithCovariance(d):
     return m, o
 
 
-def _enc_TwistWithCovariance(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S6.pack(
-        m._twist._linear._x,
-        m._twist._linear._y,
-        m._twist._linear._z,
-        m._twist._angular._x,
-        m._twist._angular._y,
-        m._twist._angular._z,
-        *m._covariance,
-    )
-
-
-def _dec_TwistWithCovariance(d, o):
-    o += (4 - o) & 7
-    t1 = _S6.unpack_from(d, o)
-    o += 336
-    m = _mk_TwistWithCovariance(
-        _mk_Twist(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5])), list(t1[6:42])
-    )
-    return m, o
-
-
 def _to_TwistWithCovariance(m):
     return TwistWithCovariance_(twist=_to_Twist(m._twist), covariance=list(m._covariance))
 
@@ -2473,43 +1871,6 @@ def _msg_TwistWithCovarianceStamped(d):
     return m, o
 
 
-def _enc_TwistWithCovarianceStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S6.pack(
-        m._twist._twist._linear._x,
-        m._twist._twist._linear._y,
-        m._twist._twist._linear._z,
-        m._twist._twist._angular._x,
-        m._twist._twist._angular._y,
-        m._twist._twist._angular._z,
-        *m._twist._covariance,
-    )
-
-
-def _dec_TwistWithCovarianceStamped(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S6.unpack_from(d, o)
-    o += 336
-    m = _mk_TwistWithCovarianceStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        _mk_TwistWithCovariance(
-            _mk_Twist(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])), list(t4[6:42])
-        ),
-    )
-    return m, o
-
-
 def _to_TwistWithCovarianceStamped(m):
     return TwistWithCovarianceStamped_(header=_std_msgs._to_Header(m._header), twist=_to_TwistWithCovariance(m._twist))
 
@@ -2552,32 +1913,6 @@ def _cdr_Vector3Stamped(m):
 
 def _msg_Vector3Stamped(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S1.unpack_from(d, o)
-    o += 24
-    m = _mk_Vector3Stamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3), _mk_Vector3(t4[0], t4[1], t4[2])
-    )
-    return m, o
-
-
-def _enc_Vector3Stamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S1.pack(m._vector._x, m._vector._y, m._vector._z)
-
-
-def _dec_Vector3Stamped(d, o):
-    o += (4 - o) & 3
     t1 = _S4.unpack_from(d, o)
     o += 12
     n2 = t1[2]
@@ -2657,19 +1992,6 @@ def _msg_Wrench(d):
     return m, o
 
 
-def _enc_Wrench(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._force._x, m._force._y, m._force._z, m._torque._x, m._torque._y, m._torque._z)
-
-
-def _dec_Wrench(d, o):
-    o += (4 - o) & 7
-    t1 = _S3.unpack_from(d, o)
-    o += 48
-    m = _mk_Wrench(_mk_Vector3(t1[0], t1[1], t1[2]), _mk_Vector3(t1[3], t1[4], t1[5]))
-    return m, o
-
-
 def _to_Wrench(m):
     return Wrench_(force=_to_Vector3(m._force), torque=_to_Vector3(m._torque))
 
@@ -2734,40 +2056,6 @@ def _msg_WrenchStamped(d):
     return m, o
 
 
-def _enc_WrenchStamped(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._header._frame_id.encode()
-    b += _S4.pack(m._header._stamp._sec, m._header._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(
-        m._wrench._force._x,
-        m._wrench._force._y,
-        m._wrench._force._z,
-        m._wrench._torque._x,
-        m._wrench._torque._y,
-        m._wrench._torque._z,
-    )
-
-
-def _dec_WrenchStamped(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 7
-    t4 = _S3.unpack_from(d, o)
-    o += 48
-    m = _mk_WrenchStamped(
-        _std_msgs._mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3),
-        _mk_Wrench(_mk_Vector3(t4[0], t4[1], t4[2]), _mk_Vector3(t4[3], t4[4], t4[5])),
-    )
-    return m, o
-
-
 def _to_WrenchStamped(m):
     return WrenchStamped_(header=_std_msgs._to_Header(m._header), wrench=_to_Wrench(m._wrench))
 
@@ -2779,39 +2067,18 @@ def _from_WrenchStamped(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
-    "Vector3": (
-        Vector3_,
-        _cdr_Vector3,
-        _msg_Vector3,
-        _to_Vector3,
-        _from_Vector3,
-        _enc_Vector3,
-        _dec_Vector3,
-        _stamped_Vector3,
-        _TAP_Vector3,
-    ),
-    "Accel": (
-        Accel_,
-        _cdr_Accel,
-        _msg_Accel,
-        _to_Accel,
-        _from_Accel,
-        _enc_Accel,
-        _dec_Accel,
-        _stamped_Accel,
-        _TAP_Accel,
-    ),
+    "Vector3": (Vector3_, _cdr_Vector3, _msg_Vector3, _to_Vector3, _from_Vector3, None, _stamped_Vector3, _TAP_Vector3),
+    "Accel": (Accel_, _cdr_Accel, _msg_Accel, _to_Accel, _from_Accel, None, _stamped_Accel, _TAP_Accel),
     "AccelStamped": (
         AccelStamped_,
         _cdr_AccelStamped,
         _msg_AccelStamped,
         _to_AccelStamped,
         _from_AccelStamped,
-        _enc_AccelStamped,
-        _dec_AccelStamped,
+        None,
         None,
         None,
     ),
@@ -2821,8 +2088,7 @@ CODECS = {
         _msg_AccelWithCovariance,
         _to_AccelWithCovariance,
         _from_AccelWithCovariance,
-        _enc_AccelWithCovariance,
-        _dec_AccelWithCovariance,
+        None,
         _stamped_AccelWithCovariance,
         _TAP_AccelWithCovariance,
     ),
@@ -2832,85 +2098,41 @@ CODECS = {
         _msg_AccelWithCovarianceStamped,
         _to_AccelWithCovarianceStamped,
         _from_AccelWithCovarianceStamped,
-        _enc_AccelWithCovarianceStamped,
-        _dec_AccelWithCovarianceStamped,
+        None,
         None,
         None,
     ),
-    "Inertia": (
-        Inertia_,
-        _cdr_Inertia,
-        _msg_Inertia,
-        _to_Inertia,
-        _from_Inertia,
-        _enc_Inertia,
-        _dec_Inertia,
-        _stamped_Inertia,
-        _TAP_Inertia,
-    ),
+    "Inertia": (Inertia_, _cdr_Inertia, _msg_Inertia, _to_Inertia, _from_Inertia, None, _stamped_Inertia, _TAP_Inertia),
     "InertiaStamped": (
         InertiaStamped_,
         _cdr_InertiaStamped,
         _msg_InertiaStamped,
         _to_InertiaStamped,
         _from_InertiaStamped,
-        _enc_InertiaStamped,
-        _dec_InertiaStamped,
         None,
         None,
+        None,
     ),
-    "Point": (
-        Point_,
-        _cdr_Point,
-        _msg_Point,
-        _to_Point,
-        _from_Point,
-        _enc_Point,
-        _dec_Point,
-        _stamped_Point,
-        _TAP_Point,
-    ),
-    "Point32": (
-        Point32_,
-        _cdr_Point32,
-        _msg_Point32,
-        _to_Point32,
-        _from_Point32,
-        _enc_Point32,
-        _dec_Point32,
-        _stamped_Point32,
-        _TAP_Point32,
-    ),
+    "Point": (Point_, _cdr_Point, _msg_Point, _to_Point, _from_Point, None, _stamped_Point, _TAP_Point),
+    "Point32": (Point32_, _cdr_Point32, _msg_Point32, _to_Point32, _from_Point32, None, _stamped_Point32, _TAP_Point32),
     "PointStamped": (
         PointStamped_,
         _cdr_PointStamped,
         _msg_PointStamped,
         _to_PointStamped,
         _from_PointStamped,
-        _enc_PointStamped,
-        _dec_PointStamped,
         None,
-        None,
-    ),
-    "Polygon": (
-        Polygon_,
-        _cdr_Polygon,
-        _msg_Polygon,
-        _to_Polygon,
-        _from_Polygon,
-        _enc_Polygon,
-        _dec_Polygon,
         None,
         None,
     ),
+    "Polygon": (Polygon_, _cdr_Polygon, _msg_Polygon, _to_Polygon, _from_Polygon, None, None, None),
     "PolygonStamped": (
         PolygonStamped_,
         _cdr_PolygonStamped,
         _msg_PolygonStamped,
         _to_PolygonStamped,
         _from_PolygonStamped,
-        _enc_PolygonStamped,
-        _dec_PolygonStamped,
+        None,
         None,
         None,
     ),
@@ -2920,42 +2142,20 @@ CODECS = {
         _msg_Quaternion,
         _to_Quaternion,
         _from_Quaternion,
-        _enc_Quaternion,
-        _dec_Quaternion,
+        None,
         _stamped_Quaternion,
         _TAP_Quaternion,
     ),
-    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose, _stamped_Pose, _TAP_Pose),
-    "Pose2D": (
-        Pose2D_,
-        _cdr_Pose2D,
-        _msg_Pose2D,
-        _to_Pose2D,
-        _from_Pose2D,
-        _enc_Pose2D,
-        _dec_Pose2D,
-        _stamped_Pose2D,
-        _TAP_Pose2D,
-    ),
-    "PoseArray": (
-        PoseArray_,
-        _cdr_PoseArray,
-        _msg_PoseArray,
-        _to_PoseArray,
-        _from_PoseArray,
-        _enc_PoseArray,
-        _dec_PoseArray,
-        None,
-        None,
-    ),
+    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, None, _stamped_Pose, _TAP_Pose),
+    "Pose2D": (Pose2D_, _cdr_Pose2D, _msg_Pose2D, _to_Pose2D, _from_Pose2D, None, _stamped_Pose2D, _TAP_Pose2D),
+    "PoseArray": (PoseArray_, _cdr_PoseArray, _msg_PoseArray, _to_PoseArray, _from_PoseArray, None, None, None),
     "PoseStamped": (
         PoseStamped_,
         _cdr_PoseStamped,
         _msg_PoseStamped,
         _to_PoseStamped,
         _from_PoseStamped,
-        _enc_PoseStamped,
-        _dec_PoseStamped,
+        None,
         None,
         None,
     ),
@@ -2965,8 +2165,7 @@ CODECS = {
         _msg_PoseWithCovariance,
         _to_PoseWithCovariance,
         _from_PoseWithCovariance,
-        _enc_PoseWithCovariance,
-        _dec_PoseWithCovariance,
+        None,
         _stamped_PoseWithCovariance,
         _TAP_PoseWithCovariance,
     ),
@@ -2976,8 +2175,7 @@ CODECS = {
         _msg_PoseWithCovarianceStamped,
         _to_PoseWithCovarianceStamped,
         _from_PoseWithCovarianceStamped,
-        _enc_PoseWithCovarianceStamped,
-        _dec_PoseWithCovarianceStamped,
+        None,
         None,
         None,
     ),
@@ -2987,8 +2185,7 @@ CODECS = {
         _msg_QuaternionStamped,
         _to_QuaternionStamped,
         _from_QuaternionStamped,
-        _enc_QuaternionStamped,
-        _dec_QuaternionStamped,
+        None,
         None,
         None,
     ),
@@ -2998,8 +2195,7 @@ CODECS = {
         _msg_Transform,
         _to_Transform,
         _from_Transform,
-        _enc_Transform,
-        _dec_Transform,
+        None,
         _stamped_Transform,
         _TAP_Transform,
     ),
@@ -3009,30 +2205,18 @@ CODECS = {
         _msg_TransformStamped,
         _to_TransformStamped,
         _from_TransformStamped,
-        _enc_TransformStamped,
-        _dec_TransformStamped,
+        None,
         None,
         None,
     ),
-    "Twist": (
-        Twist_,
-        _cdr_Twist,
-        _msg_Twist,
-        _to_Twist,
-        _from_Twist,
-        _enc_Twist,
-        _dec_Twist,
-        _stamped_Twist,
-        _TAP_Twist,
-    ),
+    "Twist": (Twist_, _cdr_Twist, _msg_Twist, _to_Twist, _from_Twist, None, _stamped_Twist, _TAP_Twist),
     "TwistStamped": (
         TwistStamped_,
         _cdr_TwistStamped,
         _msg_TwistStamped,
         _to_TwistStamped,
         _from_TwistStamped,
-        _enc_TwistStamped,
-        _dec_TwistStamped,
+        None,
         None,
         None,
     ),
@@ -3042,8 +2226,7 @@ CODECS = {
         _msg_TwistWithCovariance,
         _to_TwistWithCovariance,
         _from_TwistWithCovariance,
-        _enc_TwistWithCovariance,
-        _dec_TwistWithCovariance,
+        None,
         _stamped_TwistWithCovariance,
         _TAP_TwistWithCovariance,
     ),
@@ -3053,8 +2236,7 @@ CODECS = {
         _msg_TwistWithCovarianceStamped,
         _to_TwistWithCovarianceStamped,
         _from_TwistWithCovarianceStamped,
-        _enc_TwistWithCovarianceStamped,
-        _dec_TwistWithCovarianceStamped,
+        None,
         None,
         None,
     ),
@@ -3064,30 +2246,18 @@ CODECS = {
         _msg_Vector3Stamped,
         _to_Vector3Stamped,
         _from_Vector3Stamped,
-        _enc_Vector3Stamped,
-        _dec_Vector3Stamped,
+        None,
         None,
         None,
     ),
-    "Wrench": (
-        Wrench_,
-        _cdr_Wrench,
-        _msg_Wrench,
-        _to_Wrench,
-        _from_Wrench,
-        _enc_Wrench,
-        _dec_Wrench,
-        _stamped_Wrench,
-        _TAP_Wrench,
-    ),
+    "Wrench": (Wrench_, _cdr_Wrench, _msg_Wrench, _to_Wrench, _from_Wrench, None, _stamped_Wrench, _TAP_Wrench),
     "WrenchStamped": (
         WrenchStamped_,
         _cdr_WrenchStamped,
         _msg_WrenchStamped,
         _to_WrenchStamped,
         _from_WrenchStamped,
-        _enc_WrenchStamped,
-        _dec_WrenchStamped,
+        None,
         None,
         None,
     ),

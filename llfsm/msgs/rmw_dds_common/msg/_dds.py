@@ -65,17 +65,6 @@ def _msg_Gid(d):
     return m, o
 
 
-def _enc_Gid(m, b):
-    b += _S1.pack(*m._data)
-
-
-def _dec_Gid(d, o):
-    t1 = _S1.unpack_from(d, o)
-    o += 16
-    m = _mk_Gid(list(t1[0:16]))
-    return m, o
-
-
 def _to_Gid(m):
     return Gid_(data=list(m._data))
 
@@ -123,12 +112,12 @@ def _cdr_NodeEntitiesInfo(m):
     b += _Z[(4 - len(b)) & 3]
     b += _S2.pack(len(v3))
     for e4 in v3:
-        _enc_Gid(e4, b)
+        b += _S1.pack(*e4._data)
     v5 = m._writer_gid_seq
     b += _Z[(4 - len(b)) & 3]
     b += _S2.pack(len(v5))
     for e6 in v5:
-        _enc_Gid(e6, b)
+        b += _S1.pack(*e6._data)
     return bytes(b)
 
 
@@ -153,79 +142,23 @@ def _msg_NodeEntitiesInfo(d):
         raise ValueError(f"{n8} elements announced, {len(d) - o} bytes left")
     v9 = []
     for _ in range(n8):
-        e10, o = _dec_Gid(d, o)
+        t11 = _S1.unpack_from(d, o)
+        o += 16
+        e10 = _mk_Gid(list(t11[0:16]))
         v9.append(e10)
     o += (4 - o) & 3
-    t11 = _S2.unpack_from(d, o)
+    t12 = _S2.unpack_from(d, o)
     o += 4
-    n12 = t11[0]
-    if n12 > len(d) - o:
-        raise ValueError(f"{n12} elements announced, {len(d) - o} bytes left")
-    v13 = []
-    for _ in range(n12):
-        e14, o = _dec_Gid(d, o)
-        v13.append(e14)
-    m = _mk_NodeEntitiesInfo(s3, s6, v9, v13)
-    return m, o
-
-
-def _enc_NodeEntitiesInfo(m, b):
-    s1 = m._node_namespace.encode()
-    b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(s1) + 1)
-    b += s1
-    b.append(0)
-    s2 = m._node_name.encode()
-    b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(s2) + 1)
-    b += s2
-    b.append(0)
-    v3 = m._reader_gid_seq
-    b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v3))
-    for e4 in v3:
-        _enc_Gid(e4, b)
-    v5 = m._writer_gid_seq
-    b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v5))
-    for e6 in v5:
-        _enc_Gid(e6, b)
-
-
-def _dec_NodeEntitiesInfo(d, o):
-    o += (4 - o) & 3
-    t1 = _S2.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 3
-    t4 = _S2.unpack_from(d, o)
-    o += 4
-    n5 = t4[0]
-    s6 = str(d[o : o + n5 - 1], "utf-8") if n5 else ""
-    o += n5
-    o += (4 - o) & 3
-    t7 = _S2.unpack_from(d, o)
-    o += 4
-    n8 = t7[0]
-    if n8 > len(d) - o:
-        raise ValueError(f"{n8} elements announced, {len(d) - o} bytes left")
-    v9 = []
-    for _ in range(n8):
-        e10, o = _dec_Gid(d, o)
-        v9.append(e10)
-    o += (4 - o) & 3
-    t11 = _S2.unpack_from(d, o)
-    o += 4
-    n12 = t11[0]
-    if n12 > len(d) - o:
-        raise ValueError(f"{n12} elements announced, {len(d) - o} bytes left")
-    v13 = []
-    for _ in range(n12):
-        e14, o = _dec_Gid(d, o)
-        v13.append(e14)
-    m = _mk_NodeEntitiesInfo(s3, s6, v9, v13)
+    n13 = t12[0]
+    if n13 > len(d) - o:
+        raise ValueError(f"{n13} elements announced, {len(d) - o} bytes left")
+    v14 = []
+    for _ in range(n13):
+        t16 = _S1.unpack_from(d, o)
+        o += 16
+        e15 = _mk_Gid(list(t16[0:16]))
+        v14.append(e15)
+    m = _mk_NodeEntitiesInfo(s3, s6, v9, v14)
     return m, o
 
 
@@ -270,7 +203,26 @@ def _cdr_ParticipantEntitiesInfo(m):
     v1 = m._node_entities_info_seq
     b += _S3.pack(*m._gid._data, len(v1))
     for e2 in v1:
-        _enc_NodeEntitiesInfo(e2, b)
+        s3 = e2._node_namespace.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S2.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        s4 = e2._node_name.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S2.pack(len(s4) + 1)
+        b += s4
+        b.append(0)
+        v5 = e2._reader_gid_seq
+        b += _Z[(4 - len(b)) & 3]
+        b += _S2.pack(len(v5))
+        for e6 in v5:
+            b += _S1.pack(*e6._data)
+        v7 = e2._writer_gid_seq
+        b += _Z[(4 - len(b)) & 3]
+        b += _S2.pack(len(v7))
+        for e8 in v7:
+            b += _S1.pack(*e8._data)
     return bytes(b)
 
 
@@ -283,35 +235,45 @@ def _msg_ParticipantEntitiesInfo(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_NodeEntitiesInfo(d, o)
+        o += (4 - o) & 3
+        t5 = _S2.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S2.unpack_from(d, o)
+        o += 4
+        n9 = t8[0]
+        s10 = str(d[o : o + n9 - 1], "utf-8") if n9 else ""
+        o += n9
+        o += (4 - o) & 3
+        t11 = _S2.unpack_from(d, o)
+        o += 4
+        n12 = t11[0]
+        if n12 > len(d) - o:
+            raise ValueError(f"{n12} elements announced, {len(d) - o} bytes left")
+        v13 = []
+        for _ in range(n12):
+            t15 = _S1.unpack_from(d, o)
+            o += 16
+            e14 = _mk_Gid(list(t15[0:16]))
+            v13.append(e14)
+        o += (4 - o) & 3
+        t16 = _S2.unpack_from(d, o)
+        o += 4
+        n17 = t16[0]
+        if n17 > len(d) - o:
+            raise ValueError(f"{n17} elements announced, {len(d) - o} bytes left")
+        v18 = []
+        for _ in range(n17):
+            t20 = _S1.unpack_from(d, o)
+            o += 16
+            e19 = _mk_Gid(list(t20[0:16]))
+            v18.append(e19)
+        e4 = _mk_NodeEntitiesInfo(s7, s10, v13, v18)
         v3.append(e4)
     m = _mk_ParticipantEntitiesInfo(_mk_Gid(list(t1[0:16])), v3)
-    return m, o
-
-
-def _enc_ParticipantEntitiesInfo(m, b):
-    v1 = m._node_entities_info_seq
-    b += _S1.pack(*m._gid._data)
-    b += _Z[(4 - len(b)) & 3]
-    b += _S2.pack(len(v1))
-    for e2 in v1:
-        _enc_NodeEntitiesInfo(e2, b)
-
-
-def _dec_ParticipantEntitiesInfo(d, o):
-    t1 = _S1.unpack_from(d, o)
-    o += 16
-    o += (4 - o) & 3
-    t2 = _S2.unpack_from(d, o)
-    o += 4
-    n3 = t2[0]
-    if n3 > len(d) - o:
-        raise ValueError(f"{n3} elements announced, {len(d) - o} bytes left")
-    v4 = []
-    for _ in range(n3):
-        e5, o = _dec_NodeEntitiesInfo(d, o)
-        v4.append(e5)
-    m = _mk_ParticipantEntitiesInfo(_mk_Gid(list(t1[0:16])), v4)
     return m, o
 
 
@@ -328,18 +290,17 @@ def _from_ParticipantEntitiesInfo(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
-    "Gid": (Gid_, _cdr_Gid, _msg_Gid, _to_Gid, _from_Gid, _enc_Gid, _dec_Gid, _stamped_Gid, _TAP_Gid),
+    "Gid": (Gid_, _cdr_Gid, _msg_Gid, _to_Gid, _from_Gid, None, _stamped_Gid, _TAP_Gid),
     "NodeEntitiesInfo": (
         NodeEntitiesInfo_,
         _cdr_NodeEntitiesInfo,
         _msg_NodeEntitiesInfo,
         _to_NodeEntitiesInfo,
         _from_NodeEntitiesInfo,
-        _enc_NodeEntitiesInfo,
-        _dec_NodeEntitiesInfo,
+        None,
         None,
         None,
     ),
@@ -349,8 +310,7 @@ CODECS = {
         _msg_ParticipantEntitiesInfo,
         _to_ParticipantEntitiesInfo,
         _from_ParticipantEntitiesInfo,
-        _enc_ParticipantEntitiesInfo,
-        _dec_ParticipantEntitiesInfo,
+        None,
         None,
         None,
     ),

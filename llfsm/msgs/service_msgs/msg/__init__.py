@@ -8,7 +8,6 @@ import llfsm.msgs.builtin_interfaces.msg as _builtin_interfaces
 from llfsm.msgs import _message as _m
 
 _DEFAULT = _m.DEFAULT
-_FLOAT32_MAX = _m.FLOAT32_MAX
 _new = object.__new__
 
 

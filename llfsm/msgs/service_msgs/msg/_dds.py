@@ -15,12 +15,8 @@ import llfsm.msgs.service_msgs.msg as _classes
 
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
-_Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<4sB3xiI16B4xq")
 _S1 = _Struct("<B3xiI16B4xq")
-_S2 = _Struct("<B")
-_S3 = _Struct("<iI16B")
-_S4 = _Struct("<q")
 _R0 = _Struct("<IqI4sB3xiI16B4xq")
 
 
@@ -91,27 +87,6 @@ def _msg_ServiceEventInfo(d):
     return m, o
 
 
-def _enc_ServiceEventInfo(m, b):
-    b += _S2.pack(m._event_type)
-    b += _Z[(4 - len(b)) & 3]
-    b += _S3.pack(m._stamp._sec, m._stamp._nanosec, *m._client_gid)
-    b += _Z[(4 - len(b)) & 7]
-    b += _S4.pack(m._sequence_number)
-
-
-def _dec_ServiceEventInfo(d, o):
-    t1 = _S2.unpack_from(d, o)
-    o += 1
-    o += (4 - o) & 3
-    t2 = _S3.unpack_from(d, o)
-    o += 24
-    o += (4 - o) & 7
-    t3 = _S4.unpack_from(d, o)
-    o += 8
-    m = _mk_ServiceEventInfo(t1[0], _builtin_interfaces._mk_Time(t2[0], t2[1]), list(t2[2:18]), t3[0])
-    return m, o
-
-
 def _to_ServiceEventInfo(m):
     return ServiceEventInfo_(
         event_type=m._event_type,
@@ -130,8 +105,8 @@ def _from_ServiceEventInfo(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
     "ServiceEventInfo": (
         ServiceEventInfo_,
@@ -139,8 +114,7 @@ CODECS = {
         _msg_ServiceEventInfo,
         _to_ServiceEventInfo,
         _from_ServiceEventInfo,
-        _enc_ServiceEventInfo,
-        _dec_ServiceEventInfo,
+        None,
         _stamped_ServiceEventInfo,
         _TAP_ServiceEventInfo,
     ),

@@ -101,17 +101,6 @@ def _msg_Bool(d):
     return m, o
 
 
-def _enc_Bool(m, b):
-    b += _S1.pack(m._data)
-
-
-def _dec_Bool(d, o):
-    t1 = _S1.unpack_from(d, o)
-    o += 1
-    m = _mk_Bool(t1[0])
-    return m, o
-
-
 def _to_Bool(m):
     return Bool_(data=m._data)
 
@@ -159,17 +148,6 @@ _TAP_Byte = (("B", "_data"),)
 
 def _msg_Byte(d):
     o = 4
-    t1 = _S3.unpack_from(d, o)
-    o += 1
-    m = _mk_Byte(t1[0])
-    return m, o
-
-
-def _enc_Byte(m, b):
-    b += _S3.pack(m._data)
-
-
-def _dec_Byte(d, o):
     t1 = _S3.unpack_from(d, o)
     o += 1
     m = _mk_Byte(t1[0])
@@ -231,30 +209,6 @@ def _msg_MultiArrayDimension(d):
     return m, o
 
 
-def _enc_MultiArrayDimension(m, b):
-    s1 = m._label.encode()
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(s1) + 1)
-    b += s1
-    b.append(0)
-    b += _Z[(4 - len(b)) & 3]
-    b += _S5.pack(m._size, m._stride)
-
-
-def _dec_MultiArrayDimension(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    o += (4 - o) & 3
-    t4 = _S5.unpack_from(d, o)
-    o += 8
-    m = _mk_MultiArrayDimension(s3, t4[0], t4[1])
-    return m, o
-
-
 def _to_MultiArrayDimension(m):
     return MultiArrayDimension_(label=m._label, size=m._size, stride=m._stride)
 
@@ -290,7 +244,13 @@ def _cdr_MultiArrayLayout(m):
     v1 = m._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
     b += _S4.pack(m._data_offset)
     return bytes(b)
@@ -305,40 +265,21 @@ def _msg_MultiArrayLayout(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S4.unpack_from(d, o)
+    t9 = _S4.unpack_from(d, o)
     o += 4
-    m = _mk_MultiArrayLayout(v3, t5[0])
-    return m, o
-
-
-def _enc_MultiArrayLayout(m, b):
-    v1 = m._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(m._data_offset)
-
-
-def _dec_MultiArrayLayout(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S4.unpack_from(d, o)
-    o += 4
-    m = _mk_MultiArrayLayout(v3, t5[0])
+    m = _mk_MultiArrayLayout(v3, t9[0])
     return m, o
 
 
@@ -376,11 +317,17 @@ def _cdr_ByteMultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += bytes(v3)
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    b += bytes(v4)
     return bytes(b)
 
 
@@ -393,48 +340,24 @@ def _msg_ByteMultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    v7 = list(d[o : o + n6])
-    o += n6
-    m = _mk_ByteMultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_ByteMultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += bytes(v3)
-
-
-def _dec_ByteMultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    v7 = list(d[o : o + n6])
-    o += n6
-    m = _mk_ByteMultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    n10 = t9[1]
+    v11 = list(d[o : o + n10])
+    o += n10
+    m = _mk_ByteMultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -486,17 +409,6 @@ _TAP_Char = (("B", "_data"),)
 
 def _msg_Char(d):
     o = 4
-    t1 = _S3.unpack_from(d, o)
-    o += 1
-    m = _mk_Char(t1[0])
-    return m, o
-
-
-def _enc_Char(m, b):
-    b += _S3.pack(m._data)
-
-
-def _dec_Char(d, o):
     t1 = _S3.unpack_from(d, o)
     o += 1
     m = _mk_Char(t1[0])
@@ -562,19 +474,6 @@ def _msg_ColorRGBA(d):
     return m, o
 
 
-def _enc_ColorRGBA(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S7.pack(m._r, m._g, m._b, m._a)
-
-
-def _dec_ColorRGBA(d, o):
-    o += (4 - o) & 3
-    t1 = _S7.unpack_from(d, o)
-    o += 16
-    m = _mk_ColorRGBA(t1[0], t1[1], t1[2], t1[3])
-    return m, o
-
-
 def _to_ColorRGBA(m):
     return ColorRGBA_(r=m._r, g=m._g, b=m._b, a=m._a)
 
@@ -620,16 +519,6 @@ def _stamped_Empty(out, key, clock):
 
 def _msg_Empty(d):
     o = 4
-    o += 1
-    m = _mk_Empty()
-    return m, o
-
-
-def _enc_Empty(m, b):
-    b += _S3.pack(0)
-
-
-def _dec_Empty(d, o):
     o += 1
     m = _mk_Empty()
     return m, o
@@ -687,19 +576,6 @@ def _msg_Float32(d):
     return m, o
 
 
-def _enc_Float32(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S9.pack(m._data)
-
-
-def _dec_Float32(d, o):
-    o += (4 - o) & 3
-    t1 = _S9.unpack_from(d, o)
-    o += 4
-    m = _mk_Float32(t1[0])
-    return m, o
-
-
 def _to_Float32(m):
     return Float32_(data=m._data)
 
@@ -733,11 +609,17 @@ def _cdr_Float32MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}f", *v3)
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    b += _pack(f"<{len(v4)}f", *v4)
     return bytes(b)
 
 
@@ -750,48 +632,24 @@ def _msg_Float32MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}f", d, o))
-    o += n6 * 4
-    m = _mk_Float32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_Float32MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}f", *v3)
-
-
-def _dec_Float32MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}f", d, o))
-    o += n6 * 4
-    m = _mk_Float32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    n10 = t9[1]
+    v11 = list(_unpack_from(f"<{n10}f", d, o))
+    o += n10 * 4
+    m = _mk_Float32MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -849,19 +707,6 @@ def _msg_Float64(d):
     return m, o
 
 
-def _enc_Float64(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S11.pack(m._data)
-
-
-def _dec_Float64(d, o):
-    o += (4 - o) & 7
-    t1 = _S11.unpack_from(d, o)
-    o += 8
-    m = _mk_Float64(t1[0])
-    return m, o
-
-
 def _to_Float64(m):
     return Float64_(data=m._data)
 
@@ -895,13 +740,19 @@ def _cdr_Float64MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    if v3:
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    if v4:
         b += _Z[(4 - len(b)) & 7]
-    b += _pack(f"<{len(v3)}d", *v3)
+    b += _pack(f"<{len(v4)}d", *v4)
     return bytes(b)
 
 
@@ -914,54 +765,26 @@ def _msg_Float64MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    if n6:
+    n10 = t9[1]
+    if n10:
         o += (4 - o) & 7
-    v7 = list(_unpack_from(f"<{n6}d", d, o))
-    o += n6 * 8
-    m = _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_Float64MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    if v3:
-        b += _Z[(4 - len(b)) & 7]
-    b += _pack(f"<{len(v3)}d", *v3)
-
-
-def _dec_Float64MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    if n6:
-        o += (4 - o) & 7
-    v7 = list(_unpack_from(f"<{n6}d", d, o))
-    o += n6 * 8
-    m = _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    v11 = list(_unpack_from(f"<{n10}d", d, o))
+    o += n10 * 8
+    m = _mk_Float64MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -1005,25 +828,6 @@ def _cdr_Header(m):
 
 def _msg_Header(d):
     o = 4
-    t1 = _S12.unpack_from(d, o)
-    o += 12
-    n2 = t1[2]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    m = _mk_Header(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3)
-    return m, o
-
-
-def _enc_Header(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._frame_id.encode()
-    b += _S12.pack(m._stamp._sec, m._stamp._nanosec, len(s1) + 1)
-    b += s1
-    b.append(0)
-
-
-def _dec_Header(d, o):
-    o += (4 - o) & 3
     t1 = _S12.unpack_from(d, o)
     o += 12
     n2 = t1[2]
@@ -1087,19 +891,6 @@ def _msg_Int16(d):
     return m, o
 
 
-def _enc_Int16(m, b):
-    b += _Z[(4 - len(b)) & 1]
-    b += _S14.pack(m._data)
-
-
-def _dec_Int16(d, o):
-    o += (4 - o) & 1
-    t1 = _S14.unpack_from(d, o)
-    o += 2
-    m = _mk_Int16(t1[0])
-    return m, o
-
-
 def _to_Int16(m):
     return Int16_(data=m._data)
 
@@ -1133,11 +924,17 @@ def _cdr_Int16MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}h", *v3)
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    b += _pack(f"<{len(v4)}h", *v4)
     return bytes(b)
 
 
@@ -1150,48 +947,24 @@ def _msg_Int16MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}h", d, o))
-    o += n6 * 2
-    m = _mk_Int16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_Int16MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}h", *v3)
-
-
-def _dec_Int16MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}h", d, o))
-    o += n6 * 2
-    m = _mk_Int16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    n10 = t9[1]
+    v11 = list(_unpack_from(f"<{n10}h", d, o))
+    o += n10 * 2
+    m = _mk_Int16MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -1249,19 +1022,6 @@ def _msg_Int32(d):
     return m, o
 
 
-def _enc_Int32(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S16.pack(m._data)
-
-
-def _dec_Int32(d, o):
-    o += (4 - o) & 3
-    t1 = _S16.unpack_from(d, o)
-    o += 4
-    m = _mk_Int32(t1[0])
-    return m, o
-
-
 def _to_Int32(m):
     return Int32_(data=m._data)
 
@@ -1295,11 +1055,17 @@ def _cdr_Int32MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}i", *v3)
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    b += _pack(f"<{len(v4)}i", *v4)
     return bytes(b)
 
 
@@ -1312,48 +1078,24 @@ def _msg_Int32MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}i", d, o))
-    o += n6 * 4
-    m = _mk_Int32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_Int32MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}i", *v3)
-
-
-def _dec_Int32MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}i", d, o))
-    o += n6 * 4
-    m = _mk_Int32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    n10 = t9[1]
+    v11 = list(_unpack_from(f"<{n10}i", d, o))
+    o += n10 * 4
+    m = _mk_Int32MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -1411,19 +1153,6 @@ def _msg_Int64(d):
     return m, o
 
 
-def _enc_Int64(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S18.pack(m._data)
-
-
-def _dec_Int64(d, o):
-    o += (4 - o) & 7
-    t1 = _S18.unpack_from(d, o)
-    o += 8
-    m = _mk_Int64(t1[0])
-    return m, o
-
-
 def _to_Int64(m):
     return Int64_(data=m._data)
 
@@ -1457,13 +1186,19 @@ def _cdr_Int64MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    if v3:
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    if v4:
         b += _Z[(4 - len(b)) & 7]
-    b += _pack(f"<{len(v3)}q", *v3)
+    b += _pack(f"<{len(v4)}q", *v4)
     return bytes(b)
 
 
@@ -1476,54 +1211,26 @@ def _msg_Int64MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    if n6:
+    n10 = t9[1]
+    if n10:
         o += (4 - o) & 7
-    v7 = list(_unpack_from(f"<{n6}q", d, o))
-    o += n6 * 8
-    m = _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_Int64MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    if v3:
-        b += _Z[(4 - len(b)) & 7]
-    b += _pack(f"<{len(v3)}q", *v3)
-
-
-def _dec_Int64MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    if n6:
-        o += (4 - o) & 7
-    v7 = list(_unpack_from(f"<{n6}q", d, o))
-    o += n6 * 8
-    m = _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    v11 = list(_unpack_from(f"<{n10}q", d, o))
+    o += n10 * 8
+    m = _mk_Int64MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -1581,17 +1288,6 @@ def _msg_Int8(d):
     return m, o
 
 
-def _enc_Int8(m, b):
-    b += _S20.pack(m._data)
-
-
-def _dec_Int8(d, o):
-    t1 = _S20.unpack_from(d, o)
-    o += 1
-    m = _mk_Int8(t1[0])
-    return m, o
-
-
 def _to_Int8(m):
     return Int8_(data=m._data)
 
@@ -1625,11 +1321,17 @@ def _cdr_Int8MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}b", *v3)
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    b += _pack(f"<{len(v4)}b", *v4)
     return bytes(b)
 
 
@@ -1642,48 +1344,24 @@ def _msg_Int8MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}b", d, o))
-    o += n6 * 1
-    m = _mk_Int8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_Int8MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}b", *v3)
-
-
-def _dec_Int8MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}b", d, o))
-    o += n6 * 1
-    m = _mk_Int8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    n10 = t9[1]
+    v11 = list(_unpack_from(f"<{n10}b", d, o))
+    o += n10 * 1
+    m = _mk_Int8MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -1725,25 +1403,6 @@ def _cdr_String(m):
 
 def _msg_String(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
-    o += n2
-    m = _mk_String(s3)
-    return m, o
-
-
-def _enc_String(m, b):
-    s1 = m._data.encode()
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(s1) + 1)
-    b += s1
-    b.append(0)
-
-
-def _dec_String(d, o):
-    o += (4 - o) & 3
     t1 = _S4.unpack_from(d, o)
     o += 4
     n2 = t1[0]
@@ -1806,19 +1465,6 @@ def _msg_UInt16(d):
     return m, o
 
 
-def _enc_UInt16(m, b):
-    b += _Z[(4 - len(b)) & 1]
-    b += _S22.pack(m._data)
-
-
-def _dec_UInt16(d, o):
-    o += (4 - o) & 1
-    t1 = _S22.unpack_from(d, o)
-    o += 2
-    m = _mk_UInt16(t1[0])
-    return m, o
-
-
 def _to_UInt16(m):
     return UInt16_(data=m._data)
 
@@ -1852,11 +1498,17 @@ def _cdr_UInt16MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}H", *v3)
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    b += _pack(f"<{len(v4)}H", *v4)
     return bytes(b)
 
 
@@ -1869,48 +1521,24 @@ def _msg_UInt16MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}H", d, o))
-    o += n6 * 2
-    m = _mk_UInt16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_UInt16MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}H", *v3)
-
-
-def _dec_UInt16MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}H", d, o))
-    o += n6 * 2
-    m = _mk_UInt16MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    n10 = t9[1]
+    v11 = list(_unpack_from(f"<{n10}H", d, o))
+    o += n10 * 2
+    m = _mk_UInt16MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -1968,19 +1596,6 @@ def _msg_UInt32(d):
     return m, o
 
 
-def _enc_UInt32(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(m._data)
-
-
-def _dec_UInt32(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    m = _mk_UInt32(t1[0])
-    return m, o
-
-
 def _to_UInt32(m):
     return UInt32_(data=m._data)
 
@@ -2014,11 +1629,17 @@ def _cdr_UInt32MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}I", *v3)
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    b += _pack(f"<{len(v4)}I", *v4)
     return bytes(b)
 
 
@@ -2031,48 +1652,24 @@ def _msg_UInt32MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}I", d, o))
-    o += n6 * 4
-    m = _mk_UInt32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_UInt32MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += _pack(f"<{len(v3)}I", *v3)
-
-
-def _dec_UInt32MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    v7 = list(_unpack_from(f"<{n6}I", d, o))
-    o += n6 * 4
-    m = _mk_UInt32MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    n10 = t9[1]
+    v11 = list(_unpack_from(f"<{n10}I", d, o))
+    o += n10 * 4
+    m = _mk_UInt32MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -2130,19 +1727,6 @@ def _msg_UInt64(d):
     return m, o
 
 
-def _enc_UInt64(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S25.pack(m._data)
-
-
-def _dec_UInt64(d, o):
-    o += (4 - o) & 7
-    t1 = _S25.unpack_from(d, o)
-    o += 8
-    m = _mk_UInt64(t1[0])
-    return m, o
-
-
 def _to_UInt64(m):
     return UInt64_(data=m._data)
 
@@ -2176,13 +1760,19 @@ def _cdr_UInt64MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    if v3:
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    if v4:
         b += _Z[(4 - len(b)) & 7]
-    b += _pack(f"<{len(v3)}Q", *v3)
+    b += _pack(f"<{len(v4)}Q", *v4)
     return bytes(b)
 
 
@@ -2195,54 +1785,26 @@ def _msg_UInt64MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    if n6:
+    n10 = t9[1]
+    if n10:
         o += (4 - o) & 7
-    v7 = list(_unpack_from(f"<{n6}Q", d, o))
-    o += n6 * 8
-    m = _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_UInt64MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    if v3:
-        b += _Z[(4 - len(b)) & 7]
-    b += _pack(f"<{len(v3)}Q", *v3)
-
-
-def _dec_UInt64MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    if n6:
-        o += (4 - o) & 7
-    v7 = list(_unpack_from(f"<{n6}Q", d, o))
-    o += n6 * 8
-    m = _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    v11 = list(_unpack_from(f"<{n10}Q", d, o))
+    o += n10 * 8
+    m = _mk_UInt64MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -2300,17 +1862,6 @@ def _msg_UInt8(d):
     return m, o
 
 
-def _enc_UInt8(m, b):
-    b += _S3.pack(m._data)
-
-
-def _dec_UInt8(d, o):
-    t1 = _S3.unpack_from(d, o)
-    o += 1
-    m = _mk_UInt8(t1[0])
-    return m, o
-
-
 def _to_UInt8(m):
     return UInt8_(data=m._data)
 
@@ -2344,11 +1895,17 @@ def _cdr_UInt8MultiArray(m):
     v1 = m._layout._dim
     b += _S4.pack(len(v1))
     for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
+        s3 = e2._label.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S4.pack(len(s3) + 1)
+        b += s3
+        b.append(0)
+        b += _Z[(4 - len(b)) & 3]
+        b += _S5.pack(e2._size, e2._stride)
     b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += bytes(v3)
+    v4 = m._data
+    b += _S5.pack(m._layout._data_offset, len(v4))
+    b += bytes(v4)
     return bytes(b)
 
 
@@ -2361,48 +1918,24 @@ def _msg_UInt8MultiArray(d):
         raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
     v3 = []
     for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
+        o += (4 - o) & 3
+        t5 = _S4.unpack_from(d, o)
+        o += 4
+        n6 = t5[0]
+        s7 = str(d[o : o + n6 - 1], "utf-8") if n6 else ""
+        o += n6
+        o += (4 - o) & 3
+        t8 = _S5.unpack_from(d, o)
+        o += 8
+        e4 = _mk_MultiArrayDimension(s7, t8[0], t8[1])
         v3.append(e4)
     o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
+    t9 = _S5.unpack_from(d, o)
     o += 8
-    n6 = t5[1]
-    v7 = list(d[o : o + n6])
-    o += n6
-    m = _mk_UInt8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
-    return m, o
-
-
-def _enc_UInt8MultiArray(m, b):
-    v1 = m._layout._dim
-    b += _Z[(4 - len(b)) & 3]
-    b += _S4.pack(len(v1))
-    for e2 in v1:
-        _enc_MultiArrayDimension(e2, b)
-    b += _Z[(4 - len(b)) & 3]
-    v3 = m._data
-    b += _S5.pack(m._layout._data_offset, len(v3))
-    b += bytes(v3)
-
-
-def _dec_UInt8MultiArray(d, o):
-    o += (4 - o) & 3
-    t1 = _S4.unpack_from(d, o)
-    o += 4
-    n2 = t1[0]
-    if n2 > len(d) - o:
-        raise ValueError(f"{n2} elements announced, {len(d) - o} bytes left")
-    v3 = []
-    for _ in range(n2):
-        e4, o = _dec_MultiArrayDimension(d, o)
-        v3.append(e4)
-    o += (4 - o) & 3
-    t5 = _S5.unpack_from(d, o)
-    o += 8
-    n6 = t5[1]
-    v7 = list(d[o : o + n6])
-    o += n6
-    m = _mk_UInt8MultiArray(_mk_MultiArrayLayout(v3, t5[0]), v7)
+    n10 = t9[1]
+    v11 = list(d[o : o + n10])
+    o += n10
+    m = _mk_UInt8MultiArray(_mk_MultiArrayLayout(v3, t9[0]), v11)
     return m, o
 
 
@@ -2417,19 +1950,18 @@ def _from_UInt8MultiArray(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
-    "Bool": (Bool_, _cdr_Bool, _msg_Bool, _to_Bool, _from_Bool, _enc_Bool, _dec_Bool, _stamped_Bool, _TAP_Bool),
-    "Byte": (Byte_, _cdr_Byte, _msg_Byte, _to_Byte, _from_Byte, _enc_Byte, _dec_Byte, _stamped_Byte, _TAP_Byte),
+    "Bool": (Bool_, _cdr_Bool, _msg_Bool, _to_Bool, _from_Bool, None, _stamped_Bool, _TAP_Bool),
+    "Byte": (Byte_, _cdr_Byte, _msg_Byte, _to_Byte, _from_Byte, None, _stamped_Byte, _TAP_Byte),
     "MultiArrayDimension": (
         MultiArrayDimension_,
         _cdr_MultiArrayDimension,
         _msg_MultiArrayDimension,
         _to_MultiArrayDimension,
         _from_MultiArrayDimension,
-        _enc_MultiArrayDimension,
-        _dec_MultiArrayDimension,
+        None,
         None,
         None,
     ),
@@ -2439,8 +1971,7 @@ CODECS = {
         _msg_MultiArrayLayout,
         _to_MultiArrayLayout,
         _from_MultiArrayLayout,
-        _enc_MultiArrayLayout,
-        _dec_MultiArrayLayout,
+        None,
         None,
         None,
     ),
@@ -2450,233 +1981,131 @@ CODECS = {
         _msg_ByteMultiArray,
         _to_ByteMultiArray,
         _from_ByteMultiArray,
-        _enc_ByteMultiArray,
-        _dec_ByteMultiArray,
+        None,
         None,
         None,
     ),
-    "Char": (Char_, _cdr_Char, _msg_Char, _to_Char, _from_Char, _enc_Char, _dec_Char, _stamped_Char, _TAP_Char),
+    "Char": (Char_, _cdr_Char, _msg_Char, _to_Char, _from_Char, None, _stamped_Char, _TAP_Char),
     "ColorRGBA": (
         ColorRGBA_,
         _cdr_ColorRGBA,
         _msg_ColorRGBA,
         _to_ColorRGBA,
         _from_ColorRGBA,
-        _enc_ColorRGBA,
-        _dec_ColorRGBA,
+        None,
         _stamped_ColorRGBA,
         _TAP_ColorRGBA,
     ),
-    "Empty": (Empty_, _cdr_Empty, _msg_Empty, _to_Empty, _from_Empty, _enc_Empty, _dec_Empty, _stamped_Empty, None),
-    "Float32": (
-        Float32_,
-        _cdr_Float32,
-        _msg_Float32,
-        _to_Float32,
-        _from_Float32,
-        _enc_Float32,
-        _dec_Float32,
-        _stamped_Float32,
-        _TAP_Float32,
-    ),
+    "Empty": (Empty_, _cdr_Empty, _msg_Empty, _to_Empty, _from_Empty, None, _stamped_Empty, None),
+    "Float32": (Float32_, _cdr_Float32, _msg_Float32, _to_Float32, _from_Float32, None, _stamped_Float32, _TAP_Float32),
     "Float32MultiArray": (
         Float32MultiArray_,
         _cdr_Float32MultiArray,
         _msg_Float32MultiArray,
         _to_Float32MultiArray,
         _from_Float32MultiArray,
-        _enc_Float32MultiArray,
-        _dec_Float32MultiArray,
+        None,
         None,
         None,
     ),
-    "Float64": (
-        Float64_,
-        _cdr_Float64,
-        _msg_Float64,
-        _to_Float64,
-        _from_Float64,
-        _enc_Float64,
-        _dec_Float64,
-        _stamped_Float64,
-        _TAP_Float64,
-    ),
+    "Float64": (Float64_, _cdr_Float64, _msg_Float64, _to_Float64, _from_Float64, None, _stamped_Float64, _TAP_Float64),
     "Float64MultiArray": (
         Float64MultiArray_,
         _cdr_Float64MultiArray,
         _msg_Float64MultiArray,
         _to_Float64MultiArray,
         _from_Float64MultiArray,
-        _enc_Float64MultiArray,
-        _dec_Float64MultiArray,
+        None,
         None,
         None,
     ),
-    "Header": (Header_, _cdr_Header, _msg_Header, _to_Header, _from_Header, _enc_Header, _dec_Header, None, None),
-    "Int16": (
-        Int16_,
-        _cdr_Int16,
-        _msg_Int16,
-        _to_Int16,
-        _from_Int16,
-        _enc_Int16,
-        _dec_Int16,
-        _stamped_Int16,
-        _TAP_Int16,
-    ),
+    "Header": (Header_, _cdr_Header, _msg_Header, _to_Header, _from_Header, None, None, None),
+    "Int16": (Int16_, _cdr_Int16, _msg_Int16, _to_Int16, _from_Int16, None, _stamped_Int16, _TAP_Int16),
     "Int16MultiArray": (
         Int16MultiArray_,
         _cdr_Int16MultiArray,
         _msg_Int16MultiArray,
         _to_Int16MultiArray,
         _from_Int16MultiArray,
-        _enc_Int16MultiArray,
-        _dec_Int16MultiArray,
+        None,
         None,
         None,
     ),
-    "Int32": (
-        Int32_,
-        _cdr_Int32,
-        _msg_Int32,
-        _to_Int32,
-        _from_Int32,
-        _enc_Int32,
-        _dec_Int32,
-        _stamped_Int32,
-        _TAP_Int32,
-    ),
+    "Int32": (Int32_, _cdr_Int32, _msg_Int32, _to_Int32, _from_Int32, None, _stamped_Int32, _TAP_Int32),
     "Int32MultiArray": (
         Int32MultiArray_,
         _cdr_Int32MultiArray,
         _msg_Int32MultiArray,
         _to_Int32MultiArray,
         _from_Int32MultiArray,
-        _enc_Int32MultiArray,
-        _dec_Int32MultiArray,
+        None,
         None,
         None,
     ),
-    "Int64": (
-        Int64_,
-        _cdr_Int64,
-        _msg_Int64,
-        _to_Int64,
-        _from_Int64,
-        _enc_Int64,
-        _dec_Int64,
-        _stamped_Int64,
-        _TAP_Int64,
-    ),
+    "Int64": (Int64_, _cdr_Int64, _msg_Int64, _to_Int64, _from_Int64, None, _stamped_Int64, _TAP_Int64),
     "Int64MultiArray": (
         Int64MultiArray_,
         _cdr_Int64MultiArray,
         _msg_Int64MultiArray,
         _to_Int64MultiArray,
         _from_Int64MultiArray,
-        _enc_Int64MultiArray,
-        _dec_Int64MultiArray,
+        None,
         None,
         None,
     ),
-    "Int8": (Int8_, _cdr_Int8, _msg_Int8, _to_Int8, _from_Int8, _enc_Int8, _dec_Int8, _stamped_Int8, _TAP_Int8),
+    "Int8": (Int8_, _cdr_Int8, _msg_Int8, _to_Int8, _from_Int8, None, _stamped_Int8, _TAP_Int8),
     "Int8MultiArray": (
         Int8MultiArray_,
         _cdr_Int8MultiArray,
         _msg_Int8MultiArray,
         _to_Int8MultiArray,
         _from_Int8MultiArray,
-        _enc_Int8MultiArray,
-        _dec_Int8MultiArray,
+        None,
         None,
         None,
     ),
-    "String": (String_, _cdr_String, _msg_String, _to_String, _from_String, _enc_String, _dec_String, None, None),
-    "UInt16": (
-        UInt16_,
-        _cdr_UInt16,
-        _msg_UInt16,
-        _to_UInt16,
-        _from_UInt16,
-        _enc_UInt16,
-        _dec_UInt16,
-        _stamped_UInt16,
-        _TAP_UInt16,
-    ),
+    "String": (String_, _cdr_String, _msg_String, _to_String, _from_String, None, None, None),
+    "UInt16": (UInt16_, _cdr_UInt16, _msg_UInt16, _to_UInt16, _from_UInt16, None, _stamped_UInt16, _TAP_UInt16),
     "UInt16MultiArray": (
         UInt16MultiArray_,
         _cdr_UInt16MultiArray,
         _msg_UInt16MultiArray,
         _to_UInt16MultiArray,
         _from_UInt16MultiArray,
-        _enc_UInt16MultiArray,
-        _dec_UInt16MultiArray,
+        None,
         None,
         None,
     ),
-    "UInt32": (
-        UInt32_,
-        _cdr_UInt32,
-        _msg_UInt32,
-        _to_UInt32,
-        _from_UInt32,
-        _enc_UInt32,
-        _dec_UInt32,
-        _stamped_UInt32,
-        _TAP_UInt32,
-    ),
+    "UInt32": (UInt32_, _cdr_UInt32, _msg_UInt32, _to_UInt32, _from_UInt32, None, _stamped_UInt32, _TAP_UInt32),
     "UInt32MultiArray": (
         UInt32MultiArray_,
         _cdr_UInt32MultiArray,
         _msg_UInt32MultiArray,
         _to_UInt32MultiArray,
         _from_UInt32MultiArray,
-        _enc_UInt32MultiArray,
-        _dec_UInt32MultiArray,
+        None,
         None,
         None,
     ),
-    "UInt64": (
-        UInt64_,
-        _cdr_UInt64,
-        _msg_UInt64,
-        _to_UInt64,
-        _from_UInt64,
-        _enc_UInt64,
-        _dec_UInt64,
-        _stamped_UInt64,
-        _TAP_UInt64,
-    ),
+    "UInt64": (UInt64_, _cdr_UInt64, _msg_UInt64, _to_UInt64, _from_UInt64, None, _stamped_UInt64, _TAP_UInt64),
     "UInt64MultiArray": (
         UInt64MultiArray_,
         _cdr_UInt64MultiArray,
         _msg_UInt64MultiArray,
         _to_UInt64MultiArray,
         _from_UInt64MultiArray,
-        _enc_UInt64MultiArray,
-        _dec_UInt64MultiArray,
+        None,
         None,
         None,
     ),
-    "UInt8": (
-        UInt8_,
-        _cdr_UInt8,
-        _msg_UInt8,
-        _to_UInt8,
-        _from_UInt8,
-        _enc_UInt8,
-        _dec_UInt8,
-        _stamped_UInt8,
-        _TAP_UInt8,
-    ),
+    "UInt8": (UInt8_, _cdr_UInt8, _msg_UInt8, _to_UInt8, _from_UInt8, None, _stamped_UInt8, _TAP_UInt8),
     "UInt8MultiArray": (
         UInt8MultiArray_,
         _cdr_UInt8MultiArray,
         _msg_UInt8MultiArray,
         _to_UInt8MultiArray,
         _from_UInt8MultiArray,
-        _enc_UInt8MultiArray,
-        _dec_UInt8MultiArray,
+        None,
         None,
         None,
     ),

@@ -14,13 +14,11 @@ import llfsm.msgs.std_srvs.srv as _classes
 
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
-_Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<4sB")
-_S1 = _Struct("<B")
-_S2 = _Struct("<4s?")
-_S3 = _Struct("<?")
-_S4 = _Struct("<?3xI")
-_S5 = _Struct("<I")
+_S1 = _Struct("<4s?")
+_S2 = _Struct("<?")
+_S3 = _Struct("<?3xI")
+_S4 = _Struct("<I")
 _R0 = _Struct("<IqI4sB")
 _R1 = _Struct("<IqI4s?")
 
@@ -69,10 +67,6 @@ def _msg_Empty_Request(d):
     o += 1
     m = _mk_Empty_Request()
     return m, o
-
-
-def _enc_Empty_Request(m, b):
-    b += _S1.pack(0)
 
 
 def _dec_Empty_Request(d, o):
@@ -136,10 +130,6 @@ def _msg_Empty_Response(d):
     return m, o
 
 
-def _enc_Empty_Response(m, b):
-    b += _S1.pack(0)
-
-
 def _dec_Empty_Response(d, o):
     o += 1
     m = _mk_Empty_Response()
@@ -181,7 +171,7 @@ def _mk_SetBool_Request(a0):
 
 
 def _cdr_SetBool_Request(m):
-    return _S2.pack(_HDR, m._data)
+    return _S1.pack(_HDR, m._data)
 
 
 def _stamped_SetBool_Request(out, key, clock):
@@ -201,18 +191,14 @@ _TAP_SetBool_Request = (("?", "_data"),)
 
 def _msg_SetBool_Request(d):
     o = 4
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S2.unpack_from(d, o)
     o += 1
     m = _mk_SetBool_Request(t1[0])
     return m, o
 
 
-def _enc_SetBool_Request(m, b):
-    b += _S3.pack(m._data)
-
-
 def _dec_SetBool_Request(d, o):
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S2.unpack_from(d, o)
     o += 1
     m = _mk_SetBool_Request(t1[0])
     return m, o
@@ -259,7 +245,7 @@ def _mk_SetBool_Response(a0, a1):
 def _cdr_SetBool_Response(m):
     b = bytearray(_HDR)
     s1 = m._message.encode()
-    b += _S4.pack(m._success, len(s1) + 1)
+    b += _S3.pack(m._success, len(s1) + 1)
     b += s1
     b.append(0)
     return bytes(b)
@@ -267,7 +253,7 @@ def _cdr_SetBool_Response(m):
 
 def _msg_SetBool_Response(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 8
     n2 = t1[1]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
@@ -276,20 +262,11 @@ def _msg_SetBool_Response(d):
     return m, o
 
 
-def _enc_SetBool_Response(m, b):
-    s1 = m._message.encode()
-    b += _S3.pack(m._success)
-    b += _Z[(4 - len(b)) & 3]
-    b += _S5.pack(len(s1) + 1)
-    b += s1
-    b.append(0)
-
-
 def _dec_SetBool_Response(d, o):
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S2.unpack_from(d, o)
     o += 1
     o += (4 - o) & 3
-    t2 = _S5.unpack_from(d, o)
+    t2 = _S4.unpack_from(d, o)
     o += 4
     n3 = t2[0]
     s4 = str(d[o : o + n3 - 1], "utf-8") if n3 else ""
@@ -355,10 +332,6 @@ def _msg_Trigger_Request(d):
     return m, o
 
 
-def _enc_Trigger_Request(m, b):
-    b += _S1.pack(0)
-
-
 def _dec_Trigger_Request(d, o):
     o += 1
     m = _mk_Trigger_Request()
@@ -405,7 +378,7 @@ def _mk_Trigger_Response(a0, a1):
 def _cdr_Trigger_Response(m):
     b = bytearray(_HDR)
     s1 = m._message.encode()
-    b += _S4.pack(m._success, len(s1) + 1)
+    b += _S3.pack(m._success, len(s1) + 1)
     b += s1
     b.append(0)
     return bytes(b)
@@ -413,7 +386,7 @@ def _cdr_Trigger_Response(m):
 
 def _msg_Trigger_Response(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 8
     n2 = t1[1]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
@@ -422,20 +395,11 @@ def _msg_Trigger_Response(d):
     return m, o
 
 
-def _enc_Trigger_Response(m, b):
-    s1 = m._message.encode()
-    b += _S3.pack(m._success)
-    b += _Z[(4 - len(b)) & 3]
-    b += _S5.pack(len(s1) + 1)
-    b += s1
-    b.append(0)
-
-
 def _dec_Trigger_Response(d, o):
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S2.unpack_from(d, o)
     o += 1
     o += (4 - o) & 3
-    t2 = _S5.unpack_from(d, o)
+    t2 = _S4.unpack_from(d, o)
     o += 4
     n3 = t2[0]
     s4 = str(d[o : o + n3 - 1], "utf-8") if n3 else ""
@@ -455,8 +419,8 @@ def _from_Trigger_Response(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
     "Empty_Request": (
         Empty_Request_,
@@ -464,7 +428,6 @@ CODECS = {
         _msg_Empty_Request,
         _to_Empty_Request,
         _from_Empty_Request,
-        _enc_Empty_Request,
         _dec_Empty_Request,
         _stamped_Empty_Request,
         None,
@@ -475,7 +438,6 @@ CODECS = {
         _msg_Empty_Response,
         _to_Empty_Response,
         _from_Empty_Response,
-        _enc_Empty_Response,
         _dec_Empty_Response,
         _stamped_Empty_Response,
         None,
@@ -486,7 +448,6 @@ CODECS = {
         _msg_SetBool_Request,
         _to_SetBool_Request,
         _from_SetBool_Request,
-        _enc_SetBool_Request,
         _dec_SetBool_Request,
         _stamped_SetBool_Request,
         _TAP_SetBool_Request,
@@ -497,7 +458,6 @@ CODECS = {
         _msg_SetBool_Response,
         _to_SetBool_Response,
         _from_SetBool_Response,
-        _enc_SetBool_Response,
         _dec_SetBool_Response,
         None,
         None,
@@ -508,7 +468,6 @@ CODECS = {
         _msg_Trigger_Request,
         _to_Trigger_Request,
         _from_Trigger_Request,
-        _enc_Trigger_Request,
         _dec_Trigger_Request,
         _stamped_Trigger_Request,
         None,
@@ -519,7 +478,6 @@ CODECS = {
         _msg_Trigger_Response,
         _to_Trigger_Response,
         _from_Trigger_Response,
-        _enc_Trigger_Response,
         _dec_Trigger_Response,
         None,
         None,

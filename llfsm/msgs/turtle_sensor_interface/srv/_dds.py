@@ -14,11 +14,9 @@ import llfsm.msgs.turtle_sensor_interface.srv as _classes
 
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
-_Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<4sB")
-_S1 = _Struct("<B")
-_S2 = _Struct("<4sddd")
-_S3 = _Struct("<ddd")
+_S1 = _Struct("<4sddd")
+_S2 = _Struct("<ddd")
 _R0 = _Struct("<IqI4sB")
 _R1 = _Struct("<IqI4sddd")
 
@@ -67,10 +65,6 @@ def _msg_TurtlePosition_Request(d):
     o += 1
     m = _mk_TurtlePosition_Request()
     return m, o
-
-
-def _enc_TurtlePosition_Request(m, b):
-    b += _S1.pack(0)
 
 
 def _dec_TurtlePosition_Request(d, o):
@@ -122,7 +116,7 @@ def _mk_TurtlePosition_Response(a0, a1, a2):
 
 
 def _cdr_TurtlePosition_Response(m):
-    return _S2.pack(_HDR, m._x, m._y, m._theta)
+    return _S1.pack(_HDR, m._x, m._y, m._theta)
 
 
 def _stamped_TurtlePosition_Response(out, key, clock):
@@ -142,20 +136,15 @@ _TAP_TurtlePosition_Response = (("d", "_x"), ("d", "_y"), ("d", "_theta"))
 
 def _msg_TurtlePosition_Response(d):
     o = 4
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S2.unpack_from(d, o)
     o += 24
     m = _mk_TurtlePosition_Response(t1[0], t1[1], t1[2])
     return m, o
 
 
-def _enc_TurtlePosition_Response(m, b):
-    b += _Z[(4 - len(b)) & 7]
-    b += _S3.pack(m._x, m._y, m._theta)
-
-
 def _dec_TurtlePosition_Response(d, o):
     o += (4 - o) & 7
-    t1 = _S3.unpack_from(d, o)
+    t1 = _S2.unpack_from(d, o)
     o += 24
     m = _mk_TurtlePosition_Response(t1[0], t1[1], t1[2])
     return m, o
@@ -173,8 +162,8 @@ def _from_TurtlePosition_Response(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
     "TurtlePosition_Request": (
         TurtlePosition_Request_,
@@ -182,7 +171,6 @@ CODECS = {
         _msg_TurtlePosition_Request,
         _to_TurtlePosition_Request,
         _from_TurtlePosition_Request,
-        _enc_TurtlePosition_Request,
         _dec_TurtlePosition_Request,
         _stamped_TurtlePosition_Request,
         None,
@@ -193,7 +181,6 @@ CODECS = {
         _msg_TurtlePosition_Response,
         _to_TurtlePosition_Response,
         _from_TurtlePosition_Response,
-        _enc_TurtlePosition_Response,
         _dec_TurtlePosition_Response,
         _stamped_TurtlePosition_Response,
         _TAP_TurtlePosition_Response,

@@ -14,7 +14,6 @@ import llfsm.msgs.turtlesim.msg as _classes
 
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
-_Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<4sBBB")
 _S1 = _Struct("<BBB")
 _S2 = _Struct("<4sfffff")
@@ -64,17 +63,6 @@ _TAP_Color = (("B", "_r"), ("B", "_g"), ("B", "_b"))
 
 def _msg_Color(d):
     o = 4
-    t1 = _S1.unpack_from(d, o)
-    o += 3
-    m = _mk_Color(t1[0], t1[1], t1[2])
-    return m, o
-
-
-def _enc_Color(m, b):
-    b += _S1.pack(m._r, m._g, m._b)
-
-
-def _dec_Color(d, o):
     t1 = _S1.unpack_from(d, o)
     o += 3
     m = _mk_Color(t1[0], t1[1], t1[2])
@@ -144,19 +132,6 @@ def _msg_Pose(d):
     return m, o
 
 
-def _enc_Pose(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S3.pack(m._x, m._y, m._theta, m._linear_velocity, m._angular_velocity)
-
-
-def _dec_Pose(d, o):
-    o += (4 - o) & 3
-    t1 = _S3.unpack_from(d, o)
-    o += 20
-    m = _mk_Pose(t1[0], t1[1], t1[2], t1[3], t1[4])
-    return m, o
-
-
 def _to_Pose(m):
     return Pose_(
         x=m._x, y=m._y, theta=m._theta, linear_velocity=m._linear_velocity, angular_velocity=m._angular_velocity
@@ -173,21 +148,11 @@ def _from_Pose(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
-    "Color": (
-        Color_,
-        _cdr_Color,
-        _msg_Color,
-        _to_Color,
-        _from_Color,
-        _enc_Color,
-        _dec_Color,
-        _stamped_Color,
-        _TAP_Color,
-    ),
-    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, _enc_Pose, _dec_Pose, _stamped_Pose, _TAP_Pose),
+    "Color": (Color_, _cdr_Color, _msg_Color, _to_Color, _from_Color, None, _stamped_Color, _TAP_Color),
+    "Pose": (Pose_, _cdr_Pose, _msg_Pose, _to_Pose, _from_Pose, None, _stamped_Pose, _TAP_Pose),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {

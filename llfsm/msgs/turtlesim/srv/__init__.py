@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from llfsm.msgs import _message as _m
 
-_DEFAULT = _m.DEFAULT
 _FLOAT32_MAX = _m.FLOAT32_MAX
 _new = object.__new__
 

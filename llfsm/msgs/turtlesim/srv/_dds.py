@@ -14,17 +14,15 @@ import llfsm.msgs.turtlesim.srv as _classes
 
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
-_Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<I")
 _S1 = _Struct("<4sB")
-_S2 = _Struct("<B")
-_S3 = _Struct("<4sBBBBB")
-_S4 = _Struct("<BBBBB")
-_S5 = _Struct("<fffI")
-_S6 = _Struct("<4sfff")
-_S7 = _Struct("<fff")
-_S8 = _Struct("<4sff")
-_S9 = _Struct("<ff")
+_S2 = _Struct("<4sBBBBB")
+_S3 = _Struct("<BBBBB")
+_S4 = _Struct("<fffI")
+_S5 = _Struct("<4sfff")
+_S6 = _Struct("<fff")
+_S7 = _Struct("<4sff")
+_S8 = _Struct("<ff")
 _R0 = _Struct("<IqI4sB")
 _R1 = _Struct("<IqI4sBBBBB")
 _R2 = _Struct("<IqI4sfff")
@@ -74,14 +72,6 @@ def _msg_Kill_Request(d):
     o += n2
     m = _mk_Kill_Request(s3)
     return m, o
-
-
-def _enc_Kill_Request(m, b):
-    s1 = m._name.encode()
-    b += _Z[(4 - len(b)) & 3]
-    b += _S0.pack(len(s1) + 1)
-    b += s1
-    b.append(0)
 
 
 def _dec_Kill_Request(d, o):
@@ -151,10 +141,6 @@ def _msg_Kill_Response(d):
     return m, o
 
 
-def _enc_Kill_Response(m, b):
-    b += _S2.pack(0)
-
-
 def _dec_Kill_Response(d, o):
     o += 1
     m = _mk_Kill_Response()
@@ -208,7 +194,7 @@ def _mk_SetPen_Request(a0, a1, a2, a3, a4):
 
 
 def _cdr_SetPen_Request(m):
-    return _S3.pack(_HDR, m._r, m._g, m._b, m._width, m._off)
+    return _S2.pack(_HDR, m._r, m._g, m._b, m._width, m._off)
 
 
 def _stamped_SetPen_Request(out, key, clock):
@@ -228,18 +214,14 @@ _TAP_SetPen_Request = (("B", "_r"), ("B", "_g"), ("B", "_b"), ("B", "_width"), (
 
 def _msg_SetPen_Request(d):
     o = 4
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 5
     m = _mk_SetPen_Request(t1[0], t1[1], t1[2], t1[3], t1[4])
     return m, o
 
 
-def _enc_SetPen_Request(m, b):
-    b += _S4.pack(m._r, m._g, m._b, m._width, m._off)
-
-
 def _dec_SetPen_Request(d, o):
-    t1 = _S4.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 5
     m = _mk_SetPen_Request(t1[0], t1[1], t1[2], t1[3], t1[4])
     return m, o
@@ -305,10 +287,6 @@ def _msg_SetPen_Response(d):
     return m, o
 
 
-def _enc_SetPen_Response(m, b):
-    b += _S2.pack(0)
-
-
 def _dec_SetPen_Response(d, o):
     o += 1
     m = _mk_SetPen_Response()
@@ -361,7 +339,7 @@ def _mk_Spawn_Request(a0, a1, a2, a3):
 def _cdr_Spawn_Request(m):
     b = bytearray(_HDR)
     s1 = m._name.encode()
-    b += _S5.pack(m._x, m._y, m._theta, len(s1) + 1)
+    b += _S4.pack(m._x, m._y, m._theta, len(s1) + 1)
     b += s1
     b.append(0)
     return bytes(b)
@@ -369,7 +347,7 @@ def _cdr_Spawn_Request(m):
 
 def _msg_Spawn_Request(d):
     o = 4
-    t1 = _S5.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 16
     n2 = t1[3]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
@@ -378,17 +356,9 @@ def _msg_Spawn_Request(d):
     return m, o
 
 
-def _enc_Spawn_Request(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    s1 = m._name.encode()
-    b += _S5.pack(m._x, m._y, m._theta, len(s1) + 1)
-    b += s1
-    b.append(0)
-
-
 def _dec_Spawn_Request(d, o):
     o += (4 - o) & 3
-    t1 = _S5.unpack_from(d, o)
+    t1 = _S4.unpack_from(d, o)
     o += 16
     n2 = t1[3]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
@@ -455,14 +425,6 @@ def _msg_Spawn_Response(d):
     return m, o
 
 
-def _enc_Spawn_Response(m, b):
-    s1 = m._name.encode()
-    b += _Z[(4 - len(b)) & 3]
-    b += _S0.pack(len(s1) + 1)
-    b += s1
-    b.append(0)
-
-
 def _dec_Spawn_Response(d, o):
     o += (4 - o) & 3
     t1 = _S0.unpack_from(d, o)
@@ -516,7 +478,7 @@ def _mk_TeleportAbsolute_Request(a0, a1, a2):
 
 
 def _cdr_TeleportAbsolute_Request(m):
-    return _S6.pack(_HDR, m._x, m._y, m._theta)
+    return _S5.pack(_HDR, m._x, m._y, m._theta)
 
 
 def _stamped_TeleportAbsolute_Request(out, key, clock):
@@ -536,20 +498,15 @@ _TAP_TeleportAbsolute_Request = (("f", "_x"), ("f", "_y"), ("f", "_theta"))
 
 def _msg_TeleportAbsolute_Request(d):
     o = 4
-    t1 = _S7.unpack_from(d, o)
+    t1 = _S6.unpack_from(d, o)
     o += 12
     m = _mk_TeleportAbsolute_Request(t1[0], t1[1], t1[2])
     return m, o
 
 
-def _enc_TeleportAbsolute_Request(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S7.pack(m._x, m._y, m._theta)
-
-
 def _dec_TeleportAbsolute_Request(d, o):
     o += (4 - o) & 3
-    t1 = _S7.unpack_from(d, o)
+    t1 = _S6.unpack_from(d, o)
     o += 12
     m = _mk_TeleportAbsolute_Request(t1[0], t1[1], t1[2])
     return m, o
@@ -613,10 +570,6 @@ def _msg_TeleportAbsolute_Response(d):
     return m, o
 
 
-def _enc_TeleportAbsolute_Response(m, b):
-    b += _S2.pack(0)
-
-
 def _dec_TeleportAbsolute_Response(d, o):
     o += 1
     m = _mk_TeleportAbsolute_Response()
@@ -661,7 +614,7 @@ def _mk_TeleportRelative_Request(a0, a1):
 
 
 def _cdr_TeleportRelative_Request(m):
-    return _S8.pack(_HDR, m._linear, m._angular)
+    return _S7.pack(_HDR, m._linear, m._angular)
 
 
 def _stamped_TeleportRelative_Request(out, key, clock):
@@ -681,20 +634,15 @@ _TAP_TeleportRelative_Request = (("f", "_linear"), ("f", "_angular"))
 
 def _msg_TeleportRelative_Request(d):
     o = 4
-    t1 = _S9.unpack_from(d, o)
+    t1 = _S8.unpack_from(d, o)
     o += 8
     m = _mk_TeleportRelative_Request(t1[0], t1[1])
     return m, o
 
 
-def _enc_TeleportRelative_Request(m, b):
-    b += _Z[(4 - len(b)) & 3]
-    b += _S9.pack(m._linear, m._angular)
-
-
 def _dec_TeleportRelative_Request(d, o):
     o += (4 - o) & 3
-    t1 = _S9.unpack_from(d, o)
+    t1 = _S8.unpack_from(d, o)
     o += 8
     m = _mk_TeleportRelative_Request(t1[0], t1[1])
     return m, o
@@ -757,10 +705,6 @@ def _msg_TeleportRelative_Response(d):
     return m, o
 
 
-def _enc_TeleportRelative_Response(m, b):
-    b += _S2.pack(0)
-
-
 def _dec_TeleportRelative_Response(d, o):
     o += 1
     m = _mk_TeleportRelative_Response()
@@ -776,8 +720,8 @@ def _from_TeleportRelative_Response(s):
     return m
 
 
-# name -> (IdlStruct, cdr, from cdr, to sample, from sample, append CDR, read CDR at offset,
-#          stamped records or None, the C tap's layout or None)
+# name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
+#          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
     "Kill_Request": (
         Kill_Request_,
@@ -785,7 +729,6 @@ CODECS = {
         _msg_Kill_Request,
         _to_Kill_Request,
         _from_Kill_Request,
-        _enc_Kill_Request,
         _dec_Kill_Request,
         None,
         None,
@@ -796,7 +739,6 @@ CODECS = {
         _msg_Kill_Response,
         _to_Kill_Response,
         _from_Kill_Response,
-        _enc_Kill_Response,
         _dec_Kill_Response,
         _stamped_Kill_Response,
         None,
@@ -807,7 +749,6 @@ CODECS = {
         _msg_SetPen_Request,
         _to_SetPen_Request,
         _from_SetPen_Request,
-        _enc_SetPen_Request,
         _dec_SetPen_Request,
         _stamped_SetPen_Request,
         _TAP_SetPen_Request,
@@ -818,7 +759,6 @@ CODECS = {
         _msg_SetPen_Response,
         _to_SetPen_Response,
         _from_SetPen_Response,
-        _enc_SetPen_Response,
         _dec_SetPen_Response,
         _stamped_SetPen_Response,
         None,
@@ -829,7 +769,6 @@ CODECS = {
         _msg_Spawn_Request,
         _to_Spawn_Request,
         _from_Spawn_Request,
-        _enc_Spawn_Request,
         _dec_Spawn_Request,
         None,
         None,
@@ -840,7 +779,6 @@ CODECS = {
         _msg_Spawn_Response,
         _to_Spawn_Response,
         _from_Spawn_Response,
-        _enc_Spawn_Response,
         _dec_Spawn_Response,
         None,
         None,
@@ -851,7 +789,6 @@ CODECS = {
         _msg_TeleportAbsolute_Request,
         _to_TeleportAbsolute_Request,
         _from_TeleportAbsolute_Request,
-        _enc_TeleportAbsolute_Request,
         _dec_TeleportAbsolute_Request,
         _stamped_TeleportAbsolute_Request,
         _TAP_TeleportAbsolute_Request,
@@ -862,7 +799,6 @@ CODECS = {
         _msg_TeleportAbsolute_Response,
         _to_TeleportAbsolute_Response,
         _from_TeleportAbsolute_Response,
-        _enc_TeleportAbsolute_Response,
         _dec_TeleportAbsolute_Response,
         _stamped_TeleportAbsolute_Response,
         None,
@@ -873,7 +809,6 @@ CODECS = {
         _msg_TeleportRelative_Request,
         _to_TeleportRelative_Request,
         _from_TeleportRelative_Request,
-        _enc_TeleportRelative_Request,
         _dec_TeleportRelative_Request,
         _stamped_TeleportRelative_Request,
         _TAP_TeleportRelative_Request,
@@ -884,7 +819,6 @@ CODECS = {
         _msg_TeleportRelative_Response,
         _to_TeleportRelative_Response,
         _from_TeleportRelative_Response,
-        _enc_TeleportRelative_Response,
         _dec_TeleportRelative_Response,
         _stamped_TeleportRelative_Response,
         None,
