@@ -117,7 +117,7 @@ bench: $(VENV)/.installed-bench
 	$(PY) bench/run.py
 
 msgs: $(VENV)/.installed-dev
-	$(PY) -m llfsm.idl.package
+	$(PY) -m llfsm.idl
 
 clean:
 	rm -rf $(VENV) $(VENV_ROS) .venv-latest .venv-ros-latest .venv-lock build demo-output .pytest_cache .ruff_cache

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from llfsm.idl import package as interfaces
+from llfsm.idl.package import MSGS_DIR, installed_spec
 from llfsm.msgs import _dds
 from llfsm.msgs._message import INT_RANGES, Message, Service, is_message_class, is_service_class
 
@@ -251,7 +251,7 @@ def test_user_package_gets_dds_forms(tmp_path: Path, monkeypatch: pytest.MonkeyP
             assert _dds.from_cdr(_dds.cdr(msg), cls) == msg
         assert _dds.dds_type(cls).__idl_typename__.startswith(cls._TYPE.split("/")[0] + "::")
     assert _dds.type_hash(srv_module.Ask).startswith("RIHS01_")
-    assert interfaces.installed_spec("llfsm_dds_user_pkg/msg/Inner").fields[2].type.array == "unbounded"
+    assert installed_spec("llfsm_dds_user_pkg/msg/Inner").fields[2].type.array == "unbounded"
 
 
 def test_vendor_of_a_guid_tells_the_service_wire_form() -> None:
@@ -275,7 +275,7 @@ def test_generated_dds_modules_import_nothing_heavy() -> None:
         "import cyclonedds.idl.types",
         "from cyclonedds.idl import",
     )
-    paths = sorted(interfaces.MSGS_DIR.glob("*/*/_dds.py"))
+    paths = sorted(MSGS_DIR.glob("*/*/_dds.py"))
     assert len(paths) >= 9
     for path in paths:
         for line in path.read_text().splitlines():

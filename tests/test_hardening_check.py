@@ -128,7 +128,7 @@ class TestHeadersCarryNoCode:
 
     def test_names_with_a_trailing_newline_are_refused(self, tmp_path: Path) -> None:
         """`$` matches before a final newline: every name rule must end at the end (\\Z)."""
-        from llfsm.idl.package import FIELD_NAME, PACKAGE_NAME, TYPE_NAME
+        from llfsm.idl.spec import FIELD_NAME, PACKAGE_NAME, TYPE_NAME
         from llfsm.lang.model import is_valid_name
         from llfsm.scaffold import ScaffoldError, check_package_name
 

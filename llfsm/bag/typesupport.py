@@ -4,10 +4,10 @@ for the types a bag brings that llfsm has no class for.
 Definitions follow rosbag2 (rosbag2_cpp's LocalMessageDefinitionSource): the type's own `.msg`
 text, then each dependency once, depth first in name order, after a line of 80 `=` and
 `MSG: pkg/Name`.  That is the `ros2msg` schema Foxglove and `ros2 bag play` read.  The text of
-a type comes from its `.msg` file where llfsm has one (turtlesim, user packages); the built-in
-ROS packages (std_msgs, geometry_msgs, builtin_interfaces) have no file here, so their text is
-rebuilt from rosbags' type store (fields and constants, without comments).  Type hashes are
-RIHS01 as rosidl computes them, by rosbags.
+a type is its `.msg` file, as rosbag2 reads it from `share/`: the shipped definitions that
+llfsm's own classes are generated from (llfsm/msgs/_interfaces/), or a user package's (a type a
+bag brought is written as one); a type with no file at all is rebuilt from rosbags' type store
+(fields and constants, without comments).  Type hashes are RIHS01 as rosidl computes them, by rosbags.
 
 Bytes are XCDR1 (plain CDR, little endian) as rclpy's `serialize_message` gives them, from
 llfsm's own DDS type support (`llfsm.msgs._dds`); a class without a DDS form (none should be
@@ -77,9 +77,9 @@ _PRIMITIVES = frozenset(
 _BUILTIN_DIR = Path(__file__).resolve().parent.parent / "msgs" / "_interfaces"
 
 
-# rosidl's rules for names (as llfsm.idl.package.PACKAGE_NAME and TYPE_NAME, which are
-# not imported here: that module loads jinja2, and a recording run never needs it).  A name a
-# bag brings becomes a folder, a file and a module path: `..`, `/x`, `os.path` must never pass.
+# rosidl's rules for names (as llfsm.idl.spec.PACKAGE_NAME and TYPE_NAME: the bag, beside the
+# interface toolchain, does not import it).  A name a bag brings becomes a folder, a file and a
+# module path: `..`, `/x`, `os.path` must never pass.
 _PACKAGE_NAME = re.compile(r"(?!.*__)(?!.*_\Z)[a-z][a-z0-9_]*\Z")
 _TYPE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*\Z")
 
@@ -242,9 +242,9 @@ _BASE_STORE: Typestore | None = None
 
 
 def _base_store() -> Typestore:
-    """rosbags' store of the ROS 2 Humble types, which llfsm's built-in classes are generated
-    from (llfsm.idl.package), with the types of llfsm's .msg files added as they are
-    needed: one per process (loading it takes a few tenths of a second)."""
+    """rosbags' store of the ROS 2 Humble types (the definitions of llfsm's standard packages are
+    Humble's too), with the types of other .msg files added as they are needed: one per process
+    (loading it takes a few tenths of a second)."""
     global _BASE_STORE
     if _BASE_STORE is None:
         from rosbags.typesys import Stores, get_typestore

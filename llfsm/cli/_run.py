@@ -64,7 +64,7 @@ def run(
         )
     if native and not os.environ.get("LLFSM_NATIVE"):
         _run_native(targets)  # compiles (or finds) the native build, then runs in a fresh process
-    from ..idl.paths import add_search_path  # not llfsm.msgs: a run without messages never imports it
+    from ..interface_path import add_search_path  # not llfsm.msgs: a run without messages never imports it
 
     for t in targets:  # user interfaces (PKG/msg/*.msg) beside or above the machines import too
         folder = os.path.realpath(t)  # realpath: no error on a loop

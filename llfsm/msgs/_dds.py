@@ -1,6 +1,6 @@
 """Messages on ROS 2's DDS wire: the runtime API over the generated `_dds` modules.
 
-Every message and service class (built in or a user's, compiled by llfsm.idl.package)
+Every message and service class (shipped or a user's, compiled by the toolchain, llfsm.idl)
 has a generated DDS form beside it, `llfsm.msgs.<pkg>.<msg|srv>._dds`.  This module finds it
 from the class and offers:
 
@@ -49,8 +49,7 @@ class Codec(NamedTuple):
     from_cdr: Any  # (data) -> (msg, end offset)
     to_dds: Any  # (msg) -> sample
     from_dds: Any  # (sample) -> msg
-    enc: Any  # (msg, bytearray) -> None, appends at any offset
-    dec: Any  # (data, offset) -> (msg, offset)
+    dec: Any  # (data, offset) -> (msg, offset) for a request or reply after its header; else None
     # (out, key, clock) -> (msg) -> None, appending out(head + CDR) with the head
     # <uint32 key><int64 clock.now><uint32 size>; None where the size varies (or in a module
     # generated before it existed)
@@ -92,7 +91,7 @@ def dds_type_name(cls: type[Message] | type[Service]) -> str:
     """ "geometry_msgs::msg::dds_::Twist_"; for a service class, its Request's type name."""
     if isinstance(cls, type) and issubclass(cls, Service):
         cls = cls.Request
-    return dds_type(cls).__idl_typename__
+    return dds_type(cls).__idl_typename__  # type: ignore[attr-defined]  # set by cyclonedds
 
 
 def to_dds(msg: Message) -> Any:
@@ -181,6 +180,8 @@ def unwrap(data: bytes | bytearray | memoryview, msg_cls: type[Message]) -> tupl
     """(client guid, sequence number, message) of a payload written by `wrap` or by
     rmw_cyclonedds_cpp."""
     c = codec(msg_cls)
+    if c.dec is None:
+        raise TypeError(f"{msg_cls._TYPE} is not a service request or response")
     _check_header(data)
     try:
         guid, seq = _REQUEST_HEADER.unpack_from(data, 4)

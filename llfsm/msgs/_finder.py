@@ -1,11 +1,14 @@
-"""The import hook that makes a user's interface package importable as llfsm.msgs.PKG.
+"""The import hook that makes a user's interface package importable as llfsm.msgs.PKG
+(docs/bus.md, "Your own interfaces").
 
-A package in ROS layout (PKG/msg/*.msg, PKG/srv/*.srv) found in the search path is compiled by
-llfsm.idl.package into the cache, in a folder named after a fingerprint of its files,
-and imported from there.  A warm import lists and hashes the definition files and nothing more:
-the compiler (and jinja2) are imported only when that folder does not exist yet.  Built-in
-packages never reach this hook: the hook sits at the end of sys.meta_path, after the finder that
-imports llfsm/msgs/<pkg>/ from the package itself.
+A package in ROS layout (PKG/msg/*.msg, PKG/srv/*.srv) found in the interface search path
+(llfsm.interface_path) is compiled by the toolchain (llfsm.idl.package) into the cache, in a
+folder named after a fingerprint of its files, and imported from there.  A warm import lists
+and hashes the definition files and nothing more: the toolchain (and jinja2) are imported only
+when that folder does not exist yet, by the one deferred import in `compiled_package`, the
+single door from run time to the toolchain.  Shipped packages never reach this hook: it sits
+at the end of sys.meta_path, after the finder that imports llfsm/msgs/<pkg>/ from the package
+itself.
 """
 
 from __future__ import annotations
@@ -13,93 +16,30 @@ from __future__ import annotations
 import os
 import sys
 from importlib.machinery import ModuleSpec
+from importlib.util import spec_from_file_location
 from typing import TYPE_CHECKING
+
+from .. import __version__
+from ..cachedir import cache_dir, fresh_private, problem, warn
+from ..interface_path import is_package_name, package_dir
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
-    from pathlib import Path
     from types import ModuleType
 
 PREFIX = "llfsm.msgs."
 _LLFSM_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# What shapes generated message code: a change to any of these recompiles users' packages.
-_GENERATOR_FILES = (
-    os.path.join(_LLFSM_DIR, "idl", "package.py"),
-    os.path.join(_LLFSM_DIR, "idl", "ddsgen.py"),
-    os.path.join(_LLFSM_DIR, "msgs", "_message.py"),
-)
-_added: list[str] = []
+_IDL_DIR = os.path.join(_LLFSM_DIR, "idl")
 _generator_id: str | None = None
 
 
-def add_search_path(path: str | os.PathLike[str]) -> None:
-    """Search `path` (a folder holding PKG/msg or PKG/srv folders) for interface packages,
-    before LLFSM_INTERFACE_PATH and AMENT_PREFIX_PATH."""
-    p = os.path.abspath(os.fspath(path))
-    if p not in _added:
-        _added.append(p)
-
-
-def _take_pending() -> None:
-    """The folders named before this module was imported (llfsm.idl.paths)."""
-    from ..idl import paths as interface_paths
-
-    for p in interface_paths.pending:
-        add_search_path(p)
-    interface_paths.pending.clear()
-
-
-_take_pending()
-
-
-def _roots() -> list[str]:
-    roots = list(_added)
-    roots += [os.path.abspath(p) for p in _env_list("LLFSM_INTERFACE_PATH")]
-    roots += [os.path.join(os.path.abspath(p), "share") for p in _env_list("AMENT_PREFIX_PATH")]
-    return list(dict.fromkeys(roots))
-
-
-def _env_list(name: str) -> list[str]:
-    return [p for p in os.environ.get(name, "").split(os.pathsep) if p]
-
-
-def search_path() -> list[Path]:
-    """The folders searched, in order: added paths, LLFSM_INTERFACE_PATH, then `share/` of
-    every AMENT_PREFIX_PATH prefix (where colcon installs PKG/msg/X.msg)."""
-    from pathlib import Path
-
-    return [Path(r) for r in _roots()]
-
-
-def _package_dir(package: str) -> str | None:
-    """The folder of the package in the search path.  Only a package name (ROS's rule) is
-    looked for: a name such as `..` or `a/b`, from a file or a peer, never becomes a path."""
-    if not _is_package_name(package):
-        return None
-    for root in _roots():
-        d = os.path.join(root, package)
-        if os.path.isdir(os.path.join(d, "msg")) or os.path.isdir(os.path.join(d, "srv")):
-            return d
-    return None
-
-
-def find_package(package: str) -> Path | None:
-    """The folder of a user's interface package, as the import hook finds it."""
-    from pathlib import Path
-
-    d = _package_dir(package)
-    return None if d is None else Path(d)
-
-
-def _is_package_name(name: str) -> bool:
-    """ROS's rule for package names (lower_snake_case), without importing re."""
-    return (
-        name[:1].isascii()
-        and name[:1].islower()
-        and all(c.isascii() and (c.islower() or c.isdigit() or c == "_") for c in name)
-        and "__" not in name
-        and not name.endswith("_")
-    )
+def _generator_files() -> list[str]:
+    """What shapes generated message code, so that a change to any of them recompiles users'
+    packages: the toolchain's modules, its templates, and the message base they generate for."""
+    templates = os.path.join(_IDL_DIR, "templates")
+    files = sorted(os.path.join(_IDL_DIR, n) for n in os.listdir(_IDL_DIR) if n.endswith(".py"))
+    files += sorted(os.path.join(templates, n) for n in os.listdir(templates) if n.endswith(".j2"))
+    return [*files, os.path.join(_LLFSM_DIR, "msgs", "_message.py")]
 
 
 def _cache_root() -> str:
@@ -113,42 +53,35 @@ def _cache_root() -> str:
 
 def _interfaces_cache() -> str:
     """The cache's `interfaces` folder: one of ours that no one else can write (llfsm.cachedir)."""
-    from ..cachedir import cache_dir
-
     return cache_dir(_cache_root(), "interfaces")
 
 
 def _trusted_package(out: str) -> bool:
     """A compiled package folder (and its __init__.py) that this user wrote and only it can
     change; anything else there is never imported."""
-    from ..cachedir import problem
-
     return problem(out) is None and problem(os.path.join(out, "__init__.py"), directory=False) is None
 
 
-def _fingerprint(package_dir: str) -> str:
-    import hashlib
+def _fingerprint(folder: str) -> str:
+    """The package's files and the generator's, hashed: the name of its folder in the cache."""
+    import hashlib  # deferred: start-up (a run importing only shipped messages hashes nothing)
 
     global _generator_id
     if _generator_id is None:
         g = hashlib.sha256()
-        from .. import __version__
-
         g.update(__version__.encode())
-        templates = os.path.join(_LLFSM_DIR, "idl", "templates")
-        names = sorted(n for n in os.listdir(templates) if n.startswith("msgs") and n.endswith(".j2"))
-        for p in (*_GENERATOR_FILES, *(os.path.join(templates, n) for n in names)):
+        for p in _generator_files():
             with open(p, "rb") as f:
                 g.update(os.path.basename(p).encode() + b"\0" + f.read())
         _generator_id = g.hexdigest()
     h = hashlib.sha256(_generator_id.encode())
-    h.update(os.fsencode(package_dir))
+    h.update(os.fsencode(folder))
     for kind in ("msg", "srv"):
-        folder = os.path.join(package_dir, kind)
-        if not os.path.isdir(folder):
+        kind_dir = os.path.join(folder, kind)
+        if not os.path.isdir(kind_dir):
             continue
-        for name in sorted(os.listdir(folder)):
-            path = os.path.join(folder, name)
+        for name in sorted(os.listdir(kind_dir)):
+            path = os.path.join(kind_dir, name)
             if not name.endswith(f".{kind}") or not os.path.isfile(path):
                 continue
             with open(path, "rb") as f:
@@ -158,31 +91,31 @@ def _fingerprint(package_dir: str) -> str:
     return h.hexdigest()
 
 
-def compiled_package(package: str, package_dir: str) -> str:
+def compiled_package(package: str, folder: str) -> str:
     """The cache folder holding the package's generated modules, compiled first if missing."""
-    fingerprint = _fingerprint(package_dir)
+    fingerprint = _fingerprint(folder)
     cache = _interfaces_cache()
     out = os.path.join(cache, f"{package}-{fingerprint[:20]}")
     if os.path.isfile(os.path.join(out, "__init__.py")):
         if _trusted_package(out):
             return out
-        from ..cachedir import fresh_private, problem, warn
-
         why = problem(out) or problem(os.path.join(out, "__init__.py"), directory=False) or "not trusted"
         warn(out, why)
         cache = fresh_private()  # compile again where only we can write
         out = os.path.join(cache, f"{package}-{fingerprint[:20]}")
         if os.path.isfile(os.path.join(out, "__init__.py")):
             return out
-    import shutil
+    import shutil  # deferred: start-up, as the toolchain below
     import tempfile
     from pathlib import Path
 
+    # The single door from run time to the toolchain (llfsm.idl), deferred: start-up (a warm
+    # import, and any import of a shipped package, never loads the compiler or jinja2).
     from ..idl.package import build_package
 
     tmp = tempfile.mkdtemp(prefix=f".{package}-", dir=cache)
     try:
-        build_package(Path(package_dir), Path(tmp), fingerprint)
+        build_package(Path(folder), Path(tmp), fingerprint)
         try:
             os.replace(tmp, out)  # the whole package appears at once
         except OSError:
@@ -203,14 +136,12 @@ class InterfaceFinder:
         if not fullname.startswith(PREFIX):
             return None
         package = fullname[len(PREFIX) :]
-        if "." in package or not _is_package_name(package):
+        if "." in package or not is_package_name(package):
             return None
-        package_dir = _package_dir(package)
-        if package_dir is None:
+        folder = package_dir(package)
+        if folder is None:
             return None
-        out = compiled_package(package, package_dir)
-        from importlib.util import spec_from_file_location
-
+        out = compiled_package(package, folder)
         return spec_from_file_location(fullname, os.path.join(out, "__init__.py"), submodule_search_locations=[out])
 
     def invalidate_caches(self) -> None:
@@ -218,5 +149,6 @@ class InterfaceFinder:
 
 
 def install() -> None:
+    """Put the hook at the end of sys.meta_path (once)."""
     if not any(isinstance(f, InterfaceFinder) for f in sys.meta_path):
         sys.meta_path.append(InterfaceFinder())

@@ -17,6 +17,7 @@ from deep inside.
 
 from __future__ import annotations
 
+import importlib
 import re
 from collections.abc import Callable
 from typing import Any
@@ -332,7 +333,7 @@ def from_yaml(cls: type[Message], text: str) -> tuple[Message, list[StampSetter]
     """A new `cls` filled from VALUES (`"{linear: {x: 2.0}}"`, `"data: hello"`; empty means
     defaults), and the setters of the stamps VALUES asked to be `now` (a header `auto`), which
     the caller calls with (sec, nanosec) each time it sends the message."""
-    import yaml
+    import yaml  # deferred: start-up (`--echo` prints messages without PyYAML; only VALUES need it)
 
     try:
         data = yaml.safe_load(text) if text.strip() else {}
@@ -360,7 +361,7 @@ def set_fields(msg: Message, values: dict[Any, Any], path: str = "", stamps: lis
         name = str(key)
         where = f"{path}{name}"
         if name not in fields:
-            import difflib
+            import difflib  # deferred: start-up (only a mistake looks for a close name)
 
             close = difflib.get_close_matches(name, list(fields), n=1)
             hint = f"; did you mean '{close[0]}'?" if close else f" (its fields: {', '.join(fields) or 'none'})"
@@ -375,8 +376,6 @@ def set_fields(msg: Message, values: dict[Any, Any], path: str = "", stamps: lis
 
 
 def _message_class(ros_type: str) -> type[Message]:
-    import importlib
-
     pkg, kind, name = ros_type.split("/")
     return getattr(importlib.import_module(f"llfsm.msgs.{pkg}.{kind}"), name)
 
@@ -394,10 +393,12 @@ def _set(msg: Message, name: str, ros_type: str, value: Any, where: str, stamps:
             return
         sub = getattr(msg, name)
         if value == "auto" and element == "std_msgs/msg/Header":
-            stamps is not None and stamps.append(_stamp_setter(sub.stamp))
+            if stamps is not None:
+                stamps.append(_stamp_setter(sub.stamp))
             return
         if value == "now" and element == "builtin_interfaces/msg/Time":
-            stamps is not None and stamps.append(_stamp_setter(sub))
+            if stamps is not None:
+                stamps.append(_stamp_setter(sub))
             return
         if not isinstance(value, dict):
             raise ValuesError(f"{where}: {element} takes a mapping of its fields, not {value!r}")

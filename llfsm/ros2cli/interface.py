@@ -3,8 +3,7 @@ accepts) to llfsm's message and service classes, which every verb that takes a T
 web view) reads it through.
 
 Built-in packages are the generated modules under llfsm/msgs/; their definitions are the files
-in llfsm/msgs/_interfaces/ (the standard ones, std_msgs, geometry_msgs and builtin_interfaces,
-in _interfaces/_standard/: ROS 2 Humble's files, kept for their text and comments).  A user's
+in llfsm/msgs/_interfaces/ they are generated from (ROS 2's own, with their comments).  A user's
 packages are found as `llfsm run` finds them: the interface search path of llfsm.msgs, to which
 the commands add the working directory and its parents (where a machine's packages sit).
 """
@@ -22,7 +21,6 @@ from . import CliError
 
 _MSGS_DIR = Path(__file__).resolve().parent.parent / "msgs"
 _DEFINITIONS = _MSGS_DIR / "_interfaces"
-_STANDARD = _DEFINITIONS / "_standard"
 _PACKAGE = re.compile(r"^(?!.*__)(?!.*_$)[a-z][a-z0-9_]*$")
 _NAME = re.compile(r"^[A-Z][A-Za-z0-9]*$")
 KINDS = ("msg", "srv")
@@ -74,10 +72,9 @@ def known_types(kind: str) -> list[str]:
     out = []
     builtin = _builtin_packages()
     for pkg in builtin:
-        for base in (_DEFINITIONS / pkg, _STANDARD / pkg):
-            folder = base / kind
-            if folder.is_dir():
-                out += [f"{pkg}/{kind}/{p.stem}" for p in sorted(folder.glob(f"*.{kind}"))]
+        folder = _DEFINITIONS / pkg / kind
+        if folder.is_dir():
+            out += [f"{pkg}/{kind}/{p.stem}" for p in sorted(folder.glob(f"*.{kind}"))]
     for pkg, d in _user_packages().items():
         if pkg not in builtin and (d / kind).is_dir():
             out += [f"{pkg}/{kind}/{p.stem}" for p in sorted((d / kind).glob(f"*.{kind}")) if _NAME.match(p.stem)]
@@ -138,7 +135,7 @@ def service_class(text: str) -> type[Service]:
 def definition_file(pkg: str, kind: str, name: str) -> Path | None:
     """The .msg/.srv file that defines the type, or None."""
     if pkg in _builtin_packages():
-        folders = [_DEFINITIONS / pkg / kind, _STANDARD / pkg / kind]
+        folders = [_DEFINITIONS / pkg / kind]
     else:
         d = find_package(pkg)
         folders = [] if d is None else [d / kind]
@@ -151,8 +148,9 @@ def definition_file(pkg: str, kind: str, name: str) -> Path | None:
 
 def _nested_types(path: Path, pkg: str, kind: str, name: str, text: str) -> dict[int, str]:
     """Line number -> the message type its field holds, for the lines that hold a message."""
-    # deferred: start-up (the toolchain loads jinja2; the web view reads TYPEs through this module)
-    from ..idl.package import InterfaceError, parse_message, parse_service
+    # deferred: start-up (only `interface show` parses; resolving a TYPE never does)
+    from ..idl.parser import parse_message, parse_service
+    from ..idl.spec import InterfaceError
 
     local = {p.stem for p in (path.parent.parent / "msg").glob("*.msg")}
     try:
@@ -168,9 +166,9 @@ def _nested_types(path: Path, pkg: str, kind: str, name: str, text: str) -> dict
 
 def _content(line: str) -> str:
     """The line without its comment, stripped ('' for a blank or comment-only line)."""
-    from ..idl.package import _strip_comment  # deferred: start-up (as in _nested_types)
+    from ..idl.parser import strip_comment  # deferred: start-up, as in _nested_types
 
-    return _strip_comment(line).strip()
+    return strip_comment(line).strip()
 
 
 def show(text: str, *, comments: str = "top") -> str:
