@@ -21,6 +21,8 @@ if TYPE_CHECKING:
 
     from click import Group
 
+    from ..session.options import RunOptions
+
     cli: Group
 
 __all__ = ["cli", "main"]
@@ -41,16 +43,16 @@ def main() -> None:
     if options is None:
         click_main()
     else:
-        run_guarded(lambda: run(**options))
+        run_guarded(lambda: run(options))
 
 
-def _fast_run_options(args: list[str]) -> dict[str, Any] | None:
-    """The run's keyword arguments when `args` is a run the fast path can take, else None."""
+def _fast_run_options(args: list[str]) -> RunOptions | None:
+    """The run's options when `args` is a run the fast path can take, else None."""
     if not args or args[0] != "run":
         return None
-    from .run_args import parse
+    from .run_args import run_options
 
-    return parse(args[1:])
+    return run_options(args[1:])
 
 
 def __getattr__(name: str) -> Any:

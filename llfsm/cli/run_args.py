@@ -2,6 +2,8 @@
 
 The click command (llfsm.cli.run) is built from RUN_OPTIONS, and so is `parse`, the parser of
 the start-up fast path: `llfsm run` without importing click saves a third of its start-up time.
+Both hand the run its options as one llfsm.session.options.RunOptions, whose fields are the
+table's keywords.
 `parse` accepts only what it fully understands and what click would accept the same way;
 anything else (--help, an unknown option, a value that does not convert, shell completion)
 returns None, and the caller hands the whole command line to click, which gives its usual
@@ -13,6 +15,8 @@ from __future__ import annotations
 
 import os
 import stat
+
+from ..session.options import RunOptions
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
@@ -185,6 +189,12 @@ def _convert(opt: RunOption, text: str) -> Any:
             raise _Delegate
         return text
     raise AssertionError(opt.kind)
+
+
+def run_options(args: Sequence[str], environ: Mapping[str, str] | None = None) -> RunOptions | None:
+    """The options of `llfsm run ARGS`, or None when click should handle ARGS (see `parse`)."""
+    keywords = parse(args, environ)
+    return None if keywords is None else RunOptions(**keywords)
 
 
 def parse(args: Sequence[str], environ: Mapping[str, str] | None = None) -> dict[str, Any] | None:

@@ -125,7 +125,7 @@ def _node(name: str) -> Iterator[tuple[Node, Graph]]:
         transport = DdsTransport()
     except DiscoveryError as e:
         raise CliError(str(e)) from None
-    ctx.extras["transport"] = transport
+    ctx.transport = transport
     prev = activate(ctx)
     try:
         bus = bus_of(ctx)
