@@ -25,7 +25,7 @@ def web_address(text: str) -> tuple[str, int]:
         server_class()
     except WebUnavailable:
         raise UsageError(f"--web: {INSTALL_HINT}") from None
-    from ..web.server import AddressError, parse_address
+    from ..web.server import AddressError, parse_address  # deferred: optional dependency (checked above)
 
     try:
         return parse_address(text)

@@ -9,6 +9,7 @@ from typing import Any
 
 import click
 
+from ..session.options import RunOptions
 from ._common import DURATION, cli
 from .run_args import CHOICE, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
 from .run_args import DURATION as DURATION_KIND
@@ -53,7 +54,6 @@ def run(**options: Any) -> None:
     until Ctrl-C or --duration, as `ros2 run` does.  Exit status: 0 normal end, 1 an exception in
     machine code, 2 bad arguments or a machine that fails validation.
     """
-    from ..session.options import RunOptions
-    from ._run import run as run_machines
+    from ._run import run as run_machines  # deferred: start-up (the other verbs never load the run's session)
 
     run_machines(RunOptions(**options))

@@ -17,6 +17,7 @@ import os
 import stat
 
 from ..session.options import RunOptions
+from ._base import duration_ns
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
@@ -172,8 +173,6 @@ def _convert(opt: RunOption, text: str) -> Any:
         except ValueError:
             raise _Delegate from None
     if opt.kind == DURATION:
-        from ._base import duration_ns
-
         try:
             return duration_ns(text)
         except ValueError:

@@ -26,6 +26,7 @@ def view(web: str, duration: int | None) -> None:
     Suspend / Resume / Restart call /llfsm/M/suspend|resume|restart.  Discovery follows
     ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS and CYCLONEDDS_URI.
     """
+    # deferred: start-up (the other verbs never load the run's session)
     from ..session.errors import SessionError
     from ..session.options import RunOptions
     from ..session.session import Session

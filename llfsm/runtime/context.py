@@ -5,7 +5,7 @@ The bus (`llfsm.ros`) keeps its graph here rather than in module globals, so tha
 from here so that `ros.ok()` turns false on Ctrl-C exactly as rclpy's does.
 
 The bus and its transport belong to llfsm.ros (SPEC §3, §6), a layer above the runtime, so the
-context types them by the little it knows of them (`RunBus`, `RunTransport`); the bus's own
+context types them by the little it knows of them (llfsm.runtime.protocols); the bus's own
 module reads them back as what it made.
 """
 
@@ -16,29 +16,11 @@ from .clock import Clock, SimClock, WallClock
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from collections.abc import Callable
-    from typing import Any, Protocol
+    from typing import Any
 
+    from .protocols import RunBus, RunTransport
     from .scheduler import Arrangement
     from .trace import Tracer
-
-    class RunBus(Protocol):
-        """The run's bus (llfsm.ros.bus.Bus), as far as the run and its session need it."""
-
-        @property
-        def initialised(self) -> bool:
-            """True once `ros.init()` (or the command line) started it."""
-
-        def init(self) -> None: ...
-
-    class RunTransport(Protocol):
-        """The transport the run's bus is to use (llfsm.ros.transports): set before the bus is
-        made (the in-process one when None)."""
-
-        @property
-        def remote(self) -> bool:
-            """True when other processes can change what the bus sees."""
-
-        def close(self) -> None: ...
 
 
 #: A run time no run reaches: "never" for wake times and durations.
@@ -76,7 +58,7 @@ class RunContext:
         #: command line before nodes start): the machines' state topics and control services
         #: join the graph with the first node, never in a run without one.  (Any: the bus is
         #: llfsm.ros.bus.Bus, which the runtime cannot name.)
-        self.on_init: list[Callable[[Any], None]] = []
+        self.on_init: list[Callable[[Any], object]] = []
         #: The machines' nodes on the bus (llfsm.ros.control.MachineGraph, a tracer), once made.
         self.machine_graph: Tracer | None = None
         #: Named outputs (`--image`) that could not be written: the run then ends with status 1.
