@@ -18,7 +18,7 @@ SIM = {"clock": "sim"}
 
 
 def test_the_options_are_the_table_of_llfsm_run() -> None:
-    assert FIELDS == (TARGETS, *(o.dest for o in RUN_OPTIONS))
+    assert (TARGETS, *(o.dest for o in RUN_OPTIONS)) == FIELDS
 
 
 def test_the_defaults_are_those_of_a_run_with_no_option(monkeypatch: pytest.MonkeyPatch) -> None:
