@@ -10,9 +10,7 @@ from conftest import MACHINES, write_machine
 
 from llfsm.cli.run_args import RUN_OPTIONS, TARGETS, parse, run_options
 from llfsm.runtime import RunContext
-from llfsm.session.errors import MachineFailed, SessionError, UsageError
-from llfsm.session.options import FIELDS, RunOptions
-from llfsm.session.session import Session
+from llfsm.session import FIELDS, MachineFailed, RunOptions, Session, SessionError, UsageError
 
 SIM = {"clock": "sim"}
 

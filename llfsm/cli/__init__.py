@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 
     from click import Group
 
-    from ..session.options import RunOptions
+    from ..session import RunOptions
 
     cli: Group
 

@@ -1,5 +1,5 @@
 """What `llfsm run` does once its arguments are parsed: open the run's session
-(llfsm.session.session.Session) with them, and turn how it ended into messages and the exit
+(llfsm.session.Session) with them, and turn how it ended into messages and the exit
 status (SPEC §2, §5).
 
 Free of click, so that the start-up fast path (llfsm.cli.main with llfsm.cli.run_args) can run a
@@ -11,16 +11,14 @@ from __future__ import annotations
 import os
 import sys
 
-from ..session.errors import SessionError
-from ..session.session import RunOutcome, Session
+from ..session import RunOutcome, Session, SessionError
 from ._base import echo, fail
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from typing import Any, NoReturn
 
-    from ..session.options import RunOptions
-    from ..session.session import WebPage
+    from ..session import RunOptions, WebPage
 
 
 def run(options: RunOptions) -> NoReturn:

@@ -1,6 +1,6 @@
 """The web view (SPEC §10) as the run's session takes it: `llfsm run --web` serves the run's
 own machines, `llfsm view` the machines found over DDS.  The session (llfsm.session) sits a
-layer below llfsm.web, so the page is handed to it from here (llfsm.session.session.WebPage).
+layer below llfsm.web, so the page is handed to it from here (llfsm.session.WebPage).
 
 Free of click, as the fast path of `llfsm run` is; llfsm.web is imported only when a page is
 asked for (it is optional: `pip install 'llfsm[web]'`).
@@ -8,12 +8,12 @@ asked for (it is optional: `pip install 'llfsm[web]'`).
 
 from __future__ import annotations
 
-from ..session.errors import UsageError
+from ..session import UsageError
 from ._base import echo
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
-    from ..session.session import Session
+    from ..session import Session
     from ..web.server import WebServer
 
 

@@ -1,6 +1,6 @@
 """`llfsm run`: the click command, built from the table of options in llfsm.cli.run_args; what
-it does is llfsm.cli._run.run with the options as one RunOptions (llfsm.session.options), which
-the start-up fast path (llfsm.cli.main) builds too."""
+it does is llfsm.cli._run.run with the options as one llfsm.session.RunOptions, which the
+start-up fast path (llfsm.cli.main) builds too."""
 
 from __future__ import annotations
 
@@ -9,7 +9,6 @@ from typing import Any
 
 import click
 
-from ..session.options import RunOptions
 from ._common import DURATION, cli
 from .run_args import CHOICE, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
 from .run_args import DURATION as DURATION_KIND
@@ -54,6 +53,8 @@ def run(**options: Any) -> None:
     until Ctrl-C or --duration, as `ros2 run` does.  Exit status: 0 normal end, 1 an exception in
     machine code, 2 bad arguments or a machine that fails validation.
     """
-    from ._run import run as run_machines  # deferred: start-up (the other verbs never load the run's session)
+    # deferred: start-up (the other verbs never load the run's session)
+    from ..session import RunOptions
+    from ._run import run as run_machines
 
     run_machines(RunOptions(**options))

@@ -27,9 +27,7 @@ def view(web: str, duration: int | None) -> None:
     ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS and CYCLONEDDS_URI.
     """
     # deferred: start-up (the other verbs never load the run's session)
-    from ..session.errors import SessionError
-    from ..session.options import RunOptions
-    from ..session.session import Session
+    from ..session import RunOptions, Session, SessionError
     from ._run import exit_with, finish
     from ._web import GraphPage
 

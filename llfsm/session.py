@@ -1,28 +1,37 @@
-"""The session of one `llfsm run` (SPEC §2, §4-§10): everything that opens beside the machines,
-opened in one place, in one order, and closed whatever happens.
+"""The session of one `llfsm run` (SPEC §2, §4-§10): its options, everything that opens beside
+the machines, opened in one place, in one order, and closed whatever happens.
 
-Order matters, and this is it:
-1. the options are checked (`Session(...)`: before anything is loaded);
-2. the machines are loaded (a machine that fails validation is reported before anything opens);
-3. the outputs and the web address are checked (a usage error still costs nothing);
-4. the watchdog starts (llfsm.runtime.watchdog): with the machines loaded and before any of
-   the below starts a thread;
-5. the transport, the bags (a bad bag to play must fail before a bag to record is created),
-   the bus with its remaps, parameters and `--echo` readers, the `--node` nodes, and the bags'
-   taps on it (set up before any machine runs, so that turtle1 exists and no message is
-   missed); the `--trace` file and the tracer;
-6. the arrangement, the machines' state topics and control services (SPEC §8: with the bus,
-   now if it is up, else at its first `ros.init()`), the web view (SPEC §10);
-7. the run; then, whatever happened: the web view stops, the trace file and the bag are
-   closed, a transport the run never used is closed, and the watchdog ends.
+- `RunOptions`: the options of `llfsm run` as one frozen value; both parsers build it (the
+  click command, llfsm.cli.run, and the start-up fast path, llfsm.cli.run_args, from the same
+  table of options: its fields are that table's keywords).  Defaults are those of `llfsm run`
+  given no option, so a test names only what it changes:
+  `RunOptions(("hello.machine",), clock="sim", duration=2_000_000_000)`.
+- `Session`: loads the machines and opens the rest, in this order:
+  1. the options are checked (`Session(...)`: before anything is loaded);
+  2. the machines are loaded (a machine that fails validation is reported before anything opens);
+  3. the outputs and the web address are checked (a usage error still costs nothing);
+  4. the watchdog starts (llfsm.runtime.watchdog): with the machines loaded and before any of
+     the below starts a thread;
+  5. the transport, the bags (a bad bag to play must fail before a bag to record is created),
+     the bus with its remaps, parameters and `--echo` readers, the `--node` nodes, and the
+     bags' taps on it (set up before any machine runs, so that turtle1 exists and no message
+     is missed); the `--trace` file and the tracer;
+  6. the arrangement, the machines' state topics and control services (SPEC §8: with the bus,
+     now if it is up, else at its first `ros.init()`), the web view (SPEC §10);
+  7. the run; then, whatever happened: the web view stops, the trace file and the bag are
+     closed, a transport the run never used is closed, and the watchdog ends.
+- `SessionError` and its kinds: what a session raises instead of ending the process, so that a
+  test can open one, see what went wrong and carry on; llfsm.cli._run prints them and exits
+  with their status (SPEC §2: 1 for an error in machine code or a lost output, 2 for bad input),
+  byte for byte as `llfsm run` always has.
 
-Problems are raised as llfsm.session.errors (a usage error, a machine's report, a lost output),
-never by ending the process: llfsm.cli._run prints them and exits with their status.
-
-Start-up: a plain run (no bus, no bag, no page) imports none of the bus, the messages, the
-bags, the nodes or the web view: those imports sit in the steps that open them, and say so.
-The web view is a layer above the session (llfsm.web): the command line hands it in as a
-`WebPage`, so the session names no module of it.
+Start-up: one module, and plain classes rather than dataclasses (`dataclasses` imports
+`inspect`, a fifth of a warm run's start-up; bench/run.py startup measures it).  A plain run
+(no bus, no bag, no page) imports none of the bus, the messages, the bags, the nodes or the web
+view: those imports sit in the steps that open them, and say so.  The other verbs never import
+this module (the click command imports it when it runs).  The web view is a layer above the
+session (llfsm.web): the command line hands it in as a `WebPage`, so the session names no
+module of it.
 """
 
 from __future__ import annotations
@@ -30,28 +39,27 @@ from __future__ import annotations
 import os
 import sys
 
-from ..idl.paths import add_search_path
-from ..runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
-from ..runtime.context import activate
-from ..runtime.errors import passes_through, report_for
-from ..runtime.scheduler import EXIT_ERROR
-from ..runtime.watchdog import Watchdog
-from ..targets import InvalidMachine, MachineLoadError, TargetError, load
-from .errors import MachineFailed, OutputFailed, UsageError
-from .options import RunOptions
+from .idl.paths import add_search_path
+from .runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
+from .runtime.context import activate
+from .runtime.errors import passes_through, report_for
+from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE
+from .runtime.watchdog import Watchdog
+from .targets import InvalidMachine, MachineLoadError, TargetError, load
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from collections.abc import Callable
-    from typing import Any, Protocol
+    from typing import Any, NoReturn, Protocol
 
-    from ..bag import RunBags
-    from ..outputs import StreamedOutput
-    from ..ros.bus import Bus
-    from ..ros.transports.base import Transport
-    from ..runtime.machine import Machine
-    from ..runtime.scheduler import RunResult
-    from ..sim.world import TurtleWorld
+    from .bag import RunBags
+    from .outputs import StreamedOutput
+    from .ros.bus import Bus
+    from .ros.transports.base import Transport
+    from .runtime.errors import ErrorReport
+    from .runtime.machine import Machine
+    from .runtime.scheduler import RunResult
+    from .sim.world import TurtleWorld
 
     class Stoppable(Protocol):
         def stop(self) -> None: ...
@@ -73,6 +81,170 @@ if TYPE_CHECKING:
             """Start serving on a thread, and tell the user where; UsageError if it cannot."""
 
 
+# -- the options ---------------------------------------------------------------------------------
+#: The targets, then the options in the order `llfsm run --help` lists them.
+FIELDS = (
+    "targets",
+    "verbose",
+    "trace_file",
+    "clock",
+    "period",
+    "idle",
+    "duration",
+    "grace",
+    "suspended",
+    "keep_accepting",
+    "nodes",
+    "remaps",
+    "params",
+    "echoes",
+    "image",
+    "view",
+    "introspect",
+    "web",
+    "transport",
+    "record",
+    "record_topics",
+    "storage",
+    "play",
+    "play_topics",
+    "play_rate",
+    "native",
+)
+
+
+class RunOptions:
+    """What `llfsm run` was asked to do: the machines, the clock, and what opens beside them
+    (transport, nodes, bags, web view).  Immutable: the session reads it, never changes it."""
+
+    __slots__ = FIELDS
+
+    targets: tuple[str, ...]
+    verbose: bool
+    trace_file: str | None
+    clock: str  # wall | sim
+    period: int | None  # ns
+    idle: int  # ns
+    duration: int | None  # ns
+    grace: int  # ns
+    suspended: tuple[str, ...]
+    keep_accepting: bool
+    nodes: tuple[str, ...]
+    remaps: tuple[str, ...]
+    params: tuple[str, ...]
+    echoes: tuple[str, ...]
+    image: str | None
+    view: bool
+    introspect: bool
+    web: str | None
+    transport: str  # inproc | dds
+    record: str | None
+    record_topics: tuple[str, ...]
+    storage: str  # mcap | sqlite3
+    play: str | None
+    play_topics: tuple[str, ...]
+    play_rate: float
+    native: bool
+
+    def __init__(
+        self,
+        targets: tuple[str, ...] = (),
+        *,
+        verbose: bool = False,
+        trace_file: str | None = None,
+        clock: str = "wall",
+        period: int | None = None,
+        idle: int = 10_000_000,
+        duration: int | None = None,
+        grace: int = 1_000_000_000,
+        suspended: tuple[str, ...] = (),
+        keep_accepting: bool = False,
+        nodes: tuple[str, ...] = (),
+        remaps: tuple[str, ...] = (),
+        params: tuple[str, ...] = (),
+        echoes: tuple[str, ...] = (),
+        image: str | None = None,
+        view: bool = False,
+        introspect: bool = False,
+        web: str | None = None,
+        transport: str = "inproc",
+        record: str | None = None,
+        record_topics: tuple[str, ...] = (),
+        storage: str = "mcap",
+        play: str | None = None,
+        play_topics: tuple[str, ...] = (),
+        play_rate: float = 1.0,
+        native: bool = False,
+    ) -> None:
+        given = locals()  # every parameter by name: one loop instead of 26 assignments
+        for name in FIELDS:
+            object.__setattr__(self, name, given[name])
+
+    def replace(self, **changes: Any) -> RunOptions:
+        """A copy with some options changed (as dataclasses.replace)."""
+        return RunOptions(**{**self.as_dict(), **changes})
+
+    def as_dict(self) -> dict[str, Any]:
+        """The options as the keywords they were given with."""
+        return {name: getattr(self, name) for name in FIELDS}
+
+    def __setattr__(self, name: str, value: object) -> NoReturn:
+        raise AttributeError(f"RunOptions is frozen: cannot set {name}")
+
+    def __delattr__(self, name: str) -> NoReturn:
+        raise AttributeError(f"RunOptions is frozen: cannot delete {name}")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, RunOptions):
+            return NotImplemented
+        return self.as_dict() == other.as_dict()
+
+    def __hash__(self) -> int:
+        return hash(tuple(self.as_dict().values()))
+
+    def __repr__(self) -> str:
+        fields = ", ".join(f"{name}={value!r}" for name, value in self.as_dict().items())
+        return f"RunOptions({fields})"
+
+
+# -- what goes wrong ------------------------------------------------------------------------------
+class SessionError(Exception):
+    """What to print, in order: `details` as is (a machine's diagnostics or error report, each
+    line ending in a newline), then `message` on a line of its own after `llfsm: ` (when there
+    is one); and the exit status."""
+
+    status = EXIT_USAGE
+
+    def __init__(self, message: str = "", *, details: str = "") -> None:
+        super().__init__(message or details)
+        self.message = message
+        self.details = details
+
+
+class UsageError(SessionError):
+    """Bad input: an option, a machine that fails validation, a node or bag that cannot open."""
+
+    status = EXIT_USAGE
+
+
+class OutputFailed(SessionError):
+    """A file the user named for output cannot be written (`--trace`): the run would lose it."""
+
+    status = EXIT_ERROR
+
+
+class MachineFailed(SessionError):
+    """Machine code raised before the run began (importing its module, a variable's initial
+    value): the report says where, as the user wrote it."""
+
+    status = EXIT_ERROR
+
+    def __init__(self, report: ErrorReport) -> None:
+        super().__init__(details=report.format())
+        self.report = report
+
+
+# -- the session ----------------------------------------------------------------------------------
 def _stderr_line(text: str) -> None:
     sys.stderr.write(text + "\n")
     sys.stderr.flush()
@@ -172,7 +344,7 @@ class Session:
             except TargetError as e:
                 raise UsageError(str(e)) from None
             except InvalidMachine as e:
-                from ..lang.diagnostics import format_text  # deferred: start-up (error path only)
+                from .lang.diagnostics import format_text  # deferred: start-up (error path only)
 
                 raise UsageError(
                     f"{t}: the machine has errors; nothing was run", details=format_text(e.diagnostics)
@@ -266,7 +438,7 @@ class Session:
     def _open_transport(self) -> Transport:
         """A missing package or a bad ROS_* variable is a usage error."""
         # deferred: start-up (the factory is only needed beside the in-process bus; dds is heavy)
-        from ..ros.transports.inproc import make
+        from .ros.transports.inproc import make
 
         try:
             return make(self.options.transport)
@@ -275,7 +447,7 @@ class Session:
 
     def _open_bags(self) -> RunBags:
         """The bag to play (read and checked now) and the bag to record (created now)."""
-        from ..bag import BagError, RunBags  # deferred: start-up (a run without bags never imports them)
+        from .bag import BagError, RunBags  # deferred: start-up (a run without bags never imports them)
 
         o = self.options
         try:
@@ -297,9 +469,9 @@ class Session:
         # deferred: start-up (a run that never uses the bus never imports it, nor the messages)
         from pathlib import Path
 
-        from ..nodes import NodeError, NodeOptions, start
-        from ..nodes.echo import echo as echo_topic
-        from ..ros import InvalidNameError, Remap, bus_of
+        from .nodes import NodeError, NodeOptions, start
+        from .nodes.echo import echo as echo_topic
+        from .ros import InvalidNameError, Remap, bus_of
 
         o = self.options
         prev = activate(ctx)
@@ -328,7 +500,7 @@ class Session:
         """`--param [NODE:]NAME:=VALUE`: overrides the nodes read when they declare a parameter.
         ValueError for one that does not parse.  Issue 21 (SPEC §12) grows this into rclpy's
         parameters: `-p NODE:NAME:=VALUE` and `--params-file FILE` are read here too."""
-        from ..ros import parse_param  # deferred: start-up (with the bus, in _open_bus)
+        from .ros import parse_param  # deferred: start-up (with the bus, in _open_bus)
 
         for text in self.options.params:
             node, name, value = parse_param(text)
@@ -336,7 +508,7 @@ class Session:
             bus.parameters[(node, name)] = value
 
     def _attach_bags(self, bags: RunBags, bus: Bus) -> None:
-        from ..bag import BagError  # deferred: start-up (loaded with the bags already)
+        from .bag import BagError  # deferred: start-up (loaded with the bags already)
 
         try:
             bags.attach(bus)
@@ -344,7 +516,7 @@ class Session:
             raise UsageError(f"--play {e}") from None
 
     def _open_trace(self, path: str) -> StreamedOutput:
-        from ..outputs import OutputError, StreamedOutput  # deferred: start-up (only with --trace)
+        from .outputs import OutputError, StreamedOutput  # deferred: start-up (only with --trace)
 
         try:
             return StreamedOutput(path, what="--trace")  # write errors kept, not raised mid-run
@@ -414,7 +586,7 @@ class Session:
 
 
 def _enable(ctx: RunContext) -> None:
-    from ..ros.control import enable  # deferred: start-up (a run that never uses the bus never imports it)
+    from .ros.control import enable  # deferred: start-up (a run that never uses the bus never imports it)
 
     enable(ctx)
 
