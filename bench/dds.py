@@ -43,7 +43,7 @@ def _llfsm_node(name: str):
     from llfsm.runtime.context import activate
 
     ctx = RunContext(WallClock())
-    ctx.extras["transport"] = make("dds")
+    ctx.transport = make("dds")
     activate(ctx)
     ros.init()
     return ros, ros.Node(name)
@@ -164,7 +164,7 @@ def role_idle(transport: str, seconds: float) -> None:
         os.environ.setdefault("LLFSM_CACHE_DIR", str(Path(tmp) / "cache"))
         cls = load(str(d))
         ctx = RunContext(WallClock(idle_ns=0))
-        ctx.extras["transport"] = make(transport)
+        ctx.transport = make(transport)
         bus_of(ctx)  # the bus's executor runs between rounds, as in `llfsm run`
         arr = Arrangement([cls], context=ctx)
         # the scheduler counts rounds itself (between-round hooks run only when the bus has work)

@@ -28,7 +28,7 @@ from llfsm.runtime.context import activate
 
 ctx = RunContext(WallClock())
 transport = DdsTransport(0)
-ctx.extras["transport"] = transport
+ctx.transport = transport
 activate(ctx)
 bus = bus_of(ctx)
 bus.initialised = True

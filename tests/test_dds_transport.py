@@ -38,7 +38,7 @@ class Run:
     def __init__(self) -> None:
         self.ctx = RunContext(WallClock())
         self.transport = DdsTransport(DOMAIN)
-        self.ctx.extras["transport"] = self.transport
+        self.ctx.transport = self.transport
         self.bus: Bus = bus_of(self.ctx)
         self.bus.initialised = True
 

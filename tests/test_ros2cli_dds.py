@@ -203,7 +203,7 @@ CLASH = textwrap.dedent(
     from llfsm.ros.transports.dds import DdsTransport
     from llfsm.runtime.context import RunContext, activate
     from llfsm.msgs.std_msgs.msg import String, Float64
-    ctx = RunContext(); ctx.extras["transport"] = DdsTransport(); activate(ctx)
+    ctx = RunContext(); ctx.transport = DdsTransport(); activate(ctx)
     ros.init()
     node = ros.Node(sys.argv[1])
     cls = String if sys.argv[1] == "text" else Float64
@@ -275,7 +275,7 @@ STUCK_SERVER = textwrap.dedent(
     from llfsm.runtime.context import RunContext, activate
     from llfsm.msgs.std_srvs.srv import Trigger
     transport = DdsTransport()
-    ctx = RunContext(); ctx.extras["transport"] = transport; activate(ctx)
+    ctx = RunContext(); ctx.transport = transport; activate(ctx)
     ros.init()
     node = ros.Node("stuck")
 
@@ -365,7 +365,7 @@ LATE_TALKER = textwrap.dedent(
     from llfsm.ros.transports.dds import DdsTransport
     from llfsm.runtime.context import RunContext, activate
     from llfsm.msgs.std_msgs.msg import String
-    ctx = RunContext(); ctx.extras["transport"] = DdsTransport(); activate(ctx)
+    ctx = RunContext(); ctx.transport = DdsTransport(); activate(ctx)
     ros.init()
     node = ros.Node("late_talker")
     pub = node.create_publisher(String, "/late", 10)

@@ -41,7 +41,7 @@ class _Session:
         except (ImportError, ValueError) as e:
             raise BagError(str(e)) from None
         self.ctx = RunContext(WallClock())
-        self.ctx.extras["transport"] = transport
+        self.ctx.transport = transport
         self.bus: Bus = bus_of(self.ctx)
         self.bus.initialised = True
         self.stopped = False

@@ -21,6 +21,8 @@ if TYPE_CHECKING:
 
     from click import Group
 
+    from ..session import RunOptions
+
     cli: Group
 
 __all__ = ["cli", "main"]
@@ -31,6 +33,7 @@ def main() -> None:
     args = sys.argv[1:]
     try:
         options = _fast_run_options(args)
+        # deferred: start-up (a run on the fast path never imports click; other verbs never the run)
         if options is None:
             from ._click import main as click_main
         else:
@@ -41,21 +44,21 @@ def main() -> None:
     if options is None:
         click_main()
     else:
-        run_guarded(lambda: run(**options))
+        run_guarded(lambda: run(options))
 
 
-def _fast_run_options(args: list[str]) -> dict[str, Any] | None:
-    """The run's keyword arguments when `args` is a run the fast path can take, else None."""
+def _fast_run_options(args: list[str]) -> RunOptions | None:
+    """The run's options when `args` is a run the fast path can take, else None."""
     if not args or args[0] != "run":
         return None
-    from .run_args import parse
+    from .run_args import run_options  # deferred: start-up (only `llfsm run` reads the table of options)
 
-    return parse(args[1:])
+    return run_options(args[1:])
 
 
 def __getattr__(name: str) -> Any:
     if name == "cli":
-        from ._click import cli
+        from ._click import cli  # deferred: start-up (click on first use)
 
         return cli
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -39,7 +39,7 @@ def fail(message: str, status: int = EXIT_USAGE) -> NoReturn:
 def duration_ns(text: str) -> int:
     """Seconds (`0.5`) or a number with a unit (`500ms`, `2s`), as nanoseconds; ValueError with
     the message to show when the text is not a duration, or one longer than 100 years."""
-    from ..runtime.clock import parse_duration
+    from ..runtime.clock import parse_duration  # deferred: start-up (llfsm.runtime loads the scheduler)
 
     try:
         ns = parse_duration(text)

@@ -1,5 +1,6 @@
 """`llfsm run`: the click command, built from the table of options in llfsm.cli.run_args; what
-it does is llfsm.cli._run.run, which the start-up fast path (llfsm.cli.main) also calls."""
+it does is llfsm.cli._run.run with the options as one llfsm.session.RunOptions, which the
+start-up fast path (llfsm.cli.main) builds too."""
 
 from __future__ import annotations
 
@@ -52,6 +53,8 @@ def run(**options: Any) -> None:
     until Ctrl-C or --duration, as `ros2 run` does.  Exit status: 0 normal end, 1 an exception in
     machine code, 2 bad arguments or a machine that fails validation.
     """
+    # deferred: start-up (the other verbs never load the run's session)
+    from ..session import RunOptions
     from ._run import run as run_machines
 
-    run_machines(**options)
+    run_machines(RunOptions(**options))

@@ -2,6 +2,8 @@
 
 The click command (llfsm.cli.run) is built from RUN_OPTIONS, and so is `parse`, the parser of
 the start-up fast path: `llfsm run` without importing click saves a third of its start-up time.
+Both hand the run its options as one llfsm.session.RunOptions, whose fields are the table's
+keywords.
 `parse` accepts only what it fully understands and what click would accept the same way;
 anything else (--help, an unknown option, a value that does not convert, shell completion)
 returns None, and the caller hands the whole command line to click, which gives its usual
@@ -14,10 +16,14 @@ from __future__ import annotations
 import os
 import stat
 
+from ._base import duration_ns
+
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
     from typing import Any
+
+    from ..session import RunOptions
 
 #: Kinds of option: how the value is converted (click: is_flag, str, click.Path(dir_okay=False),
 #: click.Choice, Duration, float).
@@ -168,8 +174,6 @@ def _convert(opt: RunOption, text: str) -> Any:
         except ValueError:
             raise _Delegate from None
     if opt.kind == DURATION:
-        from ._base import duration_ns
-
         try:
             return duration_ns(text)
         except ValueError:
@@ -185,6 +189,16 @@ def _convert(opt: RunOption, text: str) -> Any:
             raise _Delegate
         return text
     raise AssertionError(opt.kind)
+
+
+def run_options(args: Sequence[str], environ: Mapping[str, str] | None = None) -> RunOptions | None:
+    """The options of `llfsm run ARGS`, or None when click should handle ARGS (see `parse`)."""
+    keywords = parse(args, environ)
+    if keywords is None:
+        return None
+    from ..session import RunOptions  # deferred: start-up (the click command reads this table for every verb)
+
+    return RunOptions(**keywords)
 
 
 def parse(args: Sequence[str], environ: Mapping[str, str] | None = None) -> dict[str, Any] | None:

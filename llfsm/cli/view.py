@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import sys
-
 import click
 
+from ._base import echo
 from ._common import DURATION, cli
 
 
@@ -27,29 +26,15 @@ def view(web: str, duration: int | None) -> None:
     Suspend / Resume / Restart call /llfsm/M/suspend|resume|restart.  Discovery follows
     ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS and CYCLONEDDS_URI.
     """
-    from ..runtime import Arrangement, RunContext, WallClock, signals_handled
-    from ..runtime.context import activate
-    from ._run import _open_transport, _serve_web, _web_address
+    # deferred: start-up (the other verbs never load the run's session)
+    from ..session import RunOptions, Session, SessionError
+    from ._run import exit_with, finish
+    from ._web import GraphPage
 
-    address = _web_address(web)
-    ctx = RunContext(WallClock(10_000_000, None))
-    ctx.extras["transport"] = _open_transport("dds")
-    from ..ros.bus import bus_of
-    from ..web.machines import GraphSource
-
-    prev = activate(ctx)
+    # a run of its own with no machine: the DDS transport, its bus, and the page of the graph
+    options = RunOptions(transport="dds", duration=duration, web=web)
     try:
-        bus = bus_of(ctx)
-        bus.init()
-        source = GraphSource(bus)
-    finally:
-        activate(prev)
-    arr = Arrangement([], context=ctx)
-    arr.serve_forever = True  # no machines of its own: it runs until Ctrl-C or --duration
-    server = _serve_web(source, address)
-    try:
-        with signals_handled(arr):
-            result = arr.run(duration, 0)
-    finally:
-        server.stop()
-    sys.exit(result.status)
+        outcome = Session(options, web=GraphPage(web), say=echo).run()
+    except SessionError as e:
+        exit_with(e)
+    finish(outcome)

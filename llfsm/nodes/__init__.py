@@ -7,7 +7,7 @@ nodes alone (no machine) runs until Ctrl-C, SIGTERM or --duration, as `ros2 run`
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..runtime.context import RunContext
@@ -26,7 +26,6 @@ class NodeOptions:
 
     image: Path | None = None
     view: bool = False
-    extras: dict[str, object] = field(default_factory=dict)
 
 
 class NodeError(Exception):
@@ -34,6 +33,8 @@ class NodeError(Exception):
 
 
 def start(name: str, ctx: RunContext, options: NodeOptions) -> object:
+    """Start the node `name` in the run of `ctx`; the node, for whoever serves it beside the run
+    (the web view draws turtlesim's world)."""
     if name not in REGISTRY:
         raise NodeError(f"--node {name}: no such node (available: {', '.join(sorted(REGISTRY))})")
     module = importlib.import_module(REGISTRY[name])

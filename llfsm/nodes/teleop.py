@@ -89,7 +89,7 @@ class Teleop:
                     return  # one key per poll: movement follows the keys' rhythm
             key, self.pending = self.pending[0], self.pending[1:]
             if key in "qQ":
-                arr = self.ctx.extras.get("arrangement")
+                arr = self.ctx.arrangement
                 if arr is not None:
                     arr.interrupt(0)
                 return

@@ -100,7 +100,6 @@ class Turtlesim:
         self.node.create_service(Empty, "reset", self.reset)
         self.node.create_timer(UPDATE_PERIOD, self.update)
         self.viewer: Any = None
-        ctx.extras["turtlesim"] = self  # the web view draws self.world live
         if options.view:
             try:
                 from ..sim.view import Viewer
@@ -174,7 +173,7 @@ class Turtlesim:
             render(self.world, path)
         except OSError as e:
             # `llfsm run` reports it and ends with status 1: a picture asked for and not written
-            self.ctx.extras.setdefault("output_errors", []).append(f"--image {path}: cannot write: {e.strerror or e}")
+            self.ctx.output_errors.append(f"--image {path}: cannot write: {e.strerror or e}")
 
 
 def start(ctx: RunContext, options: NodeOptions) -> Turtlesim:

@@ -20,7 +20,7 @@ import sys
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from typing import IO, TYPE_CHECKING, Any, Protocol
+from typing import IO, TYPE_CHECKING, Any, Protocol, cast
 
 from ..runtime.context import RunContext, current
 from .executor import Executor
@@ -100,7 +100,7 @@ class Bus(Executor):
         #: None: whatever sys.stderr (or sys.stdout) is when a line is logged, so that a
         #: redirection made after the bus started is honoured.
         self.log_stream: IO[str] | None = None
-        self.transport: Transport = ctx.extras.get("transport") or InProcess()
+        self.transport: Transport = cast("Transport | None", ctx.transport) or InProcess()
         #: The transport's poll when it can bring anything in (never for the in-process one).
         self._poll = self.transport.poll if self.transport.remote else None
         self.transport.start(self)
@@ -111,12 +111,13 @@ class Bus(Executor):
     # -- lifecycle ---------------------------------------------------------------------------
     def init(self) -> None:
         """Initialise (the first `ros.init()`, or the command line before nodes start); then
-        run the run's on-init hooks once (`ctx.extras["on_init"]`: the machines' state topics
+        run the run's on-init hooks once (`ctx.on_init`: the machines' state topics
         and control services join the graph with the first node, never in a run without one)."""
         if self.initialised:
             return
         self.initialised = True
-        for fn in self.ctx.extras.pop("on_init", ()):
+        hooks, self.ctx.on_init = self.ctx.on_init, []
+        for fn in hooks:
             fn(self)
 
     # -- topics ------------------------------------------------------------------------------
@@ -192,7 +193,7 @@ class Bus(Executor):
 def bus_of(ctx: RunContext | None = None) -> Bus:
     """The bus of the active run (made on first use)."""
     ctx = ctx if ctx is not None else current()
-    bus = ctx.extras.get("bus")
+    bus = cast("Bus | None", ctx.bus)  # the context holds what this made, typed as the runtime sees it
     if bus is None:
-        bus = ctx.extras["bus"] = Bus(ctx)
+        bus = ctx.bus = Bus(ctx)
     return bus

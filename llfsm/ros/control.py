@@ -22,7 +22,7 @@ so what the reader is handed is never stale.
 from __future__ import annotations
 
 import json
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ..msgs.std_msgs.msg import String
 from ..msgs.std_srvs.srv import Trigger
@@ -45,24 +45,24 @@ LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 def enable(ctx: RunContext) -> None:
     """Put the run's machines on the graph as soon as its bus is initialised (now, if it is).
 
-    Call once the Arrangement exists (it registers itself in `ctx.extras["arrangement"]`)."""
-    arr = ctx.extras.get("arrangement")
-    if arr is None or "machine_graph" in ctx.extras:
+    Call once the Arrangement exists (it registers itself in `ctx.arrangement`)."""
+    arr = ctx.arrangement
+    if arr is None or ctx.machine_graph is not None:
         return
-    bus = ctx.extras.get("bus")
+    bus = ctx.bus
     if bus is not None and bus.initialised:
-        attach(arr, bus)
+        attach(arr, cast("Bus", bus))
     else:
-        ctx.extras.setdefault("on_init", []).append(lambda b: attach(arr, b))
+        ctx.on_init.append(lambda b: attach(arr, b))
 
 
 def attach(arr: Arrangement, bus: Bus) -> MachineGraph:
     """Create the nodes, topics and services of every machine of `arr` on `bus` (once)."""
-    graph = arr.ctx.extras.get("machine_graph")
-    if graph is None:
+    graph = arr.ctx.machine_graph
+    if not isinstance(graph, MachineGraph):
         prev = activate(arr.ctx)
         try:
-            graph = arr.ctx.extras["machine_graph"] = MachineGraph(arr, bus)
+            graph = arr.ctx.machine_graph = MachineGraph(arr, bus)
         finally:
             activate(prev)
     return graph

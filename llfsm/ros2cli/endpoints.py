@@ -107,7 +107,7 @@ def hidden_node(name: str) -> Iterator[tuple[Node, Graph]]:
         transport = DdsTransport()
     except DiscoveryError as e:
         raise CliError(str(e)) from None
-    ctx.extras["transport"] = transport
+    ctx.transport = transport
     prev = activate(ctx)
     try:
         bus = bus_of(ctx)

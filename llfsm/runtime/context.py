@@ -3,6 +3,10 @@
 The bus (`llfsm.ros`) keeps its graph here rather than in module globals, so that every run
 (and every test) starts from a clean slate, and reads the run clock and the interrupt state
 from here so that `ros.ok()` turns false on Ctrl-C exactly as rclpy's does.
+
+The bus and its transport belong to llfsm.ros (SPEC §3, §6), a layer above the runtime, so the
+context types them by the little it knows of them (llfsm.runtime.protocols); the bus's own
+module reads them back as what it made.
 """
 
 from __future__ import annotations
@@ -13,6 +17,11 @@ TYPE_CHECKING = False  # not typing's own: importing typing would cost every run
 if TYPE_CHECKING:
     from collections.abc import Callable
     from typing import Any
+
+    from .protocols import RunBus, RunTransport
+    from .scheduler import Arrangement
+    from .trace import Tracer
+
 
 #: A run time no run reaches: "never" for wake times and durations.
 FOREVER = 1 << 62
@@ -38,8 +47,22 @@ class RunContext:
         self.wake: int = FOREVER
         #: Called once when the run ends (nodes write their pictures, close windows).
         self.at_end: list[Callable[[], None]] = []
-        #: Free slots for the bus and nodes (`bus`, `remaps`, ...).
-        self.extras: dict[str, Any] = {}
+        #: The run's arrangement (set by the Arrangement itself): nodes that end the run (teleop's
+        #: `q`) and the machines' topics on the bus (llfsm.ros.control) find it here.
+        self.arrangement: Arrangement | None = None
+        #: The transport for the bus to use when it is made; None: the in-process one.
+        self.transport: RunTransport | None = None
+        #: The run's bus, made on first use (llfsm.ros.bus.bus_of); None until then.
+        self.bus: RunBus | None = None
+        #: Called once, with the bus, when it is initialised (the first `ros.init()`, or the
+        #: command line before nodes start): the machines' state topics and control services
+        #: join the graph with the first node, never in a run without one.  (Any: the bus is
+        #: llfsm.ros.bus.Bus, which the runtime cannot name.)
+        self.on_init: list[Callable[[Any], object]] = []
+        #: The machines' nodes on the bus (llfsm.ros.control.MachineGraph, a tracer), once made.
+        self.machine_graph: Tracer | None = None
+        #: Named outputs (`--image`) that could not be written: the run then ends with status 1.
+        self.output_errors: list[str] = []
         self.round = 0
         #: Run time at which the run will end (--duration), if any: blocking waits inside
         #: machine code (spin calls) never wait past it.

@@ -83,7 +83,7 @@ class Arrangement:
     ) -> None:
         self.ctx = context if context is not None else RunContext(clock or SimClock())
         self.clock = self.ctx.clock
-        self.ctx.extras["arrangement"] = self
+        self.ctx.arrangement = self
         self.keep_accepting = keep_accepting
         self.tracer = tracer
         self.machines: list[Machine] = []

@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from ..ros.bus import Bus
     from ..ros.node import Node
     from ..runtime.scheduler import Arrangement
+    from ..sim.world import TurtleWorld
 
 #: Transitions kept for the page, per machine.
 HISTORY = 12
@@ -288,9 +289,11 @@ class Source:
 class RunSource(Source):
     """The machines, topics, services and turtle world of the run in this process."""
 
-    def __init__(self, arr: Arrangement, bus: Bus) -> None:
+    def __init__(self, arr: Arrangement, bus: Bus, world: TurtleWorld | None = None) -> None:
         super().__init__(bus, "llfsm_web")
         self.arr = arr
+        #: The turtle simulator's world (`--node turtlesim`: the run's session hands it in), drawn live.
+        self.turtle_world = world
         self.descriptions = [description(type(m)) for m in arr.machines]
         self._last: list[tuple[int, int]] = [(-1, -1)] * len(arr.machines)
         self._since: list[int] = [0] * len(arr.machines)
@@ -346,10 +349,9 @@ class RunSource(Source):
         return machines
 
     def world(self) -> str | None:
-        sim = self.ctx.extras.get("turtlesim")
-        if sim is None:
+        world = self.turtle_world
+        if world is None:
             return None
-        world = sim.world
         wall = time.monotonic()
         if self._world_svg is not None and wall - self._world_at < WORLD_PERIOD:
             return self._world_svg

@@ -1,0 +1,604 @@
+"""The session of one `llfsm run` (SPEC §2, §4-§10): its options, everything that opens beside
+the machines, opened in one place, in one order, and closed whatever happens.
+
+- `RunOptions`: the options of `llfsm run` as one frozen value; both parsers build it (the
+  click command, llfsm.cli.run, and the start-up fast path, llfsm.cli.run_args, from the same
+  table of options: its fields are that table's keywords).  Defaults are those of `llfsm run`
+  given no option, so a test names only what it changes:
+  `RunOptions(("hello.machine",), clock="sim", duration=2_000_000_000)`.
+- `Session`: loads the machines and opens the rest, in this order:
+  1. the options are checked (`Session(...)`: before anything is loaded);
+  2. the machines are loaded (a machine that fails validation is reported before anything opens);
+  3. the outputs and the web address are checked (a usage error still costs nothing);
+  4. the watchdog starts (llfsm.runtime.watchdog): with the machines loaded and before any of
+     the below starts a thread;
+  5. the transport, the bags (a bad bag to play must fail before a bag to record is created),
+     the bus with its remaps, parameters and `--echo` readers, the `--node` nodes, and the
+     bags' taps on it (set up before any machine runs, so that turtle1 exists and no message
+     is missed); the `--trace` file and the tracer;
+  6. the arrangement, the machines' state topics and control services (SPEC §8: with the bus,
+     now if it is up, else at its first `ros.init()`), the web view (SPEC §10);
+  7. the run; then, whatever happened: the web view stops, the trace file and the bag are
+     closed, a transport the run never used is closed, and the watchdog ends.
+- `SessionError` and its kinds: what a session raises instead of ending the process, so that a
+  test can open one, see what went wrong and carry on; llfsm.cli._run prints them and exits
+  with their status (SPEC §2: 1 for an error in machine code or a lost output, 2 for bad input),
+  byte for byte as `llfsm run` always has.
+
+Start-up: one module, and plain classes rather than dataclasses (`dataclasses` imports
+`inspect`, a fifth of a warm run's start-up; bench/run.py startup measures it).  A plain run
+(no bus, no bag, no page) imports none of the bus, the messages, the bags, the nodes or the web
+view: those imports sit in the steps that open them, and say so.  The other verbs never import
+this module (the click command imports it when it runs).  The web view is a layer above the
+session (llfsm.web): the command line hands it in as a `WebPage`, so the session names no
+module of it.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from .interface_path import add_search_path
+from .runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
+from .runtime.context import activate
+from .runtime.errors import passes_through, report_for
+from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE
+from .runtime.watchdog import Watchdog
+from .targets import InvalidMachine, MachineLoadError, TargetError, load
+
+TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import Any, NoReturn, Protocol
+
+    from .bag import RunBags
+    from .outputs import StreamedOutput
+    from .ros.bus import Bus
+    from .ros.transports.base import Transport
+    from .runtime.errors import ErrorReport
+    from .runtime.machine import Machine
+    from .runtime.scheduler import RunResult
+    from .sim.world import TurtleWorld
+
+    class Stoppable(Protocol):
+        def stop(self) -> None: ...
+
+    class WebPage(Protocol):
+        """The web view of a session (SPEC §10), as llfsm.cli hands it in: llfsm.web is a layer
+        above the session, so the session knows the page by this alone."""
+
+        #: Worth running with no machine and no node (`llfsm view`: the page of the DDS graph).
+        runs_alone: bool
+
+        def check(self) -> None:
+            """Raise UsageError if the page cannot be served (no aiohttp, a bad address)."""
+
+        def source(self, session: Session) -> object:
+            """What the page shows; called with the run's context active and its bus up."""
+
+        def serve(self, source: object) -> Stoppable:
+            """Start serving on a thread, and tell the user where; UsageError if it cannot."""
+
+
+# -- the options ---------------------------------------------------------------------------------
+#: The targets, then the options in the order `llfsm run --help` lists them.
+FIELDS = (
+    "targets",
+    "verbose",
+    "trace_file",
+    "clock",
+    "period",
+    "idle",
+    "duration",
+    "grace",
+    "suspended",
+    "keep_accepting",
+    "nodes",
+    "remaps",
+    "params",
+    "echoes",
+    "image",
+    "view",
+    "introspect",
+    "web",
+    "transport",
+    "record",
+    "record_topics",
+    "storage",
+    "play",
+    "play_topics",
+    "play_rate",
+    "native",
+)
+
+
+class RunOptions:
+    """What `llfsm run` was asked to do: the machines, the clock, and what opens beside them
+    (transport, nodes, bags, web view).  Immutable: the session reads it, never changes it."""
+
+    __slots__ = FIELDS
+
+    targets: tuple[str, ...]
+    verbose: bool
+    trace_file: str | None
+    clock: str  # wall | sim
+    period: int | None  # ns
+    idle: int  # ns
+    duration: int | None  # ns
+    grace: int  # ns
+    suspended: tuple[str, ...]
+    keep_accepting: bool
+    nodes: tuple[str, ...]
+    remaps: tuple[str, ...]
+    params: tuple[str, ...]
+    echoes: tuple[str, ...]
+    image: str | None
+    view: bool
+    introspect: bool
+    web: str | None
+    transport: str  # inproc | dds
+    record: str | None
+    record_topics: tuple[str, ...]
+    storage: str  # mcap | sqlite3
+    play: str | None
+    play_topics: tuple[str, ...]
+    play_rate: float
+    native: bool
+
+    def __init__(
+        self,
+        targets: tuple[str, ...] = (),
+        *,
+        verbose: bool = False,
+        trace_file: str | None = None,
+        clock: str = "wall",
+        period: int | None = None,
+        idle: int = 10_000_000,
+        duration: int | None = None,
+        grace: int = 1_000_000_000,
+        suspended: tuple[str, ...] = (),
+        keep_accepting: bool = False,
+        nodes: tuple[str, ...] = (),
+        remaps: tuple[str, ...] = (),
+        params: tuple[str, ...] = (),
+        echoes: tuple[str, ...] = (),
+        image: str | None = None,
+        view: bool = False,
+        introspect: bool = False,
+        web: str | None = None,
+        transport: str = "inproc",
+        record: str | None = None,
+        record_topics: tuple[str, ...] = (),
+        storage: str = "mcap",
+        play: str | None = None,
+        play_topics: tuple[str, ...] = (),
+        play_rate: float = 1.0,
+        native: bool = False,
+    ) -> None:
+        given = locals()  # every parameter by name: one loop instead of 26 assignments
+        for name in FIELDS:
+            object.__setattr__(self, name, given[name])
+
+    def replace(self, **changes: Any) -> RunOptions:
+        """A copy with some options changed (as dataclasses.replace)."""
+        return RunOptions(**{**self.as_dict(), **changes})
+
+    def as_dict(self) -> dict[str, Any]:
+        """The options as the keywords they were given with."""
+        return {name: getattr(self, name) for name in FIELDS}
+
+    def __setattr__(self, name: str, value: object) -> NoReturn:
+        raise AttributeError(f"RunOptions is frozen: cannot set {name}")
+
+    def __delattr__(self, name: str) -> NoReturn:
+        raise AttributeError(f"RunOptions is frozen: cannot delete {name}")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, RunOptions):
+            return NotImplemented
+        return self.as_dict() == other.as_dict()
+
+    def __hash__(self) -> int:
+        return hash(tuple(self.as_dict().values()))
+
+    def __repr__(self) -> str:
+        fields = ", ".join(f"{name}={value!r}" for name, value in self.as_dict().items())
+        return f"RunOptions({fields})"
+
+
+# -- what goes wrong ------------------------------------------------------------------------------
+class SessionError(Exception):
+    """What to print, in order: `details` as is (a machine's diagnostics or error report, each
+    line ending in a newline), then `message` on a line of its own after `llfsm: ` (when there
+    is one); and the exit status."""
+
+    status = EXIT_USAGE
+
+    def __init__(self, message: str = "", *, details: str = "") -> None:
+        super().__init__(message or details)
+        self.message = message
+        self.details = details
+
+
+class UsageError(SessionError):
+    """Bad input: an option, a machine that fails validation, a node or bag that cannot open."""
+
+    status = EXIT_USAGE
+
+
+class OutputFailed(SessionError):
+    """A file the user named for output cannot be written (`--trace`): the run would lose it."""
+
+    status = EXIT_ERROR
+
+
+class MachineFailed(SessionError):
+    """Machine code raised before the run began (importing its module, a variable's initial
+    value): the report says where, as the user wrote it."""
+
+    status = EXIT_ERROR
+
+    def __init__(self, report: ErrorReport) -> None:
+        super().__init__(details=report.format())
+        self.report = report
+
+
+# -- the session ----------------------------------------------------------------------------------
+def _stderr_line(text: str) -> None:
+    sys.stderr.write(text + "\n")
+    sys.stderr.flush()
+
+
+class RunOutcome:
+    """How a session ended, for the command line to report: the run's result, the outputs that
+    could not be written whole, and the graph (`--introspect`).  (A plain class: dataclasses
+    would cost a run's start-up.)"""
+
+    def __init__(
+        self,
+        result: RunResult,
+        failed_outputs: list[str],
+        bag_error: str | None = None,
+        graph: dict[str, Any] | None = None,
+    ) -> None:
+        self.result = result
+        #: Messages about named outputs (`--trace`, `--image`) not written whole.
+        self.failed_outputs = failed_outputs
+        #: Why the recorded bag failed (it was reported when it happened), or None.
+        self.bag_error = bag_error
+        #: The bus's nodes, topics and services after the run, when `--introspect` asked.
+        self.graph = graph
+
+    @property
+    def status(self) -> int:
+        """The exit status: the run's own, or 1 when it succeeded but lost an output (a named
+        output that could not be written whole is an error, never a silent success)."""
+        if self.result.status or not (self.failed_outputs or self.bag_error):
+            return self.result.status
+        return EXIT_ERROR
+
+
+class Session:
+    """One run's machines and everything opened beside them.  Attributes are None (or empty)
+    until `run` opens them, and stay None when the options do not ask for them."""
+
+    def __init__(
+        self,
+        options: RunOptions,
+        *,
+        web: WebPage | None = None,
+        say: Callable[[str], None] | None = None,
+    ) -> None:
+        """Check the options alone (UsageError); nothing is loaded or opened yet."""
+        self.options = options
+        #: The page `--web` serves (given by the command line, which reads options.web).
+        self.web = web
+        #: Writes a line for the user while the run goes on (stderr unless told otherwise).
+        self.say: Callable[[str], None] = say if say is not None else _stderr_line
+        self.classes: list[type[Machine]] = []
+        self.ctx: RunContext | None = None
+        self.watchdog: Watchdog | None = None
+        self.transport: Transport | None = None
+        self.bags: RunBags | None = None
+        self.bus: Bus | None = None
+        #: `--param` overrides, (node or None, name) -> value, as the bus's nodes read them.
+        self.parameters: dict[tuple[str | None, str], Any] = {}
+        #: The `--node` nodes by name, in the order they started.
+        self.nodes: dict[str, object] = {}
+        self.trace_out: StreamedOutput | None = None
+        self.tracer: Tracer | None = None
+        self.arrangement: Arrangement | None = None
+        self.web_server: Stoppable | None = None
+        self._check_options()
+
+    # -- checks before anything opens ---------------------------------------------------------------
+    def _check_options(self) -> None:
+        o = self.options
+        if o.period is not None and o.period <= 0:
+            raise UsageError("--period must be greater than 0")
+        if not o.targets and not o.nodes and not o.echoes and not (self.web is not None and self.web.runs_alone):
+            raise UsageError(
+                "nothing to run: give a machine (TARGET), or --node NAME / --echo TOPIC to run on their own"
+            )
+        if o.transport == "dds" and o.clock == "sim":
+            raise UsageError(
+                "--clock sim cannot be used with --transport dds: DDS peers live on the wall clock (their messages "
+                "come in real time), so simulated time would neither keep pace with them nor be reproducible"
+            )
+
+    def _load(self) -> None:
+        """The machines' classes, in command-line order; user interfaces (PKG/msg/*.msg) beside
+        or above the machines import too."""
+        for t in self.options.targets:
+            folder = os.path.realpath(t)  # realpath: no error on a loop
+            for _ in range(4):
+                parent = os.path.dirname(folder)
+                if parent == folder:
+                    break
+                folder = parent
+                add_search_path(folder)
+        for t in self.options.targets:
+            try:
+                self.classes.append(load(t))
+            except TargetError as e:
+                raise UsageError(str(e)) from None
+            except InvalidMachine as e:
+                from .lang.diagnostics import format_text  # deferred: start-up (error path only)
+
+                raise UsageError(
+                    f"{t}: the machine has errors; nothing was run", details=format_text(e.diagnostics)
+                ) from None
+            except MachineLoadError as e:
+                raise MachineFailed(e.report) from None
+
+    def _check_outputs(self) -> None:
+        o = self.options
+        if o.image and not o.image.lower().endswith((".png", ".svg")):
+            raise UsageError(f"--image {o.image}: the picture is written as .png or .svg")
+        if (o.image or o.view) and "turtlesim" not in o.nodes:
+            raise UsageError("--image and --view draw the turtle simulator: add --node turtlesim")
+        if o.view and (why := _no_display()) is not None:
+            raise UsageError(why)
+        if self.web is not None:
+            self.web.check()
+
+    # -- the run --------------------------------------------------------------------------------
+    def run(self) -> RunOutcome:
+        """Load, open, run and close (see the module's docstring for the order).  Returns how
+        the run ended; raises SessionError when it could not start."""
+        o = self.options
+        self._load()
+        self.ctx = RunContext(SimClock(o.period or 1_000_000) if o.clock == "sim" else WallClock(o.idle, o.period))
+        self._check_outputs()
+        # the watchdog ends a run stuck in a C call (llfsm.runtime.watchdog): started here, with
+        # the machines loaded and before the transport, the bus, the nodes or the page start a thread
+        self.watchdog = Watchdog.start(o.grace if self.classes else 0, self.classes)
+        try:
+            return self._run(self.ctx)
+        finally:
+            if self.watchdog is not None:
+                self.watchdog.close()  # it ends with the run, never after it
+
+    def _run(self, ctx: RunContext) -> RunOutcome:
+        o = self.options
+        ran = False
+        failed_outputs: list[str] = []
+        bag_error: str | None = None
+        try:
+            if o.transport != "inproc":
+                self.transport = self._open_transport()
+                ctx.transport = self.transport
+            if o.record or o.play:
+                self.bags = self._open_bags()
+            if self.uses_bus:
+                self.bus = self._open_bus(ctx)
+                if self.bags is not None:
+                    self._attach_bags(self.bags, self.bus)
+            if o.trace_file:
+                self.trace_out = self._open_trace(o.trace_file)
+            if o.verbose or self.trace_out is not None:
+                # a StreamedOutput writes text as a file does (IO[str] is more than the tracer uses)
+                self.tracer = Tracer(verbose=sys.stderr if o.verbose else None, jsonl=self.trace_out)  # type: ignore[arg-type]
+            arr = self.arrangement = self._arrange(ctx)
+            self._machines_on_graph(ctx)
+            grace = o.grace
+            if self.classes:
+                arr.on_interrupt = lambda grace: self.say(
+                    f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish "
+                    "(interrupt again to stop now)",
+                )
+            else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
+                arr.serve_forever = True
+                grace = 0
+            if o.transport != "inproc":  # other processes can resume machines (SPEC 8): all suspended is no end
+                arr.end_when_suspended = False
+            if self.web is not None and self.bus is not None:
+                self.web_server = self._open_web(self.web, ctx, self.bus, arr)
+            try:
+                with signals_handled(arr):
+                    ran = True  # from here the run's end hooks (ctx.at_end) close what the nodes and bus opened
+                    result = arr.run(o.duration, grace)
+            finally:
+                if self.web_server is not None:
+                    self.web_server.stop()
+        finally:
+            # a named output that could not be written whole is an error, never a silent success
+            failed_outputs += ctx.output_errors
+            if self.trace_out is not None and (trace_error := self.trace_out.finish()) is not None:
+                failed_outputs.append(trace_error)
+            if self.bags is not None:
+                bag_error = self.bags.close()  # the bag is closed whatever happened
+            if not ran and self.transport is not None:
+                self.transport.close()  # a run that never began: peers see us leave now
+        graph = self.bus.graph() if o.introspect and self.bus is not None else None
+        return RunOutcome(result, failed_outputs, bag_error, graph)
+
+    # -- the steps ------------------------------------------------------------------------------
+    def _open_transport(self) -> Transport:
+        """A missing package or a bad ROS_* variable is a usage error."""
+        # deferred: start-up (the factory is only needed beside the in-process bus; dds is heavy)
+        from .ros.transports import make
+
+        try:
+            return make(self.options.transport)
+        except (ImportError, ValueError) as e:
+            raise UsageError(str(e)) from None
+
+    def _open_bags(self) -> RunBags:
+        """The bag to play (read and checked now) and the bag to record (created now)."""
+        from .bag import BagError, RunBags  # deferred: start-up (a run without bags never imports them)
+
+        o = self.options
+        try:
+            return RunBags(
+                o.record,
+                o.record_topics,
+                o.storage,
+                o.play,
+                o.play_topics,
+                o.play_rate,
+                report=lambda text: self.say(f"llfsm: {text}"),
+            )
+        except BagError as e:
+            raise UsageError(str(e)) from None
+
+    def _open_bus(self, ctx: RunContext) -> Bus:
+        """The bus, its remaps and parameters, the --echo readers and the --node nodes, set up
+        before any machine runs, so that turtle1 exists and no message is missed."""
+        # deferred: start-up (a run that never uses the bus never imports it, nor the messages)
+        from pathlib import Path
+
+        from .nodes import NodeError, NodeOptions, start
+        from .nodes.echo import echo as echo_topic
+        from .ros import InvalidNameError, Remap, bus_of
+
+        o = self.options
+        prev = activate(ctx)
+        try:
+            bus = self.bus = bus_of(ctx)
+            try:
+                bus.remaps = [Remap.parse(r) for r in o.remaps]
+                self._set_parameters(bus)
+                for topic in o.echoes:
+                    echo_topic(bus, topic)
+            except (InvalidNameError, ValueError) as e:
+                raise UsageError(str(e)) from None
+            if o.nodes:
+                bus.init()  # the nodes are up: ros.ok() is true from the first round
+            options = NodeOptions(image=Path(o.image) if o.image else None, view=o.view)
+            for name in dict.fromkeys(o.nodes):
+                try:
+                    self.nodes[name] = start(name, ctx, options)
+                except NodeError as e:
+                    raise UsageError(str(e)) from None
+            return bus
+        finally:
+            activate(prev)
+
+    def _set_parameters(self, bus: Bus) -> None:
+        """`--param [NODE:]NAME:=VALUE`: overrides the nodes read when they declare a parameter.
+        ValueError for one that does not parse.  Issue 21 (SPEC §12) grows this into rclpy's
+        parameters: `-p NODE:NAME:=VALUE` and `--params-file FILE` are read here too."""
+        from .ros import parse_param  # deferred: start-up (with the bus, in _open_bus)
+
+        for text in self.options.params:
+            node, name, value = parse_param(text)
+            self.parameters[(node, name)] = value
+            bus.parameters[(node, name)] = value
+
+    def _attach_bags(self, bags: RunBags, bus: Bus) -> None:
+        from .bag import BagError  # deferred: start-up (loaded with the bags already)
+
+        try:
+            bags.attach(bus)
+        except BagError as e:
+            raise UsageError(f"--play {e}") from None
+
+    def _open_trace(self, path: str) -> StreamedOutput:
+        from .outputs import OutputError, StreamedOutput  # deferred: start-up (only with --trace)
+
+        try:
+            return StreamedOutput(path, what="--trace")  # write errors kept, not raised mid-run
+        except OutputError as e:
+            raise OutputFailed(str(e)) from None
+
+    def _arrange(self, ctx: RunContext) -> Arrangement:
+        o = self.options
+        try:
+            arr = Arrangement(
+                self.classes, context=ctx, keep_accepting=o.keep_accepting, tracer=self.tracer, suspended=o.suspended
+            )
+        except ArrangementError as e:
+            raise UsageError(str(e)) from None
+        except BaseException as exc:  # a variable initialiser raised: machine code may raise anything
+            rep = None if passes_through(exc) else report_for(exc)
+            if rep is None:
+                raise
+            raise MachineFailed(rep) from None
+        arr.watchdog = self.watchdog
+        return arr
+
+    def _machines_on_graph(self, ctx: RunContext) -> None:
+        """SPEC §8: the machines' state topics and control services join the graph with the bus
+        (now if it is up, else at the first `ros.init()`)."""
+        bus = ctx.bus
+        if bus is not None and bus.initialised:
+            _enable(ctx)
+        else:
+            ctx.on_init.append(lambda bus: _enable(ctx))
+
+    def _open_web(self, web: WebPage, ctx: RunContext, bus: Bus, arr: Arrangement) -> Stoppable:
+        """--web: the page's server on its own thread, the bus up (so the machines' control
+        services exist), and a run that waits, rather than ends, when every machine is
+        suspended: the page can resume them."""
+        prev = activate(ctx)
+        try:
+            bus.init()
+            source = web.source(self)
+        finally:
+            activate(prev)
+        arr.end_when_suspended = False
+        return web.serve(source)
+
+    # -- what the session is asked for ----------------------------------------------------------------
+    @property
+    def uses_bus(self) -> bool:
+        """Whether the run opens the bus before its machines start (a machine alone gets one at its
+        first `ros.init()`, and a run that never calls it never imports the bus)."""
+        o = self.options
+        return bool(
+            o.nodes
+            or o.remaps
+            or o.params
+            or o.echoes
+            or o.introspect
+            or self.web is not None
+            or o.transport != "inproc"
+            or o.record
+            or o.play
+        )
+
+    @property
+    def world(self) -> TurtleWorld | None:
+        """The turtle simulator's world (`--node turtlesim`), for the web view to draw live."""
+        return getattr(self.nodes.get("turtlesim"), "world", None)
+
+
+def _enable(ctx: RunContext) -> None:
+    from .ros.control import enable  # deferred: start-up (a run that never uses the bus never imports it)
+
+    enable(ctx)
+
+
+def _no_display() -> str | None:
+    """Why --view cannot open a window, or None.  Without a display SDL falls back to drawing
+    off-screen, and the user would wait for a window that never appears."""
+    if not sys.platform.startswith("linux"):
+        return None  # macOS and Windows always have their own display
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or os.environ.get("SDL_VIDEODRIVER"):
+        return None  # a display, or a video driver chosen on purpose (dummy: off-screen, for tests)
+    return (
+        "--view opens a window, but there is no display (neither DISPLAY nor WAYLAND_DISPLAY is set); "
+        "use --image FILE.png for a picture, or SDL_VIDEODRIVER=dummy to draw off-screen on purpose"
+    )
