@@ -13,7 +13,7 @@ import os
 import stat
 
 from . import __version__
-from .lang.discover import refused_link
+from .machinedir import refused_link
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:

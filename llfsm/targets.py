@@ -18,7 +18,7 @@ import sys
 
 from .cachedir import cache_dir
 from .cachedir import problem as cache_problem
-from .lang.discover import MACHINE_SUFFIX
+from .machinedir import MACHINE_SUFFIX
 from .runtime.errors import ErrorReport, passes_through, report_for
 from .runtime.machine import Machine
 

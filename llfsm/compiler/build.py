@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..fingerprint import RACY_NS, compiler_id, machine_fingerprint, module_fingerprint, stat_signature
-from ..lang.discover import machine_name_of
+from ..machinedir import machine_name_of
 
 if TYPE_CHECKING:
     from ..lang.diagnostics import Diagnostic

@@ -19,6 +19,7 @@ from functools import cache
 import jinja2
 
 from .. import __version__
+from ..lang.bindings import MACHINE_ALIAS, Edit, attribute_of, find, name_map, own_locals, state_map, used_names
 from ..lang.check import MachineCheck
 from ..lang.diagnostics import Diagnostic, diag
 from ..lang.model import Code, Machine, State
@@ -26,18 +27,7 @@ from ..lang.scopes import child_nodes
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
 from ..templating import environment
-from .rewrite import (
-    ALIAS_LINE,
-    MACHINE_ALIAS,
-    Edit,
-    apply,
-    attribute_of,
-    find,
-    name_map,
-    own_locals,
-    state_map,
-    used_names,
-)
+from .rewrite import ALIAS_LINE, apply
 
 #: How a rewritten name that reaches the machine through its alias starts.
 _ALIASED = MACHINE_ALIAS + "."
