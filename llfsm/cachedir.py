@@ -18,8 +18,30 @@ import os
 import stat
 import sys
 
+TYPE_CHECKING = False  # not typing's own: `llfsm run` imports this module, and typing costs its start-up
+if TYPE_CHECKING:
+    from pathlib import Path
+
 _fresh: str | None = None
 _warned: set[str] = set()
+
+
+def preferred_root() -> str:
+    """The usual cache folder: LLFSM_CACHE_DIR, else XDG_CACHE_HOME/llfsm, else ~/.cache/llfsm.
+    (Whether it may be trusted is `cache_dir`'s to decide, folder by folder.)"""
+    env = os.environ.get("LLFSM_CACHE_DIR")
+    if env:
+        return env
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "llfsm")
+
+
+def cache_root() -> Path:
+    """`preferred_root()` as a Path, for the commands that keep their own folders in the cache
+    (native builds, the build's stat records)."""
+    from pathlib import Path  # deferred: start-up (a warm `llfsm run` never needs pathlib)
+
+    return Path(preferred_root())
 
 
 def problem(path: str | os.PathLike[str], *, directory: bool = True) -> str | None:

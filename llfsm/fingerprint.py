@@ -13,7 +13,7 @@ import os
 import stat
 
 from . import __version__
-from .machinedir import refused_link
+from .machinedir import refused_link, source_ref
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
@@ -65,8 +65,10 @@ def compiler_id() -> str:
     return _compiler_id
 
 
-def machine_fingerprint(path: str | Path, known: dict[str, bytes] | None = None) -> str:
-    """Hash of every regular file of a machine directory (names and bytes) and the compiler id.
+def machine_fingerprint(path: str | Path, module_dir: str | Path, known: dict[str, bytes] | None = None) -> str:
+    """Hash of every regular file of a machine directory (names and bytes), the compiler id,
+    and the machine folder as a module built into `module_dir` names it (the one place the
+    module's text depends on where things are: machinedir.source_ref).
     `known`: bytes already read (by the checker), by file name: only the others are read.
     (os.path, not pathlib: a run after an edit hashes the files and should not pay for it.)"""
     import hashlib
@@ -77,7 +79,7 @@ def machine_fingerprint(path: str | Path, known: dict[str, bytes] | None = None)
         if refused_link(Path(path)) is not None:  # never read; the build then reports it (LF037)
             raise OSError(f"{path} is a symlink leading out of its folder")
     h = hashlib.sha256(compiler_id().encode())
-    h.update(os.fsencode(os.path.abspath(path)))
+    h.update(os.fsencode(source_ref(path, module_dir)))
     with os.scandir(path) as it:  # file types from the listing: no stat per file
         entries = sorted((e for e in it if not e.name.startswith(".")), key=lambda e: e.name)
     for e in entries:

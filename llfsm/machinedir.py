@@ -41,3 +41,19 @@ def refused_link(path: Path) -> str | None:
     if real.is_relative_to(home):
         return None
     return f"{path.name} is a symlink leading out of {path.parent}; refused"
+
+
+def source_ref(machine_dir: str | os.PathLike[str], module_dir: str | os.PathLike[str]) -> str:
+    """The machine folder as a module built into `module_dir` names it: relative to that folder,
+    so that a module holds no absolute path and the same machine gives the same bytes wherever
+    the two folders are (copied, checked out elsewhere) as long as they move together."""
+    try:
+        return os.path.relpath(os.path.abspath(machine_dir), os.path.abspath(module_dir))
+    except ValueError:  # another drive (Windows): no relative path exists
+        return os.path.abspath(machine_dir)
+
+
+def machine_dir_of(ref: str, module_file: str) -> str:
+    """The machine folder a module names with `ref` (`source_ref`), from the module's own path.
+    Lexical, as `source_ref` is: the module found by the path it was built under."""
+    return os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(module_file)), ref))

@@ -8,7 +8,7 @@ recently) and nothing more.
 
 The run's path through this module (`load` of a machine directory or a built module) imports
 neither pathlib nor hashlib nor importlib.util: each is a tenth of `llfsm run`'s start-up.  The
-functions that return a Path (`resolve`, `compiled_module_for`, `cache_root`) import it.
+functions that return a Path (`resolve`, `compiled_module_for`) import it.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 import sys
 
-from .cachedir import cache_dir
+from .cachedir import cache_dir, preferred_root
 from .cachedir import problem as cache_problem
 from .machinedir import MACHINE_SUFFIX
 from .runtime.errors import ErrorReport, passes_through, report_for
@@ -46,20 +46,6 @@ class MachineLoadError(Exception):
     def __init__(self, report: ErrorReport) -> None:
         super().__init__(report.exception)
         self.report = report
-
-
-def _cache_root() -> str:
-    env = os.environ.get("LLFSM_CACHE_DIR")
-    if env:
-        return env
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return os.path.join(base, "llfsm")
-
-
-def cache_root() -> Path:
-    from pathlib import Path
-
-    return Path(_cache_root())
 
 
 def _path_str(p: str) -> str:
@@ -93,7 +79,7 @@ def compiled_module_for(machine_dir: Path) -> Path:
 def _compiled_module(machine_dir: str) -> str:
     from .fingerprint import module_fingerprint, record_fresh, unchanged_since_record
 
-    out = cache_dir(_cache_root(), _cache_key(machine_dir))  # a folder of ours that no one else can write
+    out = cache_dir(preferred_root(), _cache_key(machine_dir))  # a folder of ours that no one else can write
     name = _name(machine_dir)
     module = os.path.join(out, f"{name.removesuffix(MACHINE_SUFFIX)}.py")
     trusted = cache_problem(module, directory=False) is None
@@ -102,7 +88,7 @@ def _compiled_module(machine_dir: str) -> str:
     from .fingerprint import machine_fingerprint  # hashes the files
 
     try:
-        fp: str | None = machine_fingerprint(machine_dir)
+        fp: str | None = machine_fingerprint(machine_dir, out)
         fresh = module_fingerprint(module) == fp
     except OSError:
         fp, fresh = None, False

@@ -88,8 +88,8 @@ def _report(machines: list[Path], outcomes: Iterator[BuildOutcome | str], out_di
 
 def _native(modules: list[Path], quiet: bool) -> None:
     """One mypyc compile for every module of the build (cached in the llfsm cache)."""
+    from ..cachedir import cache_root
     from ..compiler.native import NativeUnavailable, native_build
-    from ..targets import cache_root
 
     try:
         nb = native_build(modules, cache_root())

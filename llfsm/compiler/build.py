@@ -12,8 +12,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..cachedir import cache_root
 from ..fingerprint import RACY_NS, compiler_id, machine_fingerprint, module_fingerprint, stat_signature
-from ..machinedir import machine_name_of
+from ..machinedir import machine_name_of, source_ref
 
 if TYPE_CHECKING:
     from ..lang.diagnostics import Diagnostic
@@ -86,7 +87,7 @@ def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None
     target = out_dir / f"{name}.py"
     if fp is None and not force and target.exists():
         try:
-            fp = machine_fingerprint(path)
+            fp = machine_fingerprint(path, out_dir)
         except OSError:
             fp = ""
     if not force and fp and module_fingerprint(target) == fp:
@@ -100,11 +101,11 @@ def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None
         return BuildOutcome(path, None, "failed", checked.diagnostics, name=name)
     if not fp:  # no module to compare with: hash the bytes the checker has read
         try:
-            fp = machine_fingerprint(path, checked.read.raw)
+            fp = machine_fingerprint(path, out_dir, checked.read.raw)
         except OSError:
             fp = ""
     try:
-        source = compile_machine(checked, fp)
+        source = compile_machine(checked, fp, source_ref(path, out_dir))
     except CompileError as e:
         return BuildOutcome(path, None, "failed", checked.diagnostics + e.diagnostics, name=name)
     write_atomic(target, source)
@@ -155,7 +156,7 @@ def build_all(
         fp: str | None = None
         if old is not None and not force:  # a module to compare with: hash the machine's files
             try:
-                fp = machine_fingerprint(path)
+                fp = machine_fingerprint(path, out_dir)
             except OSError:
                 fp = ""
             if fp and old == fp:
@@ -319,8 +320,6 @@ class _StatCache:
     def __init__(self, out_dir: Path) -> None:
         import hashlib
         import json
-
-        from ..targets import cache_root
 
         key = hashlib.sha256(os.fsencode(os.path.abspath(out_dir))).hexdigest()[:16]
         self.file = cache_root() / "buildstat" / f"{key}.json"

@@ -32,13 +32,17 @@ import sysconfig
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..machinedir import source_ref
 from ..runtime.errors import _display, map_line, source_dir_of
+from ..templating import comment_text
 
 #: The runtime modules a native build compiles: everything a round touches.
 RUNTIME_MODULES = ("machine", "scheduler", "clock", "context")
 #: Environment variable naming the native build a process runs with.
 ENV = "LLFSM_NATIVE"
 MANIFEST = "manifest.json"
+#: How a generated module's header names its machine folder (runtime.errors.SOURCE_PATTERN).
+SOURCE_KEY = b"# Source: "
 
 _ERROR = re.compile(r"^(?P<file>[^:\n]+):(?P<line>\d+):(?:\d+:)? error: (?P<msg>.*)$", re.M)
 
@@ -74,8 +78,8 @@ class NativeBuild:
 
 
 def content_hash(data: bytes) -> str:
-    """How a manifest names a module: by its text, so a build made from `build/` serves a run of
-    the same machine from the cache too (the runtime looks modules up the same way)."""
+    """How a manifest names a module: by its text (the runtime looks modules up the same way),
+    so a build serves every run of the same modules, wherever they are run from."""
     return hashlib.sha256(data).hexdigest()[:32]
 
 
@@ -191,10 +195,26 @@ def _stage(modules: list[Path], folder: Path) -> dict[str, Path]:
     staged = {}
     for m in modules:
         target = folder / f"{_stage_name(m)}.py"
-        shutil.copyfile(m, target)
+        target.write_bytes(_rebased(m, folder))
         staged[_stage_name(m)] = target
     (folder / "mypy.ini").write_text(_MYPY_INI, encoding="utf-8")
     return staged
+
+
+def _rebased(module: Path, folder: Path) -> bytes:
+    """The module's text for its copy in `folder`: the same lines, but the `# Source:` line names
+    the machine folder relative to the copy (a module names it relative to its own folder), so
+    that errors in the compiled code, whose frames point at the copy, still name the user's files."""
+    data = module.read_bytes()
+    machine = source_dir_of(str(module))
+    if machine is None:
+        return data
+    lines = data.split(b"\n")
+    for i, line in enumerate(lines[:5]):
+        if line.startswith(SOURCE_KEY):
+            lines[i] = SOURCE_KEY + comment_text(source_ref(machine, folder)).encode("ascii")
+            break
+    return b"\n".join(lines)
 
 
 def _run_mypyc(files: list[Path], folder: Path, mypy_cache: Path) -> subprocess.CompletedProcess[str]:
