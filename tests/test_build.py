@@ -331,3 +331,51 @@ def test_a_rebuild_sees_an_edit_that_keeps_the_size_and_the_modification_time(
     os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))
     assert [o.status for o in build_mod.build_all([m], tmp_path / "out")] == ["compiled"]  # type: ignore[union-attr]
     assert "count += 2" in (tmp_path / "out" / "m.py").read_text()
+
+
+def test_the_same_machine_gives_the_same_module_in_any_folder(tmp_path: Path) -> None:
+    """Builds are reproducible: a machine and its build folder copied as a whole to another
+    absolute folder build to the same bytes, and the module holds no absolute path (it names
+    the machine folder relative to its own)."""
+    one = tmp_path / "one" / "project"
+    shutil.copytree(MACHINES / "ros2_wall_turtle_bot.machine", one / "machines" / "ros2_wall_turtle_bot.machine")
+    assert build_machine(one / "machines" / "ros2_wall_turtle_bot.machine", one / "build").status == "compiled"
+    two = tmp_path / "second place" / "deeper" / "project"
+    shutil.copytree(one, two)
+    (two / "build" / "ros2_wall_turtle_bot.py").unlink()
+    assert build_machine(two / "machines" / "ros2_wall_turtle_bot.machine", two / "build").status == "compiled"
+    first = (one / "build" / "ros2_wall_turtle_bot.py").read_bytes()
+    assert (two / "build" / "ros2_wall_turtle_bot.py").read_bytes() == first
+    text = first.decode()
+    assert str(tmp_path) not in text and str(REPO) not in text
+    assert "# Source: ../machines/ros2_wall_turtle_bot.machine\n" in text
+    # the copy's module is up to date where it is: the fingerprint does not depend on the folder
+    assert build_machine(two / "machines" / "ros2_wall_turtle_bot.machine", two / "build").status == "unchanged"
+
+
+def test_the_module_names_states_and_has_no_dead_branches_nor_long_lines(tmp_path: Path) -> None:
+    """What the template writes: state numbers named, no `if True:` / `if False:`, no line over
+    120 characters (a long description, many transitions, long names), the public finish."""
+    description = " ".join(f"word{i}" for i in range(80)) + " " + "x" * 150
+    states: dict[str, list[tuple[str, str]] | None] = {
+        "A_STATE_WITH_A_RATHER_LONG_NAME": [(f"S{i}", f"count > {i} and not done") for i in range(12)]
+        + [("END", "True")],
+        **{f"S{i}": [("END", "False"), ("A_STATE_WITH_A_RATHER_LONG_NAME", "True")] for i in range(12)},
+        "END": None,
+    }
+    m = write_machine(
+        tmp_path,
+        "long_machine",
+        states,
+        variables="count: int = 0\ndone: bool = False\n",
+        yaml_extra=f"description: {description}",
+    )
+    outcome = build_machine(m, tmp_path / "out")
+    assert outcome.status == "compiled", outcome.diagnostics
+    text = outcome.module.read_text()  # type: ignore[union-attr]
+    assert [line for line in text.splitlines() if len(line) > 120] == []
+    assert "if True" not in text and "if False" not in text
+    assert "        self._state = 1  # S0\n" in text
+    assert "is always true: the transition fires at once\n    self._state = 13  # END\n" in text
+    assert "self._arr.finish(self)" in text and "._finish(" not in text
+    assert run_sim(outcome.module).status == 0  # type: ignore[arg-type]

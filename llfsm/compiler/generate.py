@@ -173,9 +173,11 @@ class StateView:
     internal_method: bool = False
     #: The entry ringlet records the entry time: only states whose code uses after* need it.
     stamp: bool = False
-    #: The `def` lines of the two ringlets (spread over lines when a long name needs it).
+    #: The `def` lines of the two ringlets (spread over lines when a long name needs it), and
+    #: the entry ringlet's docstring.
     enter_def: str = ""
     steady_def: str = ""
+    enter_doc: str = ""
 
     @property
     def falls_through(self) -> bool:
@@ -390,6 +392,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
         if not sv.is_suspend:
             targets = ", ".join(t.target for t in s.transitions) or "none: accepting"
             sv.doc = _wrap_doc(f"Ringlet of {s.name} (transitions to {targets}).", 4)
+            sv.enter_doc = _wrap_doc(f"{s.name} was just entered: OnEntry, then as _llfsm_steady_{s.name}.", 4)
             for t in s.transitions:
                 assert t.guard is not None
                 g = _guard_view(
