@@ -63,7 +63,7 @@ def test_generated_module_imports_only_the_runtime(tmp_path: Path) -> None:
         "import sys, importlib.util\n"
         f"spec = importlib.util.spec_from_file_location('counter', {str(out / 'counter.py')!r})\n"
         "mod = importlib.util.module_from_spec(spec); spec.loader.exec_module(mod)\n"
-        "names = ('yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.lang.check', 'click')\n"
+        "names = ('yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.lang', 'click')\n"
         "heavy = [m for m in names if m in sys.modules]\n"
         "print(heavy)\n"
     )
@@ -77,14 +77,14 @@ def test_warm_run_of_a_machine_directory_does_not_load_the_compiler(tmp_path: Pa
     probe = (
         "import atexit, sys\n"
         "atexit.register(lambda: sys.stderr.write('HEAVY %s\\n' % sorted(m for m in ('yaml', 'jinja2', 'pydantic',"
-        " 'llfsm.compiler.generate') if m in sys.modules)))\n"
+        " 'llfsm.compiler.generate', 'llfsm.lang') if m in sys.modules)))\n"
         "from llfsm.cli import main\n"
         f"sys.argv = ['llfsm', 'run', '--clock', 'sim', {str(m)!r}]\n"
         "main()\n"
     )
     cold = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env)
     warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env)
-    assert "HEAVY ['jinja2', 'llfsm.compiler.generate', 'pydantic', 'yaml']" in cold.stderr
+    assert "HEAVY ['jinja2', 'llfsm.compiler.generate', 'llfsm.lang', 'pydantic', 'yaml']" in cold.stderr
     assert "HEAVY []" in warm.stderr
     assert warm.stdout == cold.stdout and "done" in warm.stdout
 
