@@ -9,7 +9,8 @@ fallback is TMPDIR/llfsm-cache-UID, created 0700; when that exists but fails the
 user made it first, or opened it up), a fresh private folder (mkdtemp, removed at exit) is used
 for this run and a warning says why.
 
-This module imports nothing from llfsm: the message import hook uses it and must stay light.
+This module imports nothing from llfsm: the message import hook and a warm `llfsm run` use it,
+and must stay light.
 """
 
 from __future__ import annotations
@@ -74,6 +75,7 @@ def fresh_private() -> str:
     """A new 0700 folder for this process only, removed when it exits."""
     global _fresh
     if _fresh is None:
+        # deferred: start-up (only a cache that cannot be trusted needs a private folder)
         import atexit
         import shutil
         import tempfile
@@ -96,7 +98,7 @@ def _make(path: str) -> str | None:
 
 def fallback_root() -> str:
     """TMPDIR/llfsm-cache-UID when it is this user's private folder, else a fresh private one."""
-    import tempfile  # only when the normal cache cannot be written: not on every run's start-up
+    import tempfile  # deferred: start-up (only when the usual cache cannot be written)
 
     root = os.path.join(tempfile.gettempdir(), f"llfsm-cache-{os.getuid()}")
     why = _make(root)

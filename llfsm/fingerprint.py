@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import stat
+import time
 
 from . import __version__
 from .machinedir import refused_link, source_ref
@@ -54,7 +55,7 @@ def compiler_id() -> str:
     """Changes whenever anything that shapes generated code changes: version, templates, compiler."""
     global _compiler_id
     if _compiler_id is None:
-        import hashlib
+        import hashlib  # deferred: start-up (a warm run never hashes: hashlib is a tenth of it)
 
         h = hashlib.sha256(__version__.encode())
         for p in _compiler_files():
@@ -71,10 +72,10 @@ def machine_fingerprint(path: str | Path, module_dir: str | Path, known: dict[st
     module's text depends on where things are: machinedir.source_ref).
     `known`: bytes already read (by the checker), by file name: only the others are read.
     (os.path, not pathlib: a run after an edit hashes the files and should not pay for it.)"""
-    import hashlib
+    import hashlib  # deferred: start-up (a warm run never hashes: hashlib is a tenth of it)
 
     if os.path.islink(path):
-        from pathlib import Path
+        from pathlib import Path  # deferred: start-up (only a linked machine directory needs it)
 
         if refused_link(Path(path)) is not None:  # never read; the build then reports it (LF037)
             raise OSError(f"{path} is a symlink leading out of its folder")
@@ -163,8 +164,6 @@ def unchanged_since_record(machine_dir: str, module: str) -> bool:
 def record_fresh(machine_dir: str, module: str, fp: str) -> None:
     """After the module was found (by hashing) or made up to date: remember the stat signature,
     unless a file changed so recently that a change within the same clock tick could be missed."""
-    import time
-
     now = stat_signature(machine_dir)
     if now is None or now[1] > time.time_ns() - RACY_NS:
         return

@@ -104,7 +104,7 @@ def _from_manifest(folder: Path, modules: list[Path], base: str) -> NativeBuild 
 def available() -> str | None:
     """Why --native cannot work here, or None when it can."""
     try:
-        import mypyc  # noqa: F401
+        import mypyc  # noqa: F401  # deferred: optional dependency (llfsm[native])
     except ImportError:
         return "mypyc is not installed (pip install 'llfsm[native]')"
     cc = (sysconfig.get_config_var("CC") or "cc").split()[0]
@@ -121,7 +121,7 @@ def _runtime_dir() -> Path:
 
 
 def _mypyc_version() -> str:
-    from mypy.version import __version__
+    from mypy.version import __version__  # deferred: optional dependency (llfsm[native])
 
     return __version__
 
