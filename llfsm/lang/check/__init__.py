@@ -14,6 +14,12 @@ what they look at, each a function over one `Checking` (llfsm.lang.check.checkin
 
 This module runs them in order for one machine (`check_machine`), and for many, over worker
 processes when there are many (`diagnose`).
+
+A new rule: its code, severity and summary in `RULES` (llfsm.lang.diagnostics; docs/rules.md
+is generated from it, and a test keeps the two in step), a function in the module of what it
+looks at that calls `Checking.add` or `Checking.at`, and a call in `run_rules` (or in the
+function of that module that already walks what the rule needs: `code.state_code` for each
+section and guard).
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@ is worked out once per machine rather than once per state or file.
 
 Each rule module (structure, variables, includes, code, ros_habits, packages) is a set of
 functions over one `Checking`; the driver (llfsm.lang.check) makes it and calls them in order.
-docs/rules.md lists the rules; docs/architecture.md says how to add one.
+docs/rules.md lists the rules.
 """
 
 from __future__ import annotations
