@@ -291,10 +291,10 @@ def load_class(module_path: str | Path) -> type[Machine]:
     path = os.fspath(module_path)
     key = f"{zlib.crc32(os.fsencode(os.path.realpath(path))):08x}"  # the same name in every run
     mod_name = f"llfsm_machine_{os.path.splitext(_name(path))[0]}_{key}"
-    module = _new_module(mod_name, path)
+    module, loader = _new_module(mod_name, path)
     sys.modules[mod_name] = module
     try:
-        module.__loader__.exec_module(module)
+        loader.exec_module(module)
     except SyntaxError as e:
         sys.modules.pop(mod_name, None)
         raise TargetError(f"{module_path}:{e.lineno}: not a valid module: {e.msg}") from None
@@ -316,9 +316,10 @@ def load_class(module_path: str | Path) -> type[Machine]:
     return classes[0]
 
 
-def _new_module(name: str, path: str) -> ModuleType:
+def _new_module(name: str, path: str) -> tuple[ModuleType, SourceFileLoader]:
     """What importlib.util.spec_from_file_location and module_from_spec make of a source file,
-    from importlib.machinery alone (importlib.util imports contextlib and functools)."""
+    from importlib.machinery alone (importlib.util imports contextlib and functools), and its
+    loader."""
     loader = SourceFileLoader(name, path)
     spec = ModuleSpec(name, loader, origin=path)
     spec.has_location = True
@@ -328,7 +329,7 @@ def _new_module(name: str, path: str) -> ModuleType:
     module.__package__ = ""
     module.__file__ = path
     module.__cached__ = spec.cached  # type: ignore[attr-defined]
-    return module
+    return module, loader
 
 
 def load(target: str) -> type[Machine]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -67,7 +67,7 @@ def build(
     sys.exit(EXIT_ERRORS if failed else EXIT_OK)
 
 
-def _report(machines: list[Path], outcomes: Iterator[BuildOutcome | str], out_dir: Path, quiet: bool) -> int:
+def _report(machines: list[Path], outcomes: Iterable[BuildOutcome | str], out_dir: Path, quiet: bool) -> int:
     """One progress line per machine (in order), diagnostics of failures; the number failed."""
     failed = 0
     for i, (path, outcome) in enumerate(zip(machines, outcomes, strict=True), 1):

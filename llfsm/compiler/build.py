@@ -12,7 +12,7 @@ import secrets
 import signal
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Generator, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -140,7 +140,7 @@ def _build_or_error(
 
 def build_all(
     paths: Sequence[Path], out_dir: Path, force: bool = False, jobs: int | None = None
-) -> Iterator[BuildOutcome | str]:
+) -> Generator[BuildOutcome | str, None, None]:
     """build_machine for each path, in order (a str for an output that cannot be written).
 
     Machines whose module is up to date are found in this process (a fingerprint each); the

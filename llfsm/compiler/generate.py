@@ -363,9 +363,9 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
                 if used:
                     after_states.add(s.name)
                 stamp_all = stamp_all or escaped
-    for code in (m.includes, m.variables_file, *(s.variables_file for s in m.states)):
-        tree = trees.get(code.file) if code is not None else None
-        if tree is not None and code is not None and "after" in code.text and any(_after_use(tree)):
+    for loaded in (m.includes, m.variables_file, *(s.variables_file for s in m.states)):
+        tree = trees.get(loaded.file) if loaded is not None else None
+        if tree is not None and loaded is not None and "after" in loaded.text and any(_after_use(tree)):
             stamp_all = True
     walks = _Trees()  # each tree walked once for the rewrite, its names and its locals
     cls = class_name(m.name)
@@ -440,10 +440,10 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
         variables = _variables_block(m.variables_file, trees["Variables.py"], base)
     state_variables = []
     for s in m.states:
-        code = s.variables_file
-        if code is not None and code.file in trees:
+        declared = s.variables_file
+        if declared is not None and declared.file in trees:
             svars = [v.name for v in s.variables]
-            b = _variables_block(code, trees[code.file], state_map(base, s.name, svars))
+            b = _variables_block(declared, trees[declared.file], state_map(base, s.name, svars))
             if b is not None:
                 state_variables.append(b)
 

@@ -177,7 +177,7 @@ class _Finder(ast.NodeVisitor):
             self.visit(stmt)
         self.scopes.pop()
 
-    visit_FunctionDef = visit_AsyncFunctionDef = visit_Lambda = _function  # type: ignore[assignment]
+    visit_FunctionDef = visit_AsyncFunctionDef = visit_Lambda = _function
 
     def _comprehension(self, node: ast.ListComp | ast.SetComp | ast.GeneratorExp | ast.DictComp) -> None:
         gens = node.generators
@@ -200,7 +200,7 @@ class _Finder(ast.NodeVisitor):
             self.visit(node.elt)
         self.scopes.pop()
 
-    visit_ListComp = visit_SetComp = visit_GeneratorExp = visit_DictComp = _comprehension  # type: ignore[assignment]
+    visit_ListComp = visit_SetComp = visit_GeneratorExp = visit_DictComp = _comprehension
 
     def visit_ClassDef(self, node: ast.ClassDef) -> None:
         self._bind(node.name, "class", node)
@@ -246,7 +246,7 @@ class _Finder(ast.NodeVisitor):
         for a in node.names:
             self._bind((a.asname or a.name).split(".")[0], "import", node)
 
-    visit_ImportFrom = visit_Import  # type: ignore[assignment]
+    visit_ImportFrom = visit_Import
 
     def visit_MatchAs(self, node: ast.MatchAs) -> None:
         self._bind(node.name, "a match pattern", node)
@@ -318,7 +318,7 @@ def state_map(base: Mapping[str, str], state: str, state_vars: list[str]) -> Map
     return _StateMap({v: f"self.{attribute_of(state, v)}" for v in state_vars}, base)  # type: ignore[arg-type]
 
 
-class _StateMap(ChainMap):  # type: ignore[type-arg]
+class _StateMap(ChainMap[str, str]):
     """A ChainMap of a state's own map over the machine's, whose lookups ask the two maps
     directly: ChainMap's own `in` and `get` build a generator each, and every name of every
     code file is looked up (by check, then by the rewrite)."""

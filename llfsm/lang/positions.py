@@ -59,7 +59,7 @@ class LineIndex:
             self._offsets[line] = offsets
         if offsets is None:
             return byte_offset + 1
-        return bisect.bisect_right(offsets, byte_offset) + 1  # type: ignore[arg-type]
+        return bisect.bisect_right(offsets, byte_offset) + 1
 
 
 @lru_cache(maxsize=16)
@@ -73,10 +73,13 @@ def source_segment(text: str, node: ast.AST) -> str | None:
     """`ast.get_source_segment`, on the file's `LineIndex`: the standard one splits the whole
     source anew for every node, so a Variables.py of N lines cost N squared."""
     try:
-        l0, l1 = node.lineno - 1, node.end_lineno - 1  # type: ignore[attr-defined]
-        c0, c1 = node.col_offset, node.end_col_offset  # type: ignore[attr-defined]
+        l0: int = node.lineno - 1  # type: ignore[attr-defined]
+        end_line: int | None = node.end_lineno  # type: ignore[attr-defined]
+        c0: int = node.col_offset  # type: ignore[attr-defined]
+        c1: int | None = node.end_col_offset  # type: ignore[attr-defined]
     except AttributeError:
         return None
+    l1 = end_line - 1 if end_line is not None else None
     if l1 is None or c1 is None:
         return None
     lines = line_index(text).lines

@@ -373,15 +373,15 @@ class _Reader:
         counts: dict[str, int] = {}
         for s in states:
             counts.setdefault(s.name, len(s.transitions))
-        for e in entries:
-            m = SECTION_RE.match(e) or GUARD_RE.match(e)
+        for entry in entries:
+            m = SECTION_RE.match(entry) or GUARD_RE.match(entry)
             if m and m["state"] not in counts:
-                result.orphans.append(e)
+                result.orphans.append(entry)
             elif m and "n" in m.groupdict():
                 n, count = m["n"], counts[m["state"]]
                 # `Transition_01` is no transition's file; int() of a long digit string raises
                 if (n != "0" and n.startswith("0")) or len(n) > len(str(count)) or int(n) >= count:
-                    result.orphans.append(e)
+                    result.orphans.append(entry)
 
         result.machine = Machine(
             name=name,

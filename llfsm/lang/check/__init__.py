@@ -110,7 +110,7 @@ def _without_cascade(diags: list[Diagnostic]) -> list[Diagnostic]:
 
 
 def check_paths(paths: Iterable[Path]) -> list[MachineCheck]:
-    out = []
+    out: list[MachineCheck] = []
     for p in paths:
         out.extend(check_machine(m, p) for m in find_machines(p))
     return out

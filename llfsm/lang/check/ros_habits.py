@@ -63,8 +63,8 @@ def ros_import_hint(module: str, stmt: ast.Import | ast.ImportFrom) -> str | Non
     if m is None:
         return None
     if isinstance(stmt, ast.ImportFrom):
-        names = ", ".join(a.name for a in stmt.names)
-        spelled = f"from llfsm.msgs.{module} import {names}"
+        imported = ", ".join(a.name for a in stmt.names)
+        spelled = f"from llfsm.msgs.{module} import {imported}"
     else:
         spelled = f"import llfsm.msgs.{module}"
     return f"ROS messages of {m['pkg']} come from llfsm.msgs: `{spelled}`"

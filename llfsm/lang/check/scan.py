@@ -17,10 +17,13 @@ import tokenize
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 from ...runtime.machine import MACROS
 from ..reader import MAX_CODE_DEPTH
 from ..scopes import child_nodes
+
+_Node = TypeVar("_Node", bound=ast.AST)
 
 _BINDERS = (
     ast.NamedExpr,
@@ -122,18 +125,19 @@ def scan_code(tree: ast.AST, mapping: Mapping[str, str]) -> Scanned:
                 stack.append((child, nested or t in nests_t, depth + 1))
                 continue
             if t is name_t:
-                if child.id == "self":
+                name: ast.Name = child  # type: ignore[assignment]  # its type is ast.Name, exactly
+                if name.id == "self":
                     # the user's own in a method, lambda or comprehension that binds it, else
                     # the machine's: the scoped walk decides (LF013 there)
                     out.may_bind_variable = True
-                elif child.id.startswith("_llfsm"):
-                    out.reserved.append(child)
-                elif isinstance(child.ctx, ast.Load | ast.Del):  # `del x` reads x as well
-                    out.loads.setdefault(child.id, child)
+                elif name.id.startswith("_llfsm"):
+                    out.reserved.append(name)
+                elif isinstance(name.ctx, ast.Load | ast.Del):  # `del x` reads x as well
+                    out.loads.setdefault(name.id, name)
                 else:
-                    bound.add(child.id)
-                    if child.id in MACROS:
-                        out.reserved.append(child)
+                    bound.add(name.id)
+                    if name.id in MACROS:
+                        out.reserved.append(name)
                 continue
             if isinstance(child, ast.Import | ast.ImportFrom):
                 out.imports.append(child)
@@ -186,7 +190,7 @@ def scan_code(tree: ast.AST, mapping: Mapping[str, str]) -> Scanned:
     return out
 
 
-def _located(node: ast.AST) -> ast.AST:
+def _located(node: _Node) -> _Node:
     node.lineno = node.end_lineno = 1  # type: ignore[attr-defined]
     node.col_offset = node.end_col_offset = 0  # type: ignore[attr-defined]
     return node
@@ -197,7 +201,8 @@ def compile_error(tree: ast.Module, guard: bool) -> SyntaxError | None:
     places it (a guard as the condition of an `if`); None if it compiles."""
     body: list[ast.stmt] = tree.body
     if guard:
-        body = [_located(ast.If(test=tree.body[0].value, body=[_located(ast.Pass())], orelse=[]))]  # type: ignore[attr-defined]
+        test: ast.expr = tree.body[0].value  # type: ignore[attr-defined]  # check: one expression
+        body = [_located(ast.If(test=test, body=[_located(ast.Pass())], orelse=[]))]
     args = ast.arguments(
         posonlyargs=[], args=[_located(ast.arg(arg="self"))], kwonlyargs=[], kw_defaults=[], defaults=[]
     )
