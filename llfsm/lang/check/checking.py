@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..diagnostics import Diagnostic, diag
-from ..model import Loc, Machine
+from ..model import Loc
 from ..reader import ReadResult
 
 #: "Did you mean" is for hand-written machines: difflib compares a name with every candidate,
@@ -75,12 +75,6 @@ class Checking:
             list(read.diagnostics),
             unreadable={os.path.basename(d.file) for d in read.diagnostics},
         )
-
-    @property
-    def machine(self) -> Machine:
-        """The machine the rules look at (only rules on the directory's name run without one)."""
-        assert self.read.machine is not None
-        return self.read.machine
 
     def add(self, code: str, file: str, line: int, col: int, msg: str) -> None:
         self.diagnostics.append(diag(code, self.path / file, line, col, msg))
