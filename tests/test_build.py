@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import shutil
@@ -11,6 +12,8 @@ from pathlib import Path
 
 import pytest
 from conftest import MACHINES, REPO, llfsm, run_sim, write_machine
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from llfsm.compiler import build as build_mod
 from llfsm.compiler.build import build_machine
@@ -379,3 +382,32 @@ def test_the_module_names_states_and_has_no_dead_branches_nor_long_lines(tmp_pat
     assert "is always true: the transition fires at once\n    self._state = 13  # END\n" in text
     assert "self._arr.finish(self)" in text and "._finish(" not in text
     assert run_sim(outcome.module).status == 0  # type: ignore[arg-type]
+
+
+TEXTS = st.lists(
+    st.sampled_from(['"', "'", "\\", "\n", "\t", "\x00", " ", "é", "\u2028", "word ", "z" * 130, '"""'])
+).map("".join)
+LITERALS = st.recursive(
+    st.one_of(TEXTS, st.integers(-1000, 10**6)), lambda inner: st.tuples(inner, inner) | st.tuples(inner)
+)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, database=None)
+@given(LITERALS, st.sampled_from([0, 4, 18]))
+def test_literals_and_docstrings_keep_their_values_within_120_columns(value: object, start: int) -> None:
+    """What the template writes of its own (literals, docstrings from descriptions) reads back as
+    the same value and never passes column 120."""
+    from llfsm.compiler.literals import WIDTH, doc_lines, py, py_block
+
+    block = py_block(value, 4, start)
+    assert ast.literal_eval(block) == value
+    assert all(len(line) <= WIDTH for line in (" " * start + block).split("\n"))
+    if start + len(py(value)) <= WIDTH:
+        assert block == py(value)  # what fits stays on one line
+    text = str(value)
+    for indent in (0, 4):
+        doc = doc_lines(text, indent)
+        tree = ast.parse(f"class C:\n{doc}\n" if indent else f"{doc}\n")
+        want = " ".join(text.split()) or "A machine."
+        assert ast.get_docstring(tree.body[0] if indent else tree, clean=False) == want
+        assert all(len(line) <= WIDTH for line in doc.split("\n"))

@@ -73,6 +73,9 @@ def _def_line(name: str, cls: str) -> str:
 def _wrap_doc(text: str, indent: int) -> str:
     """A one-line docstring of llfsm's own words (and names: no quotes, no escapes), at `indent`,
     over more lines if need be."""
+    one = f'"""{text}"""'
+    if indent + len(one) <= WIDTH:
+        return one  # the usual case, without textwrap's cost (two per state of every machine)
     pad = " " * indent
     return textwrap.fill(
         f'"""{text}"""', WIDTH, initial_indent=pad, subsequent_indent=pad, break_long_words=False
@@ -136,6 +139,36 @@ class GuardView:
     #: A constant is written as what it does, not as a dead `if True:` or `if False:` block.
     constant: bool | None = None
     file: str = ""
+    #: The state has an OnExit, which the transition runs first.
+    exits: bool = False
+    state: str = ""
+
+    def code(self) -> str:
+        """The guard's lines in a ringlet: its pointer, the test, and the lines that take the
+        transition; a constant as what it does.  Made here, once for both ringlets, rather than
+        by the template: a template macro per guard cost a tenth of a build's time."""
+        if self.constant is None:
+            test = (
+                f"    if ({self.first_line}\n{self.other_lines}\n    ):\n"
+                if self.multiline
+                else f"    if {self.text}:\n"
+            )
+            return f"{_lead(self, 4)}\n{test}{self.fire(8)}"
+        if self.constant:
+            return f"    # {self.file} is always true: the transition fires at once\n{self.fire(4)}"
+        return f"    # {self.file} is always false: the transition never fires\n"
+
+    def fire(self, width: int) -> str:
+        """The lines that take the transition, at `width`."""
+        pad = " " * width
+        lines = [f"self.on_exit_{self.state}()"] if self.exits else []
+        if self.to_suspend:
+            lines.append("self._enter_suspend_state()")
+        else:
+            lines.append(f"self._state = {self.target}  # {self.target_name}")
+            lines.append(f"self._run = _llfsm_enter_{self.target_name}")
+        lines.append(f"return {self.index}")
+        return "".join(f"{pad}{line}\n" for line in lines)
 
     @property
     def first_line(self) -> str:
@@ -161,6 +194,8 @@ class StateView:
     #: The guards the steady ringlet tests, in order, up to a constant true one (what follows
     #: it never runs, and is not written).
     guards: list[GuardView] = field(default_factory=list)
+    #: Their lines, as both ringlets write them (made once, here rather than by the template).
+    guards_code: str = ""
     hooks: list[tuple[str, Block]] = field(default_factory=list)
     #: OnSuspend / OnResume: functions beside the ringlets, which the ON_SUSPEND / ON_RESUME
     #: tables name (a class body cannot name its own methods once mypyc compiles it).
@@ -405,9 +440,11 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
                     index[t.target] == susp,
                     walks,
                 )
+                g.exits, g.state = sv.exit is not None, s.name
                 sv.guards.append(g)
                 if g.constant:
                     break  # the transition always fires here: the rest is never evaluated
+        sv.guards_code = "".join(g.code() for g in sv.guards)
         if not sv.falls_through:
             sv.internal = None  # never runs: a guard before it always fires
         parts = {sec: trees[c.file] for sec, c in s.sections.items() if sec in ("OnEntry", "Internal")}

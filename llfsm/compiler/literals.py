@@ -30,18 +30,33 @@ def py(value: object) -> str:
 def py_block(value: object, indent: int, start: int, end: int = 0) -> str:
     """`py(value)` when it fits between column `start` and `end` characters before `WIDTH`; else
     spread over lines below a line at `indent`: a tuple an item per line, a string in pieces."""
-    text = py(value)
+    return _block(value, _py_tree(value), indent, start, end)
+
+
+_Tree = tuple[str, list["_Tree"]]
+
+
+def _py_tree(value: object) -> _Tree:
+    """`py(value)`, with the same for each item of a tuple or list: each literal made once."""
+    if isinstance(value, list | tuple):
+        items = [_py_tree(v) for v in value]
+        inner = ", ".join(text for text, _ in items)
+        return (f"({inner},)" if len(value) == 1 else f"({inner})"), items
+    return py(value), []
+
+
+def _block(value: object, tree: _Tree, indent: int, start: int, end: int) -> str:
+    text, items = tree
     if start + len(text) + end <= WIDTH:
         return text
     inner = indent + 4
     pad = " " * inner
     if isinstance(value, list | tuple) and value:
-        items = [py_block(v, inner, inner, 1) for v in value]
-        return "(\n" + "".join(f"{pad}{item},\n" for item in items) + " " * indent + ")"
+        lines = [_block(v, t, inner, inner, 1) for v, t in zip(value, items, strict=True)]
+        return "(\n" + "".join(f"{pad}{line},\n" for line in lines) + " " * indent + ")"
     if isinstance(value, str) and value:
         pieces = _string_pieces(value, WIDTH - inner)
-        if len(pieces) > 1:
-            return "(\n" + "".join(f"{pad}{piece}\n" for piece in pieces) + " " * indent + ")"
+        return "(\n" + "".join(f"{pad}{piece}\n" for piece in pieces) + " " * indent + ")"
     return text
 
 
@@ -101,6 +116,9 @@ def doc_lines(text: str, indent: int) -> str:
     (which Python drops with the line end, so the value has no line break), cut after a space,
     and the lines after the first start at column 0 (an indent would be part of the value)."""
     units = doc_units(text)
+    one = "".join(units)
+    if indent + len(one) + 6 <= WIDTH:  # the usual case: on one line with its quotes
+        return " " * indent + '"""' + one + '"""'
     lines: list[str] = []
     line: list[str] = []
     room = WIDTH - indent - 3 - 1  # the opening quotes and the backslash
