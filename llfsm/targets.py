@@ -22,7 +22,7 @@ from . import fingerprint
 from .cachedir import cache_dir, preferred_root
 from .cachedir import problem as cache_problem
 from .machinedir import MACHINE_SUFFIX
-from .runtime.errors import ErrorReport, passes_through, report_for
+from .runtime.errors import ErrorReport, passes_through, report_for, source_dir_of
 from .runtime.machine import Machine
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
@@ -271,7 +271,9 @@ def _native_module(module_path: str | Path) -> str | None:
         return None
     import hashlib  # deferred: start-up (only a native run names modules by their hash)
 
-    return manifest.get("modules", {}).get(hashlib.sha256(data).hexdigest()[:32])
+    key = hashlib.sha256(data)  # as compiler.native.module_key, without importing the compiler
+    key.update(b"\0" + os.fsencode(source_dir_of(os.fspath(module_path)) or ""))
+    return manifest.get("modules", {}).get(key.hexdigest()[:32])
 
 
 def load_class(module_path: str | Path) -> type[Machine]:

@@ -10,9 +10,10 @@ refuses it, usually) is dropped from the group with one warning naming the user'
 line, and runs as plain Python beside the compiled ones.
 
 The result lives in `<cache>/native/<key>`, where the key covers the runtime's source, every
-module's text, the Python version and the mypyc version, so an unchanged build is found again
-without compiling.  A process uses it by starting with `LLFSM_NATIVE=<that folder>` in its
-environment: `llfsm.runtime` then imports its compiled modules from there (see
+module's text and the machine folder it leads to, the Python version and the mypyc version, so
+an unchanged build is found again without compiling.  A process uses it by starting with
+`LLFSM_NATIVE=<that folder>` in its environment: `llfsm.runtime` then imports its compiled
+modules from there (see
 llfsm/runtime/__init__.py), which is why `llfsm run --native` starts the run in a fresh process.
 """
 
@@ -77,10 +78,14 @@ class NativeBuild:
     cached: bool = False
 
 
-def content_hash(data: bytes) -> str:
-    """How a manifest names a module: by its text (the runtime looks modules up the same way),
-    so a build serves every run of the same modules, wherever they are run from."""
-    return hashlib.sha256(data).hexdigest()[:32]
+def module_key(module: Path) -> str:
+    """How a manifest names a module (llfsm.targets looks modules up the same way): by its text
+    and the machine folder it leads to.  A module names that folder relative to its own, so two
+    copies of a project have modules of the same text; their compiled code would name the files
+    of whichever copy was compiled first in its error reports."""
+    h = hashlib.sha256(module.read_bytes())
+    h.update(b"\0" + os.fsencode(source_dir_of(str(module)) or ""))
+    return h.hexdigest()[:32]
 
 
 def _from_manifest(folder: Path, modules: list[Path], base: str) -> NativeBuild | None:
@@ -93,7 +98,7 @@ def _from_manifest(folder: Path, modules: list[Path], base: str) -> NativeBuild 
         return None
     out = NativeBuild(folder, cached=True)
     for m in modules:
-        h = content_hash(m.read_bytes())
+        h = module_key(m)
         if h not in data["modules"]:
             return None
         out.modules[str(m)] = data["modules"][h]
@@ -136,10 +141,11 @@ def base_key() -> str:
 
 
 def build_key(modules: list[Path], base: str) -> str:
-    """Content + Python version + mypyc version: the same key means the same compiled result."""
+    """Content (each module's `module_key`) + Python version + mypyc version: the same key means
+    the same compiled result."""
     h = hashlib.sha256(base.encode())
     for m in sorted(modules, key=_stage_name):
-        h.update(_stage_name(m).encode() + b"\0" + m.read_bytes() + b"\0")
+        h.update(_stage_name(m).encode() + b"\0" + module_key(m).encode() + b"\0")
     return h.hexdigest()[:24]
 
 
@@ -177,8 +183,8 @@ def native_build(modules: list[Path], root: Path) -> NativeBuild:
         result, per_module = _compile(modules, folder, native / "mypy-cache")
         data = {
             "base": base,
-            "modules": {content_hash(m.read_bytes()): result.modules[str(m)] for m in modules},
-            "warnings": {content_hash(m.read_bytes()): w for m, w in per_module.items()},
+            "modules": {module_key(m): result.modules[str(m)] for m in modules},
+            "warnings": {module_key(m): w for m, w in per_module.items()},
         }
         (folder / MANIFEST).write_text(json.dumps(data, indent=1), encoding="utf-8")
         return result
