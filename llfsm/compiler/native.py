@@ -13,8 +13,8 @@ The result lives in `<cache>/native/<key>`, where the key covers the runtime's s
 module's text and the machine folder it leads to, the Python version and the mypyc version, so
 an unchanged build is found again without compiling.  A process uses it by starting with
 `LLFSM_NATIVE=<that folder>` in its environment: `llfsm.runtime` then imports its compiled
-modules from there (see
-llfsm/runtime/__init__.py), which is why `llfsm run --native` starts the run in a fresh process.
+modules from there (see llfsm/runtime/__init__.py), which is why `llfsm run --native` starts
+the run in a fresh process.
 """
 
 from __future__ import annotations
