@@ -1,5 +1,6 @@
 """What a machine directory is on disk, for every layer that touches one: its `NAME.machine`
-name, and the one rule about symlinks that every entry point applies before reading it.
+name, the one rule about symlinks that every entry point applies before reading it, and how a
+generated module names it (relative to the module's own folder: docs/machine-format.md).
 
 Stdlib only, and light (os; pathlib only when a link is found): `llfsm run` uses it on its
 warm path, the fingerprints below the compiler use it, and so does the front end (llfsm.lang).
