@@ -308,7 +308,7 @@ class Native:
     """The native contestants, timed by a worker process that runs the compiled runtime."""
 
     def __init__(self, toggles: list[Path], idles: list[Path]) -> None:
-        from llfsm.targets import cache_root
+        from llfsm.cachedir import cache_root
 
         self.proc: subprocess.Popen[str] | None = None
         self.cached, self.build_seconds = False, 0.0

@@ -9,7 +9,8 @@ fallback is TMPDIR/llfsm-cache-UID, created 0700; when that exists but fails the
 user made it first, or opened it up), a fresh private folder (mkdtemp, removed at exit) is used
 for this run and a warning says why.
 
-This module imports nothing from llfsm: the message import hook uses it and must stay light.
+This module imports nothing from llfsm: the message import hook and a warm `llfsm run` use it,
+and must stay light.
 """
 
 from __future__ import annotations
@@ -18,8 +19,30 @@ import os
 import stat
 import sys
 
+TYPE_CHECKING = False  # not typing's own: `llfsm run` imports this module, and typing costs its start-up
+if TYPE_CHECKING:
+    from pathlib import Path
+
 _fresh: str | None = None
 _warned: set[str] = set()
+
+
+def preferred_root() -> str:
+    """The usual cache folder: LLFSM_CACHE_DIR, else XDG_CACHE_HOME/llfsm, else ~/.cache/llfsm.
+    (Whether it may be trusted is `cache_dir`'s to decide, folder by folder.)"""
+    env = os.environ.get("LLFSM_CACHE_DIR")
+    if env:
+        return env
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "llfsm")
+
+
+def cache_root() -> Path:
+    """`preferred_root()` as a Path, for the commands that keep their own folders in the cache
+    (native builds, the build's stat records)."""
+    from pathlib import Path  # deferred: start-up (a warm `llfsm run` never needs pathlib)
+
+    return Path(preferred_root())
 
 
 def problem(path: str | os.PathLike[str], *, directory: bool = True) -> str | None:
@@ -52,6 +75,7 @@ def fresh_private() -> str:
     """A new 0700 folder for this process only, removed when it exits."""
     global _fresh
     if _fresh is None:
+        # deferred: start-up (only a cache that cannot be trusted needs a private folder)
         import atexit
         import shutil
         import tempfile
@@ -74,7 +98,7 @@ def _make(path: str) -> str | None:
 
 def fallback_root() -> str:
     """TMPDIR/llfsm-cache-UID when it is this user's private folder, else a fresh private one."""
-    import tempfile  # only when the normal cache cannot be written: not on every run's start-up
+    import tempfile  # deferred: start-up (only when the usual cache cannot be written)
 
     root = os.path.join(tempfile.gettempdir(), f"llfsm-cache-{os.getuid()}")
     why = _make(root)

@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import os
 import stat
+import time
 
 from . import __version__
-from .lang.discover import refused_link
+from .machinedir import refused_link, source_ref
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
@@ -54,7 +55,7 @@ def compiler_id() -> str:
     """Changes whenever anything that shapes generated code changes: version, templates, compiler."""
     global _compiler_id
     if _compiler_id is None:
-        import hashlib
+        import hashlib  # deferred: start-up (a warm run never hashes: hashlib is a tenth of it)
 
         h = hashlib.sha256(__version__.encode())
         for p in _compiler_files():
@@ -65,19 +66,21 @@ def compiler_id() -> str:
     return _compiler_id
 
 
-def machine_fingerprint(path: str | Path, known: dict[str, bytes] | None = None) -> str:
-    """Hash of every regular file of a machine directory (names and bytes) and the compiler id.
+def machine_fingerprint(path: str | Path, module_dir: str | Path, known: dict[str, bytes] | None = None) -> str:
+    """Hash of every regular file of a machine directory (names and bytes), the compiler id,
+    and the machine folder as a module built into `module_dir` names it (the one place the
+    module's text depends on where things are: machinedir.source_ref).
     `known`: bytes already read (by the checker), by file name: only the others are read.
     (os.path, not pathlib: a run after an edit hashes the files and should not pay for it.)"""
-    import hashlib
+    import hashlib  # deferred: start-up (a warm run never hashes: hashlib is a tenth of it)
 
     if os.path.islink(path):
-        from pathlib import Path
+        from pathlib import Path  # deferred: start-up (only a linked machine directory needs it)
 
         if refused_link(Path(path)) is not None:  # never read; the build then reports it (LF037)
             raise OSError(f"{path} is a symlink leading out of its folder")
     h = hashlib.sha256(compiler_id().encode())
-    h.update(os.fsencode(os.path.abspath(path)))
+    h.update(os.fsencode(source_ref(path, module_dir)))
     with os.scandir(path) as it:  # file types from the listing: no stat per file
         entries = sorted((e for e in it if not e.name.startswith(".")), key=lambda e: e.name)
     for e in entries:
@@ -161,8 +164,6 @@ def unchanged_since_record(machine_dir: str, module: str) -> bool:
 def record_fresh(machine_dir: str, module: str, fp: str) -> None:
     """After the module was found (by hashing) or made up to date: remember the stat signature,
     unless a file changed so recently that a change within the same clock tick could be missed."""
-    import time
-
     now = stat_signature(machine_dir)
     if now is None or now[1] > time.time_ns() - RACY_NS:
         return

@@ -242,7 +242,7 @@ def _validate_manifest(text: str, name: str, deps: list[str], license: str) -> l
     template and catkin_pkg is the judge: anything it refuses (a malformed e-mail, say) is the
     user's input, reported as such.
     """
-    from catkin_pkg.package import InvalidPackage, parse_package_string
+    from catkin_pkg.package import InvalidPackage, parse_package_string  # deferred: start-up (packages only)
 
     warnings: list[str] = []
     try:

@@ -8,18 +8,21 @@ recently) and nothing more.
 
 The run's path through this module (`load` of a machine directory or a built module) imports
 neither pathlib nor hashlib nor importlib.util: each is a tenth of `llfsm run`'s start-up.  The
-functions that return a Path (`resolve`, `compiled_module_for`, `cache_root`) import it.
+functions that return a Path (`resolve`, `compiled_module_for`) import it.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+import zlib  # not hashlib: zlib is a builtin module, hashlib a tenth of a run's start-up
+from importlib.machinery import ModuleSpec, SourceFileLoader
 
-from .cachedir import cache_dir
+from . import fingerprint
+from .cachedir import cache_dir, preferred_root
 from .cachedir import problem as cache_problem
-from .lang.discover import MACHINE_SUFFIX
-from .runtime.errors import ErrorReport, passes_through, report_for
+from .machinedir import MACHINE_SUFFIX
+from .runtime.errors import ErrorReport, passes_through, report_for, source_dir_of
 from .runtime.machine import Machine
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
@@ -48,20 +51,6 @@ class MachineLoadError(Exception):
         self.report = report
 
 
-def _cache_root() -> str:
-    env = os.environ.get("LLFSM_CACHE_DIR")
-    if env:
-        return env
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return os.path.join(base, "llfsm")
-
-
-def cache_root() -> Path:
-    from pathlib import Path
-
-    return Path(_cache_root())
-
-
 def _path_str(p: str) -> str:
     """str(Path(p)), without pathlib: repeated and trailing slashes and `.` parts dropped."""
     lead = "//" if p.startswith("//") and not p.startswith("///") else "/" if p.startswith("/") else ""
@@ -77,33 +66,27 @@ def _name(p: str) -> str:
 def _cache_key(machine_dir: str) -> str:
     """The machine's folder in the cache: named after its real path (zlib's checksums, not
     hashlib's: a different key only costs a compile, and hashlib costs every run's start-up)."""
-    import zlib
-
     b = os.fsencode(os.path.realpath(machine_dir))
     return f"{zlib.crc32(b):08x}{zlib.adler32(b):08x}"
 
 
 def compiled_module_for(machine_dir: Path) -> Path:
     """The cached module of a machine directory, compiled first if missing or stale."""
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
     return Path(_compiled_module(os.fspath(machine_dir)))
 
 
 def _compiled_module(machine_dir: str) -> str:
-    from .fingerprint import module_fingerprint, record_fresh, unchanged_since_record
-
-    out = cache_dir(_cache_root(), _cache_key(machine_dir))  # a folder of ours that no one else can write
+    out = cache_dir(preferred_root(), _cache_key(machine_dir))  # a folder of ours that no one else can write
     name = _name(machine_dir)
     module = os.path.join(out, f"{name.removesuffix(MACHINE_SUFFIX)}.py")
     trusted = cache_problem(module, directory=False) is None
-    if trusted and unchanged_since_record(machine_dir, module):
+    if trusted and fingerprint.unchanged_since_record(machine_dir, module):
         return module  # the warm run: the files look exactly as when the module was last found fresh
-    from .fingerprint import machine_fingerprint  # hashes the files
-
     try:
-        fp: str | None = machine_fingerprint(machine_dir)
-        fresh = module_fingerprint(module) == fp
+        fp: str | None = fingerprint.machine_fingerprint(machine_dir, out)  # hashes the files
+        fresh = fingerprint.module_fingerprint(module) == fp
     except OSError:
         fp, fresh = None, False
     untrusted = fresh and not trusted
@@ -111,11 +94,11 @@ def _compiled_module(machine_dir: str) -> str:
         fresh = False  # not written by us for us: compile again (the atomic write replaces it)
     if fresh:
         assert fp is not None
-        record_fresh(machine_dir, module, fp)
+        fingerprint.record_fresh(machine_dir, module, fp)
         return module
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
-    from .compiler.build import build_machine  # only now: the compiler is not needed to run
+    from .compiler.build import build_machine  # deferred: start-up (a warm run needs no compiler)
 
     try:
         outcome = build_machine(Path(machine_dir), Path(out), force=untrusted)
@@ -126,13 +109,13 @@ def _compiled_module(machine_dir: str) -> str:
     if outcome.status == "failed" or outcome.module is None:
         raise InvalidMachine(outcome.diagnostics)
     if outcome.fingerprint:
-        record_fresh(machine_dir, os.fspath(outcome.module), outcome.fingerprint)
+        fingerprint.record_fresh(machine_dir, os.fspath(outcome.module), outcome.fingerprint)
     return os.fspath(outcome.module)
 
 
 def find_installed(spec: str) -> Path:
     """`PKG/NAME` -> the machine installed by colcon under some prefix of AMENT_PREFIX_PATH."""
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
     pkg, _, name = spec.partition("/")
     prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
@@ -160,7 +143,7 @@ def find_installed(spec: str) -> Path:
 
 def _installed_machines(prefixes: list[str], pkg: str) -> set[str]:
     """The machines a package installs: share/PKG/llfsm/NAME.py and share/PKG/machine/NAME.machine."""
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
     out: set[str] = set()
     for prefix in prefixes:
@@ -173,7 +156,7 @@ def _installed_machines(prefixes: list[str], pkg: str) -> set[str]:
 
 
 def _installed_packages(prefixes: list[str]) -> set[str]:
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
     return {
         p.name
@@ -185,7 +168,7 @@ def _installed_packages(prefixes: list[str]) -> set[str]:
 
 def _listing(folder: Path, limit: int = 2000) -> list[Path]:
     """A folder's entries (at most `limit`: a hint must not cost a scan of a huge folder)."""
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
     try:
         with os.scandir(folder) as it:
@@ -195,7 +178,7 @@ def _listing(folder: Path, limit: int = 2000) -> list[Path]:
 
 
 def _did_you_mean(name: str, choices: set[str] | list[str]) -> str:
-    import difflib
+    import difflib  # deferred: start-up (only a target that names nothing needs it)
 
     close = difflib.get_close_matches(name, sorted(choices), n=3, cutoff=0.6)
     return f"; did you mean {' or '.join(close)}?" if close else ""
@@ -204,7 +187,7 @@ def _did_you_mean(name: str, choices: set[str] | list[str]) -> str:
 def _not_found(target: str) -> str:
     """What to say about a target that names nothing: the NAME.machine folder it probably meant,
     or close names of machines and modules beside it."""
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
     p = Path(target)
     bare = p.name.removesuffix(MACHINE_SUFFIX).removesuffix(".py")
@@ -214,7 +197,7 @@ def _not_found(target: str) -> str:
     folder = p.parent
     names = {e.name for e in _listing(folder) if e.name.endswith((MACHINE_SUFFIX, ".py"))}
     stems = {n.removesuffix(MACHINE_SUFFIX).removesuffix(".py"): n for n in names}
-    import difflib
+    import difflib  # deferred: start-up (only a target that names nothing needs it)
 
     close = difflib.get_close_matches(bare, sorted(stems), n=3, cutoff=0.6)
     hint = f"; did you mean {' or '.join(str(folder / stems[c]) for c in close)}?" if close else ""
@@ -223,7 +206,7 @@ def _not_found(target: str) -> str:
 
 def resolve(target: str) -> Path:
     """The module file to load for a target."""
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
     return Path(_resolve(target))
 
@@ -251,7 +234,7 @@ def helper_folder(target: str) -> Path | None:
     folder = _helper_folder(target)
     if folder is None:
         return None
-    from pathlib import Path
+    from pathlib import Path  # deferred: start-up (the run's own path has no Path)
 
     return Path(folder)
 
@@ -274,7 +257,7 @@ def _native_module(module_path: str | Path) -> str | None:
     folder = os.environ.get("LLFSM_NATIVE")
     if not folder:
         return None
-    import json
+    import json  # deferred: start-up (only a native run reads the manifest)
 
     try:
         with open(os.path.join(folder, "manifest.json"), encoding="utf-8") as f:
@@ -286,16 +269,18 @@ def _native_module(module_path: str | Path) -> str | None:
             data = f.read()
     except OSError:
         return None
-    import hashlib
+    import hashlib  # deferred: start-up (only a native run names modules by their hash)
 
-    return manifest.get("modules", {}).get(hashlib.sha256(data).hexdigest()[:32])
+    key = hashlib.sha256(data)  # as compiler.native.module_key, without importing the compiler
+    key.update(b"\0" + os.fsencode(source_dir_of(os.fspath(module_path)) or ""))
+    return manifest.get("modules", {}).get(key.hexdigest()[:32])
 
 
 def load_class(module_path: str | Path) -> type[Machine]:
     """Import a built module and return its machine class."""
     native = _native_module(module_path)
     if native is not None:
-        import importlib
+        import importlib  # deferred: start-up (only a native run imports modules by name)
 
         module = importlib.import_module(native)
         found = [
@@ -305,15 +290,13 @@ def load_class(module_path: str | Path) -> type[Machine]:
         ]
         if len(found) == 1:
             return found[0]
-    import zlib  # not hashlib: a run that loads built modules does not need it
-
     path = os.fspath(module_path)
     key = f"{zlib.crc32(os.fsencode(os.path.realpath(path))):08x}"  # the same name in every run
     mod_name = f"llfsm_machine_{os.path.splitext(_name(path))[0]}_{key}"
-    module = _new_module(mod_name, path)
+    module, loader = _new_module(mod_name, path)
     sys.modules[mod_name] = module
     try:
-        module.__loader__.exec_module(module)
+        loader.exec_module(module)
     except SyntaxError as e:
         sys.modules.pop(mod_name, None)
         raise TargetError(f"{module_path}:{e.lineno}: not a valid module: {e.msg}") from None
@@ -335,11 +318,10 @@ def load_class(module_path: str | Path) -> type[Machine]:
     return classes[0]
 
 
-def _new_module(name: str, path: str) -> ModuleType:
+def _new_module(name: str, path: str) -> tuple[ModuleType, SourceFileLoader]:
     """What importlib.util.spec_from_file_location and module_from_spec make of a source file,
-    from importlib.machinery alone (importlib.util imports contextlib and functools)."""
-    from importlib.machinery import ModuleSpec, SourceFileLoader
-
+    from importlib.machinery alone (importlib.util imports contextlib and functools), and its
+    loader."""
     loader = SourceFileLoader(name, path)
     spec = ModuleSpec(name, loader, origin=path)
     spec.has_location = True
@@ -349,7 +331,7 @@ def _new_module(name: str, path: str) -> ModuleType:
     module.__package__ = ""
     module.__file__ = path
     module.__cached__ = spec.cached  # type: ignore[attr-defined]
-    return module
+    return module, loader
 
 
 def load(target: str) -> type[Machine]:

@@ -1,6 +1,6 @@
 """Worker processes that never outlive the command that started them.
 
-Light (os, signal, ctypes): any command that forks a ProcessPoolExecutor (`llfsm check -j`,
+Light (os, signal, threading; ctypes in the worker): any command that forks a ProcessPoolExecutor (`llfsm check -j`,
 a parallel build) passes `die_with_parent` as the pool's initializer and bounds its workers
 by `usable_cores()`.
 """
@@ -8,6 +8,9 @@ by `usable_cores()`.
 from __future__ import annotations
 
 import os
+import signal
+import threading
+import time
 
 
 def usable_cores() -> int:
@@ -27,10 +30,8 @@ def die_with_parent(parent: int, signum: int | None = None) -> None:
     Linux ends it by PR_SET_PDEATHSIG (`signum`, SIGKILL unless given: a build's workers ask
     for SIGTERM, which they hold back until the module they write is whole); elsewhere a
     thread watches for the parent's exit."""
-    import signal
-
     try:
-        import ctypes
+        import ctypes  # deferred: optional (a Python may be built without it) and start-up (workers only)
 
         libc = ctypes.CDLL(None, use_errno=True)
         pr_set_pdeathsig = 1
@@ -42,8 +43,6 @@ def die_with_parent(parent: int, signum: int | None = None) -> None:
     if os.getppid() != parent:  # the parent died before the signal was asked for
         os._exit(1)
     if watch:
-        import threading
-        import time
 
         def watchdog() -> None:
             while os.getppid() == parent:

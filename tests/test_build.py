@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import shutil
@@ -11,6 +12,8 @@ from pathlib import Path
 
 import pytest
 from conftest import MACHINES, REPO, llfsm, run_sim, write_machine
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from llfsm.compiler import build as build_mod
 from llfsm.compiler.build import build_machine
@@ -63,7 +66,7 @@ def test_generated_module_imports_only_the_runtime(tmp_path: Path) -> None:
         "import sys, importlib.util\n"
         f"spec = importlib.util.spec_from_file_location('counter', {str(out / 'counter.py')!r})\n"
         "mod = importlib.util.module_from_spec(spec); spec.loader.exec_module(mod)\n"
-        "names = ('yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.lang.check', 'click')\n"
+        "names = ('yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.lang', 'click')\n"
         "heavy = [m for m in names if m in sys.modules]\n"
         "print(heavy)\n"
     )
@@ -77,14 +80,14 @@ def test_warm_run_of_a_machine_directory_does_not_load_the_compiler(tmp_path: Pa
     probe = (
         "import atexit, sys\n"
         "atexit.register(lambda: sys.stderr.write('HEAVY %s\\n' % sorted(m for m in ('yaml', 'jinja2', 'pydantic',"
-        " 'llfsm.compiler.generate') if m in sys.modules)))\n"
+        " 'llfsm.compiler.generate', 'llfsm.lang') if m in sys.modules)))\n"
         "from llfsm.cli import main\n"
         f"sys.argv = ['llfsm', 'run', '--clock', 'sim', {str(m)!r}]\n"
         "main()\n"
     )
     cold = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env)
     warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env)
-    assert "HEAVY ['jinja2', 'llfsm.compiler.generate', 'pydantic', 'yaml']" in cold.stderr
+    assert "HEAVY ['jinja2', 'llfsm.compiler.generate', 'llfsm.lang', 'pydantic', 'yaml']" in cold.stderr
     assert "HEAVY []" in warm.stderr
     assert warm.stdout == cold.stdout and "done" in warm.stdout
 
@@ -331,3 +334,80 @@ def test_a_rebuild_sees_an_edit_that_keeps_the_size_and_the_modification_time(
     os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))
     assert [o.status for o in build_mod.build_all([m], tmp_path / "out")] == ["compiled"]  # type: ignore[union-attr]
     assert "count += 2" in (tmp_path / "out" / "m.py").read_text()
+
+
+def test_the_same_machine_gives_the_same_module_in_any_folder(tmp_path: Path) -> None:
+    """Builds are reproducible: a machine and its build folder copied as a whole to another
+    absolute folder build to the same bytes, and the module holds no absolute path (it names
+    the machine folder relative to its own)."""
+    one = tmp_path / "one" / "project"
+    shutil.copytree(MACHINES / "ros2_wall_turtle_bot.machine", one / "machines" / "ros2_wall_turtle_bot.machine")
+    assert build_machine(one / "machines" / "ros2_wall_turtle_bot.machine", one / "build").status == "compiled"
+    two = tmp_path / "second place" / "deeper" / "project"
+    shutil.copytree(one, two)
+    (two / "build" / "ros2_wall_turtle_bot.py").unlink()
+    assert build_machine(two / "machines" / "ros2_wall_turtle_bot.machine", two / "build").status == "compiled"
+    first = (one / "build" / "ros2_wall_turtle_bot.py").read_bytes()
+    assert (two / "build" / "ros2_wall_turtle_bot.py").read_bytes() == first
+    text = first.decode()
+    assert str(tmp_path) not in text and str(REPO) not in text
+    assert "# Source: ../machines/ros2_wall_turtle_bot.machine\n" in text
+    # the copy's module is up to date where it is: the fingerprint does not depend on the folder
+    assert build_machine(two / "machines" / "ros2_wall_turtle_bot.machine", two / "build").status == "unchanged"
+
+
+def test_the_module_names_states_and_has_no_dead_branches_nor_long_lines(tmp_path: Path) -> None:
+    """What the template writes: state numbers named, no `if True:` / `if False:`, no line over
+    120 characters (a long description, many transitions, long names), the public finish."""
+    description = " ".join(f"word{i}" for i in range(80)) + " " + "x" * 150
+    states: dict[str, list[tuple[str, str]] | None] = {
+        "A_STATE_WITH_A_RATHER_LONG_NAME": [(f"S{i}", f"count > {i} and not done") for i in range(12)]
+        + [("END", "True")],
+        **{f"S{i}": [("END", "False"), ("A_STATE_WITH_A_RATHER_LONG_NAME", "True")] for i in range(12)},
+        "END": None,
+    }
+    m = write_machine(
+        tmp_path,
+        "long_machine",
+        states,
+        variables="count: int = 0\ndone: bool = False\n",
+        yaml_extra=f"description: {description}",
+    )
+    outcome = build_machine(m, tmp_path / "out")
+    assert outcome.status == "compiled", outcome.diagnostics
+    text = outcome.module.read_text()  # type: ignore[union-attr]
+    assert [line for line in text.splitlines() if len(line) > 120] == []
+    assert "if True" not in text and "if False" not in text
+    assert "        self._state = 1  # S0\n" in text
+    assert "is always true: the transition fires at once\n    self._state = 13  # END\n" in text
+    assert "self._arr.finish(self)" in text and "._finish(" not in text
+    assert run_sim(outcome.module).status == 0  # type: ignore[arg-type]
+
+
+TEXTS = st.lists(
+    st.sampled_from(['"', "'", "\\", "\n", "\t", "\x00", " ", "é", "\u2028", "word ", "z" * 130, '"""'])
+).map("".join)
+LITERALS = st.recursive(
+    st.one_of(TEXTS, st.integers(-1000, 10**6)), lambda inner: st.tuples(inner, inner) | st.tuples(inner)
+)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, database=None)
+@given(LITERALS, st.sampled_from([0, 4, 18]))
+def test_literals_and_docstrings_keep_their_values_within_120_columns(value: object, start: int) -> None:
+    """What the template writes of its own (literals, docstrings from descriptions) reads back as
+    the same value and never passes column 120."""
+    from llfsm.compiler.literals import WIDTH, doc_lines, py, py_block
+
+    block = py_block(value, 4, start)
+    assert ast.literal_eval(block) == value
+    assert all(len(line) <= WIDTH for line in (" " * start + block).split("\n"))
+    if start + len(py(value)) <= WIDTH:
+        assert block == py(value)  # what fits stays on one line
+    text = str(value)
+    for indent in (0, 4):
+        doc = doc_lines(text, indent)
+        tree = ast.parse(f"class C:\n{doc}\n" if indent else f"{doc}\n")
+        want = " ".join(text.split()) or "A machine."
+        assert ast.get_docstring(tree.body[0] if indent else tree, clean=False) == want
+        assert all(len(line) <= WIDTH for line in doc.split("\n"))

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
-from conftest import llfsm, llfsm_process, write_machine
+from conftest import MACHINES, llfsm, llfsm_process, write_machine
 
 from llfsm.lang.check import check_machine, find_machines
 from llfsm.lang.diagnostics import RULES, Diagnostic
@@ -501,3 +503,25 @@ def test_parallel_check_gives_the_same_output_in_the_same_order(tmp_path: Path) 
     assert one == two and len(one) > 8
     r = llfsm("check", "-j", "2", "--format", "json", tmp_path)
     assert [d["file"] for d in json.loads(r.stdout)] == [d.file for d in one]
+
+
+def test_check_knows_the_attributes_of_llfsms_clock_time() -> None:
+    """LF041's hint about `now().to_msg()` rests on a list of what llfsm's clock time has:
+    the front end never imports the bus to find out."""
+    from llfsm import ros
+    from llfsm.lang.check.ros_habits import CLOCK_TIME_ATTRIBUTES
+
+    assert {n for n in dir(ros.Time(0)) if not n.startswith("_")} == CLOCK_TIME_ATTRIBUTES
+
+
+def test_the_front_end_imports_neither_the_compiler_nor_the_bus() -> None:
+    """lang/ sits below compiler/ and above nothing of the bus: checking a machine loads
+    neither (nor the messages), so `llfsm check` stays light and the layers point one way."""
+    code = (
+        "import sys\n"
+        "from llfsm.lang.check import check_machine\n"
+        f"check_machine({str(MACHINES / 'counter.machine')!r})\n"
+        "print(sorted(m for m in sys.modules if m.startswith(('llfsm.compiler', 'llfsm.ros', 'llfsm.msgs'))))\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.stdout.strip() == "[]", proc.stderr

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -216,3 +217,36 @@ def test_error_event_in_the_trace_uses_the_same_id_key(tmp_path: Path) -> None:
     last = json.loads(tr.read_text().splitlines()[-1])
     assert last["event"] == "error" and last["id"] == 0 and "machine_id" not in last
     assert last["file"].endswith("State_A_OnEntry.py") and last["line"] == 3
+
+
+def test_a_built_module_moved_with_its_machine_names_the_moved_files(tmp_path: Path) -> None:
+    """The module names its machine folder relative to its own: a project (machines and build
+    folder) moved or checked out elsewhere reports errors against the files where they are now."""
+    from llfsm.compiler.build import build_machine
+
+    old = tmp_path / "old"
+    m = write_machine(old / "machines", "faulty", {"A": None}, {"A_OnEntry": BOOM})
+    assert build_machine(m, old / "build").status == "compiled"
+    new = tmp_path / "new" / "place"
+    shutil.copytree(old, new)
+    shutil.rmtree(old)
+    r = run_sim(new / "build" / "faulty.py")
+    assert r.status == 1
+    assert f"{new}/machines/faulty.machine/State_A_OnEntry.py:3: error: ZeroDivisionError" in r.stderr
+    assert r.stderr.splitlines()[-1].strip() == "z = x / y  # boom"
+
+
+def test_a_module_installed_by_a_package_names_the_machine_installed_beside_it(tmp_path: Path) -> None:
+    """colcon installs share/PKG/llfsm/NAME.py and share/PKG/machine/NAME.machine; the module's
+    path from the build folder does not lead to the machine from there, the folder beside does."""
+    from llfsm.compiler.build import build_machine
+
+    m = write_machine(tmp_path / "ws" / "src" / "pkg" / "machine", "faulty", {"A": None}, {"A_OnEntry": BOOM})
+    assert build_machine(m, tmp_path / "ws" / "build" / "pkg" / "llfsm").status == "compiled"
+    share = tmp_path / "ws" / "install" / "pkg" / "share" / "pkg"
+    (share / "llfsm").mkdir(parents=True)
+    shutil.copy(tmp_path / "ws" / "build" / "pkg" / "llfsm" / "faulty.py", share / "llfsm")
+    shutil.copytree(m, share / "machine" / "faulty.machine")
+    r = run_sim(share / "llfsm" / "faulty.py")
+    assert r.status == 1
+    assert f"{share}/machine/faulty.machine/State_A_OnEntry.py:3: error: ZeroDivisionError" in r.stderr

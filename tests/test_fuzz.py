@@ -359,7 +359,8 @@ def _stdlib_statements(limit: int | None) -> Iterator[tuple[str, ast.Module]]:
 
 
 def _plain_but_refused(limit: int | None) -> tuple[int, list[str]]:
-    from llfsm.lang.check import _compile_error, _scan
+    from llfsm.lang.check.scan import compile_error as _compile_error
+    from llfsm.lang.check.scan import scan_code as _scan
 
     plain, refused = 0, []
     for where, module in _stdlib_statements(limit):

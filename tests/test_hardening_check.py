@@ -173,7 +173,7 @@ class TestLinearWork:
         return write_machine(tmp_path / str(n), "m", {"A": [("END", "True")], "END": None}, {"A_OnEntry": code})
 
     def test_the_file_is_split_once_however_many_diagnostics(self, tmp_path: Path, monkeypatch) -> None:
-        import llfsm.compiler.rewrite as rw
+        import llfsm.lang.positions as rw
 
         calls = []
         real = rw.source_lines

@@ -13,7 +13,7 @@ import yaml
 from conftest import run_sim, write_machine
 
 from llfsm import ros
-from llfsm.lang.check import ROS_QOS_NAMES
+from llfsm.lang.check.ros_habits import ROS_QOS_NAMES
 from llfsm.msgs.std_msgs.msg import Int64
 from llfsm.ros.bus import Bus
 

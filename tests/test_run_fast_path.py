@@ -166,7 +166,8 @@ def test_a_warm_run_imports_neither_click_nor_the_bus(tmp_path: Path) -> None:
     def probe(target: Path) -> str:
         return (
             "import atexit, sys\n"
-            "heavy = ('click', 'yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.ros', 'llfsm.msgs', 'hashlib')\n"
+            "heavy = ('click', 'yaml', 'jinja2', 'pydantic', 'llfsm.compiler', 'llfsm.lang', 'llfsm.ros', 'llfsm.msgs',"
+            " 'hashlib')\n"
             "atexit.register(lambda: sys.stderr.write('HEAVY %s\\n' % sorted(m for m in heavy if m in sys.modules)))\n"
             "import llfsm.fingerprint\n"
             "llfsm.fingerprint.RACY_NS = 0  # a stat record even for files just checked out or merged\n"

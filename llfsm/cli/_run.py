@@ -67,8 +67,9 @@ def _run_native(targets: tuple[str, ...]) -> None:
     # deferred: start-up (only --native loads the compiler)
     from pathlib import Path
 
+    from ..cachedir import cache_root
     from ..compiler.native import ENV, NativeUnavailable, native_build
-    from ..targets import InvalidMachine, MachineLoadError, TargetError, cache_root, resolve
+    from ..targets import InvalidMachine, MachineLoadError, TargetError, resolve
 
     main = sys.modules.get("__main__")
     spec = getattr(main, "__spec__", None)

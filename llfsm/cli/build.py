@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -42,6 +42,7 @@ def build(
 
     With no PATH, every machine below the current folder (e.g. a package root) is built.
     """
+    # deferred: start-up (every command module is imported when `llfsm` starts)
     from ..compiler.build import build_all, terminated_as_exception
     from ..lang.discover import find_machines
 
@@ -66,7 +67,7 @@ def build(
     sys.exit(EXIT_ERRORS if failed else EXIT_OK)
 
 
-def _report(machines: list[Path], outcomes: Iterator[BuildOutcome | str], out_dir: Path, quiet: bool) -> int:
+def _report(machines: list[Path], outcomes: Iterable[BuildOutcome | str], out_dir: Path, quiet: bool) -> int:
     """One progress line per machine (in order), diagnostics of failures; the number failed."""
     failed = 0
     for i, (path, outcome) in enumerate(zip(machines, outcomes, strict=True), 1):
@@ -76,7 +77,7 @@ def _report(machines: list[Path], outcomes: Iterator[BuildOutcome | str], out_di
             progress(f"llfsm: cannot write {target}: {outcome}\n")
             continue
         if outcome.status == "failed":
-            from ..lang.diagnostics import format_text
+            from ..lang.diagnostics import format_text  # deferred: start-up (failures only)
 
             failed += 1
             progress(format_text(outcome.diagnostics))
@@ -88,8 +89,9 @@ def _report(machines: list[Path], outcomes: Iterator[BuildOutcome | str], out_di
 
 def _native(modules: list[Path], quiet: bool) -> None:
     """One mypyc compile for every module of the build (cached in the llfsm cache)."""
+    # deferred: start-up (--native only)
+    from ..cachedir import cache_root
     from ..compiler.native import NativeUnavailable, native_build
-    from ..targets import cache_root
 
     try:
         nb = native_build(modules, cache_root())

@@ -49,6 +49,8 @@ def check(paths: tuple[str, ...], fmt: str, strict: bool, output: str | None, qu
     directory (that machine: pre-commit passes files).  Exit status: 0 clean (warnings allowed
     unless --strict), 1 problems found, 2 bad usage.
     """
+    # deferred: start-up (every command module is imported when `llfsm` starts; the checker
+    # and its yaml and pydantic only when `check` runs)
     from ..lang.check import diagnose
     from ..lang.diagnostics import Severity, render
 

@@ -20,6 +20,7 @@ from ._common import EXIT_ERRORS, cli, fail, write_output
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE (needed for png).")
 def graph(path: str, fmt: str, output: str | None) -> None:
     """The machine's diagram, guards on the arrows."""
+    # deferred: start-up (every command module is imported when `llfsm` starts)
     from ..diagram.dot import DiagramError, dot, render_image
     from ..diagram.mermaid import mermaid
     from ..lang.check import check_machine
@@ -55,8 +56,8 @@ def graph(path: str, fmt: str, output: str | None) -> None:
 @cli.command()
 def schema() -> None:
     """JSON Schema of machine.yaml."""
-    import json
+    import json  # deferred: start-up (as above)
 
-    from ..lang.model import MachineYaml
+    from ..lang.model import MachineYaml  # deferred: start-up (pydantic)
 
     click.echo(json.dumps(MachineYaml.model_json_schema(), indent=2))

@@ -30,7 +30,7 @@ def new() -> None:
 @click.option("--description", default=None, help="One line saying what the machine does.")
 def new_machine(name: str, directory: str, description: str | None) -> None:
     """A valid machine skeleton: INITIAL -> END."""
-    from ..scaffold import ScaffoldError, create_machine
+    from ..scaffold import ScaffoldError, create_machine  # deferred: start-up (jinja2)
 
     try:
         path = create_machine(Path(directory), name, description)
@@ -127,7 +127,7 @@ def new_package(
     `colcon build`, `source install/setup.bash`, `llfsm run NAME/M`.  NAME comes before the
     options that take several values.
     """
-    from ..scaffold import ScaffoldError, create_package
+    from ..scaffold import ScaffoldError, create_package  # deferred: start-up (jinja2)
 
     try:
         pkg = create_package(

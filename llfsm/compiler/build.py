@@ -4,16 +4,23 @@ the module header), and atomic writes, so an interrupted build never leaves half
 from __future__ import annotations
 
 import contextlib
+import gc
+import hashlib
+import json
 import os
 import secrets
 import signal
-from collections.abc import Iterator, Sequence
+import threading
+import time
+from collections.abc import Generator, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..cachedir import cache_root
 from ..fingerprint import RACY_NS, compiler_id, machine_fingerprint, module_fingerprint, stat_signature
-from ..lang.discover import machine_name_of
+from ..machinedir import machine_name_of, source_ref
+from ..workers import die_with_parent, usable_cores
 
 if TYPE_CHECKING:
     from ..lang.diagnostics import Diagnostic
@@ -86,12 +93,13 @@ def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None
     target = out_dir / f"{name}.py"
     if fp is None and not force and target.exists():
         try:
-            fp = machine_fingerprint(path)
+            fp = machine_fingerprint(path, out_dir)
         except OSError:
             fp = ""
     if not force and fp and module_fingerprint(target) == fp:
         return BuildOutcome(path, target, "unchanged", name=name, fingerprint=fp)
-    # only now the checker and the code generator (pydantic, yaml, jinja2): warm builds skip them
+    # deferred: start-up (the checker and the code generator import pydantic, yaml and jinja2;
+    # a warm build, and a warm `llfsm run`, which imports this module to compile, skip them)
     from ..lang.check import check_machine
     from .generate import CompileError, compile_machine
 
@@ -100,11 +108,11 @@ def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None
         return BuildOutcome(path, None, "failed", checked.diagnostics, name=name)
     if not fp:  # no module to compare with: hash the bytes the checker has read
         try:
-            fp = machine_fingerprint(path, checked.read.raw)
+            fp = machine_fingerprint(path, out_dir, checked.read.raw)
         except OSError:
             fp = ""
     try:
-        source = compile_machine(checked, fp)
+        source = compile_machine(checked, fp, source_ref(path, out_dir))
     except CompileError as e:
         return BuildOutcome(path, None, "failed", checked.diagnostics + e.diagnostics, name=name)
     write_atomic(target, source)
@@ -132,7 +140,7 @@ def _build_or_error(
 
 def build_all(
     paths: Sequence[Path], out_dir: Path, force: bool = False, jobs: int | None = None
-) -> Iterator[BuildOutcome | str]:
+) -> Generator[BuildOutcome | str, None, None]:
     """build_machine for each path, in order (a str for an output that cannot be written).
 
     Machines whose module is up to date are found in this process (a fingerprint each); the
@@ -155,7 +163,7 @@ def build_all(
         fp: str | None = None
         if old is not None and not force:  # a module to compare with: hash the machine's files
             try:
-                fp = machine_fingerprint(path)
+                fp = machine_fingerprint(path, out_dir)
             except OSError:
                 fp = ""
             if fp and old == fp:
@@ -165,22 +173,20 @@ def build_all(
         fps.append(fp)
         sigs[path] = sig  # taken before anything was read: an edit during the build is seen next time
     if jobs is None:  # the cores this process may use (taskset, a container's cpuset), as check does
-        from ..workers import usable_cores
-
         jobs = usable_cores() if len(stale) >= PARALLEL_FROM else 1
     results: Iterator[BuildOutcome | str]
     pool = None
     safe: _SafePoints | None = None
     if jobs > 1 and len(stale) > 1:
+        # deferred: start-up (a build of a few machines never starts worker processes); the
+        # compiler is imported once here, before the workers fork, rather than by each of them
         import multiprocessing
 
-        from ..lang.check import check_machine  # noqa: F401 (imported once, before the workers fork)
+        from ..lang.check import check_machine  # noqa: F401
         from .generate import compile_machine  # noqa: F401
 
         compiler_id()  # read once here, not by every worker
         ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-        import gc
-
         gc.freeze()  # the workers' collector leaves the inherited objects alone: fewer pages copied
         with _signals_deferred():  # an interrupt never lands between two forks: every worker is known
             pool = ctx.Pool(jobs, initializer=_worker_init, initargs=(os.getpid(),))
@@ -222,7 +228,7 @@ def build_all(
 def _results_of(batches: Any, safe: _SafePoints) -> Iterator[BuildOutcome | str]:
     """The outcomes of the workers' batches in order (`batches`: Pool.imap's iterator), waited
     for in short steps that take any interrupt noted meanwhile (see _SafePoints)."""
-    import multiprocessing
+    import multiprocessing  # deferred: start-up (only a parallel build waits for workers)
 
     while True:
         safe.take()
@@ -244,8 +250,6 @@ class _SafePoints:
     main thread only (elsewhere signals are not this thread's to handle)."""
 
     def __init__(self) -> None:
-        import threading
-
         self.pending: int | None = None
         self.old: dict[int, Any] = {}
         if threading.current_thread() is threading.main_thread():
@@ -278,8 +282,6 @@ def _worker_init(parent: int | None = None) -> None:
     them with SIGTERM, which write_atomic_bytes holds back until a module is whole.  A parent
     killed outright (SIGKILL, the OOM killer) sends them SIGTERM too, as check's workers end."""
     if parent is not None:
-        from ..workers import die_with_parent
-
         die_with_parent(parent, signal.SIGTERM)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
@@ -317,11 +319,6 @@ class _StatCache:
     output folder; any difference (a touched file, another output) falls back to the contents."""
 
     def __init__(self, out_dir: Path) -> None:
-        import hashlib
-        import json
-
-        from ..targets import cache_root
-
         key = hashlib.sha256(os.fsencode(os.path.abspath(out_dir))).hexdigest()[:16]
         self.file = cache_root() / "buildstat" / f"{key}.json"
         try:
@@ -335,9 +332,6 @@ class _StatCache:
         """The stat signature that `llfsm run`'s record uses too (fingerprint.stat_signature:
         names, sizes, times, inodes, the compiler's files), hashed; "" when a file changed too
         recently to be trusted (a change within the same clock tick could go unseen)."""
-        import hashlib
-        import time
-
         sig = stat_signature(str(path))
         if sig is None or sig[1] > time.time_ns() - RACY_NS:
             return ""
@@ -351,8 +345,6 @@ class _StatCache:
             self.now[str(path)] = [sig, fp]
 
     def save(self) -> None:
-        import json
-
         if self.now == self.known:
             return
         with contextlib.suppress(OSError):

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import ast
 import io
-import os
 import re
+import textwrap
 import tokenize
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -19,6 +19,7 @@ from functools import cache
 import jinja2
 
 from .. import __version__
+from ..lang.bindings import MACHINE_ALIAS, Edit, attribute_of, find, name_map, own_locals, state_map, used_names
 from ..lang.check import MachineCheck
 from ..lang.diagnostics import Diagnostic, diag
 from ..lang.model import Code, Machine, State
@@ -26,18 +27,8 @@ from ..lang.scopes import child_nodes
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
 from ..templating import environment
-from .rewrite import (
-    ALIAS_LINE,
-    MACHINE_ALIAS,
-    Edit,
-    apply,
-    attribute_of,
-    find,
-    name_map,
-    own_locals,
-    state_map,
-    used_names,
-)
+from .literals import WIDTH, doc_lines, names_block, py, py_block
+from .rewrite import ALIAS_LINE, apply
 
 #: How a rewritten name that reaches the machine through its alias starts.
 _ALIASED = MACHINE_ALIAS + "."
@@ -68,34 +59,27 @@ def indent_code(text: str, width: int) -> str:
     return "\n".join(line if (i + 1 in keep or not line.strip()) else prefix + line for i, line in enumerate(lines))
 
 
-def _py(value: object) -> str:
-    """A Python literal for a value: strings through repr, so no name or text can inject code."""
-    if isinstance(value, list | tuple):
-        inner = ", ".join(_py(v) for v in value)
-        return f"({inner},)" if len(value) == 1 else f"({inner})"
-    if isinstance(value, frozenset | set):
-        return "{" + ", ".join(_py(v) for v in sorted(value)) + "}" if value else "()"
-    return repr(value)
-
-
-def _doc(text: str) -> str:
-    """Text safe inside a triple-quoted docstring, on one line: every quote and backslash is
-    escaped and non-printable characters are spelled out, so no description can end the string."""
-    text = " ".join(text.split()) or "A machine."
-    out = []
-    for ch in text:
-        if ch in '\\"':
-            out.append("\\" + ch)
-        elif not ch.isprintable():
-            out.append(ch.encode("unicode_escape").decode("ascii"))
-        else:
-            out.append(ch)
-    return "".join(out)
-
-
 @cache
 def _env() -> jinja2.Environment:
-    return environment(py=_py, code=indent_code, pointer=_pointer, lead=_lead)
+    return environment(py=py, pyblock=py_block, names=names_block, code=indent_code, pointer=_pointer, lead=_lead)
+
+
+def _def_line(name: str, cls: str) -> str:
+    """The `def` line of a ringlet, spread over three when a long name needs it."""
+    one = f'def {name}(self: "{cls}") -> "int | None":'
+    return one if len(one) <= WIDTH else f'def {name}(\n    self: "{cls}",\n) -> "int | None":'
+
+
+def _wrap_doc(text: str, indent: int) -> str:
+    """A one-line docstring of llfsm's own words (and names: no quotes, no escapes), at `indent`,
+    over more lines if need be."""
+    one = f'"""{text}"""'
+    if indent + len(one) <= WIDTH:
+        return one  # the usual case, without textwrap's cost (two per state of every machine)
+    pad = " " * indent
+    return textwrap.fill(
+        f'"""{text}"""', WIDTH, initial_indent=pad, subsequent_indent=pad, break_long_words=False
+    ).removeprefix(pad)
 
 
 def class_name(machine: str) -> str:
@@ -151,6 +135,40 @@ class GuardView:
     multiline: bool
     to_suspend: bool
     alias: bool = False
+    #: A guard that is a constant: True (truthy) fires at once, False never; None for the rest.
+    #: A constant is written as what it does, not as a dead `if True:` or `if False:` block.
+    constant: bool | None = None
+    file: str = ""
+    #: The state has an OnExit, which the transition runs first.
+    exits: bool = False
+    state: str = ""
+
+    def code(self) -> str:
+        """The guard's lines in a ringlet: its pointer, the test, and the lines that take the
+        transition; a constant as what it does.  Made here, once for both ringlets, rather than
+        by the template: a template macro per guard cost a tenth of a build's time."""
+        if self.constant is None:
+            test = (
+                f"    if ({self.first_line}\n{self.other_lines}\n    ):\n"
+                if self.multiline
+                else f"    if {self.text}:\n"
+            )
+            return f"{_lead(self, 4)}\n{test}{self.fire(8)}"
+        if self.constant:
+            return f"    # {self.file} is always true: the transition fires at once\n{self.fire(4)}"
+        return f"    # {self.file} is always false: the transition never fires\n"
+
+    def fire(self, width: int) -> str:
+        """The lines that take the transition, at `width`."""
+        pad = " " * width
+        lines = [f"self.on_exit_{self.state}()"] if self.exits else []
+        if self.to_suspend:
+            lines.append("self._enter_suspend_state()")
+        else:
+            lines.append(f"self._state = {self.target}  # {self.target_name}")
+            lines.append(f"self._run = _llfsm_enter_{self.target_name}")
+        lines.append(f"return {self.index}")
+        return "".join(f"{pad}{line}\n" for line in lines)
 
     @property
     def first_line(self) -> str:
@@ -173,18 +191,33 @@ class StateView:
     entry: Block | None
     internal: Block | None
     exit: Block | None
+    #: The guards the steady ringlet tests, in order, up to a constant true one (what follows
+    #: it never runs, and is not written).
     guards: list[GuardView] = field(default_factory=list)
+    #: Their lines, as both ringlets write them (made once, here rather than by the template).
+    guards_code: str = ""
     hooks: list[tuple[str, Block]] = field(default_factory=list)
     #: OnSuspend / OnResume: functions beside the ringlets, which the ON_SUSPEND / ON_RESUME
     #: tables name (a class body cannot name its own methods once mypyc compiles it).
     command_hooks: list[tuple[str, Block]] = field(default_factory=list)
-    #: OnEntry / Internal are inlined into the ringlet (one call per ringlet) unless one binds a
-    #: local that another part of the ringlet also uses; then it gets a method of its own, so
-    #: that its locals stay its own, as the locals of a clfsm section do.
+    #: OnEntry / Internal are inlined into their ringlet unless one binds a local that another
+    #: part of the state (the other section, a guard) also uses; then it gets a method of its
+    #: own, so that the reader sees at once that its locals are its own, as the locals of a
+    #: clfsm section are.
     entry_method: bool = False
     internal_method: bool = False
     #: The entry ringlet records the entry time: only states whose code uses after* need it.
     stamp: bool = False
+    #: The `def` lines of the two ringlets (spread over lines when a long name needs it), and
+    #: the entry ringlet's docstring.
+    enter_def: str = ""
+    steady_def: str = ""
+    enter_doc: str = ""
+
+    @property
+    def falls_through(self) -> bool:
+        """No guard is constant true: Internal (and an accepting state's finish) can run."""
+        return not any(g.constant for g in self.guards)
 
     @property
     def has_on_suspend(self) -> bool:
@@ -316,7 +349,11 @@ def _guard_view(
         t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(block.text).readline)
     )
     multiline = "\n" in block.text or has_comment
-    return GuardView(index, target, target_name, block.pointer, block.text, multiline, to_suspend, block.alias)
+    expr = tree.body[0]
+    constant = bool(expr.value.value) if isinstance(expr, ast.Expr) and isinstance(expr.value, ast.Constant) else None
+    return GuardView(
+        index, target, target_name, block.pointer, block.text, multiline, to_suspend, block.alias, constant, code.file
+    )
 
 
 def _variables_block(code: Code, tree: ast.Module, mapping: Mapping[str, str]) -> Block | None:
@@ -338,8 +375,10 @@ class CompileError(Exception):
         self.diagnostics = diagnostics
 
 
-def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
-    """Source of the module for a machine that passed `check` (no errors)."""
+def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str:
+    """Source of the module for a machine that passed `check` (no errors).  `source`: the
+    machine folder as the module names it, relative to the folder the module is written to
+    (llfsm.machinedir.source_ref), so that the module holds no absolute path."""
     m = checked.machine
     assert m is not None and checked.ok, "compile only machines that check clean"
     trees = checked.read.trees
@@ -359,11 +398,12 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
                 if used:
                     after_states.add(s.name)
                 stamp_all = stamp_all or escaped
-    for code in (m.includes, m.variables_file, *(s.variables_file for s in m.states)):
-        tree = trees.get(code.file) if code is not None else None
-        if tree is not None and code is not None and "after" in code.text and any(_after_use(tree)):
+    for loaded in (m.includes, m.variables_file, *(s.variables_file for s in m.states)):
+        tree = trees.get(loaded.file) if loaded is not None else None
+        if tree is not None and loaded is not None and "after" in loaded.text and any(_after_use(tree)):
             stamp_all = True
     walks = _Trees()  # each tree walked once for the rewrite, its names and its locals
+    cls = class_name(m.name)
 
     def view(s: State) -> StateView:
         mapping = state_map(base, s.name, [v.name for v in s.variables])
@@ -382,13 +422,15 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
             exit=sec("OnExit"),
             stamp=stamp_all or s.name in after_states,
         )
+        sv.enter_def = _def_line(f"_llfsm_enter_{s.name}", cls)
+        sv.steady_def = _def_line(f"_llfsm_steady_{s.name}", cls)
         if not sv.is_suspend:
             targets = ", ".join(t.target for t in s.transitions) or "none: accepting"
-            sv.doc = f"Ringlet of {s.name} (transitions to {targets})."
-        for t in s.transitions:
-            assert t.guard is not None
-            sv.guards.append(
-                _guard_view(
+            sv.doc = _wrap_doc(f"Ringlet of {s.name} (transitions to {targets}).", 4)
+            sv.enter_doc = _wrap_doc(f"{s.name} was just entered: OnEntry, then as _llfsm_steady_{s.name}.", 4)
+            for t in s.transitions:
+                assert t.guard is not None
+                g = _guard_view(
                     t.guard,
                     trees[t.guard.file],
                     mapping,
@@ -398,7 +440,13 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
                     index[t.target] == susp,
                     walks,
                 )
-            )
+                g.exits, g.state = sv.exit is not None, s.name
+                sv.guards.append(g)
+                if g.constant:
+                    break  # the transition always fires here: the rest is never evaluated
+        sv.guards_code = "".join(g.code() for g in sv.guards)
+        if not sv.falls_through:
+            sv.internal = None  # never runs: a guard before it always fires
         parts = {sec: trees[c.file] for sec, c in s.sections.items() if sec in ("OnEntry", "Internal")}
         parts.update({f"guard{t.index}": trees[t.guard.file] for t in s.transitions if t.guard is not None})
         for part in ("OnEntry", "Internal"):
@@ -429,28 +477,29 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
         variables = _variables_block(m.variables_file, trees["Variables.py"], base)
     state_variables = []
     for s in m.states:
-        code = s.variables_file
-        if code is not None and code.file in trees:
+        declared = s.variables_file
+        if declared is not None and declared.file in trees:
             svars = [v.name for v in s.variables]
-            b = _variables_block(code, trees[code.file], state_map(base, s.name, svars))
+            b = _variables_block(declared, trees[declared.file], state_map(base, s.name, svars))
             if b is not None:
                 state_variables.append(b)
 
-    source_dir = os.path.abspath(m.path)
     views = [view(s) for s in m.states]
+    accepting = tuple(i for i, s in enumerate(m.states) if s.accepting and i != susp)
     ctx = {
         "version": __version__,
         "fingerprint": fingerprint,
         "m": {
             "name": m.name,
-            "class_name": class_name(m.name),
-            "docstring": _doc(f"{m.name}: {m.description}" if m.description else f"The machine {m.name}."),
-            "class_doc": _doc(m.description or f"The machine {m.name}."),
+            "class_name": cls,
+            "docstring": doc_lines(f"{m.name}: {m.description}" if m.description else f"The machine {m.name}.", 0),
+            "class_doc": doc_lines(m.description or f"The machine {m.name}.", 4),
             "state_names": tuple(names),
             "initial": index[m.initial],
             "suspended": susp,
-            "accepting": tuple(i for i, s in enumerate(m.states) if s.accepting and i != susp),
-            "source_dir": source_dir,
+            "accepting": accepting,
+            "accepting_names": ", ".join(names[i] for i in accepting),
+            "source_dir": source,
             "description": m.description or "",
             # per state, (target index, guard as written) in priority order: for the description
             # a run publishes on /llfsm/NAME/description and the web view draws
@@ -458,6 +507,8 @@ def compile_machine(checked: MachineCheck, fingerprint: str = "") -> str:
                 tuple((index[t.target], t.guard.text.strip() if t.guard is not None else "") for t in s.transitions)
                 for s in m.states
             ),
+            "enter": [f"_llfsm_enter_{v.name}" for v in views],
+            "steady": [f"_llfsm_steady_{v.name}" for v in views],
             "includes": includes,
             "variables": variables,
             "state_variables": state_variables,

@@ -10,10 +10,11 @@ refuses it, usually) is dropped from the group with one warning naming the user'
 line, and runs as plain Python beside the compiled ones.
 
 The result lives in `<cache>/native/<key>`, where the key covers the runtime's source, every
-module's text, the Python version and the mypyc version, so an unchanged build is found again
-without compiling.  A process uses it by starting with `LLFSM_NATIVE=<that folder>` in its
-environment: `llfsm.runtime` then imports its compiled modules from there (see
-llfsm/runtime/__init__.py), which is why `llfsm run --native` starts the run in a fresh process.
+module's text and the machine folder it leads to, the Python version and the mypyc version, so
+an unchanged build is found again without compiling.  A process uses it by starting with
+`LLFSM_NATIVE=<that folder>` in its environment: `llfsm.runtime` then imports its compiled
+modules from there (see llfsm/runtime/__init__.py), which is why `llfsm run --native` starts
+the run in a fresh process.
 """
 
 from __future__ import annotations
@@ -32,13 +33,17 @@ import sysconfig
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..machinedir import source_ref
 from ..runtime.errors import _display, map_line, source_dir_of
+from ..templating import comment_text
 
 #: The runtime modules a native build compiles: everything a round touches.
 RUNTIME_MODULES = ("machine", "scheduler", "clock", "context")
 #: Environment variable naming the native build a process runs with.
 ENV = "LLFSM_NATIVE"
 MANIFEST = "manifest.json"
+#: How a generated module's header names its machine folder (runtime.errors.SOURCE_PATTERN).
+SOURCE_KEY = b"# Source: "
 
 _ERROR = re.compile(r"^(?P<file>[^:\n]+):(?P<line>\d+):(?:\d+:)? error: (?P<msg>.*)$", re.M)
 
@@ -73,10 +78,14 @@ class NativeBuild:
     cached: bool = False
 
 
-def content_hash(data: bytes) -> str:
-    """How a manifest names a module: by its text, so a build made from `build/` serves a run of
-    the same machine from the cache too (the runtime looks modules up the same way)."""
-    return hashlib.sha256(data).hexdigest()[:32]
+def module_key(module: Path) -> str:
+    """How a manifest names a module (llfsm.targets looks modules up the same way): by its text
+    and the machine folder it leads to.  A module names that folder relative to its own, so two
+    copies of a project have modules of the same text; their compiled code would name the files
+    of whichever copy was compiled first in its error reports."""
+    h = hashlib.sha256(module.read_bytes())
+    h.update(b"\0" + os.fsencode(source_dir_of(str(module)) or ""))
+    return h.hexdigest()[:32]
 
 
 def _from_manifest(folder: Path, modules: list[Path], base: str) -> NativeBuild | None:
@@ -89,7 +98,7 @@ def _from_manifest(folder: Path, modules: list[Path], base: str) -> NativeBuild 
         return None
     out = NativeBuild(folder, cached=True)
     for m in modules:
-        h = content_hash(m.read_bytes())
+        h = module_key(m)
         if h not in data["modules"]:
             return None
         out.modules[str(m)] = data["modules"][h]
@@ -100,7 +109,7 @@ def _from_manifest(folder: Path, modules: list[Path], base: str) -> NativeBuild 
 def available() -> str | None:
     """Why --native cannot work here, or None when it can."""
     try:
-        import mypyc  # noqa: F401
+        import mypyc  # noqa: F401  # deferred: optional dependency (llfsm[native])
     except ImportError:
         return "mypyc is not installed (pip install 'llfsm[native]')"
     cc = (sysconfig.get_config_var("CC") or "cc").split()[0]
@@ -117,7 +126,7 @@ def _runtime_dir() -> Path:
 
 
 def _mypyc_version() -> str:
-    from mypy.version import __version__
+    from mypy.version import __version__  # deferred: optional dependency (llfsm[native])
 
     return __version__
 
@@ -132,10 +141,11 @@ def base_key() -> str:
 
 
 def build_key(modules: list[Path], base: str) -> str:
-    """Content + Python version + mypyc version: the same key means the same compiled result."""
+    """Content (each module's `module_key`) + Python version + mypyc version: the same key means
+    the same compiled result."""
     h = hashlib.sha256(base.encode())
     for m in sorted(modules, key=_stage_name):
-        h.update(_stage_name(m).encode() + b"\0" + m.read_bytes() + b"\0")
+        h.update(_stage_name(m).encode() + b"\0" + module_key(m).encode() + b"\0")
     return h.hexdigest()[:24]
 
 
@@ -173,8 +183,8 @@ def native_build(modules: list[Path], root: Path) -> NativeBuild:
         result, per_module = _compile(modules, folder, native / "mypy-cache")
         data = {
             "base": base,
-            "modules": {content_hash(m.read_bytes()): result.modules[str(m)] for m in modules},
-            "warnings": {content_hash(m.read_bytes()): w for m, w in per_module.items()},
+            "modules": {module_key(m): result.modules[str(m)] for m in modules},
+            "warnings": {module_key(m): w for m, w in per_module.items()},
         }
         (folder / MANIFEST).write_text(json.dumps(data, indent=1), encoding="utf-8")
         return result
@@ -191,10 +201,26 @@ def _stage(modules: list[Path], folder: Path) -> dict[str, Path]:
     staged = {}
     for m in modules:
         target = folder / f"{_stage_name(m)}.py"
-        shutil.copyfile(m, target)
+        target.write_bytes(_rebased(m, folder))
         staged[_stage_name(m)] = target
     (folder / "mypy.ini").write_text(_MYPY_INI, encoding="utf-8")
     return staged
+
+
+def _rebased(module: Path, folder: Path) -> bytes:
+    """The module's text for its copy in `folder`: the same lines, but the `# Source:` line names
+    the machine folder relative to the copy (a module names it relative to its own folder), so
+    that errors in the compiled code, whose frames point at the copy, still name the user's files."""
+    data = module.read_bytes()
+    machine = source_dir_of(str(module))
+    if machine is None:
+        return data
+    lines = data.split(b"\n")
+    for i, line in enumerate(lines[:5]):
+        if line.startswith(SOURCE_KEY):
+            lines[i] = SOURCE_KEY + comment_text(source_ref(machine, folder)).encode("ascii")
+            break
+    return b"\n".join(lines)
 
 
 def _run_mypyc(files: list[Path], folder: Path, mypy_cache: Path) -> subprocess.CompletedProcess[str]:

@@ -1,15 +1,17 @@
-"""Finding machine directories.  Light (os only when imported): `llfsm build` and `llfsm run`
-use it on their fast paths, before deciding whether anything needs the compiler."""
+"""Finding machine directories below a folder, for `llfsm check`, `llfsm build` and the package
+builds.  Light (os only when imported); what a machine directory is (its name, the symlink
+rule) is llfsm.machinedir's, below the front end."""
 
 from __future__ import annotations
 
 import os
 
-TYPE_CHECKING = False  # not typing's own: `llfsm run` imports this module and starts fast without typing
-if TYPE_CHECKING:
-    from pathlib import Path  # not at run time: pathlib costs `llfsm run` a tenth of its start-up
+from ..machinedir import MACHINE_SUFFIX
 
-MACHINE_SUFFIX = ".machine"
+TYPE_CHECKING = False  # not typing's own: a warm `llfsm build` imports this module, and typing costs it
+if TYPE_CHECKING:
+    from pathlib import Path
+
 #: Folders never searched for machines: VCS data, caches, virtual environments.
 SKIP_DIRS = frozenset(
     {
@@ -28,32 +30,6 @@ SKIP_DIRS = frozenset(
 )
 #: colcon's output folders, skipped when they sit beside a `src/` (they hold copies).
 COLCON_OUTPUT = frozenset({"build", "install", "log"})
-
-
-def machine_name_of(path: Path) -> str:
-    name = path.name
-    return name[: -len(MACHINE_SUFFIX)] if name.endswith(MACHINE_SUFFIX) else name
-
-
-def refused_link(path: Path) -> str | None:
-    """Why the machine directory `path` must not be read, or None if it may.
-
-    The one rule of every entry point (check, build, run, graph, a path found by searching or
-    named on the command line or by a shell glob): a machine directory that is a symlink is
-    read only if it leads to a place inside the folder that holds the link.  A pull request
-    can add `evil.machine -> /home/ci/secrets`; neither `llfsm check .` nor
-    `llfsm check */*.machine` nor `llfsm build` may then read, report or compile that folder.
-    """
-    if not os.path.islink(path):
-        return None
-    from pathlib import Path
-
-    # os.path.realpath, not Path.resolve: it never raises on a symlink loop (Python 3.11)
-    real = Path(os.path.realpath(path))
-    home = Path(os.path.realpath(path.parent))
-    if real.is_relative_to(home):
-        return None
-    return f"{path.name} is a symlink leading out of {path.parent}; refused"
 
 
 def is_machine_dir(path: Path) -> bool:

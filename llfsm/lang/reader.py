@@ -18,9 +18,8 @@ from pathlib import Path
 
 import yaml
 
-from ..compiler.rewrite import line_index, source_segment
+from ..machinedir import machine_name_of, refused_link
 from .diagnostics import Diagnostic, diag
-from .discover import machine_name_of, refused_link
 from .model import (
     IMPLICIT_SUSPENDED,
     SECTIONS,
@@ -31,6 +30,7 @@ from .model import (
     Transition,
     Variable,
 )
+from .positions import line_index, node_col, source_segment
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: no hand-written state section comes near this
 MAX_YAML_DEPTH = 32
@@ -168,7 +168,7 @@ class _Reader:
             tree = ast.parse(text, filename=name)
         except SyntaxError as e:
             line = e.lineno or 1
-            col = _char_col(text, line, (e.offset or 1) - 1, is_bytes=False) if e.offset else 1
+            col = e.offset if e.offset else 1  # the parser counts characters, not bytes
             hint = cpp_hint(line_index(text).lines[line - 1] if 1 <= line <= text.count("\n") + 1 else "")
             self.report("LF030", name, line, col, f"syntax error: {e.msg}" + (f"; {hint}" if hint else ""))
             return None
@@ -212,7 +212,7 @@ class _Reader:
                         name=stmt.target.id,
                         annotation=ann,
                         initial=init,
-                        loc=Loc(file=name, line=stmt.lineno, column=_node_col(text, stmt)),
+                        loc=Loc(file=name, line=stmt.lineno, column=node_col(text, stmt)),
                     )
                 )
             else:
@@ -221,7 +221,7 @@ class _Reader:
                     "LF032",
                     name,
                     stmt.lineno,
-                    _node_col(text, stmt),
+                    node_col(text, stmt),
                     f"{what} in {name}: only annotated assignments such as `count: int = 0` are allowed",
                 )
         return out, self.code(name, text)
@@ -373,15 +373,15 @@ class _Reader:
         counts: dict[str, int] = {}
         for s in states:
             counts.setdefault(s.name, len(s.transitions))
-        for e in entries:
-            m = SECTION_RE.match(e) or GUARD_RE.match(e)
+        for entry in entries:
+            m = SECTION_RE.match(entry) or GUARD_RE.match(entry)
             if m and m["state"] not in counts:
-                result.orphans.append(e)
+                result.orphans.append(entry)
             elif m and "n" in m.groupdict():
                 n, count = m["n"], counts[m["state"]]
                 # `Transition_01` is no transition's file; int() of a long digit string raises
                 if (n != "0" and n.startswith("0")) or len(n) > len(str(count)) or int(n) >= count:
-                    result.orphans.append(e)
+                    result.orphans.append(entry)
 
         result.machine = Machine(
             name=name,
@@ -506,22 +506,6 @@ def _mark_loc(node: yaml.Node) -> Loc:
 
 def _kind(node: yaml.Node) -> str:
     return {"MappingNode": "mapping", "SequenceNode": "list"}.get(type(node).__name__, "value")
-
-
-def _char_col(text: str, line: int, offset: int, is_bytes: bool = True) -> int:
-    """1-based character column of a 0-based offset on a 1-based line (ast offsets are UTF-8 bytes)."""
-    if not is_bytes:
-        return offset + 1
-    return line_index(text).char_col(line, offset)
-
-
-def _node_col(text: str, node: ast.AST) -> int:
-    return _char_col(text, node.lineno, node.col_offset)  # type: ignore[attr-defined]
-
-
-def node_col(text: str, node: ast.AST) -> int:
-    """Public form of `_node_col` for the checker."""
-    return _node_col(text, node)
 
 
 def _describe(stmt: ast.stmt) -> str:

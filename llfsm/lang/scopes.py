@@ -183,7 +183,7 @@ class _Resolver:
         """Where the names a statement binds take effect: after the whole statement for an
         assignment or import (`x = x + 1` reads x first), after the iterable for a `for`."""
         at: Pos | None = None
-        targets: list[ast.AST] = []
+        targets: list[ast.expr] = []
         if isinstance(stmt, ast.Assign):
             at, targets = _end(stmt), stmt.targets
         elif isinstance(stmt, ast.AugAssign):

@@ -12,6 +12,7 @@ from __future__ import annotations
 import errno
 import os
 
+from ..machinedir import machine_dir_of
 from .machine import Machine
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
@@ -157,8 +158,15 @@ def is_generated(filename: str) -> bool:
 
 
 def source_dir_of(filename: str) -> str | None:
-    """The machine folder named in a generated module's header (written JSON-escaped, so that
-    any folder name fits on one comment line)."""
+    """The machine folder named in a generated module's header, as a path from here.
+
+    The header names it relative to the module's own folder (written JSON-escaped, so that any
+    folder name fits on one comment line): a module holds no absolute path, and the same
+    machine gives the same bytes wherever the machine and the build are, as long as they move
+    together.  A module installed by a colcon package (share/PKG/llfsm/NAME.py) has its machine
+    installed beside it (share/PKG/machine/NAME.machine), where the relative path from the
+    build folder no longer leads: that folder is taken when it is there and the other is not.
+    (A header of an older build with an absolute path still works.)"""
     import json
     import linecache  # error paths only: a run's start-up does not pay for them
 
@@ -166,9 +174,15 @@ def source_dir_of(filename: str) -> str | None:
         m = _compiled(SOURCE_PATTERN).match(linecache.getline(filename, i).rstrip("\n"))
         if m:
             try:
-                return str(json.loads(f'"{m["dir"]}"'))
+                ref = str(json.loads(f'"{m["dir"]}"'))
             except ValueError:
-                return m["dir"]
+                ref = m["dir"]
+            folder = machine_dir_of(ref, filename)
+            if not os.path.isdir(folder):
+                installed = machine_dir_of(os.path.join(os.pardir, "machine", os.path.basename(folder)), filename)
+                if os.path.isdir(installed):
+                    return installed
+            return folder
     return None
 
 

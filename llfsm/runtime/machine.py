@@ -74,7 +74,7 @@ class Machine:
     STEADY: ClassVar[tuple[Ringlet, ...]] = ()
     ON_SUSPEND: ClassVar[tuple[Hook, ...]] = ()
     ON_RESUME: ClassVar[tuple[Hook, ...]] = ()
-    #: The machine directory the class was compiled from.
+    #: The machine directory the class was compiled from, relative to its module's folder.
     SOURCE_DIR: ClassVar[str] = ""
     #: machine.yaml's description, and per state its transitions in priority order as
     #: (target index, guard text as written): what /llfsm/NAME/description and the web view show.

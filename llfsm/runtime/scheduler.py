@@ -226,8 +226,9 @@ class Arrangement:
         _regate(m)
         return m._run(m)
 
-    def _finish(self, m: Machine) -> None:
-        """Called by the ringlet of an accepting state (unless --keep-accepting): unload m."""
+    def finish(self, m: Machine) -> None:
+        """The machine has finished: unload it.  The hook generated code calls, from the ringlet
+        of an accepting state, unless the run keeps accepting machines (`keep_accepting`)."""
         if self.tracer is not None:
             self.tracer.finish(m)
         m._finished = True

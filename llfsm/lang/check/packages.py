@@ -117,6 +117,7 @@ def _read_manifest(path: Path, _mtime_ns: int, size: int) -> Manifest:
     except OSError as e:
         return Manifest(path, error=e.strerror or str(e))
     try:
+        # deferred: start-up (only a machine inside a package has a package.xml to read)
         from catkin_pkg.package import InvalidPackage, parse_package_string
     except ImportError:  # checking still works without it; only LF106 is lost
         return Manifest(path, error="catkin_pkg, which llfsm reads it with, is not installed")
