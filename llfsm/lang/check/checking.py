@@ -66,6 +66,8 @@ class Checking:
     imported: set[str] | None = field(default_factory=set)
     #: name -> a section file binding it at its own level, made on the first undefined name
     section_locals: dict[str, str] | None = None
+    #: file -> ids of the names its calls call, made on the file's first undefined name
+    called: dict[str, set[int]] = field(default_factory=dict)
 
     @classmethod
     def of(cls, path: Path, read: ReadResult) -> Checking:
