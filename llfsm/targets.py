@@ -368,12 +368,19 @@ def load(target: str) -> type[Machine]:
 
 
 def _missing_helper_hint(exception: str, folders: list[str], module: str) -> str:
-    """Where llfsm looked for a helper module an include could not import (a built module
-    copied away from the machine folder it was built from), and what to do about it."""
+    """Where llfsm looked for a module an include could not import: a helper module (a built
+    module copied away from the machine folder it was built from), or an interface package."""
     prefix = "ModuleNotFoundError: No module named '"
-    if not exception.startswith(prefix) or "." in exception[len(prefix) :].split("'")[0]:
+    if not exception.startswith(prefix):
         return ""
     name = exception[len(prefix) :].split("'")[0]
+    if name.startswith("llfsm.msgs.") and name.count(".") == 2:
+        return (
+            f" (no interface package {name.split('.')[2]!r}: llfsm looks among the packages it ships, in the "
+            "folders above the machine, in LLFSM_INTERFACE_PATH and in share/ of AMENT_PREFIX_PATH)"
+        )
+    if "." in name:
+        return ""
     where = " and ".join(folders) or "nowhere"
     return (
         f" (not installed; llfsm looks for helper modules in {where}: copy {name}.py beside "

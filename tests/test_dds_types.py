@@ -15,8 +15,8 @@ from llfsm.idl.package import MSGS_DIR, installed_spec
 from llfsm.msgs import _dds
 from llfsm.msgs._message import INT_RANGES, Message, Service, is_message_class, is_service_class
 
-BUILTIN = ("builtin_interfaces", "std_msgs", "geometry_msgs", "std_srvs", "turtlesim", "turtle_sensor_interface",
-           "service_msgs", "rmw_dds_common")  # fmt: skip
+#: Every package llfsm ships (a folder of definitions each, under llfsm/msgs/_interfaces).
+BUILTIN = tuple(sorted(p.name for p in (Path(_dds.__file__).parent / "_interfaces").iterdir() if p.is_dir()))
 
 
 def shipped_classes() -> list[type[Message]]:

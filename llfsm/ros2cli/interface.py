@@ -16,8 +16,9 @@ import os
 import re
 from pathlib import Path
 
+from ..interface_path import INTERFACE_KINDS
 from ..msgs import Message, Service, add_search_path, find_package, search_path
-from . import CliError
+from . import NOT_FOUND, CliError
 
 _MSGS_DIR = Path(__file__).resolve().parent.parent / "msgs"
 _DEFINITIONS = _MSGS_DIR / "_interfaces"
@@ -42,7 +43,9 @@ def split_type(text: str, kind: str) -> tuple[str, str, str]:
         parts = [parts[0], kind, parts[1]]
     if len(parts) != 3 or parts[1] not in KINDS or not _PACKAGE.match(parts[0]) or not _NAME.match(parts[2]):
         example = "geometry_msgs/msg/Twist" if kind == "msg" else "turtlesim/srv/Spawn"
-        raise CliError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {example})")
+        close = _closest(parts[0], parts[-1], kind) if len(parts) == 3 and parts[1] in KINDS else None
+        hint = f" (did you mean '{close}'?)" if close else ""
+        raise CliError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {example}){hint}")
     return parts[0], parts[1], parts[2]
 
 
@@ -50,7 +53,7 @@ def _builtin_packages() -> list[str]:
     return sorted(
         d.name
         for d in _MSGS_DIR.iterdir()
-        if not d.name.startswith("_") and any((d / k / "__init__.py").is_file() for k in KINDS)
+        if not d.name.startswith("_") and any((d / k / "__init__.py").is_file() for k in INTERFACE_KINDS)
     )
 
 
@@ -62,40 +65,90 @@ def _user_packages() -> dict[str, Path]:
         except OSError:
             continue
         for d in entries:
-            if _PACKAGE.match(d.name) and d.name not in found and any((d / k).is_dir() for k in KINDS):
+            if _PACKAGE.match(d.name) and d.name not in found and any((d / k).is_dir() for k in INTERFACE_KINDS):
                 found[d.name] = d
     return found
 
 
-def known_types(kind: str) -> list[str]:
-    """Every `pkg/kind/Name` llfsm can import: built-in packages, then the user's."""
-    out = []
-    builtin = _builtin_packages()
-    for pkg in builtin:
-        folder = _DEFINITIONS / pkg / kind
-        if folder.is_dir():
-            out += [f"{pkg}/{kind}/{p.stem}" for p in sorted(folder.glob(f"*.{kind}"))]
+def packages() -> dict[str, Path]:
+    """Every interface package llfsm can import, by name: its own (their definitions), then the
+    user's from the search path (a user's package of a shipped package's name is never used)."""
+    out = {pkg: _DEFINITIONS / pkg for pkg in _builtin_packages()}
     for pkg, d in _user_packages().items():
-        if pkg not in builtin and (d / kind).is_dir():
-            out += [f"{pkg}/{kind}/{p.stem}" for p in sorted((d / kind).glob(f"*.{kind}")) if _NAME.match(p.stem)]
+        out.setdefault(pkg, d)
     return out
 
 
+def _types_of(folder: Path, kind: str) -> list[str]:
+    d = folder / kind
+    if not d.is_dir():
+        return []
+    return sorted(p.stem for p in d.glob(f"*.{kind}") if _NAME.match(p.stem))
+
+
+def known_types(kind: str) -> list[str]:
+    """Every `pkg/kind/Name` llfsm can import: built-in packages, then the user's."""
+    return [f"{pkg}/{kind}/{name}" for pkg, d in packages().items() for name in _types_of(d, kind)]
+
+
+#: How alike two names must be to be offered as "did you mean" (difflib's ratio): a package or
+#: a type name each on its own, so that what two names share by convention (`_msgs/msg/`) never
+#: makes `test_msgs/msg/BasicTypes` look like `std_msgs/msg/Byte`.
+CLOSE = 0.75
+
+
+def _similar(a: str, b: str) -> float:
+    return difflib.SequenceMatcher(None, a.lower(), b.lower()).ratio()
+
+
+def _closest(pkg: str, name: str, kind: str) -> str | None:
+    """The known type closest to pkg/kind/name, when one is close: a close name (or one it
+    begins: Odom -> Odometry) in the same or a close package.  A type of the same name in an
+    unrelated package is not offered: example_interfaces/msg/Int64 is not std_msgs/msg/Int64
+    on the wire."""
+    best: tuple[float, str] | None = None
+    for candidate in known_types(kind):
+        cpkg, _, cname = candidate.split("/")
+        p = _similar(pkg, cpkg)
+        if p < CLOSE:
+            continue
+        n = _similar(name, cname)
+        if n >= CLOSE:
+            score = p + n
+        elif len(name) >= 3 and cname.lower().startswith(name.lower()):
+            score = p + len(name) / len(cname)
+        else:
+            continue
+        if best is None or score > best[0]:
+            best = (score, candidate)
+    return best[1] if best else None
+
+
+def where_interfaces() -> str:
+    """Where llfsm looks for interface packages, in words, with what the variables hold."""
+    env = {name: os.environ.get(name, "") for name in ("LLFSM_INTERFACE_PATH", "AMENT_PREFIX_PATH")}
+    shown = {name: f"({value})" if value else "(not set)" for name, value in env.items()}
+    return (
+        "llfsm looks among the packages it ships, in the current folder and the three above it, in "
+        f"LLFSM_INTERFACE_PATH {shown['LLFSM_INTERFACE_PATH']} and in share/ of AMENT_PREFIX_PATH "
+        f"{shown['AMENT_PREFIX_PATH']}"
+    )
+
+
 def _unknown(text: str, kind: str) -> CliError:
-    name = "message" if kind == "msg" else "service"
+    name = "message" if kind == "msg" else "service" if kind == "srv" else "action"
     parts = text.split("/")
-    other = "srv" if kind == "msg" else "msg"
-    twin = f"{parts[0]}/{other}/{parts[-1]}"
-    if len(parts) in (2, 3) and twin in known_types(other):  # std_srvs/msg/Trigger: the kind is wrong
-        what = "a service" if other == "srv" else "a message"
-        return CliError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
-    candidates = known_types(kind)
-    close = difflib.get_close_matches(text, candidates, n=1, cutoff=0.6)
-    if not close:  # "Twist", "geometry_msgs/twist": match on the name alone
-        last = text.rsplit("/", 1)[-1].lower()
-        close = [t for t in candidates if t.rsplit("/", 1)[1].lower() == last][:1]
-    hint = f" (did you mean '{close[0]}'?)" if close else ""
-    return CliError(f"unknown {name} type '{text}'{hint}")
+    pkg, tname = parts[0], parts[-1]
+    for other in INTERFACE_KINDS:  # std_srvs/msg/Trigger: the kind is wrong
+        twin = f"{pkg}/{other}/{tname}"
+        if other != kind and len(parts) in (2, 3) and twin in known_types(other):
+            what = {"msg": "a message", "srv": "a service", "action": "an action"}[other]
+            return CliError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
+    close = _closest(pkg, tname, kind)
+    hint = f" (did you mean '{close}'?)" if close else ""
+    if pkg not in packages():
+        return CliError(f"unknown {name} type '{text}': no interface package '{pkg}'{hint}; {where_interfaces()}")
+    return CliError(f"unknown {name} type '{text}': {pkg} has no {name} '{tname}'{hint}")
 
 
 def _import(pkg: str, kind: str, name: str, text: str) -> object:
@@ -127,6 +180,33 @@ def service_class(text: str) -> type[Service]:
     if kind != "srv":
         raise CliError(f"'{text}' is a message type; a service has a service type (pkg/srv/Name)")
     return _import(pkg, kind, name, text)  # type: ignore[return-value]
+
+
+# -- ros2 interface list, package -----------------------------------------------------------------
+
+_HEADINGS = {"msg": "Messages:", "srv": "Services:", "action": "Actions:"}
+
+
+def list_(*, kinds: tuple[str, ...] = ()) -> str:
+    """`ros2 interface list`: each kind under its heading (all three when `kinds` is empty),
+    every type of every package llfsm can import, indented by four spaces."""
+    out = []
+    for kind in [k for k in _HEADINGS if not kinds or k in kinds]:
+        out.append(_HEADINGS[kind] + "\n")
+        out += [f"    {t}\n" for t in known_types(kind)]
+    return "".join(out)
+
+
+def package(name: str, *, kinds: tuple[str, ...] = ()) -> str:
+    """`ros2 interface package NAME`: the package's types, one a line (ros2 prints them in no
+    particular order; llfsm sorts them).  An unknown package is status 1, as in ros2."""
+    folder = packages().get(name)
+    if folder is None:
+        close = difflib.get_close_matches(name, list(packages()), n=1, cutoff=CLOSE)
+        hint = f" (did you mean '{close[0]}'?)" if close else ""
+        raise CliError(f"Unknown package '{name}'{hint}", NOT_FOUND)
+    found = [f"{name}/{k}/{t}" for k in INTERFACE_KINDS if not kinds or k in kinds for t in _types_of(folder, k)]
+    return "".join(f"{t}\n" for t in sorted(found))
 
 
 # -- ros2 interface show -------------------------------------------------------------------------
