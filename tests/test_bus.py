@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
 from conftest import run_sim, write_machine
@@ -12,6 +13,7 @@ from llfsm.msgs.geometry_msgs.msg import Twist
 from llfsm.msgs.std_msgs.msg import Int64, String
 from llfsm.msgs.std_srvs.srv import SetBool, Trigger
 from llfsm.ros.bus import Bus
+from llfsm.ros.transports.inproc import InProcess
 from llfsm.runtime import RunContext, SimClock
 from llfsm.runtime.context import activate
 
@@ -406,3 +408,61 @@ def test_exceptions_in_callbacks_point_at_the_machine_code_that_defined_them(
         "State_INITIAL_OnEntry.py:3: error: ZeroDivisionError: division by zero (machine cb, state INITIAL, OnEntry)"
         in r.stderr
     )
+
+
+# -- a remote transport: a reply a poll brings in ends the spin at once -------------------------------
+
+
+class _OneReplyTransport(InProcess):
+    """A transport of another process's server: the request goes out, and the reply arrives with
+    the next poll after one wait (as a reply from another process comes in through the wait set).
+    It counts the waits: a spin that keeps waiting after the reply came costs every call a whole
+    wait (the DDS transport's is 100 ms)."""
+
+    remote = True
+
+    def __init__(self) -> None:
+        self.waits = 0
+        self.sent: list[Any] = []
+        self.arrived = False  # a wait happened since the request went out
+
+    def client(self, cli: Any) -> Any:
+        return self
+
+    def ready(self) -> bool:
+        return True
+
+    def can_still_answer(self, future: Any) -> bool:
+        return True
+
+    def send(self, request: Any, future: Any) -> None:
+        self.sent.append(future)
+        self.arrived = False
+
+    def poll(self, force: bool = True) -> bool:
+        if self.arrived and self.sent:
+            self.sent.pop().set_result(Trigger.Response(success=True, message="from afar"))
+            return True
+        return False
+
+    def wait(self, until_ns: int) -> None:
+        self.waits += 1
+        self.arrived = True
+
+
+def test_a_spin_returns_as_soon_as_a_poll_brings_the_reply_in() -> None:
+    ctx = RunContext(SimClock())
+    transport = ctx.transport = _OneReplyTransport()
+    prev = activate(ctx)
+    try:
+        ros.init()
+        node = ros.Node("caller")
+        client = node.create_client(Trigger, "/elsewhere")
+        for _ in range(3):
+            future = client.call_async(Trigger.Request())
+            before = transport.waits
+            code = ros.spin_until_future_complete(node, future, timeout_sec=5.0)
+            assert code is ros.FutureReturnCode.SUCCESS and future.result().message == "from afar"
+            assert transport.waits - before == 1  # the one wait the reply came in after, no more
+    finally:
+        activate(prev)
