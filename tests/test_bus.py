@@ -8,11 +8,11 @@ import pytest
 from conftest import run_sim, write_machine
 
 from llfsm import ros
-from llfsm.ros.parameter_files import parse_param
 from llfsm.msgs.geometry_msgs.msg import Twist
 from llfsm.msgs.std_msgs.msg import Int64, String
 from llfsm.msgs.std_srvs.srv import SetBool, Trigger
 from llfsm.ros.bus import Bus
+from llfsm.ros.parameter_files import parse_param
 from llfsm.runtime import RunContext, SimClock
 from llfsm.runtime.context import activate
 
@@ -368,24 +368,27 @@ def test_echo_prints_yaml_documents_and_remap_moves_the_topic(tmp_path: Path) ->
 
 def test_introspect_lists_nodes_topics_and_services(tmp_path: Path) -> None:
     r = run_sim(_talker(tmp_path), "--introspect")
-    assert r.stderr.splitlines() == [
-        "nodes:",
-        "  /llfsm/talker",  # SPEC §8: every machine's state and control on the graph
-        "  /talker",
-        "topics:",
-        "  /chatter [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 2",
-        "  /llfsm/talker/description [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
-        "  /llfsm/talker/state [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
-        # every node publishes its parameter events and serves its parameters, as rclpy's do
-        "  /parameter_events [rcl_interfaces/msg/ParameterEvent] publishers: 2, subscriptions: 0, messages: 0",
-        "services:",
-        *parameter_services("/llfsm/talker")[:4],
-        "  /llfsm/talker/restart [std_srvs/srv/Trigger]",
-        "  /llfsm/talker/resume [std_srvs/srv/Trigger]",
-        *parameter_services("/llfsm/talker")[4:],
-        "  /llfsm/talker/suspend [std_srvs/srv/Trigger]",
-        *parameter_services("/talker"),
-    ]
+    assert (
+        r.stderr.splitlines()
+        == [
+            "nodes:",
+            "  /llfsm/talker",  # SPEC §8: every machine's state and control on the graph
+            "  /talker",
+            "topics:",
+            "  /chatter [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 2",
+            "  /llfsm/talker/description [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
+            "  /llfsm/talker/state [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
+            # every node publishes its parameter events and serves its parameters, as rclpy's do
+            "  /parameter_events [rcl_interfaces/msg/ParameterEvent] publishers: 2, subscriptions: 0, messages: 0",
+            "services:",
+            *parameter_services("/llfsm/talker")[:4],
+            "  /llfsm/talker/restart [std_srvs/srv/Trigger]",
+            "  /llfsm/talker/resume [std_srvs/srv/Trigger]",
+            *parameter_services("/llfsm/talker")[4:],
+            "  /llfsm/talker/suspend [std_srvs/srv/Trigger]",
+            *parameter_services("/talker"),
+        ]
+    )
 
 
 def parameter_services(node: str) -> list[str]:

@@ -375,7 +375,8 @@ class SetParameters(_m.Service):
 
 
 class SetParametersAtomically(_m.Service):
-    """rcl_interfaces/srv/SetParametersAtomically: SetParametersAtomically.Request -> SetParametersAtomically.Response"""
+    """rcl_interfaces/srv/SetParametersAtomically: SetParametersAtomically.Request ->
+    SetParametersAtomically.Response"""
 
     _TYPE = "rcl_interfaces/srv/SetParametersAtomically"
     Request = SetParametersAtomically_Request
