@@ -13,6 +13,7 @@ from llfsm.msgs.geometry_msgs.msg import Twist
 from llfsm.msgs.std_msgs.msg import Int64, String
 from llfsm.msgs.std_srvs.srv import SetBool, Trigger
 from llfsm.ros.bus import Bus
+from llfsm.ros.parameter_files import parse_param
 from llfsm.ros.transports.inproc import InProcess
 from llfsm.runtime import RunContext, SimClock
 from llfsm.runtime.context import activate
@@ -295,14 +296,14 @@ def test_logger_prints_rclpy_lines_with_run_time_under_the_sim_clock(
 
 
 def test_parameters_and_overrides(bus: Bus) -> None:
-    node, name, value = ros.parse_param("turtlesim:background_r:=10")
+    node, name, value = parse_param("turtlesim:background_r:=10")
     bus.parameters[(node, name)] = value
-    bus.parameters[ros.parse_param("verbose:=true")[::2]] = True  # type: ignore[index]
+    bus.parameters[parse_param("verbose:=true")[::2]] = True  # type: ignore[index]
     t = ros.Node("turtlesim")
     assert t.declare_parameter("background_r", 69).value == 10
     assert t.declare_parameter("background_g", 86).value == 86
     assert t.get_parameter("background_r").value == 10
-    assert ros.parse_param("x:=1.5")[2] == 1.5 and ros.parse_param("s:=hello")[2] == "hello"
+    assert parse_param("x:=1.5")[2] == 1.5 and parse_param("s:=hello")[2] == "hello"
 
 
 def test_graph_introspection(bus: Bus) -> None:
@@ -310,11 +311,30 @@ def test_graph_introspection(bus: Bus) -> None:
     pub = n.create_publisher(String, "chatter", 10)
     n.create_subscription(String, "chatter", None, 10)
     n.create_service(Trigger, "reset", lambda req, resp: resp)
+    ros.Node("quiet", start_parameter_services=False)  # as ros2cli's own nodes: no parameter services
     pub.publish(String(data="x"))
+    events = {"type": "rcl_interfaces/msg/ParameterEvent", "publishers": 1, "subscriptions": 0, "messages": 0}
     assert bus.graph() == {
-        "nodes": ["/talker"],
-        "topics": {"/chatter": {"type": "std_msgs/msg/String", "publishers": 1, "subscriptions": 1, "messages": 1}},
-        "services": {"/reset": "std_srvs/srv/Trigger"},
+        "nodes": ["/quiet", "/talker"],
+        "topics": {
+            "/chatter": {"type": "std_msgs/msg/String", "publishers": 1, "subscriptions": 1, "messages": 1},
+            "/parameter_events": events,  # every node publishes there, as rclpy's do
+        },
+        "services": {
+            "/reset": "std_srvs/srv/Trigger",
+            # every node serves its parameters, as rclpy's do (`ros2 service list` shows them)
+            **{
+                f"/talker/{verb}": f"rcl_interfaces/srv/{srv}"
+                for verb, srv in (
+                    ("describe_parameters", "DescribeParameters"),
+                    ("get_parameter_types", "GetParameterTypes"),
+                    ("get_parameters", "GetParameters"),
+                    ("list_parameters", "ListParameters"),
+                    ("set_parameters", "SetParameters"),
+                    ("set_parameters_atomically", "SetParametersAtomically"),
+                )
+            },
+        },
     }
 
 
@@ -350,18 +370,41 @@ def test_echo_prints_yaml_documents_and_remap_moves_the_topic(tmp_path: Path) ->
 
 def test_introspect_lists_nodes_topics_and_services(tmp_path: Path) -> None:
     r = run_sim(_talker(tmp_path), "--introspect")
-    assert r.stderr.splitlines() == [
-        "nodes:",
-        "  /llfsm/talker",  # SPEC §8: every machine's state and control on the graph
-        "  /talker",
-        "topics:",
-        "  /chatter [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 2",
-        "  /llfsm/talker/description [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
-        "  /llfsm/talker/state [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
-        "services:",
-        "  /llfsm/talker/restart [std_srvs/srv/Trigger]",
-        "  /llfsm/talker/resume [std_srvs/srv/Trigger]",
-        "  /llfsm/talker/suspend [std_srvs/srv/Trigger]",
+    assert (
+        r.stderr.splitlines()
+        == [
+            "nodes:",
+            "  /llfsm/talker",  # SPEC §8: every machine's state and control on the graph
+            "  /talker",
+            "topics:",
+            "  /chatter [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 2",
+            "  /llfsm/talker/description [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
+            "  /llfsm/talker/state [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
+            # every node publishes its parameter events and serves its parameters, as rclpy's do
+            "  /parameter_events [rcl_interfaces/msg/ParameterEvent] publishers: 2, subscriptions: 0, messages: 0",
+            "services:",
+            *parameter_services("/llfsm/talker")[:4],
+            "  /llfsm/talker/restart [std_srvs/srv/Trigger]",
+            "  /llfsm/talker/resume [std_srvs/srv/Trigger]",
+            *parameter_services("/llfsm/talker")[4:],
+            "  /llfsm/talker/suspend [std_srvs/srv/Trigger]",
+            *parameter_services("/talker"),
+        ]
+    )
+
+
+def parameter_services(node: str) -> list[str]:
+    """`--introspect`'s lines for a node's parameter services, in name order."""
+    return [
+        f"  {node}/{verb} [rcl_interfaces/srv/{srv}]"
+        for verb, srv in (
+            ("describe_parameters", "DescribeParameters"),
+            ("get_parameter_types", "GetParameterTypes"),
+            ("get_parameters", "GetParameters"),
+            ("list_parameters", "ListParameters"),
+            ("set_parameters", "SetParameters"),
+            ("set_parameters_atomically", "SetParametersAtomically"),
+        )
     ]
 
 
