@@ -10,7 +10,9 @@ builtin_interfaces from ros2/rcl_interfaces as Humble ships them; sensor_msgs an
 (common_interfaces) as Jazzy ships them (Humble's but for comments, constants and the
 `variance` Jazzy added to Range); service_msgs (rcl_interfaces) and rmw_dds_common as Jazzy
 ships them (a Gid is 16 bytes since Iron, 24 in Humble: llfsm speaks current ROS 2 on the
-wire); turtlesim from ros/ros_tutorials.  turtle_sensor_interface
+wire); rcl_interfaces' parameter messages and services and its `Log` as Kilted ships them
+(what every node's parameter services speak, docs/parameters.md); turtlesim from
+ros/ros_tutorials.  turtle_sensor_interface
 is llfsm's own (the interface of the how-to in docs/turtlesim.md).
 """
 

@@ -80,6 +80,10 @@ class Machine:
     #: (target index, guard text as written): what /llfsm/NAME/description and the web view show.
     DESCRIPTION: ClassVar[str] = ""
     TRANSITIONS: ClassVar[tuple[tuple[tuple[int, str], ...], ...]] = ()
+    #: machine.yaml's `parameters:`, each (variable, rclpy's type name: "DOUBLE", "INTEGER_ARRAY"
+    #: ...): parameters of the node /llfsm/NAME (llfsm.ros.control), set between ringlets
+    #: (Arrangement.set_variables).
+    PARAMETERS: ClassVar[tuple[tuple[str, str], ...]] = ()
 
     # Slots make attribute access on the hot path as cheap as CPython allows; generated classes
     # add their variables to them.

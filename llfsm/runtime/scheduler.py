@@ -131,6 +131,9 @@ class Arrangement:
             m._state, m._suspended, m._resume_to = m.SUSPENDED, True, None
             m._next, m._run = m.ENTER[m.SUSPENDED], m._held
         self._live: list[Machine] = list(self.machines)
+        #: New values for machines' variables (their parameters), by machine id, waiting for the
+        #: machine's next ringlet (set_variables).
+        self._variables: dict[int, dict[str, object]] = {}
 
     @property
     def _attention(self) -> bool:
@@ -158,6 +161,15 @@ class Arrangement:
             return  # a finished machine can only be restarted; it stays finished until then
         m._pending = cmd  # a later command replaces an earlier pending one
         _hold(m)  # a machine commanding itself may still fire a transition: _rehold fixes that
+        self._attention = True
+
+    def set_variables(self, name: str, values: dict[str, object]) -> None:
+        """Give machine variables new values (a machine's parameters set from outside,
+        llfsm.ros.control): they take effect at the start of the machine's next ringlet, before
+        a pending command, never in the middle of a ringlet.  Later values replace earlier ones."""
+        m = self.machine(name)
+        self._variables.setdefault(m._id, {}).update(values)
+        _hold(m)  # the gate sets them; a machine setting its own may still fire: _rehold fixes that
         self._attention = True
 
     def suspend_now(self, m: Machine, remember: int | None) -> None:
@@ -218,13 +230,26 @@ class Arrangement:
             tr.command("restart", m, m.INITIAL)
         return True
 
-    def _gate(self, m: Machine) -> int | None:
-        """Stands in for the ringlet of a held machine (a command pending, or suspended): apply
-        the command, then run the real ringlet if the command lets it go on."""
-        if m._pending is None or not self._apply(m):
-            return None  # suspended: no ringlet; or the command (suspend) ended it
+    def _release(self, m: Machine) -> bool:
+        """The turn of a held machine (new variable values, a command pending, or suspended):
+        set the variables, apply the command; True if the ringlet goes on."""
+        if self._variables:
+            values = self._variables.pop(m._id, None)
+            if values is not None:
+                for name, value in values.items():
+                    setattr(m, name, value)
+        if m._pending is not None:
+            if not self._apply(m):
+                return False  # the command (suspend) ended the ringlet
+        elif m._suspended:
+            return False  # suspended: no ringlet
         _regate(m)
-        return m._run(m)
+        return True
+
+    def _gate(self, m: Machine) -> int | None:
+        """Stands in for the ringlet of a held machine: release it, then run the real ringlet
+        if that lets it go on."""
+        return m._run(m) if self._release(m) else None
 
     def finish(self, m: Machine) -> None:
         """The machine has finished: unload it.  The hook generated code calls, from the ringlet
@@ -240,7 +265,7 @@ class Arrangement:
         """Between rounds: a machine that commanded itself and then fired a transition in the
         same ringlet pointed `_run` past its gate; put the gate back in front."""
         for m in self.machines:
-            if m._pending is not None or m._suspended:
+            if m._pending is not None or m._suspended or m._id in self._variables:
                 _hold(m)
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
@@ -259,10 +284,8 @@ class Arrangement:
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
         for m in live:
-            if m._run is m._held:
-                if m._pending is None or not self._apply(m):
-                    continue
-                _regate(m)
+            if m._run is m._held and not self._release(m):
+                continue
             s = m._state
             if m._entered:
                 tr.entry(m, s)
@@ -490,7 +513,7 @@ def _hold(m: Machine) -> None:
 
 def _regate(m: Machine) -> None:
     """Point the machine's `_run` at the gate while it is held, at its next ringlet otherwise."""
-    if m._pending is not None or m._suspended:
+    if m._pending is not None or m._suspended or m._id in m._arr._variables:
         _hold(m)
     elif m._run is m._held:
         m._run = m._next

@@ -31,6 +31,7 @@ COMMON = (
     "service_msgs",
     "sensor_msgs",
     "nav_msgs",
+    "rcl_interfaces",
 )
 
 # Runs in .venv-ros: reads {ros type: [payload hex]} on stdin; for each payload, rclpy
