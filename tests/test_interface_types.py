@@ -51,7 +51,7 @@ class TestUnknownTypes:
         return e.value.message
 
     @pytest.mark.parametrize(
-        "text", ["test_msgs/msg/BasicTypes", "example_interfaces/msg/Int64", "my_robot/msg/Status"]
+        "text", ["robot_test_msgs/msg/BasicTypes", "example_interfaces/msg/Int64", "my_robot/msg/Status"]
     )
     def test_no_suggestion_that_is_not_close(self, text: str) -> None:
         msg = self._message(text)
@@ -74,8 +74,8 @@ class TestUnknownTypes:
     def test_an_unknown_package_says_where_llfsm_looks(self, monkeypatch: pytest.MonkeyPatch) -> None:
         monkeypatch.delenv("LLFSM_INTERFACE_PATH", raising=False)
         monkeypatch.setenv("AMENT_PREFIX_PATH", "/opt/ros/humble")
-        msg = self._message("test_msgs/msg/BasicTypes")
-        assert "no interface package 'test_msgs'" in msg
+        msg = self._message("robot_test_msgs/msg/BasicTypes")  # (test_msgs may be in this process's path)
+        assert "no interface package 'robot_test_msgs'" in msg
         assert "LLFSM_INTERFACE_PATH (not set)" in msg and "share/ of AMENT_PREFIX_PATH (/opt/ros/humble)" in msg
 
     def test_a_known_package_without_the_type(self) -> None:
@@ -83,7 +83,7 @@ class TestUnknownTypes:
         assert "sensor_msgs has no message 'Lidar'" in msg and "did you mean" not in msg
 
     def test_the_command_line_says_it_in_one_line(self) -> None:
-        r = llfsm("interface", "show", "test_msgs/msg/BasicTypes")
+        r = llfsm("interface", "show", "robot_test_msgs/msg/BasicTypes")
         assert r.status == 2
         assert r.stderr.count("\n") == 1 and "std_msgs/msg/Byte" not in r.stderr, r.stderr
 
@@ -144,8 +144,8 @@ def test_a_machine_importing_an_unknown_package_says_where_llfsm_looks(tmp_path:
         tmp_path,
         "m",
         {"A": [("END", "True")], "END": None},
-        includes="from llfsm.msgs.test_msgs.msg import BasicTypes\n",
+        includes="from llfsm.msgs.robot_test_msgs.msg import BasicTypes\n",
     )
     r = run_sim(m)
     assert r.status == 1
-    assert "no interface package 'test_msgs'" in r.stderr and "LLFSM_INTERFACE_PATH" in r.stderr, r.stderr
+    assert "no interface package 'robot_test_msgs'" in r.stderr and "LLFSM_INTERFACE_PATH" in r.stderr, r.stderr

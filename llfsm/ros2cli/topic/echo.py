@@ -19,6 +19,7 @@ from ..arguments import full_name
 from ..discovery import open_graph, wait_for_topic_types, where
 from ..endpoints import Waiter, samples, topic_reader
 from ..interface import message_class, use_working_directory
+from ..suggest import did_you_mean
 from . import check_types, class_of_topic
 
 #: How long echo looks for the topic's publishers (to match their QoS) when TYPE is given.
@@ -69,7 +70,8 @@ def echo(
                 patient = True  # as ros2: a topic that is there may publish rarely
             left = 1.0 if patient else timeout - (time.monotonic() - started)
             if left <= 0:
-                raise CliError(f"no message on '{name}' within {timeout:g} s ({where()})", NOT_FOUND)
+                hint = "" if publishers else did_you_mean(name, graph.topics(include_hidden=True))
+                raise CliError(f"no message on '{name}' within {timeout:g} s ({where()}){hint}", NOT_FOUND)
             if not waiter.wait(left):
                 continue
             for msg, _info in taken.take(64):

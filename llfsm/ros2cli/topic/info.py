@@ -7,6 +7,7 @@ from ...ros.transports.dds_graph import Graph, describe_qos, message_type
 from .. import NOT_FOUND, TIMEOUT, CliError
 from ..arguments import full_name
 from ..discovery import open_graph
+from ..suggest import did_you_mean
 
 
 def info(topic: str, *, verbose: bool = False, timeout: float = TIMEOUT) -> str:
@@ -26,7 +27,7 @@ def info(topic: str, *, verbose: bool = False, timeout: float = TIMEOUT) -> str:
 def _describe(graph: Graph, name: str, *, verbose: bool) -> str:
     types = graph.topics(include_hidden=True).get(name)
     if types is None:
-        raise CliError(f"Unknown topic '{name}'", NOT_FOUND)
+        raise CliError(f"Unknown topic '{name}'{did_you_mean(name, graph.topics(include_hidden=True))}", NOT_FOUND)
     end = "\n\n" if verbose else "\n"
     type_str = types[0] if len(types) == 1 else str(types)
     out = [f"Type: {type_str}{end}"]
