@@ -12,8 +12,8 @@ Stdlib only, and light: commands import it when they start long work.
 
 from __future__ import annotations
 
+import io
 import os
-import shutil
 import sys
 import threading
 import time
@@ -53,10 +53,22 @@ class Status:
             if not now and t - self._last < INTERVAL:
                 return
             self._last = t
-            width = shutil.get_terminal_size((80, 24)).columns
+            width = self._width()
             line = text if len(text) < width else text[: max(1, width - 2)] + "…"
             self._write(_CLEAR + line)
             self._shown = line
+
+    def _width(self) -> int:
+        """The columns of the terminal the line is drawn on: stderr's own size (stdout may be a
+        pipe, and COLUMNS may be stale), else COLUMNS, else 80."""
+        try:
+            columns = os.get_terminal_size(self.stream.fileno()).columns
+        except (AttributeError, ValueError, OSError, io.UnsupportedOperation):
+            columns = 0
+        if columns > 0:
+            return columns
+        env = os.environ.get("COLUMNS", "")
+        return int(env) if env.isdigit() and int(env) > 0 else 80
 
     def print(self, line: str) -> None:
         """Write a line of the command's own above the status line (which comes back after)."""
@@ -93,7 +105,9 @@ class Status:
 
         def tick() -> None:
             while True:
-                self.show(text(time.monotonic() - start), now=True)
+                line = text(time.monotonic() - start)
+                if line:
+                    self.show(line, now=True)
                 if done.wait(every):
                     return
 
@@ -105,6 +119,27 @@ class Status:
             done.set()
             thread.join()
             self.clear()
+
+    @contextmanager
+    def doing(self, prefix: str) -> Iterator[Callable[[str], None]]:
+        """While the block runs, `prefix: <what it is doing>... <seconds>`, where the block
+        says what it is doing by calling the function it is given (nothing shows before it
+        first does: work that turns out quick, a cache hit, draws nothing)."""
+        what = [""]
+
+        def say(text: str) -> None:
+            what[0] = text
+
+        with self.ticking(lambda elapsed: f"{prefix}: {what[0]}... {seconds(elapsed)}" if what[0] else ""):
+            yield say
+
+    @contextmanager
+    def waiting(self, what: str, timeout: float | None = None) -> Iterator[Status]:
+        """While the block waits for `what` (a topic, a message): `waiting for WHAT... 3 s of
+        5 s`, from half a second on (a wait that ends sooner draws nothing)."""
+        limit = f" of {timeout:g} s" if timeout is not None else ""
+        with self.ticking(lambda t: f"waiting for {what}... {seconds(t)}{limit}" if t >= 0.5 else "") as status:
+            yield status
 
 
 def seconds(elapsed: float) -> str:

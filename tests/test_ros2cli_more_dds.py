@@ -191,3 +191,27 @@ def test_node_info_of_an_rclpy_node(netns: NetNamespace) -> None:
     assert "    /chatter: std_msgs/msg/String" in lines and "    /rosout: rcl_interfaces/msg/Log" in lines
     assert "    /reset: std_srvs/srv/Trigger" in lines
     assert lines[lines.index("  Service Clients:") + 1] == "    /other: std_srvs/srv/Trigger"
+
+
+def test_waiting_for_a_topic_shows_on_a_terminal_only(netns: NetNamespace) -> None:
+    """Item 9: a verb that waits says what for, while it waits, when stderr is a terminal; the
+    line is cleared before the verb's own last word, which starts on a clean line."""
+    import re
+    import sys
+
+    from conftest import REPO
+    from test_progress import on_pty
+
+    cmd = ["nsenter", f"--net=/proc/{netns.holder.pid}/ns/net", sys.executable, "-m", "llfsm", "topic", "echo"]
+    status, _out, shown = on_pty([*cmd, "/nothing", "--timeout", "2"], cwd=REPO)
+    assert status == 1
+    parts = shown.split("\r\x1b[K")
+    assert any(re.fullmatch(r"waiting for topic '/nothing' to appear\.\.\. [01] s of 2 s", p) for p in parts), parts
+    assert parts[-1].startswith("llfsm: topic '/nothing' not found within 2 s")
+    status, _out, shown = on_pty([*cmd, "/quiet", "std_msgs/msg/String", "--once", "--timeout", "2"], cwd=REPO)
+    assert status == 1
+    parts = shown.split("\r\x1b[K")
+    assert any(re.fullmatch(r"waiting for a message on '/quiet'\.\.\. [01] s", p) for p in parts), parts
+    assert parts[-1].startswith("llfsm: no message on '/quiet' within 2 s")
+    r = llfsm(netns, "topic", "echo", "/nothing", "--timeout", "1")  # stderr a pipe: the one line only
+    assert r.stderr.count("\n") == 1 and "waiting" not in r.stderr and "\r" not in r.stderr

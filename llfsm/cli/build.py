@@ -104,9 +104,11 @@ def _native(modules: list[Path], quiet: bool) -> None:
     # deferred: start-up (--native only)
     from ..cachedir import cache_root
     from ..compiler.native import NativeUnavailable, native_build
+    from ..progress import Status
 
     try:
-        nb = native_build(modules, cache_root())
+        with Status().doing("native") as say:
+            nb = native_build(modules, cache_root(), say)
     except NativeUnavailable as e:
         fail(f"--native: {e}")
     for w in nb.warnings:

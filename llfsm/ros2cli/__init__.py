@@ -8,8 +8,8 @@ name):
 - `topic/`: `list`, `info`, `type`, `find`, `echo`, `pub`, `hz`, a module each (the group is big).
 - `node`: `list`, `info`.
 - `service`: `list`, `type`, `find`, `call`.
-- `interface`: `show`, `list`, `package`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to llfsm's classes, with
-  a "did you mean" for near misses.  Offline; the web view reads TYPEs through it too.
+- `interface`: `show`, `list`, `package`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to
+  llfsm's classes, with a "did you mean" for near misses.  Offline; the web view reads TYPEs through it too.
 
 What the groups share:
 
@@ -19,7 +19,9 @@ What the groups share:
   a hidden node of llfsm's bus for the verbs that talk.  cyclonedds is optional and heavy:
   only here and in the verbs it is imported, inside functions (`llfsm --help` never loads it).
 - `arguments`: topic and service names, VALUES (YAML as `ros2 topic pub` takes it).
-- `suggest`: close names the graph has, for the lines that say something was not found.
+
+The close names the graph has, for the lines that say something was not found, are
+llfsm.suggest's.
 
 Adding a verb (as `service type` was): write `def type_(service: str, *, timeout: float = TIMEOUT)
 -> str` in `service.py` (for `topic`, a new module such as `topic/find.py`), taking typed arguments

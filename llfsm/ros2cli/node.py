@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from ..ros.transports.dds_graph import Endpoint, Graph, NodeName, is_hidden, message_type, service_name, service_type
 from ..ros.transports.dds_graph import topic_name as ros_topic_name
+from ..suggest import did_you_mean
 from . import NOT_FOUND, SPIN_TIME, TIMEOUT, CliError
 from .discovery import discovered, where
-from .suggest import did_you_mean
 
 #: What ros2 prints on stderr, before the list, when two nodes share a name.
 DUPLICATE_NAMES = (

@@ -14,12 +14,12 @@ from typing import Any, TextIO
 
 from ..ros import FutureReturnCode, spin_until_future_complete
 from ..ros.transports.dds_graph import Graph
+from ..suggest import did_you_mean
 from . import NOT_FOUND, SPIN_TIME, TIMEOUT, CliError
 from .arguments import full_name, parse_values, stamp
 from .discovery import discovered, open_graph, where
 from .endpoints import hidden_node
 from .interface import service_class, split_type, use_working_directory
-from .suggest import did_you_mean
 
 
 def list_(

@@ -3,11 +3,12 @@ each endpoint's node, GID and QoS as `ros2 topic info -v` prints them."""
 
 from __future__ import annotations
 
+from ...progress import Status
 from ...ros.transports.dds_graph import Graph, describe_qos, message_type
+from ...suggest import did_you_mean
 from .. import NOT_FOUND, TIMEOUT, CliError
 from ..arguments import full_name
 from ..discovery import open_graph
-from ..suggest import did_you_mean
 
 
 def info(topic: str, *, verbose: bool = False, timeout: float = TIMEOUT) -> str:
@@ -15,7 +16,8 @@ def info(topic: str, *, verbose: bool = False, timeout: float = TIMEOUT) -> str:
     name = full_name(topic, "topic")
     graph = open_graph()
     try:
-        graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True))
+        with Status().waiting(f"topic '{name}' to appear", timeout):  # on a terminal only
+            graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True))
         graph.spin(0.2)  # the rest of the topic's endpoints, discovered with the first
         if verbose:  # each endpoint's node
             graph.settle()

@@ -1,5 +1,6 @@
 """Close names that exist, for "not found" lines: after a verb has waited for `/turtle1/cmdvel`
-in vain, the line that says so names `/turtle1/cmd_vel`, which the graph has.
+in vain, the line that says so names `/turtle1/cmd_vel`, which the graph has; `bag play
+--topics` names the bag's topics the same way.  Stdlib only (difflib), for every layer.
 
 A name is close when it reads almost the same (difflib's ratio, ignoring case), or when it is
 the same last part in another namespace (`cmd_vel` typed for `/turtle1/cmd_vel`).  Hidden
