@@ -71,7 +71,7 @@ class Tee(Tracer):
         self.tracers = tracers
         self._round = self._now = 0
 
-    @property  # type: ignore[override]
+    @property
     def round(self) -> int:
         return self._round
 
@@ -81,7 +81,7 @@ class Tee(Tracer):
         for t in self.tracers:
             t.round = value
 
-    @property  # type: ignore[override]
+    @property
     def now(self) -> int:
         return self._now
 
