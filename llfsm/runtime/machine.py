@@ -16,13 +16,15 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from typing import Any, ClassVar
 
+    from _typeshed import IdentityFunction
+
     from .scheduler import Arrangement
 
 if __file__.endswith((".so", ".pyd")):  # compiled by mypyc (`--native`), which reads this decorator
     from mypy_extensions import mypyc_attr
 else:  # plain Python (source or bytecode) has nothing to do with it, and mypy_extensions imports typing
 
-    def mypyc_attr(*_args: object, **_kwargs: object) -> Callable[[type], type]:  # type: ignore[misc]
+    def mypyc_attr(*attrs: str, **kwattrs: object) -> IdentityFunction:  # mypy_extensions' signature
         return lambda cls: cls
 
 

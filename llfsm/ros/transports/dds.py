@@ -759,7 +759,7 @@ class DdsTransport(Transport):
         (a node-only run then keeps its timers' rhythm, turtlesim's 16 ms, to the millisecond)."""
         due = self.bus.next_timer_due()
         if due is not None:
-            ns = min(ns, max(0, due - self.bus.clock.read()))  # type: ignore[attr-defined]
+            ns = min(ns, max(0, due - self.bus.clock.read()))  # type: ignore[attr-defined]  # a WallClock (start)
         if self._parked:
             ns = min(ns, 10_000_000)
         self.waits.wait(min(ns, MAX_WAIT_NS))
