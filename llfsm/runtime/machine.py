@@ -35,8 +35,10 @@ FINISHED = -1
 SUSPEND, RESUME, RESTART = "suspend", "resume", "restart"
 
 if TYPE_CHECKING:
-    #: A ringlet takes the machine (typed Any: each generated class types its own ringlets).
+    #: A ringlet takes the machine (typed Any: each generated class types its own ringlets,
+    #: which take that class, not Machine, and a callable's parameter cannot be narrowed).
     Ringlet = Callable[[Any], "int | None"]
+    #: A state's OnSuspend or OnResume section, if it has one (Any: as a ringlet's).
     Hook = Callable[[Any], None] | None
 
 
