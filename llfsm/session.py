@@ -402,7 +402,7 @@ class Session:
                 self.trace_out = self._open_trace(o.trace_file)
             if o.verbose or self.trace_out is not None:
                 # a StreamedOutput writes text as a file does (IO[str] is more than the tracer uses)
-                self.tracer = Tracer(verbose=sys.stderr if o.verbose else None, jsonl=self.trace_out)  # type: ignore[arg-type]
+                self.tracer = Tracer(verbose=sys.stderr if o.verbose else None, jsonl=self.trace_out)
             arr = self.arrangement = self._arrange(ctx)
             self._machines_on_graph(ctx)
             grace = o.grace

@@ -266,11 +266,12 @@ def _flat_names(tree: ast.AST) -> _Flat | None:
         for child in child_nodes(node):
             t = type(child)
             if t is name:
-                out.names.append(child)  # type: ignore[arg-type]
+                n: ast.Name = child  # type: ignore[assignment]  # its type is ast.Name, exactly
+                out.names.append(n)
                 if not in_comp:
-                    out.outer.append(child)  # type: ignore[arg-type]
-                elif type(child.ctx) is not load:  # type: ignore[attr-defined]
-                    out.targets.add(child.id)  # type: ignore[attr-defined]
+                    out.outer.append(n)
+                elif type(n.ctx) is not load:
+                    out.targets.add(n.id)
             elif t in scoped:
                 return None
             else:

@@ -8,11 +8,16 @@ The world updates every 16 ms of run time with dt = 0.016 s, as turtlesim's time
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..runtime.context import RunContext
 from ..sim.world import TurtleError, TurtleWorld
 from . import NodeError, NodeOptions
+
+if TYPE_CHECKING:
+    from ..ros.publisher import Publisher
+    from ..ros.service import ServiceServer
+    from ..ros.subscription import Subscription
 
 NODE_NAME = "turtlesim"
 UPDATE_PERIOD = 0.016
@@ -45,7 +50,7 @@ class _Turtle:
             world.teleport_relative(name, req.linear, req.angular)
             return resp
 
-        self.entities = [
+        self.entities: list[Subscription | ServiceServer | Publisher] = [
             node.create_subscription(Twist, f"{name}/cmd_vel", on_cmd, 1),
             node.create_service(SetPen, f"{name}/set_pen", set_pen),
             node.create_service(TeleportAbsolute, f"{name}/teleport_absolute", teleport_absolute),
