@@ -533,7 +533,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
 def _parameters(m: Machine) -> tuple[tuple[str, str], ...]:
     """The variables of `parameters:` with their parameter types (check has made sure each fits)."""
     annotations = {v.name: v.annotation for v in m.variables}
-    out = []
+    out: list[tuple[str, str]] = []
     for p in m.parameters:
         kind = parameter_type(annotations.get(p.name, ""))
         if kind is not None and p.name not in dict(out):
