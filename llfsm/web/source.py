@@ -22,6 +22,7 @@ from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from ..msgs import to_yaml
+from ..msgs._lookup import TypeNameError, message_class, service_class
 from ..ros.control import NAMESPACE, description
 
 if TYPE_CHECKING:
@@ -44,14 +45,11 @@ class CommandError(Exception):
 
 def type_class(type_name: str, kind: str) -> Any:
     """The class a type typed into the page names (`pkg/msg/Name`, `pkg/srv/Name`, or `pkg/Name`),
-    read as `llfsm topic pub` and `llfsm service call` read their TYPE."""
-    from ..ros2cli import CliError
-    from ..ros2cli.interface import message_class, service_class
-
+    read as `llfsm topic pub` and `llfsm service call` read their TYPE (llfsm/msgs/_lookup.py)."""
     try:
         return message_class(type_name.strip()) if kind == "msg" else service_class(type_name.strip())
-    except CliError as e:
-        raise CommandError(e.message) from None
+    except TypeNameError as e:
+        raise CommandError(str(e)) from None
 
 
 def parse_values(cls: Any, text: str) -> tuple[Any, list[Any]]:
