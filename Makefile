@@ -52,8 +52,10 @@ demo: $(VENV)/.installed
 		--duration 30s --image demo-output/turtle_follower.png
 	@echo "pictures: demo-output/wall_turtle_bot.png demo-output/turtle_follower.png"
 
+# lint-imports: the layers and contracts of [tool.importlinter] (docs/architecture.md)
 lint: $(VENV)/.installed-dev
 	$(VENV)/bin/ruff check llfsm tests bench
+	$(VENV)/bin/lint-imports --no-logo
 
 # The web view's browser tests drive Debian's Chromium (Playwright never downloads a browser):
 # installed here where we can (root with apt-get); elsewhere those tests skip and say why.
@@ -120,5 +122,5 @@ msgs: $(VENV)/.installed-dev
 	$(PY) -m llfsm.idl
 
 clean:
-	rm -rf $(VENV) $(VENV_ROS) .venv-latest .venv-ros-latest .venv-lock build demo-output .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(VENV_ROS) .venv-latest .venv-ros-latest .venv-lock build demo-output .pytest_cache .ruff_cache .import_linter_cache
 	find llfsm -name '*.so' -delete
