@@ -7,14 +7,13 @@ from __future__ import annotations
 import sys
 from typing import IO
 
+from ..msgs import to_yaml
 from ..ros.bus import Bus, Topic
 from ..ros.names import expand
+from ..ros.node import Node
 
 
 def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
-    from ..msgs import to_yaml
-    from ..ros.node import Node
-
     name = expand(topic, "llfsm_echo", "/")
     stream = out if out is not None else sys.stdout
     shown = [0]
@@ -38,6 +37,7 @@ def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
         if name in bus.topics:
             why = f"nothing was published on {name} during the run"
         else:
+            # deferred: start-up (only an --echo that heard nothing looks for a close name)
             import difflib
 
             topics = sorted(t for t in bus.topics if not t.startswith("/rosout"))

@@ -65,6 +65,7 @@ class GraphSource(Source):
 
     def __init__(self, bus: Bus) -> None:
         super().__init__(bus, "llfsm_view")
+        # deferred: optional dependency (cyclonedds), only for `llfsm view`'s graph
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication, BuiltinTopicDcpsSubscription
 
         dp = bus.transport.dp  # type: ignore[attr-defined]

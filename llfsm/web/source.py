@@ -23,11 +23,13 @@ from typing import TYPE_CHECKING, Any
 
 from ..msgs import to_yaml
 from ..msgs._lookup import TypeNameError, message_class, service_class
+from ..msgs._yaml import ValuesError, from_yaml
 from ..ros.control import NAMESPACE, description
+from ..ros.names import expand
+from ..ros.node import Node
 
 if TYPE_CHECKING:
     from ..ros.bus import Bus
-    from ..ros.node import Node
     from ..runtime.scheduler import Arrangement
     from ..sim.world import TurtleWorld
 
@@ -56,8 +58,6 @@ def parse_values(cls: Any, text: str) -> tuple[Any, list[Any]]:
     """The message (or request) the page's YAML values make, through the same parsing and type
     checks as `llfsm topic pub` (llfsm.msgs._yaml: PyYAML's safe loader, then field by field
     through the typed properties, never eval), and the setters of the stamps it asks for."""
-    from ..msgs._yaml import ValuesError, from_yaml
-
     try:
         return from_yaml(cls, text)
     except ValuesError as e:
@@ -89,8 +89,6 @@ class Source:
     through their control services."""
 
     def __init__(self, bus: Bus, node_name: str) -> None:
-        from ..ros.node import Node
-
         self.bus = bus
         self.ctx = bus.ctx
         self.clock = bus.clock
@@ -167,8 +165,6 @@ class Source:
         return {"success": response.success, "message": response.message}
 
     async def publish(self, topic: str, type_name: str, text: str) -> dict[str, Any]:
-        from ..ros.names import expand
-
         try:
             name = expand(topic.strip(), "llfsm_web", "/")
         except Exception as e:  # InvalidNameError and friends: one line
@@ -201,8 +197,6 @@ class Source:
         return {"success": True, "message": "response", "yaml": to_yaml(response)}
 
     async def _call(self, service: str, type_name: str, text: str) -> Any:
-        from ..ros.names import expand
-
         try:
             name = expand(service, "llfsm_web", "/")
         except Exception as e:
@@ -356,6 +350,7 @@ class RunSource(Source):
         try:
             key = (world.raster_version, tuple(world.turtle_pixels()), world.background)
             if key != self._world_key or self._world_svg is None:
+                # deferred: start-up (only a run with turtlesim draws a world)
                 from ..sim.draw import svg_text
 
                 text = svg_text(world)
