@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from conftest import run_sim, write_machine
+from helpers import run_sim, write_machine
 
 from llfsm import ros
 from llfsm.msgs.geometry_msgs.msg import Twist
