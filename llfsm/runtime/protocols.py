@@ -1,5 +1,5 @@
 """What the runtime knows of the layers above it: the run's bus and its transport (llfsm.ros,
-SPEC §3 and §6), which the run context holds for them but never names.
+docs/bus.md and docs/transports.md), which the run context holds for them but never names.
 
 For type checkers only: the context imports this under TYPE_CHECKING, so a run never imports
 it (nor `typing`, which it needs), and a native build (docs/native.md) never compiles it.

@@ -1,4 +1,4 @@
-"""The live view (SPEC §10): `llfsm run ... --web [HOST:]PORT` and `llfsm view`.
+"""The live view (docs/view.md): `llfsm run ... --web [HOST:]PORT` and `llfsm view`.
 
 One page, live over a WebSocket: each machine's diagram with its current state, commands,
 topics, a form to publish and one to call a service, and the turtle world.  Every script, style
