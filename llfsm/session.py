@@ -498,7 +498,7 @@ class Session:
 
     def _set_parameters(self, bus: Bus) -> None:
         """`--param [NODE:]NAME:=VALUE`: overrides the nodes read when they declare a parameter.
-        ValueError for one that does not parse.  Issue 21 grows this into rclpy's
+        ValueError for one that does not parse.  Issue 21 (SPEC §12) grows this into rclpy's
         parameters: `-p NODE:NAME:=VALUE` and `--params-file FILE` are read here too."""
         from .ros import parse_param  # deferred: start-up (with the bus, in _open_bus)
 

@@ -3,7 +3,7 @@
 Today: `node.declare_parameter(name, default)` (a `--param [node:]name:=value` given to
 `llfsm run` overrides the default), `has_parameter`, `get_parameter`, `set_parameters`.  A
 node keeps its parameters in a `NodeParameters` and forwards those calls to it, so rclpy's full
-parameter API (types, descriptors, callbacks, the parameter services: issue 21) grows
+parameter API (types, descriptors, callbacks, the parameter services; SPEC section 12) grows
 here.  See docs/bus.md (Parameters: `--param`).
 """
 
