@@ -55,6 +55,7 @@ demo: $(VENV)/.installed
 # lint-imports: the layers and contracts of [tool.importlinter] (docs/architecture.md)
 lint: $(VENV)/.installed-dev
 	$(VENV)/bin/ruff check llfsm tests bench
+	$(VENV)/bin/mypy
 	$(VENV)/bin/lint-imports --no-logo
 
 # The web view's browser tests drive Debian's Chromium (Playwright never downloads a browser):

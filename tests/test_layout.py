@@ -13,6 +13,7 @@ import ast
 import io
 import re
 import tokenize
+import tomllib
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -287,6 +288,19 @@ def test_no_import_cycle_hidden_behind_a_deferred_import() -> None:
     assert not found, "modules that import each other (deferred imports counted):\n" + "\n".join(
         " <-> ".join(c) for c in found
     )
+
+
+def test_the_transports_contract_names_every_other_module_of_ros() -> None:
+    """Transports see the bus only through transports/base.py's protocols: the forbidden contract
+    in pyproject.toml must name every module and package of llfsm.ros besides the transports, so
+    that a new entity module (actions, say) is forbidden to them as soon as it exists."""
+    config = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))
+    contract = next(c for c in config["tool"]["importlinter"]["contracts"] if c["id"] == "transports")
+    ros = PACKAGE / "ros"
+    present = {f"llfsm.ros.{p.stem}" for p in ros.glob("*.py") if p.name != "__init__.py"}
+    present |= {f"llfsm.ros.{d.name}" for d in ros.iterdir() if (d / "__init__.py").is_file()}
+    missing = sorted(present - {"llfsm.ros.transports"} - set(contract["forbidden_modules"]))
+    assert not missing, f"add to the transports contract's forbidden_modules in pyproject.toml: {missing}"
 
 
 # -- README's layout block ------------------------------------------------------------------------

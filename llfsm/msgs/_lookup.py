@@ -115,7 +115,7 @@ def message_class(text: str) -> type[Message]:
     pkg, kind, name = split_type(text, "msg")
     if kind != "msg":
         raise TypeNameError(f"'{text}' is a service type; a topic carries a message type (pkg/msg/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _import(pkg, kind, name, text)  # type: ignore[return-value]  # its _TYPE is pkg/msg/name
 
 
 def service_class(text: str) -> type[Service]:
@@ -123,4 +123,4 @@ def service_class(text: str) -> type[Service]:
     pkg, kind, name = split_type(text, "srv")
     if kind != "srv":
         raise TypeNameError(f"'{text}' is a message type; a service has a service type (pkg/srv/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _import(pkg, kind, name, text)  # type: ignore[return-value]  # its _TYPE is pkg/srv/name
