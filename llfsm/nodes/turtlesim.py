@@ -28,6 +28,7 @@ class _Turtle:
     """The bus entities of one turtle, so that kill and reset can take them down again."""
 
     def __init__(self, sim: Turtlesim, name: str) -> None:
+        # deferred: with the node (importing the node's module loads neither the bus nor its messages)
         from ..msgs.geometry_msgs.msg import Twist
         from ..msgs.turtlesim.msg import Color, Pose
         from ..msgs.turtlesim.srv import SetPen, TeleportAbsolute, TeleportRelative
@@ -84,6 +85,7 @@ class _Turtle:
 
 class Turtlesim:
     def __init__(self, ctx: RunContext, options: NodeOptions) -> None:
+        # deferred: with the node, as in _Turtle
         from .. import ros
         from ..msgs.std_srvs.srv import Empty
         from ..msgs.turtlesim.srv import Kill, Spawn
@@ -110,6 +112,7 @@ class Turtlesim:
         self.node.create_timer(UPDATE_PERIOD, self.update)
         self.viewer: Any = None
         if options.view:
+            # deferred: optional dependency (pygame, the view extra), only with --view
             try:
                 from ..sim.view import Viewer
             except ImportError as e:
@@ -182,6 +185,7 @@ class Turtlesim:
             self.viewer.draw()
 
     def _write_image(self, path: Any) -> None:
+        # deferred: start-up (Pillow, only with --image)
         from ..sim.draw import render
 
         try:
@@ -192,6 +196,7 @@ class Turtlesim:
 
 
 def _channel(colour: str) -> Any:
+    # deferred: with the node, as in _Turtle
     from ..msgs.rcl_interfaces.msg import IntegerRange, ParameterDescriptor
 
     return ParameterDescriptor(
