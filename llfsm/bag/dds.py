@@ -24,6 +24,7 @@ from .errors import BagError
 if TYPE_CHECKING:
     from typing import Any
 
+    from ..msgs import Message
     from ..progress import Status
     from ..ros.bus import Bus, Topic
 
@@ -35,6 +36,7 @@ class _Session:
     """A bus on the DDS transport, active while the verb runs; Ctrl-C or SIGTERM ends it."""
 
     def __init__(self) -> None:
+        # deferred: start-up (every `llfsm` command imports this module's verbs; only a running verb loads the bus)
         from ..ros.bus import bus_of
         from ..ros.transports import make
         from ..runtime import RunContext, WallClock
@@ -51,6 +53,7 @@ class _Session:
 
     @contextmanager
     def active(self) -> Iterator[None]:
+        # deferred: start-up, as in __init__
         from ..runtime.context import activate
 
         def stop(_signum: int, _frame: object) -> None:
@@ -86,14 +89,16 @@ class _Session:
 
 
 def _all_topics(
-    bus: Bus, found: Callable[[str, type], None], skipped: Callable[[str, str], None]
+    bus: Bus, found: Callable[[str, type[Message]], None], skipped: Callable[[str, str], None]
 ) -> Callable[[], None]:
     """A scan of DCPSPublication for ROS topics (`rt/...`): found(name, class) once per topic."""
+    # deferred: optional dependency (cyclonedds) and start-up, as in _Session
     from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
     from ..ros.transports.dds_graph import message_class
 
-    reader = BuiltinDataReader(bus.transport.dp, BuiltinTopicDcpsPublication)  # type: ignore[attr-defined]
+    dp = bus.transport.dp  # type: ignore[attr-defined]  # the session's bus is on DDS (_Session)
+    reader = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
     seen: set[str] = set()
 
     def scan() -> None:
@@ -125,6 +130,7 @@ def record(
 ) -> str | None:
     """Record until Ctrl-C (or `duration` seconds); the error message if recording failed.
     `status` (a terminal's) shows what is being recorded: the topics and their counts."""
+    # deferred: start-up (`bag play` never loads the recorder, nor `bag record` the player)
     from ..ros.node import Node
     from .recorder import Recorder
 
@@ -153,10 +159,11 @@ def record(
             bus.watch(name, subscribe)
         if all_topics:
 
-            def found(name: str, cls: type) -> None:
-                subscribe(bus.topic(name, cls, "subscribe to"))  # type: ignore[arg-type]
+            def found(name: str, cls: type[Message]) -> None:
+                subscribe(bus.topic(name, cls, "subscribe to"))
 
             def skipped(name: str, dds_type: str) -> None:
+                # deferred: start-up (only a topic llfsm cannot record needs its type's ROS name)
                 from ..ros.transports.dds_graph import message_type
 
                 if report is not None:  # the type as ROS names it (pkg/msg/Name), not in its DDS form
@@ -191,7 +198,7 @@ def _counted(deliver: Callable[[Any], None], counts: dict[str, int], name: str) 
 
 def _recording(out: str, names: list[str], all_topics: bool, counts: dict[str, int], elapsed: float) -> str:
     """`recording 2 topics to DIR: 120 messages (/a 60, /b 60), 12 s`, or what it waits for."""
-    from ..progress import seconds
+    from ..progress import seconds  # deferred: start-up (a status line is drawn on a terminal only)
 
     if not counts:
         what = "any topic" if all_topics else ", ".join(names)
@@ -215,6 +222,7 @@ def play(
 ) -> int:
     """Play the bag to the DDS graph; the number of messages published.  `status` (a
     terminal's) shows how far it is: messages and bag time."""
+    # deferred: start-up, as in record
     from ..progress import seconds
     from .player import Player
 

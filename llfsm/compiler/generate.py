@@ -266,11 +266,12 @@ def _flat_names(tree: ast.AST) -> _Flat | None:
         for child in child_nodes(node):
             t = type(child)
             if t is name:
-                out.names.append(child)  # type: ignore[arg-type]
+                n: ast.Name = child  # type: ignore[assignment]  # its type is ast.Name, exactly
+                out.names.append(n)
                 if not in_comp:
-                    out.outer.append(child)  # type: ignore[arg-type]
-                elif type(child.ctx) is not load:  # type: ignore[attr-defined]
-                    out.targets.add(child.id)  # type: ignore[attr-defined]
+                    out.outer.append(n)
+                elif type(n.ctx) is not load:
+                    out.targets.add(n.id)
             elif t in scoped:
                 return None
             else:
@@ -532,7 +533,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
 def _parameters(m: Machine) -> tuple[tuple[str, str], ...]:
     """The variables of `parameters:` with their parameter types (check has made sure each fits)."""
     annotations = {v.name: v.annotation for v in m.variables}
-    out = []
+    out: list[tuple[str, str]] = []
     for p in m.parameters:
         kind = parameter_type(annotations.get(p.name, ""))
         if kind is not None and p.name not in dict(out):

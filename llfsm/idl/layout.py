@@ -9,8 +9,10 @@ splits it.  Only the shapes the generators produce are handled.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+
+from .spec import Value
 
 LINE_LIMIT = 120  # the project's ruff line-length
 
@@ -23,7 +25,7 @@ def str_literal(s: str) -> str:
     return r
 
 
-def literal(value: Any) -> str:
+def literal(value: Value) -> str:
     """A default or constant value of a definition as Python source."""
     if isinstance(value, str):
         return str_literal(value)
@@ -47,7 +49,7 @@ def bracketed(head: str, items: list[str], tail: str, indent: int, *, is_tuple: 
     return head + "\n" + "".join(f"    {item},\n" for item in items) + tail
 
 
-def assign(target: str, value: Any, indent: int, parts: tuple[Any, Any, Any] | None = None) -> str:
+def assign(target: str, value: str | Call, indent: int, parts: tuple[str, str, str | Call] | None = None) -> str:
     """`target = value`, wrapped in parentheses as ruff does when too long; `parts` are the
     (body, condition, alternative) of a conditional value, split one a line if still too long.
     A value (or an alternative) that is a `Call` and still too long is split inside its own
@@ -64,7 +66,7 @@ def assign(target: str, value: Any, indent: int, parts: tuple[Any, Any, Any] | N
     return f"{target} = (\n" + "\n".join(lines) + "\n)"
 
 
-def conditional(body: str, cond: str, alt: Any) -> tuple[str, tuple[str, str, Any]]:
+def conditional(body: str, cond: str, alt: str | Call) -> tuple[str, tuple[str, str, str | Call]]:
     """`body if cond else alt`, and its parts for `assign` to split."""
     return f"{body} if {cond} else {alt}", (body, cond, alt)
 
@@ -74,13 +76,13 @@ class Call:
     """A call expression kept as a tree, so that a long one is laid out as ruff lays it out."""
 
     fn: str
-    args: list[Any]  # str | Call
+    args: Sequence[str | Call]
 
     def __str__(self) -> str:
         return f"{self.fn}({', '.join(map(str, self.args))})"
 
 
-def layout(prefix: str, expr: Any, suffix: str = "", indent: int = 4, *, atom: bool = False) -> str:
+def layout(prefix: str, expr: str | Call, suffix: str = "", indent: int = 4, *, atom: bool = False) -> str:
     """`prefix + expr + suffix` as a statement at `indent`, split as ruff format splits it: on
     one line if it fits; else the arguments on one line of their own if they fit (calls only:
     a bracketed collection, `atom`, is always exploded); else one argument a line, each laid

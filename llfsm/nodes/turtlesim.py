@@ -8,11 +8,16 @@ The world updates every 16 ms of run time with dt = 0.016 s, as turtlesim's time
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..runtime.context import RunContext
 from ..sim.world import TurtleError, TurtleWorld
 from . import NodeError, NodeOptions
+
+if TYPE_CHECKING:
+    from ..ros.publisher import Publisher
+    from ..ros.service import ServiceServer
+    from ..ros.subscription import Subscription
 
 NODE_NAME = "turtlesim"
 UPDATE_PERIOD = 0.016
@@ -23,6 +28,7 @@ class _Turtle:
     """The bus entities of one turtle, so that kill and reset can take them down again."""
 
     def __init__(self, sim: Turtlesim, name: str) -> None:
+        # deferred: with the node (importing the node's module loads neither the bus nor its messages)
         from ..msgs.geometry_msgs.msg import Twist
         from ..msgs.turtlesim.msg import Color, Pose
         from ..msgs.turtlesim.srv import SetPen, TeleportAbsolute, TeleportRelative
@@ -45,7 +51,7 @@ class _Turtle:
             world.teleport_relative(name, req.linear, req.angular)
             return resp
 
-        self.entities = [
+        self.entities: list[Subscription | ServiceServer | Publisher] = [
             node.create_subscription(Twist, f"{name}/cmd_vel", on_cmd, 1),
             node.create_service(SetPen, f"{name}/set_pen", set_pen),
             node.create_service(TeleportAbsolute, f"{name}/teleport_absolute", teleport_absolute),
@@ -79,6 +85,7 @@ class _Turtle:
 
 class Turtlesim:
     def __init__(self, ctx: RunContext, options: NodeOptions) -> None:
+        # deferred: with the node, as in _Turtle
         from .. import ros
         from ..msgs.std_srvs.srv import Empty
         from ..msgs.turtlesim.srv import Kill, Spawn
@@ -105,6 +112,7 @@ class Turtlesim:
         self.node.create_timer(UPDATE_PERIOD, self.update)
         self.viewer: Any = None
         if options.view:
+            # deferred: optional dependency (pygame, the view extra), only with --view
             try:
                 from ..sim.view import Viewer
             except ImportError as e:
@@ -177,6 +185,7 @@ class Turtlesim:
             self.viewer.draw()
 
     def _write_image(self, path: Any) -> None:
+        # deferred: start-up (Pillow, only with --image)
         from ..sim.draw import render
 
         try:
@@ -187,6 +196,7 @@ class Turtlesim:
 
 
 def _channel(colour: str) -> Any:
+    # deferred: with the node, as in _Turtle
     from ..msgs.rcl_interfaces.msg import IntegerRange, ParameterDescriptor
 
     return ParameterDescriptor(

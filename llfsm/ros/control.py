@@ -1,4 +1,4 @@
-"""Machines on the graph (SPEC §8): each machine's state, structure and control, as ROS means.
+"""Machines on the graph (docs/view.md): each machine's state, structure and control, as ROS means.
 
 For each loaded machine M, a node `/llfsm/M` offers
 - `/llfsm/M/state` (std_msgs/msg/String, the current state's name; TRANSIENT_LOCAL, so a late
@@ -161,7 +161,10 @@ class MachineGraph(Tracer):
             # deferred: optional dependency (cyclonedds); only a run on the DDS transport looks
             from .transports.dds_graph import Graph
 
-            graph = Graph(dp, say=lambda text: self.nodes[0].get_logger().warning(text))
+            def say(text: str) -> None:  # what a peer sent that could not be read
+                self.nodes[0].get_logger().warning(text)
+
+            graph = Graph(dp, say=say)
         except Exception:  # the graph reader is a courtesy: the run goes on without it
             return
         ours = {node.get_fully_qualified_name(): node for node in self.nodes}

@@ -1,6 +1,7 @@
-"""`interface show`, and interface types by name: `pkg/msg/Name` (or `pkg/Name`, as `ros2`
-accepts) to llfsm's message and service classes, which every verb that takes a TYPE (and the
-web view) reads it through.
+"""`interface show`, and interface types by name for the verbs: `pkg/msg/Name` (or `pkg/Name`,
+as `ros2` accepts) to llfsm's message and service classes, a mistake being the verbs' one-line
+usage error.  The lookup itself is llfsm/msgs/_lookup.py, which the web view reads TYPEs
+through too (a layer below both).
 
 Built-in packages are the generated modules under llfsm/msgs/; their definitions are the files
 in llfsm/msgs/_interfaces/ they are generated from (ROS 2's own, with their comments).  A user's
@@ -11,20 +12,31 @@ the commands add the working directory and its parents (where a machine's packag
 from __future__ import annotations
 
 import difflib
-import importlib
 import os
-import re
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 from ..interface_path import INTERFACE_KINDS
-from ..msgs import Message, Service, add_search_path, find_package, search_path
+from ..msgs import Message, Service, _lookup, add_search_path, find_package
+from ..msgs._lookup import CLOSE, KINDS, TypeNameError, builtin_packages, known_types, packages, types_of
+from ..msgs._lookup import DEFINITIONS as _DEFINITIONS
 from . import NOT_FOUND, CliError
 
-_MSGS_DIR = Path(__file__).resolve().parent.parent / "msgs"
-_DEFINITIONS = _MSGS_DIR / "_interfaces"
-_PACKAGE = re.compile(r"^(?!.*__)(?!.*_$)[a-z][a-z0-9_]*$")
-_NAME = re.compile(r"^[A-Z][A-Za-z0-9]*$")
-KINDS = ("msg", "srv")
+__all__ = [
+    "KINDS",
+    "definition_file",
+    "known_types",
+    "list_",
+    "message_class",
+    "package",
+    "service_class",
+    "show",
+    "split_type",
+    "use_working_directory",
+]
+
+_T = TypeVar("_T")
 
 
 def use_working_directory(cwd: str | os.PathLike[str] | None = None) -> None:
@@ -35,151 +47,28 @@ def use_working_directory(cwd: str | os.PathLike[str] | None = None) -> None:
         add_search_path(folder)
 
 
+def _as_usage_error(lookup: Callable[..., _T], *args: str) -> _T:
+    """The lookup's answer, or its one-line TypeNameError as the verbs' usage error (status 2)."""
+    try:
+        return lookup(*args)
+    except TypeNameError as e:
+        raise CliError(str(e)) from None
+
+
 def split_type(text: str, kind: str) -> tuple[str, str, str]:
     """("turtlesim", "srv", "Spawn") from "turtlesim/srv/Spawn" or "turtlesim/Spawn"; `kind`
     is what a two-part name means.  Anything else is a usage error."""
-    parts = text.split("/")
-    if len(parts) == 2:
-        parts = [parts[0], kind, parts[1]]
-    if len(parts) != 3 or parts[1] not in KINDS or not _PACKAGE.match(parts[0]) or not _NAME.match(parts[2]):
-        example = "geometry_msgs/msg/Twist" if kind == "msg" else "turtlesim/srv/Spawn"
-        close = _closest(parts[0], parts[-1], kind) if len(parts) == 3 and parts[1] in KINDS else None
-        hint = f" (did you mean '{close}'?)" if close else ""
-        raise CliError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {example}){hint}")
-    return parts[0], parts[1], parts[2]
-
-
-def _builtin_packages() -> list[str]:
-    return sorted(
-        d.name
-        for d in _MSGS_DIR.iterdir()
-        if not d.name.startswith("_") and any((d / k / "__init__.py").is_file() for k in INTERFACE_KINDS)
-    )
-
-
-def _user_packages() -> dict[str, Path]:
-    found: dict[str, Path] = {}
-    for root in search_path():
-        try:
-            entries = sorted(root.iterdir())
-        except OSError:
-            continue
-        for d in entries:
-            if _PACKAGE.match(d.name) and d.name not in found and any((d / k).is_dir() for k in INTERFACE_KINDS):
-                found[d.name] = d
-    return found
-
-
-def packages() -> dict[str, Path]:
-    """Every interface package llfsm can import, by name: its own (their definitions), then the
-    user's from the search path (a user's package of a shipped package's name is never used)."""
-    out = {pkg: _DEFINITIONS / pkg for pkg in _builtin_packages()}
-    for pkg, d in _user_packages().items():
-        out.setdefault(pkg, d)
-    return out
-
-
-def _types_of(folder: Path, kind: str) -> list[str]:
-    d = folder / kind
-    if not d.is_dir():
-        return []
-    return sorted(p.stem for p in d.glob(f"*.{kind}") if _NAME.match(p.stem))
-
-
-def known_types(kind: str) -> list[str]:
-    """Every `pkg/kind/Name` llfsm can import: built-in packages, then the user's."""
-    return [f"{pkg}/{kind}/{name}" for pkg, d in packages().items() for name in _types_of(d, kind)]
-
-
-#: How alike two names must be to be offered as "did you mean" (difflib's ratio): a package or
-#: a type name each on its own, so that what two names share by convention (`_msgs/msg/`) never
-#: makes `test_msgs/msg/BasicTypes` look like `std_msgs/msg/Byte`.
-CLOSE = 0.75
-
-
-def _similar(a: str, b: str) -> float:
-    return difflib.SequenceMatcher(None, a.lower(), b.lower()).ratio()
-
-
-def _closest(pkg: str, name: str, kind: str) -> str | None:
-    """The known type closest to pkg/kind/name, when one is close: a close name (or one it
-    begins: Odom -> Odometry) in the same or a close package.  A type of the same name in an
-    unrelated package is not offered: example_interfaces/msg/Int64 is not std_msgs/msg/Int64
-    on the wire."""
-    best: tuple[float, str] | None = None
-    for candidate in known_types(kind):
-        cpkg, _, cname = candidate.split("/")
-        p = _similar(pkg, cpkg)
-        if p < CLOSE:
-            continue
-        n = _similar(name, cname)
-        if n >= CLOSE:
-            score = p + n
-        elif len(name) >= 3 and cname.lower().startswith(name.lower()):
-            score = p + len(name) / len(cname)
-        else:
-            continue
-        if best is None or score > best[0]:
-            best = (score, candidate)
-    return best[1] if best else None
-
-
-def where_interfaces() -> str:
-    """Where llfsm looks for interface packages, in words, with what the variables hold."""
-    env = {name: os.environ.get(name, "") for name in ("LLFSM_INTERFACE_PATH", "AMENT_PREFIX_PATH")}
-    shown = {name: f"({value})" if value else "(not set)" for name, value in env.items()}
-    return (
-        "llfsm looks among the packages it ships, in the current folder and the three above it, in "
-        f"LLFSM_INTERFACE_PATH {shown['LLFSM_INTERFACE_PATH']} and in share/ of AMENT_PREFIX_PATH "
-        f"{shown['AMENT_PREFIX_PATH']}"
-    )
-
-
-def _unknown(text: str, kind: str) -> CliError:
-    name = "message" if kind == "msg" else "service" if kind == "srv" else "action"
-    parts = text.split("/")
-    pkg, tname = parts[0], parts[-1]
-    for other in INTERFACE_KINDS:  # std_srvs/msg/Trigger: the kind is wrong
-        twin = f"{pkg}/{other}/{tname}"
-        if other != kind and len(parts) in (2, 3) and twin in known_types(other):
-            what = {"msg": "a message", "srv": "a service", "action": "an action"}[other]
-            return CliError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
-    close = _closest(pkg, tname, kind)
-    hint = f" (did you mean '{close}'?)" if close else ""
-    if pkg not in packages():
-        return CliError(f"unknown {name} type '{text}': no interface package '{pkg}'{hint}; {where_interfaces()}")
-    return CliError(f"unknown {name} type '{text}': {pkg} has no {name} '{tname}'{hint}")
-
-
-def _import(pkg: str, kind: str, name: str, text: str) -> object:
-    try:  # llfsm.msgs, imported above, has installed the import hook for user packages
-        module = importlib.import_module(f"llfsm.msgs.{pkg}.{kind}")
-    except ModuleNotFoundError as e:
-        if e.name is not None and e.name.startswith(f"llfsm.msgs.{pkg}"):  # no such package, or no msg/srv in it
-            raise _unknown(text, kind) from None
-        raise CliError(f"{text}: {e}") from None
-    except ImportError as e:  # a user's definition that does not compile: file and line
-        raise CliError(str(e)) from None
-    cls = getattr(module, name, None)
-    if cls is None or getattr(cls, "_TYPE", None) != f"{pkg}/{kind}/{name}":
-        raise _unknown(text, kind)
-    return cls
+    return _as_usage_error(_lookup.split_type, text, kind)
 
 
 def message_class(text: str) -> type[Message]:
     """The message class that TYPE names (`std_msgs/msg/String`, `std_msgs/String`)."""
-    pkg, kind, name = split_type(text, "msg")
-    if kind != "msg":
-        raise CliError(f"'{text}' is a service type; a topic carries a message type (pkg/msg/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _as_usage_error(_lookup.message_class, text)
 
 
 def service_class(text: str) -> type[Service]:
     """The service class that TYPE names (`turtlesim/srv/Spawn`, `turtlesim/Spawn`)."""
-    pkg, kind, name = split_type(text, "srv")
-    if kind != "srv":
-        raise CliError(f"'{text}' is a message type; a service has a service type (pkg/srv/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _as_usage_error(_lookup.service_class, text)
 
 
 # -- ros2 interface list, package -----------------------------------------------------------------
@@ -200,12 +89,13 @@ def list_(*, kinds: tuple[str, ...] = ()) -> str:
 def package(name: str, *, kinds: tuple[str, ...] = ()) -> str:
     """`ros2 interface package NAME`: the package's types, one a line (ros2 prints them in no
     particular order; llfsm sorts them).  An unknown package is status 1, as in ros2."""
-    folder = packages().get(name)
+    known = packages()
+    folder = known.get(name)
     if folder is None:
-        close = difflib.get_close_matches(name, list(packages()), n=1, cutoff=CLOSE)
+        close = difflib.get_close_matches(name, list(known), n=1, cutoff=CLOSE)
         hint = f" (did you mean '{close[0]}'?)" if close else ""
         raise CliError(f"Unknown package '{name}'{hint}", NOT_FOUND)
-    found = [f"{name}/{k}/{t}" for k in INTERFACE_KINDS if not kinds or k in kinds for t in _types_of(folder, k)]
+    found = [f"{name}/{k}/{t}" for k in INTERFACE_KINDS if not kinds or k in kinds for t in types_of(folder, k)]
     return "".join(f"{t}\n" for t in sorted(found))
 
 
@@ -214,7 +104,7 @@ def package(name: str, *, kinds: tuple[str, ...] = ()) -> str:
 
 def definition_file(pkg: str, kind: str, name: str) -> Path | None:
     """The .msg/.srv file that defines the type, or None."""
-    if pkg in _builtin_packages():
+    if pkg in builtin_packages():
         folders = [_DEFINITIONS / pkg / kind]
     else:
         d = find_package(pkg)
@@ -278,7 +168,7 @@ def _show(
 ) -> None:
     path = definition_file(pkg, kind, name)
     if path is None:
-        raise _unknown(text, kind)
+        raise CliError(str(_lookup.unknown(text, kind)))
     try:
         source = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:

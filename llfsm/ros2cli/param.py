@@ -262,7 +262,8 @@ def load(node_name: str, path: str, *, use_wildcard: bool = True, timeout: float
         s = _Session(node, graph, timeout)
         s.wait_for_node(full)
         response = s.call(full, SetParameters, SetParameters.Request(parameters=messages))
-    out, err = [], []
+    out: list[str] = []
+    err: list[str] = []
     for name, result in zip(chosen, response.results, strict=False):
         said = f": {result.reason}" if result.reason else ""
         (out if result.successful else err).append(
