@@ -15,10 +15,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, REPO, llfsm, run_sim
 from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from helpers import MACHINES, REPO, llfsm, on_pty, run_sim
 from rosbags.highlevel import AnyReader
-from test_progress import on_pty
 
 DOC = REPO / "docs" / "recording.md"
 
@@ -34,30 +33,65 @@ def _topics(bag: Path) -> dict[str, int]:
 # -- the first message of a publisher that appears --------------------------------------------------
 
 
+class _Run:
+    """One llfsm run on the DDS transport in this process (its context, transport and bus)."""
+
+    def __init__(self) -> None:
+        from llfsm.ros.bus import bus_of
+        from llfsm.ros.transports.dds import DdsTransport
+        from llfsm.runtime import RunContext, WallClock
+
+        self.ctx = RunContext(WallClock())
+        self.transport = DdsTransport(97)
+        self.ctx.transport = self.transport
+        self.bus = bus_of(self.ctx)
+        self.bus.initialised = True
+
+    def __enter__(self) -> _Run:
+        from llfsm.runtime.context import activate
+
+        self._prev = activate(self.ctx)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        from llfsm.runtime.context import activate
+
+        activate(self._prev)
+
+
+def _spin_until(cond: Callable[[], object], run: _Run, timeout: float = 5.0) -> bool:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        run.bus.spin_once(5_000_000)
+        if cond():
+            return True
+    return False
+
+
+@pytest.mark.dds
 def test_a_message_published_once_the_reader_matched_is_sent_before_the_next_poll(monkeypatch) -> None:
     """The race behind "4 of 5 first messages recorded": a DDS writer sent nothing while its own
     count of matched readers, updated when the transport polls (between rounds), was still 0,
     though DDS had matched the recorder's reader already.  A run that publishes right after the
     match (the first message of a publisher that just appeared) lost that message."""
     pytest.importorskip("cyclonedds")
-    from test_dds_transport import Run, spin_until
-
+    from llfsm import ros
     from llfsm.msgs.std_msgs.msg import String
 
     monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "OFF")  # this process only
-    a, b = Run(), Run()
+    a, b = _Run(), _Run()
     try:
         with a:
-            pub = a.node("talker").create_publisher(String, "/first", 10)
+            pub = ros.Node("talker").create_publisher(String, "/first", 10)
         heard: list[str] = []
         with b:
-            sub = b.node("recorder").create_subscription(String, "/first", lambda m: heard.append(m.data), 10)
+            sub = ros.Node("recorder").create_subscription(String, "/first", lambda m: heard.append(m.data), 10)
         # only the reader's side is polled: DDS matches both ends, the writer's run has not looked
-        assert spin_until(lambda: sub._remote.reader.get_subscription_matched_status().current_count == 1, b)
-        assert spin_until(lambda: pub._remote.writer.get_publication_matched_status().current_count == 1, b)
+        assert _spin_until(lambda: sub._remote.reader.get_subscription_matched_status().current_count == 1, b)
+        assert _spin_until(lambda: pub._remote.writer.get_publication_matched_status().current_count == 1, b)
         with a:
             pub.publish(String(data="first"))
-        assert spin_until(lambda: heard == ["first"], b), heard
+        assert _spin_until(lambda: heard == ["first"], b), heard
     finally:
         a.transport.close()
         b.transport.close()
@@ -127,6 +161,7 @@ def test_rosout_is_recorded_from_the_first_line(tmp_path: Path) -> None:
 # -- types named as ROS names them -------------------------------------------------------------------------
 
 
+@pytest.mark.dds
 def test_an_unrecordable_type_is_named_pkg_msg_name(netns: NetNamespace, tmp_path: Path) -> None:
     """A topic of a type llfsm has no class for is not recorded, and the line says which type
     in ROS's spelling (pkg/msg/Name), not DDS's (pkg::msg::dds_::Name_)."""
@@ -198,6 +233,7 @@ def _status_lines(shown: str) -> list[str]:
     return [part for part in shown.split("\r\x1b[K") if part and "\n" not in part]
 
 
+@pytest.mark.dds
 def test_bag_record_and_play_say_what_they_do_on_a_terminal(netns: NetNamespace, tmp_path: Path) -> None:
     runner: Callable[..., subprocess.Popen[str]]
     run = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "8")

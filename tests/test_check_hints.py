@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import write_machine
+from helpers import write_machine
 
 from llfsm.lang.check import check_machine
 from llfsm.lang.diagnostics import Diagnostic

@@ -14,8 +14,10 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import write_machine
 from dds_netns import NetNamespace, finish, netns  # noqa: F401  (the fixture)
+from helpers import write_machine
+
+pytestmark = pytest.mark.dds  # every test talks DDS across processes
 
 
 def _twins(tmp_path: Path) -> tuple[Path, Path]:

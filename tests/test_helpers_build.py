@@ -10,7 +10,7 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from conftest import llfsm_process, write_machine
+from helpers import llfsm_process, write_machine
 
 
 def _project(root: Path, helper: str = "greeting") -> Path:

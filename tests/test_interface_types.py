@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from conftest import llfsm
+from helpers import llfsm
 
 from llfsm.msgs import _dds
 from llfsm.ros2cli import CliError
@@ -138,7 +138,7 @@ class TestInterfaceList:
 
 
 def test_a_machine_importing_an_unknown_package_says_where_llfsm_looks(tmp_path: Path) -> None:
-    from conftest import run_sim, write_machine
+    from helpers import run_sim, write_machine
 
     m = write_machine(
         tmp_path,

@@ -7,50 +7,16 @@ stderr on the pty, as in a user's shell.
 
 from __future__ import annotations
 
-import fcntl
 import io
-import os
-import pty
-import select
-import struct
 import subprocess
 import sys
-import termios
 import textwrap
 import time
 from pathlib import Path
 
-from conftest import MACHINES, REPO
+from helpers import MACHINES, REPO, on_pty
 
 from llfsm.progress import Status, seconds
-
-
-def on_pty(argv: list[str], timeout: float = 120, columns: int = 200, **kw: object) -> tuple[int, str, str]:
-    """(status, stdout, what the terminal showed) of a command whose stderr is a terminal
-    `columns` wide."""
-    master, slave = pty.openpty()
-    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
-    p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=slave, stdin=subprocess.DEVNULL, **kw)  # type: ignore[call-overload]
-    os.close(slave)
-    chunks = []
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        ready, _, _ = select.select([master], [], [], 0.2)
-        if ready:
-            try:
-                data = os.read(master, 4096)
-            except OSError:  # EIO: every holder of the terminal has gone
-                break
-            if not data:
-                break
-            chunks.append(data)
-        elif p.poll() is not None:
-            break
-    os.close(master)
-    out = p.stdout.read().decode() if p.stdout else ""
-    p.wait(timeout=30)
-    return p.returncode, out, b"".join(chunks).decode(errors="replace")
-
 
 # A native build whose compile is replaced by a slow stand-in: what the terminal shows while
 # mypyc works is the subject, not mypyc (tests/test_native.py compiles for real).

@@ -6,15 +6,53 @@ the close names a verb offers after waiting in vain for a misspelt one.
 # ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import textwrap
+import time
 from pathlib import Path
 
 import pytest
 import yaml
-from conftest import write_machine
-from dds_netns import NetNamespace, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from helpers import REPO, Run, on_pty, write_machine
 from interop.ros2env import ROS_PYTHON, ros_installed
-from test_ros2cli_dds import llfsm, start, start_python, turtlesim, wait_for
+
+pytestmark = pytest.mark.dds  # every test talks DDS across processes
+
+
+def llfsm(ns: NetNamespace, *args: str | os.PathLike[str], timeout: float = 60) -> Run:
+    """`llfsm ARGS` in the namespace, to its end."""
+    status, out, err = finish(ns.popen([sys.executable, "-m", "llfsm", *map(str, args)], cwd=REPO), timeout)
+    return Run(status, out, err)
+
+
+def start(ns: NetNamespace, *args: str | os.PathLike[str]) -> None:
+    """`llfsm ARGS` in the namespace, in the background until the test ends (output dropped)."""
+    cmd = [sys.executable, "-m", "llfsm", *map(str, args)]
+    ns.popen(cmd, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def start_python(ns: NetNamespace, code: str, python: str | Path) -> None:
+    env = {"RMW_IMPLEMENTATION": "rmw_fastrtps_cpp"}
+    ns.popen([str(python), "-c", code], env=env, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def wait_for(ns: NetNamespace, *args: str, needle: str, timeout: float = 40) -> Run:
+    """Repeat `llfsm ARGS` until its output holds `needle` (discovery takes its time)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        r = llfsm(ns, *args, timeout=timeout)
+        if needle in r.stdout or time.monotonic() > deadline:
+            return r
+        time.sleep(0.2)
+
+
+def turtlesim(ns: NetNamespace) -> None:
+    start(ns, "run", "--transport", "dds", "--node", "turtlesim", "--duration", "90s")
+    r = wait_for(ns, "topic", "list", needle="/turtle1/pose")
+    assert "/turtle1/pose" in r.stdout, r.stderr
 
 
 def test_node_info_prints_what_ros2_prints(netns: NetNamespace) -> None:
@@ -147,10 +185,6 @@ ROSOUT_LISTENER = textwrap.dedent(
 @pytest.mark.skipif(not ros_installed(), reason="real ROS 2 not installed: run `make .venv-ros/.installed`")
 def test_an_rclpy_subscriber_reads_machine_logs_on_rosout(netns: NetNamespace, tmp_path: Path) -> None:
     """`ros2 topic echo /rosout` shows machine logs: rclpy reads llfsm's Log with its own class."""
-    import sys
-
-    from dds_netns import finish
-
     m = _logging_machine(tmp_path)
     start(netns, "run", "--transport", "dds", m, "--duration", "60s")
     p = netns.popen([str(ROS_PYTHON), "-c", ROSOUT_LISTENER], env={"RMW_IMPLEMENTATION": "rmw_fastrtps_cpp"})
@@ -158,7 +192,6 @@ def test_an_rclpy_subscriber_reads_machine_logs_on_rosout(netns: NetNamespace, t
     assert status == 0, err
     name, level, word, _n, file, line = out.split()
     assert (name, level, word, file, line) == ("chatty", "20", "tick", "State_TALK_OnEntry.py", "2"), out
-    assert sys.executable  # (the listener is rclpy's own python, from .venv-ros)
 
 
 RCLPY_NODE = textwrap.dedent(
@@ -183,7 +216,7 @@ RCLPY_NODE = textwrap.dedent(
 @pytest.mark.interop
 @pytest.mark.skipif(not ros_installed(), reason="real ROS 2 not installed: run `make .venv-ros/.installed`")
 def test_node_info_of_an_rclpy_node(netns: NetNamespace) -> None:
-    start_python(netns, RCLPY_NODE, python=ROS_PYTHON)
+    start_python(netns, RCLPY_NODE, ROS_PYTHON)
     r = wait_for(netns, "node", "info", "/rclpy_node", needle="/reset")
     assert r.status == 0, r.stderr
     lines = r.stdout.splitlines()
@@ -197,10 +230,6 @@ def test_waiting_for_a_topic_shows_on_a_terminal_only(netns: NetNamespace) -> No
     """Item 9: a verb that waits says what for, while it waits, when stderr is a terminal; the
     line is cleared before the verb's own last word, which starts on a clean line."""
     import re
-    import sys
-
-    from conftest import REPO
-    from test_progress import on_pty
 
     cmd = ["nsenter", f"--net=/proc/{netns.holder.pid}/ns/net", sys.executable, "-m", "llfsm", "topic", "echo"]
     status, _out, shown = on_pty([*cmd, "/nothing", "--timeout", "2"], cwd=REPO)
