@@ -68,6 +68,8 @@ class Checking:
     section_locals: dict[str, str] | None = None
     #: file -> ids of the names its calls call, made on the file's first undefined name
     called: dict[str, set[int]] = field(default_factory=dict)
+    #: the folders around the machine where `llfsm run` looks for interface packages (first import)
+    interface_roots: list[str] | None = None
 
     @classmethod
     def of(cls, path: Path, read: ReadResult) -> Checking:

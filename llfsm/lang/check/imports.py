@@ -13,9 +13,17 @@ from __future__ import annotations
 import ast
 import functools
 import os
+import sys
 from pathlib import Path
 
-from ...interface_path import INTERFACE_KINDS, folders_around, interface_folder, interface_names, shipped_packages
+from ...interface_path import (
+    INTERFACE_KINDS,
+    SHIPPED_DIR,
+    folders_around,
+    interface_folder,
+    interface_names,
+    shipped_packages,
+)
 from ..model import Code
 from ..positions import node_col
 from .checking import Checking
@@ -61,8 +69,8 @@ def _message_import(c: Checking, code: Code, stmt: ast.Import | ast.ImportFrom, 
     if len(parts) == 1:
         return
     kind = parts[1]
-    kinds = [k for k in INTERFACE_KINDS if _names(folder, k)]
-    if kind not in INTERFACE_KINDS or kind not in kinds:
+    if kind not in INTERFACE_KINDS or not _names(folder, kind):
+        kinds = [k for k in INTERFACE_KINDS if _names(folder, k)]
         wanted = [a.name for a in stmt.names] if isinstance(stmt, ast.ImportFrom) else []
         elsewhere = [f"{package}/{k}/{n}" for n in wanted for k in kinds if n in _names(folder, k)]
         has = " and ".join(kinds) or "no interfaces"
@@ -102,7 +110,11 @@ def _defines(names: list[str], name: str) -> bool:
 def _package(c: Checking, code: Code, stmt: ast.stmt, package: str) -> tuple[str, bool] | None:
     """The package's folder, or LF109 (a warning: the package may be installed where this
     check cannot see, such as a workspace not sourced in CI) and None."""
-    found = interface_folder(package, _roots(c.path))
+    if package in _shipped():
+        return os.path.join(SHIPPED_DIR, package), True
+    if c.interface_roots is None:  # once per machine: the folders `llfsm run` adds around it
+        c.interface_roots = folders_around(os.fspath(c.path))
+    found = interface_folder(package, c.interface_roots)
     if found is None:
         close = c.suggest.close(package, shipped_packages())
         hint = f" (did you mean {close[0]!r}?)" if close else ""
@@ -116,8 +128,10 @@ def _package(c: Checking, code: Code, stmt: ast.stmt, package: str) -> tuple[str
     return found
 
 
-def _roots(machine_dir: Path) -> list[str]:
-    return folders_around(os.fspath(machine_dir))
+@functools.cache
+def _shipped() -> frozenset[str]:
+    """The packages llfsm ships: its own files, the same for as long as it runs."""
+    return frozenset(shipped_packages())
 
 
 def _names(folder: str, kind: str) -> list[str]:
@@ -147,8 +161,8 @@ def _helper_inside(c: Checking, code: Code, stmt: ast.stmt, module: str) -> None
     folder and not beside it: the run imports from the folder that holds NAME.machine, never
     from inside it, so the import fails there (or finds another module of that name)."""
     top = module.split(".")[0]
-    if not top.isidentifier():
-        return
+    if not top.isidentifier() or top in sys.stdlib_module_names or top == "llfsm":
+        return  # a module of Python's own wins over a file of that name anyway
     inside = _module_at(c.path, top)
     if inside is None or _module_at(c.path.parent, top) is not None:
         return
