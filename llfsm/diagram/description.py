@@ -65,6 +65,8 @@ class Description(_Strict):
     states: list[State] = Field(min_length=1, max_length=MAX_STATES)
     initial: str = Name
     suspend: str | None = Field(default=None, max_length=MAX_NAME)
+    #: Wall time (seconds since the epoch) of the run's time 0 (a run on the wall clock says it).
+    started: float | None = Field(default=None, ge=0, le=1e11, allow_inf_nan=False)
 
     @model_validator(mode="after")
     def _references(self) -> Description:
