@@ -302,7 +302,16 @@ class WebServer:
                 self._warn(f"machine {shown!r} not shown: drawing failed: {type(e).__name__}: {e}", f"draw {shown}")
                 continue
             text = d.get("description")
-            out.append({"name": name, "description": text if isinstance(text, str) else "", "svg": svg})
+            machine, participant = d.get("machine", name), d.get("participant", "")
+            out.append(
+                {
+                    "name": name,
+                    "machine": machine if isinstance(machine, str) else shown,
+                    "participant": participant if isinstance(participant, str) else "",
+                    "description": text if isinstance(text, str) else "",
+                    "svg": svg,
+                }
+            )
         return out
 
     def _descriptions(self) -> list[Any]:
