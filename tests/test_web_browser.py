@@ -474,8 +474,8 @@ class TwoRuns:
 
         desc = _json.loads(_json.dumps(description(load(str(MACHINES / f"{MACHINE}.machine")))))
         self.descs = [
-            {**desc, "name": MACHINE, "machine": MACHINE, "participant": "0110f00dcafe"},
-            {**desc, "name": f"{MACHINE}@0110beef", "machine": MACHINE, "participant": "0110beefcafe"},
+            {**desc, "name": MACHINE, "machine": MACHINE, "participant": "01100b7fc3313630a1b2c3d4000001c1"},
+            {**desc, "name": f"{MACHINE}@5e0f9a21", "machine": MACHINE, "participant": "01100b7f5e0f9a21e5f6"},
         ]
 
     def machines(self) -> list[Any]:
@@ -534,18 +534,19 @@ def test_two_runs_of_one_machine_are_two_cards_saying_which_run_and_that_command
             p.set_default_timeout(TIMEOUT_MS)
             p.goto(url)
             first = p.locator(f'article.machine[data-machine="{MACHINE}"]')
-            second = p.locator(f'article.machine[data-machine="{MACHINE}@0110beef"]')
+            second = p.locator(f'article.machine[data-machine="{MACHINE}@5e0f9a21"]')
             second.wait_for()
             assert first.locator(".machine-name").inner_text() == second.locator(".machine-name").inner_text()
-            assert first.locator(".run-label").inner_text() == "run 0110f00d"
-            assert second.locator(".run-label").inner_text() == "run 0110beef"
+            assert first.locator(".run-label").inner_text() == "run c3313630"
+            assert second.locator(".run-label").inner_text() == "run 5e0f9a21"
             for card in (first, second):
                 twins = card.locator(".twins").inner_text()
                 assert "One of 2 runs of ros2_ping_pong" in twins and "reaches every one of them" in twins
+                assert card.locator(".run-label").inner_text() in twins
             # each card follows its own run
             p.wait_for_selector(f'.state[data-machine="{MACHINE}"][data-state="PUBLISH"][aria-current="true"]')
             p.wait_for_selector(
-                f'.state[data-machine="{MACHINE}@0110beef"][data-state="WAIT_AND_COUNT"][aria-current="true"]'
+                f'.state[data-machine="{MACHINE}@5e0f9a21"][data-state="WAIT_AND_COUNT"][aria-current="true"]'
             )
             # the actions, from the graph's names and types
             row = p.locator('#actions tr[data-action="/turtle1/rotate_absolute"]')

@@ -115,8 +115,9 @@ function updateMachine(m, s) {
   for (const b of el_.querySelectorAll("button[data-command]")) b.disabled = over;
   el_.querySelector(".machine-name").textContent = m.machine || m.name;
   const label = el_.querySelector(".run-label");
-  label.hidden = !m.participant;
-  label.textContent = m.participant ? `run ${m.participant.slice(0, 8)}` : "";
+  const run = runLabel(m);
+  label.hidden = !run;
+  label.textContent = run;
   label.title = m.participant ? `the run of DDS participant ${m.participant}` : "";
   el_.querySelector(".state-name").textContent = m.state ?? "(no state yet)";
   const clock = s.source === "view" && !m.run_time ? "view time" : "run time";
@@ -124,9 +125,8 @@ function updateMachine(m, s) {
   const twins = el_.querySelector(".twins");
   if (m.runs > 1) {
     twins.hidden = false;
-    twins.textContent = `One of ${m.runs} runs of ${m.machine} on this domain (this card: DDS participant ` +
-      `${m.participant.slice(0, 8)}…). They serve the same service names, so a command from either card ` +
-      "reaches every one of them.";
+    twins.textContent = `One of ${m.runs} runs of ${m.machine} on this domain (this card: ${run}). They serve ` +
+      "the same service names, so a command from any of their cards reaches every one of them.";
   } else {
     twins.hidden = true;
   }
@@ -153,6 +153,14 @@ function updateMachine(m, s) {
     if (card.asked) { out.textContent = ""; card.asked = null; }
   }
   card.status = status;
+}
+
+// Which run a card is: the digits the view keys another run by (NAME@xxxxxxxx: its participant's
+// GUID after the vendor and host part, the same for every run on one host), for the first too.
+function runLabel(m) {
+  if (!m.participant) return "";
+  const at = m.name.indexOf("@");
+  return "run " + (at >= 0 ? m.name.slice(at + 1) : m.participant.slice(8, 16));
 }
 
 // -- topics, services ------------------------------------------------------------------------------
