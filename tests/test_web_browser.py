@@ -314,7 +314,7 @@ LINE_ENDS = """(cells) => cells.map((td) => {
 
 def test_the_type_column_breaks_only_after_a_slash(wide_page: Any, tmp_path: Path) -> None:
     wide_page.wait_for_selector('#topics tr[data-topic="/rosout"]')
-    cells = wide_page.locator("#topics tbody tr:not(.last) td:nth-child(2)").evaluate_all(LINE_ENDS)
+    cells = wide_page.locator("#topics tbody tr.topic td.type").evaluate_all(LINE_ENDS)
     assert any(text == "rcl_interfaces/msg/Log" for text, _ in cells), cells
     assert all(end == "/" for _, ends in cells for end in ends), cells
     _shot(wide_page, tmp_path, "types")

@@ -171,12 +171,13 @@ function updateTopics(topics) {
   const names = [];
   for (const t of topics) {
     names.push(t.name);
-    const tr = el("tr");
+    const tr = el("tr", null, "topic");
     tr.dataset.topic = t.name;
     tr.append(breakable("td", t.name, "name"), breakable("td", t.type, "type"),
       el("td", t.count === null ? "—" : String(t.count), "num count"),
       el("td", t.rate === null ? "—" : `${t.rate.toFixed(1)} Hz`, "num rate"));
     rows.push(tr);
+    if (!t.last) { tr.className = "topic bare"; continue; } // nothing received yet: no empty row under it
     const last = el("tr", null, "last");
     last.dataset.topic = t.name;
     const td = el("td");
