@@ -66,7 +66,8 @@ DDS_PROBE = textwrap.dedent(
     sys.path.insert(0, sys.argv[1] + "/bench")
     import dds
     p50, _p99 = dds.latency("llfsm", int(sys.argv[2]))
-    print(json.dumps({"Twist round trip p50 (µs)": p50, "idle rounds/s on dds": dds.idle_rate("dds", float(sys.argv[3]))}))
+    idle = dds.idle_rate("dds", float(sys.argv[3]))
+    print(json.dumps({"Twist round trip p50 (µs)": p50, "idle rounds/s on dds": idle}))
     """
 )
 
