@@ -161,7 +161,10 @@ def test_the_editor_reads_values_as_param_set_does_and_refuses_a_bad_name() -> N
     assert params.message("name", "turtle").value.type == ParameterType.PARAMETER_STRING
     assert params.node_name("turtlesim") == "/turtlesim"
     assert params.node_name("/ns/turtlesim") == "/ns/turtlesim"
-    with pytest.raises(params.ParameterInputError, match="invalid node name"):
+    with pytest.raises(params.ParameterInputError) as bad:
         params.node_name("/1turtle")
+    assert (
+        str(bad.value) == "invalid node name '1turtle': use letters, digits and underscores, not starting with a digit"
+    )
     with pytest.raises(params.ParameterInputError, match="give the parameter's name"):
         params.message(" ", "2")

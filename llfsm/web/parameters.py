@@ -57,7 +57,9 @@ def node_name(text: str) -> str:
         validate_node_name(base)
         normalise_namespace(ns or "/")
     except InvalidNameError as e:
-        raise ParameterInputError(f"invalid node name {text!r}: {e}") from None
+        raise ParameterInputError(
+            str(e) if str(e).startswith("invalid") else f"invalid node name {text!r}: {e}"
+        ) from None
     return full
 
 
