@@ -8,6 +8,7 @@ installs it where it can), and these tests skip, saying why, when it is absent.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -625,3 +626,83 @@ def test_the_page_follows_a_suspend_called_with_llfsm_service_call(netns: NetNam
     )
     assert c_out in (answer, "waiting for service to become available...\n" + answer), c_out
     assert w_status == 0 and w_out == "suspended\n", w_out + w_err
+
+
+#: The browser's side of `llfsm view` over DDS (in the test's network namespace): the graph of
+#: another process's nodes, and turtlesim's parameters read and set from the page.
+VIEW_PAGE = r"""
+import json, sys
+from playwright.sync_api import sync_playwright
+url, chromium, args, shot = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4]
+out = {}
+with sync_playwright() as pw:
+    b = pw.chromium.launch(executable_path=chromium, args=args)
+    p = b.new_page(viewport={"width": 1280, "height": 900})
+    p.set_default_timeout(30_000)
+    p.goto(url)
+    g = p.locator("#graph svg.rosgraph")
+    g.locator('g.ros-node[data-node="/turtlesim"] ellipse').wait_for()
+    link = 'path.link.pub[data-node="/ros2_blind_turtle_bot"][data-topic="/turtle1/cmd_vel"]'
+    g.locator(link).wait_for(state="attached")
+    g.locator('path.link.sub[data-node="/turtlesim"][data-topic="/turtle1/cmd_vel"]').wait_for(state="attached")
+    g.locator('g.ros-node[data-node="/turtlesim"]').click()
+    form = '#nodes details[data-node="/turtlesim"][open] form.param[data-param="background_r"]'
+    p.locator(form).wait_for()
+    out["type"] = p.locator(form + " .param-type").inner_text()
+    for value in ("abc", "255"):
+        p.locator(form + " input").fill(value)
+        p.locator(form + " button").click()
+        o = p.locator(form + " output")
+        for _ in range(300):
+            if o.inner_text() not in ("", "…"):
+                break
+            p.wait_for_timeout(100)
+        out[value] = o.inner_text()
+    for _ in range(300):  # the rows are read again after turtlesim's parameter event
+        if p.locator(form + " input").input_value() == "255":
+            break
+        p.wait_for_timeout(100)
+    out["shown"] = p.locator(form + " input").input_value()
+    p.screenshot(path=shot, full_page=True)
+    b.close()
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.dds
+def test_llfsm_view_in_chromium_draws_another_processs_graph_and_sets_its_parameters(
+    netns: NetNamespace, tmp_path: Path
+) -> None:
+    run = netns.llfsm(
+        "run",
+        "--transport",
+        "dds",
+        MACHINES / "ros2_blind_turtle_bot.machine",
+        "--node",
+        "turtlesim",
+        "--duration",
+        "90",
+    )
+    view = netns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "90")
+    assert view.stderr is not None
+    url = ""
+    for line in view.stderr:
+        m = re.search(r"http://\S+", line)
+        if m:
+            url = m.group(0)
+            break
+    assert url, "llfsm view printed no address"
+    threading.Thread(target=LiveRun._drain, args=(view.stderr, []), daemon=True).start()
+    shot = tmp_path / "view-dds.png"
+    page = netns.popen([sys.executable, "-c", VIEW_PAGE, url, CHROMIUM, " ".join(ARGS), str(shot)])
+    status, out, err = finish(page, 120)
+    for p in (run, view):
+        p.terminate()
+    for p in (run, view):
+        finish(p, 20)
+    assert status == 0, err
+    got = json.loads(out)
+    assert got["type"] == "integer"
+    assert got["abc"].startswith("Setting parameter failed: Wrong parameter type"), got
+    assert got["255"] == "Set parameter successful" and got["shown"] == "255", got
+    assert shot.stat().st_size > 10_000
