@@ -1,4 +1,4 @@
-"""The web view's server: aiohttp on a thread of its own, one page, one WebSocket.
+"""The web view's server: aiohttp on a thread of its own, one page, one WebSocket (docs/view.md).
 
 The server thread has its own event loop; the scheduler never waits on it.  While at least one
 page is connected, the server samples its source at most `RATE` times a second and pushes the

@@ -1,4 +1,5 @@
-"""What the page shows, taken from a run in this process, and the way back into it.
+"""What the page shows, taken from a run in this process, and the way back into it (docs/view.md,
+"How it keeps up, and what it costs").
 
 The scheduler never waits on the page and does no work for it: the server's thread samples
 the run (at most 20 times a second, and only while a page is connected) by reading plain
