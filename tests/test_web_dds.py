@@ -205,3 +205,49 @@ def test_llfsm_view_shows_two_runs_their_own_times_the_graph_and_parameters_over
     assert got["bad"]["message"].startswith("Setting parameter failed: Wrong parameter type")
     assert got["good"] == {"success": True, "message": "Set parameter successful"}
     assert {p["name"]: p["value"] for p in got["after"]["parameters"]}["background_r"] == "10"
+
+
+GONE_CLIENT = r"""
+import asyncio, json, sys, aiohttp
+async def main(url):
+    seen = []
+    async with aiohttp.ClientSession() as s:
+        async with s.ws_connect(url.replace("http://", "ws://") + "ws") as ws:
+            loop = asyncio.get_running_loop()
+            end = loop.time() + 40
+            while loop.time() < end:
+                data = json.loads((await asyncio.wait_for(ws.receive(), end - loop.time())).data)
+                if data["type"] == "hello":
+                    data = data["snapshot"]
+                elif data["type"] != "snapshot":
+                    continue
+                for m in data["machines"]:
+                    if not seen or seen[-1] != m["ended"]:
+                        seen.append(m["ended"])
+                if seen[-1:] == [True]:
+                    break
+    print(json.dumps(seen))
+asyncio.run(main(sys.argv[1]))
+"""
+
+
+def test_llfsm_view_says_when_a_run_has_gone(netns: NetNamespace) -> None:
+    """Issue 22: after its run ends, a machine's card in `llfsm view` no longer says running (the
+    page shows `run gone` and disables its buttons when `ended` is true)."""
+    pytest.importorskip("aiohttp")
+    run = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "8")
+    view = netns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "60")
+    assert view.stderr is not None
+    url = ""
+    for line in view.stderr:
+        if "http://" in line:
+            url = line.split("web view at ", 1)[1].strip()
+            break
+    assert url, "llfsm view printed no address"
+    client = netns.python(GONE_CLIENT.replace("sys.argv[1]", repr(url)))
+    c_status, out, c_err = finish(client, 60)
+    r_status, _, r_err = finish(run, 30)
+    view.terminate()
+    finish(view, 20)
+    assert c_status == 0 and r_status == 0, c_err + r_err
+    assert json.loads(out) == [False, True]
