@@ -16,13 +16,13 @@ from llfsm.msgs import _dds
 from llfsm.msgs._message import INT_RANGES, Message, Service, is_message_class, is_service_class
 
 BUILTIN = ("builtin_interfaces", "std_msgs", "geometry_msgs", "std_srvs", "turtlesim", "turtle_sensor_interface",
-           "service_msgs", "rmw_dds_common")  # fmt: skip
+           "service_msgs", "rmw_dds_common", "action_msgs", "unique_identifier_msgs")  # fmt: skip
 
 
 def shipped_classes() -> list[type[Message]]:
     out: list[type[Message]] = []
     for pkg in BUILTIN:
-        for kind in ("msg", "srv"):
+        for kind in ("msg", "srv", "action"):
             try:
                 module = importlib.import_module(f"llfsm.msgs.{pkg}.{kind}")
             except ModuleNotFoundError:
@@ -36,11 +36,12 @@ def shipped_classes() -> list[type[Message]]:
 def shipped_services() -> list[type[Service]]:
     out = []
     for pkg in BUILTIN:
-        try:
-            module = importlib.import_module(f"llfsm.msgs.{pkg}.srv")
-        except ModuleNotFoundError:
-            continue
-        out += [o for o in vars(module).values() if is_service_class(o) and o.__module__ == module.__name__]
+        for kind in ("srv", "action"):  # an action's SendGoal and GetResult are services too
+            try:
+                module = importlib.import_module(f"llfsm.msgs.{pkg}.{kind}")
+            except ModuleNotFoundError:
+                continue
+            out += [o for o in vars(module).values() if is_service_class(o) and o.__module__ == module.__name__]
     return sorted(out, key=lambda c: c._TYPE)
 
 

@@ -1,6 +1,6 @@
 """The shipped message packages, regenerated from the shipped definitions alone: every folder of
-llfsm/msgs/_interfaces/ (PKG/msg/*.msg, PKG/srv/*.srv) becomes the committed modules of
-llfsm/msgs/PKG/ (docs/bus.md, "Messages").  `python -m llfsm.idl` (`make msgs`) writes them;
+llfsm/msgs/_interfaces/ (PKG/msg/*.msg, PKG/srv/*.srv, PKG/action/*.action) becomes the
+committed modules of llfsm/msgs/PKG/ (docs/bus.md, "Messages").  `python -m llfsm.idl` (`make msgs`) writes them;
 `--check` lists the stale ones; tests/test_msgs.py regenerates into a temporary folder and
 compares the whole tree byte for byte.
 
@@ -8,7 +8,9 @@ The definitions are ROS 2's own files, comments included (`ros2 interface show` 
 bags embed them): std_msgs, geometry_msgs and std_srvs from ros2/common_interfaces and
 builtin_interfaces from ros2/rcl_interfaces as Humble ships them; service_msgs (rcl_interfaces)
 and rmw_dds_common as Jazzy ships them (a Gid is 16 bytes since Iron, 24 in Humble: llfsm
-speaks current ROS 2 on the wire); turtlesim from ros/ros_tutorials.  turtle_sensor_interface
+speaks current ROS 2 on the wire); action_msgs (rcl_interfaces) and unique_identifier_msgs
+(ros2/unique_identifier_msgs) as Humble ships them, unchanged since; turtlesim from
+ros/ros_tutorials, its RotateAbsolute action as Humble's.  turtle_sensor_interface
 is llfsm's own (the interface of the how-to in docs/turtlesim.md).
 """
 
