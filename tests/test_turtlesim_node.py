@@ -150,7 +150,7 @@ def test_the_pose_service_answers_with_the_newest_pose(sim: Sim) -> None:
 def test_background_parameters_are_declared(sim: Sim) -> None:
     turtlesim = next(n for n in sim.bus.nodes if n.get_name() == "turtlesim")
     assert [turtlesim.get_parameter(f"background_{c}").value for c in "rgb"] == [69, 86, 255]
-    assert sorted(sim.bus.services) == sorted(
+    assert sorted(s for s in sim.bus.services if "/_action/" not in s) == sorted(
         [
             "/clear",
             "/kill",
@@ -162,3 +162,7 @@ def test_background_parameters_are_declared(sim: Sim) -> None:
             "/turtle1/teleport_relative",
         ]
     )
+    # and the hidden services of the action /turtle1/rotate_absolute, as turtlesim has them
+    assert sorted(s for s in sim.bus.services if "/_action/" in s) == [
+        f"/turtle1/rotate_absolute/_action/{s}" for s in ("cancel_goal", "get_result", "send_goal")
+    ]

@@ -78,7 +78,12 @@ class _Request:
         server = self.bus.services.get(self.service)
         if server is None or self.future.done():
             return  # no server (any more): the future stays pending; spin_until_future_complete says TIMEOUT
-        self.future.set_result(server._answer(self.request)._copy())
+        answer = server._answer(self.request)
+        if isinstance(answer, Future):  # a server that answers later (an action's get_result)
+            future = self.future
+            answer.add_done_callback(lambda done: future.done() or future.set_result(done.result()._copy()))
+            return
+        self.future.set_result(answer._copy())
 
 
 class Bus(Executor):

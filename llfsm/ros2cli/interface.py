@@ -1,6 +1,6 @@
 """`interface show`, and interface types by name: `pkg/msg/Name` (or `pkg/Name`, as `ros2`
-accepts) to llfsm's message and service classes, which every verb that takes a TYPE (and the
-web view) reads it through.
+accepts) to llfsm's message, service and action classes, which every verb that takes a TYPE
+(and the web view) reads it through.
 
 Built-in packages are the generated modules under llfsm/msgs/; their definitions are the files
 in llfsm/msgs/_interfaces/ they are generated from (ROS 2's own, with their comments).  A user's
@@ -17,13 +17,20 @@ import re
 from pathlib import Path
 
 from ..msgs import Message, Service, add_search_path, find_package, search_path
+from ..msgs._message import Action
 from . import CliError
 
 _MSGS_DIR = Path(__file__).resolve().parent.parent / "msgs"
 _DEFINITIONS = _MSGS_DIR / "_interfaces"
 _PACKAGE = re.compile(r"^(?!.*__)(?!.*_$)[a-z][a-z0-9_]*$")
 _NAME = re.compile(r"^[A-Z][A-Za-z0-9]*$")
-KINDS = ("msg", "srv")
+KINDS = ("msg", "srv", "action")
+_WHAT = {"msg": "message", "srv": "service", "action": "action"}
+_EXAMPLES = {
+    "msg": "geometry_msgs/msg/Twist",
+    "srv": "turtlesim/srv/Spawn",
+    "action": "turtlesim/action/RotateAbsolute",
+}
 
 
 def use_working_directory(cwd: str | os.PathLike[str] | None = None) -> None:
@@ -41,8 +48,7 @@ def split_type(text: str, kind: str) -> tuple[str, str, str]:
     if len(parts) == 2:
         parts = [parts[0], kind, parts[1]]
     if len(parts) != 3 or parts[1] not in KINDS or not _PACKAGE.match(parts[0]) or not _NAME.match(parts[2]):
-        example = "geometry_msgs/msg/Twist" if kind == "msg" else "turtlesim/srv/Spawn"
-        raise CliError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {example})")
+        raise CliError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {_EXAMPLES[kind]})")
     return parts[0], parts[1], parts[2]
 
 
@@ -82,13 +88,13 @@ def known_types(kind: str) -> list[str]:
 
 
 def _unknown(text: str, kind: str) -> CliError:
-    name = "message" if kind == "msg" else "service"
+    name = _WHAT[kind]
     parts = text.split("/")
-    other = "srv" if kind == "msg" else "msg"
-    twin = f"{parts[0]}/{other}/{parts[-1]}"
-    if len(parts) in (2, 3) and twin in known_types(other):  # std_srvs/msg/Trigger: the kind is wrong
-        what = "a service" if other == "srv" else "a message"
-        return CliError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
+    for other in KINDS:
+        twin = f"{parts[0]}/{other}/{parts[-1]}"
+        if other != kind and len(parts) in (2, 3) and twin in known_types(other):  # std_srvs/msg/Trigger
+            what = "an action" if other == "action" else f"a {_WHAT[other]}"
+            return CliError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
     candidates = known_types(kind)
     close = difflib.get_close_matches(text, candidates, n=1, cutoff=0.6)
     if not close:  # "Twist", "geometry_msgs/twist": match on the name alone
@@ -117,7 +123,7 @@ def message_class(text: str) -> type[Message]:
     """The message class that TYPE names (`std_msgs/msg/String`, `std_msgs/String`)."""
     pkg, kind, name = split_type(text, "msg")
     if kind != "msg":
-        raise CliError(f"'{text}' is a service type; a topic carries a message type (pkg/msg/Name)")
+        raise CliError(f"'{text}' is {_a(kind)} type; a topic carries a message type (pkg/msg/Name)")
     return _import(pkg, kind, name, text)  # type: ignore[return-value]
 
 
@@ -125,8 +131,20 @@ def service_class(text: str) -> type[Service]:
     """The service class that TYPE names (`turtlesim/srv/Spawn`, `turtlesim/Spawn`)."""
     pkg, kind, name = split_type(text, "srv")
     if kind != "srv":
-        raise CliError(f"'{text}' is a message type; a service has a service type (pkg/srv/Name)")
+        raise CliError(f"'{text}' is {_a(kind)} type; a service has a service type (pkg/srv/Name)")
     return _import(pkg, kind, name, text)  # type: ignore[return-value]
+
+
+def action_class(text: str) -> type[Action]:
+    """The action class that TYPE names (`turtlesim/action/RotateAbsolute`, `turtlesim/RotateAbsolute`)."""
+    pkg, kind, name = split_type(text, "action")
+    if kind != "action":
+        raise CliError(f"'{text}' is {_a(kind)} type; an action has an action type (pkg/action/Name)")
+    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+
+
+def _a(kind: str) -> str:
+    return "an action" if kind == "action" else f"a {_WHAT[kind]}"
 
 
 # -- ros2 interface show -------------------------------------------------------------------------
@@ -149,16 +167,17 @@ def definition_file(pkg: str, kind: str, name: str) -> Path | None:
 def _nested_types(path: Path, pkg: str, kind: str, name: str, text: str) -> dict[int, str]:
     """Line number -> the message type its field holds, for the lines that hold a message."""
     # deferred: start-up (only `interface show` parses; resolving a TYPE never does)
-    from ..idl.parser import parse_message, parse_service
+    from ..idl.parser import parse_action, parse_message, parse_service
     from ..idl.spec import InterfaceError
 
     local = {p.stem for p in (path.parent.parent / "msg").glob("*.msg")}
     try:
         if kind == "msg":
             halves = [parse_message(text, f"{pkg}/msg/{name}", str(path), local=local)]
+        elif kind == "srv":
+            halves = list(parse_service(text, f"{pkg}/srv/{name}", str(path), local=local).parts)
         else:
-            spec = parse_service(text, f"{pkg}/srv/{name}", str(path), local=local)
-            halves = [spec.request, spec.response]
+            halves = list(parse_action(text, f"{pkg}/action/{name}", str(path), local=local).parts)
     except InterfaceError as e:
         raise CliError(str(e)) from None
     return {f.line: f.type.base for h in halves for f in h.fields if f.type.is_message and f.line is not None}
@@ -176,9 +195,9 @@ def show(text: str, *, comments: str = "top") -> str:
     followed by that message's definition one tab deeper.  `comments`: "top" keeps the comments
     and blank lines of the type itself (ros2's default), "all" of nested ones too, "none" of none."""
     kind = text.split("/")[1] if text.count("/") == 2 else None
-    if kind is None:  # pkg/Name: a message if there is one, else a service
+    if kind is None:  # pkg/Name: a message if there is one, else a service, else an action
         pkg, _, name = split_type(text, "msg")
-        kind = "msg" if definition_file(pkg, "msg", name) or not definition_file(pkg, "srv", name) else "srv"
+        kind = next((k for k in KINDS if definition_file(pkg, k, name)), "msg")
     pkg, kind, name = split_type(text, kind)
     out: list[str] = []
     _show(pkg, kind, name, text, comments != "none", comments == "all", 0, out, ())

@@ -93,6 +93,15 @@ class SubscriptionView(Protocol):
         """A message from another process, delivered as a local publisher's copy is."""
 
 
+class LaterAnswer(Protocol):
+    """An answer still to come (llfsm.ros.task.Future): a server that answers when it can (an
+    action's get_result, when the goal has finished) returns one of the response."""
+
+    def add_done_callback(self, fn: Callable[[Any], None]) -> None: ...
+
+    def result(self) -> Any: ...
+
+
 class ServiceView(Protocol):
     """A server whose requests may come from other processes."""
 
@@ -103,8 +112,9 @@ class ServiceView(Protocol):
     @property
     def srv_name(self) -> str: ...
 
-    def _answer(self, request: Message) -> Message:
-        """The server's callback run on a request (checked), as for a local client."""
+    def _answer(self, request: Message) -> Message | LaterAnswer:
+        """The server's callback run on a request (checked), as for a local client: the
+        response, or a LaterAnswer of it."""
 
 
 class ClientView(Protocol):
@@ -180,6 +190,11 @@ class RemoteClient(Protocol):
     def can_still_answer(self, future: PendingReply) -> bool:
         """False once the server the request went to is gone: spin calls then return TIMEOUT
         instead of waiting forever."""
+
+    @property
+    def in_order(self) -> bool:
+        """True when replies are matched to requests by their order rather than by an id (a
+        Fast DDS server): a request that waits for its answer would take a later one's."""
 
     def close(self) -> None: ...
 
