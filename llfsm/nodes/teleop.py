@@ -99,7 +99,7 @@ class Teleop:
 
     def poll(self) -> None:
         self._read_available()
-        while self.pending:
+        if self.pending:
             for seq, (lin, ang) in KEYS.items():
                 if self.pending.startswith(seq):
                     self.pending = self.pending[len(seq) :]
@@ -123,7 +123,7 @@ class Teleop:
                 return
             if key == "\x1b" and len(self.pending) < 2:
                 self.pending = key + self.pending  # an escape sequence still arriving
-                return
+            return  # any other key is ignored, and takes its 100 ms as turtle_teleop_key's read does
 
     def send_goal(self, theta: float) -> None:
         """turtle_teleop_key's sendGoal: send and forget; the accepted goal is the one F cancels."""

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
+from weakref import WeakKeyDictionary
 
 from ...msgs._message import Message, is_action_class
 from ..executor import FutureReturnCode
@@ -31,6 +32,12 @@ if TYPE_CHECKING:
     from ...msgs._message import Action
     from ..bus import Bus
     from ..node import Node
+
+
+#: Action clients made so far on each bus, per (node, action): under the sim clock the n-th one
+#: draws its goal ids from a sequence of its own, so two runs send the same ids and two clients
+#: of one run never send the same.
+_clients_made: WeakKeyDictionary[Bus, dict[tuple[str, str], int]] = WeakKeyDictionary()
 
 
 class ClientGoalHandle:
@@ -119,7 +126,12 @@ class ActionClient:
         #: Goals sent and not yet answered -> the status the server's status topic gave them
         #: meanwhile (it can overtake the answer), UNKNOWN while it gave none.
         self._sent: dict[bytes, int] = {}
-        seed = f"{node.get_fully_qualified_name()} {name}" if bus.clock.kind == "sim" else None
+        seed = None
+        if bus.clock.kind == "sim":  # the n-th client of this node and action in the run: its own ids
+            made = _clients_made.setdefault(bus, {})
+            key = (node.get_fully_qualified_name(), name)
+            made[key] = made.get(key, 0) + 1
+            seed = f"{key[0]} {name} {made[key]}"
         self._ids = status.GoalIds(seed)
         self._destroyed = False
         impl = action_type.Impl
@@ -254,7 +266,10 @@ class ActionClient:
         if response.status in status.TERMINAL:
             handle._status = response.status
             self._handles.pop(handle._id, None)
-        self._feedback_callbacks.pop(handle._id, None)  # rclpy's rule: no feedback after the result
+        # rclpy's rule: no feedback after the result; but feedback the server sent before it,
+        # already queued for the executor, is still handed over
+        goal_id = handle._id
+        self._bus.call_soon_threadsafe(lambda: self._feedback_callbacks.pop(goal_id, None))
 
     def _cancel_goal_async(self, handle: ClientGoalHandle) -> Future:
         request = self._type.Impl.CancelGoalService.Request()
