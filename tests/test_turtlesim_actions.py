@@ -4,6 +4,7 @@ the sim clock.  Over DDS from `llfsm action send_goal`: tests/test_actions_dds.p
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from collections.abc import Iterator
@@ -55,7 +56,7 @@ def test_a_rotation_turns_at_one_radian_a_second_and_ends_within_tolerance() -> 
     assert ended.kind == "succeeded" and abs(theta - 1.0) < TOLERANCE
     assert ended.value == f32(0.0 - theta)  # delta: where it started, less where it is
     assert remaining[0] == f32(1.0) and remaining[-1] < TOLERANCE
-    steps = [a - b for a, b in zip(remaining, remaining[1:], strict=False)]
+    steps = [a - b for a, b in itertools.pairwise(remaining)]
     assert steps == pytest.approx([SPEED * DT] * len(steps), abs=1e-6)  # 1 rad/s, 16 ms a step
     assert len(remaining) == math.ceil((1.0 - TOLERANCE) / (SPEED * DT)) + 1
     assert world.pose("turtle1").angular_velocity == 0.0  # it stops there

@@ -37,6 +37,9 @@ TRANSITIONS = {
 }
 
 
+_VERBS = {"cancel_goal": "cancel", "canceled": "end as canceled"}
+
+
 def name(status: int) -> str:
     """ "SUCCEEDED" for 4, as `ros2 action send_goal` prints a status; "UNKNOWN" for a value
     no goal can have (a peer may send anything)."""
@@ -58,7 +61,7 @@ def transition(state: int, event: str, goal: str) -> int:
             hint = ": execute() it first"
         elif state in TERMINAL:
             hint = ": it has finished already"
-        raise InvalidTransition(f"goal {goal}: cannot {event.replace('_', ' ')} a goal that is {name(state)}{hint}")
+        raise InvalidTransition(f"goal {goal}: cannot {_VERBS.get(event, event)} a goal that is {name(state)}{hint}")
     return new
 
 
