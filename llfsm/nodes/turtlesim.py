@@ -64,7 +64,7 @@ class _Turtle:
             world.teleport_relative(name, req.linear, req.angular)
             return resp
 
-        self.entities = [
+        self.entities: list[Any] = [
             ros.ActionServer(
                 node,
                 RotateAbsolute,

@@ -81,9 +81,14 @@ class _Request:
         answer = server._answer(self.request)
         if isinstance(answer, Future):  # a server that answers later (an action's get_result)
             future = self.future
-            answer.add_done_callback(lambda done: future.done() or future.set_result(done.result()._copy()))
+
+            def reply(done: Future) -> None:
+                if not future.done():
+                    future.set_result(done.result()._copy())
+
+            answer.add_done_callback(reply)
             return
-        self.future.set_result(answer._copy())
+        self.future.set_result(cast("Message", answer)._copy())
 
 
 class Bus(Executor):

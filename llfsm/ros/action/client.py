@@ -143,7 +143,7 @@ class ActionClient:
         self._status_sub = node.create_subscription(
             impl.GoalStatusMessage, name + STATUS, self._on_status, qos_profile_action_status_default
         )
-        self._parts = [
+        self._parts: list[Any] = [
             self._goal_client,
             self._cancel_client,
             self._result_client,

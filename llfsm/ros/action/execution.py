@@ -22,7 +22,7 @@ from __future__ import annotations
 import inspect
 import math
 from collections.abc import Callable, Coroutine, Generator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ..timer import Timer
 
@@ -70,7 +70,7 @@ class Execution:
             if not (inspect.isgenerator(value) or inspect.iscoroutine(value)):
                 self._finish(value)
                 return
-            self._steps = value
+            self._steps = cast("Steps", value)
         self._step(None)
 
     def _step(self, error: BaseException | None) -> None:
