@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 
 from llfsm import ros
-from llfsm.msgs.action_msgs.msg import GoalStatus
+from llfsm.msgs.action_msgs.msg import GoalStatus, GoalStatusArray
 from llfsm.msgs.action_msgs.srv import CancelGoal
 from llfsm.msgs.geometry_msgs.msg import Twist
 from llfsm.msgs.std_srvs.srv import Trigger
@@ -429,3 +429,23 @@ def test_names_follow_the_node_namespace_and_remapping(bus: Bus) -> None:
     topics = set(bus.topics)
     assert {"/robot/turn/_action/feedback", "/robot/turn/_action/status"} <= topics
     assert ros.ActionClient(node, RotateAbsolute, "~/x").action_name == "/robot/n/x"
+
+
+def test_the_status_array_lists_unfinished_goals_and_the_recent_finished_ones(bus: Bus) -> None:
+    """Every goal not finished is listed; of the finished ones the latest STATUS_FINISHED only
+    (their results stay available for the result timeout)."""
+    from llfsm.ros.action.server import STATUS_FINISHED
+
+    node, client, server = client_and_server(None)  # the PULL form: the test takes the goals
+    statuses: list[Any] = []
+    node.create_subscription(GoalStatusArray, "/count/_action/status", statuses.append, 100)
+    finished = [send(bus, client, 0.0) for _ in range(STATUS_FINISHED + 6)]
+    while (taken := server.take()) is not None:
+        taken.succeed()
+    waiting = send(bus, client, 1.0)
+    advance(bus, 2)
+    listed = [(bytes(s.goal_info.goal_id.uuid), s.status) for s in statuses[-1].status_list]
+    assert (bytes(waiting.goal_id.uuid), GoalStatus.STATUS_ACCEPTED) in listed
+    assert len(listed) == STATUS_FINISHED + 1
+    assert {i for i, _ in listed[1:]} == {bytes(h.goal_id.uuid) for h in finished[-STATUS_FINISHED:]}
+    assert finished[0].get_result(timeout_sec=1.0).status == GoalStatus.STATUS_SUCCEEDED  # still kept

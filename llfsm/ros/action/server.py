@@ -51,6 +51,11 @@ RESULT_TIMEOUT = 900.0
 #: Finished goals a server remembers at most (their results and statuses), oldest forgotten
 #: first: a client sending goals in a loop must not grow the server without bound.
 MAX_FINISHED = 1000
+#: Finished goals the status array lists, the most recent ones, beside every goal not finished.
+#: rcl_action lists every goal it remembers, so each status message grows with the goals of
+#: the last result_timeout (15 min) and costs every publish and every client that much; a
+#: client needs a goal's terminal status once, and asks for an older one's with get_result.
+STATUS_FINISHED = 64
 
 
 class GoalResponse(Enum):
@@ -81,7 +86,7 @@ class ServerGoalHandle:
     """An accepted goal, as the server's code sees it (rclpy's ServerGoalHandle; `succeed`,
     `abort` and `canceled` also take the result, as rclcpp's do)."""
 
-    __slots__ = ("_id", "_request", "_result", "_server", "_stamp", "_stamp_ns", "_status", "goal_id")
+    __slots__ = ("_entry", "_id", "_request", "_result", "_server", "_stamp", "_stamp_ns", "_status", "goal_id")
 
     def __init__(self, server: ActionServer, goal_id: Any, stamp: Any, request: Message) -> None:
         self._server = server
@@ -92,6 +97,10 @@ class ServerGoalHandle:
         self._request = request
         self._status = status.ACCEPTED
         self._result: Message | None = None
+        #: Its entry in the status array (action_msgs/msg/GoalStatus), made once.
+        self._entry = server._goal_status(status=status.ACCEPTED)
+        self._entry.goal_info.goal_id = goal_id
+        self._entry.goal_info.stamp = stamp
 
     def __repr__(self) -> str:
         return f"<ServerGoalHandle {status.text(self._id)} {status.name(self._status)}>"
@@ -233,8 +242,10 @@ class ActionServer:
         self._cancel_callback = cancel_callback or default_cancel_callback
         self._result_timeout_ns = round(result_timeout * 1e9)
         self._goals: dict[bytes, ServerGoalHandle] = {}  # every goal not yet forgotten, oldest first
+        self._unfinished: dict[bytes, ServerGoalHandle] = {}  # goals whose result is still to come
         self._results: dict[bytes, Future] = {}  # each goal's GetResult response, once finished
         self._finished: deque[tuple[bytes, int]] = deque()  # (goal, run time it finished), in order
+        self._recent: deque[bytes] = deque(maxlen=STATUS_FINISHED)  # the finished goals the status lists
         self._running: dict[bytes, Execution] = {}
         self._waiting: deque[ServerGoalHandle] = deque()
         self._destroyed = False
@@ -302,7 +313,7 @@ class ActionServer:
             sec, nanosec = self._bus.stamp()
             response.stamp.sec, response.stamp.nanosec = sec, nanosec
             handle = ServerGoalHandle(self, request.goal_id, response.stamp._copy(), request.goal)
-            self._goals[goal_id] = handle
+            self._goals[goal_id] = self._unfinished[goal_id] = handle
             self._results[goal_id] = Future(self._name + GET_RESULT)  # set when the goal ends
             self._publish_status()
             self._bus.queue(_Accepted(self, handle))
@@ -408,7 +419,9 @@ class ActionServer:
             return
         response = self._type.Impl.GetResultService.Response(status=handle._status)
         response.result = result if result is not None else self._type.Result()
+        self._unfinished.pop(handle._id, None)
         self._finished.append((handle._id, self._bus.clock.now))
+        self._recent.append(handle._id)
         future.set_result(response)
 
     def _expire(self) -> None:
@@ -428,15 +441,15 @@ class ActionServer:
     def _publish_status(self) -> None:
         if self._destroyed:
             return
-        array = self._type.Impl.GoalStatusMessage()
-        statuses = array.status_list
-        goal_status = self._goal_status
-        for h in self._goals.values():
-            s = goal_status(status=h._status)
-            s.goal_info.goal_id = h.goal_id
-            s.goal_info.stamp = h._stamp
-            statuses.append(s)
-        self._status.publish(array)
+        goals = self._goals
+        shown = list(self._unfinished.values())
+        shown += [goals[goal_id] for goal_id in self._recent if goal_id in goals]
+        entries = []
+        for h in shown:
+            entry = h._entry
+            entry.status = h._status
+            entries.append(entry)
+        self._status.publish(self._type.Impl.GoalStatusMessage(status_list=entries))
 
     # -- lifecycle ---------------------------------------------------------------------------------------
     def destroy(self) -> None:
