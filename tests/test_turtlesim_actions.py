@@ -258,3 +258,35 @@ def test_suspending_turtle_rotator_cancels_its_goal_and_resuming_sends_it_again(
     assert run.stderr.count("Rotation goal canceled") == 1
     reached = re.findall(r"^reached heading ([^,]+),", run.stdout, re.M)
     assert [float(h) for h in reached] == [1.5708, 3.1416, -1.5708, 0.0]  # the first goal sent again
+
+
+# -- recording a run with an action ----------------------------------------------------------------------------
+
+
+def test_a_recorded_run_keeps_the_action_topics_and_plays_them_back(tmp_path: Path) -> None:
+    """`--record` writes the feedback topic with its type, the definition ROS tools read and
+    rosidl's type hash; `--play` brings the same messages back."""
+    import yaml
+
+    from llfsm.msgs import _dds
+
+    bag = tmp_path / "rotations"
+    run = run_sim(ROTATOR, "--node", "turtlesim", "--record", bag)
+    assert run.status == 0 and "not recorded" not in run.stderr, run.stderr
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    topics = {t["topic_metadata"]["name"]: t for t in info["topics_with_message_count"]}
+    feedback = topics["/turtle1/rotate_absolute/_action/feedback"]
+    assert feedback["topic_metadata"]["type"] == "turtlesim/action/RotateAbsolute_FeedbackMessage"
+    assert feedback["topic_metadata"]["type_description_hash"] == _dds.type_hash(RotateAbsolute.Impl.FeedbackMessage)
+    assert feedback["message_count"] > 300
+    assert topics["/turtle1/rotate_absolute/_action/status"]["message_count"] >= 12  # 3 changes a goal
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([bag]) as reader:  # rosbags reads the definition in the bag
+        connection = next(c for c in reader.connections if c.msgtype.endswith("_FeedbackMessage"))
+        assert "MSG: turtlesim/action/RotateAbsolute_Feedback\n" in connection.msgdef.data
+        first = next(reader.messages([connection]))
+        assert reader.deserialize(first[2], connection.msgtype).feedback.remaining == pytest.approx(1.5708)
+    replay = run_sim("--play", bag, "--echo", "/turtle1/rotate_absolute/_action/feedback", "--duration", "9s")
+    assert replay.status == 0, replay.stderr
+    assert replay.stdout.count("remaining:") == feedback["message_count"]
