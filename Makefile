@@ -54,6 +54,7 @@ demo: $(VENV)/.installed
 
 lint: $(VENV)/.installed-dev
 	$(VENV)/bin/ruff check llfsm tests bench
+	$(VENV)/bin/mypy
 
 # The web view's browser tests drive Debian's Chromium (Playwright never downloads a browser):
 # installed here where we can (root with apt-get); elsewhere those tests skip and say why.

@@ -97,6 +97,7 @@ FIELDS = (
     "nodes",
     "remaps",
     "params",
+    "params_files",
     "echoes",
     "image",
     "view",
@@ -132,6 +133,7 @@ class RunOptions:
     nodes: tuple[str, ...]
     remaps: tuple[str, ...]
     params: tuple[str, ...]
+    params_files: tuple[str, ...]
     echoes: tuple[str, ...]
     image: str | None
     view: bool
@@ -162,6 +164,7 @@ class RunOptions:
         nodes: tuple[str, ...] = (),
         remaps: tuple[str, ...] = (),
         params: tuple[str, ...] = (),
+        params_files: tuple[str, ...] = (),
         echoes: tuple[str, ...] = (),
         image: str | None = None,
         view: bool = False,
@@ -399,7 +402,7 @@ class Session:
                 self.trace_out = self._open_trace(o.trace_file)
             if o.verbose or self.trace_out is not None:
                 # a StreamedOutput writes text as a file does (IO[str] is more than the tracer uses)
-                self.tracer = Tracer(verbose=sys.stderr if o.verbose else None, jsonl=self.trace_out)  # type: ignore[arg-type]
+                self.tracer = Tracer(verbose=sys.stderr if o.verbose else None, jsonl=self.trace_out)
             arr = self.arrangement = self._arrange(ctx)
             self._machines_on_graph(ctx)
             grace = o.grace
@@ -472,6 +475,7 @@ class Session:
         from .nodes import NodeError, NodeOptions, start
         from .nodes.echo import echo as echo_topic
         from .ros import InvalidNameError, Remap, bus_of
+        from .ros.parameters import ParameterException
 
         o = self.options
         prev = activate(ctx)
@@ -484,28 +488,43 @@ class Session:
                     echo_topic(bus, topic)
             except (InvalidNameError, ValueError) as e:
                 raise UsageError(str(e)) from None
-            if o.nodes:
-                bus.init()  # the nodes are up: ros.ok() is true from the first round
+            if o.nodes or o.params or o.params_files:
+                # the nodes are up (ros.ok() is true from the first round), and the machines'
+                # nodes will be too: their parameters are set before their first ringlet
+                bus.init()
             options = NodeOptions(image=Path(o.image) if o.image else None, view=o.view)
             for name in dict.fromkeys(o.nodes):
                 try:
                     self.nodes[name] = start(name, ctx, options)
                 except NodeError as e:
                     raise UsageError(str(e)) from None
+                except ParameterException as e:
+                    raise UsageError(parameter_refused(e, f"--node {name}")) from None
             return bus
         finally:
             activate(prev)
 
     def _set_parameters(self, bus: Bus) -> None:
-        """`--param [NODE:]NAME:=VALUE`: overrides the nodes read when they declare a parameter.
-        ValueError for one that does not parse.  Issue 21 (SPEC §12) grows this into rclpy's
-        parameters: `-p NODE:NAME:=VALUE` and `--params-file FILE` are read here too."""
-        from .ros import parse_param  # deferred: start-up (with the bus, in _open_bus)
+        """`-p [NODE:]NAME:=VALUE` and `--params-file FILE`: the overrides nodes read when they
+        declare a parameter (llfsm/ros/parameter_files.py), all read and checked here, before
+        any node or machine starts.  UsageError naming the file and line of a bad one."""
+        o = self.options
+        if not (o.params or o.params_files):
+            return
+        # deferred: start-up (only a run given parameters reads their text, with yaml)
+        from .ros.parameter_files import ParameterTextError, node_pattern, parse_param, read_params_file
 
-        for text in self.options.params:
-            node, name, value = parse_param(text)
-            self.parameters[(node, name)] = value
-            bus.parameters[(node, name)] = value
+        try:
+            for path in o.params_files:
+                for key, values in read_params_file(path):
+                    bus.parameter_files.append((node_pattern(key), values))
+            for text in o.params:
+                node, name, value = parse_param(text)
+                self.parameters[(node, name)] = value
+                bus.parameters[(node, name)] = value
+                bus.parameter_origins[(node, name)] = f"-p {text}"
+        except ParameterTextError as e:
+            raise UsageError(str(e)) from None
 
     def _attach_bags(self, bags: RunBags, bus: Bus) -> None:
         from .bag import BagError  # deferred: start-up (loaded with the bags already)
@@ -571,6 +590,7 @@ class Session:
             o.nodes
             or o.remaps
             or o.params
+            or o.params_files
             or o.echoes
             or o.introspect
             or self.web is not None
@@ -586,9 +606,21 @@ class Session:
 
 
 def _enable(ctx: RunContext) -> None:
-    from .ros.control import enable  # deferred: start-up (a run that never uses the bus never imports it)
+    # deferred: start-up (a run that never uses the bus never imports it)
+    from .ros.control import enable
+    from .ros.parameters import ParameterException
 
-    enable(ctx)
+    try:
+        enable(ctx)
+    except ParameterException as e:  # an override of a machine's parameter that its variable refuses
+        raise UsageError(parameter_refused(e, "a machine's node")) from None
+
+
+def parameter_refused(e: Exception, who: str) -> str:
+    """The one line for an override a node refused: where it was written, then rclpy's words."""
+    origin = getattr(e, "origin", None)
+    who = getattr(e, "node", None) or who
+    return f"{origin}: {who} refused it: {e}" if origin else f"{who}: {e}"
 
 
 def _no_display() -> str | None:

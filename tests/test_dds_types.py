@@ -16,7 +16,8 @@ from llfsm.msgs import _dds
 from llfsm.msgs._message import INT_RANGES, Message, Service, is_message_class, is_service_class
 
 BUILTIN = ("builtin_interfaces", "std_msgs", "geometry_msgs", "std_srvs", "turtlesim", "turtle_sensor_interface",
-           "service_msgs", "rmw_dds_common", "action_msgs", "unique_identifier_msgs")  # fmt: skip
+           "service_msgs", "rmw_dds_common", "rcl_interfaces",
+           "action_msgs", "unique_identifier_msgs")  # fmt: skip
 
 
 def shipped_classes() -> list[type[Message]]:

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 from .errors import BagError
 
 if TYPE_CHECKING:
+    from ..msgs import Message
     from ..ros.bus import Bus, Topic
 
 QUEUE_DEPTH = 1000  # per topic, between two executor passes
@@ -74,14 +75,15 @@ class _Session:
 
 
 def _all_topics(
-    bus: Bus, found: Callable[[str, type], None], skipped: Callable[[str, str], None]
+    bus: Bus, found: Callable[[str, type[Message]], None], skipped: Callable[[str, str], None]
 ) -> Callable[[], None]:
     """A scan of DCPSPublication for ROS topics (`rt/...`): found(name, class) once per topic."""
     from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
     from ..ros.transports.dds_graph import message_class
 
-    reader = BuiltinDataReader(bus.transport.dp, BuiltinTopicDcpsPublication)  # type: ignore[attr-defined]
+    dp = bus.transport.dp  # type: ignore[attr-defined]  # the session's bus is on DDS (_Session)
+    reader = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
     seen: set[str] = set()
 
     def scan() -> None:
@@ -135,8 +137,8 @@ def record(
             bus.watch(name, subscribe)
         if all_topics:
 
-            def found(name: str, cls: type) -> None:
-                subscribe(bus.topic(name, cls, "subscribe to"))  # type: ignore[arg-type]
+            def found(name: str, cls: type[Message]) -> None:
+                subscribe(bus.topic(name, cls, "subscribe to"))
 
             def skipped(name: str, dds_type: str) -> None:
                 if report is not None:

@@ -41,6 +41,8 @@ if TYPE_CHECKING:
 
     from rosbags.typesys.store import Typestore
 
+    from . import _tap
+
 
 class ByteSpool(bytearray):
     """The recorder's buffer where the C one (llfsm.bag._tap.Spool) is not built: a bytearray
@@ -53,7 +55,8 @@ class ByteSpool(bytearray):
 
 
 # The recorder's tap and buffer in C (setup.py builds them where a C compiler is; optional).
-Spool: Any
+Spool: type[ByteSpool] | type[_tap.Spool]
+_Tap: type[_tap.Tap] | None
 try:
     from ._tap import Spool
     from ._tap import Tap as _Tap
@@ -279,11 +282,11 @@ class TypeSupport:
             return None
         python, layout = c.stamped, c.tap_layout
         if _Tap is None or layout is None:
-            return lambda records, key, clock: python(records.extend, key, clock)  # type: ignore[no-any-return]
+            return lambda records, key, clock: python(records.extend, key, clock)
         tap = _Tap
 
         def make(records: Any, key: int, clock: Any) -> Callable[[Any], None]:
-            return tap(records, key, clock, layout, python(records.extend, key, clock))  # type: ignore[no-any-return]
+            return tap(records, key, clock, layout, python(records.extend, key, clock))
 
         return make
 
@@ -405,8 +408,10 @@ def _to_rosbags(msg: Message, store: Typestore) -> Any:
             elif value and isinstance(value[0], Message):
                 value = [_to_rosbags(v, store) for v in value]
         kwargs[field] = value
-    if not msg._FIELDS and "structure_needs_at_least_one_member" in cls.__dataclass_fields__:
-        kwargs["structure_needs_at_least_one_member"] = 0
+    if not msg._FIELDS:
+        fields = cls.__dataclass_fields__  # type: ignore[attr-defined]  # a dataclass: rosbags' MsgType does not say
+        if "structure_needs_at_least_one_member" in fields:
+            kwargs["structure_needs_at_least_one_member"] = 0
     return cls(**kwargs)
 
 
@@ -438,7 +443,7 @@ def class_for(type_name: str) -> type[Message]:
         cls = getattr(module, type_name.rsplit("/", 1)[1], None)
         if not is_message_class(cls):
             raise BagError(f"{type_name}: llfsm has no class for this type")
-        return cls  # type: ignore[return-value]
+        return cls
     pkg, name = _split(type_name)
     try:
         module = importlib.import_module(f"llfsm.msgs.{pkg}.msg")
@@ -447,7 +452,7 @@ def class_for(type_name: str) -> type[Message]:
     cls = getattr(module, name, None)
     if not is_message_class(cls):
         raise BagError(f"{pkg}/msg/{name}: llfsm has no class for this type")
-    return cls  # type: ignore[return-value]
+    return cls
 
 
 def class_from_definition(type_name: str, encoding: str, definition: str, folder: Path) -> type[Message]:

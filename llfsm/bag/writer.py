@@ -27,7 +27,7 @@ import os
 import sqlite3
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from .. import __version__
 from .errors import BagError
@@ -190,6 +190,22 @@ def metadata_yaml(meta: dict[str, Any]) -> str:
 # -- storages ----------------------------------------------------------------------------------------
 
 
+class _Storage(Protocol):
+    """A bag's storage file as BagWriter drives it, so that MCAP and sqlite3 are interchangeable."""
+
+    identifier: str
+    suffix: str
+
+    def __init__(self, path: Path) -> None: ...
+    def add(self, c: Connection) -> None: ...
+    def write(self, c: Connection, t: int, data: bytes) -> None: ...
+    def chunk(self) -> None: ...
+    def sync(self) -> None: ...
+    def close(self, meta: dict[str, Any]) -> None: ...
+    def salvage(self) -> None: ...
+    def abandon(self) -> None: ...
+
+
 class _Spool:
     """The MCAP library's output stream: bytes wait here until the batch is appended to the file."""
 
@@ -225,7 +241,12 @@ class _McapStorage:
         self.fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
         self.good = 0  # the file ends on a whole record here
         self.spool = _Spool()
-        self.writer = Writer(self.spool, chunk_size=CHUNK_SIZE, compression=CompressionType.NONE, enable_crcs=False)
+        self.writer = Writer(
+            self.spool,  # type: ignore[arg-type]  # mcap calls write, tell and flush only; its hint asks for IO
+            chunk_size=CHUNK_SIZE,
+            compression=CompressionType.NONE,
+            enable_crcs=False,
+        )
         self.writer.start(profile="ros2", library=f"llfsm-{__version__}")
         self.schemas: dict[str, int] = {}
         self.sync()
@@ -367,7 +388,7 @@ def _distro() -> str:
     return os.environ.get("ROS_DISTRO") or ROS_DISTRO
 
 
-STORAGES = {"mcap": _McapStorage, "sqlite3": _Sqlite3Storage}
+STORAGES: dict[str, type[_Storage]] = {"mcap": _McapStorage, "sqlite3": _Sqlite3Storage}
 
 
 def _reason(e: BaseException) -> str:

@@ -12,14 +12,16 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ..msgs._message import INT_RANGES
-from .layout import assign, bracketed, conditional, fits, literal, str_literal
+from .layout import assign, bracketed, conditional, literal, str_literal
 from .spec import FLOATS, STRINGS, FieldSpec, FieldType, MessageSpec, PackageSpec
 
 if TYPE_CHECKING:
     import jinja2
+
+    from .spec import Scalar
 
 TEMPLATE = "msgs.py.j2"
 
@@ -83,7 +85,7 @@ def _check(t: FieldType, name: str, names: _Names, v: str) -> tuple[str | None, 
     return f"{v}.__class__ is bool", f"_m.check_bool({v}, self, {q})"
 
 
-def _scalar_default(t: FieldType) -> Any:
+def _scalar_default(t: FieldType) -> Scalar:
     if t.base in FLOATS:
         return 0.0
     if t.base in INT_RANGES:
@@ -152,7 +154,7 @@ def _field_view(f: FieldSpec, names: _Names) -> FieldView:
     return FieldView(name, annotation, parameter, init, setter, copy)
 
 
-def _natural(name: str) -> list[Any]:
+def _natural(name: str) -> list[int | str]:
     """The order ruff's RUF023 wants for __slots__ (digits compare as numbers)."""
     return [int(part) if part.isdigit() else part for part in re.split(r"([0-9]+)", name)]
 
@@ -171,12 +173,6 @@ def _message_view(spec: MessageSpec, names: _Names) -> MessageView:
         init_def=init_def,
         fields=fields,
     )
-
-
-def _service_doc(name: str, type_name: str) -> str:
-    """A service class's docstring: its parts by their full names while that fits the line."""
-    doc = f"{type_name}: {name}.Request -> {name}.Response"
-    return doc if fits(f'    """{doc}"""', 0) else f"{type_name}: Request -> Response"
 
 
 def render_module(package: PackageSpec, kind: str, header: list[str], env: jinja2.Environment) -> str:
@@ -203,7 +199,6 @@ def render_module(package: PackageSpec, kind: str, header: list[str], env: jinja
         names.imports.add("action_msgs")
         imports.append(("llfsm.msgs.action_msgs.srv", "_action_msgs_srv"))
     imports += [(f"llfsm.msgs.{pkg}.msg", f"_{pkg}") for pkg in names.imports]
-    documented = [(name, type_name, _service_doc(name, type_name)) for name, type_name in services]
     source = env.get_template(TEMPLATE).render(
         header=header,
         package=package.name,
@@ -211,7 +206,7 @@ def render_module(package: PackageSpec, kind: str, header: list[str], env: jinja
         imports=sorted(imports),
         uses=names.uses,
         messages=messages,
-        services=documented,
+        services=services,
         actions=actions,
     )
     compile(source, f"<llfsm.msgs.{package.name}.{kind}>", "exec", dont_inherit=True)

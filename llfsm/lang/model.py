@@ -84,6 +84,14 @@ class State(BaseModel):
         return not self.transitions
 
 
+class MachineParameter(BaseModel):
+    """A machine variable listed under `parameters:` in machine.yaml: a parameter of the node
+    /llfsm/NAME (docs/parameters.md).  `loc` is where machine.yaml names it."""
+
+    name: str
+    loc: Loc
+
+
 class Machine(BaseModel):
     """A whole machine directory.  `path` is the directory as the user named it."""
 
@@ -98,6 +106,7 @@ class Machine(BaseModel):
     variables_file: Code | None = None  # Variables.py as written
     initial_loc: Loc = Loc(file="machine.yaml")
     suspended_loc: Loc = Loc(file="machine.yaml")
+    parameters: list[MachineParameter] = Field(default_factory=list)
 
     def state(self, name: str) -> State:
         for s in self.states:
@@ -129,6 +138,12 @@ class MachineYaml(BaseModel):
     )
     states: list[YamlState] = Field(
         ..., min_length=1, description="The states, in order; the order is the state index."
+    )
+    parameters: list[str] | None = Field(
+        None,
+        description="Machine variables that are parameters of the node /llfsm/<machine>: `llfsm param set` "
+        "(or ros2 param set, -p, --params-file) gives one a value before the machine's next ringlet.  Each "
+        "must be a variable of Variables.py annotated bool, int, float, str or list[...] of one of them.",
     )
 
 

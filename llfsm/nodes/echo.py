@@ -5,10 +5,13 @@ creates its publisher in INITIAL), so no message published on it is missed."""
 from __future__ import annotations
 
 import sys
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 from ..ros.bus import Bus, Topic
 from ..ros.names import expand
+
+if TYPE_CHECKING:
+    from ..msgs import Message
 
 
 def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
@@ -23,7 +26,7 @@ def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
         node = Node.__new__(Node)  # a hidden node: not listed in the graph, not remapped
         node._bus, node._name, node._ns, node._destroyed, node._entities = bus, "llfsm_echo", "/", False, []
 
-        def show(msg: object) -> None:
+        def show(msg: Message) -> None:
             shown[0] += 1
             stream.write(to_yaml(msg) + "---\n")
             stream.flush()

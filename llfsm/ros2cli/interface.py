@@ -124,7 +124,7 @@ def message_class(text: str) -> type[Message]:
     pkg, kind, name = split_type(text, "msg")
     if kind != "msg":
         raise CliError(f"'{text}' is {_a(kind)} type; a topic carries a message type (pkg/msg/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _import(pkg, kind, name, text)  # type: ignore[return-value]  # its _TYPE is pkg/msg/name
 
 
 def service_class(text: str) -> type[Service]:
@@ -132,7 +132,7 @@ def service_class(text: str) -> type[Service]:
     pkg, kind, name = split_type(text, "srv")
     if kind != "srv":
         raise CliError(f"'{text}' is {_a(kind)} type; a service has a service type (pkg/srv/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _import(pkg, kind, name, text)  # type: ignore[return-value]  # its _TYPE is pkg/srv/name
 
 
 def action_class(text: str) -> type[Action]:
@@ -140,7 +140,7 @@ def action_class(text: str) -> type[Action]:
     pkg, kind, name = split_type(text, "action")
     if kind != "action":
         raise CliError(f"'{text}' is {_a(kind)} type; an action has an action type (pkg/action/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _import(pkg, kind, name, text)  # type: ignore[return-value]  # its _TYPE is pkg/action/name
 
 
 def _a(kind: str) -> str:

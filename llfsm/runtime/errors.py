@@ -128,7 +128,7 @@ class ErrorReport:
     def __eq__(self, other: object) -> bool:
         return isinstance(other, ErrorReport) and self.as_dict() == other.as_dict()
 
-    __hash__ = None  # type: ignore[assignment]  (mutable, as a dataclass is)
+    __hash__ = None  # type: ignore[assignment]  # mutable, as a dataclass is
 
     def format(self) -> str:
         """Two lines: a compiler-style first line, then the offending source line."""

@@ -10,13 +10,12 @@ import sys
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
-    from typing import IO
-
     from .machine import Machine
+    from .protocols import TextSink
 
 
 class Tracer:
-    def __init__(self, verbose: IO[str] | None = None, jsonl: IO[str] | None = None) -> None:
+    def __init__(self, verbose: TextSink | None = None, jsonl: TextSink | None = None) -> None:
         self.verbose = verbose
         self.jsonl = jsonl
         self.round = 0
@@ -71,7 +70,7 @@ class Tee(Tracer):
         self.tracers = tracers
         self._round = self._now = 0
 
-    @property  # type: ignore[override]
+    @property
     def round(self) -> int:
         return self._round
 
@@ -81,7 +80,7 @@ class Tee(Tracer):
         for t in self.tracers:
             t.round = value
 
-    @property  # type: ignore[override]
+    @property
     def now(self) -> int:
         return self._now
 

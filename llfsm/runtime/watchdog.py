@@ -55,6 +55,7 @@ import sys
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
+    from _signal import _Handler
     from collections.abc import Sequence
     from types import FrameType
 
@@ -98,7 +99,7 @@ class Watchdog:
         self.closed = False
         self._old_wakeup = -1
         self._dump_registered = False
-        self._old_dump_handler: object = None
+        self._old_dump_handler: _Handler = None
 
     @classmethod
     def start(cls, grace_ns: int, machines: Sequence[type[Machine]]) -> Watchdog | None:
@@ -187,7 +188,7 @@ class Watchdog:
 
             faulthandler.unregister(DUMP_SIGNAL)
             old = self._old_dump_handler  # None: a handler set from C, which Python cannot put back
-            signal.signal(DUMP_SIGNAL, signal.SIG_DFL if old is None else old)  # type: ignore[arg-type]
+            signal.signal(DUMP_SIGNAL, signal.SIG_DFL if old is None else old)
             self._dump_registered = False
         for fd in (self.wake_r, self.answer_r, self.dump_w):
             os.close(fd)

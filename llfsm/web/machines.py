@@ -67,7 +67,7 @@ class GraphSource(Source):
         super().__init__(bus, "llfsm_view")
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication, BuiltinTopicDcpsSubscription
 
-        dp = bus.transport.dp  # type: ignore[attr-defined]
+        dp = bus.transport.dp  # type: ignore[attr-defined]  # the view of a DDS graph runs on a DDS bus
         self._pubs = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
         self._subs = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)
         self._topics_seen: dict[str, Any] = {}

@@ -22,8 +22,17 @@ pytestmark = [pytest.mark.interop, requires_ros]
 
 SHARE = VENV_ROS / "share"
 # Packages both llfsm and the wheels have (turtlesim has no wheel on PyPI).
-COMMON = ("builtin_interfaces", "std_msgs", "geometry_msgs", "std_srvs", "rmw_dds_common", "service_msgs",
-          "action_msgs", "unique_identifier_msgs")  # fmt: skip
+COMMON = (
+    "builtin_interfaces",
+    "std_msgs",
+    "geometry_msgs",
+    "std_srvs",
+    "rmw_dds_common",
+    "service_msgs",
+    "rcl_interfaces",
+    "action_msgs",
+    "unique_identifier_msgs",
+)
 
 # Runs in .venv-ros: reads {ros type: [payload hex]} on stdin; for each payload, rclpy
 # deserializes it into its own message class and serializes that again.  Also serializes the

@@ -233,7 +233,7 @@ class Graph:
             Policy.History.KeepLast(256),
             Policy.DataRepresentation(use_cdrv0_representation=True),
         )
-        topic = Topic(self.participant, DISCOVERY_TOPIC, dds_type(ParticipantEntitiesInfo))
+        topic: Topic[Any] = Topic(self.participant, DISCOVERY_TOPIC, dds_type(ParticipantEntitiesInfo))
         reader = DataReader(self.participant, topic, qos=qos)
         return Samples(
             reader,

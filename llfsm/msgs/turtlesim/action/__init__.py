@@ -308,7 +308,8 @@ class RotateAbsolute_SendGoal(_m.Service):
 
 
 class RotateAbsolute_GetResult(_m.Service):
-    """turtlesim/action/RotateAbsolute_GetResult: Request -> Response"""
+    """turtlesim/action/RotateAbsolute_GetResult: RotateAbsolute_GetResult.Request ->
+    RotateAbsolute_GetResult.Response"""
 
     _TYPE = "turtlesim/action/RotateAbsolute_GetResult"
     Request = RotateAbsolute_GetResult_Request
