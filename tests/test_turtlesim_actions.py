@@ -17,6 +17,7 @@ from conftest import MACHINES, llfsm_process, run_sim, write_machine
 from llfsm import ros
 from llfsm.msgs.action_msgs.msg import GoalStatus
 from llfsm.msgs.geometry_msgs.msg import Twist
+from llfsm.msgs.std_srvs.srv import Empty
 from llfsm.msgs.turtlesim.action import RotateAbsolute
 from llfsm.msgs.turtlesim.msg import Pose
 from llfsm.msgs.turtlesim.srv import Kill, Spawn
@@ -175,7 +176,7 @@ def test_a_new_goal_aborts_the_one_running(bus: Bus, capsys: pytest.CaptureFixtu
     assert second.get_result(timeout_sec=10.0).status == GoalStatus.STATUS_SUCCEEDED
 
 
-def test_every_turtle_has_its_action_and_a_killed_turtle_aborts_its_goal(bus: Bus) -> None:
+def test_every_turtle_has_its_action_and_a_kill_or_a_reset_aborts_the_goal(bus: Bus) -> None:
     node = ros.Node("tester")
     node.create_client(Spawn, "/spawn").call(Spawn.Request(x=2.0, y=2.0, name="turtle2"))
     goal = rotate(node, "turtle2", 1.0)
@@ -183,8 +184,14 @@ def test_every_turtle_has_its_action_and_a_killed_turtle_aborts_its_goal(bus: Bu
     step(bus, 50)
     node.create_client(Kill, "/kill").call(Kill.Request(name="turtle2"))
     step(bus, 2)
-    assert result.result().status == GoalStatus.STATUS_ABORTED
+    assert result.result().status == GoalStatus.STATUS_ABORTED and -0.1 < result.result().result.delta < 0
     assert not ros.ActionClient(node, RotateAbsolute, "/turtle2/rotate_absolute").server_is_ready()
+    reset_midway = rotate(node, "turtle1", 2.0).get_result_async()
+    step(bus, 500)
+    node.create_client(Empty, "/reset").call(Empty.Request())
+    step(bus, 2)
+    assert reset_midway.result().status == GoalStatus.STATUS_ABORTED and reset_midway.result().result.delta < -0.3
+    assert rotate(node, "turtle1", 0.5).get_result(timeout_sec=5.0).status == GoalStatus.STATUS_SUCCEEDED
 
 
 # -- teleop's keys ---------------------------------------------------------------------------------------------

@@ -204,10 +204,15 @@ class Turtlesim:
         return resp
 
     def kill(self, req: Any, resp: Any) -> Any:
+        turtle = self.turtles.get(req.name)
         try:
+            delta = self.world.end_rotation(req.name)
             self.world.kill(req.name)
         except TurtleError as e:
             self.log.error(str(e))
+        else:
+            if turtle is not None and delta is not None:  # its goal ends with the turtle: aborted
+                turtle._end_goal("abort", delta)
         self._sync()
         return resp
 
@@ -217,6 +222,10 @@ class Turtlesim:
         return resp
 
     def reset(self, req: Any, resp: Any) -> Any:
+        for name, turtle in self.turtles.items():  # every turtle goes, and its goal with it
+            delta = self.world.end_rotation(name)
+            if delta is not None:
+                turtle._end_goal("abort", delta)
         self.world.set_background(*self._background())
         self.world.reset()
         self._sync()

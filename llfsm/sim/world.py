@@ -374,6 +374,11 @@ class TurtleWorld:
         t.rotation.canceling = True
         return True
 
+    def end_rotation(self, name: str) -> float | None:
+        """End the turtle's rotate_absolute goal where it is (the turtle is killed or reset):
+        its delta, None if there was none."""
+        return self._end_rotation(self._get(name))
+
     def rotating(self, name: str) -> bool:
         """Whether the turtle has a rotate_absolute goal that has not ended."""
         return self._get(name).rotation is not None
