@@ -79,7 +79,8 @@ def test_send_goal_turns_turtlesim_in_another_process_as_ros2_prints_it(netns: N
     goal_id = re.search(r"^Goal accepted with ID: ([0-9a-f]{32})\n\n", out, re.M)
     assert goal_id, out
     remaining = [float(v) for v in re.findall(r"^Feedback:\n    remaining: (\S+)\n\n", out, re.M)]
-    assert remaining and remaining[0] > 1.0 and abs(remaining[-1]) < 0.02
+    assert remaining[0] == pytest.approx(1.57) and remaining == sorted(remaining, reverse=True)
+    assert abs(remaining[-1]) < 0.06  # the last feedback may come after the result, and is then not shown
     assert re.search(r"Result:\n    delta: -1\.5\d*\n\nGoal finished with status: SUCCEEDED\n\Z", out), out
     echo = finish(netns.llfsm("topic", "echo", "/turtle1/pose", "--once"), 20)
     assert abs(theta_of(echo[1]) - 1.57) < 0.02  # the turtle ends at the goal's heading
@@ -182,7 +183,8 @@ def test_a_machine_serves_goals_of_a_users_action_to_other_processes(netns: NetN
     for (status, out, err), total in zip(results, (6, 3), strict=True):
         assert status == 0, err
         assert f"Result:\n    total: {total}\n\nGoal finished with status: SUCCEEDED\n" in out
-    assert [int(v) for v in re.findall(r"current: (\d+)", results[0][1])] == list(range(7))
+    counted = [int(v) for v in re.findall(r"current: (\d+)", results[0][1])]
+    assert counted == list(range(len(counted))) and len(counted) >= 6  # the last may come after the result
     aborted = finish(send("{target: 13}"), 40)
     assert aborted[0] == 0 and aborted[1].endswith("Result:\n    total: 5\n\nGoal finished with status: ABORTED\n")
     rejected = finish(send("{target: -1}"), 40)

@@ -206,7 +206,7 @@ class Turtlesim:
     def kill(self, req: Any, resp: Any) -> Any:
         turtle = self.turtles.get(req.name)
         try:
-            delta = self.world.end_rotation(req.name)
+            delta = self.world.end_rotation(req.name) if req.name in self.world else None
             self.world.kill(req.name)
         except TurtleError as e:
             self.log.error(str(e))

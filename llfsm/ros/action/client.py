@@ -163,11 +163,14 @@ class ActionClient:
 
     # -- the server ----------------------------------------------------------------------------------
     def server_is_ready(self) -> bool:
-        """A server answers all three of the action's services (rcl_action's test)."""
+        """A server answers all three of the action's services, and its feedback and status
+        reach this client (rcl_action's test): a goal sent then misses none of its feedback."""
         return (
             self._goal_client.service_is_ready()
             and self._cancel_client.service_is_ready()
             and self._result_client.service_is_ready()
+            and self._feedback_sub.get_publisher_count() > 0
+            and self._status_sub.get_publisher_count() > 0
         )
 
     def wait_for_server(self, timeout_sec: float | None = None) -> bool:
@@ -267,9 +270,11 @@ class ActionClient:
             handle._status = response.status
             self._handles.pop(handle._id, None)
         # rclpy's rule: no feedback after the result; but feedback the server sent before it,
-        # already queued for the executor, is still handed over
+        # queued for the executor or brought in by the same look at the transport as the
+        # result (its reader may be looked at after the result's), is still handed over
         goal_id = handle._id
-        self._bus.call_soon_threadsafe(lambda: self._feedback_callbacks.pop(goal_id, None))
+        call_soon = self._bus.call_soon_threadsafe
+        call_soon(lambda: call_soon(lambda: self._feedback_callbacks.pop(goal_id, None)))
 
     def _cancel_goal_async(self, handle: ClientGoalHandle) -> Future:
         request = self._type.Impl.CancelGoalService.Request()

@@ -203,6 +203,13 @@ class Closable(Protocol):
     def close(self) -> None: ...
 
 
+class RemoteReader(Protocol):
+    def publisher_count(self) -> int:
+        """Writers in other processes matched with this reader."""
+
+    def close(self) -> None: ...
+
+
 class Transport:
     """The in-process transport: no remote ends; `wait` is the run clock's sleep."""
 
@@ -216,7 +223,7 @@ class Transport:
     def publisher(self, pub: PublisherView) -> RemoteWriter | None:
         return None
 
-    def subscription(self, sub: SubscriptionView) -> Closable | None:
+    def subscription(self, sub: SubscriptionView) -> RemoteReader | None:
         return None
 
     def service(self, srv: ServiceView) -> Closable | None:

@@ -281,6 +281,9 @@ class _Reader(_Endpoint):
         for msg, _info in self.samples.take():
             deliver(msg)
 
+    def publisher_count(self) -> int:
+        return int(self.reader.get_subscription_matched_status().current_count)
+
     def close(self) -> None:
         self.t.waits.detach(self.cond, self.token)
         self.t.waits.detach(self.reader, self.status_token)
