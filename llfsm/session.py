@@ -1,4 +1,4 @@
-"""The session of one `llfsm run` (SPEC §2, §4-§10): its options, everything that opens beside
+"""The session of one `llfsm run` (docs/cli.md, `llfsm run`): its options, everything that opens beside
 the machines, opened in one place, in one order, and closed whatever happens.
 
 - `RunOptions`: the options of `llfsm run` as one frozen value; both parsers build it (the
@@ -16,13 +16,13 @@ the machines, opened in one place, in one order, and closed whatever happens.
      the bus with its remaps, parameters and `--echo` readers, the `--node` nodes, and the
      bags' taps on it (set up before any machine runs, so that turtle1 exists and no message
      is missed); the `--trace` file and the tracer;
-  6. the arrangement, the machines' state topics and control services (SPEC §8: with the bus,
-     now if it is up, else at its first `ros.init()`), the web view (SPEC §10);
+  6. the arrangement, the machines' state topics and control services (docs/view.md: with the bus,
+     now if it is up, else at its first `ros.init()`), the web view (docs/view.md);
   7. the run; then, whatever happened: the web view stops, the trace file and the bag are
      closed, a transport the run never used is closed, and the watchdog ends.
 - `SessionError` and its kinds: what a session raises instead of ending the process, so that a
   test can open one, see what went wrong and carry on; llfsm.cli._run prints them and exits
-  with their status (SPEC §2: 1 for an error in machine code or a lost output, 2 for bad input),
+  with their status (docs/cli.md, "Exit statuses": 1 for an error in machine code or a lost output, 2 for bad input),
   byte for byte as `llfsm run` always has.
 
 Start-up: one module, and plain classes rather than dataclasses (`dataclasses` imports
@@ -65,7 +65,7 @@ if TYPE_CHECKING:
         def stop(self) -> None: ...
 
     class WebPage(Protocol):
-        """The web view of a session (SPEC §10), as llfsm.cli hands it in: llfsm.web is a layer
+        """The web view of a session (docs/view.md), as llfsm.cli hands it in: llfsm.web is a layer
         above the session, so the session knows the page by this alone."""
 
         #: Worth running with no machine and no node (`llfsm view`: the page of the DDS graph).
@@ -411,10 +411,10 @@ class Session:
                     f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish "
                     "(interrupt again to stop now)",
                 )
-            else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
+            else:  # nodes on their own (docs/turtlesim.md): they run until interrupted or --duration
                 arr.serve_forever = True
                 grace = 0
-            if o.transport != "inproc":  # other processes can resume machines (SPEC 8): all suspended is no end
+            if o.transport != "inproc":  # other processes can resume machines (docs/view.md): all suspended is no end
                 arr.end_when_suspended = False
             if self.web is not None and self.bus is not None:
                 self.web_server = self._open_web(self.web, ctx, self.bus, arr)
@@ -559,7 +559,7 @@ class Session:
         return arr
 
     def _machines_on_graph(self, ctx: RunContext) -> None:
-        """SPEC §8: the machines' state topics and control services join the graph with the bus
+        """The machines' state topics and control services (docs/view.md) join the graph with the bus
         (now if it is up, else at the first `ros.init()`)."""
         bus = ctx.bus
         if bus is not None and bus.initialised:

@@ -17,8 +17,8 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, llfsm, write_machine
 from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from helpers import MACHINES, llfsm, write_machine
 
 ROTATE = ("/turtle1/rotate_absolute", "turtlesim/action/RotateAbsolute")
 #: Peers that vanish without saying goodbye are noticed after the lease: 1 s instead of 10 s.
@@ -62,6 +62,7 @@ def theta_of(echo: str) -> float:
 # -- turtlesim's rotate_absolute -------------------------------------------------------------------------
 
 
+@pytest.mark.dds
 def test_send_goal_turns_turtlesim_in_another_process_as_ros2_prints_it(netns: NetNamespace) -> None:
     sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "25")
     listed = netns.llfsm("action", "list", "-t", "--spin-time", "3")
@@ -89,6 +90,7 @@ def test_send_goal_turns_turtlesim_in_another_process_as_ros2_prints_it(netns: N
     assert "[turtlesim]: Rotation goal completed successfully" in sim_err
 
 
+@pytest.mark.dds
 def test_turtle_rotator_in_one_process_turns_turtlesim_in_another(netns: NetNamespace) -> None:
     sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "30")
     rotator = netns.llfsm("run", "--transport", "dds", MACHINES / "turtle_rotator.machine", "--duration", "28")
@@ -101,6 +103,7 @@ def test_turtle_rotator_in_one_process_turns_turtlesim_in_another(netns: NetName
     assert finish(sim, 20)[2].count("Rotation goal completed successfully") == 4
 
 
+@pytest.mark.dds
 def test_ctrl_c_during_send_goal_cancels_the_goal(netns: NetNamespace) -> None:
     sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "25")
     goal = netns.llfsm("action", "send_goal", *ROTATE, "{theta: 3.0}")
@@ -170,6 +173,7 @@ def counting_server(root: Path) -> Path:
     )
 
 
+@pytest.mark.dds
 def test_a_machine_serves_goals_of_a_users_action_to_other_processes(netns: NetNamespace, tmp_path: Path) -> None:
     server = llfsm_at(netns, tmp_path, "run", "--transport", "dds", counting_server(tmp_path), "--duration", "40")
 
@@ -201,6 +205,7 @@ def test_a_machine_serves_goals_of_a_users_action_to_other_processes(netns: NetN
     assert finish(server, 20)[0] == 0
 
 
+@pytest.mark.dds
 def test_a_server_that_vanishes_mid_goal_ends_send_goal_with_a_clear_line(netns: NetNamespace, tmp_path: Path) -> None:
     server = llfsm_at(netns, tmp_path, "run", "--transport", "dds", counting_server(tmp_path), env=SHORT_LEASE)
     goal = llfsm_at(
@@ -243,6 +248,7 @@ def test_bad_input_is_one_line_and_status_2(args: list[str], needle: str) -> Non
     assert r.stdout == "" and len(r.stderr.splitlines()) == 1 and needle in r.stderr, r.stderr
 
 
+@pytest.mark.dds
 def test_no_server_is_one_line_and_status_1_after_the_timeout(netns: NetNamespace) -> None:
     started = time.monotonic()
     status, out, err = finish(netns.llfsm("action", "send_goal", *ROTATE, "{}", "--timeout", "1.5"), 30)

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, REPO, llfsm, run_sim, write_machine
+from helpers import MACHINES, REPO, llfsm, run_sim, write_machine
 from hypothesis import given, settings
 from hypothesis import strategies as st
 

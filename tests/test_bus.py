@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from conftest import run_sim, write_machine
+from helpers import run_sim, write_machine
 
 from llfsm import ros
 from llfsm.msgs.geometry_msgs.msg import Twist

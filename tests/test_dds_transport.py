@@ -29,6 +29,8 @@ from llfsm.ros.transports.dds import DdsTransport
 from llfsm.runtime import RunContext, WallClock
 from llfsm.runtime.context import activate
 
+pytestmark = pytest.mark.dds  # Cyclone DDS participants (in this process)
+
 DOMAIN = 98
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from conftest import MACHINES, llfsm, run_sim, write_machine
+from helpers import MACHINES, llfsm, run_sim, write_machine
 
 from llfsm import ros
 from llfsm.msgs.rcl_interfaces.msg import (

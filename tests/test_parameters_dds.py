@@ -5,7 +5,6 @@ rclpy node (Fast DDS, from .venv-ros); an rclpy parameter client against an llfs
 Each test has a private network namespace (tests/dds_netns.py); every process has a timeout.
 """
 
-# ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
 from __future__ import annotations
 
 import os
@@ -16,9 +15,11 @@ from pathlib import Path
 
 import pytest
 import yaml
-from conftest import REPO, Run, write_machine
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish
+from helpers import REPO, Run, write_machine
 from interop.ros2env import ROS_PYTHON, ros_installed
+
+pytestmark = pytest.mark.dds  # every test talks DDS across processes
 
 
 def llfsm(ns: NetNamespace, *args: str | os.PathLike[str], timeout: float = 60) -> Run:

@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import llfsm, llfsm_process, write_machine
+from helpers import llfsm, llfsm_process, write_machine
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from strategies import _yaml_string

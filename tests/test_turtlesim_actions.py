@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from conftest import MACHINES, llfsm_process, run_sim, write_machine
+from helpers import MACHINES, llfsm_process, run_sim, write_machine
 
 from llfsm import ros
 from llfsm.msgs.action_msgs.msg import GoalStatus

@@ -33,6 +33,7 @@ class _Session:
     """A bus on the DDS transport, active while the verb runs; Ctrl-C or SIGTERM ends it."""
 
     def __init__(self) -> None:
+        # deferred: start-up (every `llfsm` command imports this module's verbs; only a running verb loads the bus)
         from ..ros.bus import bus_of
         from ..ros.transports import make
         from ..runtime import RunContext, WallClock
@@ -49,6 +50,7 @@ class _Session:
 
     @contextmanager
     def active(self) -> Iterator[None]:
+        # deferred: start-up, as in __init__
         from ..runtime.context import activate
 
         def stop(_signum: int, _frame: object) -> None:
@@ -78,6 +80,7 @@ def _all_topics(
     bus: Bus, found: Callable[[str, type[Message]], None], skipped: Callable[[str, str], None]
 ) -> Callable[[], None]:
     """A scan of DCPSPublication for ROS topics (`rt/...`): found(name, class) once per topic."""
+    # deferred: optional dependency (cyclonedds) and start-up, as in _Session
     from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
     from ..ros.transports.dds_graph import message_class
@@ -113,6 +116,7 @@ def record(
     duration: float | None = None,
 ) -> str | None:
     """Record until Ctrl-C (or `duration` seconds); the error message if recording failed."""
+    # deferred: start-up (`bag play` never loads the recorder, nor `bag record` the player)
     from ..ros.node import Node
     from .recorder import Recorder
 
@@ -157,6 +161,7 @@ def play(
     delay: float = 0.0,
 ) -> int:
     """Play the bag to the DDS graph; the number of messages published."""
+    # deferred: start-up, as in record
     from .player import Player
 
     player = Player(path, topics, rate, loop)

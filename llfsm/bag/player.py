@@ -92,6 +92,7 @@ class Player:
 
     def attach(self, bus: Bus) -> None:
         """Create the player's node, publishers and timer on the bus of a run."""
+        # deferred: start-up (the player reads its bag before the run's bus exists; only attaching needs the bus)
         from ..ros.node import Node
         from ..runtime.context import activate
 

@@ -191,6 +191,7 @@ class TypeSupport:
         for dep in self._dependencies(text, type_name):
             self._register(dep, seen)
         if type_name not in self.store.fielddefs:
+            # deferred: optional dependency (the bag extra) and start-up (rosbags' type store is slow to load)
             from rosbags.typesys import get_types_from_msg
 
             self.store.register(get_types_from_msg(text, type_name))
@@ -321,6 +322,7 @@ def _base_store() -> Typestore:
     (loading it takes a few tenths of a second)."""
     global _BASE_STORE
     if _BASE_STORE is None:
+        # deferred: optional dependency and start-up, as in _register
         from rosbags.typesys import Stores, get_typestore
 
         _BASE_STORE = get_typestore(Stores.ROS2_HUMBLE)
@@ -330,6 +332,7 @@ def _base_store() -> Typestore:
 def _codec(cls: type[Message]) -> Any:
     """The generated DDS functions of the class (llfsm.msgs._dds.Codec), or None if it has none."""
     try:
+        # deferred: start-up (the DDS forms of the messages, only for the classes a bag holds)
         from ..msgs._dds import codec
     except ImportError:  # pragma: no cover - the DDS type support is part of llfsm
         return None
@@ -370,6 +373,7 @@ def preload_native(classes: Iterable[type[Message]]) -> None:
 def _native_deserializer(cls: type[Message]) -> Callable[[bytes], Any] | None:
     if _codec(cls) is None:
         return None
+    # deferred: start-up, as in _codec
     from ..msgs._dds import from_cdr
 
     return lambda data: from_cdr(data, cls)
@@ -402,6 +406,7 @@ def _to_rosbags(msg: Message, store: Typestore) -> Any:
         elif isinstance(value, list):
             element = ftype.partition("[")[0]
             if element in _NUMPY_TYPES:
+                # deferred: optional dependency (numpy comes with rosbags, for its arrays only)
                 import numpy
 
                 value = numpy.array(value, dtype=_NUMPY_TYPES[element])
@@ -478,6 +483,7 @@ def class_from_definition(type_name: str, encoding: str, definition: str, folder
             raise BagError(
                 f"{type_name}: llfsm has no class for this type and cannot read its {encoding or 'unknown'} definition"
             ) from None
+    # deferred: start-up (only a type llfsm has no class for is compiled from the bag)
     from ..msgs import add_search_path
 
     root_pkg, root_name = _split(type_name)
@@ -531,6 +537,7 @@ def _write_definition(folder: Path, pkg: str, name: str, text: str) -> None:
 
 def scratch_folder() -> Path:
     """A folder for definitions taken from bags, removed when the process ends."""
+    # deferred: start-up (only a bag's own definitions need a scratch folder)
     import atexit
     import shutil
 

@@ -235,6 +235,7 @@ class _McapStorage:
     suffix = ".mcap"
 
     def __init__(self, path: Path) -> None:
+        # deferred: optional dependency (mcap, the bag extra) and start-up (only the writer process writes)
         from mcap.writer import CompressionType, Writer
 
         self.path = path
@@ -289,6 +290,7 @@ class _McapStorage:
     def salvage(self) -> None:
         """After a failed write: cut the file back to its last whole record and end it there
         (data end and footer, no summary)."""
+        # deferred: optional dependency and start-up, as in __init__ (salvaging only)
         from mcap.data_stream import RecordBuilder
         from mcap.records import DataEnd, Footer
 
@@ -313,6 +315,7 @@ class _Sqlite3Storage:
     suffix = ".db3"
 
     def __init__(self, path: Path) -> None:
+        # deferred: optional dependency (rosbags, the bag extra) and start-up (sqlite3 bags only)
         from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 
         class Writer(Sqlite3Writer):
@@ -330,6 +333,7 @@ class _Sqlite3Storage:
         self.uncommitted = 0
 
     def add(self, c: Connection) -> None:
+        # deferred: optional dependency and start-up, as in __init__
         from rosbags.interfaces import (
             Connection as RConnection,
         )
@@ -483,6 +487,7 @@ class BagWriter:
 
     def _rescan(self) -> int:
         """Count what the salvaged file holds, and write metadata.yaml to match."""
+        # deferred: start-up (only a salvaged bag is read back)
         from .reader import BagReader
 
         stats = Stats()

@@ -7,17 +7,16 @@ from __future__ import annotations
 import sys
 from typing import IO, TYPE_CHECKING
 
+from ..msgs import to_yaml
 from ..ros.bus import Bus, Topic
 from ..ros.names import expand
+from ..ros.node import Node
 
 if TYPE_CHECKING:
     from ..msgs import Message
 
 
 def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
-    from ..msgs import to_yaml
-    from ..ros.node import Node
-
     name = expand(topic, "llfsm_echo", "/")
     stream = out if out is not None else sys.stdout
     shown = [0]
@@ -41,6 +40,7 @@ def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
         if name in bus.topics:
             why = f"nothing was published on {name} during the run"
         else:
+            # deferred: start-up (only an --echo that heard nothing looks for a close name)
             import difflib
 
             topics = sorted(t for t in bus.topics if not t.startswith("/rosout"))

@@ -31,6 +31,7 @@ class _Turtle:
     """The bus entities of one turtle, so that kill and reset can take them down again."""
 
     def __init__(self, sim: Turtlesim, name: str) -> None:
+        # deferred: with the node (importing the node's module loads neither the bus nor its messages)
         from .. import ros
         from ..msgs.geometry_msgs.msg import Twist
         from ..msgs.turtlesim.action import RotateAbsolute
@@ -137,6 +138,7 @@ class _Turtle:
 
 class Turtlesim:
     def __init__(self, ctx: RunContext, options: NodeOptions) -> None:
+        # deferred: with the node, as in _Turtle
         from .. import ros
         from ..msgs.std_srvs.srv import Empty
         from ..msgs.turtlesim.srv import Kill, Spawn
@@ -163,6 +165,7 @@ class Turtlesim:
         self.node.create_timer(UPDATE_PERIOD, self.update)
         self.viewer: Any = None
         if options.view:
+            # deferred: optional dependency (pygame, the view extra), only with --view
             try:
                 from ..sim.view import Viewer
             except ImportError as e:
@@ -248,6 +251,7 @@ class Turtlesim:
             self.viewer.draw()
 
     def _write_image(self, path: Any) -> None:
+        # deferred: start-up (Pillow, only with --image)
         from ..sim.draw import render
 
         try:
@@ -258,6 +262,7 @@ class Turtlesim:
 
 
 def _channel(colour: str) -> Any:
+    # deferred: with the node, as in _Turtle
     from ..msgs.rcl_interfaces.msg import IntegerRange, ParameterDescriptor
 
     return ParameterDescriptor(

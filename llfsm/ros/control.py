@@ -1,4 +1,4 @@
-"""Machines on the graph (SPEC §8): each machine's state, structure and control, as ROS means.
+"""Machines on the graph (docs/view.md): each machine's state, structure and control, as ROS means.
 
 For each loaded machine M, a node `/llfsm/M` offers
 - `/llfsm/M/state` (std_msgs/msg/String, the current state's name; TRANSIENT_LOCAL, so a late

@@ -31,7 +31,7 @@ else:  # plain Python (source or bytecode) has nothing to do with it, and mypy_e
 #: Returned by the ringlet of an accepting state: the machine has finished.
 FINISHED = -1
 
-# Control commands a machine can have pending (SPEC section 2, step 1).
+# Control commands a machine can have pending (docs/semantics.md, "A ringlet, step by step", step 1).
 SUSPEND, RESUME, RESTART = "suspend", "resume", "restart"
 
 if TYPE_CHECKING:

@@ -1,6 +1,6 @@
 """What the runtime knows of the layers above it: the run's bus and its transport (llfsm.ros,
-SPEC §3 and §6), which the run context holds for them but never names, and the text streams
-it writes to, which may be the session's outputs (llfsm.outputs).
+docs/bus.md and docs/transports.md), which the run context holds for them but never names, and
+the text streams it writes to, which may be the session's outputs (llfsm.outputs).
 
 For type checkers only: the context and the tracer import this under TYPE_CHECKING, so a run
 never imports it (nor `typing`, which it needs), and a native build (docs/native.md) never

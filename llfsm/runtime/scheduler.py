@@ -1,4 +1,4 @@
-"""The ringlet scheduler: one thread runs an arrangement of machines round-robin (SPEC §2).
+"""The ringlet scheduler: one thread runs an arrangement of machines round-robin (docs/semantics.md).
 
 The untraced loops (`_sim_rounds`, `_wall_rounds`, `_rounds`) are the fast path: a round is a
 plain call per live machine, `m._run(m)`, and nothing else runs between rounds unless something
@@ -30,7 +30,7 @@ if TYPE_CHECKING:
 
     from .watchdog import Watchdog
 
-#: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
+#: Exit statuses (docs/cli.md, "Exit statuses"): a normal end, an exception in machine code, bad input.
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
@@ -104,10 +104,11 @@ class Arrangement:
         self.watchdog: Watchdog | None = None
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
-        #: SPEC §2 ends a run whose machines are all suspended: nothing could resume them.  A run
-        #: steered from outside (control services a page or another process calls) waits instead.
+        #: A run whose machines are all suspended ends (docs/semantics.md, "When a run ends"):
+        #: nothing could resume them.  A run steered from outside (control services a page or
+        #: another process calls) waits instead.
         self.end_when_suspended = True
-        #: Keep running rounds with no machine left (nodes on their own, SPEC 4): the run then
+        #: Keep running rounds with no machine left (nodes on their own, docs/turtlesim.md): the run then
         #: ends by an interrupt or --duration only.
         self.serve_forever = False
         names = [c.NAME for c in classes]
@@ -321,7 +322,7 @@ class Arrangement:
         return None
 
     def run(self, duration_ns: int | None = None, grace_ns: int = 1_000_000_000) -> RunResult:
-        """Run rounds until the run ends (SPEC §2); machine exceptions become an error report."""
+        """Run rounds until the run ends (docs/semantics.md); machine exceptions become an error report."""
         prev = activate(self.ctx)
         self.ctx.deadline = duration_ns
         self._grace_ns = grace_ns

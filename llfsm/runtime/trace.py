@@ -48,6 +48,7 @@ class Tracer:
 
     def error(self, m: Machine | None, report: dict[str, object]) -> None:
         if self.jsonl is not None:
+            # deferred: start-up, as in _event (only when tracing)
             import json
 
             fields = {("id" if k == "machine_id" else k): v for k, v in report.items()}

@@ -15,7 +15,7 @@ import pytest
 
 from interop.ros2env import VENV_ROS, llfsm_command, python_command, requires_ros, ros_command, run_together
 
-pytestmark = [pytest.mark.interop, requires_ros]
+pytestmark = [pytest.mark.interop, pytest.mark.dds, requires_ros]
 
 # An rclpy Fibonacci server, as ROS 2's tutorial writes it, on a multithreaded executor so that
 # goals run side by side (a short goal sent second finishes first); cancel requests accepted.

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from test_dds_types import sample, shipped_classes
+from samples import sample, shipped_classes
 
 from interop.ros2env import VENV_ROS, requires_ros
 from llfsm.msgs import _dds

@@ -1,6 +1,6 @@
 """The DDS transport: the bus on ROS 2's wire, through Cyclone DDS (the `cyclonedds` package).
 
-What a ROS 2 peer sees, as rmw_cyclonedds_cpp makes it (SPEC 6):
+What a ROS 2 peer sees, as rmw_cyclonedds_cpp makes it (docs/transports.md, "What a ROS 2 peer sees"):
 - one DomainParticipant per run (USER_DATA `enclave=/;`), configured from the ROS_* variables
   (dds_config.py);
 - each `ros.Node` a ROS 2 node, announced on `ros_discovery_info` (rmw_dds_common's

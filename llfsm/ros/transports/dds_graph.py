@@ -198,6 +198,7 @@ class Graph:
             BuiltinTopicDcpsSubscription,
         )
 
+        # deferred: optional dependency and start-up, as the cyclonedds imports above
         from .dds_config import participant as make_participant
 
         self.participant = participant if participant is not None else make_participant()
