@@ -256,6 +256,7 @@ class TypeSupport:
 
         text = append(type_name)
         if _action_part(type_name) is not None:  # llfsm's class has rosidl's hash; rosbags' store need not know it
+            # deferred: start-up, as in _codec (the DDS forms, only for the classes a bag holds)
             from ..msgs._dds import type_hash
 
             got = self._full[type_name] = (text, type_hash(class_for(type_name)))
