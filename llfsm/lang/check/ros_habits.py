@@ -38,6 +38,7 @@ ROS_QOS_NAMES = frozenset(
         "qos_profile_parameters",
         "qos_profile_parameter_events",
         "qos_profile_action_status_default",
+        "qos_profile_rosout_default",
     }
 )
 #: The public attributes of the time `node.get_clock().now()` returns in llfsm (`llfsm.ros.Time`;
