@@ -101,6 +101,22 @@ def test_spin_until_future_complete_waits_the_goal_out_on_the_sim_clock(bus: Bus
     assert sent.result().get_result().result.delta == pytest.approx(0.5)  # the synchronous form
 
 
+def test_send_goal_waits_for_the_result_as_rclpy_s_synchronous_form(bus: Bus) -> None:
+    _, client, _ = client_and_server(
+        goal_callback=lambda goal: ros.GoalResponse.REJECT if goal.theta < 0 else ros.GoalResponse.ACCEPT
+    )
+    feedback: list[Any] = []
+    start = bus.clock.now
+    answer = client.send_goal(Goal(theta=0.3), feedback_callback=feedback.append)
+    assert answer.status == GoalStatus.STATUS_SUCCEEDED and answer.result.delta == pytest.approx(0.3)
+    assert [m.feedback.remaining for m in feedback] == pytest.approx([0.3, 0.2, 0.1])
+    assert 300 * MS <= bus.clock.now - start < 310 * MS  # the sim clock jumped the pauses
+    assert client.send_goal(Goal(theta=-1.0)).status == GoalStatus.STATUS_UNKNOWN  # rejected, as rclpy answers it
+    nobody = ros.ActionClient(ros.Node("lonely"), RotateAbsolute, "nobody")
+    with pytest.raises(TimeoutError, match="no answer from action /nobody"):
+        nobody.send_goal(Goal(), timeout_sec=1.0)
+
+
 def test_the_three_forms_of_execute_callback(bus: Bus) -> None:
     """A plain function, a generator and a coroutine (awaiting a service's future) all serve."""
     node = ros.Node("forms")

@@ -228,6 +228,21 @@ class ActionClient:
         sent.add_done_callback(lambda done: self._goal_answered(done, goal_id, future))
         return future
 
+    def send_goal(
+        self,
+        goal: Message,
+        feedback_callback: Callable[[Any], Any] | None = None,
+        goal_uuid: Any = None,
+        timeout_sec: float | None = None,
+    ) -> Any:
+        """rclpy's synchronous form, for scripts and tests: spins (the sim clock jumps) until the
+        goal's result response (`.status`, `.result`).  A rejected goal's result is asked for
+        all the same, as rclpy does, and comes back with status UNKNOWN.  `timeout_sec` bounds
+        each of the two waits (TimeoutError).  Machine code must not wait in a ringlet: it polls
+        `send_goal_async`'s future in a guard instead."""
+        handle = self._wait(self.send_goal_async(goal, feedback_callback, goal_uuid), timeout_sec, "the goal")
+        return handle.get_result(timeout_sec)
+
     def _goal_answered(self, sent: Future, goal_id: Any, future: Future) -> None:
         response = sent.result()
         handle = ClientGoalHandle(self, goal_id, response)
