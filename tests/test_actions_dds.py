@@ -104,6 +104,21 @@ def test_turtle_rotator_in_one_process_turns_turtlesim_in_another(netns: NetName
 
 
 @pytest.mark.dds
+def test_turtle_rotator_ends_with_a_line_when_turtlesim_dies_mid_goal(netns: NetNamespace) -> None:
+    env = {**SHORT_LEASE, "PYTHONUNBUFFERED": "1"}
+    sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "60", env=env)
+    rotator = netns.llfsm("run", "--transport", "dds", MACHINES / "turtle_rotator.machine", "--duration", "60", env=env)
+    wait_for_line(rotator, r"^reached heading ", 30)  # the second goal is under way now
+    sim.kill()  # no goodbye: the lease tells
+    started = time.monotonic()
+    status, out, err = finish(rotator, 30)
+    assert status == 0 and time.monotonic() - started < 10, err
+    lost = "the server of /turtle1/rotate_absolute went away before heading {} was reached"
+    assert out.splitlines()[-1] in {lost.format("+3.1416"), lost.format("-1.5708")}, out
+    assert "Traceback" not in err
+
+
+@pytest.mark.dds
 def test_ctrl_c_during_send_goal_cancels_the_goal(netns: NetNamespace) -> None:
     sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "25")
     goal = netns.llfsm("action", "send_goal", *ROTATE, "{theta: 3.0}")
