@@ -114,6 +114,8 @@ rclpy.init()
 node = Node("fast_client")
 client = ActionClient(node, Fibonacci, "fibonacci")
 print("server", client.wait_for_server(timeout_sec=15.0), flush=True)
+from rclpy.action import get_action_names_and_types
+print("actions", sorted((n, list(t)) for n, t in get_action_names_and_types(node)), flush=True)
 time.sleep(2.0)  # let the server's side match this client's request writer too
 sent = client.send_goal_async(Fibonacci.Goal(order=7))
 rclpy.spin_until_future_complete(node, sent, timeout_sec=5.0)
@@ -174,4 +176,6 @@ def test_an_rclpy_client_goal_reaches_an_llfsm_server_but_no_answer_comes_back(t
     )
     assert client.returncode == 0, client.stderr
     assert "server True" in client.stdout and "answered False" in client.stdout
+    # rcl_action's graph (what `ros2 action list -t` prints) finds the action by its endpoints
+    assert "actions [('/fibonacci', ['test_msgs/action/Fibonacci'])]" in client.stdout, client.stdout
     assert "executing order 7" in _server.stdout
