@@ -372,6 +372,16 @@ def test_the_graph_of_nodes_and_topics_as_rqt_graph_draws_it_live(turtle: LiveRu
         form.locator('button[type="submit"]').click()
         graph.locator('path.link.pub[data-node="/turtlesim"][data-topic="/leo/pose"]').wait_for(state="attached")
         graph.locator('path.link.sub[data-node="/turtlesim"][data-topic="/leo/cmd_vel"]').wait_for(state="attached")
+        # turtlesim's action, found by the names of its services, with its type and server
+        row = p.locator('#actions tr[data-action="/turtle1/rotate_absolute"]')
+        row.wait_for()
+        assert row.locator("td").all_inner_texts() == [
+            "/turtle1/rotate_absolute",
+            "turtlesim/action/RotateAbsolute",
+            "/turtlesim",
+            "—",
+        ]
+        assert p.locator("#no-actions").is_hidden()
         # a click on a node opens its parameters
         graph.locator('g.ros-node[data-node="/turtlesim"]').click()
         p.locator('#nodes details[data-node="/turtlesim"][open] form.param[data-param="background_g"]').wait_for()

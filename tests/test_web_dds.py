@@ -145,7 +145,7 @@ async def main(url):
                 for m in data["machines"]:
                     out["machines"][m["name"]] = m
                 nodes = set((out["graph"] or {}).get("nodes", []))
-                if len(out["machines"]) >= 2 and {"/turtlesim", "/ros_ping_pong"} <= nodes:
+                if len(out["machines"]) >= 2 and {"/turtlesim", "/ros_ping_pong"} <= nodes and out["first"]:
                     break
         api = url + "api/"
         out["params"] = await (await s.post(api + "parameters", json={"node": "/turtlesim"})).json()
@@ -199,6 +199,13 @@ def test_llfsm_view_shows_two_runs_their_own_times_the_graph_and_parameters_over
     assert newest > first["t"] + 2.5, first  # the run's time, seconds ahead of the view's
     assert all(r["run_time"] for r in first["rows"])
     assert {"/turtlesim", "/ros_ping_pong"} <= set(got["graph"]["nodes"])
+    # turtlesim's action, found over DDS by the names and types of its services
+    assert {
+        "name": "/turtle1/rotate_absolute",
+        "type": "turtlesim/action/RotateAbsolute",
+        "servers": ["/turtlesim"],
+        "clients": [],
+    } in got["graph"]["actions"]
     params = {p["name"]: p for p in got["params"]["parameters"]}
     assert got["params"]["success"] and params["background_r"]["type"] == "integer"
     assert not got["bad"]["success"]
