@@ -82,6 +82,8 @@ async def main(url):
                     out["machines"] = [m["name"] for m in data["machines"]]
                     out["svg"] = any('data-state="WAIT_AND_COUNT"' in m["svg"] for m in data["machines"])
                     data = data["snapshot"]
+                elif data["type"] != "snapshot":  # the graph of nodes and topics
+                    continue
                 for m in data["machines"]:
                     if m["name"] == "ros2_ping_pong":
                         if not out["states"] or out["states"][-1] != m["state"]:
