@@ -259,10 +259,15 @@ async function readParameters(d) {
   d.querySelector(".count").textContent = `(${result.parameters.length})`;
   const focused = document.activeElement;
   const keep = focused && box.contains(focused) ? focused.closest("form")?.dataset.param : null;
-  box.replaceChildren(...result.parameters.map((p) => paramRow(name, p, keep)));
+  // what the user is typing survives the rows being read again (a parameter event may come at any time)
+  const edits = new Map();
+  for (const input of box.querySelectorAll("form.param input")) {
+    if (input.value !== input.defaultValue) edits.set(input.closest("form").dataset.param, input.value);
+  }
+  box.replaceChildren(...result.parameters.map((p) => paramRow(name, p, keep, edits.get(p.name))));
 }
 
-function paramRow(node, p, keep) {
+function paramRow(node, p, keep, edit) {
   const f = el("form", null, "param");
   f.dataset.param = p.name;
   f.autocomplete = "off";
@@ -271,7 +276,8 @@ function paramRow(node, p, keep) {
   if (p.range) label.append(el("span", `${p.range.from} … ${p.range.to}`, "param-range"));
   const input = el("input");
   input.name = "value";
-  input.value = p.value;
+  input.defaultValue = p.value; // the node's value; the field differs from it while edited
+  if (edit !== undefined) input.value = edit;
   input.spellcheck = false;
   input.readOnly = p.read_only;
   if (keep === p.name) queueMicrotask(() => input.focus());
