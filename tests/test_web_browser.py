@@ -313,11 +313,12 @@ LINE_ENDS = """(cells) => cells.map((td) => {
 })"""
 
 
-def test_the_type_column_breaks_only_after_a_slash(wide_page: Any, tmp_path: Path) -> None:
+def test_the_type_column_breaks_only_between_words(wide_page: Any, tmp_path: Path) -> None:
+    """A type wraps after a slash (or an underscore), never inside a word."""
     wide_page.wait_for_selector('#topics tr[data-topic="/rosout"]')
     cells = wide_page.locator("#topics tbody tr.topic td.type").evaluate_all(LINE_ENDS)
     assert any(text == "rcl_interfaces/msg/Log" for text, _ in cells), cells
-    assert all(end == "/" for _, ends in cells for end in ends), cells
+    assert all(end in "/_" for _, ends in cells for end in ends), cells
     _shot(wide_page, tmp_path, "types")
 
 
@@ -382,6 +383,12 @@ def test_the_graph_of_nodes_and_topics_as_rqt_graph_draws_it_live(turtle: LiveRu
             "—",
         ]
         assert p.locator("#no-actions").is_hidden()
+        # the action's long types wrap between words, within their column
+        p.locator('#topics tr[data-topic="/turtle1/rotate_absolute/_action/feedback"]').wait_for()
+        wide = p.locator("#topics td.type, #actions td.type").evaluate_all(
+            "(cells) => cells.filter((td) => td.scrollWidth > td.clientWidth + 1).map((td) => td.textContent)"
+        )
+        assert wide == []
         # a click on a node opens its parameters
         graph.locator('g.ros-node[data-node="/turtlesim"]').click()
         p.locator('#nodes details[data-node="/turtlesim"][open] form.param[data-param="background_g"]').wait_for()

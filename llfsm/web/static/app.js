@@ -40,14 +40,14 @@ function el(tag, text, cls) {
   return e;
 }
 
-// A name or type that may wrap only after its slashes (never mid-word): `std_msgs/msg/String`.
+// A name or type that may wrap only after its slashes or underscores (between words, never
+// inside one): `std_msgs/msg/String`, `RotateAbsolute_FeedbackMessage`.
 function breakable(tag, text, cls) {
   const e = el(tag, null, cls);
-  const parts = String(text).split("/");
-  parts.forEach((p, i) => {
-    if (i) { e.append("/"); e.append(document.createElement("wbr")); }
-    e.append(p);
-  });
+  for (const part of String(text).split(/(?<=[/_])/)) {
+    if (e.childNodes.length) e.append(document.createElement("wbr"));
+    e.append(part);
+  }
   return e;
 }
 
