@@ -70,6 +70,10 @@ RULES: dict[str, Rule] = {
         _r("LF040", E, "undeclared-name", "Code reads a name that nothing defines where it is read."),
         _r("LF041", E, "ros-habit", "An rclpy spelling llfsm does not take (rclpy, std_msgs.msg...)."),
         _r("LF039", E, "too-complex", "Code beyond a size or shape limit that keeps parsing it fast."),
+        _r("LF042", E, "input-assigned", "Code assigns an input (or a part of one): inputs are read-only."),
+        _r("LF043", E, "input-name", "An input's name is not usable or clashes with a variable."),
+        _r("LF044", E, "input-value", "An input's type is unknown, or its default or domain holds a wrong value."),
+        _r("LF045", E, "input-binding", "An input's topic, msg and field are incomplete, unknown or do not fit."),
         _r("LF101", W, "orphan-file", "A code file belongs to a state or transition that does not exist."),
         _r("LF102", W, "unreachable-state", "No path of transitions leads from the initial state to this state."),
         _r("LF103", W, "guard-always-false", "A guard is the constant False: the transition never fires."),
@@ -88,6 +92,11 @@ RULES: dict[str, Rule] = {
             "undeclared-dependency",
             "Machine code imports messages of a package package.xml does not declare.",
         ),
+        # `llfsm verify` only: code it cannot explore faithfully (never reported by check)
+        _r("LF200", E, "unexplorable-code", "Code verify cannot explore faithfully (a read of the world)."),
+        _r("LF201", E, "unexplorable-time", "An after* verify cannot follow (not a constant, or outside a state)."),
+        _r("LF202", E, "input-without-domain", "An int, float or str input has no domain for verify to explore."),
+        _r("LF203", E, "no-machine-source", "A built module whose machine directory verify cannot find."),
     ]
 }
 

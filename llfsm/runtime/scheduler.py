@@ -160,6 +160,13 @@ class Arrangement:
         _hold(m)  # a machine commanding itself may still fire a transition: _rehold fixes that
         self._attention = True
 
+    def hold_for_inputs(self, m: Machine) -> None:
+        """A new input value came for `m` (llfsm.runtime.inputs): its next ringlet starts at the
+        gate, which takes the snapshot first.  (Called during m's own ringlet, the ringlet may
+        still point `_run` past the gate: `_rehold` puts it back after the round.)"""
+        _hold(m)
+        self._attention = True
+
     def suspend_now(self, m: Machine, remember: int | None) -> None:
         """Move `m` to its suspend state and run that state's OnEntry (no OnExit anywhere)."""
         m._resume_to = remember
@@ -219,12 +226,26 @@ class Arrangement:
         return True
 
     def _gate(self, m: Machine) -> int | None:
-        """Stands in for the ringlet of a held machine (a command pending, or suspended): apply
-        the command, then run the real ringlet if the command lets it go on."""
-        if m._pending is None or not self._apply(m):
+        """Stands in for the ringlet of a held machine (a command pending, suspended, or a new
+        input value to take): take the inputs' snapshot, apply the command, then run the real
+        ringlet if the command lets it go on."""
+        if not self._open_gate(m):
             return None  # suspended: no ringlet; or the command (suspend) ended it
-        _regate(m)
         return m._run(m)
+
+    def _open_gate(self, m: Machine) -> bool:
+        """The start of a held machine's ringlet: the inputs' snapshot (if a value came), then the
+        pending command.  True if the ringlet goes on (with `_run` pointing at it)."""
+        inputs = m._inputs
+        if inputs is not None and inputs.fresh:
+            inputs.snapshot()
+        if m._pending is None:
+            if m._suspended:
+                return False  # no ringlet while suspended
+        elif not self._apply(m):
+            return False
+        _regate(m)
+        return True
 
     def finish(self, m: Machine) -> None:
         """The machine has finished: unload it.  The hook generated code calls, from the ringlet
@@ -240,7 +261,7 @@ class Arrangement:
         """Between rounds: a machine that commanded itself and then fired a transition in the
         same ringlet pointed `_run` past its gate; put the gate back in front."""
         for m in self.machines:
-            if m._pending is not None or m._suspended:
+            if m._pending is not None or m._suspended or (m._inputs is not None and m._inputs.fresh):
                 _hold(m)
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
@@ -259,10 +280,8 @@ class Arrangement:
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
         for m in live:
-            if m._run is m._held:
-                if m._pending is None or not self._apply(m):
-                    continue
-                _regate(m)
+            if m._run is m._held and not self._open_gate(m):
+                continue
             s = m._state
             if m._entered:
                 tr.entry(m, s)
