@@ -51,6 +51,7 @@ from ._common import DURATION, cli, fail, progress, write_output
 )
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the report to FILE instead of stdout.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress and no summary on stderr.")
+@click.option("-v", "--witnesses", is_flag=True, help="Also show the path to what a reachable (or EF) property found.")
 def verify(
     targets: tuple[str, ...],
     properties: tuple[str, ...],
@@ -63,6 +64,7 @@ def verify(
     fmt: str,
     output: str | None,
     quiet: bool,
+    witnesses: bool,
 ) -> None:
     """Explore every reachable configuration of an arrangement and judge properties.
 
@@ -147,7 +149,7 @@ def verify(
             said = None
         if said and not quiet:
             click.echo(f"llfsm: {said}", err=True)
-    report = render(result, fmt, __version__)
+    report = render(result, fmt, __version__, witnesses)
     if output:
         write_output(output, report.encode("utf-8"), "-o")
     else:

@@ -460,6 +460,7 @@ class _FormulaParser:
             start, known = self.pos, len(self.atoms)
             closing = ")" if tok.string == "(" else "]"
             self.pos += 1
+            problem: PropertyError | None = None
             try:
                 inner = self.implies()
                 if self.is_op(self.peek(), closing):
@@ -467,11 +468,19 @@ class _FormulaParser:
                     nxt = self.peek()
                     if nxt is None or self.is_op(nxt, "->", "|", "or", "&", "and", "U", ")", "]"):
                         return inner
-            except PropertyError:
+            except PropertyError as e:
                 if closing == "]":
                     raise
+                problem = e
             self.pos = start  # a Python expression that starts with a parenthesis: an atom
             del self.atoms[known:]
+            atom = self.atom_tokens()
+            if problem is not None:
+                try:
+                    ast.parse(self.atoms[atom[1]].strip(), mode="eval")
+                except SyntaxError:
+                    raise problem from None  # not Python either: the formula's own mistake
+            return atom
         return self.atom_tokens()
 
     def atom_tokens(self) -> Formula:

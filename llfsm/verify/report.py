@@ -86,11 +86,12 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
     return out
 
 
-def text(v: Verification) -> str:
+def text(v: Verification, witnesses: bool = False) -> str:
+    """The report; `witnesses`: also the path to what a `reachable` or `EF` property found."""
     lines = []
     for o in v.outcomes:
         lines.append(_line(o, v))
-        if o.trace is not None and v.explorer is not None:
+        if o.trace is not None and v.explorer is not None and (o.verdict != "holds" or witnesses):
             kind = "witness" if o.verdict == "holds" else "counterexample"
             lines += ["  " + x for x in trace_lines(v.explorer, o.trace, kind)]
         elif o.verdict == "fails" and o.why:
@@ -267,11 +268,11 @@ def sarif(v: Verification, version: str) -> str:
     return json.dumps(doc, indent=2) + "\n"
 
 
-def render(v: Verification, fmt: str, version: str) -> str:
+def render(v: Verification, fmt: str, version: str, witnesses: bool = False) -> str:
     if fmt == "json":
         return as_json(v)
     if fmt == "github":
         return github(v)
     if fmt == "sarif":
         return sarif(v, version)
-    return text(v)
+    return text(v, witnesses)
