@@ -339,3 +339,17 @@ def test_a_machine_with_errors_is_not_explored(tmp_path: Path) -> None:
     with pytest.raises(VerifyError) as info:
         load_arrangement([str(m)])
     assert info.value.status == 2 and info.value.diagnostics[0].code == "LF020"
+
+
+@pytest.mark.parametrize("period", [None, 10_000_000])
+def test_the_specialised_loop_hash_compaction_and_the_generic_step_explore_alike(period: int | None) -> None:
+    targets = [str(MACHINES / "ros2_turtle_suspend_resume.machine"), str(MACHINES / "ros2_blind_turtle_bot.machine")]
+    loaded = load_arrangement(targets)
+    props = [PropertySource("eventually", "finished(ros2_blind_turtle_bot)")]
+    shapes = []
+    for hash_compact, generic in ((False, False), (False, True), (True, False), (True, True)):
+        options = Options(period=period, interrupt=True, hash_compact=hash_compact, generic=generic)
+        r = verify(loaded, props, options)
+        e = r.explorer
+        shapes.append((r.configurations, r.steps, list(e.edges), list(e.labels), list(e.fair), verdicts(r)))
+    assert shapes[0] == shapes[1] == shapes[2] == shapes[3]

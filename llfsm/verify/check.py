@@ -16,7 +16,7 @@ from typing import Any
 
 from ..runtime.errors import report_for
 from .ctl import CTL
-from .explorer import Explorer, Loaded, MachineError, Options, StateLimit, Step
+from .explorer import AtomError, Explorer, Loaded, MachineError, Options, StateLimit, Step
 from .load import PropertySource, VerifyError, machine_infos
 from .ltl import Structure, check_ltl
 from .props import Atom, Property, PropertyError, parse_property
@@ -148,8 +148,9 @@ def verify(
         result.partial = "interrupted"
     except VariableValueError as e:
         raise VerifyError(str(e)) from None
-    except PropertyError as e:
-        raise VerifyError(str(e)) from None
+    except AtomError as e:
+        a = atoms[e.atom]
+        raise VerifyError(f"{a.where}: `{a.text}` could not be evaluated: {e}") from None
     except MachineError as e:
         rep = report_for(e.exc)
         result.error = rep.format() if rep is not None else f"{type(e.exc).__name__}: {e.exc}"
@@ -235,12 +236,9 @@ def _judge_ctl(explorer: Explorer, ctl: CTL, prop: Property, ids: list[int]) -> 
 
 
 def _nearest(explorer: Explorer, where: bytearray) -> int | None:
-    """The configuration of `where` nearest the initial one (breadth-first order is by depth)."""
-    best = None
-    for c in range(explorer.count):
-        if where[c] and (best is None or explorer.depth[c] < explorer.depth[best]):
-            best = c
-    return best
+    """The configuration of `where` nearest the initial one: the first in breadth-first order."""
+    found = where.find(1)
+    return found if found >= 0 else None
 
 
 def growing_variables(explorer: Explorer) -> list[str]:

@@ -98,6 +98,15 @@ class MachineError(Exception):
         self.choice = choice
 
 
+class AtomError(Exception):
+    """An atom of a property raised while it was evaluated (which one, and the exception)."""
+
+    def __init__(self, atom: int, exc: Exception) -> None:
+        super().__init__(f"{type(exc).__name__}: {exc}")
+        self.atom = atom
+        self.exc = exc
+
+
 class StateLimit(Exception):
     """More configurations than --max-states."""
 
@@ -131,6 +140,9 @@ class Options:
     hash_compact: bool = False
     #: keep every edge (liveness, CTL, exports need the graph; safety alone does not)
     graph: bool = False
+    #: explore with the generic step (as replay does) rather than the specialised loop: the two
+    #: must explore alike (a test compares them)
+    generic: bool = False
 
 
 @dataclass
@@ -205,13 +217,14 @@ class Explorer:
         if self.period is not None:
             p = self.period
             self.caps = [[(cuts[-1] // p + 1) * p if cuts else 0 for cuts in per] for per in self.cuts]
-        # the structure
-        self.parent = array("q")
-        self.choice = array("l")
-        self.labels = array("Q")
-        self.fair = array("Q")
-        self.depth = array("l")
-        self.edges = array("q")
+        # the structure: per configuration (numbered in breadth-first order, so by depth) its
+        # parent in the BFS tree, the choice that reached it, its atoms' values, its fairness
+        # bits, in arrays of the narrowest item that holds them; the edges if kept
+        self.parent = array("i")
+        self.choice = array("L")
+        self.labels = array(_narrowest(len(self.atoms)))
+        self.fair = array(_narrowest(self.n))
+        self.edges = array("i")
         self.edge_start = array("q")
         self.steps = 0
         self.partial: str | None = None  # why the exploration stopped early, if it did
@@ -441,9 +454,13 @@ class Explorer:
         """The atoms' values (a bit each) on the machine objects as they are now."""
         bits = 0
         machines = self.machines
-        for k, atom in enumerate(self.atoms):
-            if atom(machines, published):
-                bits |= 1 << k
+        k = 0
+        try:
+            for k, atom in enumerate(self.atoms):
+                if atom(machines, published):
+                    bits |= 1 << k
+        except Exception as e:  # a variable of another type than the atom expects
+            raise AtomError(k, e) from None
         return bits
 
     def fairness(self, config: tuple[Any, ...]) -> int:
@@ -478,7 +495,7 @@ class Explorer:
         turn = next((k for k in range(self.n) if self._would_run(k)), -1)
         return (turn, live, g, e, t, *parts)
 
-    def _add(self, config: tuple[Any, ...], parent: int, choice: int, depth: int) -> tuple[int, bool]:
+    def _add(self, config: tuple[Any, ...], parent: int, choice: int) -> tuple[int, bool]:
         """The index of `config`, and whether it is new (then its labels are taken now)."""
         if self.options.hash_compact:
             h = hash(config)
@@ -495,8 +512,7 @@ class Explorer:
             idx = self.index[config] = len(self.configs)
             self.configs.append(config)
         self.parent.append(parent)
-        self.choice.append(choice)
-        self.depth.append(depth)
+        self.choice.append(max(choice, 0))  # (the initial configuration's: 0)
         self.labels.append(self.label(self.published_of(config)))
         self.fair.append(self.fairness(config))
         return idx, True
@@ -634,6 +650,9 @@ class Explorer:
             activate(prev)
 
     def _explore(self) -> None:
+        if not self.options.generic:
+            self._explore_fast()
+            return
         hc = self.options.hash_compact
         graph = self.options.graph
         start = time.monotonic()
@@ -641,7 +660,7 @@ class Explorer:
         c0 = self.c0 = self.initial()
         self.load(c0)
         self.published.clear()
-        idx, _ = self._add(c0, -1, -1, 0)
+        idx, _ = self._add(c0, -1, -1)
         if self.on_new is not None and not self.on_new(idx):
             return
         pos = 0
@@ -658,12 +677,11 @@ class Explorer:
                 pos += 1
             if graph:
                 self.edge_start.append(len(self.edges))
-            depth = self.depth[idx] + 1
             if config[TURN] < 0:  # the run has ended: it stays so, publishing nothing
                 succ = (*config[:PUBLISHED], self._intern(self.etab, self.elist, frozenset()), *config[TIMES:])
                 self.load(config)
                 self.published.clear()
-                j, new = self._add(succ, idx, 0, depth)
+                j, new = self._add(succ, idx, 0)
                 self.steps += 1
                 if graph:
                     self.edges.append(j)
@@ -680,7 +698,7 @@ class Explorer:
                         raise
                     raise MachineError(exc, idx, c) from exc
                 self.steps += 1
-                j, new = self._add(succ, idx, c, depth)
+                j, new = self._add(succ, idx, c)
                 if graph:
                     self.edges.append(j)
                 if new:
@@ -697,6 +715,258 @@ class Explorer:
         if graph:
             self.edge_start.append(len(self.edges))
 
+    def _explore_fast(self) -> None:
+        """`_explore`, with the same steps as `step`, written out in one loop with everything it
+        touches in locals, and the choices and fairness of each machine's part cached (a step
+        costs a few microseconds; docs/verify.md, "Performance").  Exact storage interns each
+        part and keeps the configurations; hash compaction keeps each as a 64-bit hash in an
+        open-addressing table, and the configurations still to expand in a queue."""
+        n = self.n
+        hc = self.options.hash_compact
+        machines, codecs = self.machines, self.codecs
+        snaps = [c.snapshot for c in codecs]
+        restores = [c.restore for c in codecs]
+        gates = [c.gate_index for c in codecs]
+        part_tabs, part_lists = self.parts, self.part_list
+        cur = self.cur
+        configs, index, frontier = self.configs, self.index, self.frontier
+        parent, choice_arr = self.parent, self.choice
+        labels, fair_arr = self.labels, self.fair
+        edges, edge_start = self.edges, self.edge_start
+        graph = self.options.graph
+        bus, ctx, clock, arr = self.bus, self.ctx, self.clock, self.arr
+        touched, published = arr.touched, self.published
+        gtab, glist, etab, elist, ttab, tlist = self.gtab, self.glist, self.etab, self.elist, self.ttab, self.tlist
+        period = self.period
+        cuts, caps, reps = self.cuts, getattr(self, "caps", None), self.reps
+        input_names = self.input_names
+        atoms = self.atoms
+        label = self.label
+        on_new = self.on_new
+        limit = self.options.max_states
+        progress = self.progress
+        probe, insert = self._probe, self._insert
+        choice_cache: dict[tuple[Any, ...], list[tuple[tuple[Any, ...], int, bool]]] = {}
+        fair_cache: dict[tuple[int, Any, int], int] = {}
+        full = (1 << n) - 1
+        start = last = time.monotonic()
+
+        def fairness(config: tuple[Any, ...]) -> int:
+            if period is not None:
+                return full
+            times = tlist[config[TIMES]]
+            bits = 0
+            for k in range(n):
+                key = (k, config[PARTS + k], times[k])
+                b = fair_cache.get(key)
+                if b is None:
+                    part = key[1] if hc else part_lists[k][key[1]]
+                    cs = cuts[k][part[STATE]]
+                    b = fair_cache[key] = int(
+                        not cs or key[2] >= len(cs) or part[SUSPENDED] or part[FINISHED] or codecs[k].entered(part)
+                    )
+                if b:
+                    bits |= 1 << k
+            return bits
+
+        def added(succ: tuple[Any, ...], idx: int, c: int, events: int) -> int:
+            """The index of succ, new or not; -1 - index when new (its labels taken now)."""
+            if hc:
+                h = hash(succ)
+                j = probe(h)
+                if j >= 0:
+                    return j
+                j = len(parent)
+                insert(h, j)
+                frontier.append((j, succ))
+            else:
+                j = index.get(succ, -1)
+                if j >= 0:
+                    return j
+                j = index[succ] = len(configs)
+                configs.append(succ)
+            parent.append(idx)
+            choice_arr.append(c)
+            labels.append(label(elist[events]) if atoms else 0)
+            fair_arr.append(fairness(succ))
+            return -1 - j
+
+        c0 = self.c0 = self.initial()
+        self.load(c0)
+        published.clear()
+        added(c0, -1, 0, c0[PUBLISHED])
+        if on_new is not None and not on_new(0):
+            return
+        empty = self._intern(etab, elist, frozenset())
+        pos = 0
+        steps = 0
+        try:
+            while True:
+                if hc:
+                    if not frontier:
+                        break
+                    idx, config = frontier.popleft()
+                else:
+                    if pos >= len(configs):
+                        break
+                    idx, config = pos, configs[pos]
+                    pos += 1
+                if graph:
+                    edge_start.append(len(edges))
+                turn = config[TURN]
+                if turn < 0:  # the run has ended: it stays so, publishing nothing
+                    succ = (*config[:PUBLISHED], empty, *config[TIMES:])
+                    steps += 1
+                    self.load(succ)
+                    j = added(succ, idx, 0, empty)
+                    if j < 0:
+                        j = -1 - j
+                        if on_new is not None and not on_new(j):
+                            return
+                    if graph:
+                        edges.append(j)
+                    continue
+                live = config[LIVE]
+                g0 = config[GLOBALS]
+                t0 = config[TIMES]
+                # the choices depend on the machine's ringlet, state, command and suspension,
+                # the globals and its time: not on its variables
+                p0 = config[PARTS + turn] if hc else part_lists[turn][config[PARTS + turn]]
+                key = (turn, p0[0], p0[1], p0[2], p0[3], p0[4], g0, tlist[t0][turn])
+                choices = choice_cache.get(key)
+                if choices is None:
+                    choices = choice_cache[key] = self.choices(config)
+                m = machines[turn]
+                names = input_names[turn]
+                for c, (values, tm, intr) in enumerate(choices):
+                    # the configuration into the objects (what the previous choice changed)
+                    for k in range(n):
+                        p = config[PARTS + k]
+                        if hc:
+                            if cur[k] is not p:
+                                restores[k](machines[k], p)
+                                cur[k] = p
+                        elif cur[k] != p:
+                            restores[k](machines[k], part_lists[k][p])
+                            cur[k] = p
+                    if self.cur_g != g0:
+                        gv = glist[g0]
+                        bus.initialised, bus.shut, ctx.interrupted = gv[INITIALISED], gv[SHUT], gv[INTERRUPTED]
+                        self.cur_g = g0
+                    if names:
+                        for name, v in zip(names, values, strict=True):
+                            setattr(m, name, v)
+                    now = reps[turn][m._state][tm] if period is None else tm
+                    m._t0 = 0
+                    clock.now = now
+                    if intr:
+                        ctx.interrupted = True
+                    touched.clear()
+                    published.clear()
+                    initialised, shut = bus.initialised, bus.shut
+                    try:
+                        m._run(m)
+                    except BaseException as exc:  # machine code may raise anything
+                        if isinstance(exc, KeyboardInterrupt | MemoryError | VariableValueError):
+                            raise
+                        raise MachineError(exc, idx, c) from exc
+                    steps += 1
+                    # the machine's new part (and those its commands touched)
+                    part = snaps[turn](m)
+                    if hc:
+                        pid: Any = part
+                    else:
+                        tab = part_tabs[turn]
+                        pid = tab.get(part)
+                        if pid is None:
+                            pid = tab[part] = len(part_lists[turn])
+                            part_lists[turn].append(part)
+                    cur[turn] = pid
+                    if touched or n > 1:
+                        parts = list(config[PARTS:])
+                        parts[turn] = pid
+                        for k in touched:
+                            if k != turn:
+                                other = snaps[k](machines[k])
+                                parts[k] = cur[k] = other if hc else self._part_id(k, other)
+                    else:
+                        parts = [pid]
+                    # globals
+                    gv = glist[g0]
+                    if intr or bus.initialised != initialised or bus.shut != shut:
+                        gv = (bus.initialised, bus.shut, ctx.interrupted, gv[FIRST_ROUND])
+                    # the machine's time in its state
+                    if part[SUSPENDED] or part[FINISHED]:
+                        e = 0
+                    else:
+                        run = part[1] if part[0] == gates[turn] else part[0]
+                        if run == 2 * part[STATE]:
+                            e = 0
+                        else:
+                            e = now - m._t0
+                            cs = cuts[turn][part[STATE]]
+                            if period is None:
+                                e = bisect.bisect_left(cs, e) if cs else 0
+                            else:
+                                cap = caps[turn][part[STATE]]  # type: ignore[index]
+                                e = e if e < cap else cap
+                    times = tlist[t0]
+                    if times[turn] != e:
+                        times = (*times[:turn], e, *times[turn + 1 :])
+                    # whose turn, or the round's end
+                    nxt = -1
+                    for k in range(turn + 1, n):
+                        if live >> k & 1:
+                            mk = machines[k]
+                            if mk._pending is not None or not mk._suspended:
+                                nxt = k
+                                break
+                    new_live = live
+                    if nxt < 0:  # the round ends (as `_round_end`, written out for the usual case)
+                        slow = False
+                        new_live = 0
+                        for k in range(n):
+                            mk = machines[k]
+                            pending = mk._pending is not None
+                            if mk._finished and not pending:
+                                continue  # unloaded
+                            new_live |= 1 << k
+                            if (pending or mk._suspended) and mk._run is not mk._held:
+                                slow = True  # the gate goes back in front: its part changes
+                            if nxt < 0 and (pending or not mk._suspended):
+                                nxt = k
+                        if slow or period is not None or (n > 1 and new_live != live):
+                            tl = list(times)
+                            nxt, new_live, gv = self._round_end(parts, tl, gv)
+                            times = tuple(tl)
+                    g = gtab.get(gv)
+                    if g is None:
+                        g = self._intern(gtab, glist, gv)
+                    self.cur_g = g
+                    ev = empty if not published else self._intern(etab, elist, frozenset(published))
+                    t = ttab.get(times)
+                    if t is None:
+                        t = self._intern(ttab, tlist, times)
+                    j = added((nxt, new_live, g, ev, t, *parts), idx, c, ev)
+                    if j < 0:
+                        j = -1 - j
+                        if on_new is not None and not on_new(j):
+                            return
+                        if j >= limit:
+                            raise StateLimit()
+                    if graph:
+                        edges.append(j)
+                if progress is not None and not idx & 0x3FF:
+                    now_s = time.monotonic()
+                    if now_s - last >= 1.0:
+                        last = now_s
+                        self.steps = steps
+                        progress(len(parent), len(frontier) if hc else len(configs) - pos, now_s - start)
+            if graph:
+                edge_start.append(len(edges))
+        finally:
+            self.steps = steps
+
     @property
     def count(self) -> int:
         """Configurations stored."""
@@ -712,6 +982,11 @@ class Explorer:
 
     def edges_of(self, idx: int) -> Sequence[int]:
         return self.edges[self.edge_start[idx] : self.edge_start[idx + 1]]
+
+
+def _narrowest(bits: int) -> str:
+    """The array type code of the narrowest unsigned item of at least `bits` bits."""
+    return "B" if bits <= 8 else "H" if bits <= 16 else "L" if bits <= 32 else "Q"
 
 
 def _ns(t: int) -> str:

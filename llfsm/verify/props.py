@@ -72,7 +72,10 @@ class MachineInfo:
 @dataclass
 class Atom:
     text: str
-    fn: Callable[[Sequence[Any], frozenset[str]], bool]
+    #: the compiled atom: fn(machines, published) is true or false (the explorer reports an
+    #: exception, AtomError, with the atom's text and `where`)
+    fn: Callable[[Sequence[Any], frozenset[str]], Any]
+    where: str = "--property"
 
 
 @dataclass
@@ -184,7 +187,7 @@ class _Compiler:
         code = compile(fn_tree, f"<property {src[:40]}>", "eval", dont_inherit=True)
         # the checked and rewritten tree, with only the pure builtins in reach
         fn = eval(code, {"__builtins__": dict(PURE)})
-        return Atom(src, _guarded(fn, src, self.where))
+        return Atom(src, fn, self.where)
 
     def _machine(self, node: ast.AST, text: str) -> MachineInfo:
         name = node.id if isinstance(node, ast.Name) else node.value if isinstance(node, ast.Constant) else None
@@ -303,19 +306,6 @@ class _Compiler:
                         raise self.fail(
                             text, f"{info.name} has no state {v.value}{hint}; its states: {', '.join(info.states)}"
                         )
-
-
-def _guarded(fn: Callable[..., Any], text: str, where: str) -> Callable[[Sequence[Any], frozenset[str]], bool]:
-    """The atom as a function returning a bool; an exception while evaluating it (a variable of
-    the wrong type) says which property."""
-
-    def atom(machines: Sequence[Any], published: frozenset[str]) -> bool:
-        try:
-            return bool(fn(machines, published))
-        except Exception as e:
-            raise PropertyError(f"{where}: `{text}` could not be evaluated: {type(e).__name__}: {e}") from None
-
-    return atom
 
 
 def _depth(node: ast.AST, limit: int = MAX_DEPTH + 1) -> int:
