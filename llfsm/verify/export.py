@@ -30,6 +30,8 @@ from .check import Verification
 from .explorer import Explorer
 
 Formula = tuple[Any, ...]
+#: Statements per d_step that fills Promela's tables.
+INIT_CHUNK = 200
 
 
 def write_export(kind: str, v: Verification) -> str:
@@ -122,9 +124,11 @@ def promela(v: Verification) -> str:
     init += [f"succ[{j}] = {d}" for j, d in enumerate(edges) if d]
     init += [f"A{k}[{c}] = 1" for k in range(len(texts)) for c in range(n) if e.labels[c] >> k & 1]
     init += [f"F{k}[{c}] = 1" for k in range(fair_sets) for c in range(n) if e.fair[c] >> k & 1]
-    if init:
+    # the tables, filled in d_steps of at most INIT_CHUNK statements (SPIN refuses a longer one);
+    # the states between them repeat configuration 0's labels
+    for k in range(0, len(init), INIT_CHUNK):
         out.append("  d_step {")
-        out += [f"    {line};" for line in init]
+        out += [f"    {line};" for line in init[k : k + INIT_CHUNK]]
         out.append("  }")
     sets = "".join(f"; a{k} = A{k}[s]" for k in range(len(texts)))
     sets += "".join(f"; f{k} = F{k}[s]" for k in range(fair_sets))
