@@ -53,7 +53,7 @@ from ..runtime.machine import RESUME, Machine
 from ..runtime.scheduler import Arrangement
 from ..runtime.trace import Tracer
 from .snapshot import FINISHED, PENDING, STATE, SUSPENDED, Codec, VariableValueError
-from .values import Handles
+from .values import Frozen, Handles
 
 #: Positions in a configuration tuple.
 TURN, LIVE, GLOBALS, PUBLISHED, TIMES = range(5)
@@ -589,8 +589,7 @@ class Explorer:
                 for k in range(self.n):
                     old, new = self.codecs[k].variables_of(before[k]), self.codecs[k].variables_of(after[k])
                     for name, v in new.items():
-                        if old[name] != v or type(old[name]) is not type(v):
-                            changed[f"{self.machines[k].NAME}.{name}"] = (old[name], v)
+                        changed.update(_diff(f"{self.machines[k].NAME}.{name}", old[name], v))
                 values, tm, intr = choice
                 step = Step(
                     machine=i,
@@ -982,6 +981,18 @@ class Explorer:
 
     def edges_of(self, idx: int) -> Sequence[int]:
         return self.edges[self.edge_start[idx] : self.edge_start[idx + 1]]
+
+
+def _diff(name: str, old: Any, new: Any) -> dict[str, tuple[Any, Any]]:
+    """What changed of a variable, as `name: (old, new)`; a message's fields one by one."""
+    if old == new and type(old) is type(new):
+        return {}
+    if type(old) is Frozen and type(new) is Frozen and old[0] == new[0] == "message" and old[1] is new[1]:
+        out: dict[str, tuple[Any, Any]] = {}
+        for (field_name, _), a, b in zip(old[1]._FIELDS, old[2:], new[2:], strict=True):
+            out.update(_diff(f"{name}.{field_name}", a, b))
+        return out
+    return {name: (old, new)}
 
 
 def _narrowest(bits: int) -> str:

@@ -83,15 +83,15 @@ _OS: dict[str, str] = {
 
 #: Methods and attributes of the bus that read it, wait on it, or run callbacks verify never runs.
 _BUS: dict[str, str] = {
-    "create_subscription": "a subscription (what arrives on a topic)",
-    "create_client": "a service client (what a server answers)",
-    "create_service": "a service (its callback runs when a peer calls)",
-    "create_timer": "a timer (its callback runs between rounds)",
+    "create_subscription": "a subscription, what arrives on a topic",
+    "create_client": "a service client, what a server answers",
+    "create_service": "a service, its callback runs when a peer calls",
+    "create_timer": "a timer, its callback runs between rounds",
     "take": "a message taken from a subscription",
     "latest": "the newest message of a subscription",
-    "spin": "a spin call (callbacks, waiting)",
-    "spin_once": "a spin call (callbacks, waiting)",
-    "spin_until_future_complete": "a spin call (callbacks, waiting)",
+    "spin": "a spin call, callbacks, waiting",
+    "spin_once": "a spin call, callbacks, waiting",
+    "spin_until_future_complete": "a spin call, callbacks, waiting",
     "call_async": "a service call",
     "call": "a service call",
     "wait_for_service": "a wait for a server",
@@ -99,12 +99,12 @@ _BUS: dict[str, str] = {
     "get_subscription_count": "how many subscribers there are",
     "get_publisher_count": "how many publishers there are",
     "get_clock": "the run clock",
-    "declare_parameter": "a parameter (set from outside)",
-    "declare_parameters": "a parameter (set from outside)",
-    "get_parameter": "a parameter (set from outside)",
-    "get_parameters": "a parameter (set from outside)",
-    "get_parameter_or": "a parameter (set from outside)",
-    "has_parameter": "a parameter (set from outside)",
+    "declare_parameter": "a parameter, set from outside",
+    "declare_parameters": "a parameter, set from outside",
+    "get_parameter": "a parameter, set from outside",
+    "get_parameters": "a parameter, set from outside",
+    "get_parameter_or": "a parameter, set from outside",
+    "has_parameter": "a parameter, set from outside",
     "add_on_set_parameters_callback": "a parameter callback",
 }
 
@@ -134,7 +134,7 @@ def refusals(m: Machine, trees: dict[str, ast.Module], path: Path) -> Refusals:
         tree = trees.get(code.file)
         if tree is not None:
             for node, what in _world_reads(tree):
-                report("LF200", code.file, node, f"{what} cannot be explored faithfully: {_INPUT_ADVICE}")
+                report("LF200", code.file, node, f"{what}: verify cannot explore this faithfully; {_INPUT_ADVICE}")
     for i in m.inputs:
         if i.type != "bool" and not i.domain:
             out.diagnostics.append(

@@ -46,7 +46,7 @@ def step_lines(e: Explorer, step: Step | None, config: tuple[Any, ...]) -> list[
     if step.interval:
         what.append(f"time {step.interval}")
     if step.interrupted:
-        what.append("ros.ok() is now false (interrupted)")
+        what.append("interrupted: ros.ok() is false from here")
     part = e.part(config, step.machine)
     if step.finished:
         done = "finished"
@@ -67,7 +67,9 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
     n = len(steps) - 1
     head = f"{what}, {n} step{'s' if n != 1 else ''}"
     if trace.loop is not None:
-        head += f" (a lasso: the last {n - trace.loop} step{'s' if n - trace.loop != 1 else ''} repeat forever)"
+        k = n - trace.loop
+        last = "the last step repeats" if k == 1 else f"the last {k} steps repeat"
+        head += f" (a lasso: {last} forever)"
     out = [head + ":"]
     for pos, (config, step) in enumerate(steps):
         if trace.loop is not None and pos == trace.loop + 1:
