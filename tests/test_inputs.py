@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from conftest import llfsm, run_sim, write_machine
+from conftest import MACHINES, llfsm, run_sim, write_machine
 
 from llfsm.lang.check import check_machine
 
@@ -294,3 +294,18 @@ def test_the_description_the_graph_and_the_schema_show_inputs(tmp_path: Path) ->
     assert "__inputs [shape=note" in dot
     schema = json.loads(llfsm("schema").stdout)
     assert set(schema["$defs"]["YamlInput"]["properties"]) == {"type", "default", "domain", "topic", "msg", "field"}
+
+
+def test_the_wall_follower_follows_turtlesim_s_walls_on_its_sensor_input(tmp_path: Path) -> None:
+    trace = tmp_path / "t.jsonl"
+    r = run_sim(
+        "--node", "turtlesim", "--node", "wall_sensor", MACHINES / "wall_follower.machine",
+        "--duration", "40s", "--trace", trace, "--echo", "/turtle1/pose",
+    )  # fmt: skip
+    assert r.status == 0, r.stderr
+    assert "I hit the wall" not in r.stderr
+    events = [json.loads(line) for line in trace.read_text().splitlines()]
+    turns = [e for e in events if e["event"] == "entry" and e["state"] == "TURN"]
+    assert len(turns) >= 3, "the sensor never made it turn"
+    xs = [float(line.split()[1]) for line in r.stdout.splitlines() if line.startswith("x: ")]
+    assert max(xs) > 9.0 and min(xs) < 2.0, "it did not go round the arena"
