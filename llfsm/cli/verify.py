@@ -113,7 +113,7 @@ def verify(
             ms = file_options.get("max_states", 1_000_000)
             if not isinstance(ms, int) or isinstance(ms, bool):
                 fail("max_states in the verification file must be a whole number")
-            max_states = ms  # type: ignore[assignment]
+            max_states = ms
         if max_states < 1:
             fail("--max-states must be at least 1")
         if counterexample_dir is not None and period is None:

@@ -64,10 +64,10 @@ def message_class(type_name: str) -> type[Any]:
         module = importlib.import_module(f"llfsm.msgs.{pkg}.msg")
     except ImportError as e:
         raise LookupError(f"no message package {pkg} ({e})") from None
-    cls = getattr(module, name, None)
-    if not is_message_class(cls):
+    cls: type[Any] | None = getattr(module, name, None)
+    if cls is None or not is_message_class(cls):
         raise LookupError(f"{pkg} has no message {name}")
-    return cls  # type: ignore[no-any-return]
+    return cls
 
 
 def bind(arr: Arrangement, bus: Bus, where: Callable[[Machine], str] | None = None) -> list[InputReader]:

@@ -103,7 +103,7 @@ class CTL:
 
         out = bytearray(s.count)
         queue: deque[int] = deque()
-        for comp in sccs(range(s.count), succ, f.__getitem__):
+        for comp in sccs(range(s.count), succ, lambda c: bool(f[c])):
             if not nontrivial(comp, lambda c: [d for d in succ(c) if f[d]]):
                 continue
             if all(any(fair[c] >> k & 1 for c in comp) for k in range(need)):

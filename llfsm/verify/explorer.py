@@ -187,7 +187,7 @@ class Explorer:
             from ..ros.bus import bus_of  # deferred: start-up (verify imports the bus when it explores)
 
             self.bus = bus_of(self.ctx)
-            self.bus.log_stream = self.stdout
+            self.bus.log_stream = self.stdout  # type: ignore[assignment]  # a text stream that keeps nothing
             self.published: set[str] = set()
             self.bus.add_tap(self._tap)
             arr = ExploreArrangement(loaded.classes, context=self.ctx)

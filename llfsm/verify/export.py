@@ -178,16 +178,14 @@ def smv(v: Verification) -> str:
     if texts or fair_sets:
         out.append("DEFINE")
 
-    def members(pick: Callable[[int], bool]) -> str:
-        chosen = [str(c) for c in range(n) if pick(c)]
+    def members(bits: Sequence[int], k: int) -> str:
+        chosen = [str(c) for c in range(n) if bits[c] >> k & 1]
         return "FALSE" if not chosen else "TRUE" if len(chosen) == n else "s in {" + ", ".join(chosen) + "}"
 
     for k, t in enumerate(texts):
-        out.append(f"  a{k} := {members(lambda c, k=k: bool(e.labels[c] >> k & 1))};  -- {' '.join(t.split())}")
+        out.append(f"  a{k} := {members(e.labels, k)};  -- {' '.join(t.split())}")
     for k in range(fair_sets):
-        out.append(
-            f"  f{k} := {members(lambda c, k=k: bool(e.fair[c] >> k & 1))};  -- the time of {e.machines[k].NAME} passes"
-        )
+        out.append(f"  f{k} := {members(e.fair, k)};  -- the time of {e.machines[k].NAME} passes")
     for k in range(fair_sets):
         out.append(f"FAIRNESS f{k};")
     ops = {"not": "!", "and": "&", "or": "|", "implies": "->", "U": "U", "F": "F", "G": "G", "X": "X", "true": "TRUE"}
@@ -221,7 +219,7 @@ def dot(v: Verification) -> str:
     return "\n".join(out) + "\n"
 
 
-def _config(e: Explorer, c: int) -> Sequence[Any]:
+def _config(e: Explorer, c: int) -> tuple[Any, ...]:
     if not e.options.hash_compact:
         return e.configs[c]
     path = e.path_to(c)

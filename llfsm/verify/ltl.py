@@ -197,14 +197,14 @@ def check_ltl(structure: Structure, formula: Formula, atom_ids: Sequence[int]) -
                 depth[w] = depth[v] + 1
                 order.append(w)
                 queue.append(w)
-    want: list[Callable[[int], bool]] = [
-        (lambda node, acc=acc: acc[node % nb])
-        for acc in aut.accepting  # type: ignore[misc]
-    ]
-    want += [
-        (lambda node, k=k: bool(structure.fair[node // nb] >> k & 1))  # type: ignore[misc]
-        for k in range(structure.fair_sets)
-    ]
+
+    def accepts(acc: list[bool]) -> Callable[[int], bool]:
+        return lambda node: acc[node % nb]
+
+    def fair_in(k: int) -> Callable[[int], bool]:
+        return lambda node: bool(structure.fair[node // nb] >> k & 1)
+
+    want = [accepts(acc) for acc in aut.accepting] + [fair_in(k) for k in range(structure.fair_sets)]
     best: Lasso | None = None
     for comp in sccs(order, cached, lambda _n: True):
         if not nontrivial(comp, cached) or not all(any(w(n) for n in comp) for w in want):

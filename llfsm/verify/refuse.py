@@ -237,8 +237,8 @@ def _world_reads(tree: ast.AST) -> Iterator[tuple[ast.AST, str]]:
 
 def _constant(node: ast.AST) -> float | None:
     """The value of a constant number written with + - * / and parentheses, else None."""
-    if isinstance(node, ast.Constant) and type(node.value) in (int, float):
-        return node.value  # type: ignore[no-any-return]
+    if isinstance(node, ast.Constant) and isinstance(node.value, int | float) and not isinstance(node.value, bool):
+        return node.value
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
         v = _constant(node.operand)
         return None if v is None else (-v if isinstance(node.op, ast.USub) else v)

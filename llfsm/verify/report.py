@@ -78,10 +78,10 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
             out.append("  " + line)
     if trace.loop is not None:
         out.append("  -- and back to where the loop starts --")
-    last = steps[-1][0]
+    final = steps[-1][0]
     states = []
     for k, m in enumerate(e.machines):
-        part = e.part(last, k)
+        part = e.part(final, k)
         status = " (finished)" if part[6] else " (suspended)" if part[4] else ""
         states.append(f"{m.NAME} {m.STATES[part[2]]}{status}")
     out.append(f"  then: {', '.join(states)}")
@@ -116,7 +116,7 @@ def text(v: Verification, witnesses: bool = False) -> str:
 
 
 def _trace_json(e: Explorer, trace: Trace) -> dict[str, Any]:
-    steps = []
+    steps: list[dict[str, Any]] = []
     for config, step in trace.steps[1:]:
         if step is None:
             steps.append({"ended": True})
@@ -211,7 +211,7 @@ def github(v: Verification) -> str:
 
 
 def sarif(v: Verification, version: str) -> str:
-    results = []
+    results: list[dict[str, Any]] = []
     for o in v.outcomes:
         if o.verdict == "holds":
             continue
@@ -250,7 +250,7 @@ def sarif(v: Verification, version: str) -> str:
     ]
     for r in results:
         r["ruleIndex"] = 0 if r["ruleId"] == "property-fails" else 1
-    doc = {
+    doc: dict[str, Any] = {
         "$schema": "https://json.schemastore.org/sarif-2.1.0.json",
         "version": "2.1.0",
         "runs": [

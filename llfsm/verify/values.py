@@ -20,7 +20,7 @@ from typing import Any
 SCALARS: frozenset[type] = frozenset({int, float, str, bool, type(None), bytes})
 
 
-class Frozen(tuple):  # type: ignore[type-arg]
+class Frozen(tuple[Any, ...]):
     """A frozen value that is not a scalar: (kind, parts...).  Compared and hashed as a tuple."""
 
     __slots__ = ()
