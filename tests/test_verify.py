@@ -353,3 +353,44 @@ def test_the_specialised_loop_hash_compaction_and_the_generic_step_explore_alike
         e = r.explorer
         shapes.append((r.configurations, r.steps, list(e.edges), list(e.labels), list(e.fair), verdicts(r)))
     assert shapes[0] == shapes[1] == shapes[2] == shapes[3]
+
+
+def test_a_long_exploration_shows_progress_and_ctrl_c_gives_a_partial_result(tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    m = write_machine(
+        tmp_path, "big", {"A": [("A", "True")]}, {"A_OnEntry": "n = (n + 1) % 100000000"}, variables="n: int = 0\n"
+    )
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "llfsm",
+            "verify",
+            str(m),
+            "--max-states",
+            "200000000",
+            "--property",
+            "always: big.n >= 0",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    # the progress line comes once the exploration has run for 2 s; then Ctrl-C
+    assert proc.stderr is not None
+    deadline = time.monotonic() + 120
+    first = ""
+    while time.monotonic() < deadline and "llfsm verify:" not in first:
+        first = proc.stderr.readline()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    err = first + err
+    assert proc.returncode == 130, err
+    assert "configurations (" in first and "/s), queue" in first
+    assert "always: big.n >= 0: unknown (interrupted)" in out
+    assert "interrupted: a partial result" in out
+    assert "Traceback" not in err

@@ -179,7 +179,8 @@ class _progress:
         self.last = 0.0
 
     def __call__(self, explored: int, queue: int, seconds: float) -> None:
-        if not self.tty and seconds - self.last < 10:
+        # on a terminal the line is rewritten each second; in a log, a line after 2 s, then every 10 s
+        if not self.tty and (seconds < 2 or (self.shown and seconds - self.last < 10)):
             return
         self.last = seconds
         rate = explored / seconds if seconds else 0
