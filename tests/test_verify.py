@@ -394,3 +394,19 @@ def test_a_long_exploration_shows_progress_and_ctrl_c_gives_a_partial_result(tmp
     assert "always: big.n >= 0: unknown (interrupted)" in out
     assert "interrupted: a partial result" in out
     assert "Traceback" not in err
+
+
+def test_a_path_that_does_not_replay_alike_is_said(tmp_path: Path) -> None:
+    # a helper module's global is state verify does not keep: the path, run again, differs
+    (tmp_path / "ticker_helper.py").write_text("calls = [0]\n\ndef tick():\n    calls[0] += 1\n    return calls[0]\n")
+    m = write_machine(
+        tmp_path,
+        "h",
+        {"A": [("A", "True")]},
+        {"A_OnEntry": "x = ticker_helper.tick() % 4"},
+        variables="x: int = 0\n",
+        includes="import ticker_helper\n",
+    )
+    r = llfsm("verify", m, "--property", "never: h.x == 3")
+    assert r.status == 1
+    assert "warning: never: h.x == 3: its path, run again, did not give the configurations explored" in r.stdout

@@ -56,6 +56,8 @@ class Verification:
     growing: list[str] = field(default_factory=list)
     error: str | None = None  # machine code raised: the report, with the path to it
     error_trace: Trace | None = None
+    #: what the user should know about the result (a replay that did not give the same path)
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def status(self) -> int:
@@ -198,6 +200,11 @@ def verify(
                 else:
                     out.verdict = "fails"
                     out.trace = _trace(explorer, lasso.path, lasso.loop)
+        if out.trace is not None and not _replays(explorer, out.trace):
+            result.warnings.append(
+                f"{prop.name}: its path, run again, did not give the configurations explored: the machines "
+                "read something verify does not keep (a global of a helper module?), so the result may be wrong"
+            )
         out.seconds = (explored - start) + (time.monotonic() - t0)
         if out.verdict == "unknown":
             out.why = result.partial or "machine code raised before it was decided"
@@ -214,6 +221,17 @@ def _trace(explorer: Explorer, path: list[int], loop: int | None = None) -> Trac
     if loop is not None:  # the step back to the loop's start
         choices.append(explorer.choice_between(path[-1], path[loop]))
     return Trace(path, explorer.replay(choices), loop)
+
+
+def _replays(explorer: Explorer, trace: Trace) -> bool:
+    """Whether running the path again gave the configurations the exploration stored (exact
+    storage only: with hash compaction nothing is kept to compare)."""
+    if explorer.options.hash_compact:
+        return True
+    got = [config for config, _step in trace.steps]
+    return got == [explorer.configs[c] for c in trace.configs] + (
+        [explorer.configs[trace.configs[trace.loop]]] if trace.loop is not None else []
+    )
 
 
 def _judge_ctl(explorer: Explorer, ctl: CTL, prop: Property, ids: list[int]) -> tuple[str, Trace | None, str | None]:

@@ -110,6 +110,8 @@ def text(v: Verification, witnesses: bool = False) -> str:
         )
     elif v.partial == "interrupted":
         lines.append(f"interrupted: a partial result ({v.configurations:,} configurations explored so far)")
+    for w in v.warnings:
+        lines.append(f"warning: {w}")
     if not v.outcomes and v.error is None:
         lines.append(f"explored {_counts(v)} in {v.seconds:.2f} s (no property given)")
     return "\n".join(lines) + "\n"
