@@ -62,17 +62,6 @@ PARTS = 5
 INITIALISED, SHUT, INTERRUPTED, FIRST_ROUND = range(4)
 
 
-class ExploreArrangement(Arrangement):
-    """The scheduler's arrangement, telling the explorer which machines a step's commands touch
-    (their parts change: a pending command, the gate in front of their ringlet)."""
-
-    touched: set[int]
-
-    def command(self, name: str, cmd: str) -> None:
-        super().command(name, cmd)
-        self.touched.add(self.machine(name)._id)
-
-
 class _Recorder(Tracer):
     """What the scheduler reports of one step being described: entries and commands."""
 
@@ -190,10 +179,9 @@ class Explorer:
             self.bus.log_stream = self.stdout  # type: ignore[assignment]  # a text stream that keeps nothing
             self.published: set[str] = set()
             self.bus.add_tap(self._tap)
-            arr = ExploreArrangement(loaded.classes, context=self.ctx)
+            arr = Arrangement(loaded.classes, context=self.ctx)
         finally:
             activate(prev)
-        arr.touched = set()
         self.arr = arr
         self.machines: list[Machine] = arr.machines
         self.handles = Handles()
@@ -347,7 +335,8 @@ class Explorer:
             self.ctx.interrupted = True
             self.cur_g = -1
         arr = self.arr
-        arr.touched.clear()
+        # what a command changes of another machine: its pending command, the gate in front
+        others = [(mk._pending, mk._run) for mk in self.machines] if self.n > 1 else []
         self.published.clear()
         was = self.bus.initialised, self.bus.shut
         if record is None:
@@ -365,7 +354,11 @@ class Explorer:
         # the machine's new part, and those its commands touched
         parts = list(config[PARTS:])
         codecs = self.codecs
-        changed = {i} | arr.touched
+        changed = {i} | {
+            k
+            for k, (pending, run) in enumerate(others)
+            if self.machines[k]._pending != pending or self.machines[k]._run is not run
+        }
         for k in changed:
             part = codecs[k].snapshot(self.machines[k])
             pid = part if hc else self._part_id(k, part)
@@ -733,8 +726,8 @@ class Explorer:
         labels, fair_arr = self.labels, self.fair
         edges, edge_start = self.edges, self.edge_start
         graph = self.options.graph
-        bus, ctx, clock, arr = self.bus, self.ctx, self.clock, self.arr
-        touched, published = arr.touched, self.published
+        bus, ctx, clock = self.bus, self.ctx, self.clock
+        published = self.published
         gtab, glist, etab, elist, ttab, tlist = self.gtab, self.glist, self.etab, self.elist, self.ttab, self.tlist
         period = self.period
         cuts, caps, reps = self.cuts, getattr(self, "caps", None), self.reps
@@ -860,7 +853,8 @@ class Explorer:
                     clock.now = now
                     if intr:
                         ctx.interrupted = True
-                    touched.clear()
+                    # what a command changes of another machine: its pending command, the gate
+                    before = [(mk._pending, mk._run) for mk in machines] if n > 1 else None
                     published.clear()
                     initialised, shut = bus.initialised, bus.shut
                     try:
@@ -881,12 +875,13 @@ class Explorer:
                             pid = tab[part] = len(part_lists[turn])
                             part_lists[turn].append(part)
                     cur[turn] = pid
-                    if touched or n > 1:
+                    if before is not None:
                         parts = list(config[PARTS:])
                         parts[turn] = pid
-                        for k in touched:
-                            if k != turn:
-                                other = snaps[k](machines[k])
+                        for k, (pending, run) in enumerate(before):
+                            mk = machines[k]
+                            if k != turn and (mk._pending != pending or mk._run is not run):
+                                other = snaps[k](mk)
                                 parts[k] = cur[k] = other if hc else self._part_id(k, other)
                     else:
                         parts = [pid]
