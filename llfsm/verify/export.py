@@ -8,9 +8,10 @@ SPIN and NuSMV judge the same structure llfsm judged, and must agree with it (a 
 on random arrangements and compares every verdict).
 
 Promela: one process walks the structure: the successors of configuration `s` are
-`succ[first[s]] .. succ[first[s+1]-1]` in tables that are `hidden` (not part of SPIN's state
-vector), the choice among them is made one index at a time, and the atoms and fairness flags,
-globals `a<k>` and `f<k>`, change with `s` in one step.  The intermediate states of the choice
+`succ[first[s]] .. succ[first[s+1]-1]` in tables that are C constants (`c_decl`: not part of
+SPIN's state vector, and nothing for SPIN to parse or run), the choice among them is made one
+index at a time, and the atoms and fairness flags, globals `a<k>` and `f<k>`, change with `s`
+in one step.  The intermediate states of the choice
 repeat the labels of `s`: SPIN's `ltl` formulas have no X (next), so they cannot tell.  A
 property with X, or a CTL one, is written as a comment.  Fairness becomes the premise of each
 formula: `([]<> f0 && []<> f1) -> (...)`.  A `reachable: p` property is `[] !(p)`, which holds
@@ -30,8 +31,6 @@ from .check import Verification
 from .explorer import Explorer
 
 Formula = tuple[Any, ...]
-#: Statements per d_step that fills Promela's tables.
-INIT_CHUNK = 200
 
 
 def write_export(kind: str, v: Verification) -> str:
@@ -98,46 +97,50 @@ def _header(v: Verification, e: Explorer, prefix: str, end: str = "") -> list[st
     ]
 
 
+def _c_array(kind: str, name: str, values: Sequence[int]) -> list[str]:
+    """A C array of constants, twenty values a line."""
+    out = [f"  static const {kind} {name}[{max(1, len(values))}] = {{"]
+    for k in range(0, len(values), 20):
+        out.append("    " + ", ".join(str(x) for x in values[k : k + 20]) + ",")
+    if not values:
+        out.append("    0,")
+    out.append("  };")
+    return out
+
+
 def promela(v: Verification) -> str:
     e = v.explorer
     assert e is not None
     texts, ids = _atoms(v)
     n, fair_sets = e.count, (e.n if e.period is None else 0)
-    edges = list(e.edges)
-    width = "short" if max(n, len(edges)) < 32000 else "int"
     out = _header(v, e, "/*", " */")
-    out.append(f"hidden {width} first[{n + 1}];")
-    out.append(f"hidden {width} succ[{max(1, len(edges))}];")
+    # the tables are C constants (c_decl): outside SPIN's state vector, and no statements to run
+    out.append("c_decl {")
+    out += _c_array("int", "first", list(e.edge_start[: n + 1]))
+    out += _c_array("int", "succ", list(e.edges))
     for k, t in enumerate(texts):
-        out.append(f"hidden byte A{k}[{n}];  /* a{k}: {_comment(t)} */")
+        out.append(f"  /* A{k}: {_comment(t)} */")
+        out += _c_array("unsigned char", f"A{k}", [e.labels[c] >> k & 1 for c in range(n)])
     for k in range(fair_sets):
-        out.append(f"hidden byte F{k}[{n}];  /* f{k}: the time of {e.machines[k].NAME} passes */")
-    out.append(f"{width} s = 0;")
+        out.append(f"  /* F{k}: the time of {e.machines[k].NAME} passes */")
+        out += _c_array("unsigned char", f"F{k}", [e.fair[c] >> k & 1 for c in range(n)])
+    out.append("}")
+    out.append("int s = 0;  /* the configuration */")
+    out.append("int k = 0;  /* the successor being chosen */")
     for k in range(len(texts)):
         out.append(f"bool a{k} = {e.labels[0] >> k & 1};")
     for k in range(fair_sets):
         out.append(f"bool f{k} = {e.fair[0] >> k & 1};")
-    out.append("")
-    out.append("active proctype structure() {")
-    out.append(f"  {width} k;")
-    init = [f"first[{c}] = {e.edge_start[c]}" for c in range(n + 1) if e.edge_start[c]]
-    init += [f"succ[{j}] = {d}" for j, d in enumerate(edges) if d]
-    init += [f"A{k}[{c}] = 1" for k in range(len(texts)) for c in range(n) if e.labels[c] >> k & 1]
-    init += [f"F{k}[{c}] = 1" for k in range(fair_sets) for c in range(n) if e.fair[c] >> k & 1]
-    # the tables, filled in d_steps of at most INIT_CHUNK statements (SPIN refuses a longer one);
-    # the states between them repeat configuration 0's labels
-    for k in range(0, len(init), INIT_CHUNK):
-        out.append("  d_step {")
-        out += [f"    {line};" for line in init[k : k + INIT_CHUNK]]
-        out.append("  }")
-    sets = "".join(f"; a{k} = A{k}[s]" for k in range(len(texts)))
-    sets += "".join(f"; f{k} = F{k}[s]" for k in range(fair_sets))
+    sets = "".join(f" now.a{k} = A{k}[now.s];" for k in range(len(texts)))
+    sets += "".join(f" now.f{k} = F{k}[now.s];" for k in range(fair_sets))
     out += [
+        "",
+        "active proctype structure() {",
         "  do",
-        "  :: k = first[s];",
+        "  :: c_code { now.k = first[now.s]; };",
         "     do",
-        "     :: k < first[s + 1] - 1 -> k++",
-        f"     :: d_step {{ s = succ[k]; k = 0{sets} }}; break",
+        "     :: c_expr { now.k < first[now.s + 1] - 1 } -> k++",
+        f"     :: d_step {{ c_code {{ now.s = succ[now.k]; now.k = 0;{sets} }} }}; break",
         "     od",
         "  od",
         "}",
