@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from conftest import MACHINES, llfsm, run_sim, write_machine
 
 from llfsm.lang.check import check_machine
@@ -309,3 +310,38 @@ def test_the_wall_follower_follows_turtlesim_s_walls_on_its_sensor_input(tmp_pat
     assert len(turns) >= 3, "the sensor never made it turn"
     xs = [float(line.split()[1]) for line in r.stdout.splitlines() if line.startswith("x: ")]
     assert max(xs) > 9.0 and min(xs) < 2.0, "it did not go round the arena"
+
+
+def test_the_web_view_lists_a_machine_s_inputs() -> None:
+    import asyncio
+
+    aiohttp = pytest.importorskip("aiohttp")
+    from llfsm import ros
+    from llfsm.ros.control import enable
+    from llfsm.runtime import Arrangement, RunContext, SimClock
+    from llfsm.runtime.context import activate
+    from llfsm.targets import load
+    from llfsm.web.server import WebServer
+    from llfsm.web.source import RunSource
+
+    ctx = RunContext(SimClock())
+    prev = activate(ctx)
+    try:
+        arr = Arrangement([load(str(MACHINES / "wall_follower.machine"))], context=ctx)
+        ros.init()
+        enable(ctx)
+        srv = WebServer(RunSource(arr, ros.bus_of()), "127.0.0.1", 0)
+        srv.start()
+    finally:
+        activate(prev)
+
+    async def hello() -> dict:  # type: ignore[type-arg]
+        async with aiohttp.ClientSession() as s, s.ws_connect(f"ws://127.0.0.1:{srv.port}/ws") as ws:
+            return json.loads((await ws.receive()).data)  # type: ignore[no-any-return]
+
+    try:
+        first = asyncio.run(hello())
+    finally:
+        srv.stop()
+    assert first["type"] == "hello"
+    assert first["machines"][0]["inputs"] == ["wall_close: bool <- /turtle1/wall_close (std_msgs/msg/Bool data)"]
