@@ -8,14 +8,16 @@ SPIN and NuSMV judge the same structure llfsm judged, and must agree with it (a 
 on random arrangements and compares every verdict).
 
 Promela: one process walks the structure: the successors of configuration `s` are
-`succ[first[s]] .. succ[first[s+1]-1]` in tables that are C constants (`c_decl`: not part of
-SPIN's state vector, and nothing for SPIN to parse or run), the choice among them is made one
-index at a time, and the atoms and fairness flags, globals `a<k>` and `f<k>`, change with `s`
-in one step.  The intermediate states of the choice
+`succ(first(s)) .. succ(first(s+1)-1)` in tables of C constants (`c_decl` blocks, each within
+SPIN's limit on embedded C: not part of SPIN's state vector, and nothing for SPIN to parse or
+run), the choice among them is made one index at a time, and the atoms and fairness flags,
+globals `a<k>` and `f<k>`, change with `s` in one step.  The intermediate states of the choice
 repeat the labels of `s`: SPIN's `ltl` formulas have no X (next), so they cannot tell.  A
-property with X, or a CTL one, is written as a comment.  Fairness becomes the premise of each
-formula: `([]<> f0 && []<> f1) -> (...)`.  A `reachable: p` property is `[] !(p)`, which holds
-in SPIN exactly when llfsm says it fails (the comment above each formula says how to read it).
+property with X, or a CTL one, is written as a comment.  Fairness is the premise of each
+liveness formula, `([]<> f0 && []<> f1) -> (...)`; a safety property needs none (every
+configuration has a fair way on: time can always pass), and SPIN's translation of the premise
+grows exponentially with the machines.  A `reachable: p` property is `[] !(p)`, which holds in
+SPIN exactly when llfsm says it fails (the comment above each formula says how to read it).
 
 SMV: a single variable `s` and its `next` as a case over `s`, the atoms as DEFINEs, FAIRNESS
 constraints, and LTLSPEC / CTLSPEC (`reachable: p` is `EF p`).
@@ -97,14 +99,36 @@ def _header(v: Verification, e: Explorer, prefix: str, end: str = "") -> list[st
     ]
 
 
-def _c_array(kind: str, name: str, values: Sequence[int]) -> list[str]:
-    """A C array of constants, twenty values a line."""
-    out = [f"  static const {kind} {name}[{max(1, len(values))}] = {{"]
-    for k in range(0, len(values), 20):
-        out.append("    " + ", ".join(str(x) for x in values[k : k + 20]) + ",")
-    if not values:
-        out.append("    0,")
-    out.append("  };")
+#: Characters of table text per `c_decl` block: SPIN 6.5 refuses an embedded C block of 64 KiB
+#: ("inline text too long"), so a table is cut into chunks, each a block of its own.
+BLOCK_TEXT = 40_000
+
+
+def _c_table(kind: str, name: str, values: Sequence[int]) -> list[str]:
+    """A table of constants as `c_decl` blocks of at most BLOCK_TEXT characters, and an accessor
+    macro `name(i)` that picks the chunk and the value."""
+    values = list(values) or [0]
+    size = BLOCK_TEXT // (max(len(str(v)) for v in values) + 2)  # values per block
+    out = []
+    starts = range(0, len(values), size)
+    for k in starts:
+        part = values[k : k + size]
+        out.append(f"c_decl {{ static const {kind} {name}_{k // size}[{len(part)}] = {{")
+        for m in range(0, len(part), 20):
+            out.append("  " + ", ".join(str(x) for x in part[m : m + 20]) + ",")
+        out.append("}; }")
+    names = [f"{name}_{k // size}" for k in starts]
+    per = 200  # chunk names per block of the table of chunks (itself within SPIN's limit)
+    for m in range(0, len(names), per):
+        out.append(
+            f"c_decl {{ static const {kind} *const {name}_part{m // per}[] = {{{', '.join(names[m : m + per])}}}; }}"
+        )
+    parts = (len(names) + per - 1) // per
+    span = per * size
+    pick = f"{name}_part{parts - 1}[((i) - {(parts - 1) * span}) / {size}]"
+    for m in reversed(range(parts - 1)):
+        pick = f"((i) < {(m + 1) * span} ? {name}_part{m}[((i) - {m * span}) / {size}] : {pick})"
+    out.append(f"c_decl {{\n#define {name}(i) ({pick}[(i) % {size}])\n}}")
     return out
 
 
@@ -115,32 +139,30 @@ def promela(v: Verification) -> str:
     n, fair_sets = e.count, (e.n if e.period is None else 0)
     out = _header(v, e, "/*", " */")
     # the tables are C constants (c_decl): outside SPIN's state vector, and no statements to run
-    out.append("c_decl {")
-    out += _c_array("int", "first", list(e.edge_start[: n + 1]))
-    out += _c_array("int", "succ", list(e.edges))
+    out += _c_table("int", "first", list(e.edge_start[: n + 1]))
+    out += _c_table("int", "succ", list(e.edges))
     for k, t in enumerate(texts):
-        out.append(f"  /* A{k}: {_comment(t)} */")
-        out += _c_array("unsigned char", f"A{k}", [e.labels[c] >> k & 1 for c in range(n)])
+        out.append(f"/* A{k}: {_comment(t)} */")
+        out += _c_table("unsigned char", f"A{k}", [e.labels[c] >> k & 1 for c in range(n)])
     for k in range(fair_sets):
-        out.append(f"  /* F{k}: the time of {e.machines[k].NAME} passes */")
-        out += _c_array("unsigned char", f"F{k}", [e.fair[c] >> k & 1 for c in range(n)])
-    out.append("}")
+        out.append(f"/* F{k}: the time of {e.machines[k].NAME} passes */")
+        out += _c_table("unsigned char", f"F{k}", [e.fair[c] >> k & 1 for c in range(n)])
     out.append("int s = 0;  /* the configuration */")
     out.append("int k = 0;  /* the successor being chosen */")
     for k in range(len(texts)):
         out.append(f"bool a{k} = {e.labels[0] >> k & 1};")
     for k in range(fair_sets):
         out.append(f"bool f{k} = {e.fair[0] >> k & 1};")
-    sets = "".join(f" now.a{k} = A{k}[now.s];" for k in range(len(texts)))
-    sets += "".join(f" now.f{k} = F{k}[now.s];" for k in range(fair_sets))
+    sets = "".join(f" now.a{k} = A{k}(now.s);" for k in range(len(texts)))
+    sets += "".join(f" now.f{k} = F{k}(now.s);" for k in range(fair_sets))
     out += [
         "",
         "active proctype structure() {",
         "  do",
-        "  :: c_code { now.k = first[now.s]; };",
+        "  :: c_code { now.k = first(now.s); };",
         "     do",
-        "     :: c_expr { now.k < first[now.s + 1] - 1 } -> k++",
-        f"     :: d_step {{ c_code {{ now.s = succ[now.k]; now.k = 0;{sets} }} }}; break",
+        "     :: c_expr { now.k < first(now.s + 1) - 1 } -> k++",
+        f"     :: d_step {{ c_code {{ now.s = succ(now.k); now.k = 0;{sets} }} }}; break",
         "     od",
         "  od",
         "}",
@@ -162,7 +184,8 @@ def promela(v: Verification) -> str:
             out.append(f"/* p{p} uses X (next), which SPIN's ltl does not have: not written */")
             continue
         body = _render(f, ops, lambda a, mine=mine: f"a{mine[a]}")  # type: ignore[misc]
-        out.append(f"ltl p{p} {{ ({premise}) -> {body} }}" if premise else f"ltl p{p} {{ {body} }}")
+        fair = premise and prop.kind not in ("always", "never", "reachable")
+        out.append(f"ltl p{p} {{ ({premise}) -> {body} }}" if fair else f"ltl p{p} {{ {body} }}")
     return "\n".join(out) + "\n"
 
 
