@@ -63,6 +63,7 @@ def main() -> None:
         if 2 not in closed:
             os.write(2, b"llfsm: standard output is closed; to discard the output, use >/dev/null\n")
         sys.exit(2)
+    # deferred: start-up (nothing heavy until here, so a Ctrl-C while click loads ends with 130)
     try:
         from llfsm.cli import main as run_cli
     except KeyboardInterrupt:

@@ -1,4 +1,4 @@
-"""The session of one `llfsm run` (SPEC §2, §4-§10): its options, everything that opens beside
+"""The session of one `llfsm run` (docs/cli.md, `llfsm run`): its options, everything that opens beside
 the machines, opened in one place, in one order, and closed whatever happens.
 
 - `RunOptions`: the options of `llfsm run` as one frozen value; both parsers build it (the
@@ -16,13 +16,13 @@ the machines, opened in one place, in one order, and closed whatever happens.
      the bus with its remaps, parameters and `--echo` readers, the `--node` nodes, and the
      bags' taps on it (set up before any machine runs, so that turtle1 exists and no message
      is missed); the `--trace` file and the tracer;
-  6. the arrangement, the machines' state topics and control services (SPEC §8: with the bus,
-     now if it is up, else at its first `ros.init()`), the web view (SPEC §10);
+  6. the arrangement, the machines' state topics and control services (docs/view.md: with the bus,
+     now if it is up, else at its first `ros.init()`), the web view (docs/view.md);
   7. the run; then, whatever happened: the web view stops, the trace file and the bag are
      closed, a transport the run never used is closed, and the watchdog ends.
 - `SessionError` and its kinds: what a session raises instead of ending the process, so that a
   test can open one, see what went wrong and carry on; llfsm.cli._run prints them and exits
-  with their status (SPEC §2: 1 for an error in machine code or a lost output, 2 for bad input),
+  with their status (docs/cli.md, "Exit statuses": 1 for an error in machine code or a lost output, 2 for bad input),
   byte for byte as `llfsm run` always has.
 
 Start-up: one module, and plain classes rather than dataclasses (`dataclasses` imports
@@ -66,7 +66,7 @@ if TYPE_CHECKING:
         def stop(self) -> None: ...
 
     class WebPage(Protocol):
-        """The web view of a session (SPEC §10), as llfsm.cli hands it in: llfsm.web is a layer
+        """The web view of a session (docs/view.md), as llfsm.cli hands it in: llfsm.web is a layer
         above the session, so the session knows the page by this alone."""
 
         #: Worth running with no machine and no node (`llfsm view`: the page of the DDS graph).
@@ -98,6 +98,7 @@ FIELDS = (
     "nodes",
     "remaps",
     "params",
+    "params_files",
     "echoes",
     "image",
     "view",
@@ -133,6 +134,7 @@ class RunOptions:
     nodes: tuple[str, ...]
     remaps: tuple[str, ...]
     params: tuple[str, ...]
+    params_files: tuple[str, ...]
     echoes: tuple[str, ...]
     image: str | None
     view: bool
@@ -163,6 +165,7 @@ class RunOptions:
         nodes: tuple[str, ...] = (),
         remaps: tuple[str, ...] = (),
         params: tuple[str, ...] = (),
+        params_files: tuple[str, ...] = (),
         echoes: tuple[str, ...] = (),
         image: str | None = None,
         view: bool = False,
@@ -400,7 +403,7 @@ class Session:
                 self.trace_out = self._open_trace(o.trace_file)
             if o.verbose or self.trace_out is not None:
                 # a StreamedOutput writes text as a file does (IO[str] is more than the tracer uses)
-                self.tracer = Tracer(verbose=sys.stderr if o.verbose else None, jsonl=self.trace_out)  # type: ignore[arg-type]
+                self.tracer = Tracer(verbose=sys.stderr if o.verbose else None, jsonl=self.trace_out)
             arr = self.arrangement = self._arrange(ctx)
             self._machines_on_graph(ctx)
             if self.binds_inputs and self.bus is not None:
@@ -411,10 +414,10 @@ class Session:
                     f"llfsm: interrupted; machines have {grace / 1e9:g} s of run time to finish "
                     "(interrupt again to stop now)",
                 )
-            else:  # nodes on their own (SPEC 4): they run until interrupted or --duration
+            else:  # nodes on their own (docs/turtlesim.md): they run until interrupted or --duration
                 arr.serve_forever = True
                 grace = 0
-            if o.transport != "inproc":  # other processes can resume machines (SPEC 8): all suspended is no end
+            if o.transport != "inproc":  # other processes can resume machines (docs/view.md): all suspended is no end
                 arr.end_when_suspended = False
             if self.web is not None and self.bus is not None:
                 self.web_server = self._open_web(self.web, ctx, self.bus, arr)
@@ -475,6 +478,7 @@ class Session:
         from .nodes import NodeError, NodeOptions, start
         from .nodes.echo import echo as echo_topic
         from .ros import InvalidNameError, Remap, bus_of
+        from .ros.parameters import ParameterException
 
         o = self.options
         prev = activate(ctx)
@@ -487,28 +491,43 @@ class Session:
                     echo_topic(bus, topic)
             except (InvalidNameError, ValueError) as e:
                 raise UsageError(str(e)) from None
-            if o.nodes or self.binds_inputs:
-                bus.init()  # the nodes (the input readers) are up: ros.ok() is true from the first round
+            if o.nodes or o.params or o.params_files or self.binds_inputs:
+                # the nodes (and the input readers) are up (ros.ok() is true from the first round),
+                # and the machines' nodes will be too: their parameters are set before their first ringlet
+                bus.init()
             options = NodeOptions(image=Path(o.image) if o.image else None, view=o.view)
             for name in dict.fromkeys(o.nodes):
                 try:
                     self.nodes[name] = start(name, ctx, options)
                 except NodeError as e:
                     raise UsageError(str(e)) from None
+                except ParameterException as e:
+                    raise UsageError(parameter_refused(e, f"--node {name}")) from None
             return bus
         finally:
             activate(prev)
 
     def _set_parameters(self, bus: Bus) -> None:
-        """`--param [NODE:]NAME:=VALUE`: overrides the nodes read when they declare a parameter.
-        ValueError for one that does not parse.  Issue 21 (SPEC §12) grows this into rclpy's
-        parameters: `-p NODE:NAME:=VALUE` and `--params-file FILE` are read here too."""
-        from .ros import parse_param  # deferred: start-up (with the bus, in _open_bus)
+        """`-p [NODE:]NAME:=VALUE` and `--params-file FILE`: the overrides nodes read when they
+        declare a parameter (llfsm/ros/parameter_files.py), all read and checked here, before
+        any node or machine starts.  UsageError naming the file and line of a bad one."""
+        o = self.options
+        if not (o.params or o.params_files):
+            return
+        # deferred: start-up (only a run given parameters reads their text, with yaml)
+        from .ros.parameter_files import ParameterTextError, node_pattern, parse_param, read_params_file
 
-        for text in self.options.params:
-            node, name, value = parse_param(text)
-            self.parameters[(node, name)] = value
-            bus.parameters[(node, name)] = value
+        try:
+            for path in o.params_files:
+                for key, values in read_params_file(path):
+                    bus.parameter_files.append((node_pattern(key), values))
+            for text in o.params:
+                node, name, value = parse_param(text)
+                self.parameters[(node, name)] = value
+                bus.parameters[(node, name)] = value
+                bus.parameter_origins[(node, name)] = f"-p {text}"
+        except ParameterTextError as e:
+            raise UsageError(str(e)) from None
 
     def _attach_bags(self, bags: RunBags, bus: Bus) -> None:
         from .bag import BagError  # deferred: start-up (loaded with the bags already)
@@ -543,7 +562,7 @@ class Session:
         return arr
 
     def _machines_on_graph(self, ctx: RunContext) -> None:
-        """SPEC §8: the machines' state topics and control services join the graph with the bus
+        """The machines' state topics and control services (docs/view.md) join the graph with the bus
         (now if it is up, else at the first `ros.init()`)."""
         bus = ctx.bus
         if bus is not None and bus.initialised:
@@ -587,6 +606,7 @@ class Session:
             o.nodes
             or o.remaps
             or o.params
+            or o.params_files
             or o.echoes
             or o.introspect
             or self.web is not None
@@ -617,9 +637,21 @@ def _machine_yaml_of(m: Machine, targets: tuple[str, ...]) -> str:
 
 
 def _enable(ctx: RunContext) -> None:
-    from .ros.control import enable  # deferred: start-up (a run that never uses the bus never imports it)
+    # deferred: start-up (a run that never uses the bus never imports it)
+    from .ros.control import enable
+    from .ros.parameters import ParameterException
 
-    enable(ctx)
+    try:
+        enable(ctx)
+    except ParameterException as e:  # an override of a machine's parameter that its variable refuses
+        raise UsageError(parameter_refused(e, "a machine's node")) from None
+
+
+def parameter_refused(e: Exception, who: str) -> str:
+    """The one line for an override a node refused: where it was written, then rclpy's words."""
+    origin = getattr(e, "origin", None)
+    who = getattr(e, "node", None) or who
+    return f"{origin}: {who} refused it: {e}" if origin else f"{who}: {e}"
 
 
 def _no_display() -> str | None:

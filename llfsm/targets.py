@@ -330,7 +330,7 @@ def _new_module(name: str, path: str) -> tuple[ModuleType, SourceFileLoader]:
     module.__loader__ = loader
     module.__package__ = ""
     module.__file__ = path
-    module.__cached__ = spec.cached  # type: ignore[attr-defined]
+    module.__cached__ = spec.cached  # type: ignore[attr-defined]  # set by the import system; typeshed omits it
     return module, loader
 
 

@@ -4,16 +4,15 @@ Every test runs its processes in one private network namespace (dds_netns.py): n
 this machine.
 """
 
-# ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
-
 from __future__ import annotations
 
 import time
 from pathlib import Path
 
+import pytest
 import yaml
-from conftest import MACHINES, llfsm
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish
+from helpers import MACHINES, llfsm
 from rosbags.highlevel import AnyReader
 
 
@@ -25,6 +24,7 @@ def messages(bag: Path) -> dict[str, list[tuple[int, object]]]:
     return out
 
 
+@pytest.mark.dds
 def test_bag_record_all_hears_a_run_in_another_process(netns: NetNamespace, tmp_path: Path) -> None:
     before = time.time_ns()
     rec = netns.llfsm("bag", "record", "-a", "-o", tmp_path / "graph", "--duration", "7")
@@ -46,6 +46,7 @@ def test_bag_record_all_hears_a_run_in_another_process(netns: NetNamespace, tmp_
     assert meta["message_count"] == sum(len(v) for v in got.values())
 
 
+@pytest.mark.dds
 def test_bag_record_named_topics_only(netns: NetNamespace, tmp_path: Path) -> None:
     rec = netns.llfsm("bag", "record", "/pingpong", "-o", tmp_path / "one", "--duration", "6", "-s", "sqlite3")
     run = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--node", "turtlesim",
@@ -57,6 +58,7 @@ def test_bag_record_named_topics_only(netns: NetNamespace, tmp_path: Path) -> No
     assert (tmp_path / "one" / "one_0.db3").is_file()
 
 
+@pytest.mark.dds
 def test_bag_play_reaches_a_run_in_another_process(netns: NetNamespace, tmp_path: Path) -> None:
     # the bag: a sim run's /pingpong, recorded in process
     bag = tmp_path / "ping"
@@ -75,6 +77,7 @@ def test_bag_record_without_topics_is_a_usage_error() -> None:
     assert r.status == 2 and "name the topics" in r.stderr
 
 
+@pytest.mark.dds
 def test_run_on_dds_records_its_own_topics_and_what_other_processes_send_it(
     netns: NetNamespace, tmp_path: Path
 ) -> None:

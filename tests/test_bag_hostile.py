@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from conftest import llfsm_process, write_machine
+from helpers import llfsm_process, write_machine
 
 from llfsm.bag.errors import BagError
 

@@ -11,7 +11,6 @@ import random
 import struct
 import subprocess
 import sys
-import sysconfig
 import textwrap
 from pathlib import Path
 from types import SimpleNamespace
@@ -19,10 +18,9 @@ from typing import Any
 
 import hypothesis
 import pytest
-from conftest import run_sim
+from helpers import driver, run_sim, skip_unless_built
 from hypothesis import strategies as st
-from test_bag import driver
-from test_dds_types import CLASSES, sample
+from samples import CLASSES, sample
 
 import llfsm
 from llfsm.bag import recorder, typesupport
@@ -33,23 +31,16 @@ FIXED = [c for c in CLASSES if _dds.codec(c).stamped]
 TAPPED = [c for c in FIXED if _dds.codec(c).tap_layout]
 ROOT = Path(llfsm.__file__).resolve().parents[1]  # the tree under test (make asan's copy, too)
 
-# The C parts are left out on purpose in two cases: LLFSM_NO_C=1 (the run of the suite that
-# tests the Python code they stand in for) and free-threaded CPython (setup.py skips them).
-DISABLED = os.environ.get("LLFSM_NO_C", "") not in ("", "0")
-FREE_THREADED = bool(sysconfig.get_config_var("Py_GIL_DISABLED"))
-needs_c = pytest.mark.skipif(
-    typesupport._Tap is None,
-    reason="the C tap is disabled (LLFSM_NO_C)"
-    if DISABLED
-    else "the C tap (llfsm/bag/_tap.c) is not built: no C compiler, or not CPython with the GIL",
-)
+# Skipped, saying why, where the C tap is off on purpose or was not built (helpers.skip_unless_built);
+# under LLFSM_REQUIRE_C=1, as `make test` runs, an unbuilt tap fails instead.
+needs_c = skip_unless_built(typesupport._Tap is not None, "the C tap (llfsm/bag/_tap.c)")
 
 
 class Clock:
     now = 0
 
 
-@pytest.mark.skipif(DISABLED or FREE_THREADED, reason="the C parts are off on purpose (LLFSM_NO_C, or free-threaded)")
+@needs_c
 def test_the_c_tap_is_built() -> None:
     """setup.py builds it wherever a C compiler and the Python headers are (every machine this
     project runs on): without it `--record` still works but costs a busy run more (the

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, REPO, llfsm, run_sim, write_machine
+from helpers import MACHINES, REPO, llfsm, run_sim, write_machine
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -227,7 +227,8 @@ def test_schema_is_json_schema_of_machine_yaml() -> None:
     doc = json.loads(r.stdout)
     assert doc["title"] == "machine.yaml"
     assert doc["required"] == ["states"]
-    assert set(doc["properties"]) == {"description", "initial", "suspended", "states", "inputs"}
+    assert set(doc["properties"]) == {"description", "initial", "suspended", "states", "inputs", "parameters"}
+    assert "/llfsm/<machine>" in doc["properties"]["parameters"]["description"]
     assert doc["additionalProperties"] is False
     name = doc["$defs"]["YamlState"]["properties"]["name"]["pattern"]
     assert name.startswith("^") and name.endswith("$")  # JSON Schema patterns search: anchor them

@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
-from conftest import run_sim, write_machine
+from helpers import run_sim, write_machine
 
 from llfsm import ros
 from llfsm.msgs.geometry_msgs.msg import Twist
 from llfsm.msgs.std_msgs.msg import Int64, String
 from llfsm.msgs.std_srvs.srv import SetBool, Trigger
 from llfsm.ros.bus import Bus
+from llfsm.ros.parameter_files import parse_param
+from llfsm.ros.transports.inproc import InProcess
 from llfsm.runtime import RunContext, SimClock
 from llfsm.runtime.context import activate
 
@@ -293,14 +296,14 @@ def test_logger_prints_rclpy_lines_with_run_time_under_the_sim_clock(
 
 
 def test_parameters_and_overrides(bus: Bus) -> None:
-    node, name, value = ros.parse_param("turtlesim:background_r:=10")
+    node, name, value = parse_param("turtlesim:background_r:=10")
     bus.parameters[(node, name)] = value
-    bus.parameters[ros.parse_param("verbose:=true")[::2]] = True  # type: ignore[index]
+    bus.parameters[parse_param("verbose:=true")[::2]] = True  # type: ignore[index]
     t = ros.Node("turtlesim")
     assert t.declare_parameter("background_r", 69).value == 10
     assert t.declare_parameter("background_g", 86).value == 86
     assert t.get_parameter("background_r").value == 10
-    assert ros.parse_param("x:=1.5")[2] == 1.5 and ros.parse_param("s:=hello")[2] == "hello"
+    assert parse_param("x:=1.5")[2] == 1.5 and parse_param("s:=hello")[2] == "hello"
 
 
 def test_graph_introspection(bus: Bus) -> None:
@@ -308,11 +311,30 @@ def test_graph_introspection(bus: Bus) -> None:
     pub = n.create_publisher(String, "chatter", 10)
     n.create_subscription(String, "chatter", None, 10)
     n.create_service(Trigger, "reset", lambda req, resp: resp)
+    ros.Node("quiet", start_parameter_services=False)  # as ros2cli's own nodes: no parameter services
     pub.publish(String(data="x"))
+    events = {"type": "rcl_interfaces/msg/ParameterEvent", "publishers": 1, "subscriptions": 0, "messages": 0}
     assert bus.graph() == {
-        "nodes": ["/talker"],
-        "topics": {"/chatter": {"type": "std_msgs/msg/String", "publishers": 1, "subscriptions": 1, "messages": 1}},
-        "services": {"/reset": "std_srvs/srv/Trigger"},
+        "nodes": ["/quiet", "/talker"],
+        "topics": {
+            "/chatter": {"type": "std_msgs/msg/String", "publishers": 1, "subscriptions": 1, "messages": 1},
+            "/parameter_events": events,  # every node publishes there, as rclpy's do
+        },
+        "services": {
+            "/reset": "std_srvs/srv/Trigger",
+            # every node serves its parameters, as rclpy's do (`ros2 service list` shows them)
+            **{
+                f"/talker/{verb}": f"rcl_interfaces/srv/{srv}"
+                for verb, srv in (
+                    ("describe_parameters", "DescribeParameters"),
+                    ("get_parameter_types", "GetParameterTypes"),
+                    ("get_parameters", "GetParameters"),
+                    ("list_parameters", "ListParameters"),
+                    ("set_parameters", "SetParameters"),
+                    ("set_parameters_atomically", "SetParametersAtomically"),
+                )
+            },
+        },
     }
 
 
@@ -348,18 +370,41 @@ def test_echo_prints_yaml_documents_and_remap_moves_the_topic(tmp_path: Path) ->
 
 def test_introspect_lists_nodes_topics_and_services(tmp_path: Path) -> None:
     r = run_sim(_talker(tmp_path), "--introspect")
-    assert r.stderr.splitlines() == [
-        "nodes:",
-        "  /llfsm/talker",  # SPEC §8: every machine's state and control on the graph
-        "  /talker",
-        "topics:",
-        "  /chatter [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 2",
-        "  /llfsm/talker/description [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
-        "  /llfsm/talker/state [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
-        "services:",
-        "  /llfsm/talker/restart [std_srvs/srv/Trigger]",
-        "  /llfsm/talker/resume [std_srvs/srv/Trigger]",
-        "  /llfsm/talker/suspend [std_srvs/srv/Trigger]",
+    assert (
+        r.stderr.splitlines()
+        == [
+            "nodes:",
+            "  /llfsm/talker",  # SPEC §8: every machine's state and control on the graph
+            "  /talker",
+            "topics:",
+            "  /chatter [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 2",
+            "  /llfsm/talker/description [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
+            "  /llfsm/talker/state [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
+            # every node publishes its parameter events and serves its parameters, as rclpy's do
+            "  /parameter_events [rcl_interfaces/msg/ParameterEvent] publishers: 2, subscriptions: 0, messages: 0",
+            "services:",
+            *parameter_services("/llfsm/talker")[:4],
+            "  /llfsm/talker/restart [std_srvs/srv/Trigger]",
+            "  /llfsm/talker/resume [std_srvs/srv/Trigger]",
+            *parameter_services("/llfsm/talker")[4:],
+            "  /llfsm/talker/suspend [std_srvs/srv/Trigger]",
+            *parameter_services("/talker"),
+        ]
+    )
+
+
+def parameter_services(node: str) -> list[str]:
+    """`--introspect`'s lines for a node's parameter services, in name order."""
+    return [
+        f"  {node}/{verb} [rcl_interfaces/srv/{srv}]"
+        for verb, srv in (
+            ("describe_parameters", "DescribeParameters"),
+            ("get_parameter_types", "GetParameterTypes"),
+            ("get_parameters", "GetParameters"),
+            ("list_parameters", "ListParameters"),
+            ("set_parameters", "SetParameters"),
+            ("set_parameters_atomically", "SetParametersAtomically"),
+        )
     ]
 
 
@@ -406,3 +451,61 @@ def test_exceptions_in_callbacks_point_at_the_machine_code_that_defined_them(
         "State_INITIAL_OnEntry.py:3: error: ZeroDivisionError: division by zero (machine cb, state INITIAL, OnEntry)"
         in r.stderr
     )
+
+
+# -- a remote transport: a reply a poll brings in ends the spin at once -------------------------------
+
+
+class _OneReplyTransport(InProcess):
+    """A transport of another process's server: the request goes out, and the reply arrives with
+    the next poll after one wait (as a reply from another process comes in through the wait set).
+    It counts the waits: a spin that keeps waiting after the reply came costs every call a whole
+    wait (the DDS transport's is 100 ms)."""
+
+    remote = True
+
+    def __init__(self) -> None:
+        self.waits = 0
+        self.sent: list[Any] = []
+        self.arrived = False  # a wait happened since the request went out
+
+    def client(self, cli: Any) -> Any:
+        return self
+
+    def ready(self) -> bool:
+        return True
+
+    def can_still_answer(self, future: Any) -> bool:
+        return True
+
+    def send(self, request: Any, future: Any) -> None:
+        self.sent.append(future)
+        self.arrived = False
+
+    def poll(self, force: bool = True) -> bool:
+        if self.arrived and self.sent:
+            self.sent.pop().set_result(Trigger.Response(success=True, message="from afar"))
+            return True
+        return False
+
+    def wait(self, until_ns: int) -> None:
+        self.waits += 1
+        self.arrived = True
+
+
+def test_a_spin_returns_as_soon_as_a_poll_brings_the_reply_in() -> None:
+    ctx = RunContext(SimClock())
+    transport = ctx.transport = _OneReplyTransport()
+    prev = activate(ctx)
+    try:
+        ros.init()
+        node = ros.Node("caller")
+        client = node.create_client(Trigger, "/elsewhere")
+        for _ in range(3):
+            future = client.call_async(Trigger.Request())
+            before = transport.waits
+            code = ros.spin_until_future_complete(node, future, timeout_sec=5.0)
+            assert code is ros.FutureReturnCode.SUCCESS and future.result().message == "from afar"
+            assert transport.waits - before == 1  # the one wait the reply came in after, no more
+    finally:
+        activate(prev)

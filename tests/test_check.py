@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, llfsm, llfsm_process, write_machine
+from helpers import MACHINES, llfsm, llfsm_process, write_machine
 
 from llfsm.lang.check import check_machine, find_machines
 from llfsm.lang.diagnostics import RULES, Diagnostic

@@ -60,6 +60,7 @@ def test_bad_variables_are_named(env: dict[str, str]) -> None:
         c.settings(env)
 
 
+@pytest.mark.dds
 def test_cyclone_accepts_the_configuration_and_the_participant_carries_the_enclave() -> None:
     pytest.importorskip("cyclonedds")
     from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsParticipant

@@ -13,7 +13,6 @@ own making with `ddspy_write`, as a peer of any vendor could put on the wire.
   are huge in earnest, truncated samples, on many writers and topics at once.
 """
 
-# ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
 from __future__ import annotations
 
 import itertools
@@ -26,8 +25,8 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import REPO, Run
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish
+from helpers import REPO, Run
 
 pytest.importorskip("cyclonedds", reason="the DDS transport needs the cyclonedds package")
 
@@ -114,6 +113,7 @@ def wait_until_seen(ns: NetNamespace, topic: str, timeout: float = 40) -> None:
 # -- 4. a sample that cannot be decoded is dropped with one warning, by every reader --------------
 
 
+@pytest.mark.dds
 def test_echo_drops_samples_that_are_not_utf8_and_prints_the_good_ones(netns: NetNamespace) -> None:
     peer(netns, PEER)
     wait_until_seen(netns, "/chatter")
@@ -130,6 +130,7 @@ def test_echo_drops_samples_that_are_not_utf8_and_prints_the_good_ones(netns: Ne
     assert "std_msgs/msg/String" in warnings[0] and "participant" in warnings[0]
 
 
+@pytest.mark.dds
 def test_echo_once_skips_a_bad_sample(netns: NetNamespace) -> None:
     peer(netns, PEER)
     wait_until_seen(netns, "/chatter")
@@ -138,6 +139,7 @@ def test_echo_once_skips_a_bad_sample(netns: NetNamespace) -> None:
     assert r.stdout.startswith("data: good"), r.stdout
 
 
+@pytest.mark.dds
 @pytest.mark.parametrize(
     ("args", "needle"),
     [
@@ -161,6 +163,7 @@ def test_graph_verbs_survive_a_discovery_info_that_is_not_utf8(
     assert r.stderr.count("ros_discovery_info: dropped") <= 1, r.stderr
 
 
+@pytest.mark.dds
 def test_node_list_still_lists_the_good_nodes(netns: NetNamespace) -> None:
     netns.popen(
         [sys.executable, "-m", "llfsm", "run", "--transport", "dds", "--node", "turtlesim", "--duration", "60s"],
@@ -178,6 +181,7 @@ def test_node_list_still_lists_the_good_nodes(netns: NetNamespace) -> None:
     assert r.stderr.count("ros_discovery_info: dropped") == 1, r.stderr
 
 
+@pytest.mark.dds
 def test_hz_counts_the_good_samples(netns: NetNamespace) -> None:
     peer(netns, PEER)
     wait_until_seen(netns, "/chatter")
@@ -191,6 +195,7 @@ def test_hz_counts_the_good_samples(netns: NetNamespace) -> None:
     assert err.count("/chatter: dropped") == 1, err
 
 
+@pytest.mark.dds
 def test_bag_record_keeps_the_good_samples(netns: NetNamespace, tmp_path: Path) -> None:
     peer(netns, PEER)
     wait_until_seen(netns, "/chatter")
@@ -317,6 +322,7 @@ def count_now(ns: NetNamespace) -> int:
     return int(r.stdout.split("data:")[1].split()[0].strip("'\""))
 
 
+@pytest.mark.dds
 def test_a_flooding_peer_neither_stalls_a_run_nor_grows_its_memory(netns: NetNamespace, tmp_path: Path) -> None:
     """A run whose subscriptions a peer floods keeps its rounds going (the count it publishes
     keeps rising) and its memory bounded (RSS from /proc, by a generous bound: what the
@@ -324,7 +330,7 @@ def test_a_flooding_peer_neither_stalls_a_run_nor_grows_its_memory(netns: NetNam
     growth in the last third of the flood); `topic hz` on the flooded topic too.
     Stderr is a pipe read only at the end, as under `2>&1 | less`: a reader that said something
     per sample would block on it."""
-    from conftest import write_machine
+    from helpers import write_machine
 
     machine = write_machine(
         tmp_path, "flooded", FLOODED_STATES, FLOODED_CODE, variables=FLOODED_VARIABLES, includes=FLOODED_INCLUDES
@@ -406,6 +412,7 @@ BAD_REQUESTS = PRELUDE + textwrap.dedent(
 )
 
 
+@pytest.mark.dds
 def test_a_service_drops_requests_it_cannot_decode_and_answers_the_next(netns: NetNamespace) -> None:
     sim = netns.popen(
         [sys.executable, "-m", "llfsm", "run", "--transport", "dds", "--node", "turtlesim", "--duration", "90s"],

@@ -2,19 +2,20 @@
 its `wall_close` input from the wall sensor of turtlesim's process, over ROS 2's wire.  Runs in a
 private network namespace (dds_netns.py)."""
 
-# ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
 from __future__ import annotations
 
 import re
 import time
 
-from conftest import MACHINES
-from dds_netns import NetNamespace, finish, interrupt, netns  # noqa: F401  (netns is a fixture)
+import pytest
+from dds_netns import NetNamespace, finish, interrupt
+from helpers import MACHINES
 
 
+@pytest.mark.dds
 def test_the_wall_follower_reads_its_sensor_from_another_process(netns: NetNamespace) -> None:
     sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--node", "wall_sensor", "--duration", "16")
-    time.sleep(0.5)
+    time.sleep(0.5)  # across processes: turtlesim's participant up first
     bot = netns.llfsm("run", "--transport", "dds", MACHINES / "wall_follower.machine", "-v")
     interrupt(bot, 13.0)
     bot_status, _, bot_err = finish(bot, 40)

@@ -9,10 +9,10 @@ import re
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, write_machine
+from helpers import MACHINES, write_machine
 from interop.ros2env import llfsm_command, requires_ros, ros_command, run_together
 
-pytestmark = [pytest.mark.interop, requires_ros]
+pytestmark = [pytest.mark.interop, pytest.mark.dds, requires_ros]
 
 LISTENER = """
 import time, rclpy

@@ -4,15 +4,15 @@ reliable subscriber does not match a best-effort publisher (as in ROS 2) and say
 rclpy's default QoS event handler does; the endpoints carry the reliability they asked for.
 """
 
-# ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
-
 from __future__ import annotations
 
 import textwrap
 import time
 
 import pytest
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish
+
+pytestmark = pytest.mark.dds
 
 pytest.importorskip("cyclonedds")
 

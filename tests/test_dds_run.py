@@ -5,7 +5,6 @@ the machine and every process has a timeout.  These are real processes talking o
 no mocks.
 """
 
-# ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
 from __future__ import annotations
 
 import re
@@ -15,8 +14,8 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, llfsm_process, write_machine
-from dds_netns import NetNamespace, finish, interrupt, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish, interrupt
+from helpers import MACHINES, llfsm_process, write_machine
 
 #: Peers that vanish without saying goodbye are noticed after the lease: 1 s instead of 10 s.
 SHORT_LEASE = {
@@ -51,6 +50,7 @@ def test_llfsm_transport_variable_chooses_the_transport() -> None:
     assert run.status == 2 and "--clock sim cannot be used with --transport dds" in run.stderr
 
 
+@pytest.mark.dds
 def test_wall_turtle_in_one_process_backs_off_the_walls_of_turtlesim_in_another(netns: NetNamespace) -> None:
     sim = netns.llfsm(
         "run", "--transport", "dds", "--node", "turtlesim", "--node", "turtle_sensor_poster", "--duration", "14"
@@ -80,6 +80,7 @@ def test_wall_turtle_in_one_process_backs_off_the_walls_of_turtlesim_in_another(
     assert all(0.0 < v < 11.088889 for v in xs + ys), "the turtle left the arena"
 
 
+@pytest.mark.dds
 def test_ping_pong_is_heard_by_another_process(netns: NetNamespace) -> None:
     listener = netns.llfsm("run", "--transport", "dds", "--echo", "/pingpong", "--node", "teleop", "--duration", "6")
     talker = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "5.5")
@@ -103,6 +104,7 @@ node.get_logger().info(f"ready={ready} code={code} name={name}")
 """
 
 
+@pytest.mark.dds
 def test_a_service_call_across_processes(netns: NetNamespace, tmp_path: Path) -> None:
     m = write_machine(
         tmp_path,
@@ -143,6 +145,7 @@ node.get_logger().info(f"doomed: ready={ready} {code} after {time.monotonic() - 
 """
 
 
+@pytest.mark.dds
 def test_no_server_and_a_server_that_dies_mid_call_end_in_timeout_not_a_hang(
     netns: NetNamespace, tmp_path: Path
 ) -> None:
@@ -186,6 +189,7 @@ publisher_.publish(message)
 """
 
 
+@pytest.mark.dds
 def test_a_machine_publishing_while_the_transport_shuts_down_ends_cleanly(netns: NetNamespace, tmp_path: Path) -> None:
     m = write_machine(
         tmp_path,
@@ -211,6 +215,7 @@ def test_a_machine_publishing_while_the_transport_shuts_down_ends_cleanly(netns:
     assert l_status == 130 and "Traceback" not in l_err
 
 
+@pytest.mark.dds
 @pytest.mark.parametrize("node", ["turtlesim", "turtle_sensor_poster", "teleop"])
 def test_a_node_on_its_own_runs_until_interrupted(netns: NetNamespace, node: str) -> None:
     p = netns.llfsm("run", "--transport", "dds", "--node", node)
@@ -241,6 +246,7 @@ node.get_logger().info(f"found={found} ok={ros.ok()}")
 """
 
 
+@pytest.mark.dds
 def test_ctrl_c_ends_a_long_wait_for_a_service_on_dds(netns: NetNamespace, tmp_path: Path) -> None:
     m = write_machine(
         tmp_path,
@@ -265,6 +271,7 @@ NO_MULTICAST = {
 }
 
 
+@pytest.mark.dds
 @pytest.mark.parametrize(
     ("talker_env", "listener_env", "hears"),
     [

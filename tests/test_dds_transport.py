@@ -29,6 +29,8 @@ from llfsm.ros.transports.dds import DdsTransport
 from llfsm.runtime import RunContext, WallClock
 from llfsm.runtime.context import activate
 
+pytestmark = pytest.mark.dds  # Cyclone DDS participants (in this process)
+
 DOMAIN = 98
 
 
@@ -198,10 +200,11 @@ def test_nodes_are_announced_on_ros_discovery_info(runs: Callable[[], Run]) -> N
 
     a, observer = runs(), runs()
     with a:
-        node = a.node("announced")
+        # without rclpy's parameter endpoints, so the lists below are exactly the node's own
+        node = ros.Node("announced", start_parameter_services=False)
         pub = node.create_publisher(String, "news", 10)
         sub = node.create_subscription(String, "views", None, 10)
-        ros.Node("second", namespace="/ns")
+        ros.Node("second", namespace="/ns", start_parameter_services=False)
     dp = observer.transport.dp
     late = Qos(Policy.Reliability.Reliable(10**9), Policy.Durability.TransientLocal, Policy.History.KeepAll)
     # as rmw's graph reader: reliable, transient local, so a late reader still gets the last one

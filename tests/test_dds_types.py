@@ -10,86 +10,11 @@ import struct
 from pathlib import Path
 
 import pytest
+from samples import CLASSES, sample, shipped_services
 
 from llfsm.idl.package import MSGS_DIR, installed_spec
 from llfsm.msgs import _dds
-from llfsm.msgs._message import INT_RANGES, Message, Service, is_message_class, is_service_class
-
-BUILTIN = ("builtin_interfaces", "std_msgs", "geometry_msgs", "std_srvs", "turtlesim", "turtle_sensor_interface",
-           "service_msgs", "rmw_dds_common")  # fmt: skip
-
-
-def shipped_classes() -> list[type[Message]]:
-    out: list[type[Message]] = []
-    for pkg in BUILTIN:
-        for kind in ("msg", "srv"):
-            try:
-                module = importlib.import_module(f"llfsm.msgs.{pkg}.{kind}")
-            except ModuleNotFoundError:
-                continue
-            for obj in vars(module).values():
-                if is_message_class(obj) and obj.__module__ == module.__name__:
-                    out.append(obj)
-    return sorted(out, key=lambda c: c._TYPE)
-
-
-def shipped_services() -> list[type[Service]]:
-    out = []
-    for pkg in BUILTIN:
-        try:
-            module = importlib.import_module(f"llfsm.msgs.{pkg}.srv")
-        except ModuleNotFoundError:
-            continue
-        out += [o for o in vars(module).values() if is_service_class(o) and o.__module__ == module.__name__]
-    return sorted(out, key=lambda c: c._TYPE)
-
-
-def _message_class(ros_type: str) -> type[Message]:
-    pkg, kind, name = ros_type.split("/")
-    return getattr(importlib.import_module(f"llfsm.msgs.{pkg}.{kind}"), name)
-
-
-def _scalar(base: str, rng: random.Random) -> object:
-    name, _, bound = base.partition("<=")
-    if name in ("float64",):
-        return rng.choice([0.0, -1.5, 3.141592653589793, 1e300, rng.uniform(-1e6, 1e6)])
-    if name == "float32":
-        return rng.choice([0.0, -1.5, 0.25, 1024.0])  # exactly representable in float32
-    if name == "bool":
-        return rng.random() < 0.5
-    if name in INT_RANGES:
-        lo, hi = INT_RANGES[name]
-        return rng.choice([lo, hi, 0, rng.randint(lo, hi)])
-    if name in ("string", "wstring"):
-        n = int(bound) if bound else 12
-        text = rng.choice(["", "a", "hello", "ünïcödé ✓", "x" * 40, "with\0nul?"[:4]])
-        return text[:n]
-    raise AssertionError(name)
-
-
-def sample(cls: type[Message], rng: random.Random, depth: int = 0) -> Message:
-    """A message with every field set to a varied value (deterministic for a given rng)."""
-    msg = cls()
-    for name, ros_type in cls._FIELDS:
-        base, array = ros_type, None
-        if ros_type.endswith("]"):
-            base, _, array = ros_type[:-1].partition("[")
-
-        def make(base: str = base) -> object:
-            return sample(_message_class(base), rng, depth + 1) if "/" in base else _scalar(base, rng)
-
-        if array is None:
-            setattr(msg, name, make())
-        elif array.startswith("<="):
-            setattr(msg, name, [make() for _ in range(rng.randint(0, int(array[2:])))])
-        elif array:
-            setattr(msg, name, [make() for _ in range(int(array))])
-        else:
-            setattr(msg, name, [make() for _ in range(rng.randint(0, 3 if depth else 5))])
-    return msg
-
-
-CLASSES = shipped_classes()
+from llfsm.msgs._message import Message, Service
 
 
 def test_every_shipped_package_has_dds_forms() -> None:

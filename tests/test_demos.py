@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 import yaml
-from conftest import MACHINES, llfsm, llfsm_process, run_sim
+from helpers import MACHINES, llfsm, llfsm_process, run_sim
 
 PING = MACHINES / "ros2_ping_pong.machine"
 BLIND = MACHINES / "ros2_blind_turtle_bot.machine"

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import REPO, llfsm_process, run_sim, write_machine
+from helpers import REPO, llfsm_process, run_sim, write_machine
 
 BOOM = "x = 1\ny = x - 1\nz = x / y  # boom\n"
 

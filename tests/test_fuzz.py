@@ -32,7 +32,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from conftest import llfsm, write_machine
+from helpers import header_ok, llfsm, only_expected_statements, sarif_validator, strings_in, write_machine
 from hypothesis import HealthCheck, event, given, settings
 from strategies import (
     MachineSpec,
@@ -550,8 +550,6 @@ def hostile_path_property(spec: MachineSpec, folder: str) -> None:
     """A valid machine under a hostile folder: check is clean and every format is valid, the
     module's header carries no code, the machine builds, runs and draws; a broken copy beside
     it gets diagnostics that every format renders validly for the same folder."""
-    from test_hardening_check import _header_ok, _only_expected_statements, _sarif_validator, _strings
-
     from llfsm.diagram.dot import dot
     from llfsm.diagram.mermaid import mermaid
 
@@ -576,15 +574,15 @@ def hostile_path_property(spec: MachineSpec, folder: str) -> None:
             if fmt in ("text", "github"):
                 assert len(text.splitlines()) == len(diags)
         sarif = json.loads(render(diags, "sarif", "0"))
-        errors = list(_sarif_validator().iter_errors(sarif))
+        errors = list(sarif_validator().iter_errors(sarif))
         assert not errors, errors[0]
-        for s in _strings(json.loads(render(diags, "json", "0"))):
+        for s in strings_in(json.loads(render(diags, "json", "0"))):
             s.encode("utf-8")
         out = Path(tmp) / "out"
         cls = build_and_import(machine, out)
         source = (out / f"{spec.name}.py").read_text(encoding="utf-8")
-        _header_ok(source)
-        _only_expected_statements(ast.parse(source))
+        header_ok(source)
+        only_expected_statements(ast.parse(source))
         if cls is not None:
             event(f"ended: {runs([cls], [machine])}")
         assert checked.machine is not None

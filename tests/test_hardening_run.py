@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import REPO, llfsm, llfsm_process, write_machine
+from helpers import REPO, llfsm, llfsm_process, write_machine
 
 PY = sys.executable
 

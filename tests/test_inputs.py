@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, llfsm, run_sim, write_machine
+from helpers import MACHINES, llfsm, run_sim, write_machine
 
 from llfsm.lang.check import check_machine
 

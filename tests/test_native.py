@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from conftest import REPO, Run, write_machine
+from helpers import REPO, Run, write_machine
 
 from llfsm.compiler.native import available
 
@@ -241,8 +241,8 @@ def test_native_runs_keep_the_semantics(corpus: Corpus) -> None:
 
 @pytest.mark.slow
 def test_the_semantics_suite_passes_under_native(tmp_path: Path) -> None:
-    """Every test of tests/test_semantics.py with `llfsm run` switched to --native (conftest's
-    LLFSM_TEST_NATIVE): one compile per test, hence slow."""
+    """Every test of tests/test_semantics.py with `llfsm run` switched to --native (helpers.llfsm
+    reads LLFSM_TEST_NATIVE): one compile per test, hence slow."""
     env = dict(os.environ, LLFSM_TEST_NATIVE="1", LLFSM_CACHE_DIR=str(tmp_path / "cache"))
     env.pop("LLFSM_NATIVE", None)
     proc = subprocess.run(

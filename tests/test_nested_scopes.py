@@ -15,9 +15,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from helpers import llfsm, run_sim, write_machine
 
 from llfsm.lang.check import check_machine
-from tests.conftest import llfsm, run_sim, write_machine
 
 ONE_STATE = {"A": [("END", "True")], "END": None}
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 import yaml
 from catkin_pkg.package import parse_package
-from conftest import REPO, llfsm, llfsm_process, write_machine
+from helpers import REPO, llfsm, llfsm_process, write_machine
 
 from llfsm import scaffold
 from llfsm.lang.check import check_machine

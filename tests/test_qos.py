@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from conftest import run_sim, write_machine
+from helpers import run_sim, write_machine
 
 from llfsm import ros
 from llfsm.lang.check.ros_habits import ROS_QOS_NAMES

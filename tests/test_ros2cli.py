@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from conftest import llfsm, llfsm_process
+from helpers import llfsm, llfsm_process
 
 from llfsm.msgs import to_yaml
 from llfsm.msgs._yaml import ValuesError, from_yaml

@@ -6,7 +6,6 @@ loopback up with multicast), so discovery never leaves it and tests never see ea
 Every process has a timeout; rclpy comes from the interop harness's .venv-ros.
 """
 
-# ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
 from __future__ import annotations
 
 import os
@@ -20,12 +19,14 @@ from pathlib import Path
 
 import pytest
 import yaml
-from conftest import MACHINES, REPO, Run
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish
+from helpers import MACHINES, REPO, Run
 from interop.ros2env import ROS_PYTHON, ros_installed
 
 from llfsm.msgs import _dds
 from llfsm.msgs.geometry_msgs.msg import Twist
+
+pytestmark = pytest.mark.dds  # every test talks DDS across processes
 
 
 def llfsm(ns: NetNamespace, *args: str | os.PathLike[str], timeout: float = 60) -> Run:

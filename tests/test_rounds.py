@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from conftest import run_sim, write_machine
+from helpers import run_sim, write_machine
 
 ROS = "from llfsm import ros\nfrom llfsm.runtime import current\nfrom llfsm.msgs.std_msgs.msg import String\n"
 
@@ -77,7 +77,7 @@ def test_a_machine_that_suspends_itself_and_fires_in_the_same_ringlet_stays_susp
 
 
 def test_the_wall_clock_moves_on_during_back_to_back_rounds(tmp_path: Path) -> None:
-    from conftest import llfsm
+    from helpers import llfsm
 
     m = write_machine(
         tmp_path,

@@ -15,7 +15,7 @@ from pathlib import Path
 import click
 import pytest
 from click.testing import CliRunner
-from conftest import MACHINES, llfsm_process, write_machine
+from helpers import MACHINES, llfsm_process, write_machine
 
 from llfsm.cli import cli
 from llfsm.cli.run_args import COMPLETE_VAR, RUN_OPTIONS, TARGETS, parse

@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import llfsm, llfsm_process, write_machine
+from helpers import llfsm, llfsm_process, write_machine
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from strategies import _yaml_string
@@ -534,6 +534,40 @@ def _interrupt_builds(tmp_path: Path, times: int, signum: int) -> tuple[int, int
 def test_an_interrupted_build_of_many_machines_leaves_whole_modules_only(tmp_path: Path, signum: int) -> None:
     cut, _midway = _interrupt_builds(tmp_path, 4, signum)
     assert cut > 0  # the build was cut short at least once
+
+
+FINALIZER = textwrap.dedent(
+    """
+    import time
+    from llfsm.compiler.build import terminated_as_exception
+
+    class Slow:
+        def __del__(self):
+            print("in finalizer", flush=True)
+            time.sleep(1.0)  # the SIGTERM lands here, where an exception can only be printed
+
+    with terminated_as_exception():
+        Slow()
+        for _ in range(300):
+            time.sleep(0.01)
+        print("went on building", flush=True)
+    """
+)
+
+
+def test_sigterm_landing_in_a_finalizer_still_stops_the_build_without_a_traceback(tmp_path: Path) -> None:
+    """A signal handler that raises runs wherever the main thread is, a __del__ included; there
+    Python prints "Exception ignored in ..." with a traceback and carries on.  The build must
+    still stop, silently, as at any other moment (seen once in the interrupted-build test)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", FINALIZER], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path
+    )
+    assert proc.stdout is not None and proc.stdout.readline() == "in finalizer\n"
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=60)
+    assert "went on building" not in out
+    assert proc.returncode == -signal.SIGTERM
+    assert "Traceback" not in err and "Exception ignored" not in err, err
 
 
 WRITER = textwrap.dedent(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from conftest import llfsm, run_sim, write_machine
+from helpers import llfsm, run_sim, write_machine
 
 
 def test_ringlet_runs_onentry_then_guards_then_onexit_and_target_entry_waits_for_next_ringlet(tmp_path: Path) -> None:

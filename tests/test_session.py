@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, write_machine
+from helpers import MACHINES, write_machine
 
 from llfsm.cli.run_args import RUN_OPTIONS, TARGETS, parse, run_options
 from llfsm.runtime import RunContext

@@ -7,17 +7,18 @@ import math
 import os
 import subprocess
 import sys
-import sysconfig
 import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from pathlib import Path
 
 import hypothesis
 import pytest
+from helpers import skip_unless_built
 from hypothesis import strategies as st
 from PIL import Image
 
 from llfsm.sim import draw
+from llfsm.sim import world as _world
 from llfsm.sim.world import (
     BACKGROUND,
     CENTRE,
@@ -524,23 +525,10 @@ def random_strokes(kind: str) -> list[tuple[float, float, float, float, bytes, i
     return strokes
 
 
-# The C painter is left out on purpose with LLFSM_NO_C=1 (a run of the suite on the Python
-# painter) and on free-threaded CPython (setup.py does not build it there).
-_C_OFF = os.environ.get("LLFSM_NO_C", "") not in ("", "0") or bool(sysconfig.get_config_var("Py_GIL_DISABLED"))
-
-
-def _needs_c_painter() -> pytest.MarkDecorator:
-    from llfsm.sim import world
-
-    return pytest.mark.skipif(
-        world._c_fill_stroke is None,
-        reason="the C painter is disabled (LLFSM_NO_C)"
-        if _C_OFF
-        else "the C painter (llfsm/sim/_paint.c) is not built: no C compiler, or not CPython with the GIL",
-    )
-
-
-needs_c_painter = _needs_c_painter()
+# Skipped, saying why, where the C painter is off on purpose (LLFSM_NO_C, free-threaded CPython)
+# or was not built (helpers.skip_unless_built); under LLFSM_REQUIRE_C=1, as `make test` runs, an
+# unbuilt painter fails instead.
+needs_c_painter = skip_unless_built(_world._c_fill_stroke is not None, "the C painter (llfsm/sim/_paint.c)")
 
 
 @pytest.mark.parametrize("painter", ["python", pytest.param("c", marks=needs_c_painter)])
@@ -561,7 +549,7 @@ def test_the_stroke_painter_paints_the_reference_pixels(kind: str, painter: str)
         assert mine == ref, s
 
 
-@pytest.mark.skipif(_C_OFF, reason="the C parts are off on purpose (LLFSM_NO_C, or free-threaded CPython)")
+@needs_c_painter
 def test_the_c_painter_is_built_and_leaves_the_unusual_to_python() -> None:
     """setup.py builds it wherever a C compiler is.  Whatever is not an ordinary stroke on the
     500 x 500 image it declines, painting nothing, and the Python painter does what it always

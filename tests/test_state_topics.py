@@ -9,7 +9,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from conftest import run_sim, write_machine
+from helpers import run_sim, write_machine
 
 from llfsm import ros
 from llfsm.msgs.std_msgs.msg import String

@@ -147,6 +147,16 @@ def test_the_pose_service_answers_with_the_newest_pose(sim: Sim) -> None:
     assert (resp.x, resp.y, resp.theta) == pytest.approx((3.0, 4.0, 0.5))
 
 
+PARAMETER_SERVICES = (
+    "describe_parameters",
+    "get_parameter_types",
+    "get_parameters",
+    "list_parameters",
+    "set_parameters",
+    "set_parameters_atomically",
+)
+
+
 def test_background_parameters_are_declared(sim: Sim) -> None:
     turtlesim = next(n for n in sim.bus.nodes if n.get_name() == "turtlesim")
     assert [turtlesim.get_parameter(f"background_{c}").value for c in "rgb"] == [69, 86, 255]
@@ -161,4 +171,5 @@ def test_background_parameters_are_declared(sim: Sim) -> None:
             "/turtle1/teleport_absolute",
             "/turtle1/teleport_relative",
         ]
+        + [f"/{node}/{verb}" for node in ("tester", "turtlesim", "turtle_sensor_poster") for verb in PARAMETER_SERVICES]
     )

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, llfsm, write_machine
+from helpers import MACHINES, llfsm, write_machine
 
 from llfsm.verify.check import verify
 from llfsm.verify.explorer import Options
@@ -342,17 +342,41 @@ def test_a_machine_with_errors_is_not_explored(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("period", [None, 10_000_000])
-def test_the_specialised_loop_hash_compaction_and_the_generic_step_explore_alike(period: int | None) -> None:
-    targets = [str(MACHINES / "ros2_turtle_suspend_resume.machine"), str(MACHINES / "ros2_blind_turtle_bot.machine")]
+def test_the_specialised_loop_hash_compaction_and_the_generic_step_explore_alike(
+    period: int | None, tmp_path: Path
+) -> None:
+    if period is None:  # abstract time: suspension by another machine, an input, timers, nodes
+        boss = write_machine(
+            tmp_path,
+            "boss",
+            {"WAIT": [("STOP", "after_ms(10)")], "STOP": [("GO", "True")], "GO": [("WAIT", "after_ms(5)")]},
+            {"STOP_OnEntry": 'suspend("w")', "GO_OnEntry": 'resume("w")'},
+        )
+        w = write_machine(
+            tmp_path,
+            "w",
+            {"MOVE": [("MOVE", "after_ms(3)")]},
+            {"MOVE_OnEntry": "n = (n + 1) % 3"},
+            variables="n: int = 0\n",
+        )
+        targets = [str(boss), str(w), str(MACHINES / "wall_follower.machine")]
+        props = [PropertySource("eventually", "finished(wall_follower)")]
+    else:
+        targets = [
+            str(MACHINES / "ros2_turtle_suspend_resume.machine"),
+            str(MACHINES / "ros2_blind_turtle_bot.machine"),
+        ]
+        props = [PropertySource("eventually", "finished(ros2_blind_turtle_bot)")]
     loaded = load_arrangement(targets)
-    props = [PropertySource("eventually", "finished(ros2_blind_turtle_bot)")]
     shapes = []
     for hash_compact, generic in ((False, False), (False, True), (True, False), (True, True)):
         options = Options(period=period, interrupt=True, hash_compact=hash_compact, generic=generic)
         r = verify(loaded, props, options)
         e = r.explorer
+        assert r.error is None and r.partial is None
         shapes.append((r.configurations, r.steps, list(e.edges), list(e.labels), list(e.fair), verdicts(r)))
     assert shapes[0] == shapes[1] == shapes[2] == shapes[3]
+    assert shapes[0][0] > 500
 
 
 def test_a_long_exploration_shows_progress_and_ctrl_c_gives_a_partial_result(tmp_path: Path) -> None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from conftest import MACHINES, llfsm, write_machine
+from helpers import MACHINES, llfsm, write_machine
 
 
 def _trace(path: Path) -> list[dict]:  # type: ignore[type-arg]

@@ -21,8 +21,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from conftest import MACHINES, REPO
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (the fixture)
+from dds_netns import NetNamespace, finish
+from helpers import MACHINES, REPO
+
+pytestmark = pytest.mark.browser
 
 pytest.importorskip("aiohttp")
 sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
@@ -283,7 +285,8 @@ with sync_playwright() as pw:
 """
 
 
-def test_the_page_follows_a_suspend_called_with_llfsm_service_call(netns: NetNamespace) -> None:  # noqa: F811
+@pytest.mark.dds
+def test_the_page_follows_a_suspend_called_with_llfsm_service_call(netns: NetNamespace) -> None:
     """Issue 9: `llfsm service call /llfsm/M/suspend` from another process, over DDS, and the
     page (in Chromium, in the same private network) shows M suspended.  The call's output is
     ros2's, word for word (the reprs checked against rclpy 9.1.2's std_srvs)."""

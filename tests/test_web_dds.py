@@ -10,8 +10,10 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, write_machine
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (the fixture)
+from dds_netns import NetNamespace, finish
+from helpers import MACHINES, write_machine
+
+pytestmark = pytest.mark.dds
 
 WATCHER = {
     "INITIAL": [("JOIN", "after_ms(3000)")],
@@ -38,7 +40,7 @@ WATCHER_CODE = {
 }
 
 
-def test_state_and_control_of_a_machine_in_another_process(netns: NetNamespace, tmp_path: Path) -> None:  # noqa: F811
+def test_state_and_control_of_a_machine_in_another_process(netns: NetNamespace, tmp_path: Path) -> None:
     watcher = write_machine(
         tmp_path,
         "watcher",
@@ -95,7 +97,7 @@ asyncio.run(main(sys.argv[1]))
 """
 
 
-def test_llfsm_view_finds_shows_and_steers_a_machine_of_another_run(netns: NetNamespace) -> None:  # noqa: F811
+def test_llfsm_view_finds_shows_and_steers_a_machine_of_another_run(netns: NetNamespace) -> None:
     pytest.importorskip("aiohttp")
     pp = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "30")
     view = netns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "30")

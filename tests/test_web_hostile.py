@@ -18,7 +18,6 @@ a peer of any vendor could be) in a private network namespace (tests/dds_netns.p
 one drives Debian's Chromium with Playwright there, as tests/test_web_browser.py does.
 """
 
-# ruff: noqa: F811  (the netns fixture is imported, and test arguments name it)
 from __future__ import annotations
 
 import asyncio
@@ -37,8 +36,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from conftest import MACHINES, REPO
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish
+from helpers import MACHINES, REPO
 
 pytest.importorskip("aiohttp")
 
@@ -458,6 +457,7 @@ def page_client(ns: NetNamespace, url: str, want: list[str], seconds: float = 40
     return json.loads(out)
 
 
+@pytest.mark.dds
 def test_llfsm_view_keeps_serving_and_following_a_real_run_beside_a_hostile_peer(netns: NetNamespace) -> None:
     run = netns.llfsm("run", "--transport", "dds", MACHINES / f"{MACHINE}.machine", "--duration", "120")
     view, url, err = start_view(netns)
@@ -535,6 +535,8 @@ with sync_playwright() as pw:
 """
 
 
+@pytest.mark.browser
+@pytest.mark.dds
 def test_the_page_in_chromium_follows_a_real_run_while_hostile_peers_publish(
     netns: NetNamespace, tmp_path: Path
 ) -> None:

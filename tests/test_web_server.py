@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from conftest import MACHINES, llfsm
+from helpers import MACHINES, llfsm
 
 pytest.importorskip("aiohttp")
 
@@ -242,7 +242,7 @@ def test_the_run_is_sampled_only_while_a_page_is_connected(server: WebServer) ->
 
 
 def test_the_page_tells_running_suspended_and_finished_machines_apart(tmp_path: Path) -> None:
-    from conftest import write_machine
+    from helpers import write_machine
 
     quick = write_machine(tmp_path, "quick", {"A": [("END", "after_ms(2)")], "END": None})
     slow = write_machine(tmp_path, "slow", {"A": [("B", "after_ms(1)")], "B": [("A", "after_ms(1)")]})

@@ -6,7 +6,8 @@ from types import FrameType
 from typing import Any
 
 # a handler is a callable, or the SIG_DFL/SIG_IGN ints; signal() gives back whatever was set,
-# or None for a handler installed outside Python
+# or None for a handler installed outside Python (the runtime keeps those to put them back, typed
+# with this, imported under TYPE_CHECKING)
 _Handler = Callable[[int, FrameType | None], Any] | int | None
 
 SIG_DFL: int

@@ -20,6 +20,7 @@ __all__ = ["BagError", "RunBags"]
 
 
 def _need_libraries() -> None:
+    # deferred: optional dependency (the bag extra), checked only by a run that has bags
     try:
         import mcap  # noqa: F401
         import rosbags  # noqa: F401
@@ -46,6 +47,7 @@ class RunBags:
         if play is not None and not play_rate > 0:
             raise BagError(f"--play-rate must be greater than 0, not {play_rate:g}")
         if play is not None:  # first: a bad bag to play must not leave a new bag folder behind
+            # deferred: start-up (a run that plays no bag never imports the player)
             from .player import Player
 
             try:
@@ -53,6 +55,7 @@ class RunBags:
             except BagError as e:
                 raise BagError(f"--play {e}") from None
         if record is not None:
+            # deferred: start-up (a run that records nothing never imports the recorder)
             from .recorder import Recorder
 
             try:
@@ -71,6 +74,7 @@ class RunBags:
         waits: a bag cut off while its summary is written would be unreadable."""
         if self.recorder is None:
             return None
+        # deferred: start-up (the signal module's enums; only closing a recording needs them)
         import signal
         import threading
 

@@ -64,6 +64,8 @@ def _connection(writer: Any, t: dict[str, Any], out: IO[bytes]) -> Any:
 
 
 def serve(path: str, storage: str, inp: IO[bytes], out: IO[bytes]) -> int:
+    # deferred: start-up (the recorder imports this module for FRAME and RECORD; only the writer
+    # process loads the writer and its storage libraries)
     from .errors import BagError
     from .writer import BagWriter
 

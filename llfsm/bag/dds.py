@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 from .errors import BagError
 
 if TYPE_CHECKING:
+    from ..msgs import Message
     from ..ros.bus import Bus, Topic
 
 QUEUE_DEPTH = 1000  # per topic, between two executor passes
@@ -32,6 +33,7 @@ class _Session:
     """A bus on the DDS transport, active while the verb runs; Ctrl-C or SIGTERM ends it."""
 
     def __init__(self) -> None:
+        # deferred: start-up (every `llfsm` command imports this module's verbs; only a running verb loads the bus)
         from ..ros.bus import bus_of
         from ..ros.transports import make
         from ..runtime import RunContext, WallClock
@@ -48,6 +50,7 @@ class _Session:
 
     @contextmanager
     def active(self) -> Iterator[None]:
+        # deferred: start-up, as in __init__
         from ..runtime.context import activate
 
         def stop(_signum: int, _frame: object) -> None:
@@ -74,14 +77,16 @@ class _Session:
 
 
 def _all_topics(
-    bus: Bus, found: Callable[[str, type], None], skipped: Callable[[str, str], None]
+    bus: Bus, found: Callable[[str, type[Message]], None], skipped: Callable[[str, str], None]
 ) -> Callable[[], None]:
     """A scan of DCPSPublication for ROS topics (`rt/...`): found(name, class) once per topic."""
+    # deferred: optional dependency (cyclonedds) and start-up, as in _Session
     from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
     from ..ros.transports.dds_graph import message_class
 
-    reader = BuiltinDataReader(bus.transport.dp, BuiltinTopicDcpsPublication)  # type: ignore[attr-defined]
+    dp = bus.transport.dp  # type: ignore[attr-defined]  # the session's bus is on DDS (_Session)
+    reader = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
     seen: set[str] = set()
 
     def scan() -> None:
@@ -111,6 +116,7 @@ def record(
     duration: float | None = None,
 ) -> str | None:
     """Record until Ctrl-C (or `duration` seconds); the error message if recording failed."""
+    # deferred: start-up (`bag play` never loads the recorder, nor `bag record` the player)
     from ..ros.node import Node
     from .recorder import Recorder
 
@@ -135,8 +141,8 @@ def record(
             bus.watch(name, subscribe)
         if all_topics:
 
-            def found(name: str, cls: type) -> None:
-                subscribe(bus.topic(name, cls, "subscribe to"))  # type: ignore[arg-type]
+            def found(name: str, cls: type[Message]) -> None:
+                subscribe(bus.topic(name, cls, "subscribe to"))
 
             def skipped(name: str, dds_type: str) -> None:
                 if report is not None:
@@ -155,6 +161,7 @@ def play(
     delay: float = 0.0,
 ) -> int:
     """Play the bag to the DDS graph; the number of messages published."""
+    # deferred: start-up, as in record
     from .player import Player
 
     player = Player(path, topics, rate, loop)

@@ -15,19 +15,27 @@ a `MetadataError` naming metadata.yaml, the line and the field.
 
 from __future__ import annotations
 
+import math
 import os
 import stat
 import time
 from pathlib import Path, PurePath
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import Annotated, Any
 
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, StrictInt, StrictStr
+import yaml
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    StrictInt,
+    StrictStr,
+    ValidationError,
+)
 from pydantic_core import PydanticCustomError
 
 from .errors import BagError
-
-if TYPE_CHECKING:
-    import yaml
 
 INDENT = 19  # the longest label ("Topics with Type:") and a space, as rosbag2 has it
 
@@ -167,8 +175,6 @@ def _load(meta_path: Path, text: str) -> tuple[Any, yaml.Node]:
     a self-reference is made of them) and a nesting deeper than MAX_DEPTH, found by a walk
     without recursion that visits each node once.  libyaml caps nesting at 1000 itself, with
     its own message; any YAML error is one line here."""
-    import yaml
-
     loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)(text)
     try:
         node = loader.get_single_node()
@@ -206,8 +212,6 @@ def _load(meta_path: Path, text: str) -> tuple[Any, yaml.Node]:
 def _node_at(node: yaml.Node, loc: tuple[Any, ...]) -> yaml.Node:
     """The deepest node along a pydantic error location (the field's node, or the mapping a
     missing field should be in)."""
-    import yaml
-
     for key in loc:
         if isinstance(node, yaml.MappingNode):
             found = next((v for k, v in node.value if isinstance(k, yaml.ScalarNode) and k.value == str(key)), None)
@@ -230,8 +234,6 @@ def _field(loc: tuple[Any, ...]) -> str:
 
 def _kind(value: Any) -> str:
     """What a YAML value is, in words (never the value itself: it may be huge or hostile)."""
-    import math
-
     if isinstance(value, float):
         return "a number with a fraction" if math.isfinite(value) else "infinity or NaN"
     names = {type(None): "null", bool: "true/false", int: "an integer", str: "text", list: "a list", dict: "a mapping"}
@@ -263,8 +265,6 @@ def _storage_file(folder: Path, name: str) -> tuple[Path | None, str]:
 def read_metadata(path: str | Path) -> BagMetadata:
     """The rosbag2_bagfile_information of a bag folder, checked (see the module's docstring);
     a MetadataError (a BagError) names metadata.yaml, the line and the field otherwise."""
-    from pydantic import ValidationError
-
     folder = Path(path)
     if not folder.exists():
         raise BagError(f"{path}: no such bag")

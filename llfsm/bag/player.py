@@ -26,6 +26,7 @@ from .recorder import SIM_CLOCK_KEY
 from .typesupport import TypeSupport, class_from_definition, scratch_folder
 
 if TYPE_CHECKING:
+    from ..msgs import Message
     from ..ros.bus import Bus
 
 NODE_NAME = "rosbag2_player"
@@ -53,13 +54,13 @@ class Player:
             missing = wanted - {c.topic for c in reader.connections}
             if missing:
                 raise BagError(f"{path}: the bag has no topic {', '.join(sorted(missing))}")
-            self.topics: dict[str, type] = {}
+            self.topics: dict[str, type[Message]] = {}
             decoders: dict[int, Any] = {}
             for c in conns:
                 known = self.topics.get(c.topic)
                 if known is not None:
-                    if c.msgtype != known._TYPE:  # type: ignore[attr-defined]
-                        raise BagError(f"{path}: {c.topic} carries two types, {known._TYPE} and {c.msgtype}")  # type: ignore[attr-defined]
+                    if c.msgtype != known._TYPE:
+                        raise BagError(f"{path}: {c.topic} carries two types, {known._TYPE} and {c.msgtype}")
                     decoders[c.id] = decoders[next(x.id for x in conns if x.topic == c.topic)]
                     continue
                 if folder is None:
@@ -91,6 +92,7 @@ class Player:
 
     def attach(self, bus: Bus) -> None:
         """Create the player's node, publishers and timer on the bus of a run."""
+        # deferred: start-up (the player reads its bag before the run's bus exists; only attaching needs the bus)
         from ..ros.node import Node
         from ..runtime.context import activate
 

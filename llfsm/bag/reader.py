@@ -11,6 +11,7 @@ from .errors import BagError
 
 
 def _reader_errors() -> tuple[type[BaseException], ...]:
+    # deferred: optional dependency (the bag extra; reading a bag checks for it below)
     from rosbags.rosbag2 import ReaderError
 
     return (ReaderError, OSError, KeyError, ValueError, IndexError, EOFError, TypeError)
@@ -23,6 +24,7 @@ def _one_line(e: BaseException) -> str:
 def _checked_custom_data(folder: Path, path: str | Path) -> dict[str, str]:
     """Check a bag folder's metadata.yaml (llfsm.bag.info's model: fields, ranges, files inside
     the folder) before rosbags reads it; its custom_data."""
+    # deferred: start-up (pydantic and PyYAML, only where a folder's metadata.yaml is read)
     from .info import MetadataError, read_metadata
 
     try:
@@ -44,6 +46,7 @@ class BagReader:
         self._custom: dict[str, str] = {}
         if self.path.is_dir():
             self._custom = _checked_custom_data(self.path, path)
+        # deferred: optional dependency (the bag extra)
         try:
             from rosbags.highlevel import AnyReader  # noqa: F401  (rosbags is installed)
             from rosbags.rosbag2 import Reader

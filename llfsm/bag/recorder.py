@@ -177,6 +177,7 @@ class Recorder:
     def _subscribe(self, topic: Topic) -> None:
         """With a transport that reaches other processes (DDS), a tap would see only what this
         process publishes: the recorder subscribes instead, as any subscriber, and hears both."""
+        # deferred: start-up (the recorder is made before the run's bus exists; only attaching needs the bus)
         from ..ros.node import Node
         from ..runtime.context import activate
 
@@ -288,6 +289,7 @@ class Recorder:
     def _offered(self, topic: Topic) -> list[dict[str, Any]]:
         """Each publisher's offered QoS, as rosbag2 records what discovery reports: its
         reliability and durability (a best-effort sensor topic is replayed best effort)."""
+        # deferred: start-up, as in _subscribe
         from ..ros.publisher import Publisher
         from ..ros.qos import ReliabilityPolicy
 

@@ -34,6 +34,8 @@ if TYPE_CHECKING:
 
     from rosbags.typesys.store import Typestore
 
+    from . import _tap
+
 
 class ByteSpool(bytearray):
     """The recorder's buffer where the C one (llfsm.bag._tap.Spool) is not built: a bytearray
@@ -46,7 +48,8 @@ class ByteSpool(bytearray):
 
 
 # The recorder's tap and buffer in C (setup.py builds them where a C compiler is; optional).
-Spool: Any
+Spool: type[ByteSpool] | type[_tap.Spool]
+_Tap: type[_tap.Tap] | None
 try:
     from ._tap import Spool
     from ._tap import Tap as _Tap
@@ -131,6 +134,7 @@ class TypeSupport:
         for dep in self._dependencies(text, type_name):
             self._register(dep, seen)
         if type_name not in self.store.fielddefs:
+            # deferred: optional dependency (the bag extra) and start-up (rosbags' type store is slow to load)
             from rosbags.typesys import get_types_from_msg
 
             self.store.register(get_types_from_msg(text, type_name))
@@ -208,11 +212,11 @@ class TypeSupport:
             return None
         python, layout = c.stamped, c.tap_layout
         if _Tap is None or layout is None:
-            return lambda records, key, clock: python(records.extend, key, clock)  # type: ignore[no-any-return]
+            return lambda records, key, clock: python(records.extend, key, clock)
         tap = _Tap
 
         def make(records: Any, key: int, clock: Any) -> Callable[[Any], None]:
-            return tap(records, key, clock, layout, python(records.extend, key, clock))  # type: ignore[no-any-return]
+            return tap(records, key, clock, layout, python(records.extend, key, clock))
 
         return make
 
@@ -247,6 +251,7 @@ def _base_store() -> Typestore:
     (loading it takes a few tenths of a second)."""
     global _BASE_STORE
     if _BASE_STORE is None:
+        # deferred: optional dependency and start-up, as in _register
         from rosbags.typesys import Stores, get_typestore
 
         _BASE_STORE = get_typestore(Stores.ROS2_HUMBLE)
@@ -256,6 +261,7 @@ def _base_store() -> Typestore:
 def _codec(cls: type[Message]) -> Any:
     """The generated DDS functions of the class (llfsm.msgs._dds.Codec), or None if it has none."""
     try:
+        # deferred: start-up (the DDS forms of the messages, only for the classes a bag holds)
         from ..msgs._dds import codec
     except ImportError:  # pragma: no cover - the DDS type support is part of llfsm
         return None
@@ -296,6 +302,7 @@ def preload_native(classes: Iterable[type[Message]]) -> None:
 def _native_deserializer(cls: type[Message]) -> Callable[[bytes], Any] | None:
     if _codec(cls) is None:
         return None
+    # deferred: start-up, as in _codec
     from ..msgs._dds import from_cdr
 
     return lambda data: from_cdr(data, cls)
@@ -328,14 +335,17 @@ def _to_rosbags(msg: Message, store: Typestore) -> Any:
         elif isinstance(value, list):
             element = ftype.partition("[")[0]
             if element in _NUMPY_TYPES:
+                # deferred: optional dependency (numpy comes with rosbags, for its arrays only)
                 import numpy
 
                 value = numpy.array(value, dtype=_NUMPY_TYPES[element])
             elif value and isinstance(value[0], Message):
                 value = [_to_rosbags(v, store) for v in value]
         kwargs[field] = value
-    if not msg._FIELDS and "structure_needs_at_least_one_member" in cls.__dataclass_fields__:
-        kwargs["structure_needs_at_least_one_member"] = 0
+    if not msg._FIELDS:
+        fields = cls.__dataclass_fields__  # type: ignore[attr-defined]  # a dataclass: rosbags' MsgType does not say
+        if "structure_needs_at_least_one_member" in fields:
+            kwargs["structure_needs_at_least_one_member"] = 0
     return cls(**kwargs)
 
 
@@ -366,7 +376,7 @@ def class_for(type_name: str) -> type[Message]:
     cls = getattr(module, name, None)
     if not is_message_class(cls):
         raise BagError(f"{pkg}/msg/{name}: llfsm has no class for this type")
-    return cls  # type: ignore[return-value]
+    return cls
 
 
 def class_from_definition(type_name: str, encoding: str, definition: str, folder: Path) -> type[Message]:
@@ -387,6 +397,7 @@ def class_from_definition(type_name: str, encoding: str, definition: str, folder
             raise BagError(
                 f"{type_name}: llfsm has no class for this type and cannot read its {encoding or 'unknown'} definition"
             ) from None
+    # deferred: start-up (only a type llfsm has no class for is compiled from the bag)
     from ..msgs import add_search_path
 
     root_pkg, root_name = _split(type_name)
@@ -440,6 +451,7 @@ def _write_definition(folder: Path, pkg: str, name: str, text: str) -> None:
 
 def scratch_folder() -> Path:
     """A folder for definitions taken from bags, removed when the process ends."""
+    # deferred: start-up (only a bag's own definitions need a scratch folder)
     import atexit
     import shutil
 

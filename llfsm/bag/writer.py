@@ -27,7 +27,7 @@ import os
 import sqlite3
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from .. import __version__
 from .errors import BagError
@@ -190,6 +190,22 @@ def metadata_yaml(meta: dict[str, Any]) -> str:
 # -- storages ----------------------------------------------------------------------------------------
 
 
+class _Storage(Protocol):
+    """A bag's storage file as BagWriter drives it, so that MCAP and sqlite3 are interchangeable."""
+
+    identifier: str
+    suffix: str
+
+    def __init__(self, path: Path) -> None: ...
+    def add(self, c: Connection) -> None: ...
+    def write(self, c: Connection, t: int, data: bytes) -> None: ...
+    def chunk(self) -> None: ...
+    def sync(self) -> None: ...
+    def close(self, meta: dict[str, Any]) -> None: ...
+    def salvage(self) -> None: ...
+    def abandon(self) -> None: ...
+
+
 class _Spool:
     """The MCAP library's output stream: bytes wait here until the batch is appended to the file."""
 
@@ -219,13 +235,19 @@ class _McapStorage:
     suffix = ".mcap"
 
     def __init__(self, path: Path) -> None:
+        # deferred: optional dependency (mcap, the bag extra) and start-up (only the writer process writes)
         from mcap.writer import CompressionType, Writer
 
         self.path = path
         self.fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
         self.good = 0  # the file ends on a whole record here
         self.spool = _Spool()
-        self.writer = Writer(self.spool, chunk_size=CHUNK_SIZE, compression=CompressionType.NONE, enable_crcs=False)
+        self.writer = Writer(
+            self.spool,  # type: ignore[arg-type]  # mcap calls write, tell and flush only; its hint asks for IO
+            chunk_size=CHUNK_SIZE,
+            compression=CompressionType.NONE,
+            enable_crcs=False,
+        )
         self.writer.start(profile="ros2", library=f"llfsm-{__version__}")
         self.schemas: dict[str, int] = {}
         self.sync()
@@ -268,6 +290,7 @@ class _McapStorage:
     def salvage(self) -> None:
         """After a failed write: cut the file back to its last whole record and end it there
         (data end and footer, no summary)."""
+        # deferred: optional dependency and start-up, as in __init__ (salvaging only)
         from mcap.data_stream import RecordBuilder
         from mcap.records import DataEnd, Footer
 
@@ -292,6 +315,7 @@ class _Sqlite3Storage:
     suffix = ".db3"
 
     def __init__(self, path: Path) -> None:
+        # deferred: optional dependency (rosbags, the bag extra) and start-up (sqlite3 bags only)
         from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 
         class Writer(Sqlite3Writer):
@@ -309,6 +333,7 @@ class _Sqlite3Storage:
         self.uncommitted = 0
 
     def add(self, c: Connection) -> None:
+        # deferred: optional dependency and start-up, as in __init__
         from rosbags.interfaces import (
             Connection as RConnection,
         )
@@ -367,7 +392,7 @@ def _distro() -> str:
     return os.environ.get("ROS_DISTRO") or ROS_DISTRO
 
 
-STORAGES = {"mcap": _McapStorage, "sqlite3": _Sqlite3Storage}
+STORAGES: dict[str, type[_Storage]] = {"mcap": _McapStorage, "sqlite3": _Sqlite3Storage}
 
 
 def _reason(e: BaseException) -> str:
@@ -462,6 +487,7 @@ class BagWriter:
 
     def _rescan(self) -> int:
         """Count what the salvaged file holds, and write metadata.yaml to match."""
+        # deferred: start-up (only a salvaged bag is read back)
         from .reader import BagReader
 
         stats = Stats()

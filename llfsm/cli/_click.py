@@ -15,6 +15,7 @@ from . import (  # noqa: F401  (each registers its commands)
     interface,
     new,
     node,
+    param,
     run,
     service,
     topic,

@@ -47,6 +47,7 @@ DURATION = Duration()
 def write_output(path: str, data: bytes, what: str) -> None:
     """Write a file the user named (`-o FILE`) through llfsm.outputs: atomically, and one clear
     line with exit status 1 if it cannot be written (full disk, /proc, a directory)."""
+    # deferred: start-up (every command module imports this one; only a command that writes a file needs it)
     from ..outputs import OutputError, write_file
 
     try:

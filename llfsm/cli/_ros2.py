@@ -5,27 +5,28 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import ParamSpec, TypeVar
 
 import click
 
 from ..ros2cli import SPIN_TIME, TIMEOUT, CliError
 from ._common import fail
 
-F = TypeVar("F", bound=Callable[..., Any])
+P = ParamSpec("P")
+R = TypeVar("R")
 
 
-def verb(fn: F) -> F:
+def verb(fn: Callable[P, R]) -> Callable[P, R]:
     """Run the command; a CliError ends it with its message and status, Ctrl-C with 130."""
 
     @functools.wraps(fn)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
         try:
             return fn(*args, **kwargs)
         except CliError as e:
             fail(e.message, e.status)
 
-    return wrapper  # type: ignore[return-value]
+    return wrapper
 
 
 def positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:

@@ -1,6 +1,6 @@
 """What `llfsm run` does once its arguments are parsed: open the run's session
 (llfsm.session.Session) with them, and turn how it ended into messages and the exit
-status (SPEC §2, §5).
+status (docs/cli.md: `llfsm run`, exit statuses).
 
 Free of click, so that the start-up fast path (llfsm.cli.main with llfsm.cli.run_args) can run a
 machine without importing it; the click command (llfsm.cli.run) calls `run` too.

@@ -1,4 +1,4 @@
-"""The web view (SPEC §10) as the run's session takes it: `llfsm run --web` serves the run's
+"""The web view (docs/view.md) as the run's session takes it: `llfsm run --web` serves the run's
 own machines, `llfsm view` the machines found over DDS.  The session (llfsm.session) sits a
 layer below llfsm.web, so the page is handed to it from here (llfsm.session.WebPage).
 
@@ -35,7 +35,7 @@ def web_address(text: str) -> tuple[str, int]:
 
 def serve(source: object, address: tuple[str, int]) -> WebServer:
     """Start the page's server for a source and print its address: one line holding `http://`
-    (SPEC 10)."""
+    (docs/view.md)."""
     from ..web.server import AddressError, WebServer  # deferred: optional dependency
 
     server = WebServer(source, *address)

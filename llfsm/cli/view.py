@@ -1,4 +1,4 @@
-"""`llfsm view`: the live page (SPEC §10) for every llfsm machine found over DDS (SPEC §8)."""
+"""`llfsm view`: the live page (docs/view.md) for every llfsm machine found over DDS."""
 
 from __future__ import annotations
 

@@ -10,6 +10,7 @@ import json
 import os
 import secrets
 import signal
+import sys
 import threading
 import time
 from collections.abc import Generator, Iterator, Sequence
@@ -301,7 +302,22 @@ def terminated_as_exception() -> Iterator[None]:
     def handler(_signum: int, _frame: object) -> None:
         raise _Terminated
 
+    def unraisable(info: Any) -> None:
+        """A signal whose handler ran inside a finalizer (a __del__, a weakref callback) raised
+        where Python can only print "Exception ignored in ..." and go on building: say nothing
+        and deliver the signal again, so it stops the build at the next bytecode instead."""
+        again = {_Terminated: signal.SIGTERM, KeyboardInterrupt: signal.SIGINT}.get(type(info.exc_value))
+        if again is None:
+            previous_hook(info)
+            return
+        # a moment later and from another thread (sent from this one, the handler would run at
+        # once, still inside the finalizer); if it lands in a finalizer again, this comes again
+        later = threading.Timer(0.05, os.kill, args=(os.getpid(), again))
+        later.daemon = True
+        later.start()
+
     old = signal.signal(signal.SIGTERM, handler)
+    previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
     try:
         yield
     except _Terminated:
@@ -309,6 +325,7 @@ def terminated_as_exception() -> Iterator[None]:
         os.kill(os.getpid(), signal.SIGTERM)
         raise
     finally:
+        sys.unraisablehook = previous_hook
         signal.signal(signal.SIGTERM, old)
 
 

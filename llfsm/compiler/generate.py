@@ -23,6 +23,7 @@ from ..lang.bindings import MACHINE_ALIAS, Edit, attribute_of, find, name_map, o
 from ..lang.check import MachineCheck
 from ..lang.diagnostics import Diagnostic, diag
 from ..lang.model import INPUT_TYPES, Code, Machine, State
+from ..lang.parameter_types import parameter_type
 from ..lang.scopes import child_nodes
 from ..runtime.errors import map_line
 from ..runtime.machine import MACROS
@@ -265,11 +266,12 @@ def _flat_names(tree: ast.AST) -> _Flat | None:
         for child in child_nodes(node):
             t = type(child)
             if t is name:
-                out.names.append(child)  # type: ignore[arg-type]
+                n: ast.Name = child  # type: ignore[assignment]  # its type is ast.Name, exactly
+                out.names.append(n)
                 if not in_comp:
-                    out.outer.append(child)  # type: ignore[arg-type]
-                elif type(child.ctx) is not load:  # type: ignore[attr-defined]
-                    out.targets.add(child.id)  # type: ignore[attr-defined]
+                    out.outer.append(n)
+                elif type(n.ctx) is not load:
+                    out.targets.add(n.id)
             elif t in scoped:
                 return None
             else:
@@ -520,6 +522,8 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
                 tuple((index[t.target], t.guard.text.strip() if t.guard is not None else "") for t in s.transitions)
                 for s in m.states
             ),
+            # machine.yaml's `parameters:`: (variable, rclpy type name) for llfsm.ros.control
+            "parameters": _parameters(m),
             "enter": [f"_llfsm_enter_{v.name}" for v in views],
             "steady": [f"_llfsm_steady_{v.name}" for v in views],
             "includes": includes,
@@ -540,6 +544,17 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
     if not _pieces_are_safe([includes, variables, *state_variables], views):
         _verify(source, m)
     return source
+
+
+def _parameters(m: Machine) -> tuple[tuple[str, str], ...]:
+    """The variables of `parameters:` with their parameter types (check has made sure each fits)."""
+    annotations = {v.name: v.annotation for v in m.variables}
+    out: list[tuple[str, str]] = []
+    for p in m.parameters:
+        kind = parameter_type(annotations.get(p.name, ""))
+        if kind is not None and p.name not in dict(out):
+            out.append((p.name, kind))
+    return tuple(out)
 
 
 #: Text in user code that the assembly of the module (indenting it, joining a guard's lines)

@@ -62,7 +62,9 @@ def _label(index: int, guard: str) -> str:
     return f"{index}: {text}"
 
 
-def _bezier_mid(p0: tuple[float, float], c1: tuple[float, float], c2: tuple[float, float], p3: tuple[float, float]):
+def _bezier_mid(
+    p0: tuple[float, float], c1: tuple[float, float], c2: tuple[float, float], p3: tuple[float, float]
+) -> tuple[float, ...]:
     return tuple(0.125 * a + 0.375 * b + 0.375 * c + 0.125 * d for a, b, c, d in zip(p0, c1, c2, p3, strict=True))
 
 
@@ -72,9 +74,11 @@ def svg(desc: dict[str, Any], current: str | None = None) -> str:
     its DescriptionError before anything is drawn."""
     key = _key(desc)
     with _cache_lock:
-        drawn = _cache.get(key) if key is not None else None
-        if drawn is not None:
-            _cache.move_to_end(key)  # type: ignore[arg-type]
+        drawn = None
+        if key is not None:
+            drawn = _cache.get(key)
+            if drawn is not None:
+                _cache.move_to_end(key)
     if drawn is None:
         # deferred: pydantic is imported when a diagram is first drawn (on the drawing thread), not with --web
         from .description import validate

@@ -9,8 +9,10 @@ splits it.  Only the shapes the generators produce are handled.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+
+from .spec import Value
 
 LINE_LIMIT = 120  # the project's ruff line-length
 
@@ -23,7 +25,7 @@ def str_literal(s: str) -> str:
     return r
 
 
-def literal(value: Any) -> str:
+def literal(value: Value) -> str:
     """A default or constant value of a definition as Python source."""
     if isinstance(value, str):
         return str_literal(value)
@@ -69,13 +71,13 @@ class Call:
     """A call expression kept as a tree, so that a long one is laid out as ruff lays it out."""
 
     fn: str
-    args: list[Any]  # str | Call
+    args: Sequence[str | Call]
 
     def __str__(self) -> str:
         return f"{self.fn}({', '.join(map(str, self.args))})"
 
 
-def layout(prefix: str, expr: Any, suffix: str = "", indent: int = 4, *, atom: bool = False) -> str:
+def layout(prefix: str, expr: str | Call, suffix: str = "", indent: int = 4, *, atom: bool = False) -> str:
     """`prefix + expr + suffix` as a statement at `indent`, split as ruff format splits it: on
     one line if it fits; else the arguments on one line of their own if they fit (calls only:
     a bracketed collection, `atom`, is always exploded); else one argument a line, each laid

@@ -15,7 +15,6 @@ import keyword
 import math
 import re
 from collections.abc import Callable, Iterable, Iterator
-from typing import Any
 
 from ..msgs._message import FLOAT32_MAX, INT_RANGES
 from .spec import (
@@ -33,7 +32,9 @@ from .spec import (
     FieldType,
     InterfaceError,
     MessageSpec,
+    Scalar,
     ServiceSpec,
+    Value,
 )
 
 # ROS 1 spellings that ROS 2 tools still accept in .msg files.
@@ -140,7 +141,7 @@ def _split_list(text: str) -> list[str]:
     return items
 
 
-def _parse_scalar(text: str, ftype: FieldType, fail: Fail) -> Any:
+def _parse_scalar(text: str, ftype: FieldType, fail: Fail) -> Scalar:
     base = ftype.base
     if base in STRINGS:
         quoted = _unquote(text)
@@ -178,7 +179,7 @@ def _parse_scalar(text: str, ftype: FieldType, fail: Fail) -> Any:
     raise fail(f"a {base} field cannot have a default value")
 
 
-def _parse_value(text: str, ftype: FieldType, fail: Fail) -> Any:
+def _parse_value(text: str, ftype: FieldType, fail: Fail) -> Value:
     if ftype.array is None:
         return _parse_scalar(text, ftype, fail)
     if not (text.startswith("[") and text.endswith("]")):

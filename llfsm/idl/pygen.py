@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ..msgs._message import INT_RANGES
 from .layout import assign, bracketed, conditional, literal, str_literal
@@ -19,6 +19,8 @@ from .spec import FLOATS, STRINGS, FieldSpec, FieldType, MessageSpec, PackageSpe
 
 if TYPE_CHECKING:
     import jinja2
+
+    from .spec import Scalar
 
 TEMPLATE = "msgs.py.j2"
 
@@ -79,7 +81,7 @@ def _check(t: FieldType, name: str, names: _Names, v: str) -> tuple[str | None, 
     return f"{v}.__class__ is bool", f"_m.check_bool({v}, self, {q})"
 
 
-def _scalar_default(t: FieldType) -> Any:
+def _scalar_default(t: FieldType) -> Scalar:
     if t.base in FLOATS:
         return 0.0
     if t.base in INT_RANGES:
@@ -148,7 +150,7 @@ def _field_view(f: FieldSpec, names: _Names) -> FieldView:
     return FieldView(name, annotation, parameter, init, setter, copy)
 
 
-def _natural(name: str) -> list[Any]:
+def _natural(name: str) -> list[int | str]:
     """The order ruff's RUF023 wants for __slots__ (digits compare as numbers)."""
     return [int(part) if part.isdigit() else part for part in re.split(r"([0-9]+)", name)]
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from typing import Any
 
 #: The kinds of definition files, each in a folder of its name (PKG/msg/*.msg, PKG/srv/*.srv),
 #: and the sections `---` lines cut one of its files into: each section is a message of its own,
@@ -33,6 +32,12 @@ CONSTANT_NAME = re.compile(r"^[A-Z](?:[A-Z0-9_]*[A-Z0-9])?\Z")
 # Names a field cannot take: they would break the generated class (its __init__ has a `self`
 # parameter and its body uses the `property` decorator) or are not valid identifiers.
 RESERVED_FIELDS = frozenset(("self", "property"))
+
+#: A value a definition gives (a constant, a default, an element of an array's default), as
+#: Python holds it: bool, an integer type, a float type, or a string type.
+Scalar = bool | int | float | str
+#: A default: a scalar, or a list of them for an array.
+Value = Scalar | list[Scalar]
 
 
 class InterfaceError(ImportError):
@@ -81,7 +86,7 @@ class FieldType:
 class FieldSpec:
     name: str
     type: FieldType
-    default: Any = None  # a value given in the definition (list for arrays), or None
+    default: Value | None = None  # a value given in the definition, or None
     line: int | None = None
 
 
@@ -89,7 +94,7 @@ class FieldSpec:
 class ConstantSpec:
     name: str
     type: FieldType
-    value: Any
+    value: Scalar
     line: int | None = None
 
 

@@ -11,7 +11,6 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Callable
-from typing import Any
 
 from .spec import FieldSpec, FieldType, MessageSpec, ServiceSpec
 
@@ -46,7 +45,7 @@ def _wire_fields(spec: MessageSpec) -> list[FieldSpec]:
     return spec.fields or [FieldSpec(EMPTY_MEMBER, FieldType("uint8"))]
 
 
-def _field_description(f: FieldSpec) -> dict[str, Any]:
+def _field_description(f: FieldSpec) -> dict[str, object]:
     t = f.type
     base = 1 if t.is_message else _TYPE_IDS[t.base]
     if t.string_bound is not None:
@@ -62,7 +61,7 @@ def _field_description(f: FieldSpec) -> dict[str, Any]:
     }
 
 
-def _individual(spec: MessageSpec) -> dict[str, Any]:
+def _individual(spec: MessageSpec) -> dict[str, object]:
     return {"type_name": spec.type_name, "fields": [_field_description(f) for f in _wire_fields(spec)]}
 
 

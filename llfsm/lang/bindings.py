@@ -22,10 +22,10 @@ from __future__ import annotations
 
 import ast
 from collections import ChainMap
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from .positions import line_index
+from .positions import Located, line_index
 from .scopes import child_nodes
 
 #: What the generated code calls the machine where the user's own `self` hides the parameter of
@@ -93,14 +93,15 @@ class _Scope:
         self.self_inner = self_inner  # ... and in the scopes nested in it
 
 
-def _binds_self(nodes: list[ast.AST]) -> bool:
+def _binds_self(nodes: Sequence[ast.stmt | ast.expr]) -> bool:
     """Whether code running in one function scope (a def's body, a lambda's expression) binds
     the name `self` in that scope: as a local (`self = ...`, `for self in`, import, def, class,
     except-as, a match pattern) or by `:=` inside a comprehension (PEP 572 binds it in the
     enclosing function).  Nested defs, lambdas and classes have scopes of their own."""
-    if "self" in own_locals(ast.Module(body=nodes, type_ignores=[])):  # type: ignore[arg-type]
+    code = ast.Module(body=nodes, type_ignores=[])  # type: ignore[arg-type]  # or a lambda's expression: only walked
+    if "self" in own_locals(code):
         return True
-    stack = list(nodes)
+    stack: list[ast.AST] = list(nodes)
     while stack:
         node = stack.pop()
         for child in child_nodes(node):
@@ -133,11 +134,11 @@ class _Finder(ast.NodeVisitor):
         own_self = outer.self_inner or binds_self or "self" in names
         self.scopes.append(_Scope(seen, seen, function, own_self, own_self))
 
-    def _machine_self(self, name: str, node: ast.AST, scope: _Scope | None = None) -> None:
+    def _machine_self(self, name: str, node: Located, scope: _Scope | None = None) -> None:
         """`self` used or bound where it is the machine's (the section's own level, or a scope
         that does not bind it): it would read or replace the compiled code's machine."""
         if name == "self" and not (scope or self.scopes[-1]).self_here:
-            self.bad.append(BadBinding("self", "self", node.lineno, node.col_offset))  # type: ignore[attr-defined]
+            self.bad.append(BadBinding("self", "self", node.lineno, node.col_offset))
 
     def visit_Name(self, node: ast.Name) -> None:
         if node.id == "self":
@@ -151,11 +152,11 @@ class _Finder(ast.NodeVisitor):
                 attr = f"{MACHINE_ALIAS}.{attr[5:]}"
             self.edits.append(Edit(node.lineno, node.col_offset, node.end_col_offset or node.col_offset, attr))
 
-    def _bind(self, name: str | None, how: str, node: ast.AST, hidden: bool | None = None) -> None:
+    def _bind(self, name: str | None, how: str, node: Located, hidden: bool | None = None) -> None:
         if name == "self":
             self._machine_self(name, node)
         elif name and name in self.mapping and not (self._hidden(name) if hidden is None else hidden):
-            self.bad.append(BadBinding(name, how, node.lineno, node.col_offset))  # type: ignore[attr-defined]
+            self.bad.append(BadBinding(name, how, node.lineno, node.col_offset))
 
     def _function(self, node: ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) -> None:
         # decorators, defaults and annotations are evaluated where the def stands
@@ -172,7 +173,7 @@ class _Finder(ast.NodeVisitor):
             if node.returns:
                 self.visit(node.returns)
         body = node.body if isinstance(node.body, list) else [node.body]
-        self._push(_params(node.args), binds_self=self.maybe_self and _binds_self(body))  # type: ignore[arg-type]
+        self._push(_params(node.args), binds_self=self.maybe_self and _binds_self(body))
         for stmt in body:
             self.visit(stmt)
         self.scopes.pop()
@@ -315,7 +316,8 @@ def state_map(base: Mapping[str, str], state: str, state_vars: list[str]) -> Map
     """`name_map` for the code of `state`, given the machine-level map: a view over both, so
     that a machine with many states and many variables costs states + variables, not their
     product."""
-    return _StateMap({v: f"self.{attribute_of(state, v)}" for v in state_vars}, base)  # type: ignore[arg-type]
+    own = {v: f"self.{attribute_of(state, v)}" for v in state_vars}
+    return _StateMap(own, base)  # type: ignore[arg-type]  # ChainMap's hint wants mutable maps; base is only read
 
 
 class _StateMap(ChainMap[str, str]):
@@ -327,7 +329,7 @@ class _StateMap(ChainMap[str, str]):
         own, base = self.maps
         return key in own or key in base
 
-    def get(self, key: str, default: str | None = None) -> str | None:  # type: ignore[override]
+    def get(self, key: str, default: str | None = None) -> str | None:  # type: ignore[override]  # str defaults only
         own, base = self.maps
         value = own.get(key)
         return value if value is not None else base.get(key, default)

@@ -120,6 +120,14 @@ class State(BaseModel):
         return not self.transitions
 
 
+class MachineParameter(BaseModel):
+    """A machine variable listed under `parameters:` in machine.yaml: a parameter of the node
+    /llfsm/NAME (docs/parameters.md).  `loc` is where machine.yaml names it."""
+
+    name: str
+    loc: Loc
+
+
 class Machine(BaseModel):
     """A whole machine directory.  `path` is the directory as the user named it."""
 
@@ -135,6 +143,7 @@ class Machine(BaseModel):
     inputs: list[Input] = Field(default_factory=list)
     initial_loc: Loc = Loc(file="machine.yaml")
     suspended_loc: Loc = Loc(file="machine.yaml")
+    parameters: list[MachineParameter] = Field(default_factory=list)
 
     def state(self, name: str) -> State:
         for s in self.states:
@@ -172,6 +181,12 @@ class MachineYaml(BaseModel):
         description="External variables: read-only in code, taken as a snapshot at the start of each "
         "ringlet; optionally bound to a field of the newest message on a topic (docs/verify.md).",
         json_schema_extra={"propertyNames": {"pattern": "^" + NAME_RE.pattern[:-2] + "$"}},
+    )
+    parameters: list[str] | None = Field(
+        None,
+        description="Machine variables that are parameters of the node /llfsm/<machine>: `llfsm param set` "
+        "(or ros2 param set, -p, --params-file) gives one a value before the machine's next ringlet.  Each "
+        "must be a variable of Variables.py annotated bool, int, float, str or list[...] of one of them.",
     )
 
 

@@ -7,12 +7,26 @@ Both go through this one module, so that a position means the same thing everywh
 
 from __future__ import annotations
 
-import ast
 import bisect
 import re
 from functools import lru_cache
+from typing import Protocol
 
 _EOL = re.compile(r"\r\n|\r|\n")
+
+
+class Located(Protocol):
+    """A node `ast` gives a place in the text (an expression, a statement, an argument, a
+    keyword, an alias, a handler, a pattern): `ast.AST` itself declares no position."""
+
+    @property
+    def lineno(self) -> int: ...
+    @property
+    def col_offset(self) -> int: ...
+    @property
+    def end_lineno(self) -> int | None: ...
+    @property
+    def end_col_offset(self) -> int | None: ...
 
 
 def source_lines(text: str) -> list[str]:
@@ -69,14 +83,14 @@ def line_index(text: str) -> LineIndex:
     return LineIndex(text)
 
 
-def source_segment(text: str, node: ast.AST) -> str | None:
+def source_segment(text: str, node: Located) -> str | None:
     """`ast.get_source_segment`, on the file's `LineIndex`: the standard one splits the whole
     source anew for every node, so a Variables.py of N lines cost N squared."""
     try:
-        l0: int = node.lineno - 1  # type: ignore[attr-defined]
-        end_line: int | None = node.end_lineno  # type: ignore[attr-defined]
-        c0: int = node.col_offset  # type: ignore[attr-defined]
-        c1: int | None = node.end_col_offset  # type: ignore[attr-defined]
+        l0 = node.lineno - 1
+        end_line = node.end_lineno
+        c0 = node.col_offset
+        c1 = node.end_col_offset
     except AttributeError:
         return None
     l1 = end_line - 1 if end_line is not None else None
@@ -95,6 +109,6 @@ def char_col(text: str, line: int, byte_offset: int) -> int:
     return line_index(text).char_col(line, byte_offset)
 
 
-def node_col(text: str, node: ast.AST) -> int:
+def node_col(text: str, node: Located) -> int:
     """1-based character column where `node` starts in `text`."""
-    return char_col(text, node.lineno, node.col_offset)  # type: ignore[attr-defined]
+    return char_col(text, node.lineno, node.col_offset)

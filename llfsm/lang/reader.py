@@ -27,6 +27,7 @@ from .model import (
     Input,
     Loc,
     Machine,
+    MachineParameter,
     State,
     Transition,
     Variable,
@@ -301,7 +302,9 @@ class _Reader:
         root = self.yaml_tree(text)
         if root is None:
             return result
-        top = self.mapping(root, "machine.yaml", ("description", "initial", "suspended", "states", "inputs"))
+        top = self.mapping(
+            root, "machine.yaml", ("description", "initial", "suspended", "states", "inputs", "parameters")
+        )
         if top is None:
             return result
         states_node = top.get("states")
@@ -398,6 +401,7 @@ class _Reader:
             inputs=inputs,
             initial_loc=_mark_loc(top["initial"]) if "initial" in top else Loc(file="machine.yaml"),
             suspended_loc=_mark_loc(top["suspended"]) if "suspended" in top else Loc(file="machine.yaml"),
+            parameters=self.parameters(top.get("parameters")),
         )
         return result
 
@@ -465,6 +469,23 @@ class _Reader:
             self.structure_error(node, f"{what} must be a boolean, a number or a string")
             return _NOT_A_SCALAR
         return value
+
+    def parameters(self, node: yaml.Node | None) -> list[MachineParameter]:
+        """`parameters:`, a list of variable names, each with where it is written (check's rule
+        module `parameters` says whether each is a variable that can be one)."""
+        if node is None or (isinstance(node, yaml.ScalarNode) and not node.style and node.value in ("", "~")):
+            return []
+        if not isinstance(node, yaml.SequenceNode):
+            self.structure_error(node, "`parameters` must be a list of machine variable names")
+            return []
+        out = []
+        for item in node.value:
+            name = self.scalar(item, "a parameter")
+            if name is not None:
+                out.append(MachineParameter(name=name, loc=_mark_loc(item)))
+            elif isinstance(item, yaml.ScalarNode):
+                self.structure_error(item, "an entry of `parameters` is empty; name a machine variable")
+        return out
 
     def state(self, name: str, loc: Loc, targets: list[tuple[str, Loc]], entries: set[str]) -> State:
         sections: dict[str, Code] = {}

@@ -20,7 +20,10 @@ Nothing here imports or runs user code; each file costs one walk per pass.
 from __future__ import annotations
 
 import ast
+from collections.abc import Container
 from dataclasses import dataclass, field
+
+from .positions import Located
 
 _FUNCS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
 _COMPS = (ast.ListComp, ast.SetComp, ast.GeneratorExp, ast.DictComp)
@@ -33,13 +36,27 @@ Pos = tuple[int, int]
 @dataclass
 class Unresolved:
     name: str
-    node: ast.AST  # where it is read first
+    node: ast.Name  # where it is read first
     assigned_at: int | None = None  # the line of a later binding at the section level, if any
+
+
+#: The nodes that open a scope: the section's module, a function or lambda, a class, a comprehension.
+_ScopeNode = (
+    ast.Module
+    | ast.FunctionDef
+    | ast.AsyncFunctionDef
+    | ast.Lambda
+    | ast.ClassDef
+    | ast.ListComp
+    | ast.SetComp
+    | ast.GeneratorExp
+    | ast.DictComp
+)
 
 
 @dataclass
 class _Scope:
-    node: ast.AST
+    node: _ScopeNode
     kind: str  # section | function | class | comp
     bound: set[str] = field(default_factory=set)
     parent: _Scope | None = None
@@ -67,19 +84,19 @@ def _params(args: ast.arguments) -> set[str]:
     return names
 
 
-def _body_ids(node: ast.AST) -> set[int]:
+def _body_ids(node: ast.Module | ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda | ast.ClassDef) -> set[int]:
     """ids of the statements (or the expression of a lambda) that run in `node`'s own scope;
     a set, since `stmt in body` compares one by one: quadratic for a long function."""
-    body = node.body  # type: ignore[attr-defined]
+    body = node.body
     return {id(b) for b in body} if isinstance(body, list) else {id(body)}
 
 
-def _end(node: ast.AST) -> Pos:
-    return (getattr(node, "end_lineno", None) or node.lineno, getattr(node, "end_col_offset", None) or 0)  # type: ignore[attr-defined]
+def _end(node: Located) -> Pos:
+    return (node.end_lineno or node.lineno, node.end_col_offset or 0)
 
 
-def _start(node: ast.AST) -> Pos:
-    return (node.lineno, node.col_offset)  # type: ignore[attr-defined]
+def _start(node: Located) -> Pos:
+    return (node.lineno, node.col_offset)
 
 
 class _Resolver:
@@ -207,24 +224,25 @@ class _Resolver:
                     self._effect[id(n)] = at
 
     # -- pass 2 ----------------------------------------------------------------------------
-    def resolve(self, tree: ast.Module, known: object) -> None:
+    def resolve(self, tree: ast.Module, known: Container[str]) -> None:
         root = self.scopes[id(tree)]
         stack: list[tuple[ast.AST, _Scope, tuple[ast.AST, ...]]] = [(c, root, ()) for c in tree.body]
         while stack:
             child, scope, loops = stack.pop()
             inner = self.scopes.get(id(child))
             if inner is not None and inner.node is child:
-                if isinstance(child, _COMPS):
+                opener = inner.node  # (child itself, as the scope types it)
+                if isinstance(opener, _COMPS):
                     # the first iterable runs in the enclosing scope
-                    stack.append((child.generators[0].iter, scope, loops))
-                    for sub in child_nodes(child):
-                        if sub is not child.generators[0]:
+                    stack.append((opener.generators[0].iter, scope, loops))
+                    for sub in child_nodes(opener):
+                        if sub is not opener.generators[0]:
                             stack.append((sub, inner, loops))
-                    stack.append((child.generators[0].target, inner, loops))
-                    for cond in child.generators[0].ifs:
+                    stack.append((opener.generators[0].target, inner, loops))
+                    for cond in opener.generators[0].ifs:
                         stack.append((cond, inner, loops))
                 else:
-                    body_ids = _body_ids(child)
+                    body_ids = _body_ids(opener)
                     for sub in child_nodes(child):
                         if id(sub) in body_ids:
                             stack.append((sub, inner, ()))
@@ -241,7 +259,7 @@ class _Resolver:
             for sub in child_nodes(child):
                 stack.append((sub, scope, inner_loops))
 
-    def read(self, node: ast.Name, scope: _Scope, loops: tuple[ast.AST, ...], known: object) -> None:
+    def read(self, node: ast.Name, scope: _Scope, loops: tuple[ast.AST, ...], known: Container[str]) -> None:
         name = node.id
         if name in self.out and _start(self.out[name].node) <= _start(node):
             return
@@ -260,7 +278,7 @@ class _Resolver:
                     return
                 if any(name in self.loop_bound.get(id(loop), ()) for loop in loops):
                     return
-                if name in known:  # type: ignore[operator]
+                if name in known:
                     return  # a machine variable bound later in the file is still the machine's
                 line = at[0] if at is not None and at[0] < (1 << 30) else None
                 self.out[name] = Unresolved(name, node, line)
@@ -269,12 +287,12 @@ class _Resolver:
                 deferred = True
             first = False
             s = s.parent
-        if name in known:  # type: ignore[operator]
+        if name in known:
             return
         self.out[name] = Unresolved(name, node)
 
 
-def unresolved(tree: ast.Module, known: object) -> list[Unresolved]:
+def unresolved(tree: ast.Module, known: Container[str]) -> list[Unresolved]:
     """Names `tree` reads that neither its own bindings (where Python would see them) nor
     `known` (a container: machine variables, imports, builtins, macros) provide."""
     r = _Resolver()

@@ -10,7 +10,7 @@ seed machines do, without changing what subscribers already received.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeGuard
 
 
 class Message:
@@ -70,11 +70,11 @@ class Service:
     Response: ClassVar[type[Message]]
 
 
-def is_message_class(obj: object) -> bool:
+def is_message_class(obj: object) -> TypeGuard[type[Message]]:
     return isinstance(obj, type) and issubclass(obj, Message) and obj is not Message
 
 
-def is_service_class(obj: object) -> bool:
+def is_service_class(obj: object) -> TypeGuard[type[Service]]:
     return isinstance(obj, type) and issubclass(obj, Service) and obj is not Service
 
 

@@ -1,7 +1,7 @@
 """Nodes: Python participants on the bus beside the machines, started with `llfsm run --node NAME`.
 
 Beside machines they never keep a run alive: the run ends when its machines do.  A run of
-nodes alone (no machine) runs until Ctrl-C, SIGTERM or --duration, as `ros2 run` does (SPEC 4).
+nodes alone (no machine) runs until Ctrl-C, SIGTERM or --duration, as `ros2 run` does (docs/turtlesim.md).
 """
 
 from __future__ import annotations

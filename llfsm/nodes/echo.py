@@ -5,16 +5,18 @@ creates its publisher in INITIAL), so no message published on it is missed."""
 from __future__ import annotations
 
 import sys
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
+from ..msgs import to_yaml
 from ..ros.bus import Bus, Topic
 from ..ros.names import expand
+from ..ros.node import Node
+
+if TYPE_CHECKING:
+    from ..msgs import Message
 
 
 def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
-    from ..msgs import to_yaml
-    from ..ros.node import Node
-
     name = expand(topic, "llfsm_echo", "/")
     stream = out if out is not None else sys.stdout
     shown = [0]
@@ -23,7 +25,7 @@ def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
         node = Node.__new__(Node)  # a hidden node: not listed in the graph, not remapped
         node._bus, node._name, node._ns, node._destroyed, node._entities = bus, "llfsm_echo", "/", False, []
 
-        def show(msg: object) -> None:
+        def show(msg: Message) -> None:
             shown[0] += 1
             stream.write(to_yaml(msg) + "---\n")
             stream.flush()
@@ -38,6 +40,7 @@ def echo(bus: Bus, topic: str, out: IO[str] | None = None) -> None:
         if name in bus.topics:
             why = f"nothing was published on {name} during the run"
         else:
+            # deferred: start-up (only an --echo that heard nothing looks for a close name)
             import difflib
 
             topics = sorted(t for t in bus.topics if not t.startswith("/rosout"))

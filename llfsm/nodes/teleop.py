@@ -34,6 +34,7 @@ Use arrow keys to move the turtle.
 
 class Teleop:
     def __init__(self, ctx: RunContext, stream: IO[str] | None = None) -> None:
+        # deferred: with the node (importing the node's module loads neither the bus nor its messages)
         from .. import ros
         from ..msgs.geometry_msgs.msg import Twist
 
@@ -50,6 +51,7 @@ class Teleop:
         except (OSError, ValueError, AttributeError):
             self.fd = None
         if self.fd is not None and os.isatty(self.fd):
+            # deferred: optional (POSIX only), and only for a terminal
             import termios
             import tty
 
@@ -61,6 +63,7 @@ class Teleop:
 
     def restore(self) -> None:
         if self._saved is not None and self.fd is not None:
+            # deferred: optional (POSIX only), as in __init__
             import termios
 
             termios.tcsetattr(self.fd, termios.TCSADRAIN, self._saved)

@@ -15,6 +15,7 @@ SERVICE = "/turtle_pose_service"
 
 class TurtleSensorPoster:
     def __init__(self) -> None:
+        # deferred: with the node (importing the node's module loads neither the bus nor its messages)
         from .. import ros
         from ..msgs.turtle_sensor_interface.srv import TurtlePosition
         from ..msgs.turtlesim.msg import Pose

@@ -8,11 +8,16 @@ The world updates every 16 ms of run time with dt = 0.016 s, as turtlesim's time
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..runtime.context import RunContext
 from ..sim.world import TurtleError, TurtleWorld
 from . import NodeError, NodeOptions
+
+if TYPE_CHECKING:
+    from ..ros.publisher import Publisher
+    from ..ros.service import ServiceServer
+    from ..ros.subscription import Subscription
 
 NODE_NAME = "turtlesim"
 UPDATE_PERIOD = 0.016
@@ -23,6 +28,7 @@ class _Turtle:
     """The bus entities of one turtle, so that kill and reset can take them down again."""
 
     def __init__(self, sim: Turtlesim, name: str) -> None:
+        # deferred: with the node (importing the node's module loads neither the bus nor its messages)
         from ..msgs.geometry_msgs.msg import Twist
         from ..msgs.turtlesim.msg import Color, Pose
         from ..msgs.turtlesim.srv import SetPen, TeleportAbsolute, TeleportRelative
@@ -45,7 +51,7 @@ class _Turtle:
             world.teleport_relative(name, req.linear, req.angular)
             return resp
 
-        self.entities = [
+        self.entities: list[Subscription | ServiceServer | Publisher] = [
             node.create_subscription(Twist, f"{name}/cmd_vel", on_cmd, 1),
             node.create_service(SetPen, f"{name}/set_pen", set_pen),
             node.create_service(TeleportAbsolute, f"{name}/teleport_absolute", teleport_absolute),
@@ -79,6 +85,7 @@ class _Turtle:
 
 class Turtlesim:
     def __init__(self, ctx: RunContext, options: NodeOptions) -> None:
+        # deferred: with the node, as in _Turtle
         from .. import ros
         from ..msgs.std_srvs.srv import Empty
         from ..msgs.turtlesim.srv import Kill, Spawn
@@ -87,9 +94,13 @@ class Turtlesim:
         self.clock = ctx.clock
         self.node = ros.Node(NODE_NAME)
         self.log = self.node.get_logger()
+        # as turtlesim declares them: integers 0..255, each described; `llfsm param set` (or
+        # `ros2 param set`) outside that range is refused with rclpy's reason
         self.params = [
-            self.node.declare_parameter(f"background_{c}", v) for c, v in zip("rgb", DEFAULT_BACKGROUND, strict=True)
+            self.node.declare_parameter(f"background_{c}", v, _channel(colour))
+            for c, colour, v in zip("rgb", ("Red", "Green", "Blue"), DEFAULT_BACKGROUND, strict=True)
         ]
+        self.node.add_post_set_parameters_callback(self._parameters_set)
         self.log.info(f"Starting turtlesim with node name {self.node.get_fully_qualified_name()}")
         self.world = TurtleWorld(background=self._background(), log=self.log.info)
         self.turtles: dict[str, _Turtle] = {}
@@ -101,6 +112,7 @@ class Turtlesim:
         self.node.create_timer(UPDATE_PERIOD, self.update)
         self.viewer: Any = None
         if options.view:
+            # deferred: optional dependency (pygame, the view extra), only with --view
             try:
                 from ..sim.view import Viewer
             except ImportError as e:
@@ -116,6 +128,12 @@ class Turtlesim:
         if not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in values):
             raise NodeError(f"turtlesim: background_r/g/b must be integers 0..255, not {values}")
         return values[0], values[1], values[2]
+
+    def _parameters_set(self, params: list[Any]) -> None:
+        """A background parameter changed: the picture (window, --image, web view) takes the new
+        colour at once, as turtlesim repaints on a parameter event; the trails stay."""
+        if any(p.name.startswith("background_") for p in params) and hasattr(self, "world"):
+            self.world.set_background(*self._background())
 
     def _sync(self) -> None:
         """Bring the per-turtle topics and services in line with the turtles of the world."""
@@ -167,6 +185,7 @@ class Turtlesim:
             self.viewer.draw()
 
     def _write_image(self, path: Any) -> None:
+        # deferred: start-up (Pillow, only with --image)
         from ..sim.draw import render
 
         try:
@@ -174,6 +193,16 @@ class Turtlesim:
         except OSError as e:
             # `llfsm run` reports it and ends with status 1: a picture asked for and not written
             self.ctx.output_errors.append(f"--image {path}: cannot write: {e.strerror or e}")
+
+
+def _channel(colour: str) -> Any:
+    # deferred: with the node, as in _Turtle
+    from ..msgs.rcl_interfaces.msg import IntegerRange, ParameterDescriptor
+
+    return ParameterDescriptor(
+        description=f"{colour} channel of the background color",
+        integer_range=[IntegerRange(from_value=0, to_value=255, step=1)],
+    )
 
 
 def start(ctx: RunContext, options: NodeOptions) -> Turtlesim:

@@ -27,7 +27,6 @@ from .logging import Logger, LoggingSeverity
 from .names import InvalidNameError, Remap
 from .node import Node
 from .parameters import Parameter
-from .parameters import parse_param as parse_param  # for `llfsm run --param`, not machine code
 from .publisher import Publisher
 from .qos import (
     DurabilityPolicy,

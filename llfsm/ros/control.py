@@ -1,4 +1,4 @@
-"""Machines on the graph (SPEC §8): each machine's state, structure and control, as ROS means.
+"""Machines on the graph (docs/view.md): each machine's state, structure and control, as ROS means.
 
 For each loaded machine M, a node `/llfsm/M` offers
 - `/llfsm/M/state` (std_msgs/msg/String, the current state's name; TRANSIENT_LOCAL, so a late
@@ -7,7 +7,12 @@ For each loaded machine M, a node `/llfsm/M` offers
   transitions in priority order, targets and guard text; initial and suspend state;
   TRANSIENT_LOCAL),
 - `/llfsm/M/suspend`, `/llfsm/M/resume`, `/llfsm/M/restart` (std_srvs/srv/Trigger), which
-  schedule the command exactly as the macros do: pending until M's next ringlet.
+  schedule the command exactly as the macros do: pending until M's next ringlet;
+- the variables machine.yaml lists under `parameters:` as parameters of the node, typed by
+  their annotations: a set (`llfsm param set /llfsm/M gain 2.0`, `ros2 param set`, an override
+  from `-p` or `--params-file`) gives the variable its value at the start of M's next ringlet
+  (Arrangement.set_variables), never in the middle of one; a get shows the variable's value,
+  changes made by M's own code included (docs/parameters.md).
 
 Everything goes through the public `ros` API, so it works on any transport.  It joins the
 graph with the bus (the first `ros.init()` or a `--node`): a run that never uses the bus
@@ -30,6 +35,7 @@ from ..runtime.context import RunContext, activate
 from ..runtime.machine import RESTART, RESUME, SUSPEND, Machine
 from ..runtime.trace import Tee, Tracer
 from .node import Node
+from .parameters import Parameter, ParameterDescriptor
 from .qos import DurabilityPolicy, QoSProfile
 
 if TYPE_CHECKING:
@@ -145,6 +151,8 @@ class MachineGraph(Tracer):
             for verb in (SUSPEND, RESUME, RESTART):
                 node.create_service(Trigger, f"~/{verb}", self._service(m, verb))
             entry.listened = entry.state_pub.get_subscription_count() > 0
+            if m.PARAMETERS:
+                _declare_variables(arr, m, node)
         #: Readers in other processes come and go unannounced (a DDS transport): there, states
         #: are always published, so the writer's kept sample is current for a late joiner.
         self.always = bool(getattr(getattr(bus, "transport", None), "remote", False))
@@ -212,6 +220,58 @@ class MachineGraph(Tracer):
             return response
 
         return serve
+
+
+def _as_type(value: object, type_: Parameter.Type) -> object:
+    """The variable's value as its parameter holds it: an int where a float is annotated (`gain:
+    float = 2`) is that float; a tuple is a list."""
+    if type_ is Parameter.Type.DOUBLE and type(value) is int:
+        return float(value)
+    if type_ is Parameter.Type.DOUBLE_ARRAY and isinstance(value, list | tuple):
+        return [float(v) if type(v) is int else v for v in value]
+    if isinstance(value, tuple):
+        return list(value)
+    return value
+
+
+def _declare_variables(arr: Arrangement, m: Machine, node: Node) -> None:
+    """M's `parameters:` on its node: declared statically typed from the annotations, with the
+    run's overrides applied through the scheduler like any later set."""
+    names = {name for name, _ in m.PARAMETERS}
+    types = {name: Parameter.Type[kind] for name, kind in m.PARAMETERS}
+    overridden: dict[str, object] = {}
+    for name, type_ in types.items():
+        current = _as_type(getattr(m, name), type_)
+        descriptor = ParameterDescriptor(description=f"variable {name} of machine {m.NAME}", type=int(type_))
+        declared = node.declare_parameter(name, current if type_.check(current) else type_, descriptor)
+        if declared.type_ is not Parameter.Type.NOT_SET and declared.value != current:
+            overridden[name] = _own(declared.value)
+    if overridden:
+        arr.set_variables(m.NAME, overridden)
+
+    def apply(params: list[Parameter]) -> None:
+        values = {p.name: _own(p.value) for p in params if p.name in names}
+        if values:
+            arr.set_variables(m.NAME, values)
+
+    def refresh() -> None:
+        """What M's own code did to a variable shows in a get (unless a set is still pending)."""
+        pending = arr._variables.get(m._id, {})
+        for name in names:
+            if name in pending:
+                continue
+            value = _as_type(getattr(m, name), types[name])
+            held = node._parameters.get(name)
+            if held is not None and held.value != value and types[name].check(value):
+                node._parameters[name] = Parameter(name, types[name], value)
+
+    node.add_post_set_parameters_callback(apply)
+    node._refresh_parameters = refresh
+
+
+def _own(value: object) -> object:
+    """A list for the machine of its own (machine code may change it in place)."""
+    return list(value) if isinstance(value, list) else value
 
 
 def refusal(m: Machine, verb: str) -> str | None:

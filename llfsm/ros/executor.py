@@ -200,8 +200,8 @@ class Executor:
                     return FutureReturnCode.TIMEOUT  # no server in any process, or it went away
             elif future._service is not None and future._service not in self.services:
                 return FutureReturnCode.TIMEOUT  # no server: nothing in this process can answer
-            if self._poll is not None:
-                self._poll()
+            if self._poll is not None and self._poll() and future.done():
+                return FutureReturnCode.SUCCESS  # the reply was in what the poll took: no wait
             if self.timers and self.timers[0][0] <= self.clock.now:
                 self._fire_due_timers(self.clock.now)
                 continue

@@ -10,26 +10,38 @@ from collections.abc import Callable
 from typing import Any
 
 from ..msgs._message import Message, Service, is_message_class, is_service_class
+from ..msgs.rcl_interfaces.msg import ParameterEvent
 from .bus import bus_of
 from .client import Client
 from .clock import RunClock
 from .logging import Logger
 from .names import expand, normalise_namespace, remap_name, remap_node, validate_node_name
-from .parameters import NodeParameters, Parameter
+from .parameter_service import ParameterService
+from .parameters import Parameter, ParameterHost, overrides_for
 from .publisher import LatchingPublisher, Publisher
-from .qos import QoSProfile
+from .qos import QoSProfile, qos_profile_parameter_events
 from .qos import resolve as resolve_qos
 from .service import ServiceServer
 from .subscription import Subscription
 from .timer import Timer
 
 
-class Node:
+class Node(ParameterHost):
     """A participant on the bus, as `rclpy.node.Node`.  Names follow ROS 2 rules: relative names
-    take the node's namespace, `~/x` is private to the node, and `--remap` rules apply."""
+    take the node's namespace, `~/x` is private to the node, and `--remap` rules apply.  Its
+    parameters (ParameterHost, parameters.py) are rclpy's, served to other processes unless
+    `start_parameter_services=False` (the hidden nodes of `llfsm topic pub` and the like)."""
 
     def __init__(
-        self, node_name: str, namespace: str = "", *, start_parameter_services: bool = True, **_ignored: Any
+        self,
+        node_name: str,
+        namespace: str = "",
+        *,
+        start_parameter_services: bool = True,
+        parameter_overrides: list[Parameter] | None = None,
+        allow_undeclared_parameters: bool = False,
+        automatically_declare_parameters_from_overrides: bool = False,
+        **_ignored: Any,
     ) -> None:
         bus = bus_of()
         if not bus.initialised:
@@ -40,11 +52,25 @@ class Node:
         self._ns = ns
         self._destroyed = False
         self._entities: list[Any] = []
-        self._parameters = NodeParameters(bus, name)
         logger_name = ".".join([*ns.strip("/").split("/"), name]) if ns != "/" else name
         self._logger = Logger(bus, logger_name)
         bus.nodes.append(self)
         bus.transport.node_changed(self)
+        events = (
+            self.create_publisher(ParameterEvent, "/parameter_events", qos_profile_parameter_events)
+            if start_parameter_services
+            else None
+        )
+        self._init_parameters(
+            overrides_for(bus, name, self.get_fully_qualified_name()),
+            parameter_overrides,
+            allow_undeclared_parameters,
+            events,
+        )
+        if automatically_declare_parameters_from_overrides:
+            self.declare_parameters("", [(n, p.value) for n, p in self._parameter_overrides.items()])
+        if start_parameter_services:
+            ParameterService(self)
 
     # names
     def get_name(self) -> str:
@@ -152,21 +178,9 @@ class Node:
         self._destroyed = True
         self._bus.transport.node_changed(self)
 
-    # logging, time, parameters
+    # logging, time (parameters: ParameterHost)
     def get_logger(self) -> Logger:
         return self._logger
 
     def get_clock(self) -> RunClock:
         return RunClock(self._bus)
-
-    def declare_parameter(self, name: str, value: Any = None, *_args: Any, **_kw: Any) -> Parameter:
-        return self._parameters.declare(name, value)
-
-    def has_parameter(self, name: str) -> bool:
-        return self._parameters.has(name)
-
-    def get_parameter(self, name: str) -> Parameter:
-        return self._parameters.get(name)
-
-    def set_parameters(self, parameters: list[Parameter]) -> list[bool]:
-        return self._parameters.set(parameters)

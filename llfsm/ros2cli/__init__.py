@@ -9,7 +9,8 @@ name):
 - `node`: `list`.
 - `service`: `list`, `call`.
 - `interface`: `show`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to llfsm's classes, with
-  a "did you mean" for near misses.  Offline; the web view reads TYPEs through it too.
+  a "did you mean" for near misses (llfsm/msgs/_lookup.py, which the web view reads TYPEs
+  through too), as the verbs' usage errors.  Offline.
 
 What the groups share:
 

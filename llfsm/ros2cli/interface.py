@@ -1,6 +1,7 @@
-"""`interface show`, and interface types by name: `pkg/msg/Name` (or `pkg/Name`, as `ros2`
-accepts) to llfsm's message and service classes, which every verb that takes a TYPE (and the
-web view) reads it through.
+"""`interface show`, and interface types by name for the verbs: `pkg/msg/Name` (or `pkg/Name`,
+as `ros2` accepts) to llfsm's message and service classes, a mistake being the verbs' one-line
+usage error.  The lookup itself is llfsm/msgs/_lookup.py, which the web view reads TYPEs
+through too (a layer below both).
 
 Built-in packages are the generated modules under llfsm/msgs/; their definitions are the files
 in llfsm/msgs/_interfaces/ they are generated from (ROS 2's own, with their comments).  A user's
@@ -10,20 +11,28 @@ the commands add the working directory and its parents (where a machine's packag
 
 from __future__ import annotations
 
-import difflib
-import importlib
 import os
-import re
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
-from ..msgs import Message, Service, add_search_path, find_package, search_path
+from ..msgs import Message, Service, _lookup, add_search_path, find_package
+from ..msgs._lookup import DEFINITIONS as _DEFINITIONS
+from ..msgs._lookup import KINDS, TypeNameError, builtin_packages, known_types
 from . import CliError
 
-_MSGS_DIR = Path(__file__).resolve().parent.parent / "msgs"
-_DEFINITIONS = _MSGS_DIR / "_interfaces"
-_PACKAGE = re.compile(r"^(?!.*__)(?!.*_$)[a-z][a-z0-9_]*$")
-_NAME = re.compile(r"^[A-Z][A-Za-z0-9]*$")
-KINDS = ("msg", "srv")
+__all__ = [
+    "KINDS",
+    "definition_file",
+    "known_types",
+    "message_class",
+    "service_class",
+    "show",
+    "split_type",
+    "use_working_directory",
+]
+
+_T = TypeVar("_T")
 
 
 def use_working_directory(cwd: str | os.PathLike[str] | None = None) -> None:
@@ -34,99 +43,28 @@ def use_working_directory(cwd: str | os.PathLike[str] | None = None) -> None:
         add_search_path(folder)
 
 
+def _as_usage_error(lookup: Callable[..., _T], *args: str) -> _T:
+    """The lookup's answer, or its one-line TypeNameError as the verbs' usage error (status 2)."""
+    try:
+        return lookup(*args)
+    except TypeNameError as e:
+        raise CliError(str(e)) from None
+
+
 def split_type(text: str, kind: str) -> tuple[str, str, str]:
     """("turtlesim", "srv", "Spawn") from "turtlesim/srv/Spawn" or "turtlesim/Spawn"; `kind`
     is what a two-part name means.  Anything else is a usage error."""
-    parts = text.split("/")
-    if len(parts) == 2:
-        parts = [parts[0], kind, parts[1]]
-    if len(parts) != 3 or parts[1] not in KINDS or not _PACKAGE.match(parts[0]) or not _NAME.match(parts[2]):
-        example = "geometry_msgs/msg/Twist" if kind == "msg" else "turtlesim/srv/Spawn"
-        raise CliError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {example})")
-    return parts[0], parts[1], parts[2]
-
-
-def _builtin_packages() -> list[str]:
-    return sorted(
-        d.name
-        for d in _MSGS_DIR.iterdir()
-        if not d.name.startswith("_") and any((d / k / "__init__.py").is_file() for k in KINDS)
-    )
-
-
-def _user_packages() -> dict[str, Path]:
-    found: dict[str, Path] = {}
-    for root in search_path():
-        try:
-            entries = sorted(root.iterdir())
-        except OSError:
-            continue
-        for d in entries:
-            if _PACKAGE.match(d.name) and d.name not in found and any((d / k).is_dir() for k in KINDS):
-                found[d.name] = d
-    return found
-
-
-def known_types(kind: str) -> list[str]:
-    """Every `pkg/kind/Name` llfsm can import: built-in packages, then the user's."""
-    out = []
-    builtin = _builtin_packages()
-    for pkg in builtin:
-        folder = _DEFINITIONS / pkg / kind
-        if folder.is_dir():
-            out += [f"{pkg}/{kind}/{p.stem}" for p in sorted(folder.glob(f"*.{kind}"))]
-    for pkg, d in _user_packages().items():
-        if pkg not in builtin and (d / kind).is_dir():
-            out += [f"{pkg}/{kind}/{p.stem}" for p in sorted((d / kind).glob(f"*.{kind}")) if _NAME.match(p.stem)]
-    return out
-
-
-def _unknown(text: str, kind: str) -> CliError:
-    name = "message" if kind == "msg" else "service"
-    parts = text.split("/")
-    other = "srv" if kind == "msg" else "msg"
-    twin = f"{parts[0]}/{other}/{parts[-1]}"
-    if len(parts) in (2, 3) and twin in known_types(other):  # std_srvs/msg/Trigger: the kind is wrong
-        what = "a service" if other == "srv" else "a message"
-        return CliError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
-    candidates = known_types(kind)
-    close = difflib.get_close_matches(text, candidates, n=1, cutoff=0.6)
-    if not close:  # "Twist", "geometry_msgs/twist": match on the name alone
-        last = text.rsplit("/", 1)[-1].lower()
-        close = [t for t in candidates if t.rsplit("/", 1)[1].lower() == last][:1]
-    hint = f" (did you mean '{close[0]}'?)" if close else ""
-    return CliError(f"unknown {name} type '{text}'{hint}")
-
-
-def _import(pkg: str, kind: str, name: str, text: str) -> object:
-    try:  # llfsm.msgs, imported above, has installed the import hook for user packages
-        module = importlib.import_module(f"llfsm.msgs.{pkg}.{kind}")
-    except ModuleNotFoundError as e:
-        if e.name is not None and e.name.startswith(f"llfsm.msgs.{pkg}"):  # no such package, or no msg/srv in it
-            raise _unknown(text, kind) from None
-        raise CliError(f"{text}: {e}") from None
-    except ImportError as e:  # a user's definition that does not compile: file and line
-        raise CliError(str(e)) from None
-    cls = getattr(module, name, None)
-    if cls is None or getattr(cls, "_TYPE", None) != f"{pkg}/{kind}/{name}":
-        raise _unknown(text, kind)
-    return cls
+    return _as_usage_error(_lookup.split_type, text, kind)
 
 
 def message_class(text: str) -> type[Message]:
     """The message class that TYPE names (`std_msgs/msg/String`, `std_msgs/String`)."""
-    pkg, kind, name = split_type(text, "msg")
-    if kind != "msg":
-        raise CliError(f"'{text}' is a service type; a topic carries a message type (pkg/msg/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _as_usage_error(_lookup.message_class, text)
 
 
 def service_class(text: str) -> type[Service]:
     """The service class that TYPE names (`turtlesim/srv/Spawn`, `turtlesim/Spawn`)."""
-    pkg, kind, name = split_type(text, "srv")
-    if kind != "srv":
-        raise CliError(f"'{text}' is a message type; a service has a service type (pkg/srv/Name)")
-    return _import(pkg, kind, name, text)  # type: ignore[return-value]
+    return _as_usage_error(_lookup.service_class, text)
 
 
 # -- ros2 interface show -------------------------------------------------------------------------
@@ -134,7 +72,7 @@ def service_class(text: str) -> type[Service]:
 
 def definition_file(pkg: str, kind: str, name: str) -> Path | None:
     """The .msg/.srv file that defines the type, or None."""
-    if pkg in _builtin_packages():
+    if pkg in builtin_packages():
         folders = [_DEFINITIONS / pkg / kind]
     else:
         d = find_package(pkg)
@@ -198,7 +136,7 @@ def _show(
 ) -> None:
     path = definition_file(pkg, kind, name)
     if path is None:
-        raise _unknown(text, kind)
+        raise CliError(str(_lookup.unknown(text, kind)))
     try:
         source = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:

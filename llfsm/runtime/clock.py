@@ -8,7 +8,8 @@ import time
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from collections.abc import Callable
-    from typing import Any
+
+    from .context import RunContext
 
 
 def parse_duration(text: str) -> int:
@@ -54,7 +55,7 @@ class SimClock(Clock):
         self.now = 0
         self.period = period_ns
         #: The run context using this clock (RunContext sets it): told when the time jumps.
-        self.context: Any = None
+        self.context: RunContext | None = None
 
     def advance(self, fired: bool) -> None:
         self.now += self.period

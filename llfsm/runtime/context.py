@@ -4,7 +4,7 @@ The bus (`llfsm.ros`) keeps its graph here rather than in module globals, so tha
 (and every test) starts from a clean slate, and reads the run clock and the interrupt state
 from here so that `ros.ok()` turns false on Ctrl-C exactly as rclpy's does.
 
-The bus and its transport belong to llfsm.ros (SPEC §3, §6), a layer above the runtime, so the
+The bus and its transport belong to llfsm.ros (docs/bus.md, docs/transports.md), a layer above the runtime, so the
 context types them by the little it knows of them (llfsm.runtime.protocols); the bus's own
 module reads them back as what it made.
 """

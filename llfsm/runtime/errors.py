@@ -36,7 +36,7 @@ FILE_PATTERN = (
 
 
 def _compiled(pattern: str) -> Pattern[str]:
-    import re  # error paths only (re caches what it compiles)
+    import re  # deferred: start-up (error paths only; re caches what it compiles)
 
     return re.compile(pattern)
 
@@ -58,6 +58,7 @@ class RunStopped(BaseException):
 
 
 def signal_name(signum: int) -> str:
+    # deferred: start-up (the signal module's enums; error paths only)
     import signal
 
     try:
@@ -81,6 +82,7 @@ def passes_through(exc: BaseException) -> bool:
 
 def _std_stream_broken() -> bool:
     """Whether stdout or stderr is a pipe whose reader has gone (poll reports an error on it)."""
+    # deferred: start-up (error paths only)
     import select
 
     if not hasattr(select, "poll"):
@@ -128,7 +130,7 @@ class ErrorReport:
     def __eq__(self, other: object) -> bool:
         return isinstance(other, ErrorReport) and self.as_dict() == other.as_dict()
 
-    __hash__ = None  # type: ignore[assignment]  (mutable, as a dataclass is)
+    __hash__ = None  # type: ignore[assignment]  # mutable, as a dataclass is
 
     def format(self) -> str:
         """Two lines: a compiler-style first line, then the offending source line."""
@@ -198,6 +200,7 @@ def map_line(filename: str, lineno: int, source_map: SourceMap | None = None) ->
     import linecache  # error paths only: a run's start-up does not pay for them
 
     if source_map:
+        # deferred: start-up (error paths only)
         import bisect
 
         i = bisect.bisect_left(source_map, (lineno,)) - 1

@@ -18,25 +18,29 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from typing import Any, ClassVar
 
+    from _typeshed import IdentityFunction
+
     from .scheduler import Arrangement
 
 if __file__.endswith((".so", ".pyd")):  # compiled by mypyc (`--native`), which reads this decorator
     from mypy_extensions import mypyc_attr
 else:  # plain Python (source or bytecode) has nothing to do with it, and mypy_extensions imports typing
 
-    def mypyc_attr(*_args: object, **_kwargs: object) -> Callable[[type], type]:  # type: ignore[misc]
+    def mypyc_attr(*attrs: str, **kwattrs: object) -> IdentityFunction:  # mypy_extensions' signature
         return lambda cls: cls
 
 
 #: Returned by the ringlet of an accepting state: the machine has finished.
 FINISHED = -1
 
-# Control commands a machine can have pending (SPEC section 2, step 1).
+# Control commands a machine can have pending (docs/semantics.md, "A ringlet, step by step", step 1).
 SUSPEND, RESUME, RESTART = "suspend", "resume", "restart"
 
 if TYPE_CHECKING:
-    #: A ringlet takes the machine (typed Any: each generated class types its own ringlets).
+    #: A ringlet takes the machine (typed Any: each generated class types its own ringlets,
+    #: which take that class, not Machine, and a callable's parameter cannot be narrowed).
     Ringlet = Callable[[Any], "int | None"]
+    #: A state's OnSuspend or OnResume section, if it has one (Any: as a ringlet's).
     Hook = Callable[[Any], None] | None
 
 
@@ -86,6 +90,10 @@ class Machine:
     #: machine.yaml's inputs, one entry each: (name, type, default, domain, topic, msg, field);
     #: topic, msg and field are None for an input bound to nothing (llfsm.runtime.inputs).
     INPUTS: ClassVar[tuple[tuple[Any, ...], ...]] = ()
+    #: machine.yaml's `parameters:`, each (variable, rclpy's type name: "DOUBLE", "INTEGER_ARRAY"
+    #: ...): parameters of the node /llfsm/NAME (llfsm.ros.control), set between ringlets
+    #: (Arrangement.set_variables).
+    PARAMETERS: ClassVar[tuple[tuple[str, str], ...]] = ()
 
     # Slots make attribute access on the hot path as cheap as CPython allows; generated classes
     # add their variables to them.

@@ -1,8 +1,10 @@
 """What the runtime knows of the layers above it: the run's bus and its transport (llfsm.ros,
-SPEC §3 and §6), which the run context holds for them but never names.
+docs/bus.md and docs/transports.md), which the run context holds for them but never names, and
+the text streams it writes to, which may be the session's outputs (llfsm.outputs).
 
-For type checkers only: the context imports this under TYPE_CHECKING, so a run never imports
-it (nor `typing`, which it needs), and a native build (docs/native.md) never compiles it.
+For type checkers only: the context and the tracer import this under TYPE_CHECKING, so a run
+never imports it (nor `typing`, which it needs), and a native build (docs/native.md) never
+compiles it.
 """
 
 from __future__ import annotations
@@ -31,3 +33,11 @@ class RunTransport(Protocol):
         ...
 
     def close(self) -> None: ...
+
+
+class TextSink(Protocol):
+    """Where a tracer writes its lines: a text stream, or a file of the session's that keeps
+    its first write error for the end of the run (llfsm.outputs.StreamedOutput)."""
+
+    def write(self, text: str, /) -> object: ...
+    def flush(self) -> None: ...

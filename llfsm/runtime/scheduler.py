@@ -1,4 +1,4 @@
-"""The ringlet scheduler: one thread runs an arrangement of machines round-robin (SPEC §2).
+"""The ringlet scheduler: one thread runs an arrangement of machines round-robin (docs/semantics.md).
 
 The untraced loops (`_sim_rounds`, `_wall_rounds`, `_rounds`) are the fast path: a round is a
 plain call per live machine, `m._run(m)`, and nothing else runs between rounds unless something
@@ -21,6 +21,7 @@ from .trace import Tracer
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
+    from _signal import _Handler
     from collections.abc import Callable, Sequence
     from types import FrameType, TracebackType
     from typing import Final
@@ -29,7 +30,7 @@ if TYPE_CHECKING:
 
     from .watchdog import Watchdog
 
-#: Exit statuses (SPEC §2): a normal end, an exception in machine code, bad input.
+#: Exit statuses (docs/cli.md, "Exit statuses"): a normal end, an exception in machine code, bad input.
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
@@ -103,10 +104,11 @@ class Arrangement:
         self.watchdog: Watchdog | None = None
         #: Told once when an interrupt takes effect (the CLI prints it for the user).
         self.on_interrupt: Callable[[int], None] | None = None
-        #: SPEC §2 ends a run whose machines are all suspended: nothing could resume them.  A run
-        #: steered from outside (control services a page or another process calls) waits instead.
+        #: A run whose machines are all suspended ends (docs/semantics.md, "When a run ends"):
+        #: nothing could resume them.  A run steered from outside (control services a page or
+        #: another process calls) waits instead.
         self.end_when_suspended = True
-        #: Keep running rounds with no machine left (nodes on their own, SPEC 4): the run then
+        #: Keep running rounds with no machine left (nodes on their own, docs/turtlesim.md): the run then
         #: ends by an interrupt or --duration only.
         self.serve_forever = False
         names = [c.NAME for c in classes]
@@ -131,6 +133,9 @@ class Arrangement:
             m._state, m._suspended, m._resume_to = m.SUSPENDED, True, None
             m._next, m._run = m.ENTER[m.SUSPENDED], m._held
         self._live: list[Machine] = list(self.machines)
+        #: New values for machines' variables (their parameters), by machine id, waiting for the
+        #: machine's next ringlet (set_variables).
+        self._variables: dict[int, dict[str, object]] = {}
 
     @property
     def _attention(self) -> bool:
@@ -165,6 +170,15 @@ class Arrangement:
         gate, which takes the snapshot first.  (Called during m's own ringlet, the ringlet may
         still point `_run` past the gate: `_rehold` puts it back after the round.)"""
         _hold(m)
+        self._attention = True
+
+    def set_variables(self, name: str, values: dict[str, object]) -> None:
+        """Give machine variables new values (a machine's parameters set from outside,
+        llfsm.ros.control): they take effect at the start of the machine's next ringlet, before
+        a pending command, never in the middle of a ringlet.  Later values replace earlier ones."""
+        m = self.machine(name)
+        self._variables.setdefault(m._id, {}).update(values)
+        _hold(m)  # the gate sets them; a machine setting its own may still fire: _rehold fixes that
         self._attention = True
 
     def suspend_now(self, m: Machine, remember: int | None) -> None:
@@ -225,27 +239,30 @@ class Arrangement:
             tr.command("restart", m, m.INITIAL)
         return True
 
-    def _gate(self, m: Machine) -> int | None:
-        """Stands in for the ringlet of a held machine (a command pending, suspended, or a new
-        input value to take): take the inputs' snapshot, apply the command, then run the real
-        ringlet if the command lets it go on."""
-        if not self._open_gate(m):
-            return None  # suspended: no ringlet; or the command (suspend) ended it
-        return m._run(m)
-
-    def _open_gate(self, m: Machine) -> bool:
-        """The start of a held machine's ringlet: the inputs' snapshot (if a value came), then the
-        pending command.  True if the ringlet goes on (with `_run` pointing at it)."""
+    def _release(self, m: Machine) -> bool:
+        """The turn of a held machine (a new input value to take, new variable values, a command
+        pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
+        True if the ringlet goes on."""
         inputs = m._inputs
         if inputs is not None and inputs.fresh:
             inputs.snapshot()
-        if m._pending is None:
-            if m._suspended:
-                return False  # no ringlet while suspended
-        elif not self._apply(m):
-            return False
+        if self._variables:
+            values = self._variables.pop(m._id, None)
+            if values is not None:
+                for name, value in values.items():
+                    setattr(m, name, value)
+        if m._pending is not None:
+            if not self._apply(m):
+                return False  # the command (suspend) ended the ringlet
+        elif m._suspended:
+            return False  # suspended: no ringlet
         _regate(m)
         return True
+
+    def _gate(self, m: Machine) -> int | None:
+        """Stands in for the ringlet of a held machine: release it, then run the real ringlet
+        if that lets it go on."""
+        return m._run(m) if self._release(m) else None
 
     def finish(self, m: Machine) -> None:
         """The machine has finished: unload it.  The hook generated code calls, from the ringlet
@@ -261,7 +278,9 @@ class Arrangement:
         """Between rounds: a machine that commanded itself and then fired a transition in the
         same ringlet pointed `_run` past its gate; put the gate back in front."""
         for m in self.machines:
-            if m._pending is not None or m._suspended or (m._inputs is not None and m._inputs.fresh):
+            inputs = m._inputs
+            fresh = inputs is not None and inputs.fresh  # a new input value for its snapshot
+            if m._pending is not None or m._suspended or m._id in self._variables or fresh:
                 _hold(m)
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
@@ -280,7 +299,7 @@ class Arrangement:
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
         for m in live:
-            if m._run is m._held and not self._open_gate(m):
+            if m._run is m._held and not self._release(m):
                 continue
             s = m._state
             if m._entered:
@@ -316,7 +335,7 @@ class Arrangement:
         return None
 
     def run(self, duration_ns: int | None = None, grace_ns: int = 1_000_000_000) -> RunResult:
-        """Run rounds until the run ends (SPEC §2); machine exceptions become an error report."""
+        """Run rounds until the run ends (docs/semantics.md); machine exceptions become an error report."""
         prev = activate(self.ctx)
         self.ctx.deadline = duration_ns
         self._grace_ns = grace_ns
@@ -363,8 +382,9 @@ class Arrangement:
         time has come: a quiet bus costs a round nothing."""
         clock, ctx, tr = self.clock, self.ctx, self.tracer
         hooks = ctx.between_rounds
-        sim = type(clock) is SimClock
-        wall = type(clock) is WallClock and not clock.period  # type: ignore[attr-defined]
+        # the clock again, as what its own loop needs (None where that loop does not run it)
+        sim = clock if type(clock) is SimClock else None
+        wall = clock if type(clock) is WallClock and not clock.period else None
         rounds = self.rounds
         try:
             while True:
@@ -385,14 +405,14 @@ class Arrangement:
                     ctx.round = rounds
                     fired = self._traced_round(live, tr)
                     rounds += 1
-                    if sim:
-                        clock.now += clock.period  # type: ignore[attr-defined]
+                    if sim is not None:
+                        sim.now += sim.period
                     else:
                         clock.advance(fired)
-                elif sim:
-                    rounds += self._sim_rounds(live)
-                elif wall:
-                    rounds += self._wall_rounds(live)
+                elif sim is not None:
+                    rounds += self._sim_rounds(live, sim)
+                elif wall is not None:
+                    rounds += self._wall_rounds(live, wall)
                 else:
                     rounds += self._rounds(live)
                 if clock.now >= ctx.wake:
@@ -407,14 +427,14 @@ class Arrangement:
     # covers the end of the run, attention and the bus); each returns how many rounds it ran.
     # They are deliberately flat (and repeat themselves): this is the hot path of every run.
 
-    def _sim_rounds(self, live: list[Machine]) -> int:
+    def _sim_rounds(self, live: list[Machine], clock: SimClock) -> int:
         """The sim clock: the time is kept in a local and stored after each round.  A spin call
         inside machine code that moves the clock on also sets the wake time to 0 (SimClock
         tells the context), so the loop stops after that round without overwriting the jump,
         and the clock moves on by one period from wherever the jump left it.  The number of
         rounds follows from the time: no counter."""
-        clock, ctx = self.clock, self.ctx
-        period: int = clock.period  # type: ignore[attr-defined]
+        ctx = self.ctx
+        period = clock.period
         start = now = clock.now
         if len(live) == 1:
             m = live[0]
@@ -435,18 +455,18 @@ class Arrangement:
         clock.now += period  # the last round's step (from the jump, if there was one)
         return (now - start) // period
 
-    def _wall_rounds(self, live: list[Machine]) -> int:
+    def _wall_rounds(self, live: list[Machine], clock: WallClock) -> int:
         """The wall clock without a period: sleep `idle` after a round in which no transition
         fired, then read the clock.  Rounds that each fire a transition, back to back, read it
         in batches (a clock read costs as much as a whole plain ringlet): every 2, 4, ... up to
         BATCH rounds while the rounds since the last read took less than FAST, else every
         round.  So the run clock lags only during a stretch of firing rounds, by at most
         BATCH - 1 rounds, and a round in which nothing fires always reads it."""
-        clock, ctx = self.clock, self.ctx
-        read, start = time.monotonic_ns, clock._start  # type: ignore[attr-defined]
-        idle: float = clock.idle / 1e9  # type: ignore[attr-defined]
-        idle_ns: int = clock.idle  # type: ignore[attr-defined]
-        waiter = clock.waiter if idle_ns else None  # type: ignore[attr-defined]
+        ctx = self.ctx
+        read, start = time.monotonic_ns, clock._start
+        idle = clock.idle / 1e9
+        idle_ns = clock.idle
+        waiter = clock.waiter if idle_ns else None
         sleep = time.sleep
         now = clock.now
         every = left = 1
@@ -509,7 +529,7 @@ def _hold(m: Machine) -> None:
 
 def _regate(m: Machine) -> None:
     """Point the machine's `_run` at the gate while it is held, at its next ringlet otherwise."""
-    if m._pending is not None or m._suspended:
+    if m._pending is not None or m._suspended or m._id in m._arr._variables:
         _hold(m)
     elif m._run is m._held:
         m._run = m._next
@@ -569,7 +589,7 @@ class _SignalsHandled:
         self.handler = handler
         self.alarm = alarm
         self.watchdog = watchdog
-        self.old: dict[int, object] = {}
+        self.old: dict[int, _Handler] = {}
 
     def __enter__(self) -> None:
         self.old = {s: signal.signal(s, self.handler) for s in STOP_SIGNALS}

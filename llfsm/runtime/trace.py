@@ -10,13 +10,12 @@ import sys
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
-    from typing import IO
-
     from .machine import Machine
+    from .protocols import TextSink
 
 
 class Tracer:
-    def __init__(self, verbose: IO[str] | None = None, jsonl: IO[str] | None = None) -> None:
+    def __init__(self, verbose: TextSink | None = None, jsonl: TextSink | None = None) -> None:
         self.verbose = verbose
         self.jsonl = jsonl
         self.round = 0
@@ -49,6 +48,7 @@ class Tracer:
 
     def error(self, m: Machine | None, report: dict[str, object]) -> None:
         if self.jsonl is not None:
+            # deferred: start-up, as in _event (only when tracing)
             import json
 
             fields = {("id" if k == "machine_id" else k): v for k, v in report.items()}
@@ -71,7 +71,7 @@ class Tee(Tracer):
         self.tracers = tracers
         self._round = self._now = 0
 
-    @property  # type: ignore[override]
+    @property
     def round(self) -> int:
         return self._round
 
@@ -81,7 +81,7 @@ class Tee(Tracer):
         for t in self.tracers:
             t.round = value
 
-    @property  # type: ignore[override]
+    @property
     def now(self) -> int:
         return self._now
 

@@ -55,6 +55,7 @@ import sys
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
+    from _signal import _Handler
     from collections.abc import Sequence
     from types import FrameType
 
@@ -98,7 +99,7 @@ class Watchdog:
         self.closed = False
         self._old_wakeup = -1
         self._dump_registered = False
-        self._old_dump_handler: object = None
+        self._old_dump_handler: _Handler = None
 
     @classmethod
     def start(cls, grace_ns: int, machines: Sequence[type[Machine]]) -> Watchdog | None:
@@ -108,6 +109,7 @@ class Watchdog:
         if not exe or not hasattr(os, "posix_spawn") or not hasattr(signal, "set_wakeup_fd"):
             return None
         _reap()
+        # deferred: start-up (only a run that starts its watchdog needs it)
         import _thread
 
         wake, answers, dump = os.pipe(), os.pipe(), os.pipe()  # close-on-exec: no other program gets them
@@ -149,6 +151,7 @@ class Watchdog:
         signals_handled), and let it ask for the run's stacks.  From the main thread."""
         if self.armed or self.closed:
             return
+        # deferred: start-up (only an armed watchdog asks for stacks)
         import faulthandler
 
         if not self._dump_registered:  # stays until close (see disarm)
@@ -183,11 +186,12 @@ class Watchdog:
         os.close(self.answer_w)
         _reap(self.pid)
         if self._dump_registered:
+            # deferred: start-up, as in arm
             import faulthandler
 
             faulthandler.unregister(DUMP_SIGNAL)
             old = self._old_dump_handler  # None: a handler set from C, which Python cannot put back
-            signal.signal(DUMP_SIGNAL, signal.SIG_DFL if old is None else old)  # type: ignore[arg-type]
+            signal.signal(DUMP_SIGNAL, signal.SIG_DFL if old is None else old)
             self._dump_registered = False
         for fd in (self.wake_r, self.answer_r, self.dump_w):
             os.close(fd)
@@ -240,6 +244,7 @@ def _watch(
 ) -> None:
     """The watchdog's life: follow the run's signals and answers until the run closes the pipes
     or its process is gone; kill it, with a report, if it is stuck (see the module's docstring)."""
+    # deferred: start-up (the watchdog process's own; the run imports this module without them)
     import select
     import time
 
@@ -309,6 +314,7 @@ def _kill(
     """Ask the stuck run for its stacks, print the report of where it is, and kill it."""
     stacks = _stacks(parent, pidfd, wake, dump)
     sys.path.insert(0, package_root)  # the run's llfsm: only now, when a report is due
+    # deferred: start-up (in the watchdog process, from the run's llfsm, only when a report is due)
     from llfsm.runtime.errors import signal_name
 
     last = signal_name(stops[-1])
@@ -345,6 +351,7 @@ def _signal(parent: int, pidfd: int | None, signum: int) -> None:
 def _stacks(parent: int, pidfd: int | None, wake: int, dump: int) -> str:
     """The run's stacks as faulthandler writes them.  They are whole when DUMP_SIGNAL's number
     comes on the wakeup pipe (faulthandler chains to Python's C handler after writing them)."""
+    # deferred: start-up, as in _watch (the watchdog process's own)
     import select
     import time
 
@@ -378,6 +385,7 @@ def _report(what: str, stacks: str, main: int, machines: list[tuple[str, str]]) 
     """The usual report for the innermost frame of machine code in the run's main thread (the
     thread that runs the rounds), or a report without a place when there is none (a --native
     build's compiled machine code has no Python frames)."""
+    # deferred: start-up, as in _watch (the watchdog process, only when a report is due)
     import re
 
     from llfsm.runtime.errors import ErrorReport, locate

@@ -95,6 +95,7 @@ def turtle_shapes(name: str, x: float, y: float, theta: float, scale: float = 1.
 
 def to_image(world: TurtleWorld) -> Image.Image:
     """The picture as a Pillow RGB image, 500 x 500."""
+    # deferred: start-up (Pillow, only for a PNG; an SVG needs none)
     from PIL import Image, ImageDraw
 
     size = (CANVAS_PX, CANVAS_PX)
@@ -206,6 +207,7 @@ def _xml_attr(text: str) -> str:
 def _atomic_write(path: Path, write: Callable[[IO[bytes]], object]) -> Path:
     """Through llfsm.outputs, as every file a user names: atomic, and an OSError (OutputError)
     with one clear message when it cannot be written."""
+    # deferred: start-up (only writing a picture needs it)
     from ..outputs import write_file
 
     write_file(path, write, what="--image")

@@ -31,6 +31,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
+_c_fill_stroke: Callable[[bytearray, float, float, float, float, bytes, int], bool] | None
 try:  # the stroke painter in C (setup.py builds it where a C compiler is; optional)
     from ._paint import fill_stroke as _c_fill_stroke
 except ImportError:  # pragma: no cover - installs without a compiler
@@ -192,7 +193,7 @@ class TurtleWorld:
         self,
         background: tuple[int, int, int] = BACKGROUND,
         *,
-        log: Callable[[str], None] | None = None,
+        log: Callable[[str], object] | None = None,
         sensor_sees_background: bool = False,
     ) -> None:
         """`log` receives turtlesim's INFO lines (spawning, clearing, resetting); warnings come

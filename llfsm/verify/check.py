@@ -164,6 +164,13 @@ def verify(
             steps = []
         result.error_trace = Trace(path, steps)
     result.seconds = time.monotonic() - start
+    for cls in loaded.classes:  # SPEC 12: set from outside at run time, which nothing here does
+        names = [name for name, _kind in cls.PARAMETERS]
+        if names:
+            result.warnings.append(
+                f"{cls.NAME}: its parameters ({', '.join(names)}) kept their initial values in the exploration; "
+                "a run may set them from outside (llfsm param set): make what may change an input to explore it"
+            )
     result.configurations = explorer.count
     result.steps = explorer.steps
     explored = time.monotonic()

@@ -10,8 +10,10 @@ A configuration, as a tuple:
 - turn: the load index of the machine whose ringlet is next, or -1 once the run has ended;
 - live: the machines of the current round (as the scheduler's round computes them: those not
   finished, or with a command pending), as a bit mask;
-- globals: `ros.ok()`'s inputs (initialised, shut down, interrupted) and, with `--period`,
-  whether this is the first round;
+- globals: `ros.ok()`'s inputs (initialised, shut down, interrupted), with `--period` whether
+  this is the first round, and the nodes machine code made on the bus (by name: a node made
+  again under the same name fails as it does in a run, and a node made on one path is not there
+  on another);
 - published: the topics the step that reached the configuration published (`published()`);
 - times: each machine's time in its current state, abstracted (see below);
 - each machine's part: its ringlet, state, command, suspension, inputs as last read, variables.
@@ -59,7 +61,7 @@ from .values import Frozen, Handles
 TURN, LIVE, GLOBALS, PUBLISHED, TIMES = range(5)
 PARTS = 5
 #: Positions in the globals part.
-INITIALISED, SHUT, INTERRUPTED, FIRST_ROUND = range(4)
+INITIALISED, SHUT, INTERRUPTED, FIRST_ROUND, NODES = range(5)
 
 
 class _Recorder(Tracer):
@@ -184,6 +186,13 @@ class Explorer:
             activate(prev)
         self.arr = arr
         self.machines: list[Machine] = arr.machines
+        # the bus as the machines found it (nodes their initialisers made stay, as in a run)
+        self.base_nodes = list(self.bus.nodes)
+        self.base_services = dict(self.bus.services)
+        self.node_objects: dict[str, Any] = {}
+        self.node_services: dict[str, dict[str, Any]] = {}
+        self.nodes_on_bus: frozenset[str] = frozenset()
+        self.nodes_count = len(self.bus.nodes)
         self.handles = Handles()
         self.codecs = [
             Codec(cls, model, arr._gate_fn, self.handles)
@@ -284,9 +293,42 @@ class Explorer:
                 self.cur[i] = p
         g = config[GLOBALS]
         if self.cur_g != g:
-            gv = self.glist[g]
-            self.bus.initialised, self.bus.shut, self.ctx.interrupted = gv[INITIALISED], gv[SHUT], gv[INTERRUPTED]
+            self._set_globals(self.glist[g])
             self.cur_g = g
+
+    def _set_globals(self, gv: tuple[Any, ...]) -> None:
+        self.bus.initialised, self.bus.shut, self.ctx.interrupted = gv[INITIALISED], gv[SHUT], gv[INTERRUPTED]
+        if gv[NODES] != self.nodes_on_bus:
+            self._put_nodes(gv[NODES])
+
+    # -- the nodes machine code made: part of the globals, put back on the bus -----------------
+    def _put_nodes(self, names: frozenset[str]) -> None:
+        """The bus as a run that made the nodes `names` has it: those nodes and their services
+        (their parameter services), no other made by machine code."""
+        bus = self.bus
+        bus.nodes[:] = self.base_nodes + [self.node_objects[n] for n in sorted(names)]
+        bus.services.clear()
+        bus.services.update(self.base_services)
+        for n in names:
+            bus.services.update(self.node_services[n])
+        self.nodes_on_bus = names
+        self.nodes_count = len(bus.nodes)
+
+    def _nodes_made(self) -> frozenset[str]:
+        """After a step that made nodes: the names of the nodes on the bus now (the first node
+        made under each name, with its services, is the one put back for it later)."""
+        bus = self.bus
+        names = set(self.nodes_on_bus)
+        for node in bus.nodes[self.nodes_count :]:
+            name = node.get_fully_qualified_name()
+            if name not in self.node_objects:
+                self.node_objects[name] = node
+                self.node_services[name] = {k: v for k, v in bus.services.items() if getattr(v, "node", None) is node}
+            names.add(name)
+        made = frozenset(names)
+        self.nodes_on_bus = made
+        self.nodes_count = len(bus.nodes)
+        return made
 
     # -- the choices of a step ------------------------------------------------------------------
     def choices(self, config: tuple[Any, ...]) -> list[tuple[tuple[Any, ...], int, bool]]:
@@ -345,7 +387,7 @@ class Explorer:
             arr.tracer = record
             try:
                 r = None
-                if m._run is not m._held or arr._open_gate(m):  # as the traced round does
+                if m._run is not m._held or arr._release(m):  # as the traced round does
                     if self._entered(m):
                         record.entry(m, m._state)
                     r = m._run(m)
@@ -365,8 +407,9 @@ class Explorer:
             parts[k] = pid
             self.cur[k] = pid
         gv = self.globals_of(config)
-        if (self.bus.initialised, self.bus.shut) != was or intr:
-            gv = (self.bus.initialised, self.bus.shut, self.ctx.interrupted, gv[FIRST_ROUND])
+        if (self.bus.initialised, self.bus.shut) != was or intr or len(self.bus.nodes) != self.nodes_count:
+            nodes = self._nodes_made() if len(self.bus.nodes) != self.nodes_count else gv[NODES]
+            gv = (self.bus.initialised, self.bus.shut, self.ctx.interrupted, gv[FIRST_ROUND], nodes)
             self.cur_g = -1
         times = list(self.times_of(config))
         times[i] = self._time_after(i, m, now)
@@ -432,7 +475,7 @@ class Explorer:
                     e = times[k] + p
                     times[k] = e if e < cap else cap
             if gv[FIRST_ROUND]:
-                gv = (*gv[:FIRST_ROUND], False)
+                gv = (*gv[:FIRST_ROUND], False, *gv[FIRST_ROUND + 1 :])
         live = 0
         for k, m in enumerate(self.machines):
             if not m._finished or m._pending is not None:
@@ -480,7 +523,7 @@ class Explorer:
             pid = part if hc else self._part_id(k, part)
             parts.append(pid)
             self.cur[k] = pid
-        gv = (self.bus.initialised, self.bus.shut, False, self.period is not None)
+        gv = (self.bus.initialised, self.bus.shut, False, self.period is not None, frozenset())
         g = self.cur_g = self._intern(self.gtab, self.glist, gv)
         e = self._intern(self.etab, self.elist, frozenset())
         t = self._intern(self.ttab, self.tlist, (0,) * self.n)
@@ -842,8 +885,7 @@ class Explorer:
                             restores[k](machines[k], part_lists[k][p])
                             cur[k] = p
                     if self.cur_g != g0:
-                        gv = glist[g0]
-                        bus.initialised, bus.shut, ctx.interrupted = gv[INITIALISED], gv[SHUT], gv[INTERRUPTED]
+                        self._set_globals(glist[g0])
                         self.cur_g = g0
                     if names:
                         for name, v in zip(names, values, strict=True):
@@ -887,8 +929,9 @@ class Explorer:
                         parts = [pid]
                     # globals
                     gv = glist[g0]
-                    if intr or bus.initialised != initialised or bus.shut != shut:
-                        gv = (bus.initialised, bus.shut, ctx.interrupted, gv[FIRST_ROUND])
+                    if intr or bus.initialised != initialised or bus.shut != shut or len(bus.nodes) != self.nodes_count:
+                        nodes = self._nodes_made() if len(bus.nodes) != self.nodes_count else gv[NODES]
+                        gv = (bus.initialised, bus.shut, ctx.interrupted, gv[FIRST_ROUND], nodes)
                     # the machine's time in its state
                     if part[SUSPENDED] or part[FINISHED]:
                         e = 0
@@ -921,13 +964,13 @@ class Explorer:
                         new_live = 0
                         for k in range(n):
                             mk = machines[k]
-                            pending = mk._pending is not None
-                            if mk._finished and not pending:
+                            commanded = mk._pending is not None
+                            if mk._finished and not commanded:
                                 continue  # unloaded
                             new_live |= 1 << k
-                            if (pending or mk._suspended) and mk._run is not mk._held:
+                            if (commanded or mk._suspended) and mk._run is not mk._held:
                                 slow = True  # the gate goes back in front: its part changes
-                            if nxt < 0 and (pending or not mk._suspended):
+                            if nxt < 0 and (commanded or not mk._suspended):
                                 nxt = k
                         if slow or period is not None or (n > 1 and new_live != live):
                             tl = list(times)

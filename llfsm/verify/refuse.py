@@ -127,7 +127,7 @@ def refusals(m: Machine, trees: dict[str, ast.Module], path: Path) -> Refusals:
 
     def report(code: str, file: str, node: ast.AST, message: str) -> None:
         text = next((c.text for c in _codes(m) if c.file == file), "")
-        col = node_col(text, node) if text and hasattr(node, "col_offset") else 1
+        col = node_col(text, node) if text and isinstance(node, ast.expr | ast.stmt) else 1
         out.diagnostics.append(diag(code, path / file, getattr(node, "lineno", 1), col, message))
 
     for code in _codes(m):

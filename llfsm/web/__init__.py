@@ -1,4 +1,4 @@
-"""The live view (SPEC §10): `llfsm run ... --web [HOST:]PORT` and `llfsm view`.
+"""The live view (docs/view.md): `llfsm run ... --web [HOST:]PORT` and `llfsm view`.
 
 One page, live over a WebSocket: each machine's diagram with its current state, commands,
 topics, a form to publish and one to call a service, and the turtle world.  Every script, style
@@ -22,10 +22,11 @@ class WebUnavailable(Exception):
 
 def server_class() -> Any:
     """llfsm.web.server.WebServer, or WebUnavailable naming what to install."""
+    # deferred: optional dependency (aiohttp, the web extra), and start-up: a run without --web never imports the server
     try:
         import aiohttp  # noqa: F401
     except ImportError:
         raise WebUnavailable(INSTALL_HINT) from None
-    from .server import WebServer
+    from .server import WebServer  # deferred: start-up, as aiohttp above
 
     return WebServer

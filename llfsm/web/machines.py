@@ -1,9 +1,9 @@
 """`llfsm view`: the page for whatever llfsm machines run anywhere on the DDS graph.
 
-It knows them only as any ROS tool does (SPEC §8): a topic `/llfsm/M/description` announces a
-machine M; its description and `/llfsm/M/state` (both transient local, so the current values
-arrive at once) give the diagram and the current state; `/llfsm/M/suspend|resume|restart`
-steer it.  Topics and services are found through DDS discovery (the built-in
+It knows them only as any ROS tool does (docs/view.md, "Machines on the graph"): a topic
+`/llfsm/M/description` announces a machine M; its description and `/llfsm/M/state` (both
+transient local, so the current values arrive at once) give the diagram and the current state;
+`/llfsm/M/suspend|resume|restart` steer it.  Topics and services are found through DDS discovery (the built-in
 DCPSPublication and DCPSSubscription topics, as rmw_dds_common reads them): `rt/NAME` topics,
 and services by their `rq/NAMERequest` readers.
 
@@ -65,9 +65,10 @@ class GraphSource(Source):
 
     def __init__(self, bus: Bus) -> None:
         super().__init__(bus, "llfsm_view")
+        # deferred: optional dependency (cyclonedds), only for `llfsm view`'s graph
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication, BuiltinTopicDcpsSubscription
 
-        dp = bus.transport.dp  # type: ignore[attr-defined]
+        dp = bus.transport.dp  # type: ignore[attr-defined]  # the view of a DDS graph runs on a DDS bus
         self._pubs = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
         self._subs = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)
         self._topics_seen: dict[str, Any] = {}

@@ -22,11 +22,14 @@ from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from ..msgs import to_yaml
+from ..msgs._lookup import TypeNameError, message_class, service_class
+from ..msgs._yaml import ValuesError, from_yaml
 from ..ros.control import NAMESPACE, description
+from ..ros.names import expand
+from ..ros.node import Node
 
 if TYPE_CHECKING:
     from ..ros.bus import Bus
-    from ..ros.node import Node
     from ..runtime.scheduler import Arrangement
     from ..sim.world import TurtleWorld
 
@@ -44,22 +47,17 @@ class CommandError(Exception):
 
 def type_class(type_name: str, kind: str) -> Any:
     """The class a type typed into the page names (`pkg/msg/Name`, `pkg/srv/Name`, or `pkg/Name`),
-    read as `llfsm topic pub` and `llfsm service call` read their TYPE."""
-    from ..ros2cli import CliError
-    from ..ros2cli.interface import message_class, service_class
-
+    read as `llfsm topic pub` and `llfsm service call` read their TYPE (llfsm/msgs/_lookup.py)."""
     try:
         return message_class(type_name.strip()) if kind == "msg" else service_class(type_name.strip())
-    except CliError as e:
-        raise CommandError(e.message) from None
+    except TypeNameError as e:
+        raise CommandError(str(e)) from None
 
 
 def parse_values(cls: Any, text: str) -> tuple[Any, list[Any]]:
     """The message (or request) the page's YAML values make, through the same parsing and type
     checks as `llfsm topic pub` (llfsm.msgs._yaml: PyYAML's safe loader, then field by field
     through the typed properties, never eval), and the setters of the stamps it asks for."""
-    from ..msgs._yaml import ValuesError, from_yaml
-
     try:
         return from_yaml(cls, text)
     except ValuesError as e:
@@ -91,8 +89,6 @@ class Source:
     through their control services."""
 
     def __init__(self, bus: Bus, node_name: str) -> None:
-        from ..ros.node import Node
-
         self.bus = bus
         self.ctx = bus.ctx
         self.clock = bus.clock
@@ -169,8 +165,6 @@ class Source:
         return {"success": response.success, "message": response.message}
 
     async def publish(self, topic: str, type_name: str, text: str) -> dict[str, Any]:
-        from ..ros.names import expand
-
         try:
             name = expand(topic.strip(), "llfsm_web", "/")
         except Exception as e:  # InvalidNameError and friends: one line
@@ -203,8 +197,6 @@ class Source:
         return {"success": True, "message": "response", "yaml": to_yaml(response)}
 
     async def _call(self, service: str, type_name: str, text: str) -> Any:
-        from ..ros.names import expand
-
         try:
             name = expand(service, "llfsm_web", "/")
         except Exception as e:
@@ -358,6 +350,7 @@ class RunSource(Source):
         try:
             key = (world.raster_version, tuple(world.turtle_pixels()), world.background)
             if key != self._world_key or self._world_svg is None:
+                # deferred: start-up (only a run with turtlesim draws a world)
                 from ..sim.draw import svg_text
 
                 text = svg_text(world)

@@ -9,7 +9,7 @@ import pytest
 
 from interop.ros2env import python_command, requires_netns, requires_ros, ros_command, run_ros, run_together
 
-pytestmark = pytest.mark.interop
+pytestmark = [pytest.mark.interop, pytest.mark.dds]
 
 # A cyclonedds writer and reader of geometry_msgs Twist on rt/cmd_vel in one process, with
 # XCDR1 asked for explicitly (DataRepresentation), raw CDR through the generated encoder.

@@ -11,11 +11,11 @@ import re
 from pathlib import Path
 
 import pytest
-from conftest import write_machine
+from helpers import write_machine
 
 from interop.ros2env import llfsm_command, requires_ros, ros_command, run_together
 
-pytestmark = [pytest.mark.interop, requires_ros]
+pytestmark = [pytest.mark.interop, pytest.mark.dds, requires_ros]
 
 RCLPY_SENSOR = """
 import time, rclpy

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from test_dds_types import sample, shipped_classes
+from samples import sample, shipped_classes
 
 from interop.ros2env import VENV_ROS, requires_ros
 from llfsm.msgs import _dds
@@ -22,7 +22,15 @@ pytestmark = [pytest.mark.interop, requires_ros]
 
 SHARE = VENV_ROS / "share"
 # Packages both llfsm and the wheels have (turtlesim has no wheel on PyPI).
-COMMON = ("builtin_interfaces", "std_msgs", "geometry_msgs", "std_srvs", "rmw_dds_common", "service_msgs")
+COMMON = (
+    "builtin_interfaces",
+    "std_msgs",
+    "geometry_msgs",
+    "std_srvs",
+    "rmw_dds_common",
+    "service_msgs",
+    "rcl_interfaces",
+)
 
 # Runs in .venv-ros: reads {ros type: [payload hex]} on stdin; for each payload, rclpy
 # deserializes it into its own message class and serializes that again.  Also serializes the

@@ -10,7 +10,7 @@ import pytest
 
 from interop.ros2env import python_command, requires_ros, ros_command, run_together
 
-pytestmark = [pytest.mark.interop, requires_ros]
+pytestmark = [pytest.mark.interop, pytest.mark.dds, requires_ros]
 
 _QOS = r"""
 from cyclonedds.qos import Qos, Policy

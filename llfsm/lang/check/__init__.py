@@ -11,6 +11,7 @@ what they look at, each a function over one `Checking` (llfsm.lang.check.checkin
 - includes:   Includes.py
 - code:       sections, guards and initialisers (compile limits, bindings, undefined names)
 - ros_habits: rclpy spellings (LF041)
+- parameters: machine.yaml's `parameters:` (LF060-LF062)
 - packages:   message packages package.xml does not declare (LF106)
 
 This module runs them in order for one machine (`check_machine`), and for many, over worker
@@ -36,7 +37,7 @@ from ..diagnostics import Diagnostic, Severity
 from ..discover import find_machines
 from ..model import Machine
 from ..reader import ReadResult, read_machine
-from . import code, includes, inputs, structure, variables
+from . import code, includes, inputs, parameters, structure, variables
 from .checking import Checking
 from .packages import undeclared_dependencies
 
@@ -86,6 +87,7 @@ def run_rules(c: Checking) -> None:
     includes.includes(c, m)
     variables.declarations(c, m)
     inputs.declarations(c, m)
+    parameters.parameters(c, m)
     code.initialisers(c, m)
     for s in m.states:
         code.state_code(c, m, s)

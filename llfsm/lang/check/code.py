@@ -156,7 +156,7 @@ def undefined(c: Checking, m: Machine, s: State, code: Code, u: Unresolved, star
         msg = f"name {name!r} is not defined{hint}: not a variable, an import, a builtin or a macro; {declare}"
     if star:
         msg = f"{msg} (unless the star import of Includes.py provides it)"
-    c.add("LF105" if star else "LF040", code.file, n.lineno, node_col(code.text, n), msg)  # type: ignore[attr-defined]
+    c.add("LF105" if star else "LF040", code.file, n.lineno, node_col(code.text, n), msg)
 
 
 def locals_elsewhere(c: Checking, m: Machine) -> dict[str, str]:
@@ -206,9 +206,9 @@ def reserved_use(c: Checking, code: Code, n: ast.Name) -> None:
     c.add("LF013", code.file, n.lineno, node_col(code.text, n), f"`{n.id}` {what} in machine code")
 
 
-def escape(c: Checking, fname: str, text: str, node: ast.AST) -> None:
+def escape(c: Checking, fname: str, text: str, node: ast.stmt | ast.expr) -> None:
     """LF034 for `global`/`nonlocal`; LF036 for `return`, `yield`, `await` at a section's level."""
-    col = node_col(text, node) if text else node.col_offset + 1  # type: ignore[attr-defined]
+    col = node_col(text, node) if text else node.col_offset + 1
     if isinstance(node, ast.Global | ast.Nonlocal):
         kw = "global" if isinstance(node, ast.Global) else "nonlocal"
         c.add(
@@ -223,7 +223,7 @@ def escape(c: Checking, fname: str, text: str, node: ast.AST) -> None:
         c.add(
             "LF036",
             fname,
-            node.lineno,  # type: ignore[attr-defined]
+            node.lineno,
             col,
             f"`{kw}` is not allowed at the top level of {fname}: a section runs inside the state's ringlet",
         )
@@ -232,7 +232,7 @@ def escape(c: Checking, fname: str, text: str, node: ast.AST) -> None:
 def too_deep(c: Checking, code: Code, node: ast.AST) -> None:
     """LF030: nested deeper than the compiler's recursive walks can follow."""
     line = getattr(node, "lineno", 1)
-    col = node_col(code.text, node) if hasattr(node, "col_offset") else 1
+    col = char_col(code.text, line, node.col_offset) if hasattr(node, "col_offset") else 1
     c.add("LF030", code.file, line, col, f"code nested more than {MAX_CODE_DEPTH} levels deep; split it up")
 
 

@@ -23,7 +23,7 @@ from ...runtime.machine import MACROS
 from ..reader import MAX_CODE_DEPTH
 from ..scopes import child_nodes
 
-_Node = TypeVar("_Node", bound=ast.AST)
+_Node = TypeVar("_Node", bound=ast.stmt | ast.arg)  # what compile_error makes, to be given a place
 
 _BINDERS = (
     ast.NamedExpr,
@@ -94,7 +94,7 @@ class Scanned:
     loads: dict[str, ast.Name] = field(default_factory=dict)  # first use of each name read
     bound: set[str] = field(default_factory=set)  # every name the code binds, in any scope
     reserved: list[ast.Name] = field(default_factory=list)  # `_llfsm*`, or a macro assigned
-    escapes: list[tuple[ast.AST, str]] = field(default_factory=list)  # global/nonlocal; top-level return...
+    escapes: list[tuple[ast.stmt | ast.expr, str]] = field(default_factory=list)  # global/nonlocal; top-level return...
     may_bind_variable: bool = False  # a :=, import, def... binds a name of the mapping, or `self` is used
     too_deep: ast.AST | None = None  # the first node nested deeper than MAX_CODE_DEPTH: stop there
     plain: bool = True  # only `_PLAIN` nodes, used as it allows: compiling to bytecode cannot fail
@@ -191,8 +191,8 @@ def scan_code(tree: ast.AST, mapping: Mapping[str, str]) -> Scanned:
 
 
 def _located(node: _Node) -> _Node:
-    node.lineno = node.end_lineno = 1  # type: ignore[attr-defined]
-    node.col_offset = node.end_col_offset = 0  # type: ignore[attr-defined]
+    node.lineno = node.end_lineno = 1
+    node.col_offset = node.end_col_offset = 0
     return node
 
 

@@ -1,6 +1,6 @@
 """The DDS transport: the bus on ROS 2's wire, through Cyclone DDS (the `cyclonedds` package).
 
-What a ROS 2 peer sees, as rmw_cyclonedds_cpp makes it (SPEC 6):
+What a ROS 2 peer sees, as rmw_cyclonedds_cpp makes it (docs/transports.md, "What a ROS 2 peer sees"):
 - one DomainParticipant per run (USER_DATA `enclave=/;`), configured from the ROS_* variables
   (dds_config.py);
 - each `ros.Node` a ROS 2 node, announced on `ros_discovery_info` (rmw_dds_common's
@@ -194,7 +194,8 @@ class _WaitSet:
         if n <= 0:
             return []
         handlers = self.handlers
-        return [h for h in (handlers.get(xs[i]) for i in range(min(n, len(xs)))) if h is not None]
+        # (a token is never 0, so a NULL slot, None, finds no handler either)
+        return [h for h in (handlers.get(xs[i] or 0) for i in range(min(n, len(xs)))) if h is not None]
 
 
 def _delete(*entities: Entity | None) -> None:
@@ -758,7 +759,7 @@ class DdsTransport(Transport):
         (a node-only run then keeps its timers' rhythm, turtlesim's 16 ms, to the millisecond)."""
         due = self.bus.next_timer_due()
         if due is not None:
-            ns = min(ns, max(0, due - self.bus.clock.read()))  # type: ignore[attr-defined]
+            ns = min(ns, max(0, due - self.bus.clock.read()))  # type: ignore[attr-defined]  # a WallClock (start)
         if self._parked:
             ns = min(ns, 10_000_000)
         self.waits.wait(min(ns, MAX_WAIT_NS))
@@ -802,6 +803,6 @@ class DdsTransport(Transport):
             return
         self.closed = True
         clock = getattr(self, "bus", None) and self.bus.clock
-        if clock is not None and getattr(clock, "waiter", None) == self._idle_wait:
+        if clock is not None and hasattr(clock, "waiter") and clock.waiter == self._idle_wait:
             clock.waiter = None
         _delete(self.dp)

@@ -198,6 +198,7 @@ class Graph:
             BuiltinTopicDcpsSubscription,
         )
 
+        # deferred: optional dependency and start-up, as the cyclonedds imports above
         from .dds_config import participant as make_participant
 
         self.participant = participant if participant is not None else make_participant()
@@ -233,7 +234,7 @@ class Graph:
             Policy.History.KeepLast(256),
             Policy.DataRepresentation(use_cdrv0_representation=True),
         )
-        topic = Topic(self.participant, DISCOVERY_TOPIC, dds_type(ParticipantEntitiesInfo))
+        topic: Topic[Any] = Topic(self.participant, DISCOVERY_TOPIC, dds_type(ParticipantEntitiesInfo))
         reader = DataReader(self.participant, topic, qos=qos)
         return Samples(
             reader,

@@ -1,0 +1,214 @@
+"""What the tests share: writing machine directories from a compact description, running the
+command in-process or as a process, the C parts' skip rules, and the checks of generated modules
+that more than one test module makes.  Test modules import from here (`from helpers import ...`),
+never from conftest.py (which holds only fixtures and hooks) nor from one another; other helper
+modules beside this one: strategies.py (hypothesis), samples.py (shipped message classes and
+samples of them), dds_netns.py (the private network namespace of the DDS tests).
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import io
+import json
+import os
+import subprocess
+import sys
+import sysconfig
+import tokenize
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from llfsm.cli import cli
+from llfsm.templating import CODING_LINE
+
+REPO = Path(__file__).resolve().parent.parent
+MACHINES = REPO / "machines"
+
+# -- machines and runs ----------------------------------------------------------------------------
+
+
+def write_machine(
+    root: Path,
+    name: str,
+    states: dict[str, list[tuple[str, str]] | None],
+    code: dict[str, str] | None = None,
+    variables: str | None = None,
+    includes: str | None = None,
+    yaml_extra: str = "",
+) -> Path:
+    """`states` maps each state to its transitions [(target, guard)]; `code` maps file stems
+    such as "PUBLISH_OnEntry" (or whole file names) to their text."""
+    d = root / f"{name}.machine"
+    d.mkdir(parents=True, exist_ok=True)
+    lines = [yaml_extra.rstrip()] if yaml_extra else []
+    lines.append("states:")
+    for s, trans in states.items():
+        lines.append(f"  - name: {s}")
+        if trans:
+            lines.append(f"    transitions: [{', '.join(t for t, _ in trans)}]")
+            for i, (_t, guard) in enumerate(trans):
+                (d / f"State_{s}_Transition_{i}.expr").write_text(guard + "\n")
+    (d / "machine.yaml").write_text("\n".join(lines) + "\n")
+    for key, text in (code or {}).items():
+        fname = key if "." in key else f"State_{key}.py"
+        (d / fname).write_text(text if text.endswith("\n") else text + "\n")
+    if variables is not None:
+        (d / "Variables.py").write_text(variables)
+    if includes is not None:
+        (d / "Includes.py").write_text(includes)
+    return d
+
+
+def driver(root: Path) -> Path:
+    """A machine that publishes a Twist on /turtle1/cmd_vel and a String on /chat every 100 ms
+    of run time (more than 100 ms after entering DRIVE: entries at 1 ms, 103 ms, 205 ms...):
+    what the recording tests record."""
+    return write_machine(
+        root,
+        "driver",
+        {"INITIAL": [("DRIVE", "True")], "DRIVE": [("DRIVE", "after_ms(100)")]},
+        {
+            "INITIAL_OnEntry": (
+                "ros.init()\nnode = ros.Node('driver')\n"
+                "pub = node.create_publisher(Twist, '/turtle1/cmd_vel', 10)\n"
+                "chat = node.create_publisher(String, '/chat', 10)\n"
+            ),
+            "DRIVE_OnEntry": (
+                "n += 1\nt = Twist()\nt.linear.x = 1.0 + n % 3\nt.angular.z = 0.5 * (n % 5 - 2)\npub.publish(t)\n"
+                "s = String()\ns.data = f'step {n}'\nchat.publish(s)\n"
+            ),
+        },
+        variables="n: int = 0\npub: ros.Publisher\nchat: ros.Publisher\nnode: ros.Node\n",
+        includes=(
+            "from llfsm import ros\nfrom llfsm.msgs.geometry_msgs.msg import Twist\n"
+            "from llfsm.msgs.std_msgs.msg import String\n"
+        ),
+    )
+
+
+@dataclass
+class Run:
+    status: int
+    stdout: str
+    stderr: str
+
+    @property
+    def lines(self) -> list[str]:
+        return self.stdout.splitlines()
+
+
+def llfsm(*args: str | os.PathLike[str]) -> Run:
+    """Run the CLI in-process (fast); stdout and stderr kept apart.  With LLFSM_TEST_NATIVE=1
+    in the environment, `run` goes through a process of its own with --native instead (the
+    slow test in test_native.py runs the semantics suite that way)."""
+    if os.environ.get("LLFSM_TEST_NATIVE") and args and args[0] == "run":
+        return llfsm_process("run", "--native", *args[1:], timeout=900)
+    runner = CliRunner()
+    res = runner.invoke(cli, [str(a) for a in args], catch_exceptions=False)
+    return Run(res.exit_code, res.stdout, res.stderr)
+
+
+def run_sim(*args: str | os.PathLike[str]) -> Run:
+    return llfsm("run", "--clock", "sim", *args)
+
+
+def llfsm_process(*args: str | os.PathLike[str], timeout: float = 60, **kw: object) -> Run:
+    """Run the real `llfsm` entry point in a subprocess (exit codes, signals, no tracebacks)."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "llfsm", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        **kw,  # type: ignore[arg-type]
+    )
+    return Run(proc.returncode, proc.stdout, proc.stderr)
+
+
+# -- the C parts ----------------------------------------------------------------------------------
+
+#: The C parts (the recorder's tap, turtlesim's painter) are left out on purpose in two cases:
+#: LLFSM_NO_C=1 (the run of the suite that tests the Python code they stand in for) and
+#: free-threaded CPython (setup.py does not build them there).
+C_DISABLED = os.environ.get("LLFSM_NO_C", "") not in ("", "0")
+FREE_THREADED = bool(sysconfig.get_config_var("Py_GIL_DISABLED"))
+C_OFF = C_DISABLED or FREE_THREADED
+#: With LLFSM_REQUIRE_C=1 (`make test` sets it) a C part that was not built is a failure, not a
+#: skip: the numbers docs/recording.md gives assume them, and CI measures what the docs claim.
+REQUIRE_C = os.environ.get("LLFSM_REQUIRE_C", "") not in ("", "0")
+
+
+def skip_unless_built(built: bool, what: str) -> pytest.MarkDecorator:
+    """Skip, saying why, a test of a C part (`what`: "the C tap (llfsm/bag/_tap.c)") that is not
+    there; under LLFSM_REQUIRE_C=1 an unbuilt one is not skipped, so that the test fails."""
+    if C_OFF:
+        why = f"{what} is off on purpose (LLFSM_NO_C, or free-threaded CPython)"
+    else:
+        why = f"{what} is not built: no C compiler, or not CPython with the GIL (LLFSM_REQUIRE_C=1 makes this fail)"
+    return pytest.mark.skipif(not built and (C_OFF or not REQUIRE_C), reason=why)
+
+
+# -- generated modules and SARIF ------------------------------------------------------------------
+
+
+def header_ok(source: str) -> None:
+    """The first lines of a generated module are comments, one line each, ASCII, with the fixed
+    coding line second."""
+    lines = source.split("\n")
+    assert lines[0].startswith("# Generated by llfsm")
+    assert lines[1] == CODING_LINE
+    enc, _ = tokenize.detect_encoding(io.BytesIO(source.encode("utf-8")).readline)
+    assert enc in ("utf-8", "utf-8-sig")
+    header = []
+    for line in lines:
+        if not line.startswith("#"):
+            break
+        header.append(line)
+    assert all(h.isascii() and h.isprintable() for h in header), header
+    toks = list(tokenize.generate_tokens(io.StringIO(source).readline))
+    comments = [t for t in toks if t.type == tokenize.COMMENT and t.start[0] <= len(header)]
+    assert [c.start[0] for c in comments] == list(range(1, len(header) + 1))
+    assert all(c.start[0] == c.end[0] for c in comments)
+
+
+def only_expected_statements(tree: ast.Module) -> None:
+    """A machine module holds its docstring, imports (the runtime's and those of Includes.py,
+    which check allows to hold nothing else), functions and the class, and its source map:
+    any other statement at module level got in from somewhere else."""
+    for i, stmt in enumerate(tree.body):
+        if i == 0 and isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
+            continue
+        if isinstance(stmt, ast.Import | ast.ImportFrom):
+            continue
+        if isinstance(stmt, ast.FunctionDef | ast.ClassDef):
+            continue
+        if isinstance(stmt, ast.Assign) and [getattr(t, "id", "") for t in stmt.targets] == ["_LLFSM_SOURCE_MAP"]:
+            continue
+        raise AssertionError(f"unexpected statement at line {stmt.lineno}: {ast.unparse(stmt)[:80]}")
+    assert isinstance(tree.body[-1], ast.Assign)
+
+
+@functools.cache
+def sarif_validator() -> object:
+    """A validator of SARIF 2.1.0 (tests/data/sarif-schema-2.1.0.json, draft 4) that checks formats."""
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json.loads((Path(__file__).parent / "data" / "sarif-schema-2.1.0.json").read_text(encoding="utf-8"))
+    # the schema is draft 4; FormatChecker() knows `uri-reference` (rfc3986-validator)
+    checker = jsonschema.FormatChecker()
+    assert not checker.conforms("a b#c#d", "uri-reference"), "uri-reference is not checked: install the extras"
+    return jsonschema.Draft4Validator(schema, format_checker=checker)
+
+
+def strings_in(value: object) -> list[str]:
+    """Every string in a JSON value, keys included."""
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, dict):
+        return [s for k, v in value.items() for s in (*strings_in(k), *strings_in(v))]
+    if isinstance(value, list):
+        return [s for v in value for s in strings_in(v)]
+    return []
