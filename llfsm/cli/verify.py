@@ -132,7 +132,7 @@ def verify(
         click.echo(f"llfsm: {e.message}", err=True)
         sys.exit(e.status)
     for kind, path in exports:
-        from ..verify.export import write_export
+        from ..verify.export import write_export  # deferred: start-up (only --export writes one)
 
         try:
             data = write_export(kind, result)
@@ -140,7 +140,7 @@ def verify(
             fail(str(e))
         write_output(path, data.encode("utf-8"), f"--export {kind}")
     if counterexample_dir is not None:
-        from ..verify.replay import ReplayError, write_counterexample
+        from ..verify.replay import ReplayError, write_counterexample  # deferred: start-up (only with the option)
 
         try:
             said = write_counterexample(result, counterexample_dir)

@@ -29,6 +29,7 @@ def wall_close(x: float, y: float, theta: float) -> bool:
 
 class WallSensor:
     def __init__(self) -> None:
+        # deferred: start-up (the nodes' registry imports no node's bus before it starts)
         from .. import ros
         from ..msgs.std_msgs.msg import Bool
         from ..msgs.turtlesim.msg import Pose

@@ -73,6 +73,7 @@ def message_class(type_name: str) -> type[Any]:
 def bind(arr: Arrangement, bus: Bus, where: Callable[[Machine], str] | None = None) -> list[InputReader]:
     """A reader for each topic a machine of `arr` binds inputs to, on the machine's node.
     `where(m)`: how to name the machine's machine.yaml in an error (default: its name)."""
+    # deferred: start-up (control imports the messages it publishes; a run binds inputs rarely)
     from .control import attach  # the machines' nodes (/llfsm/M): made here if not yet
 
     graph = attach(arr, bus)

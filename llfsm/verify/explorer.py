@@ -41,6 +41,7 @@ from __future__ import annotations
 import bisect
 import io
 import itertools
+import sys
 import time
 from array import array
 from collections import deque
@@ -523,7 +524,7 @@ class Explorer:
             pid = part if hc else self._part_id(k, part)
             parts.append(pid)
             self.cur[k] = pid
-        gv = (self.bus.initialised, self.bus.shut, False, self.period is not None, frozenset())
+        gv: tuple[Any, ...] = (self.bus.initialised, self.bus.shut, False, self.period is not None, frozenset())
         g = self.cur_g = self._intern(self.gtab, self.glist, gv)
         e = self._intern(self.etab, self.elist, frozenset())
         t = self._intern(self.ttab, self.tlist, (0,) * self.n)
@@ -600,8 +601,6 @@ class Explorer:
         """The configurations from the initial one along `choices` (a choice number per step),
         each with the step that reached it (None for the initial one): a path rebuilt by
         running it again, with what each ringlet did."""
-        import sys
-
         prev = activate(self.ctx)
         saved = sys.stdout
         sys.stdout = self.stdout
@@ -674,8 +673,6 @@ class Explorer:
         """Every reachable configuration, breadth first (so each is first reached by a shortest
         path); safety is judged by `on_new` as each new one is found (it returns False to stop)."""
         prev = activate(self.ctx)
-        import sys
-
         saved = sys.stdout
         sys.stdout = self.stdout  # machine code's print: every path prints, in any order
         try:
