@@ -161,6 +161,7 @@ def as_json(v: Verification) -> str:
         "growing": v.growing,
         "properties": [],
         "error": v.error,
+        "warnings": v.warnings,
     }
     for o in v.outcomes:
         item: dict[str, Any] = {
