@@ -68,9 +68,9 @@ def test_assigning_an_input_is_an_error_where_the_name_is_the_machines(tmp_path:
         yaml_extra=BOOL_INPUT,
     )
     assert codes(m) == [
-        ("LF042", "State_A_Internal.py", 1),
-        ("LF042", "State_A_OnEntry.py", 1),
-        ("LF042", "State_A_OnExit.py", 2),
+        ("LF046", "State_A_Internal.py", 1),
+        ("LF046", "State_A_OnEntry.py", 1),
+        ("LF046", "State_A_OnExit.py", 2),
     ]
 
 
@@ -82,7 +82,7 @@ def test_augmented_assignment_of_an_input_is_refused_and_reading_one_is_fine(tmp
         {"A_OnEntry": "speed += 1\n", "A_Internal": "print(speed * 2)\n"},
         yaml_extra="inputs:\n  speed:\n    type: float\n    domain: [0, 2.5]\n",
     )
-    assert codes(m) == [("LF042", "State_A_OnEntry.py", 1)]
+    assert codes(m) == [("LF046", "State_A_OnEntry.py", 1)]
 
 
 def test_input_names_values_and_bindings_are_checked(tmp_path: Path) -> None:
@@ -135,16 +135,16 @@ def test_input_names_values_and_bindings_are_checked(tmp_path: Path) -> None:
     got = check_machine(m).diagnostics
     by_code = sorted((d.code, d.line) for d in got)
     assert by_code == [
-        ("LF043", 2),  # count: a machine variable
-        ("LF043", 4),  # after: a macro
-        ("LF044", 8),  # default "fast" for a float
-        ("LF044", 11),  # 2.5 for an int
-        ("LF044", 14),  # a listed twice
-        ("LF044", 16),  # type complex
-        ("LF045", 21),  # a float32 field for an int input
-        ("LF045", 26),  # no field dat
-        ("LF045", 30),  # no package nowhere_msgs
-        ("LF045", 34),  # topic without msg and field
+        ("LF047", 2),  # count: a machine variable
+        ("LF047", 4),  # after: a macro
+        ("LF048", 8),  # default "fast" for a float
+        ("LF048", 11),  # 2.5 for an int
+        ("LF048", 14),  # a listed twice
+        ("LF048", 16),  # type complex
+        ("LF049", 21),  # a float32 field for an int input
+        ("LF049", 26),  # no field dat
+        ("LF049", 30),  # no package nowhere_msgs
+        ("LF049", 34),  # topic without msg and field
     ]
     messages = " ".join(d.message for d in got)
     assert "std_msgs/msg/Bool has no field 'dat' (its fields: data)" in messages
@@ -161,7 +161,7 @@ def test_an_input_in_the_interface_search_path_is_checked_from_its_msg_file(tmp_
     ok = write_machine(tmp_path / "a", "m", {"A": None}, yaml_extra=yaml.format("range"))
     bad = write_machine(tmp_path / "b", "m", {"A": None}, yaml_extra=yaml.format("distance"))
     assert codes(ok) == []
-    assert codes(bad) == [("LF045", "machine.yaml", 6)]
+    assert codes(bad) == [("LF049", "machine.yaml", 6)]
 
 
 # -- build --------------------------------------------------------------------------------------------

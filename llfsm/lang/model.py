@@ -65,7 +65,7 @@ class Input(BaseModel):
     optionally bound to a field of the newest message on a topic (docs/machine-format.md)."""
 
     name: str
-    type: str  # bool | int | float | str (anything else is a check error, LF044)
+    type: str  # bool | int | float | str (anything else is a check error, LF048)
     default: Scalar | None = None  # as written; None when missing
     domain: list[Scalar] | None = None  # as written; None when missing (bool: both values)
     topic: str | None = None

@@ -9,6 +9,7 @@ what they look at, each a function over one `Checking` (llfsm.lang.check.checkin
 - variables:  the variables declared (reserved names, duplicates, shadowing)
 - inputs:     the inputs declared (names, values, bindings) and code that assigns one
 - includes:   Includes.py
+- imports:    what imports name: message types (LF042), packages (LF109), helpers (LF043)
 - code:       sections, guards and initialisers (compile limits, bindings, undefined names)
 - ros_habits: rclpy spellings (LF041)
 - parameters: machine.yaml's `parameters:` (LF060-LF062)

@@ -1,7 +1,7 @@
 """Rules on a machine's inputs (SPEC 11, docs/machine-format.md "Inputs"): each declaration is
-a usable name of a known type with values of that type (LF043, LF044), a binding names a
-message type and a field that exist and fit the input's type (LF045), and no code assigns an
-input (LF042): an input is a snapshot of the world, read-only for the machine.
+a usable name of a known type with values of that type (LF047, LF048), a binding names a
+message type and a field that exist and fit the input's type (LF049), and no code assigns an
+input (LF046): an input is a snapshot of the world, read-only for the machine.
 
 Message definitions are read as text (llfsm.idl's parser): the shipped ones from the folder
 they are generated from, a user's from the interface search path.  Nothing is imported.
@@ -42,7 +42,7 @@ def _where(i: Input, key: str) -> Loc:
 
 
 def declarations(c: Checking, m: Machine) -> None:
-    """LF043, LF044, LF045 for every input machine.yaml declares."""
+    """LF047, LF048, LF049 for every input machine.yaml declares."""
     names = {v.name for v in m.variables}
     state_vars = {v.name: s.name for s in m.states for v in s.variables}
     generated = {f"{p}{s.name}" for s in m.states for p in GENERATED_PREFIXES}
@@ -50,7 +50,7 @@ def declarations(c: Checking, m: Machine) -> None:
         if not _name_ok(c, i, names, state_vars, generated):
             continue
         if i.type not in INPUT_TYPES:
-            c.at("LF044", _where(i, "type"), f"input {i.name}: type {i.type!r} is not one of bool, int, float, str")
+            c.at("LF048", _where(i, "type"), f"input {i.name}: type {i.type!r} is not one of bool, int, float, str")
             continue
         _values(c, i)
         _binding(c, i)
@@ -58,13 +58,13 @@ def declarations(c: Checking, m: Machine) -> None:
 
 def _name_ok(c: Checking, i: Input, names: set[str], state_vars: dict[str, str], generated: set[str]) -> bool:
     if not is_valid_name(i.name):
-        c.at("LF043", i.loc, f"input name {i.name!r} must be a Python identifier and not a keyword")
+        c.at("LF047", i.loc, f"input name {i.name!r} must be a Python identifier and not a keyword")
     elif i.name in RESERVED or i.name in MACROS or i.name.startswith(("_llfsm", "__")) or i.name in generated:
-        c.at("LF043", i.loc, f"input name {i.name!r} is reserved by llfsm; choose another name")
+        c.at("LF047", i.loc, f"input name {i.name!r} is reserved by llfsm; choose another name")
     elif i.name in names:
-        c.at("LF043", i.loc, f"input {i.name} has the name of a machine variable; rename one of them")
+        c.at("LF047", i.loc, f"input {i.name} has the name of a machine variable; rename one of them")
     elif i.name in state_vars:
-        c.at("LF043", i.loc, f"input {i.name} has the name of a variable of state {state_vars[i.name]}; rename one")
+        c.at("LF047", i.loc, f"input {i.name} has the name of a variable of state {state_vars[i.name]}; rename one")
     else:
         return True
     return False
@@ -81,32 +81,32 @@ def _fits(value: object, kind: str) -> bool:
 
 
 def _values(c: Checking, i: Input) -> None:
-    """LF044: the default and the domain hold values of the input's type; a domain is not empty
+    """LF048: the default and the domain hold values of the input's type; a domain is not empty
     and names no value twice."""
     if i.default is not None and not _fits(i.default, i.type):
         c.at(
-            "LF044",
+            "LF048",
             _where(i, "default"),
             f"input {i.name}: default {i.default!r} is not a {i.type} (a {type(i.default).__name__})",
         )
     if i.domain is None:
         return
     if not i.domain:
-        c.at("LF044", _where(i, "domain"), f"input {i.name}: the domain is empty; list the values verify explores")
+        c.at("LF048", _where(i, "domain"), f"input {i.name}: the domain is empty; list the values verify explores")
         return
     seen: list[object] = []
     for v in i.domain:
         if not _fits(v, i.type):
-            c.at("LF044", _where(i, "domain"), f"input {i.name}: domain value {v!r} is not a {i.type}")
+            c.at("LF048", _where(i, "domain"), f"input {i.name}: domain value {v!r} is not a {i.type}")
             return
         if any(v == s and type(v) is type(s) for s in seen):
-            c.at("LF044", _where(i, "domain"), f"input {i.name}: domain value {v!r} is listed twice")
+            c.at("LF048", _where(i, "domain"), f"input {i.name}: domain value {v!r} is listed twice")
             return
         seen.append(v)
 
 
 def _binding(c: Checking, i: Input) -> None:
-    """LF045: `topic`, `msg` and `field` come together; the message type exists (shipped, or
+    """LF049: `topic`, `msg` and `field` come together; the message type exists (shipped, or
     in the interface search path) and has the field, of a type the input can hold."""
     given = [k for k in ("topic", "msg", "field") if getattr(i, k) is not None]
     if not given:
@@ -114,25 +114,25 @@ def _binding(c: Checking, i: Input) -> None:
     if len(given) < 3:
         missing = [k for k in ("topic", "msg", "field") if k not in given]
         c.at(
-            "LF045",
+            "LF049",
             _where(i, given[0]),
             f"input {i.name}: a binding needs topic, msg and field together; add {', '.join(missing)}",
         )
         return
     assert i.msg is not None and i.field is not None and i.topic is not None
     if not _topic_ok(i.topic):
-        c.at("LF045", _where(i, "topic"), f"input {i.name}: {i.topic!r} is not a valid topic name")
+        c.at("LF049", _where(i, "topic"), f"input {i.name}: {i.topic!r} is not a valid topic name")
         return
     try:
         kind = field_type(i.msg, i.field)
     except LookupError as e:
         key, _, why = str(e.args[0]).partition(": ")
-        c.at("LF045", _where(i, key), f"input {i.name}: {why}")
+        c.at("LF049", _where(i, key), f"input {i.name}: {why}")
         return
     if kind not in FIELD_TYPES[i.type]:
         article = "an" if i.type == "int" else "a"
         c.at(
-            "LF045",
+            "LF049",
             _where(i, "field"),
             f"input {i.name}: field {i.field} of {i.msg} is a {kind}, which {article} {i.type} input cannot hold",
         )
@@ -206,11 +206,11 @@ def _spec(type_name: str):  # type: ignore[no-untyped-def]  # an llfsm.idl Messa
 
 
 def assignments(c: Checking, m: Machine) -> None:
-    """LF042: code that assigns, augments, deletes, or changes an attribute or item of, an
+    """LF046: code that assigns, augments, deletes, or changes an attribute or item of, an
     input where the name is the machine's input (a lambda parameter of the same name is the
     lambda's own)."""
     variables = {v.name for v in m.variables} | {v.name for s in m.states for v in s.variables}
-    names = {i.name for i in m.inputs} - variables  # a clash is LF043 already
+    names = {i.name for i in m.inputs} - variables  # a clash is LF047 already
     if not names:
         return
     mapping = {n: f"self.{n}" for n in names}
@@ -227,7 +227,7 @@ def assignments(c: Checking, m: Machine) -> None:
             if (node.lineno, node.col_offset) in machine_uses:
                 col = char_col(code.text, node.lineno, node.col_offset)
                 c.add(
-                    "LF042",
+                    "LF046",
                     code.file,
                     node.lineno,
                     col,
