@@ -216,9 +216,11 @@ def write_input_toggle(root: Path) -> Path:
     return d
 
 
-def toggle_timed(path: Path, messages: bool) -> object:
+def toggle_timed(path: Path, messages: bool, reader: bool = False) -> object:
     """n ringlets of the toggle (sim clock, 1 us rounds) on a live bus; with an input bound to
-    /go when the machine has one, and with `messages` a node publishing /go every round."""
+    /go when the machine has one, with `messages` a node publishing /go every round, and with
+    `reader` a PULL subscription of that node's own on /go (what a bound input's reader costs the
+    bus, without the input: the delivery the input row pays too)."""
     from llfsm import ros
     from llfsm.msgs.std_msgs.msg import Bool
     from llfsm.ros.inputs import bind
@@ -238,6 +240,8 @@ def toggle_timed(path: Path, messages: bool) -> object:
             if messages:
                 msg = Bool(data=True)
                 node.create_timer(1e-6, lambda: pub.publish(msg))
+            if reader:
+                node.create_subscription(Bool, "/go", None, 1)
             arr = Arrangement([cls], context=ctx)
             if cls.INPUTS:
                 bind(arr, ros.bus_of(ctx))
@@ -254,6 +258,7 @@ NO_INPUT = "no input"
 QUIET = "one bound input, no message"
 BUSY = "one bound input, a message every round"
 BUS = "no input, a message every round (the bus alone)"
+READ = "no input, a message every round to a subscription of its own"
 
 
 def inputs_table(tmp: Path, n: int, rounds: int) -> Table:
@@ -264,6 +269,7 @@ def inputs_table(tmp: Path, n: int, rounds: int) -> Table:
         QUIET: toggle_timed(with_input, False),
         BUSY: toggle_timed(with_input, True),
         BUS: toggle_timed(plain, True),
+        READ: toggle_timed(plain, True, reader=True),
     }
     rates: dict[str, list[float]] = {k: [] for k in named}
     names = list(named)
@@ -284,7 +290,8 @@ def inputs_table(tmp: Path, n: int, rounds: int) -> Table:
         [NO_INPUT, rate(NO_INPUT), "1.00", ""],
         [QUIET, rate(QUIET), ratio(QUIET, NO_INPUT), "≥ 0.9"],
         [BUS, rate(BUS), ratio(BUS, NO_INPUT), ""],
-        [BUSY, rate(BUSY), ratio(BUSY, BUS) + " of the row above", "(a snapshot each ringlet)"],
+        [READ, rate(READ), ratio(READ, BUS) + " of the bus alone", "(a delivery each round)"],
+        [BUSY, rate(BUSY), ratio(BUSY, READ) + " of the row above", "(a delivery and a snapshot each round)"],
     ]
     return (
         f"The cost of inputs at run time: the toggle of bench/run.py (guards True, OnEntry count += 1), sim clock, "
@@ -309,58 +316,75 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run")
     ap.add_argument("--no-native", action="store_true", help="skip the --native rows (a native build takes minutes)")
+    ap.add_argument(
+        "--only", choices=("explore", "spin", "inputs"), action="append", help="only these tables (repeatable)"
+    )
     args = ap.parse_args()
+    only = set(args.only or ("explore", "spin", "inputs"))
     quick = args.quick
     rounds = 3 if quick else 5
     with tempfile.TemporaryDirectory(prefix="llfsm-bench-verify-") as tmp_s:
         tmp = Path(tmp_s)
         os.environ["LLFSM_CACHE_DIR"] = str(tmp / "cache")
         tables: list[Table] = []
-        size = 100_000 if quick else 1_000_000
-        counter = write_counter(tmp / "counter", size)
-        prop = f"always: counter.count < {size}"
-        native = None if args.no_native else native_rates([counter], prop, rounds)
-        rows = rate_rows(f"counter, {size:,}", [counter], prop, rounds, native if isinstance(native, dict) else None)
-        if isinstance(native, str):
-            rows.append([f"counter, {size:,}", "exact, --native ringlets", "", f"not measured: {native}", "", "", ""])
-        for n in range(2, 5 if quick else 7):
-            paths = write_mutex(tmp / f"mutex{n}", n)
-            rows += rate_rows(f"{n} mutex machines", paths, mutex_property(n), rounds)
-        tables.append(
-            (
-                f"Exploration: configurations per CPU second (median of {rounds} runs, min-max) and bytes per stored "
-                "configuration (tracemalloc, after the exploration, everything it keeps); a safety property judged "
-                "on the fly. Goals: ≥ 200,000/s pure and ≥ 1,000,000/s native on the counter; ≤ 100 bytes",
-                ["arrangement", "storage", "configurations", "configurations/s", "min-max", "bytes/configuration",
-                 "verdict"],
-                rows,
-            )
-        )  # fmt: skip
-        print(render(tables[-1:]), flush=True)
-        spin_rows = []
-        folder = tmp / "spin"
-        folder.mkdir()
-        for size_c in (1_000, 10_000) if quick else (1_000, 10_000, 100_000, 1_000_000):
-            c = write_counter(tmp / f"spin-counter{size_c}", size_c)
-            prop_c = f"always: counter.count < {size_c}"
-            spin_rows.append(spin_side_by_side(f"counter, {size_c:,}", [c], prop_c, folder))
-        for n in range(2, 4 if quick else 7):
-            paths = write_mutex(tmp / f"spin-mutex{n}", n)
-            spin_rows.append(spin_side_by_side(f"{n} mutex machines", paths, mutex_property(n), folder))
-        tables.append(
-            (
-                "Side by side with SPIN on the Promela export of the same structure (llfsm: CPU seconds of the "
-                "exploration, the graph kept; SPIN: wall seconds of spin -a + gcc -O2, then pan's own elapsed time "
-                "searching the exported structure, at least 0.001 s, pan -a for the claim). Goal: llfsm within "
-                "10x of SPIN's search",
-                ["arrangement", "configurations", "llfsm s", "SPIN compile s", "SPIN search s", "SPIN states",
-                 "llfsm / SPIN search", "verdict"],
-                spin_rows,
-            )
-        )  # fmt: skip
-        print(render(tables[-1:]), flush=True)
-        tables.append(inputs_table(tmp, 200_000 if quick else 1_000_000, rounds + 2))
-        print(render(tables[-1:]), flush=True)
+        if "explore" in only:
+            explore_table(tmp, quick, rounds, args.no_native, tables)
+        if "spin" in only:
+            spin_table(tmp, quick, tables)
+        if "inputs" in only:
+            tables.append(inputs_table(tmp, 200_000 if quick else 1_000_000, rounds + 2))
+            print(render(tables[-1:]), flush=True)
+
+
+def explore_table(tmp: Path, quick: bool, rounds: int, no_native: bool, tables: list[Table]) -> None:
+    """Speed and memory on the counter and the mutex machines, exact and hash-compacted."""
+    size = 100_000 if quick else 1_000_000
+    counter = write_counter(tmp / "counter", size)
+    prop = f"always: counter.count < {size}"
+    native = None if no_native else native_rates([counter], prop, rounds)
+    rows = rate_rows(f"counter, {size:,}", [counter], prop, rounds, native if isinstance(native, dict) else None)
+    if isinstance(native, str):
+        rows.append([f"counter, {size:,}", "exact, --native ringlets", "", f"not measured: {native}", "", "", ""])
+    for n in range(2, 5 if quick else 7):
+        paths = write_mutex(tmp / f"mutex{n}", n)
+        rows += rate_rows(f"{n} mutex machines", paths, mutex_property(n), rounds)
+    tables.append(
+        (
+            f"Exploration: configurations per CPU second (median of {rounds} runs, min-max) and bytes per stored "
+            "configuration (tracemalloc, after the exploration, everything it keeps); a safety property judged "
+            "on the fly. Goals: ≥ 200,000/s pure and ≥ 1,000,000/s native on the counter; ≤ 100 bytes",
+            ["arrangement", "storage", "configurations", "configurations/s", "min-max", "bytes/configuration",
+             "verdict"],
+            rows,
+        )
+    )  # fmt: skip
+    print(render(tables[-1:]), flush=True)
+
+
+def spin_table(tmp: Path, quick: bool, tables: list[Table]) -> None:
+    """The same structures searched by SPIN from the Promela export."""
+    spin_rows = []
+    folder = tmp / "spin"
+    folder.mkdir()
+    for size_c in (1_000, 10_000) if quick else (1_000, 10_000, 100_000, 1_000_000):
+        c = write_counter(tmp / f"spin-counter{size_c}", size_c)
+        prop_c = f"always: counter.count < {size_c}"
+        spin_rows.append(spin_side_by_side(f"counter, {size_c:,}", [c], prop_c, folder))
+    for n in range(2, 4 if quick else 7):
+        paths = write_mutex(tmp / f"spin-mutex{n}", n)
+        spin_rows.append(spin_side_by_side(f"{n} mutex machines", paths, mutex_property(n), folder))
+    tables.append(
+        (
+            "Side by side with SPIN on the Promela export of the same structure (llfsm: CPU seconds of the "
+            "exploration, the graph kept; SPIN: wall seconds of spin -a + gcc -O2, then pan's own elapsed time "
+            "searching the exported structure, at least 0.001 s, pan -a for the claim). Goal: llfsm within "
+            "10x of SPIN's search",
+            ["arrangement", "configurations", "llfsm s", "SPIN compile s", "SPIN search s", "SPIN states",
+             "llfsm / SPIN search", "verdict"],
+            spin_rows,
+        )
+    )  # fmt: skip
+    print(render(tables[-1:]), flush=True)
 
 
 if __name__ == "__main__":
