@@ -30,7 +30,7 @@ from ._common import DURATION, cli, fail, progress, write_output
 @click.option(
     "--hash-compact",
     is_flag=True,
-    help="Keep each configuration as a 64-bit hash only (about 30 bytes each; the chance of a collision is printed).",
+    help="Keep each configuration as a 64-bit hash only (about 60 bytes each; the chance of a collision is printed).",
 )
 @click.option(
     "--counterexample",
