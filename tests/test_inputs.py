@@ -345,3 +345,28 @@ def test_the_web_view_lists_a_machine_s_inputs() -> None:
         srv.stop()
     assert first["type"] == "hello"
     assert first["machines"][0]["inputs"] == ["wall_close: bool <- /turtle1/wall_close (std_msgs/msg/Bool data)"]
+
+
+def test_a_message_between_rounds_is_the_next_ringlet_s_snapshot(tmp_path: Path) -> None:
+    # a timer publishes between rounds (the bus's hook, where no ringlet runs, so the value goes
+    # into the machine at once: llfsm.runtime.inputs); each ringlet sees the newest value
+    # published before it, as with a machine publishing during a round
+    m = write_machine(
+        tmp_path,
+        "timed",
+        {"A": [("B", "after_ms(1)")], "B": [("END", "n >= 6")], "END": None},
+        {
+            "A_OnEntry": (
+                'ros.init()\nnode = ros.Node("n")\np = node.create_publisher(Bool, "/wall_close", 10)\n'
+                "t = node.create_timer(0.002, lambda: p.publish(Bool(data=not wall_close)))"
+            ),
+            "B_Internal": "print(node.get_clock().now().nanoseconds // 1_000_000, wall_close)\nn += 1",
+        },
+        variables="p: ros.Publisher\nnode: ros.Node\nt: ros.Timer\nn: int = 0\n",
+        includes=PUB_INCLUDES,
+        yaml_extra=BOOL_INPUT,
+    )
+    r = run_sim(m)
+    assert r.status == 0, r.stderr
+    # B's ringlets run at 3..8 ms; the timer flips the value at 2, 4, 6 and 8 ms, before the round
+    assert r.lines == ["3 True", "4 False", "5 False", "6 True", "7 True", "8 False"], r.lines

@@ -5,9 +5,10 @@ An input is read in code by its bare name, which the compiler makes an attribute
 ringlets, as clfsm snapshots external variables: a reader (llfsm.ros.inputs, a PULL subscription
 the run session opens for an input bound to a topic) calls `Inputs.set`, which keeps the value
 here and puts the scheduler's gate in front of the machine's next ringlet; the gate copies the
-values into the machine (`Inputs.snapshot`) before anything of the ringlet runs.  So a ringlet
-never sees an input change under it, a machine without inputs pays nothing, and one with inputs
-pays only when a new value has come (a ringlet costs one extra call then, none otherwise).
+values into the machine (`Inputs.snapshot`) before anything of the ringlet runs.  A value that
+comes between rounds, when no ringlet runs, goes into the machine at once.  So a ringlet never
+sees an input change under it, a machine without inputs pays nothing, and one with inputs pays
+only when a new value has come.
 """
 
 from __future__ import annotations
@@ -36,8 +37,17 @@ class Inputs:
             setattr(machine, name, value)  # the default, until a first message
 
     def set(self, index: int, value: object) -> None:
-        """A new value for input `index` (a message came): the machine's next ringlet takes it."""
+        """A new value for input `index` (a message came): the machine's next ringlet takes it.
+        Between rounds (the bus's hook taking messages in, a timer publishing) no ringlet runs,
+        so the value goes into the machine at once: what the snapshot would copy, without
+        sending the next round through the gate and the scheduler's attention (a third of a
+        1 us round's rate with a message every round, bench/verify.py --only inputs).  During
+        a ringlet (a machine publishing, a spin call in machine code) the gate takes it."""
         self.values[index] = value
+        m = self.machine
+        if m._arr.between_rounds:
+            setattr(m, self.names[index], value)
+            return
         if not self.fresh:
             self.fresh = True
             self.machine._arr.hold_for_inputs(self.machine)

@@ -96,6 +96,9 @@ class Arrangement:
         self._interrupted_at = 0.0  # time.monotonic() of the first interrupt: grace is real time too
         self._grace_ns = 1_000_000_000
         self.running = False  # inside run(): a stop may be raised into the running code
+        #: The between-round hooks (the bus) are running: no ringlet is, so a new input value can
+        #: go straight into its machine (llfsm.runtime.inputs) without the gate.
+        self.between_rounds = False
         self.rounds = 0
         #: The gate every held machine's `_run` points at (one bound method, compared with `is`).
         self._gate_fn: Callable[[Machine], int | None] = self._gate
@@ -418,8 +421,12 @@ class Arrangement:
                 if clock.now >= ctx.wake:
                     ctx.wake = FOREVER  # the hooks arm it again for whatever they still hold
                     ctx.round = rounds
-                    for h in hooks:
-                        h()
+                    self.between_rounds = True
+                    try:
+                        for h in hooks:
+                            h()
+                    finally:
+                        self.between_rounds = False
         finally:
             self.rounds = rounds
 
