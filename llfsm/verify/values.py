@@ -67,6 +67,8 @@ def freeze(value: Any, handles: Handles) -> Any:
     if t in SCALARS:
         return value
     if t is tuple:
+        if all(type(v) in SCALARS for v in value):
+            return value  # the common case (names, coordinates) without a call per item
         parts = tuple(freeze(v, handles) for v in value)
         return parts if all(type(p) in SCALARS or type(p) is tuple for p in parts) else Frozen(("tuple", *parts))
     if t is list:
