@@ -241,6 +241,27 @@ def test_code_that_reads_the_world_is_refused_one_line_per_place(tmp_path: Path)
     assert "nothing was explored" in r.stderr
 
 
+def test_an_action_client_is_refused_where_it_is_made_and_used_not_where_it_is_annotated() -> None:
+    # turtle_rotator (docs/actions.md) waits on what an action server answers: verify cannot
+    # explore that; its `client: ros.ActionClient` annotation in Variables.py is no use of one
+    r = llfsm("verify", MACHINES / "turtle_rotator.machine", "--property", "always: True")
+    assert r.status == 2, r.stderr
+    got = sorted(
+        (ln.split(":")[0].rsplit("/", 1)[1], int(ln.split(":")[1]), ln.split("`")[1]) for ln in r.stdout.splitlines()
+    )
+    assert got == [
+        ("State_INITIAL_OnEntry.py", 3, "ActionClient()"),
+        ("State_INITIAL_Transition_1.expr", 1, ".server_is_ready"),
+        ("State_ROTATE_OnEntry.py", 2, ".get_result_async"),
+        ("State_ROTATE_OnSuspend.py", 4, ".cancel_goal_async"),
+        ("State_ROTATE_Transition_3.expr", 1, ".server_is_ready"),
+        ("State_SEND_OnEntry.py", 1, ".send_goal_async"),
+        ("State_SEND_OnSuspend.py", 2, ".cancel_goal_async"),
+        ("State_SEND_Transition_2.expr", 1, ".server_is_ready"),
+    ], r.stdout
+    assert all("LF200" in ln and "make what it reads an input" in ln for ln in r.stdout.splitlines())
+
+
 def test_the_state_limit_names_the_growing_variable(tmp_path: Path) -> None:
     m = write_machine(
         tmp_path,

@@ -106,7 +106,22 @@ _BUS: dict[str, str] = {
     "get_parameter_or": "a parameter, set from outside",
     "has_parameter": "a parameter, set from outside",
     "add_on_set_parameters_callback": "a parameter callback",
+    # actions (llfsm.ros.action): goals, feedback and results come from a peer
+    "ActionClient": "an action client, what a server answers",
+    "ActionServer": "an action server, goals a peer sends",
+    "send_goal_async": "an action goal, what a server answers",
+    "send_goal": "an action goal, what a server answers",
+    "server_is_ready": "whether an action server is up",
+    "wait_for_server": "a wait for an action server",
+    "get_result_async": "an action result, what a server answers",
+    "get_result": "an action result, what a server answers",
+    "cancel_goal_async": "an action cancel, what a server answers",
+    "cancel_goal": "an action cancel, what a server answers",
 }
+
+#: Classes of the bus whose objects read the world: refused where they are called (`ros.ActionClient(...)`,
+#: `ActionClient(...)`), not where they annotate a variable (`client: ros.ActionClient`).
+_BUS_CLASSES = ("ActionClient", "ActionServer")
 
 #: Sections whose after* verify follows: those that run in a ringlet of the state itself.
 _TIMED_SECTIONS = ("OnEntry", "Internal", "OnExit")
@@ -227,12 +242,23 @@ def _world_reads(tree: ast.AST) -> Iterator[tuple[ast.AST, str]]:
                         yield node, "`current` (the run context: its clock)"
         elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _BUILTINS:
             yield node, f"`{node.func.id}()` ({_BUILTINS[node.func.id]})"
+        elif isinstance(node, ast.Call) and _called_name(node.func) in _BUS_CLASSES:
+            yield node, f"`{_called_name(node.func)}()` ({_BUS[_called_name(node.func)]})"
         elif isinstance(node, ast.Attribute):
             dotted = _dotted(node)
             if len(dotted) >= 2 and dotted[0] in ("os", "sys") and dotted[-1] in _OS:
                 yield node, f"`{'.'.join(dotted)}` ({_OS[dotted[-1]]})"
-            elif node.attr in _BUS:
+            elif (
+                node.attr in _BUS and node.attr not in _BUS_CLASSES
+            ):  # a class: only a call (not `x: ros.ActionClient`)
                 yield node, f"`.{node.attr}` ({_BUS[node.attr]})"
+
+
+def _called_name(func: ast.expr) -> str:
+    """The name a call calls: `f` of `f(...)` and of `a.b.f(...)`."""
+    if isinstance(func, ast.Name):
+        return func.id
+    return func.attr if isinstance(func, ast.Attribute) else ""
 
 
 def _constant(node: ast.AST) -> float | None:
