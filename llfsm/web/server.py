@@ -258,7 +258,7 @@ class WebServer:
         """(worker thread) Each machine's name, description text and SVG; one that cannot be
         drawn is left out, said once, and never stops the others."""
         # deferred: here, on the worker: pydantic (the description model) takes a while to import
-        from ..diagram.description import DescriptionError
+        from ..diagram.description import DescriptionError, Input
 
         out = []
         for d in descriptions:
@@ -273,7 +273,11 @@ class WebServer:
                 self._warn(f"machine {shown!r} not shown: drawing failed: {type(e).__name__}: {e}", f"draw {shown}")
                 continue
             text = d.get("description")
-            out.append({"name": name, "description": text if isinstance(text, str) else "", "svg": svg})
+            # drawn, so it fits the model: its inputs too (SPEC 11), one line each
+            inputs = [Input.model_validate(i).text() for i in d.get("inputs") or ()]
+            out.append(
+                {"name": name, "description": text if isinstance(text, str) else "", "svg": svg, "inputs": inputs}
+            )
         return out
 
     def _descriptions(self) -> list[Any]:

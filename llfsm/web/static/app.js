@@ -60,6 +60,7 @@ function buildMachines(machines) {
     el_.dataset.machine = m.name;
     el_.querySelector(".machine-name").textContent = m.name;
     el_.querySelector(".description").textContent = m.description || "";
+    el_.querySelector(".inputs").textContent = (m.inputs || []).length ? "inputs: " + m.inputs.join("; ") : "";
     el_.querySelector(".diagram-box").append(svgNode(m.svg));
     const states = new Map();
     for (const g of el_.querySelectorAll(".state")) states.set(g.dataset.state, g);
