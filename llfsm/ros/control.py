@@ -77,6 +77,10 @@ def attach(arr: Arrangement, bus: Bus) -> MachineGraph:
     return graph
 
 
+#: The keys of an input in a description, in the order of a class's INPUTS entries.
+_INPUT_KEYS = ("name", "type", "default", "domain", "topic", "msg", "field")
+
+
 def description(cls: type[Machine]) -> dict[str, Any]:
     """The structure /llfsm/M/description carries, from the compiled class alone (its guard
     text is embedded by the compiler; a module built before that has none, and says so with
@@ -98,6 +102,19 @@ def description(cls: type[Machine]) -> dict[str, Any]:
         ],
         "initial": states[cls.INITIAL],
         "suspend": states[cls.SUSPENDED],
+        # SPEC 11: what the machine reads from outside (llfsm.runtime.inputs gives the positions)
+        "inputs": [
+            {
+                "name": name,
+                "type": kind,
+                "default": default,
+                "domain": list(domain),
+                "topic": topic,
+                "msg": msg,
+                "field": field,
+            }
+            for name, kind, default, domain, topic, msg, field in cls.INPUTS
+        ],
     }
 
 

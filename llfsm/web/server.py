@@ -287,7 +287,7 @@ class WebServer:
         """(worker thread) Each machine's name, description text and SVG; one that cannot be
         drawn is left out, said once, and never stops the others."""
         # deferred: here, on the worker: pydantic (the description model) takes a while to import
-        from ..diagram.description import DescriptionError
+        from ..diagram.description import DescriptionError, Input
 
         out = []
         for d in descriptions:
@@ -303,6 +303,8 @@ class WebServer:
                 continue
             text = d.get("description")
             machine, participant = d.get("machine", name), d.get("participant", "")
+            # drawn, so it fits the model: its inputs too (SPEC 11), one line each
+            inputs = [Input.model_validate(i).text() for i in d.get("inputs") or ()]
             out.append(
                 {
                     "name": name,
@@ -310,6 +312,7 @@ class WebServer:
                     "participant": participant if isinstance(participant, str) else "",
                     "description": text if isinstance(text, str) else "",
                     "svg": svg,
+                    "inputs": inputs,
                 }
             )
         return out

@@ -79,6 +79,7 @@ function buildMachines(machines) {
     card.dataset.machine = m.name;
     card.querySelector(".machine-name").textContent = m.machine || m.name;
     card.querySelector(".description").textContent = m.description || "";
+    card.querySelector(".inputs").textContent = (m.inputs || []).length ? "inputs: " + m.inputs.join("; ") : "";
     card.querySelector(".diagram-box").append(svgNode(m.svg));
     const states = new Map();
     for (const g of card.querySelectorAll(".state")) states.set(g.dataset.state, g);
