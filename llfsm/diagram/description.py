@@ -89,6 +89,8 @@ class Description(_Strict):
     initial: str = Name
     suspend: str | None = Field(default=None, max_length=MAX_NAME)
     inputs: list[Input] = Field(default_factory=list, max_length=MAX_INPUTS)
+    #: Wall time (seconds since the epoch) of the run's time 0 (a run on the wall clock says it).
+    started: float | None = Field(default=None, ge=0, le=1e11, allow_inf_nan=False)
 
     @model_validator(mode="after")
     def _references(self) -> Description:

@@ -27,6 +27,7 @@ so what the reader is handed is never stale.
 from __future__ import annotations
 
 import json
+import time
 from typing import TYPE_CHECKING, Any, cast
 
 from ..msgs.std_msgs.msg import String
@@ -117,6 +118,16 @@ def description(cls: type[Machine]) -> dict[str, Any]:
     }
 
 
+def _with_start(desc: dict[str, Any], clock: Any) -> dict[str, Any]:
+    """The description with `started`, the wall time (seconds since the epoch) of the run's
+    time 0 when the run keeps wall time, so that `llfsm view` in another process shows the
+    run's own times (a state's sample carries its wall time); a run on the sim clock has none."""
+    read = getattr(clock, "read", None)
+    if getattr(clock, "kind", None) != "wall" or read is None:
+        return desc
+    return {**desc, "started": round((time.time_ns() - read()) / 1e9, 6)}
+
+
 class _Entry:
     """One machine's publishers and what was last published."""
 
@@ -145,7 +156,7 @@ class MachineGraph(Tracer):
             node = Node(m.NAME, namespace=NAMESPACE)
             self.nodes.append(node)
             desc = node.create_publisher(String, "~/description", LATCHED)
-            desc.publish(String(data=json.dumps(description(type(m)))))
+            desc.publish(String(data=json.dumps(_with_start(description(type(m)), arr.ctx.clock))))
             entry = _Entry(m, node.create_publisher(String, "~/state", LATCHED))
             self.entries.append(entry)
             self._publish(entry, m.STATES[m._state])
