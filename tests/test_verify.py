@@ -455,3 +455,33 @@ def test_a_path_that_does_not_replay_alike_is_said(tmp_path: Path) -> None:
     r = llfsm("verify", m, "--property", "never: h.x == 3")
     assert r.status == 1
     assert "warning: never: h.x == 3: its path, run again, did not give the configurations explored" in r.stdout
+
+
+def test_a_long_wait_in_a_counterexample_is_folded_in_text_and_whole_in_json() -> None:
+    """In exact time the seed's bot waits a thousand 1 ms rounds for each `after_ms(1000)`: the
+    text shows the ringlets in which something happened and folds the quiet ones between them
+    (saying how many, and which rounds); the JSON report keeps every step."""
+    args = [
+        "verify", MACHINES / "ros2_turtle_suspend_resume.machine", MACHINES / "ros2_blind_turtle_bot.machine",
+        "--period", "1ms", "--property", 'never: state(ros2_blind_turtle_bot) == "TURN_RIGHT"',
+    ]  # fmt: skip
+    r = llfsm(*args)
+    assert r.status == 1, r.stderr
+    lines = r.stdout.splitlines()
+    assert len(lines) < 100, r.stdout
+    assert (
+        "    ... 1,997 more ringlets in which nothing fired, changed or was published (rounds 4-1002; "
+        "--format json lists each) ..." in lines
+    )
+    # what happened is all there: the entries, the commands, the changes, the transition it is about
+    assert "    ros2_blind_turtle_bot: suspend applied -> SUSPENDED" in lines
+    assert "        ros2_blind_turtle_bot.msg.linear.x: 0.0 -> 2.0" in lines
+    fired = "ros2_blind_turtle_bot: transition 1 of STRAIGHT fired -> TURN_RIGHT (time 1.001 s in STRAIGHT or more)"
+    assert lines[-2:] == [
+        f"    [round 3007] {fired}",
+        "    then: ros2_turtle_suspend_resume RESUME, ros2_blind_turtle_bot TURN_RIGHT",
+    ]
+    full = llfsm(*args, "--format", "json")
+    steps = json.loads(full.stdout)
+    text = json.dumps(steps)
+    assert text.count('"round": 500,') == 2  # a folded round, once per machine

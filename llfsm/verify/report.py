@@ -62,6 +62,22 @@ def step_lines(e: Explorer, step: Step | None, config: tuple[Any, ...]) -> list[
     return out
 
 
+#: A run of more quiet ringlets than this is shown as its first two and last two: a path in
+#: exact time (`--period 1ms`) waits a thousand rounds for `after(1)`, and a reader wants the
+#: rounds in which something happened.
+FOLD = 6
+
+
+def _quiet(step: Step | None) -> bool:
+    """A ringlet that fired nothing, entered nothing, changed and published nothing."""
+    return (
+        step is not None
+        and step.transition is None
+        and not (step.finished or step.commands or step.entered or step.inputs or step.changed)
+        and not (step.published or step.interrupted)
+    )
+
+
 def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list[str]:
     steps = trace.steps
     n = len(steps) - 1
@@ -71,11 +87,32 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
         last = "the last step repeats" if k == 1 else f"the last {k} steps repeat"
         head += f" (a lasso: {last} forever)"
     out = [head + ":"]
-    for pos, (config, step) in enumerate(steps):
-        if trace.loop is not None and pos == trace.loop + 1:
+    loop_start = None if trace.loop is None else trace.loop + 1
+    pos = 0
+    while pos < len(steps):
+        if pos == loop_start:
             out.append("  -- the loop starts here --")
+        end = pos  # the last of a run of quiet ringlets starting here (never across the loop's start)
+        while _quiet(steps[pos][1]) and end + 1 < len(steps) and end + 1 != loop_start and _quiet(steps[end + 1][1]):
+            end += 1
+        if end - pos + 1 > FOLD:
+            folded_from, folded_to = steps[pos + 2][1], steps[end - 2][1]
+            assert folded_from is not None and folded_to is not None
+            shown_steps = [*steps[pos : pos + 2], None, *steps[end - 1 : end + 1]]
+            for item in shown_steps:
+                if item is None:
+                    out.append(
+                        f"  ... {end - pos - 3:,} more ringlets in which nothing fired, changed or was published "
+                        f"(rounds {folded_from.round}-{folded_to.round}; --format json lists each) ..."
+                    )
+                    continue
+                out += ["  " + line for line in step_lines(e, item[1], item[0])]
+            pos = end + 1
+            continue
+        config, step = steps[pos]
         for line in step_lines(e, step, config):
             out.append("  " + line)
+        pos += 1
     if trace.loop is not None:
         out.append("  -- and back to where the loop starts --")
     final = steps[-1][0]
