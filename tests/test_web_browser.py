@@ -383,8 +383,10 @@ def test_the_graph_of_nodes_and_topics_as_rqt_graph_draws_it_live(turtle: LiveRu
             "—",
         ]
         assert p.locator("#no-actions").is_hidden()
-        # the action's long types wrap between words, within their column
-        p.locator('#topics tr[data-topic="/turtle1/rotate_absolute/_action/feedback"]').wait_for()
+        # its _action/ topics are hidden from the topics, as `ros2 topic list` hides them
+        p.locator('#topics tr[data-topic="/turtle1/pose"]').first.wait_for()
+        assert p.locator('#topics tr[data-topic="/turtle1/rotate_absolute/_action/feedback"]').count() == 0
+        # long types wrap between words, within their column
         wide = p.locator("#topics td.type, #actions td.type").evaluate_all(
             "(cells) => cells.filter((td) => td.scrollWidth > td.clientWidth + 1).map((td) => td.textContent)"
         )

@@ -31,6 +31,7 @@ from ..msgs.rcl_interfaces.srv import DescribeParameters, GetParameters, ListPar
 from ..ros.control import NAMESPACE, description
 from ..ros.names import expand
 from ..ros.node import Node
+from ..ros.transports.dds_graph import is_hidden
 from . import parameters as params
 from .rosgraph import RosGraph, from_bus, from_dds, robust_graph
 
@@ -367,6 +368,8 @@ class Source:
         wall = time.monotonic()
         out = []
         for name, type_ in sorted(self.topic_types().items()):
+            if is_hidden(name):  # as `ros2 topic list`: an action's _action/ topics are under Actions
+                continue
             entry: dict[str, Any] = {"name": name, "type": type_._TYPE if type_ is not None else ""}
             machine = self._machine_topic(name)
             if machine is not None:
