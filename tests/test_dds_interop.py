@@ -146,13 +146,12 @@ node.create_service(Trigger, "/poke", lambda request, response: (node.get_logger
 """
 
 FAST_CLIENT = """
-import time, rclpy
+import rclpy
 from std_srvs.srv import Trigger
 rclpy.init()
 node = rclpy.create_node("rclpy_poker")
 client = node.create_client(Trigger, "/poke")
 print("READY", client.wait_for_service(timeout_sec=10.0), flush=True)
-time.sleep(2.0)  # let the server's side match this client's request writer too
 future = client.call_async(Trigger.Request())
 rclpy.spin_until_future_complete(node, future, timeout_sec=3.0)
 print("ANSWERED", future.done(), flush=True)
@@ -179,3 +178,53 @@ def test_a_fast_dds_client_runs_an_llfsm_service_but_gets_no_answer(tmp_path: Pa
     assert "READY True" in client.stdout, client.stdout + server.stderr
     assert "poked" in server.stderr, server.stderr
     assert "ANSWERED False" in client.stdout
+
+
+FRESH_CLIENTS = """
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from std_srvs.srv import Trigger
+ready = 0
+for i in range({n}):
+    ctx = Context()  # a context of its own: a new participant, discovered anew by the server
+    rclpy.init(context=ctx)
+    node = rclpy.create_node(f"rclpy_poker_{{i}}", context=ctx)
+    client = node.create_client(Trigger, "/poke")
+    ready += client.wait_for_service(timeout_sec=10.0)
+    future = client.call_async(Trigger.Request())  # at once: no sleep to let the server catch up
+    executor = SingleThreadedExecutor(context=ctx)
+    executor.add_node(node)
+    executor.spin_until_future_complete(future, timeout_sec=0.3)  # the request leaves; no answer comes
+    executor.shutdown()
+    node.destroy_node()
+    rclpy.shutdown(context=ctx)
+print("READY", ready, flush=True)
+"""
+
+
+def test_a_fast_dds_request_sent_right_after_wait_for_service_is_served(tmp_path: Path) -> None:
+    """Issue 22, item 4: rclpy's wait_for_service() (rmw_fastrtps_cpp) says ready as soon as
+    Fast DDS has matched the server's endpoints, which may be before Cyclone has matched the
+    client's request writer; a request written then used to be lost (Cyclone starts a volatile
+    reader of a non-Cyclone writer at the writer's next sample).  Every one of ten fresh
+    clients' requests must run the service."""
+    m = write_machine(
+        tmp_path,
+        "served",
+        {"INITIAL": [("END", "not ros.ok()")], "END": None},
+        code={"INITIAL_OnEntry": SERVED},
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_srvs.srv import Trigger\n",
+    )
+    n = 10
+    client, server = run_together(
+        [
+            ros_command(FRESH_CLIENTS.format(n=n)),
+            llfsm_command(["run", "--transport", "dds", str(m), "--duration", "100"]),
+        ],
+        timeout=120,
+        stop_after_first=0,
+    )
+    assert client.returncode == 0, client.stderr
+    assert f"READY {n}" in client.stdout, client.stdout + server.stderr
+    assert server.stderr.count("poked") == n, server.stderr

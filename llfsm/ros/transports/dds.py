@@ -321,16 +321,15 @@ class _Server(_Endpoint):
             qos=_qos(SERVICE_DEPTH, user + _type_hash(srv.type.Response)),
         )
         # Fast DDS clients send the bare request (no header): a reader of that form too, so their
-        # calls run (their side effects happen); see docs/transports.md for why they get no answer
+        # calls run (their side effects happen); its reply writer only while one is matched
+        # (_BareRequests says why); see docs/transports.md for why they get no answer
         self.bare_reader = DataReader(
             t.subscriber_,
             t.topic(f"rq{name}Request", _dds.dds_type(srv.type.Request)),
             qos=_qos(SERVICE_DEPTH, reader=True),
         )
-        self.bare_writer = DataWriter(
-            t.publisher_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.type.Response)), qos=_qos(SERVICE_DEPTH)
-        )
-        self.readers, self.writers = (self.reader, self.bare_reader), (self.writer, self.bare_writer)
+        self.bare_writer: DataWriter | None = None
+        self.readers, self.writers = (self.reader, self.bare_reader), (self.writer,)
         cls = srv.type.Request
         self.requests = Samples(
             self.reader, lambda data: _dds.unwrap(data, cls), name, f"a {cls._TYPE}", t.warn, kind="request"
@@ -369,7 +368,8 @@ class _Server(_Endpoint):
         if self.closed:
             return False
         if req.guid is None:  # a bare request (Fast DDS): a bare reply, as its server would write
-            _write(self.bare_writer, _dds.cdr(response))
+            if self.bare_writer is not None:
+                _write(self.bare_writer, _dds.cdr(response))
             return False
         state = self._client_present(req.writer_handle)
         if state == "maybe" and time.monotonic() < give_up:
@@ -385,10 +385,22 @@ class _Server(_Endpoint):
         self.bare.close()
         self.t.remove_endpoint(self)
         _delete(self.cond, self.reader, self.writer, self.bare_reader, self.bare_writer)
+        self.bare_writer = None
 
 
 class _BareRequests:
-    """The server's reader of requests without rmw_cyclonedds's header (from Fast DDS clients)."""
+    """The server's reader of requests without rmw_cyclonedds's header (from Fast DDS clients),
+    and the door that keeps their requests from being lost.
+
+    rclpy's `wait_for_service()` on rmw_fastrtps_cpp says ready once Fast DDS has matched as many
+    of the service's request readers as reply writers.  That says nothing of this side: Cyclone
+    may not have matched the client's request writer yet, and a volatile Cyclone reader that
+    matches a writer of another vendor starts at the writer's next sample, so a request written
+    in that moment is lost (its side effects never happen).  So the bare reply writer exists only
+    while a Fast DDS request writer is matched here: until then the server shows Fast DDS two
+    request readers and one reply writer, which its test reads as "not ready yet", and the client
+    waits until this side has seen it.  (The bare reply writer is only for that count: Fast DDS
+    clients drop its replies, docs/transports.md.)"""
 
     def __init__(self, server: _Server) -> None:
         self.server = server
@@ -403,15 +415,61 @@ class _BareRequests:
         )
         self.cond = ReadCondition(server.bare_reader, ANY)
         self.token = server.t.waits.attach(self.cond, self)
+        server.bare_reader.set_status_mask(DDSStatus.SubscriptionMatched)
+        self.door = _Door(self)
+        self.door_token = server.t.waits.attach(server.bare_reader, self.door)
 
     def on_trigger(self) -> None:
         srv = self.server
         for request, info in self.requests.take():
             srv.t.bus.queue(_RemoteRequest(srv, None, 0, request, info.publication_handle))
 
+    def fast_clients(self) -> bool:
+        """Whether a request writer of another vendor than Cyclone (a Fast DDS client) is matched."""
+        reader = self.server.bare_reader
+        for h in reader.get_matched_publications():
+            try:
+                ep = reader.get_matched_publication_data(h)
+            except Exception:  # gone meanwhile; cyclonedds raises DDSException
+                continue
+            if ep is not None and not _dds.carries_request_header(ep.key):
+                return True
+        return False
+
+    def open_door(self, wanted: bool) -> None:
+        srv = self.server
+        if srv.closed or wanted == (srv.bare_writer is not None):
+            return
+        t = srv.t
+        if wanted:
+            name, cls = srv.srv.srv_name, srv.srv.type.Response
+            srv.bare_writer = DataWriter(
+                t.publisher_, t.topic(f"rr{name}Reply", _dds.dds_type(cls)), qos=_qos(SERVICE_DEPTH)
+            )
+            srv.writers = (srv.writer, srv.bare_writer)
+        else:
+            _delete(srv.bare_writer)
+            srv.bare_writer = None
+            srv.writers = (srv.writer,)
+        t._dirty = True  # ros_discovery_info lists the node's writers
+
     def close(self) -> None:
-        self.server.t.waits.detach(self.cond, self.token)
+        waits = self.server.t.waits
+        waits.detach(self.cond, self.token)
+        waits.detach(self.server.bare_reader, self.door_token)
         _delete(self.cond)
+
+
+class _Door:
+    """The bare reader's match status on the wait set: a Fast DDS client coming or going opens or
+    closes its server's door (_BareRequests)."""
+
+    def __init__(self, bare: _BareRequests) -> None:
+        self.bare = bare
+
+    def on_trigger(self) -> None:
+        self.bare.server.bare_reader.get_subscription_matched_status()  # reading a status resets its trigger
+        self.bare.open_door(self.bare.fast_clients())
 
 
 class _Client(_Endpoint):
