@@ -15,6 +15,7 @@ import os
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
+    from collections.abc import Iterable
     from pathlib import Path
 
 _added: list[str] = []
@@ -77,3 +78,60 @@ def is_package_name(name: str) -> bool:
         and "__" not in name
         and not name.endswith("_")
     )
+
+
+#: The definitions of the packages llfsm ships (llfsm/msgs/_interfaces/PKG/KIND/Name.KIND): the
+#: modules of llfsm.msgs are generated from them, so their file names are the types there are.
+SHIPPED_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "msgs", "_interfaces")
+#: The kinds of interface a package folder holds, as ROS lays them out.
+INTERFACE_KINDS = ("msg", "srv", "action")
+
+
+def shipped_packages() -> list[str]:
+    """The names of the packages llfsm ships, sorted."""
+    try:
+        names = os.listdir(SHIPPED_DIR)
+    except OSError:
+        return []
+    return sorted(n for n in names if is_package_name(n) and os.path.isdir(os.path.join(SHIPPED_DIR, n)))
+
+
+def interface_folder(package: str, extra_roots: Iterable[str] = ()) -> tuple[str, bool] | None:
+    """(folder, shipped) of an interface package as an import of llfsm.msgs.PKG finds it: the
+    shipped one first, then `extra_roots` (the folders `llfsm run` adds around its machines),
+    then the search path.  Found by listing folders alone: no definition is read, nothing is
+    imported (`llfsm check` asks this of untrusted machines)."""
+    if not is_package_name(package):
+        return None
+    shipped = os.path.join(SHIPPED_DIR, package)
+    if os.path.isdir(shipped):
+        return shipped, True
+    for root in [*(os.path.abspath(r) for r in extra_roots), *_roots()]:
+        d = os.path.join(root, package)
+        if any(os.path.isdir(os.path.join(d, k)) for k in INTERFACE_KINDS):
+            return d, False
+    return None
+
+
+def interface_names(folder: str, kind: str) -> list[str]:
+    """The types of one kind a package folder defines (`Twist` for msg/Twist.msg), sorted."""
+    try:
+        names = os.listdir(os.path.join(folder, kind))
+    except OSError:
+        return []
+    suffix = "." + kind
+    return sorted(n[: -len(suffix)] for n in names if n.endswith(suffix) and n[: -len(suffix)].isidentifier())
+
+
+def folders_around(path: str, levels: int = 4) -> list[str]:
+    """The folders above `path` (a machine folder or module) that `llfsm run` searches for
+    interface packages: a machine's own `my_msgs/` beside it or a few folders up."""
+    folder = os.path.realpath(path)  # realpath: no error on a loop
+    out = []
+    for _ in range(levels):
+        parent = os.path.dirname(folder)
+        if parent == folder:
+            break
+        folder = parent
+        out.append(folder)
+    return out

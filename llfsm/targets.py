@@ -21,7 +21,7 @@ from importlib.machinery import ModuleSpec, SourceFileLoader
 from . import fingerprint
 from .cachedir import cache_dir, preferred_root
 from .cachedir import problem as cache_problem
-from .machinedir import MACHINE_SUFFIX
+from .machinedir import MACHINE_SUFFIX, machine_dir_of_module
 from .runtime.errors import ErrorReport, passes_through, report_for, source_dir_of
 from .runtime.machine import Machine
 
@@ -334,11 +334,55 @@ def _new_module(name: str, path: str) -> tuple[ModuleType, SourceFileLoader]:
     return module, loader
 
 
+def helper_folders(target: str, module: str) -> list[str]:
+    """The folders a machine's helper modules are imported from, in order: the folder that
+    holds NAME.machine (or the built module), and for a built or installed module also the
+    folder that holds the machine folder it was built from, where `import helpers` found
+    `helpers.py` when the machine itself was run (docs/machine-format.md, "Helper modules")."""
+    folders = []
+    first = _helper_folder(target)
+    if first is not None:
+        folders.append(first)
+    if not os.path.isdir(_path_str(target)):  # a built module, or PKG/NAME: not compiled from a folder here
+        machine = machine_dir_of_module(module)
+        if machine is not None and os.path.isdir(machine):
+            beside = os.path.dirname(os.path.realpath(machine))
+            if beside not in folders:
+                folders.append(beside)
+    return folders
+
+
 def load(target: str) -> type[Machine]:
     module = _resolve(target)
-    folder = _helper_folder(target)
-    if folder is not None and folder not in sys.path:
-        # last: a helper never hides an installed module of the same name (a `yaml.py` beside
-        # the machines stays a helper for them, pyyaml stays pyyaml)
-        sys.path.append(folder)
-    return load_class(module)
+    folders = helper_folders(target, module)
+    for folder in folders:
+        if folder not in sys.path:
+            # last: a helper never hides an installed module of the same name (a `yaml.py` beside
+            # the machines stays a helper for them, pyyaml stays pyyaml)
+            sys.path.append(folder)
+    try:
+        return load_class(module)
+    except MachineLoadError as e:
+        e.report.exception += _missing_helper_hint(e.report.exception, folders, module)
+        raise
+
+
+def _missing_helper_hint(exception: str, folders: list[str], module: str) -> str:
+    """Where llfsm looked for a module an include could not import: a helper module (a built
+    module copied away from the machine folder it was built from), or an interface package."""
+    prefix = "ModuleNotFoundError: No module named '"
+    if not exception.startswith(prefix):
+        return ""
+    name = exception[len(prefix) :].split("'")[0]
+    if name.startswith("llfsm.msgs.") and name.count(".") == 2:
+        return (
+            f" (no interface package {name.split('.')[2]!r}: llfsm looks among the packages it ships, in the "
+            "folders above the machine, in LLFSM_INTERFACE_PATH and in share/ of AMENT_PREFIX_PATH)"
+        )
+    if "." in name:
+        return ""
+    where = " and ".join(folders) or "nowhere"
+    return (
+        f" (not installed; llfsm looks for helper modules in {where}: copy {name}.py beside "
+        f"{os.path.basename(module)}, or install it)"
+    )

@@ -129,6 +129,40 @@ def llfsm_process(*args: str | os.PathLike[str], timeout: float = 60, **kw: obje
     return Run(proc.returncode, proc.stdout, proc.stderr)
 
 
+def on_pty(argv: list[str], timeout: float = 120, columns: int = 200, **kw: object) -> tuple[int, str, str]:
+    """(status, stdout, what the terminal showed) of a command whose stderr is a terminal
+    `columns` wide (a pseudo-terminal, as in a user's shell): what llfsm.progress draws there."""
+    import fcntl
+    import pty
+    import select
+    import struct
+    import termios
+    import time
+
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
+    p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=slave, stdin=subprocess.DEVNULL, **kw)  # type: ignore[call-overload]
+    os.close(slave)
+    chunks = []
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        ready, _, _ = select.select([master], [], [], 0.2)
+        if ready:
+            try:
+                data = os.read(master, 4096)
+            except OSError:  # EIO: every holder of the terminal has gone
+                break
+            if not data:
+                break
+            chunks.append(data)
+        elif p.poll() is not None:
+            break
+    os.close(master)
+    out = p.stdout.read().decode() if p.stdout else ""
+    p.wait(timeout=30)
+    return p.returncode, out, b"".join(chunks).decode(errors="replace")
+
+
 # -- the C parts ----------------------------------------------------------------------------------
 
 #: The C parts (the recorder's tap, turtlesim's painter) are left out on purpose in two cases:

@@ -95,6 +95,7 @@ def test_recorded_mcap_reads_back_with_two_other_readers(tmp_path: Path) -> None
     # (and the machine's /llfsm/driver/... topics, where the run publishes them)
     assert sorted(t for t in by_topic if not t.startswith("/llfsm/")) == [
         "/chat",
+        "/rosout",  # turtlesim's log lines, as every node's
         "/turtle1/cmd_vel",
         "/turtle1/color_sensor",
         "/turtle1/pose",

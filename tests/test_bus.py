@@ -319,6 +319,8 @@ def test_graph_introspection(bus: Bus) -> None:
         "topics": {
             "/chatter": {"type": "std_msgs/msg/String", "publishers": 1, "subscriptions": 1, "messages": 1},
             "/parameter_events": events,  # every node publishes there, as rclpy's do
+            # and every node's logger publishes on /rosout (an rclpy node's too, even a quiet one)
+            "/rosout": {"type": "rcl_interfaces/msg/Log", "publishers": 2, "subscriptions": 0, "messages": 0},
         },
         "services": {
             "/reset": "std_srvs/srv/Trigger",
@@ -382,6 +384,8 @@ def test_introspect_lists_nodes_topics_and_services(tmp_path: Path) -> None:
             "  /llfsm/talker/state [std_msgs/msg/String] publishers: 1, subscriptions: 0, messages: 1",
             # every node publishes its parameter events and serves its parameters, as rclpy's do
             "  /parameter_events [rcl_interfaces/msg/ParameterEvent] publishers: 2, subscriptions: 0, messages: 0",
+            # and every node's logger publishes on /rosout, as rclpy's do
+            "  /rosout [rcl_interfaces/msg/Log] publishers: 2, subscriptions: 0, messages: 0",
             "services:",
             *parameter_services("/llfsm/talker")[:4],
             "  /llfsm/talker/restart [std_srvs/srv/Trigger]",

@@ -200,11 +200,11 @@ def test_nodes_are_announced_on_ros_discovery_info(runs: Callable[[], Run]) -> N
 
     a, observer = runs(), runs()
     with a:
-        # without rclpy's parameter endpoints, so the lists below are exactly the node's own
-        node = ros.Node("announced", start_parameter_services=False)
+        # without rclpy's parameter endpoints and rosout, so the lists below are exactly the node's own
+        node = ros.Node("announced", start_parameter_services=False, enable_rosout=False)
         pub = node.create_publisher(String, "news", 10)
         sub = node.create_subscription(String, "views", None, 10)
-        ros.Node("second", namespace="/ns", start_parameter_services=False)
+        ros.Node("second", namespace="/ns", start_parameter_services=False, enable_rosout=False)
     dp = observer.transport.dp
     late = Qos(Policy.Reliability.Reliable(10**9), Policy.Durability.TransientLocal, Policy.History.KeepAll)
     # as rmw's graph reader: reliable, transient local, so a late reader still gets the last one

@@ -716,7 +716,7 @@ class TestOtherLanguagesHabits:
             ("ok = a && b", "`and`"),
             ("ok = a || b", "`or`"),
             ("if !done:\n    pass", "`not x`"),
-            ("int x = 0;", "x = ..."),
+            ("int x = 0;", "`x = 0`"),
             ("if (a) {\n}", "colon and indentation"),
             ("// a comment", "`#`"),
         ],

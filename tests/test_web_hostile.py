@@ -594,6 +594,7 @@ def test_the_view_keeps_good_descriptions_drops_bad_ones_once_and_bounds_what_it
     source = graph.GraphSource.__new__(graph.GraphSource)
     Source.__init__(source, bus, "llfsm_view")  # the discovery readers are DDS's: not needed here
     source._machines, source._order, source._keep = {}, [], []
+    source._by_key, source._followed, source._readers_of = {}, set(), {}
     node = ros.Node("peer")
     pubs: dict[str, Any] = {}
 

@@ -22,7 +22,10 @@ from typing import TYPE_CHECKING
 from .errors import BagError
 
 if TYPE_CHECKING:
+    from typing import Any
+
     from ..msgs import Message
+    from ..progress import Status
     from ..ros.bus import Bus, Topic
 
 QUEUE_DEPTH = 1000  # per topic, between two executor passes
@@ -68,12 +71,21 @@ class _Session:
             finally:
                 activate(prev)
 
-    def spin(self, until: Callable[[], bool] = lambda: False, duration: float | None = None) -> None:
+    def spin(
+        self,
+        until: Callable[[], bool] = lambda: False,
+        duration: float | None = None,
+        tick: Callable[[], None] | None = None,
+    ) -> None:
+        """Spin until `until()`, `duration` seconds or Ctrl-C; `tick()` after each pass (the
+        status line of a terminal, which throttles itself)."""
         end = None if duration is None else time.monotonic() + duration
         while not self.stopped and not until():
             if end is not None and time.monotonic() >= end:
                 return
             self.bus.spin_once(20_000_000)
+            if tick is not None:
+                tick()
 
 
 def _all_topics(
@@ -114,8 +126,10 @@ def record(
     storage: str = "mcap",
     report: Callable[[str], None] | None = None,
     duration: float | None = None,
+    status: Status | None = None,
 ) -> str | None:
-    """Record until Ctrl-C (or `duration` seconds); the error message if recording failed."""
+    """Record until Ctrl-C (or `duration` seconds); the error message if recording failed.
+    `status` (a terminal's) shows what is being recorded: the topics and their counts."""
     # deferred: start-up (`bag play` never loads the recorder, nor `bag record` the player)
     from ..ros.node import Node
     from .recorder import Recorder
@@ -123,6 +137,8 @@ def record(
     names = [t if t.startswith("/") else "/" + t for t in topics]
     session = _Session()
     recorder = Recorder(out, storage, report=report)
+    counts: dict[str, int] = {}
+    started = time.monotonic()
     with session.active():
         bus = session.bus
         recorder.start(bus, tap=False)
@@ -135,6 +151,8 @@ def record(
             subscribed.add(topic.name)
             deliver = recorder.reader(topic, wall=True)
             if deliver is not None:
+                if status is not None and status.enabled:
+                    deliver = _counted(deliver, counts, topic.name)
                 node.create_subscription(topic.type, topic.name, deliver, QUEUE_DEPTH)
 
         for name in names:
@@ -145,12 +163,53 @@ def record(
                 subscribe(bus.topic(name, cls, "subscribe to"))
 
             def skipped(name: str, dds_type: str) -> None:
-                if report is not None:
-                    report(f"bag record: {name} is not recorded: llfsm has no class for its type {dds_type}")
+                # deferred: start-up (only a topic llfsm cannot record needs its type's ROS name)
+                from ..ros.transports.dds_graph import message_type
+
+                if report is not None:  # the type as ROS names it (pkg/msg/Name), not in its DDS form
+                    report(
+                        f"bag record: {name} is not recorded: llfsm has no class for its type "
+                        f"{message_type(dds_type)} (the messages llfsm ships, or a package of yours "
+                        "in LLFSM_INTERFACE_PATH or share/ of AMENT_PREFIX_PATH)"
+                    )
 
             node.create_timer(SCAN_S, _all_topics(bus, found, skipped))
-        session.spin(duration=duration)
+
+        def tick() -> None:
+            assert status is not None
+            status.show(_recording(out, names, all_topics, counts, time.monotonic() - started))
+
+        session.spin(duration=duration, tick=tick if status is not None and status.enabled else None)
+        if status is not None:
+            status.clear()
     return recorder.close()
+
+
+def _counted(deliver: Callable[[Any], None], counts: dict[str, int], name: str) -> Callable[[Any], None]:
+    """`deliver`, counting the messages of `name` for the status line (a terminal's only)."""
+    counts[name] = 0
+
+    def counting(msg: Any) -> None:
+        counts[name] += 1
+        deliver(msg)
+
+    return counting
+
+
+def _recording(out: str, names: list[str], all_topics: bool, counts: dict[str, int], elapsed: float) -> str:
+    """`recording 2 topics to DIR: 120 messages (/a 60, /b 60), 12 s`, or what it waits for."""
+    from ..progress import seconds  # deferred: start-up (a status line is drawn on a terminal only)
+
+    if not counts:
+        what = "any topic" if all_topics else ", ".join(names)
+        return f"recording to {out}: waiting for {what} to be published, {seconds(elapsed)}"
+    total = sum(counts.values())
+    n = len(counts)
+    each = ", ".join(f"{t} {c}" for t, c in sorted(counts.items()))
+    return (
+        f"recording {n} topic{'s' if n != 1 else ''} to {out}: {total} message{'s' if total != 1 else ''} "
+        f"({each}), {seconds(elapsed)}"
+    )
 
 
 def play(
@@ -159,17 +218,37 @@ def play(
     loop: bool = False,
     topics: Iterable[str] = (),
     delay: float = 0.0,
+    status: Status | None = None,
 ) -> int:
-    """Play the bag to the DDS graph; the number of messages published."""
+    """Play the bag to the DDS graph; the number of messages published.  `status` (a
+    terminal's) shows how far it is: messages and bag time."""
     # deferred: start-up, as in record
+    from ..progress import seconds
     from .player import Player
 
     player = Player(path, topics, rate, loop)
     session = _Session()
+    total = len(player.messages)
+    length = player.length / 1e9
     with session.active():
         if delay > 0:  # discovery: let subscribers of other processes match first
-            session.spin(duration=delay)
+            started = time.monotonic()
+
+            def waiting() -> None:
+                assert status is not None
+                status.show(f"playing {path}: starting in {seconds(delay - (time.monotonic() - started))}")
+
+            session.spin(duration=delay, tick=waiting if status is not None and status.enabled else None)
         player.attach(session.bus)
-        session.spin(until=lambda: player.done)
+        started = time.monotonic()
+
+        def tick() -> None:
+            assert status is not None
+            at = min(length, (time.monotonic() - started) * rate) if not loop else (time.monotonic() - started) * rate
+            status.show(f"playing {path}: {player.published} of {total} messages, {at:.1f} s of {length:.1f} s")
+
+        session.spin(until=lambda: player.done, tick=tick if status is not None and status.enabled else None)
         session.spin(duration=0.3)  # reliable writers hand over their last samples
+        if status is not None:
+            status.clear()
     return player.published

@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
+from ..suggest import did_you_mean
 from .errors import BagError
 from .reader import BagReader
 from .recorder import SIM_CLOCK_KEY
@@ -53,7 +54,9 @@ class Player:
             conns = [c for c in reader.connections if not wanted or c.topic in wanted]
             missing = wanted - {c.topic for c in reader.connections}
             if missing:
-                raise BagError(f"{path}: the bag has no topic {', '.join(sorted(missing))}")
+                first = sorted(missing)[0]
+                hint = did_you_mean(first, {c.topic for c in reader.connections})
+                raise BagError(f"{path}: the bag has no topic {', '.join(sorted(missing))}{hint}")
             self.topics: dict[str, type[Message]] = {}
             decoders: dict[int, Any] = {}
             for c in conns:

@@ -73,6 +73,8 @@ class _WallClock:
 
 
 _WALL = _WallClock()
+#: The recorder's node while it is being made (its own topics appear then, and wait).
+_MAKING = object()
 
 
 class Recorder:
@@ -107,6 +109,7 @@ class Recorder:
         self._bus: Bus | None = None
         self._started = False
         self._node: Any = None  # with a remote transport: the recorder's node and subscriptions
+        self._pending: list[Topic] = []  # topics that appeared while that node was being made
         # the writer runs this same llfsm, installed or not
         root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
         env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p))
@@ -171,6 +174,12 @@ class Recorder:
         deliver = self.reader(topic, wall=self.wall)
         if deliver is None:
             return
+        # a transient-local topic that was there before the recorder (the --node nodes start
+        # first): what its publishers keep is recorded now, as rosbag2's subscription, which
+        # takes the durability offered, gets it (turtlesim's first /rosout lines)
+        for kept in list(topic.latched.values()):
+            for msg in list(kept):
+                deliver(msg)
         topic.taps.append(deliver)
         self._taps.append((topic, deliver))
 
@@ -182,10 +191,21 @@ class Recorder:
         from ..runtime.context import activate
 
         assert self._bus is not None
+        if self._node is _MAKING:  # the node's own topics (its /rosout) appear while it is made
+            self._pending.append(topic)
+            return
         prev = activate(self._bus.ctx)
         try:
             if self._node is None:
-                self._node = Node("rosbag2_recorder")
+                self._node = _MAKING
+                try:
+                    self._node = Node("rosbag2_recorder")
+                except BaseException:
+                    self._node = None
+                    raise
+                for pending in self._pending:
+                    self._subscribe(pending)
+                self._pending.clear()
             deliver = self.reader(topic, wall=True)
             if deliver is not None:
                 self._node.create_subscription(topic.type, topic.name, deliver, QUEUE_DEPTH)

@@ -81,8 +81,11 @@ def _run_native(targets: tuple[str, ...]) -> None:
             modules.append(resolve(t).resolve())
         except (TargetError, InvalidMachine, MachineLoadError):
             return  # the ordinary path reports it
+    from ..progress import Status  # deferred: start-up (--native only)
+
     try:
-        build = native_build(modules, cache_root())
+        with Status().doing("native") as say:
+            build = native_build(modules, cache_root(), say)
     except NativeUnavailable as e:
         fail(f"--native: {e}")
     for w in build.warnings:

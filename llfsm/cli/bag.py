@@ -43,29 +43,74 @@ def record(topics: tuple[str, ...], all_topics: bool, output: str | None, storag
         fail("bag record: -a records every topic; give topics or -a, not both")
     out = output or time.strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
     from ..bag.dds import record as record_dds  # deferred: start-up (recording needs the bus)
+    from ..progress import Status
+
+    status = Status()  # on a terminal: what is recorded, and how much
 
     def report(text: str) -> None:
-        click.echo(f"llfsm: {text}", err=True)
+        status.print(f"llfsm: {text}")
 
     try:
-        error = record_dds(out, topics, all_topics, storage, report=report, duration=duration)
+        error = record_dds(out, topics, all_topics, storage, report=report, duration=duration, status=status)
     except BagError as e:
+        status.clear()
         fail(f"bag record: {e}")
     if error is not None:
         sys.exit(EXIT_ERRORS)
 
 
-@bag.command()
+class _SpreadTopics(click.Command):
+    """`--topics A B C`, as `ros2 bag play` takes it (argparse's nargs='+'): every name after
+    the option, up to the next option or `--`, is a topic.  `--topics A --topics B` works too."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        spread = spread_option(args, "--topics")
+        try:
+            return super().parse_args(ctx, spread)
+        except click.MissingParameter as e:
+            if "--topics" in args and e.param is not None and e.param.name == "bag_path":
+                raise click.UsageError(
+                    "missing DIR: --topics takes every name after it, so give DIR before it "
+                    "(`llfsm bag play DIR --topics A B`) or end the names with `--`",
+                    ctx,
+                ) from None
+            raise
+
+
+def spread_option(args: list[str], option: str) -> list[str]:
+    """`OPTION A B` as `OPTION A OPTION B`: the values after OPTION up to the next `-...` or `--`."""
+    out: list[str] = []
+    i = 0
+    while i < len(args):
+        arg = args[i]
+        out.append(arg)
+        i += 1
+        if arg == "--":
+            out += args[i:]
+            break
+        if arg == option and i < len(args):
+            out.append(args[i])  # the first value may be anything, as click takes it
+            i += 1
+            while i < len(args) and not args[i].startswith("-"):
+                out += [option, args[i]]
+                i += 1
+    return out
+
+
+@bag.command(cls=_SpreadTopics)
 @click.argument("bag_path", metavar="DIR")
 @click.option("-r", "--rate", type=float, default=1.0, show_default=True, help="Time scale (2 = twice as fast).")
 @click.option("-l", "--loop", is_flag=True, help="Start over at the end, until Ctrl-C.")
-@click.option("--topics", "topics", multiple=True, metavar="TOPIC", help="Play only these topics (repeatable).")
+@click.option("--topics", "topics", multiple=True, metavar="TOPIC...", help="Play only these topics (--topics A B).")
 @click.option("-d", "--delay", type=float, default=0.0, show_default=True, help="Wait this many seconds first.")
 def play(bag_path: str, rate: float, loop: bool, topics: tuple[str, ...], delay: float) -> None:
     """Publish a bag's messages to the DDS graph at their recorded pace."""
     from ..bag.dds import play as play_dds  # deferred: start-up (playing needs the bus)
+    from ..progress import Status
 
+    status = Status()  # on a terminal: how far the bag has been played
     try:
-        play_dds(bag_path, rate, loop, topics, delay)
+        play_dds(bag_path, rate, loop, topics, delay, status=status)
     except BagError as e:
+        status.clear()
         fail(f"bag play: {e}")

@@ -84,7 +84,19 @@ def _report(machines: list[Path], outcomes: Iterable[BuildOutcome | str], out_di
         if not quiet:
             where = f" -> {outcome.module}" if outcome.module else ""
             progress(f"[{i}/{len(machines)}] {outcome.name}: {outcome.status}{where}\n")
+            if outcome.helpers and outcome.module is not None:
+                progress(_helpers_note(outcome.helpers, outcome.module))
     return failed
+
+
+def _helpers_note(helpers: list[Path], module: Path) -> str:
+    """What a built module needs besides itself: the helper modules beside its machine folder,
+    found there by a run of the module as long as they stay; copied beside it, anywhere."""
+    names = ", ".join(str(h) for h in helpers)
+    return (
+        f"    imports helper modules {names}: a run of {module} finds them there; "
+        f"to run it elsewhere, copy them beside it\n"
+    )
 
 
 def _native(modules: list[Path], quiet: bool) -> None:
@@ -92,9 +104,11 @@ def _native(modules: list[Path], quiet: bool) -> None:
     # deferred: start-up (--native only)
     from ..cachedir import cache_root
     from ..compiler.native import NativeUnavailable, native_build
+    from ..progress import Status
 
     try:
-        nb = native_build(modules, cache_root())
+        with Status().doing("native") as say:
+            nb = native_build(modules, cache_root(), say)
     except NativeUnavailable as e:
         fail(f"--native: {e}")
     for w in nb.warnings:

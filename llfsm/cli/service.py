@@ -1,4 +1,4 @@
-"""`llfsm service list|call`: `ros2 service` over DDS, for llfsm runs and ROS 2 nodes alike."""
+"""`llfsm service list|type|find|call`: `ros2 service` over DDS, for llfsm runs and ROS 2 nodes alike."""
 
 from __future__ import annotations
 
@@ -29,6 +29,32 @@ def list_(show_types: bool, count_services: bool, include_hidden_services: bool,
         include_hidden=include_hidden_services,
         spin_time=spin_time,
     )
+    click.echo(text, nl=False)
+
+
+@service.command("type")
+@click.argument("service_name", metavar="SERVICE")
+@click.option("--include-hidden-services", is_flag=True, help="Consider hidden services as well.")
+@timeout_option
+@verb
+def type_(service_name: str, include_hidden_services: bool, timeout: float) -> None:
+    """Output a service's type."""
+    from ..ros2cli.service import type_ as run_type  # deferred: start-up (the verb loads the bus)
+
+    click.echo(run_type(service_name, include_hidden=include_hidden_services, timeout=timeout), nl=False)
+
+
+@service.command()
+@click.argument("service_type", metavar="TYPE")
+@click.option("-c", "--count-services", is_flag=True, help="Only display the number of services discovered.")
+@click.option("--include-hidden-services", is_flag=True, help="Consider hidden services as well.")
+@spin_time_option
+@verb
+def find(service_type: str, count_services: bool, include_hidden_services: bool, spin_time: float) -> None:
+    """Output a list of available services of a given type."""
+    from ..ros2cli.service import find as run_find  # deferred: start-up (the verb loads the bus)
+
+    text = run_find(service_type, count=count_services, include_hidden=include_hidden_services, spin_time=spin_time)
     click.echo(text, nl=False)
 
 

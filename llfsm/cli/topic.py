@@ -1,4 +1,4 @@
-"""`llfsm topic list|info|type|echo|pub|hz`: `ros2 topic` over DDS, for llfsm runs and ROS 2
+"""`llfsm topic list|info|type|find|echo|pub|hz`: `ros2 topic` over DDS, for llfsm runs and ROS 2
 nodes alike.  Syntax and output follow `ros2 topic`; docs/cli.md lists what differs."""
 
 from __future__ import annotations
@@ -57,6 +57,21 @@ def type_(topic_name: str, timeout: float) -> None:
     from ..ros2cli.topic.type import type_ as run_type  # deferred: start-up (the verb loads the bus)
 
     click.echo(run_type(topic_name, timeout=timeout), nl=False)
+
+
+@topic.command()
+@click.argument("topic_type", metavar="TYPE")
+@click.option("-c", "--count-topics", is_flag=True, help="Only display the number of topics discovered.")
+@click.option("--include-hidden-topics", is_flag=True, help="Consider hidden topics as well.")
+@spin_time_option
+@verb
+def find(topic_type: str, count_topics: bool, include_hidden_topics: bool, spin_time: float) -> None:
+    """Output a list of available topics of a given type."""
+    from ..ros2cli.topic.find import find as run_find  # deferred: start-up (the verb loads the bus)
+
+    click.echo(
+        run_find(topic_type, count=count_topics, include_hidden=include_hidden_topics, spin_time=spin_time), nl=False
+    )
 
 
 @topic.command()

@@ -3,6 +3,7 @@ the module header), and atomic writes, so an interrupted build never leaves half
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import gc
 import hashlib
@@ -38,6 +39,9 @@ class BuildOutcome:
     name: str = ""
     fingerprint: str = ""  # of the machine's files, as written into the module
     signature: str = ""  # _StatCache.signature, when the worker took it (before reading)
+    #: helper modules the machine imports from beside its folder, when the module is written
+    #: elsewhere (a run of the module imports them from there: `llfsm build` says so)
+    helpers: list[Path] = field(default_factory=list)
 
 
 #: Signals held back while a module is written: Ctrl-C, `kill` and a closed terminal.
@@ -117,7 +121,52 @@ def build_machine(path: Path, out_dir: Path, force: bool = False, fp: str | None
     except CompileError as e:
         return BuildOutcome(path, None, "failed", checked.diagnostics + e.diagnostics, name=name)
     write_atomic(target, source)
-    return BuildOutcome(path, target, "compiled", checked.diagnostics, name=name, fingerprint=fp)
+    helpers = helpers_of(path, checked.read.trees, out_dir)
+    return BuildOutcome(path, target, "compiled", checked.diagnostics, name=name, fingerprint=fp, helpers=helpers)
+
+
+#: Most helper files followed from a machine's imports (a helper's own imports are followed too).
+MAX_HELPERS = 100
+
+
+def helpers_of(machine_dir: Path, trees: dict[str, ast.Module], out_dir: Path) -> list[Path]:
+    """The helper modules (`NAME.py`, or a package folder) beside `machine_dir` that its code
+    imports, and those they import in turn, when the module goes to another folder: a run of
+    the module finds them beside the machine folder while it is there (llfsm.targets), and
+    elsewhere only if they are copied beside the module.  Read as text (`ast`), never run."""
+    beside = machine_dir.parent
+    try:
+        if os.path.samefile(beside, out_dir):
+            return []
+    except OSError:
+        pass
+    found: dict[str, Path] = {}
+    todo = [name for tree in trees.values() for name in _imported_tops(tree)]
+    while todo and len(found) < MAX_HELPERS:
+        name = todo.pop(0)
+        if name in found or not name.isidentifier():
+            continue
+        file = beside / f"{name}.py"
+        if file.is_file():
+            found[name] = file
+            try:
+                todo += _imported_tops(ast.parse(file.read_bytes()))
+            except (OSError, SyntaxError, ValueError, RecursionError, MemoryError):
+                pass  # the run reports a helper that does not import; the build only names it
+        elif (beside / name / "__init__.py").is_file():
+            found[name] = beside / name
+    return sorted(found.values())
+
+
+def _imported_tops(tree: ast.AST) -> list[str]:
+    """The top-level module names a tree imports absolutely, at any depth."""
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [a.name.split(".")[0] for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            out.append(node.module.split(".")[0])
+    return out
 
 
 #: From this many machines to compile on, `build_all` spreads the work over worker processes.

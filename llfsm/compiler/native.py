@@ -30,6 +30,7 @@ import shutil
 import subprocess
 import sys
 import sysconfig
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -154,9 +155,10 @@ def _stage_name(module: Path) -> str:
     return f"_llfsm_native_{module.stem}"
 
 
-def native_build(modules: list[Path], root: Path) -> NativeBuild:
+def native_build(modules: list[Path], root: Path, say: Callable[[str], None] | None = None) -> NativeBuild:
     """Compile `modules` (generated machine modules) and the runtime into root/native/<key>,
-    or find that build already there."""
+    or find that build already there.  `say` is told what a compile is doing when one starts
+    (each try of it): the command shows it while mypyc works, which takes seconds a machine."""
     why = available()
     if why is not None:
         raise NativeUnavailable(why)
@@ -180,7 +182,7 @@ def native_build(modules: list[Path], root: Path) -> NativeBuild:
         found = _from_manifest(folder, modules, base)
         if found is not None:
             return found
-        result, per_module = _compile(modules, folder, native / "mypy-cache")
+        result, per_module = _compile(modules, folder, native / "mypy-cache", say)
         data = {
             "base": base,
             "modules": {module_key(m): result.modules[str(m)] for m in modules},
@@ -254,13 +256,18 @@ def _user_location(module: Path, line: int) -> str:
     return f"{_display(user)}:{mapped[1]}"
 
 
-def _compile(modules: list[Path], folder: Path, mypy_cache: Path) -> tuple[NativeBuild, dict[Path, list[str]]]:
+def _compile(
+    modules: list[Path], folder: Path, mypy_cache: Path, say: Callable[[str], None] | None = None
+) -> tuple[NativeBuild, dict[Path, list[str]]]:
     staged = _stage(modules, folder)
     by_stage = {_stage_name(m): m for m in modules}
     runtime = [folder / "llfsm" / "runtime" / f"{n}.py" for n in RUNTIME_MODULES]
     left = dict(staged)
     warnings: dict[Path, list[str]] = {}
-    for _attempt in range(3):  # each retry drops the machines mypyc refused
+    for attempt in range(3):  # each retry drops the machines mypyc refused
+        if say is not None:
+            again = "" if attempt == 0 else ", again without the machines it refused"
+            say(f"compiling {len(left)} machine(s) and the runtime with mypyc{again}")
         proc = _run_mypyc([*runtime, *left.values()], folder, mypy_cache)
         if proc.returncode == 0:
             break

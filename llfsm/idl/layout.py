@@ -49,19 +49,24 @@ def bracketed(head: str, items: list[str], tail: str, indent: int, *, is_tuple: 
     return head + "\n" + "".join(f"    {item},\n" for item in items) + tail
 
 
-def assign(target: str, value: str, indent: int, parts: tuple[str, str, str] | None = None) -> str:
+def assign(target: str, value: str | Call, indent: int, parts: tuple[str, str, str | Call] | None = None) -> str:
     """`target = value`, wrapped in parentheses as ruff does when too long; `parts` are the
-    (body, condition, alternative) of a conditional value, split one a line if still too long."""
+    (body, condition, alternative) of a conditional value, split one a line if still too long.
+    A value (or an alternative) that is a `Call` and still too long is split inside its own
+    parentheses, as ruff prefers to splitting around it."""
     one = f"{target} = {value}"
     if fits(one, indent):
         return one
-    if fits(value, indent + 4) or parts is None:
+    if parts is None and isinstance(value, Call):
+        return layout(f"{target} = ", value, "", indent)
+    if fits(str(value), indent + 4) or parts is None:
         return f"{target} = (\n    {value}\n)"
     body, cond, alt = parts
-    return f"{target} = (\n    {body}\n    if {cond}\n    else {alt}\n)"
+    lines = [f"    {body}", f"    if {cond}", indented(layout("else ", alt, "", indent + 4))]
+    return f"{target} = (\n" + "\n".join(lines) + "\n)"
 
 
-def conditional(body: str, cond: str, alt: str) -> tuple[str, tuple[str, str, str]]:
+def conditional(body: str, cond: str, alt: str | Call) -> tuple[str, tuple[str, str, str | Call]]:
     """`body if cond else alt`, and its parts for `assign` to split."""
     return f"{body} if {cond} else {alt}", (body, cond, alt)
 

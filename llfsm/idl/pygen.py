@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ..msgs._message import INT_RANGES
-from .layout import assign, bracketed, conditional, literal, str_literal
+from .layout import Call, assign, bracketed, conditional, literal, str_literal
 from .spec import FLOATS, STRINGS, FieldSpec, FieldType, MessageSpec, PackageSpec
 
 if TYPE_CHECKING:
@@ -55,13 +55,13 @@ def _element_annotation(t: FieldType, names: _Names) -> str:
     return "bool"
 
 
-def _check(t: FieldType, name: str, names: _Names, v: str) -> tuple[str | None, str]:
+def _check(t: FieldType, name: str, names: _Names, v: str) -> tuple[str | None, str | Call]:
     """The (fast condition or None, checking call) that validate value `v` for field `name`."""
     q = str_literal(name)
     if t.array is not None:
         element = names.ref(t.base) if t.is_message else str_literal(t.element)
-        extra = f", size={t.size}" if t.array == "fixed" else f", bound={t.size}" if t.array == "bounded" else ""
-        return None, f"_m.check_array({v}, self, {q}, {element}{extra})"
+        extra = [f"size={t.size}"] if t.array == "fixed" else [f"bound={t.size}"] if t.array == "bounded" else []
+        return None, Call("_m.check_array", [v, "self", q, element, *extra])
     if t.is_message:
         cls = names.ref(t.base)
         return f"{v}.__class__ is {cls}", f"_m.check_message({v}, self, {q}, {cls})"

@@ -6,11 +6,13 @@ compares the whole tree byte for byte.
 
 The definitions are ROS 2's own files, comments included (`ros2 interface show` prints them and
 bags embed them): std_msgs, geometry_msgs and std_srvs from ros2/common_interfaces and
-builtin_interfaces from ros2/rcl_interfaces as Humble ships them; service_msgs (rcl_interfaces)
-and rmw_dds_common as Jazzy ships them (a Gid is 16 bytes since Iron, 24 in Humble: llfsm
-speaks current ROS 2 on the wire); rcl_interfaces' parameter messages and services and its
-`Log` as Kilted ships them (what every node's parameter services speak, docs/parameters.md);
-turtlesim from ros/ros_tutorials.  turtle_sensor_interface
+builtin_interfaces from ros2/rcl_interfaces as Humble ships them; sensor_msgs and nav_msgs
+(common_interfaces) as Jazzy ships them (Humble's but for comments, constants and the
+`variance` Jazzy added to Range); service_msgs (rcl_interfaces) and rmw_dds_common as Jazzy
+ships them (a Gid is 16 bytes since Iron, 24 in Humble: llfsm speaks current ROS 2 on the
+wire); rcl_interfaces' parameter messages and services and its `Log` as Kilted ships them
+(what every node's parameter services speak, docs/parameters.md); turtlesim from
+ros/ros_tutorials.  turtle_sensor_interface
 is llfsm's own (the interface of the how-to in docs/turtlesim.md).
 """
 

@@ -70,6 +70,18 @@ RULES: dict[str, Rule] = {
         _r("LF040", E, "undeclared-name", "Code reads a name that nothing defines where it is read."),
         _r("LF041", E, "ros-habit", "An rclpy spelling llfsm does not take (rclpy, std_msgs.msg...)."),
         _r("LF039", E, "too-complex", "Code beyond a size or shape limit that keeps parsing it fast."),
+        _r(
+            "LF042",
+            E,
+            "unknown-interface-type",
+            "An import of llfsm.msgs names a message, service or action type its package does not define.",
+        ),
+        _r(
+            "LF043",
+            E,
+            "helper-inside-machine",
+            "A helper module the code imports sits inside NAME.machine/, where imports do not look.",
+        ),
         _r("LF060", E, "unknown-parameter", "`parameters:` names something that is not a machine variable."),
         _r(
             "LF061",
@@ -84,6 +96,12 @@ RULES: dict[str, Rule] = {
         _r("LF104", W, "unreachable-transition", "An earlier guard of the state is the constant True."),
         _r("LF105", W, "undefined-name", "A name nothing defines, unless a star import of Includes.py does."),
         _r("LF108", W, "semicolon", "A statement ends with `;`, a C++ habit Python does not need."),
+        _r(
+            "LF109",
+            W,
+            "unknown-interface-package",
+            "An import of llfsm.msgs names a package found neither among llfsm's nor in the search path.",
+        ),
         _r(
             "LF107",
             W,

@@ -19,6 +19,7 @@ from pathlib import Path
 import yaml
 
 from ..machinedir import machine_name_of, refused_link
+from .cpp import syntax_hint
 from .diagnostics import Diagnostic, diag
 from .model import (
     IMPLICIT_SUSPENDED,
@@ -170,7 +171,7 @@ class _Reader:
         except SyntaxError as e:
             line = e.lineno or 1
             col = e.offset if e.offset else 1  # the parser counts characters, not bytes
-            hint = cpp_hint(line_index(text).lines[line - 1] if 1 <= line <= text.count("\n") + 1 else "")
+            hint = syntax_hint(line_index(text).lines[line - 1] if 1 <= line <= text.count("\n") + 1 else "", name)
             self.report("LF030", name, line, col, f"syntax error: {e.msg}" + (f"; {hint}" if hint else ""))
             return None
         except (RecursionError, MemoryError, ValueError) as e:
@@ -448,45 +449,6 @@ def read_machine(path: str | Path) -> ReadResult:
 
 
 # -- helpers ---------------------------------------------------------------------------------
-
-
-#: C++ (clfsm) habits and their Python spelling, tried in order on the line of a syntax error.
-_CPP_HINTS: list[tuple[re.Pattern[str], str]] = [
-    (re.compile(r"^\s*//"), "comments start with `#` in Python"),
-    (re.compile(r"/\*|\*/"), "comments start with `#` in Python (no /* */)"),
-    (re.compile(r"\b(?P<v>[A-Za-z_]\w*)\s*\+\+|\+\+\s*(?P<w>[A-Za-z_]\w*)"), "Python has no `++`: write `{v} += 1`"),
-    (
-        re.compile(r"\b(?P<v>[A-Za-z_]\w*)\s*--(?!-)|(?<!-)--\s*(?P<w>[A-Za-z_]\w*)"),
-        "Python has no `--`: write `{v} -= 1`",
-    ),
-    (re.compile(r"&&"), "Python writes `and` for `&&`"),
-    (re.compile(r"\|\|"), "Python writes `or` for `||`"),
-    (
-        re.compile(
-            r"^\s*(?:const\s+|static\s+|unsigned\s+|signed\s+)*(?:int|float|double|bool|char|long|short|auto|"
-            r"string|std::string|size_t|u?int(?:8|16|32|64)_t)\s*[*&]?\s+(?P<v>[A-Za-z_]\w*)\s*(?:=|;|\[|$)"
-        ),
-        "Python declares no types in code: write `{v} = ...`; a machine variable is declared in "
-        "Variables.py as `{v}: int = 0`",
-    ),
-    (re.compile(r"\belse\s+if\b"), "Python writes `elif` for `else if`"),
-    (re.compile(r"^\s*(?:if|while|for)\b.*\{\s*$|^\s*\}"), "Python blocks are a colon and indentation, not `{{ }}`"),
-    (re.compile(r"->"), "Python reaches attributes with `.`, not `->`"),
-    (re.compile(r"(?<![=!<>])!(?!=)\s*[A-Za-z_(]"), "Python writes `not x` for `!x`"),
-]
-
-
-def cpp_hint(line: str) -> str | None:
-    """The Python spelling of a C++ habit on the line of a syntax error, if one is there."""
-    if len(line) > 10_000:
-        return None
-    for rx, hint in _CPP_HINTS:
-        m = rx.search(line)
-        if m:
-            groups = m.groupdict()
-            v = groups.get("v") or groups.get("w") or "x"
-            return hint.format(v=v)
-    return None
 
 
 def _huge_fstring(text: str) -> tuple[int, int] | None:

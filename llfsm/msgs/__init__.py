@@ -2,10 +2,11 @@
 (docs/bus.md, "Messages").
 
 Shipped (generated modules, committed, from the definitions in _interfaces/): builtin_interfaces,
-std_msgs, geometry_msgs, std_srvs, turtlesim, turtle_sensor_interface, service_msgs and
-rmw_dds_common.  A user's own interfaces, folders PKG/msg/*.msg and PKG/srv/*.srv in ROS layout,
-import the same way (`from llfsm.msgs.my_pkg.srv import Foo`) through an import hook that
-searches `search_path()` and compiles them into the cache.  Importing this package stays light:
+std_msgs, geometry_msgs, std_srvs, sensor_msgs, nav_msgs, turtlesim, turtle_sensor_interface,
+service_msgs, rmw_dds_common and rcl_interfaces.  A user's own interfaces, folders
+PKG/msg/*.msg and PKG/srv/*.srv in ROS layout, import the same way (`from llfsm.msgs.my_pkg.srv
+import Foo`) through an import hook that searches `search_path()` and compiles them into the
+cache.  Importing this package stays light:
 it loads no parser, template engine or YAML library.
 """
 

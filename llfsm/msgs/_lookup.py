@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import difflib
 import importlib
+import os
 import re
 from pathlib import Path
 
-from ..interface_path import search_path
+from ..interface_path import INTERFACE_KINDS, search_path
 from ._message import Message, Service
 
 MSGS_DIR = Path(__file__).resolve().parent
@@ -31,13 +32,16 @@ class TypeNameError(ValueError):
 
 def split_type(text: str, kind: str) -> tuple[str, str, str]:
     """("turtlesim", "srv", "Spawn") from "turtlesim/srv/Spawn" or "turtlesim/Spawn"; `kind`
-    is what a two-part name means.  Anything else is a TypeNameError."""
+    is what a two-part name means.  Anything else is a TypeNameError (with the close type, if
+    one is: `std_msgs/msg/string`)."""
     parts = text.split("/")
     if len(parts) == 2:
         parts = [parts[0], kind, parts[1]]
     if len(parts) != 3 or parts[1] not in KINDS or not _PACKAGE.match(parts[0]) or not _NAME.match(parts[2]):
         example = "geometry_msgs/msg/Twist" if kind == "msg" else "turtlesim/srv/Spawn"
-        raise TypeNameError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {example})")
+        close = _closest(parts[0], parts[-1], kind) if len(parts) == 3 and parts[1] in KINDS else None
+        hint = f" (did you mean '{close}'?)" if close else ""
+        raise TypeNameError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {example}){hint}")
     return parts[0], parts[1], parts[2]
 
 
@@ -46,7 +50,7 @@ def builtin_packages() -> list[str]:
     return sorted(
         d.name
         for d in MSGS_DIR.iterdir()
-        if not d.name.startswith("_") and any((d / k / "__init__.py").is_file() for k in KINDS)
+        if not d.name.startswith("_") and any((d / k / "__init__.py").is_file() for k in INTERFACE_KINDS)
     )
 
 
@@ -58,41 +62,94 @@ def _user_packages() -> dict[str, Path]:
         except OSError:
             continue
         for d in entries:
-            if _PACKAGE.match(d.name) and d.name not in found and any((d / k).is_dir() for k in KINDS):
+            if _PACKAGE.match(d.name) and d.name not in found and any((d / k).is_dir() for k in INTERFACE_KINDS):
                 found[d.name] = d
     return found
 
 
-def known_types(kind: str) -> list[str]:
-    """Every `pkg/kind/Name` llfsm can import: built-in packages, then the user's."""
-    out = []
-    builtin = builtin_packages()
-    for pkg in builtin:
-        folder = DEFINITIONS / pkg / kind
-        if folder.is_dir():
-            out += [f"{pkg}/{kind}/{p.stem}" for p in sorted(folder.glob(f"*.{kind}"))]
+def packages() -> dict[str, Path]:
+    """Every interface package llfsm can import, by name, with the folder of its definitions:
+    its own, then the user's from the search path (a user's package of a shipped package's
+    name is never imported, so never listed)."""
+    out = {pkg: DEFINITIONS / pkg for pkg in builtin_packages()}
     for pkg, d in _user_packages().items():
-        if pkg not in builtin and (d / kind).is_dir():
-            out += [f"{pkg}/{kind}/{p.stem}" for p in sorted((d / kind).glob(f"*.{kind}")) if _NAME.match(p.stem)]
+        out.setdefault(pkg, d)
     return out
 
 
+def types_of(folder: Path, kind: str) -> list[str]:
+    """The names of the types of one kind a package's folder defines, sorted."""
+    d = folder / kind
+    if not d.is_dir():
+        return []
+    return sorted(p.stem for p in d.glob(f"*.{kind}") if _NAME.match(p.stem))
+
+
+def known_types(kind: str) -> list[str]:
+    """Every `pkg/kind/Name` llfsm can import: built-in packages, then the user's."""
+    return [f"{pkg}/{kind}/{name}" for pkg, d in packages().items() for name in types_of(d, kind)]
+
+
+#: How alike two names must be to be offered as "did you mean" (difflib's ratio): a package or
+#: a type name each on its own, so that what two names share by convention (`_msgs/msg/`) never
+#: makes `test_msgs/msg/BasicTypes` look like `std_msgs/msg/Byte`.
+CLOSE = 0.75
+
+
+def _similar(a: str, b: str) -> float:
+    return difflib.SequenceMatcher(None, a.lower(), b.lower()).ratio()
+
+
+def _closest(pkg: str, name: str, kind: str) -> str | None:
+    """The known type closest to pkg/kind/name, when one is close: a close name (or one it
+    begins: Odom -> Odometry) in the same or a close package.  A type of the same name in an
+    unrelated package is not offered: example_interfaces/msg/Int64 is not std_msgs/msg/Int64
+    on the wire."""
+    best: tuple[float, str] | None = None
+    for candidate in known_types(kind):
+        cpkg, _, cname = candidate.split("/")
+        p = _similar(pkg, cpkg)
+        if p < CLOSE:
+            continue
+        n = _similar(name, cname)
+        if n >= CLOSE:
+            score = p + n
+        elif len(name) >= 3 and cname.lower().startswith(name.lower()):
+            score = p + len(name) / len(cname)
+        else:
+            continue
+        if best is None or score > best[0]:
+            best = (score, candidate)
+    return best[1] if best else None
+
+
+def where_interfaces() -> str:
+    """Where llfsm looks for interface packages, in words, with what the variables hold."""
+    env = {name: os.environ.get(name, "") for name in ("LLFSM_INTERFACE_PATH", "AMENT_PREFIX_PATH")}
+    shown = {name: f"({value})" if value else "(not set)" for name, value in env.items()}
+    return (
+        "llfsm looks among the packages it ships, in the folders above the machines (for a command, "
+        f"the current folder and the three above it), in LLFSM_INTERFACE_PATH {shown['LLFSM_INTERFACE_PATH']} "
+        f"and in share/ of AMENT_PREFIX_PATH {shown['AMENT_PREFIX_PATH']}"
+    )
+
+
 def unknown(text: str, kind: str) -> TypeNameError:
-    """The error for a TYPE that names nothing, with the closest known type as a hint."""
-    name = "message" if kind == "msg" else "service"
+    """The error for a TYPE that names nothing: the right kind when it is another kind's, the
+    closest known type when one is close, and for a package found nowhere, where llfsm looked."""
+    name = "message" if kind == "msg" else "service" if kind == "srv" else "action"
     parts = text.split("/")
-    other = "srv" if kind == "msg" else "msg"
-    twin = f"{parts[0]}/{other}/{parts[-1]}"
-    if len(parts) in (2, 3) and twin in known_types(other):  # std_srvs/msg/Trigger: the kind is wrong
-        what = "a service" if other == "srv" else "a message"
-        return TypeNameError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
-    candidates = known_types(kind)
-    close = difflib.get_close_matches(text, candidates, n=1, cutoff=0.6)
-    if not close:  # "Twist", "geometry_msgs/twist": match on the name alone
-        last = text.rsplit("/", 1)[-1].lower()
-        close = [t for t in candidates if t.rsplit("/", 1)[1].lower() == last][:1]
-    hint = f" (did you mean '{close[0]}'?)" if close else ""
-    return TypeNameError(f"unknown {name} type '{text}'{hint}")
+    pkg, tname = parts[0], parts[-1]
+    for other in INTERFACE_KINDS:  # std_srvs/msg/Trigger: the kind is wrong
+        twin = f"{pkg}/{other}/{tname}"
+        if other != kind and len(parts) in (2, 3) and twin in known_types(other):
+            what = {"msg": "a message", "srv": "a service", "action": "an action"}[other]
+            return TypeNameError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
+    close = _closest(pkg, tname, kind)
+    hint = f" (did you mean '{close}'?)" if close else ""
+    if pkg not in packages():
+        return TypeNameError(f"unknown {name} type '{text}': no interface package '{pkg}'{hint}; {where_interfaces()}")
+    return TypeNameError(f"unknown {name} type '{text}': {pkg} has no {name} '{tname}'{hint}")
 
 
 def _import(pkg: str, kind: str, name: str, text: str) -> object:

@@ -46,6 +46,8 @@ if TYPE_CHECKING:
 NAMESPACE = "/llfsm"
 #: Latched, as a ROS user expects of a state or a description topic.
 LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: How often a run on DDS looks for another run of one of its machines (seconds of run time).
+WATCH_PERIOD = 0.5
 
 
 def enable(ctx: RunContext) -> None:
@@ -142,7 +144,48 @@ class MachineGraph(Tracer):
         if self.always:
             for entry in self.entries:
                 entry.listened = True
+            if self.nodes:
+                self._watch_twins()
         self._update_tracer()
+
+    # -- another run of the same machine --------------------------------------------------------
+    def _watch_twins(self) -> None:
+        """Say, once per machine, when another run on the domain runs a machine of the same name:
+        the two then share /llfsm/M's topics and services, so a command reaches both, which a
+        user who started the same machine twice by mistake would not guess.  The graph's nodes
+        (ros_discovery_info, as `ros2 node list` reads it) are looked at every WATCH_PERIOD."""
+        dp = getattr(self.bus.transport, "dp", None)
+        if dp is None:
+            return
+        try:
+            # deferred: optional dependency (cyclonedds); only a run on the DDS transport looks
+            from .transports.dds_graph import Graph
+
+            def say(text: str) -> None:  # what a peer sent that could not be read
+                self.nodes[0].get_logger().warning(text)
+
+            graph = Graph(dp, say=say)
+        except Exception:  # the graph reader is a courtesy: the run goes on without it
+            return
+        ours = {node.get_fully_qualified_name(): node for node in self.nodes}
+        told: set[str] = set()
+
+        def look() -> None:
+            try:
+                graph.update()
+                others = {n.full_name for n in graph.nodes(include_hidden=True)}
+            except Exception:
+                return
+            for name in sorted((others & ours.keys()) - told):
+                told.add(name)
+                machine = name.rsplit("/", 1)[1]
+                ours[name].get_logger().warning(
+                    f"another run on this ROS domain runs a machine named {machine} too: the two share "
+                    f"{name}/state, {name}/description and {name}/suspend|resume|restart, so a command "
+                    f"reaches both (`llfsm view` shows them apart); rename one to tell them apart"
+                )
+
+        self.nodes[0].create_timer(WATCH_PERIOD, look)
 
     # -- publishing -----------------------------------------------------------------------------
     def _publish(self, entry: _Entry, name: str) -> None:

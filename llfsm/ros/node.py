@@ -10,7 +10,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..msgs._message import Message, Service, is_message_class, is_service_class
-from ..msgs.rcl_interfaces.msg import ParameterEvent
+from ..msgs.rcl_interfaces.msg import Log, ParameterEvent
 from .bus import bus_of
 from .client import Client
 from .clock import RunClock
@@ -19,7 +19,7 @@ from .names import expand, normalise_namespace, remap_name, remap_node, validate
 from .parameter_service import ParameterService
 from .parameters import Parameter, ParameterHost, overrides_for
 from .publisher import LatchingPublisher, Publisher
-from .qos import QoSProfile, qos_profile_parameter_events
+from .qos import QoSProfile, qos_profile_parameter_events, qos_profile_rosout_default
 from .qos import resolve as resolve_qos
 from .service import ServiceServer
 from .subscription import Subscription
@@ -30,7 +30,8 @@ class Node(ParameterHost):
     """A participant on the bus, as `rclpy.node.Node`.  Names follow ROS 2 rules: relative names
     take the node's namespace, `~/x` is private to the node, and `--remap` rules apply.  Its
     parameters (ParameterHost, parameters.py) are rclpy's, served to other processes unless
-    `start_parameter_services=False` (the hidden nodes of `llfsm topic pub` and the like)."""
+    `start_parameter_services=False` (the hidden nodes of `llfsm topic pub` and the like).  Its
+    logger's lines are published on /rosout unless `enable_rosout=False`, as in rclpy."""
 
     def __init__(
         self,
@@ -38,6 +39,8 @@ class Node(ParameterHost):
         namespace: str = "",
         *,
         start_parameter_services: bool = True,
+        enable_rosout: bool = True,
+        rosout_qos_profile: int | QoSProfile = qos_profile_rosout_default,
         parameter_overrides: list[Parameter] | None = None,
         allow_undeclared_parameters: bool = False,
         automatically_declare_parameters_from_overrides: bool = False,
@@ -53,9 +56,10 @@ class Node(ParameterHost):
         self._destroyed = False
         self._entities: list[Any] = []
         logger_name = ".".join([*ns.strip("/").split("/"), name]) if ns != "/" else name
-        self._logger = Logger(bus, logger_name)
         bus.nodes.append(self)
         bus.transport.node_changed(self)
+        rosout = self.create_publisher(Log, "/rosout", rosout_qos_profile) if enable_rosout else None
+        self._logger = Logger(bus, logger_name, rosout)
         events = (
             self.create_publisher(ParameterEvent, "/parameter_events", qos_profile_parameter_events)
             if start_parameter_services

@@ -111,6 +111,9 @@ qos_profile_system_default = QoSProfile(
 qos_profile_services_default = QoSProfile(10)
 qos_profile_parameters = QoSProfile(1000)
 qos_profile_parameter_events = QoSProfile(1000)
+#: What each node's /rosout publisher offers (rcl's: reliable, transient local, the last 1000;
+#: its 10 s lifespan is one of the policies llfsm ignores)
+qos_profile_rosout_default = QoSProfile(1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 @dataclass(frozen=True, slots=True)

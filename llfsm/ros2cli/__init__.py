@@ -5,12 +5,12 @@ click layers over it, and tests call it without a subprocess.  No click here.
 Verb groups (each verb a function named after it, `list_` and `type_` where Python has the
 name):
 
-- `topic/`: `list`, `info`, `type`, `echo`, `pub`, `hz`, a module each (the group is big).
-- `node`: `list`.
-- `service`: `list`, `call`.
-- `interface`: `show`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to llfsm's classes, with
-  a "did you mean" for near misses (llfsm/msgs/_lookup.py, which the web view reads TYPEs
-  through too), as the verbs' usage errors.  Offline.
+- `topic/`: `list`, `info`, `type`, `find`, `echo`, `pub`, `hz`, a module each (the group is big).
+- `node`: `list`, `info`.
+- `service`: `list`, `type`, `find`, `call`.
+- `interface`: `show`, `list`, `package`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to
+  llfsm's classes, with a "did you mean" for near misses (llfsm/msgs/_lookup.py, which the web
+  view reads TYPEs through too), as the verbs' usage errors.  Offline.
 
 What the groups share:
 
@@ -21,8 +21,11 @@ What the groups share:
   only here and in the verbs it is imported, inside functions (`llfsm --help` never loads it).
 - `arguments`: topic and service names, VALUES (YAML as `ros2 topic pub` takes it).
 
-Adding a verb (say `service type`): write `def type_(service: str, *, timeout: float = TIMEOUT)
--> str` in `service.py` (for `topic`, a new module `topic/find.py`), taking typed arguments
+The close names the graph has, for the lines that say something was not found, are
+llfsm.suggest's.
+
+Adding a verb (as `service type` was): write `def type_(service: str, *, timeout: float = TIMEOUT)
+-> str` in `service.py` (for `topic`, a new module such as `topic/find.py`), taking typed arguments
 and returning the text `ros2` prints (or, for a verb that streams, writing to `out`); check
 the user's input (names, TYPE, VALUES) before the domain is joined.  Then add its click
 command to llfsm/cli/service.py (a new group: a new llfsm/cli/ module, registered in

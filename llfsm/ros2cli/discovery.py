@@ -12,8 +12,10 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+from ..progress import Status
 from ..ros.transports.dds_config import DiscoveryError, settings
 from ..ros.transports.dds_graph import Graph
+from ..suggest import did_you_mean
 from . import NOT_FOUND, CliError
 
 NEEDS_CYCLONEDDS = "the ros2-style verbs speak DDS through the cyclonedds package, which does not load here ({})"
@@ -49,6 +51,9 @@ def where() -> str:
 
 def wait_for_topic_types(graph: Graph, name: str, timeout: float) -> list[str]:
     """The topic's types once discovery shows it; exit 1 when it does not within `timeout`."""
-    if not graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True)):
-        raise CliError(f"topic '{name}' not found within {timeout:g} s ({where()})", NOT_FOUND)
+    with Status().waiting(f"topic '{name}' to appear", timeout):  # on a terminal only
+        found = graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True))
+    if not found:
+        hint = did_you_mean(name, graph.topics(include_hidden=True))
+        raise CliError(f"topic '{name}' not found within {timeout:g} s ({where()}){hint}", NOT_FOUND)
     return graph.topics(include_hidden=True)[name]

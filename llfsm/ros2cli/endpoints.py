@@ -112,7 +112,7 @@ def hidden_node(name: str) -> Iterator[tuple[Node, Graph]]:
     try:
         bus = bus_of(ctx)
         bus.initialised = True
-        node = Node(name, start_parameter_services=False)
+        node = Node(name, start_parameter_services=False, enable_rosout=False)
         yield node, Graph(transport.dp)
     finally:
         transport.close()

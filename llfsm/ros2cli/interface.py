@@ -11,21 +11,25 @@ the commands add the working directory and its parents (where a machine's packag
 
 from __future__ import annotations
 
+import difflib
 import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
 
+from ..interface_path import INTERFACE_KINDS
 from ..msgs import Message, Service, _lookup, add_search_path, find_package
+from ..msgs._lookup import CLOSE, KINDS, TypeNameError, builtin_packages, known_types, packages, types_of
 from ..msgs._lookup import DEFINITIONS as _DEFINITIONS
-from ..msgs._lookup import KINDS, TypeNameError, builtin_packages, known_types
-from . import CliError
+from . import NOT_FOUND, CliError
 
 __all__ = [
     "KINDS",
     "definition_file",
     "known_types",
+    "list_",
     "message_class",
+    "package",
     "service_class",
     "show",
     "split_type",
@@ -65,6 +69,34 @@ def message_class(text: str) -> type[Message]:
 def service_class(text: str) -> type[Service]:
     """The service class that TYPE names (`turtlesim/srv/Spawn`, `turtlesim/Spawn`)."""
     return _as_usage_error(_lookup.service_class, text)
+
+
+# -- ros2 interface list, package -----------------------------------------------------------------
+
+_HEADINGS = {"msg": "Messages:", "srv": "Services:", "action": "Actions:"}
+
+
+def list_(*, kinds: tuple[str, ...] = ()) -> str:
+    """`ros2 interface list`: each kind under its heading (all three when `kinds` is empty),
+    every type of every package llfsm can import, indented by four spaces."""
+    out = []
+    for kind in [k for k in _HEADINGS if not kinds or k in kinds]:
+        out.append(_HEADINGS[kind] + "\n")
+        out += [f"    {t}\n" for t in known_types(kind)]
+    return "".join(out)
+
+
+def package(name: str, *, kinds: tuple[str, ...] = ()) -> str:
+    """`ros2 interface package NAME`: the package's types, one a line (ros2 prints them in no
+    particular order; llfsm sorts them).  An unknown package is status 1, as in ros2."""
+    known = packages()
+    folder = known.get(name)
+    if folder is None:
+        close = difflib.get_close_matches(name, list(known), n=1, cutoff=CLOSE)
+        hint = f" (did you mean '{close[0]}'?)" if close else ""
+        raise CliError(f"Unknown package '{name}'{hint}", NOT_FOUND)
+    found = [f"{name}/{k}/{t}" for k in INTERFACE_KINDS if not kinds or k in kinds for t in types_of(folder, k)]
+    return "".join(f"{t}\n" for t in sorted(found))
 
 
 # -- ros2 interface show -------------------------------------------------------------------------

@@ -1,4 +1,5 @@
-"""`service list|call`: services of the ROS graph as `ros2 service` lists and calls them.
+"""`service list|type|find|call`: services of the ROS graph as `ros2 service` lists, types, finds
+and calls them.
 
 `call` is a client of a hidden node of llfsm's own bus on the DDS transport
 (llfsm/ros2cli/endpoints.py): the transport's request header, client id and readiness serve
@@ -13,11 +14,12 @@ from typing import Any, TextIO
 
 from ..ros import FutureReturnCode, spin_until_future_complete
 from ..ros.transports.dds_graph import Graph
+from ..suggest import did_you_mean
 from . import NOT_FOUND, SPIN_TIME, TIMEOUT, CliError
 from .arguments import full_name, parse_values, stamp
-from .discovery import discovered, where
+from .discovery import discovered, open_graph, where
 from .endpoints import hidden_node
-from .interface import service_class, use_working_directory
+from .interface import service_class, split_type, use_working_directory
 
 
 def list_(
@@ -31,6 +33,36 @@ def list_(
     if not services:
         raise CliError(f"no services found within {spin_time:g} s ({where()})", NOT_FOUND)
     return "".join(f"{name} [{', '.join(types)}]\n" if show_types else f"{name}\n" for name, types in services.items())
+
+
+def type_(service: str, *, include_hidden: bool = False, timeout: float = TIMEOUT) -> str:
+    """What `ros2 service type SERVICE` prints: its type (one a line, if servers differ), once
+    discovery shows the service; not within `timeout` is status 1, with the close names there are."""
+    name = full_name(service, "service")
+    graph = open_graph()
+    try:
+        found = graph.spin(timeout, until=lambda: name in graph.services(include_hidden=True))
+        services = graph.services(include_hidden=True)
+    finally:
+        graph.close()
+    if not found:
+        hint = did_you_mean(name, services)
+        raise CliError(f"service '{name}' not found within {timeout:g} s ({where()}){hint}", NOT_FOUND)
+    return "".join(f"{t}\n" for t in services[name])
+
+
+def find(type_text: str, *, count: bool = False, include_hidden: bool = False, spin_time: float = SPIN_TIME) -> str:
+    """What `ros2 service find TYPE` prints: the services of that type, one a line (with `count`,
+    their number).  None found is status 1 (ros2 prints nothing)."""
+    pkg, kind, srv_name = split_type(type_text, "srv")
+    wanted = f"{pkg}/{kind}/{srv_name}"
+    with discovered(spin_time) as graph:
+        services = [s for s, types in graph.services(include_hidden=include_hidden).items() if wanted in types]
+    if count:
+        return f"{len(services)}\n"
+    if not services:
+        raise CliError(f"no services of type {wanted} found within {spin_time:g} s ({where()})", NOT_FOUND)
+    return "".join(f"{s}\n" for s in services)
 
 
 def call(
@@ -56,7 +88,8 @@ def call(
             out.write("waiting for service to become available...\n")
             out.flush()
             if not _wait_for_service(graph, client, name, srv, timeout):
-                raise CliError(f"service '{name}' not available within {timeout:g} s ({where()})", NOT_FOUND)
+                hint = did_you_mean(name, graph.services(include_hidden=True))
+                raise CliError(f"service '{name}' not available within {timeout:g} s ({where()}){hint}", NOT_FOUND)
         while True:
             stamp(stamps)
             out.write(f"requester: making request: {request!r}\n\n")

@@ -10,6 +10,13 @@ and services by their `rq/NAMERequest` readers.
 Everything here runs on the view's scheduler thread (a run with no machines whose bus executor
 spins); the server's thread only reads what the callbacks stored.
 
+Two runs of the same machine on one domain publish on the same topics and serve the same
+services.  The view keeps them apart by the participant (the run) each sample comes from: a
+machine is a (name, participant) pair, read with DDS readers of its own whose samples say
+their writer.  The first run of a name seen keeps the name; another is `NAME@PARTICIPANT` (the
+first 8 hex digits of its participant's GUID), so neither card mixes the other's transitions.
+(Without DDS, as when a test feeds the view in process, one participant is assumed.)
+
 The domain is shared, so every peer is untrusted (issue 18): a description is believed only once
 it fits llfsm.diagram.description (else it is dropped, with one warning per machine topic, and the last
 good one stays), a state's text is bounded, machine names are ROS name tokens, at most
@@ -29,7 +36,7 @@ from ..diagram.description import MAX_NAME, DescriptionError, parse_description
 from ..msgs.std_msgs.msg import String
 from ..ros.control import LATCHED, NAMESPACE
 from ..ros.transports.dds_graph import message_class, service_class
-from .source import HISTORY, Source
+from .source import HISTORY, CommandError, Source
 
 if TYPE_CHECKING:
     from ..ros.bus import Bus
@@ -47,10 +54,12 @@ _MACHINE = re.compile(rf"[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME - 1}}}")
 
 
 class _Machine:
-    """One machine seen on the graph."""
+    """One machine of one run seen on the graph."""
 
-    def __init__(self, name: str) -> None:
-        self.name = name
+    def __init__(self, name: str, key: str, participant: str) -> None:
+        self.name = name  # the machine's name (its topics': /llfsm/NAME/...)
+        self.key = key  # what the page calls it: the name, or NAME@PARTICIPANT for another run of it
+        self.participant = participant  # the run's participant GUID ("" when not known)
         self.desc: dict[str, Any] | None = None
         self.raw: bytes | None = None  # digest of the description's text last seen (the same again: nothing to do)
         self.size = 0  # states and transitions of `desc`
@@ -58,6 +67,61 @@ class _Machine:
         self.state: str | None = None
         self.since = 0.0
         self.history: deque[dict[str, Any]] = deque(maxlen=HISTORY)
+
+
+#: How often a machine's own readers are taken from (run time, seconds): its transitions' times.
+MACHINE_PERIOD = 0.05
+#: A machine topic's reader keeps this many samples (several runs' latched states arrive at once).
+MACHINE_DEPTH = 32
+
+
+class _Readers:
+    """A machine's description and state, read with DDS readers of the view's own whose samples
+    name their writer, so that two runs of the machine stay two machines.  Decoded on llfsm's
+    one path for what peers send (llfsm.ros.transports.dds_read)."""
+
+    def __init__(self, dp: Any, name: str, warn: Any) -> None:
+        # deferred: optional dependency (cyclonedds), imported by the view's DDS source only
+        from cyclonedds.core import Policy, Qos
+        from cyclonedds.sub import DataReader
+        from cyclonedds.topic import Topic
+
+        from ..msgs import _dds
+        from ..ros.transports.dds_read import Samples
+
+        qos = Qos(
+            Policy.Reliability.Reliable(max_blocking_time=100_000_000),
+            Policy.Durability.TransientLocal,
+            Policy.History.KeepLast(MACHINE_DEPTH),
+            Policy.DataRepresentation(use_cdrv0_representation=True),
+        )
+        wire = _dds.dds_type(String)
+        self.samples = {}
+        for part in ("description", "state"):
+            topic = f"{NAMESPACE}/{name}/{part}"
+            reader: Any = DataReader(dp, Topic(dp, "rt" + topic, wire), qos=qos)
+            self.samples[part] = Samples(
+                reader, lambda data: _dds.from_cdr(data, String), topic, "a std_msgs/msg/String", warn
+            )
+        self._peers: dict[int, str] = {}
+
+    def take(self, part: str) -> list[tuple[str, Any]]:
+        """(participant, message) of each sample that came, oldest first."""
+        samples = self.samples[part]
+        return [(self._peer(samples.reader, info.publication_handle), msg) for msg, info in samples.take()]
+
+    def _peer(self, reader: Any, handle: int) -> str:
+        peer = self._peers.get(handle)
+        if peer is None:
+            try:
+                key = reader.get_matched_publication_data(handle).participant_key
+            except Exception:  # the writer has gone meanwhile: its samples still count, as one run's
+                key = None
+            peer = key.hex if key is not None and hasattr(key, "hex") else f"writer-{handle:x}"
+            if len(self._peers) > 4 * MAX_MACHINES:
+                self._peers.clear()
+            self._peers[handle] = peer
+        return peer
 
 
 class GraphSource(Source):
@@ -73,8 +137,11 @@ class GraphSource(Source):
         self._subs = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)
         self._topics_seen: dict[str, Any] = {}
         self._services_seen: dict[str, Any] = {}
-        self._machines: dict[str, _Machine] = {}
-        self._order: list[str] = []
+        self._machines: dict[tuple[str, str], _Machine] = {}  # (name, participant) -> the machine of that run
+        self._by_key: dict[str, _Machine] = {}  # the page's name for each
+        self._order: list[str] = []  # keys, in the order their descriptions came
+        self._followed: set[str] = set()
+        self._readers_of: dict[str, _Readers] = {}
         self._keep: list[Any] = []
         self.node.create_timer(DISCOVERY_PERIOD, self._discover)
         self._discover()
@@ -112,8 +179,8 @@ class GraphSource(Source):
                 self._topics_seen[topic] = message_class(type_name)
             if topic.startswith(NAMESPACE + "/") and topic.endswith(_SUFFIX):
                 machine = topic[len(NAMESPACE) + 1 : -len(_SUFFIX)]
-                if machine not in self._machines and _MACHINE.fullmatch(machine):
-                    if len(self._machines) < MAX_MACHINES:
+                if machine not in self._followed and _MACHINE.fullmatch(machine):
+                    if len(self._followed) < MAX_MACHINES:
                         self._follow(machine)
                     else:
                         self.warn(f"more than {MAX_MACHINES} machines on the graph: {topic} not followed", "machines")
@@ -125,62 +192,117 @@ class GraphSource(Source):
                     self._services_seen[service] = service_class(type_name)
 
     def _follow(self, name: str) -> None:
-        m = self._machines[name] = _Machine(name)
-
-        topic = f"{NAMESPACE}/{name}{_SUFFIX}"
-
-        def on_description(msg: Any) -> None:
-            text = msg.data
-            digest = hashlib.sha256(text.encode("utf-8", "surrogatepass")).digest()
-            if digest == m.raw:
-                return
-            m.raw = digest
-            try:
-                desc = parse_description(text, name)
-            except DescriptionError as e:
-                self.warn(f"{topic}: dropped a description that does not fit: {e}", key=topic)
-                return
-            except Exception as e:  # never into the bus executor: it would end the view
-                self.warn(f"{topic}: dropped a description that could not be read: {type(e).__name__}", key=topic)
-                return
-            size = len(desc["states"]) + sum(len(s["transitions"]) for s in desc["states"])
-            others = sum(o.size for o in self._machines.values() if o is not m)
-            if others + size > MAX_TOTAL:
-                self.warn(
-                    f"{topic}: dropped a description of {size:,} states and transitions: the view holds "
-                    f"{others:,} already, and at most {MAX_TOTAL:,}",
-                    key=topic,
-                )
-                return
-            m.accepting = frozenset(s["name"] for s in desc["states"] if s["accepting"])
-            m.desc, m.size = desc, size
-            if name not in self._order:
-                self._order.append(name)
-
-        def on_state(msg: Any) -> None:
-            state = _bounded(msg.data)
-            now = round(self.clock.now / 1e9, 3)
-            if m.state is not None:
-                m.history.appendleft({"t": now, "from": m.state, "to": state})
-            m.state, m.since = state, now
-
+        """Read machine `name`'s description and state, each run's apart when DDS says which
+        run sent what (a transport with a participant), else as one machine."""
+        self._followed.add(name)
+        dp = getattr(self.bus.transport, "dp", None)
+        if dp is not None:
+            readers = _Readers(dp, name, lambda text: self.warn(text))
+            self._readers_of[name] = readers
+            if len(self._readers_of) == 1:
+                self.node.create_timer(MACHINE_PERIOD, self._take_machines)
+            return
         base = f"{NAMESPACE}/{name}"
-        self._keep.append(self.node.create_subscription(String, base + _SUFFIX, on_description, LATCHED))
-        self._keep.append(self.node.create_subscription(String, base + "/state", on_state, LATCHED))
+        self._keep.append(
+            self.node.create_subscription(
+                String, base + _SUFFIX, lambda msg: self._on_description(name, "", msg), LATCHED
+            )
+        )
+        self._keep.append(
+            self.node.create_subscription(String, base + "/state", lambda msg: self._on_state(name, "", msg), LATCHED)
+        )
+
+    def _take_machines(self) -> None:
+        try:
+            for name, readers in list(self._readers_of.items()):
+                for peer, msg in readers.take("description"):
+                    self._on_description(name, peer, msg)
+                for peer, msg in readers.take("state"):
+                    self._on_state(name, peer, msg)
+        except Exception as e:  # never into the bus executor: the next round goes on
+            self.warn(f"machines: reading failed: {type(e).__name__}: {e}", key="machines failed")
+
+    def _machine(self, name: str, peer: str) -> _Machine | None:
+        """The machine `name` of the run `peer`, made on its first sample (None beyond the bound)."""
+        m = self._machines.get((name, peer))
+        if m is not None:
+            return m
+        if len(self._machines) >= MAX_MACHINES:
+            self.warn(
+                f"more than {MAX_MACHINES} machines on the graph: {name} of {peer or 'a run'} not followed", "machines"
+            )
+            return None
+        first = not any(n == name for n, _ in self._machines)
+        key = name if first or not peer else self._other_key(name, peer)
+        m = self._machines[(name, peer)] = self._by_key[key] = _Machine(name, key, peer)
+        return m
+
+    def _other_key(self, name: str, peer: str) -> str:
+        """NAME@xxxxxxxx for another run of a machine: eight hex digits of its participant's GUID
+        after the vendor and host part (the first eight are the same for runs on one host),
+        more when those are taken."""
+        for width in (8, 16, len(peer)):
+            key = f"{name}@{peer[8 : 8 + width] if width < len(peer) else peer}"
+            if key not in self._by_key:
+                return key
+        return f"{name}@{peer}#{len(self._machines)}"
+
+    def _on_description(self, name: str, peer: str, msg: Any) -> None:
+        topic = f"{NAMESPACE}/{name}{_SUFFIX}"
+        m = self._machine(name, peer)
+        if m is None:
+            return
+        text = msg.data
+        digest = hashlib.sha256(text.encode("utf-8", "surrogatepass")).digest()
+        if digest == m.raw:
+            return
+        m.raw = digest
+        try:
+            desc = parse_description(text, name)
+        except DescriptionError as e:
+            self.warn(f"{topic}: dropped a description that does not fit: {e}", key=topic)
+            return
+        except Exception as e:  # never into the bus executor: it would end the view
+            self.warn(f"{topic}: dropped a description that could not be read: {type(e).__name__}", key=topic)
+            return
+        size = len(desc["states"]) + sum(len(s["transitions"]) for s in desc["states"])
+        others = sum(o.size for o in self._machines.values() if o is not m)
+        if others + size > MAX_TOTAL:
+            self.warn(
+                f"{topic}: dropped a description of {size:,} states and transitions: the view holds "
+                f"{others:,} already, and at most {MAX_TOTAL:,}",
+                key=topic,
+            )
+            return
+        m.accepting = frozenset(s["name"] for s in desc["states"] if s["accepting"])
+        # the page names the machine by its key: another run of it is a card of its own
+        m.desc, m.size = {**desc, "name": m.key, "machine": name, "participant": peer}, size
+        if m.key not in self._order:
+            self._order.append(m.key)
+
+    def _on_state(self, name: str, peer: str, msg: Any) -> None:
+        m = self._machine(name, peer)
+        if m is None:
+            return
+        state = _bounded(msg.data)
+        now = round(self.clock.now / 1e9, 3)
+        if m.state is not None:
+            m.history.appendleft({"t": now, "from": m.state, "to": state})
+        m.state, m.since = state, now
 
     # -- what the page is sent (server thread) ------------------------------------------------------------
     def machines(self) -> list[dict[str, Any]]:
         out = []
-        for name in list(self._order):
-            desc = self._machines[name].desc
+        for key in list(self._order):
+            desc = self._by_key[key].desc
             if desc is not None:
                 out.append(desc)
         return out
 
     def machine_rows(self) -> list[dict[str, Any]]:
         rows = []
-        for name in list(self._order):
-            m = self._machines[name]
+        for key in list(self._order):
+            m = self._by_key[key]
             desc = m.desc or {}
             state = m.state or desc.get("initial", "")
             if state == desc.get("suspend"):
@@ -191,7 +313,9 @@ class GraphSource(Source):
                 status = "running"
             rows.append(
                 {
-                    "name": name,
+                    "name": m.key,
+                    "machine": m.name,
+                    "participant": m.participant,
                     "state": state,
                     "status": status,
                     "pending": None,
@@ -200,6 +324,28 @@ class GraphSource(Source):
                 }
             )
         return rows
+
+    def has_machine(self, name: str) -> bool:
+        return name in self._order
+
+    async def command(self, machine: str, verb: str) -> dict[str, Any]:
+        """A command to `machine` (the page's name for it).  The control services are named by
+        the machine's name alone: another run of the same machine serves them too, and DDS
+        hands the request to every server, so the response says how many runs were asked."""
+        if verb not in ("suspend", "resume", "restart"):
+            raise CommandError(f"unknown command {verb!r}: suspend, resume or restart")
+        m = self._by_key.get(machine) if machine in self._order else None
+        if m is None:
+            raise CommandError(f"no machine named {machine!r} on the graph")
+        response = await self._call(f"{NAMESPACE}/{m.name}/{verb}", "std_srvs/srv/Trigger", "")
+        result = {"success": response.success, "message": response.message}
+        runs = sum(1 for n, _ in list(self._machines) if n == m.name)
+        if runs > 1:
+            result["message"] = (
+                f"{response.message} (the {runs} runs of {m.name} on this domain share "
+                f"{NAMESPACE}/{m.name}/{verb}: each of them was asked)"
+            )
+        return result
 
     def topic_types(self) -> dict[str, Any]:
         seen = dict(self._topics_seen)

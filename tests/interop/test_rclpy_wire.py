@@ -29,6 +29,8 @@ COMMON = (
     "std_srvs",
     "rmw_dds_common",
     "service_msgs",
+    "sensor_msgs",
+    "nav_msgs",
     "rcl_interfaces",
 )
 

@@ -8,6 +8,7 @@ what they look at, each a function over one `Checking` (llfsm.lang.check.checkin
 - structure:  the directory's name, states, transitions, guards' shape, reachability, suspend state
 - variables:  the variables declared (reserved names, duplicates, shadowing)
 - includes:   Includes.py
+- imports:    what imports name: message types (LF042), packages (LF109), helpers (LF043)
 - code:       sections, guards and initialisers (compile limits, bindings, undefined names)
 - ros_habits: rclpy spellings (LF041)
 - parameters: machine.yaml's `parameters:` (LF060-LF062)

@@ -66,6 +66,10 @@ class Checking:
     imported: set[str] | None = field(default_factory=set)
     #: name -> a section file binding it at its own level, made on the first undefined name
     section_locals: dict[str, str] | None = None
+    #: file -> ids of the names its calls call, made on the file's first undefined name
+    called: dict[str, set[int]] = field(default_factory=dict)
+    #: the folders around the machine where `llfsm run` looks for interface packages (first import)
+    interface_roots: list[str] | None = None
 
     @classmethod
     def of(cls, path: Path, read: ReadResult) -> Checking:

@@ -16,29 +16,19 @@ from collections.abc import Mapping
 
 from ...runtime.machine import MACROS
 from ..bindings import BadBinding, find, name_map, state_map
+from ..cpp import C_FUNCTIONS, CPP_NAMES
 from ..model import Code, Machine, State
 from ..positions import char_col, node_col
 from ..reader import MAX_CODE_DEPTH
 from ..scopes import Unresolved, section_bindings, unresolved
 from .checking import SUGGEST_AMONG, Checking
+from .imports import imports
 from .includes import imported_names
 from .ros_habits import ROS_NAMES, ROS_QOS_NAMES, ros_habits
 from .scan import compile_error, scan_code, single_expression, trailing_semicolons
 
 #: Builtins, and the globals every module has (the compiled machine is a module).
 BUILTINS = frozenset(dir(builtins)) | {"__file__", "__builtins__", "__cached__", "__loader__", "__spec__"}
-
-#: Names from C, C++ and clfsm habits, and their Python spelling.
-CPP_NAMES = {
-    "true": "True",
-    "false": "False",
-    "TRUE": "True",
-    "FALSE": "False",
-    "null": "None",
-    "NULL": "None",
-    "nullptr": "None",
-    "this": "a machine variable's bare name (no `this->`)",
-}
 
 
 class _Known:
@@ -109,6 +99,8 @@ def state_code(c: Checking, m: Machine, s: State) -> None:
         for n in scan.reserved:
             reserved_use(c, code, n)
         ros_habits(c, code, scan)
+        if scan.imports:
+            imports(c, code, scan.imports)
         if not is_guard and ";" in code.text:
             for line, col in trailing_semicolons(code.text):
                 c.add("LF108", code.file, line, col, "Python needs no `;` at the end of a statement; drop it")
@@ -133,12 +125,20 @@ def undefined(c: Checking, m: Machine, s: State, code: Code, u: Unresolved, star
     """LF040 for a name nothing provides (LF105, a warning, when Includes.py star-imports,
     since the star may provide it), with the likeliest cause and its fix."""
     name, n = u.name, u.node
-    declare = f"declare it in Variables.py (`{name}: int = 0`) to keep a value between sections and read it in guards"
+    called = id(n) in _called(c, code.file)
+    if called:  # a function: a variable to declare would be the wrong advice
+        declare = "import it in Includes.py (from a library, or a helper module beside the machine folder)"
+    else:
+        declare = (
+            f"declare it in Variables.py (`{name}: int = 0`) to keep a value between sections and read it in guards"
+        )
     other = locals_elsewhere(c, m).get(name)
     if u.assigned_at is not None:
         msg = f"name {name!r} is read before it is assigned (line {u.assigned_at}); assign it first, or {declare}"
     elif name in CPP_NAMES:
         msg = f"name {name!r} is not defined: Python spells it `{CPP_NAMES[name]}`"
+    elif called and name in C_FUNCTIONS:
+        msg = f"name {name!r} is not defined: it is C/C++; Python has {C_FUNCTIONS[name]}"
     elif name in ROS_NAMES:
         msg = f"name {name!r} is not defined: llfsm spells it {ROS_NAMES[name]}"
     elif name in ROS_QOS_NAMES:
@@ -156,6 +156,17 @@ def undefined(c: Checking, m: Machine, s: State, code: Code, u: Unresolved, star
     if star:
         msg = f"{msg} (unless the star import of Includes.py provides it)"
     c.add("LF105" if star else "LF040", code.file, n.lineno, node_col(code.text, n), msg)
+
+
+def _called(c: Checking, file: str) -> set[int]:
+    """The ids of the names a call calls (`printf(...)`) in `file`: worked out when the file's
+    first undefined name is found, once per file, so a clean file costs nothing and a file
+    with thousands of undefined names one walk."""
+    if file not in c.called:
+        tree = c.read.trees.get(file)
+        walk = ast.walk(tree) if tree is not None else ()
+        c.called[file] = {id(x.func) for x in walk if isinstance(x, ast.Call) and isinstance(x.func, ast.Name)}
+    return c.called[file]
 
 
 def locals_elsewhere(c: Checking, m: Machine) -> dict[str, str]:

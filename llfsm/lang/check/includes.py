@@ -1,5 +1,6 @@
-"""Rules on Includes.py, the machine's imports (LF031, LF013, and LF041 for rclpy imports), and
-the names it gives every section and guard.
+"""Rules on Includes.py, the machine's imports (LF031, LF013, LF041 for rclpy imports, and
+LF042/LF043/LF109 for what the imports name: llfsm.lang.check.imports), and the names it gives
+every section and guard.
 """
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ import ast
 from ..model import Machine
 from ..positions import node_col
 from .checking import Checking
+from .imports import imports
 from .ros_habits import ros_habits
 from .scan import Scanned
 
@@ -22,7 +24,9 @@ def includes(c: Checking, m: Machine) -> None:
     tree = c.read.trees.get("Includes.py")
     if tree is None or m.includes is None:
         return
-    ros_habits(c, m.includes, Scanned(imports=[s for s in tree.body if isinstance(s, ast.Import | ast.ImportFrom)]))
+    stmts = [s for s in tree.body if isinstance(s, ast.Import | ast.ImportFrom)]
+    ros_habits(c, m.includes, Scanned(imports=stmts))
+    imports(c, m.includes, stmts)
     for stmt in tree.body:
         col = node_col(m.includes.text, stmt)
         if not isinstance(stmt, ast.Import | ast.ImportFrom):

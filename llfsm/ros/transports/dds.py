@@ -236,7 +236,15 @@ class _Writer(_Endpoint):
         self.incompatible.on_trigger()
 
     def write(self, msg: Message) -> None:
-        if (self.matched or self.keeps) and not self.t.closed:  # nobody elsewhere, nothing kept: no serialisation
+        if not (self.matched or self.keeps):
+            # nobody elsewhere, nothing kept: no serialisation.  `matched` is updated when the
+            # transport polls (between rounds); a reader DDS matched since (a recorder that just
+            # subscribed to a publisher that just appeared) must get this message, so DDS is
+            # asked (a microsecond) before a message is dropped
+            self.matched = self.writer.get_publication_matched_status().current_count
+            if not self.matched:
+                return
+        if not self.t.closed:
             _write(self.writer, self.cdr(msg))
 
     def subscription_count(self) -> int:

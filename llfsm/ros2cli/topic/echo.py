@@ -14,6 +14,8 @@ import time
 from typing import Any, TextIO
 
 from ...msgs import Message, to_yaml
+from ...progress import Status, seconds
+from ...suggest import did_you_mean
 from .. import NOT_FOUND, TIMEOUT, CliError
 from ..arguments import full_name
 from ..discovery import open_graph, wait_for_topic_types, where
@@ -64,15 +66,27 @@ def echo(
         taken = samples(reader, name, cls)
         waiter = Waiter(graph, reader)
         patient = False  # a message was printed, or (streaming) a publisher is there: wait on
+        status = Status()  # on a terminal: what echo waits for, until the first message comes
+        printed = False
         while True:
             if not patient and not once and reader.get_subscription_matched_status().current_count:
                 patient = True  # as ros2: a topic that is there may publish rarely
             left = 1.0 if patient else timeout - (time.monotonic() - started)
             if left <= 0:
-                raise CliError(f"no message on '{name}' within {timeout:g} s ({where()})", NOT_FOUND)
+                status.clear()
+                hint = "" if publishers else did_you_mean(name, graph.topics(include_hidden=True))
+                raise CliError(f"no message on '{name}' within {timeout:g} s ({where()}){hint}", NOT_FOUND)
+            if status.enabled and not printed:
+                waited = time.monotonic() - started
+                if waited >= 0.5:
+                    status.show(f"waiting for a message on '{name}'... {seconds(waited)}")
+                left = min(left, 0.25)  # the line keeps counting while nothing comes
             if not waiter.wait(left):
                 continue
             for msg, _info in taken.take(64):
+                if not printed:
+                    status.clear()
+                    printed = True
                 out.write(format_message(msg, path or [], truncate_length, no_arr, no_str))
                 out.flush()
                 patient = True

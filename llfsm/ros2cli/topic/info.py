@@ -3,7 +3,9 @@ each endpoint's node, GID and QoS as `ros2 topic info -v` prints them."""
 
 from __future__ import annotations
 
+from ...progress import Status
 from ...ros.transports.dds_graph import Graph, describe_qos, message_type
+from ...suggest import did_you_mean
 from .. import NOT_FOUND, TIMEOUT, CliError
 from ..arguments import full_name
 from ..discovery import open_graph
@@ -14,7 +16,8 @@ def info(topic: str, *, verbose: bool = False, timeout: float = TIMEOUT) -> str:
     name = full_name(topic, "topic")
     graph = open_graph()
     try:
-        graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True))
+        with Status().waiting(f"topic '{name}' to appear", timeout):  # on a terminal only
+            graph.spin(timeout, until=lambda: name in graph.topics(include_hidden=True))
         graph.spin(0.2)  # the rest of the topic's endpoints, discovered with the first
         if verbose:  # each endpoint's node
             graph.settle()
@@ -26,7 +29,7 @@ def info(topic: str, *, verbose: bool = False, timeout: float = TIMEOUT) -> str:
 def _describe(graph: Graph, name: str, *, verbose: bool) -> str:
     types = graph.topics(include_hidden=True).get(name)
     if types is None:
-        raise CliError(f"Unknown topic '{name}'", NOT_FOUND)
+        raise CliError(f"Unknown topic '{name}'{did_you_mean(name, graph.topics(include_hidden=True))}", NOT_FOUND)
     end = "\n\n" if verbose else "\n"
     type_str = types[0] if len(types) == 1 else str(types)
     out = [f"Type: {type_str}{end}"]
