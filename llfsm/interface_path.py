@@ -22,8 +22,8 @@ _added: list[str] = []
 
 
 def add_search_path(path: str | os.PathLike[str]) -> None:
-    """Search `path` (a folder holding PKG/msg or PKG/srv folders) for interface packages,
-    before LLFSM_INTERFACE_PATH and AMENT_PREFIX_PATH."""
+    """Search `path` (a folder holding PKG/msg, PKG/srv or PKG/action folders) for interface
+    packages, before LLFSM_INTERFACE_PATH and AMENT_PREFIX_PATH."""
     p = os.path.abspath(os.fspath(path))
     if p not in _added:
         _added.append(p)
@@ -55,7 +55,7 @@ def package_dir(package: str) -> str | None:
         return None
     for root in _roots():
         d = os.path.join(root, package)
-        if os.path.isdir(os.path.join(d, "msg")) or os.path.isdir(os.path.join(d, "srv")):
+        if any(os.path.isdir(os.path.join(d, kind)) for kind in ("msg", "srv", "action")):
             return d
     return None
 

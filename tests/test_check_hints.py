@@ -166,6 +166,13 @@ class TestMessageImports:
         diags = _diags(_machine(tmp_path, includes="from llfsm.msgs.std_srvs.msg import Trigger\n"))
         assert [d.code for d in diags] == ["LF042"] and "std_srvs/srv/Trigger" in diags[0].message
 
+    def test_a_misspelt_kind_names_the_kinds_and_where_the_type_is(self, tmp_path: Path) -> None:
+        diags = _diags(_machine(tmp_path, includes="from llfsm.msgs.turtlesim.actoin import RotateAbsolute\n"))
+        assert [d.code for d in diags] == ["LF042"]
+        assert diags[0].message.endswith(
+            "turtlesim has msg, srv and action, not 'actoin': turtlesim/action/RotateAbsolute is an action"
+        ), diags[0].message
+
     def test_in_a_section_too(self, tmp_path: Path) -> None:
         diags = _diags(_machine(tmp_path, A_OnEntry="from llfsm.msgs.std_msgs.msg import Strin\nprint(Strin)\n"))
         assert [(d.code, d.line) for d in diags] == [("LF042", 1)] and "'String'" in diags[0].message

@@ -126,7 +126,7 @@ def _shown_fields(lines: list[str]) -> list[str]:
         if line.startswith("\t"):
             continue
         name = line.split()[1]
-        if "=" not in name and not line.split(name, 1)[1].lstrip().startswith("="):  # `TYPE_LED    = 0`
+        if "=" not in name and not line.split(name, 1)[1].lstrip().startswith("="):  # `int8 A   = 0` is a constant
             names.append(name)
     return names
 

@@ -89,6 +89,9 @@ def test_node_info_prints_what_ros2_prints(netns: NetNamespace) -> None:
     assert "    /spawn: turtlesim/srv/Spawn" in servers and "    /turtle1/set_pen: turtlesim/srv/SetPen" in servers
     assert "    /turtlesim/get_parameters: rcl_interfaces/srv/GetParameters" in servers
     assert section("Service Clients") == [""]  # ros2 prints an empty section as a blank line
+    # an action is named by its feedback topic, its five endpoints hidden (docs/actions.md)
+    assert section("Action Servers") == ["    /turtle1/rotate_absolute: turtlesim/action/RotateAbsolute"]
+    assert not any("_action" in line for line in lines)
     # without the leading slash, the node is found all the same
     assert llfsm(netns, "node", "info", "turtlesim").stdout == r.stdout
 

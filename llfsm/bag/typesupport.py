@@ -9,6 +9,13 @@ llfsm's own classes are generated from (llfsm/msgs/_interfaces/), or a user pack
 bag brought is written as one); a type with no file at all is rebuilt from rosbags' type store
 (fields and constants, without comments).  Type hashes are RIHS01 as rosidl computes them, by rosbags.
 
+An action's topics carry types its `.action` file defines (`pkg/action/Name_Feedback`, the
+feedback topic's `pkg/action/Name_FeedbackMessage`): their text is the file's section, or for
+the derived messages their fields as rosidl derives them (docs/actions.md), and their hashes
+are llfsm's own (the rosidl ones, computed when the classes were generated).  They are recorded
+and played with llfsm's classes; a bag's action type that llfsm has no class for is refused,
+not compiled from the bag.
+
 Bytes are XCDR1 (plain CDR, little endian) as rclpy's `serialize_message` gives them, from
 llfsm's own DDS type support (`llfsm.msgs._dds`); a class without a DDS form (none should be
 left) goes through rosbags' serializer instead.
@@ -102,6 +109,56 @@ def _split(type_name: str) -> tuple[str, str]:
     )
 
 
+#: The messages an action's topics and services carry, by the suffix of their names, and the
+#: text of the derived ones (`{a}`: the action's own type name).
+_ACTION_SECTIONS = ("Goal", "Result", "Feedback")
+_ACTION_DERIVED = {
+    "FeedbackMessage": "unique_identifier_msgs/UUID goal_id\n{a}_Feedback feedback\n",
+    "SendGoal_Request": "unique_identifier_msgs/UUID goal_id\n{a}_Goal goal\n",
+    "SendGoal_Response": "bool accepted\nbuiltin_interfaces/Time stamp\n",
+    "GetResult_Request": "unique_identifier_msgs/UUID goal_id\n",
+    "GetResult_Response": "int8 status\n{a}_Result result\n",
+}
+_ACTION_PART = re.compile(r"([A-Z][A-Za-z0-9]*)_(Goal|Result|Feedback|FeedbackMessage|SendGoal_Request|"
+                          r"SendGoal_Response|GetResult_Request|GetResult_Response)\Z")  # fmt: skip
+
+
+def _action_part(type_name: str) -> tuple[str, str, str] | None:
+    """(pkg, action, part) of `pkg/action/<Action>_<Part>`, both names checked; None for a name
+    of any other form."""
+    parts = type_name.split("/")
+    if len(parts) != 3 or parts[1] != "action" or not _PACKAGE_NAME.match(parts[0]):
+        return None
+    m = _ACTION_PART.match(parts[2])
+    return None if m is None else (parts[0], m[1], m[2])
+
+
+def _action_text(type_name: str) -> str:
+    """The text of an action's message: its section of the .action file (shipped, or in the
+    interface search path), or the fields rosidl derives."""
+    found = _action_part(type_name)
+    assert found is not None
+    pkg, action, part = found
+    if part in _ACTION_DERIVED:
+        return _ACTION_DERIVED[part].format(a=f"{pkg}/action/{action}")
+    for root in [_BUILTIN_DIR, *search_path()]:
+        path = root / pkg / "action" / f"{action}.action"
+        if path.is_file():
+            text = path.read_text(encoding="utf-8")
+            break
+    else:
+        raise BagError(f"{type_name}: no action definition found for this type")
+    sections: list[list[str]] = [[]]
+    for line in text.splitlines(keepends=True):
+        if line.split("#", 1)[0].strip() == "---":
+            sections.append([])
+        else:
+            sections[-1].append(line)
+    if len(sections) != len(_ACTION_SECTIONS):
+        raise BagError(f"{path}: not an action definition (goal, result and feedback between two '---' lines)")
+    return "".join(sections[_ACTION_SECTIONS.index(part)])
+
+
 def _printable(text: str) -> str:
     """A name from a file, quoted, with anything that is not printable escaped: it is shown on
     one line of a terminal."""
@@ -142,6 +199,11 @@ class TypeSupport:
     # -- definitions ------------------------------------------------------------------------
     def own_text(self, type_name: str) -> str:
         """The type's own .msg text (without its dependencies)."""
+        if _action_part(type_name) is not None:
+            text = self._texts.get(type_name)
+            if text is None:
+                text = self._texts[type_name] = _action_text(type_name)
+            return text
         pkg, name = _split(type_name)
         full_name = f"{pkg}/msg/{name}"
         text = self._texts.get(full_name)
@@ -164,7 +226,8 @@ class TypeSupport:
     @staticmethod
     def _dependencies(text: str, type_name: str) -> list[str]:
         """Message types a .msg text uses, sorted: rosbag2's own regular expression and order."""
-        pkg, _ = _split(type_name)
+        action = _action_part(type_name)
+        pkg = action[0] if action is not None else _split(type_name)[0]
         deps = set()
         for m in _MSG_FIELD_TYPE.finditer(text):
             t = m.group(1)
@@ -184,11 +247,20 @@ class TypeSupport:
             for dep in self._dependencies(out, t):
                 if dep not in seen:
                     seen.add(dep)
+                    if _action_part(dep) is not None:
+                        out += "\n" + DELIMITER + f"MSG: {dep}\n" + append(dep)
+                        continue
                     pkg, name = _split(dep)
                     out += "\n" + DELIMITER + f"MSG: {dep}\n" + append(f"{pkg}/msg/{name}")
             return out
 
         text = append(type_name)
+        if _action_part(type_name) is not None:  # llfsm's class has rosidl's hash; rosbags' store need not know it
+            # deferred: start-up, as in _codec (the DDS forms, only for the classes a bag holds)
+            from ..msgs._dds import type_hash
+
+            got = self._full[type_name] = (text, type_hash(class_for(type_name)))
+            return got
         self._register(type_name)
         got = self._full[type_name] = (text, self.store.hash_rihs01(type_name))
         return got
@@ -368,6 +440,16 @@ def _from_rosbags(obj: Any, cls: type[Message]) -> Message:
 
 def class_for(type_name: str) -> type[Message]:
     """llfsm's class of a message type; raises BagError naming the type if there is none."""
+    action = _action_part(type_name)
+    if action is not None:  # a message of an action's (its feedback topic's)
+        try:
+            module = importlib.import_module(f"llfsm.msgs.{action[0]}.action")
+        except ImportError as e:
+            raise BagError(f"{type_name}: llfsm has no class for this type ({e})") from None
+        cls = getattr(module, type_name.rsplit("/", 1)[1], None)
+        if not is_message_class(cls):
+            raise BagError(f"{type_name}: llfsm has no class for this type")
+        return cls
     pkg, name = _split(type_name)
     try:
         module = importlib.import_module(f"llfsm.msgs.{pkg}.msg")
@@ -385,6 +467,11 @@ def class_from_definition(type_name: str, encoding: str, definition: str, folder
     the definition is split into PKG/msg/Name.msg files under `folder`, which joins the
     interface search path.  Every name (the type's, and each `MSG: pkg/Name` in the text) is
     checked before it is used, and nothing is written outside `folder`."""
+    if _action_part(type_name) is not None:  # llfsm's class, or a clear no: not compiled from the bag
+        try:
+            return class_for(type_name)
+        except BagError as e:
+            raise BagError(f"{e}; an action's types are not compiled from a bag: add its .action file") from None
     _split(type_name)  # a bad name is refused as such, before any lookup or message names it
     try:
         return class_for(type_name)

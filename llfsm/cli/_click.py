@@ -8,6 +8,7 @@ import sys
 import click
 
 from . import (  # noqa: F401  (each registers its commands)
+    action,
     bag,
     build,
     check,

@@ -1,12 +1,14 @@
 """The DDS generator: from the same specs as the message classes, the `_dds` module beside each
-generated msg/srv module (llfsm/msgs/<pkg>/msg/_dds.py, .../srv/_dds.py), which
-llfsm.msgs._dds finds from a class (docs/transports.md, "How it is built").
+generated msg/srv/action module (llfsm/msgs/<pkg>/msg/_dds.py, .../srv/_dds.py,
+.../action/_dds.py), which llfsm.msgs._dds finds from a class (docs/transports.md, "How it is
+built").
 
 Each generated module holds, per message:
 - a `cyclonedds.idl.IdlStruct` named as ROS 2 names it on the wire (`pkg::msg::dds_::Name_`,
   `pkg::srv::dds_::Name_Request_`), for creating topics and for code that wants cyclonedds
-  samples (`_to_Name`, `_from_Name` convert); for a service's request and response, the same
-  with rmw_cyclonedds_cpp's request header (`Name_wire_`);
+  samples (`_to_Name`, `_from_Name` convert); for a service's request and response (an
+  action's SendGoal and GetResult too), the same with rmw_cyclonedds_cpp's request header
+  (`Name_wire_`);
 - a CDR encoder and decoder written out field by field (llfsm.idl.cdrgen): `_cdr_Name(msg) ->
   bytes` and `_msg_Name(data) -> (msg, end)`, the elements of arrays of messages inlined;
   `_mk_Name` builds a decoded message (nested ones of other packages too); for a service's
@@ -32,8 +34,8 @@ from typing import TYPE_CHECKING
 
 from .cdrgen import Alignment, Lookup, Module, Reader, Writer
 from .layout import Call, indented, layout, str_literal
-from .spec import FieldType, MessageSpec, PackageSpec
-from .typehash import EMPTY_MEMBER, service_specs, type_hash
+from .spec import FieldType, MessageSpec, PackageSpec, ServiceSpec
+from .typehash import EMPTY_MEMBER, action_spec, service_specs, type_hash
 
 if TYPE_CHECKING:
     import jinja2
@@ -113,8 +115,9 @@ def _conversion(t: FieldType, expr: str, module: Module, direction: str) -> str:
     return expr
 
 
-def message_view(spec: MessageSpec, module: Module, type_hash_value: str) -> DdsMessageView:
-    """Every generated piece of one message's DDS form, laid out."""
+def message_view(spec: MessageSpec, module: Module, type_hash_value: str, service_part: bool) -> DdsMessageView:
+    """Every generated piece of one message's DDS form, laid out.  `service_part`: a service's
+    request or response, which also gets its form after rmw_cyclonedds_cpp's header."""
     name = spec.name
     fields = spec.fields
     idl_fields = [f"{f.name}: {_idl_annotation(f.type, module)}" for f in fields] or [f"{EMPTY_MEMBER}: _t.uint8 = 0"]
@@ -154,7 +157,7 @@ def message_view(spec: MessageSpec, module: Module, type_hash_value: str) -> Dds
     reader.flush()
     msg = ["o = 4", *reader.lines, layout("m = ", result), "return m, o"]
     dec = None
-    if module.kind == "srv":  # a request or reply, read after rmw_cyclonedds_cpp's header
+    if service_part:  # a request or reply, read after rmw_cyclonedds_cpp's header
         module.n = 0
         dec_reader = Reader(module, Alignment(1))
         result = dec_reader.message(spec)
@@ -173,7 +176,7 @@ def message_view(spec: MessageSpec, module: Module, type_hash_value: str) -> Dds
         mk=mk,
         mk_def=mk_def,
         class_line=_class_line(f"{name}_", spec.type_name),
-        wire_line=_class_line(f"{name}_wire_", spec.type_name),
+        wire_line=_class_line(f"{name}_wire_", spec.type_name) if service_part else "",
         codec=_codec_line(name, dec is not None, bool(stamped), tap_layout is not None),
         cdr=cdr,
         stamped=stamped,
@@ -250,22 +253,32 @@ def render_dds_module(
 ) -> str:
     """The source of llfsm.msgs.<pkg>.<kind>._dds."""
     own: dict[str, MessageSpec] = {m.type_name: m for m in package.messages}
-    hashes: list[tuple[str, str]] = []
+    services: list[ServiceSpec] = []
+    actions: list[MessageSpec] = []  # the type descriptions of the actions, for their hashes
     if kind == "msg":
         specs = list(package.messages)
-    else:
+    elif kind == "srv":
         specs = [m for s in package.services for m in s.parts]
-        for s in package.services:
-            own.update({m.type_name: m for m in (*s.parts, *service_specs(s))})
+        services = list(package.services)
+    else:
+        specs = [m for a in package.actions for m in a.messages]
+        services = [s for a in package.actions for s in a.services]
+        actions = [action_spec(a) for a in package.actions]
+    wholes = []  # the type descriptions of the services, then of the actions: their hashes
+    for s in services:
+        whole, event = service_specs(s)
+        own.update({m.type_name: m for m in (*s.parts, whole, event)})
+        wholes.append(whole)
+    wholes += actions
     own.update({m.type_name: m for m in specs})
 
     def find(type_name: str) -> MessageSpec:
         return own[type_name] if type_name in own else lookup(type_name)
 
     module = Module(package.name, kind, find)
-    views = [message_view(m, module, type_hash(m, find)) for m in _ordered(specs)]
-    if kind == "srv":
-        hashes = [(s.name, type_hash(service_specs(s)[0], find)) for s in package.services]
+    in_services = {m.type_name for s in services for m in s.parts}
+    views = [message_view(m, module, type_hash(m, find), m.type_name in in_services) for m in _ordered(specs)]
+    hashes = [(m.name, type_hash(m, find)) for m in wholes]
     source = env.get_template(DDS_TEMPLATE).render(
         header=header,
         package=package.name,

@@ -1,8 +1,9 @@
-"""`.msg` and `.srv` text into specs (llfsm.idl.spec), with the file and line of each mistake.
+"""`.msg`, `.srv` and `.action` text into specs (llfsm.idl.spec), with the file and line of each
+mistake.
 
 Our own parser rather than rosbags': rosbags drops default values (`float64 x 1.5`) and does
 not know wstring, and ours can point at the line to fix (docs/bus.md, "Your own interfaces").
-A definition of several sections (a .srv, later an .action) is cut at its `---` lines and each
+A definition of several sections (a .srv, an .action) is cut at its `---` lines and each
 section read as a message, so a new kind needs only its row in spec.SECTIONS.
 
 Light on purpose (re, math, keyword, the spec types): `ros2 interface show` parses with it
@@ -27,6 +28,7 @@ from .spec import (
     SECTIONS,
     STRINGS,
     TYPE_NAME,
+    ActionSpec,
     ConstantSpec,
     FieldSpec,
     FieldType,
@@ -279,3 +281,9 @@ def parse_service(text: str, type_name: str, path: str, *, local: Iterable[str] 
     """A .srv definition: its request and response, cut at the one `---` line."""
     request, response = parse_sections(text, "srv", type_name, path, local=local)
     return ServiceSpec(type_name, request, response, path)
+
+
+def parse_action(text: str, type_name: str, path: str, *, local: Iterable[str] = ()) -> ActionSpec:
+    """An .action definition: its goal, result and feedback, cut at the two `---` lines."""
+    goal, result, feedback = parse_sections(text, "action", type_name, path, local=local)
+    return ActionSpec(type_name, goal, result, feedback, path)

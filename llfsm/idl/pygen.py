@@ -1,5 +1,6 @@
-"""The Python generator: a package's messages (or services) as the classes of one module,
-llfsm.msgs.<pkg>.msg or .srv, shaped as rclpy's (docs/bus.md, "Messages").
+"""The Python generator: a package's messages (or services, or actions) as the classes of one
+module, llfsm.msgs.<pkg>.msg, .srv or .action, shaped as rclpy's (docs/bus.md, "Messages";
+docs/actions.md).
 
 Each field is a property whose setter takes a fast path inline (`value if value.__class__ is
 float else _m.check_float64(...)`) and calls the checks of llfsm.msgs._message only for values
@@ -31,13 +32,16 @@ class _Names:
     aliases its code uses (only those are written)."""
 
     package: str
-    kind: str  # "msg" or "srv"
+    kind: str  # "msg", "srv" or "action"
     imports: set[str] = field(default_factory=set)
     uses: set[str] = field(default_factory=set)  # "_DEFAULT", "_FLOAT32_MAX"
 
     def ref(self, type_name: str) -> str:
-        pkg, _, name = type_name.split("/")
-        if pkg == self.package and self.kind == "msg":
+        """A class of this module by its name; a message of another module (always a msg: a
+        field holds a message, and an action's derived types hold its own sections) through
+        that package's msg module."""
+        pkg, kind, name = type_name.split("/")
+        if pkg == self.package and kind == self.kind:
             return name
         self.imports.add(pkg)
         return f"_{pkg}.{name}"
@@ -172,24 +176,38 @@ def _message_view(spec: MessageSpec, names: _Names) -> MessageView:
 
 
 def render_module(package: PackageSpec, kind: str, header: list[str], env: jinja2.Environment) -> str:
-    """The source of llfsm.msgs.<pkg>.msg (kind "msg") or llfsm.msgs.<pkg>.srv."""
+    """The source of llfsm.msgs.<pkg>.msg (kind "msg"), .srv or .action.  An action module holds
+    every message of its actions, then their two services, then the action classes, whose
+    `Impl` also names action_msgs' cancel service and status array (what rclpy's `Impl` has)."""
     names = _Names(package.name, kind)
-    services: list[tuple[str, str]] = []
+    services: list[tuple[str, str]] = []  # (name, type name)
+    actions: list[tuple[str, str]] = []
+    imports: list[tuple[str, str]] = []
     if kind == "msg":
         messages = [_message_view(m, names) for m in package.messages]
-    else:
+    elif kind == "srv":
         messages = []
         for s in package.services:
             messages += [_message_view(part, names) for part in s.parts]
             services.append((s.name, s.type_name))
+    else:
+        messages = []
+        for a in package.actions:
+            messages += [_message_view(m, names) for m in a.messages]
+            services += [(s.name, s.type_name) for s in a.services]
+            actions.append((a.name, a.type_name))
+        names.imports.add("action_msgs")
+        imports.append(("llfsm.msgs.action_msgs.srv", "_action_msgs_srv"))
+    imports += [(f"llfsm.msgs.{pkg}.msg", f"_{pkg}") for pkg in names.imports]
     source = env.get_template(TEMPLATE).render(
         header=header,
         package=package.name,
         kind=kind,
-        imports=sorted(names.imports),
+        imports=sorted(imports),
         uses=names.uses,
         messages=messages,
         services=services,
+        actions=actions,
     )
     compile(source, f"<llfsm.msgs.{package.name}.{kind}>", "exec", dont_inherit=True)
     return source

@@ -1,6 +1,6 @@
 """The shipped message packages, regenerated from the shipped definitions alone: every folder of
-llfsm/msgs/_interfaces/ (PKG/msg/*.msg, PKG/srv/*.srv) becomes the committed modules of
-llfsm/msgs/PKG/ (docs/bus.md, "Messages").  `python -m llfsm.idl` (`make msgs`) writes them;
+llfsm/msgs/_interfaces/ (PKG/msg/*.msg, PKG/srv/*.srv, PKG/action/*.action) becomes the
+committed modules of llfsm/msgs/PKG/ (docs/bus.md, "Messages").  `python -m llfsm.idl` (`make msgs`) writes them;
 `--check` lists the stale ones; tests/test_msgs.py regenerates into a temporary folder and
 compares the whole tree byte for byte.
 
@@ -11,8 +11,9 @@ builtin_interfaces from ros2/rcl_interfaces as Humble ships them; sensor_msgs an
 `variance` Jazzy added to Range); service_msgs (rcl_interfaces) and rmw_dds_common as Jazzy
 ships them (a Gid is 16 bytes since Iron, 24 in Humble: llfsm speaks current ROS 2 on the
 wire); rcl_interfaces' parameter messages and services and its `Log` as Kilted ships them
-(what every node's parameter services speak, docs/parameters.md); turtlesim from
-ros/ros_tutorials.  turtle_sensor_interface
+(what every node's parameter services speak, docs/parameters.md); action_msgs (rcl_interfaces)
+and unique_identifier_msgs (ros2/unique_identifier_msgs) as Humble ships them, unchanged since;
+turtlesim from ros/ros_tutorials, its RotateAbsolute action as Humble's.  turtle_sensor_interface
 is llfsm's own (the interface of the how-to in docs/turtlesim.md).
 """
 

@@ -1,5 +1,6 @@
-"""What a ROS interface definition says, once read: packages, messages, services, their fields
-and constants, and the rules a name must follow (docs/bus.md, "Your own interfaces").
+"""What a ROS interface definition says, once read: packages, messages, services, actions, their
+fields and constants, and the rules a name must follow (docs/bus.md, "Your own interfaces";
+docs/actions.md for actions).
 
 The parser (llfsm.idl.parser) makes these, the package builder (llfsm.idl.package) gathers them
 by package, and the generators (llfsm.idl.pygen, llfsm.idl.ddsgen) read them.  Nothing here
@@ -11,11 +12,15 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-#: The kinds of definition files, each in a folder of its name (PKG/msg/*.msg, PKG/srv/*.srv),
-#: and the sections `---` lines cut one of its files into: each section is a message of its own,
-#: `<Name>_<Section>`.  A .msg is one message.  Issue 21's .action joins as ("Goal", "Result",
-#: "Feedback"), with the services and messages rclpy derives from them.
-SECTIONS: dict[str, tuple[str, ...]] = {"msg": (), "srv": ("Request", "Response")}
+#: The kinds of definition files, each in a folder of its name (PKG/msg/*.msg, PKG/srv/*.srv,
+#: PKG/action/*.action), and the sections `---` lines cut one of its files into: each section is
+#: a message of its own, `<Name>_<Section>`.  A .msg is one message.  An .action also gets the
+#: services and the message rosidl derives from its sections (ActionSpec).
+SECTIONS: dict[str, tuple[str, ...]] = {
+    "msg": (),
+    "srv": ("Request", "Response"),
+    "action": ("Goal", "Result", "Feedback"),
+}
 KINDS = tuple(SECTIONS)
 
 FLOATS = ("float32", "float64")
@@ -127,13 +132,77 @@ class ServiceSpec:
         return (self.request, self.response)
 
 
+#: The messages every action's derived types refer to (rosidl's implicit includes).
+UUID_TYPE = "unique_identifier_msgs/msg/UUID"
+TIME_TYPE = "builtin_interfaces/msg/Time"
+
+
+@dataclass
+class ActionSpec:
+    """An .action: the three sections a user writes (Goal, Result, Feedback) and what rosidl
+    derives from them, which is what travels on the wire: the services `<Name>_SendGoal` (goal
+    id and goal -> accepted and stamp) and `<Name>_GetResult` (goal id -> status and result), and
+    the message `<Name>_FeedbackMessage` (goal id and feedback), fields in rosidl's order."""
+
+    type_name: str  # "turtlesim/action/RotateAbsolute"
+    goal: MessageSpec
+    result: MessageSpec
+    feedback: MessageSpec
+    path: str = ""
+
+    @property
+    def name(self) -> str:
+        return self.type_name.rsplit("/", 1)[1]
+
+    @property
+    def parts(self) -> tuple[MessageSpec, ...]:
+        """The messages of its sections, in the order of SECTIONS["action"]."""
+        return (self.goal, self.result, self.feedback)
+
+    def _derived(self, suffix: str, *members: tuple[str, str]) -> MessageSpec:
+        fields = [FieldSpec(name, FieldType(base)) for name, base in members]
+        return MessageSpec(f"{self.type_name}_{suffix}", fields, path=self.path)
+
+    @property
+    def send_goal(self) -> ServiceSpec:
+        request = self._derived("SendGoal_Request", ("goal_id", UUID_TYPE), ("goal", self.goal.type_name))
+        response = self._derived("SendGoal_Response", ("accepted", "bool"), ("stamp", TIME_TYPE))
+        return ServiceSpec(f"{self.type_name}_SendGoal", request, response, self.path)
+
+    @property
+    def get_result(self) -> ServiceSpec:
+        request = self._derived("GetResult_Request", ("goal_id", UUID_TYPE))
+        response = self._derived("GetResult_Response", ("status", "int8"), ("result", self.result.type_name))
+        return ServiceSpec(f"{self.type_name}_GetResult", request, response, self.path)
+
+    @property
+    def feedback_message(self) -> MessageSpec:
+        return self._derived("FeedbackMessage", ("goal_id", UUID_TYPE), ("feedback", self.feedback.type_name))
+
+    @property
+    def services(self) -> tuple[ServiceSpec, ServiceSpec]:
+        return (self.send_goal, self.get_result)
+
+    @property
+    def messages(self) -> list[MessageSpec]:
+        """Every message of the action, in the order rosidl lists them: its sections, the two
+        services' requests and responses, the feedback message."""
+        return [*self.parts, *(m for s in self.services for m in s.parts), self.feedback_message]
+
+
 @dataclass
 class PackageSpec:
     name: str
     messages: list[MessageSpec] = field(default_factory=list)
     services: list[ServiceSpec] = field(default_factory=list)
+    actions: list[ActionSpec] = field(default_factory=list)
     source: str = ""  # shown in the header of the generated modules
 
     def all_messages(self) -> list[MessageSpec]:
-        """Every message the package defines: its .msg files, then the sections of the others."""
-        return [*self.messages, *(part for s in self.services for part in s.parts)]
+        """Every message the package's files define: its .msg files, then the sections of the
+        others (what a user wrote, whose references `check_references` checks)."""
+        return [
+            *self.messages,
+            *(part for s in self.services for part in s.parts),
+            *(part for a in self.actions for part in a.parts),
+        ]

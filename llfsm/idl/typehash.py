@@ -12,7 +12,7 @@ import hashlib
 import json
 from collections.abc import Callable
 
-from .spec import FieldSpec, FieldType, MessageSpec, ServiceSpec
+from .spec import ActionSpec, FieldSpec, FieldType, MessageSpec, ServiceSpec
 
 Lookup = Callable[[str], MessageSpec]
 
@@ -112,3 +112,20 @@ def service_specs(service: ServiceSpec) -> tuple[MessageSpec, MessageSpec]:
         ],
     )
     return whole, event
+
+
+def action_spec(action: ActionSpec) -> MessageSpec:
+    """The message an action's type description describes (rosidl_generator_type_description's
+    add_action): its three sections, its two services and its feedback message, as members."""
+    name = action.type_name
+    return MessageSpec(
+        name,
+        [
+            FieldSpec("goal", FieldType(action.goal.type_name)),
+            FieldSpec("result", FieldType(action.result.type_name)),
+            FieldSpec("feedback", FieldType(action.feedback.type_name)),
+            FieldSpec("send_goal_service", FieldType(f"{name}_SendGoal")),
+            FieldSpec("get_result_service", FieldType(f"{name}_GetResult")),
+            FieldSpec("feedback_message", FieldType(f"{name}_FeedbackMessage")),
+        ],
+    )

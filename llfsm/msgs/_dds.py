@@ -35,7 +35,7 @@ from struct import error as StructError
 from typing import Any, NamedTuple
 from uuid import UUID
 
-from ._message import Message, Service
+from ._message import Action, Message, Service
 
 HEADER = b"\x00\x01\x00\x00"  # encapsulation header: CDR (XCDR1), little endian
 _REQUEST_HEADER = Struct("<Qq")  # cdds_request_header_t: client guid, sequence number
@@ -252,10 +252,10 @@ def carries_request_header(guid: UUID | bytes | str) -> bool:
 # -- type hashes -------------------------------------------------------------------------------
 
 
-def type_hash(cls: type[Message] | type[Service]) -> str:
-    """ "RIHS01_<64 hex>": the type hash of a message or service class (REP 2011)."""
-    if not (isinstance(cls, type) and issubclass(cls, Message | Service)):
-        raise TypeError(f"not a message or service class: {cls!r}")
+def type_hash(cls: type[Message] | type[Service] | type[Action]) -> str:
+    """ "RIHS01_<64 hex>": the type hash of a message, service or action class (REP 2011)."""
+    if not (isinstance(cls, type) and issubclass(cls, Message | Service | Action)):
+        raise TypeError(f"not a message, service or action class: {cls!r}")
     try:
         return _module(cls).TYPE_HASHES[cls.__name__]
     except (ImportError, KeyError, AttributeError):

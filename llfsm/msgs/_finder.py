@@ -1,7 +1,7 @@
 """The import hook that makes a user's interface package importable as llfsm.msgs.PKG
 (docs/bus.md, "Your own interfaces").
 
-A package in ROS layout (PKG/msg/*.msg, PKG/srv/*.srv) found in the interface search path
+A package in ROS layout (PKG/msg/*.msg, PKG/srv/*.srv, PKG/action/*.action) found in the interface search path
 (llfsm.interface_path) is compiled by the toolchain (llfsm.idl.package) into the cache, in a
 folder named after a fingerprint of its files, and imported from there.  A warm import lists
 and hashes the definition files and nothing more: the toolchain (and jinja2) are imported only
@@ -76,7 +76,7 @@ def _fingerprint(folder: str) -> str:
         _generator_id = g.hexdigest()
     h = hashlib.sha256(_generator_id.encode())
     h.update(os.fsencode(folder))
-    for kind in ("msg", "srv"):
+    for kind in ("msg", "srv", "action"):
         kind_dir = os.path.join(folder, kind)
         if not os.path.isdir(kind_dir):
             continue
@@ -127,7 +127,7 @@ def compiled_package(package: str, folder: str) -> str:
 
 
 class InterfaceFinder:
-    """sys.meta_path finder for llfsm.msgs.PKG: its subpackages msg and srv are then found by
+    """sys.meta_path finder for llfsm.msgs.PKG: its subpackages msg, srv and action are then found by
     Python's own finder in the cached folder, which becomes the package's __path__."""
 
     def find_spec(

@@ -1,5 +1,6 @@
-"""Interface types by name: `pkg/msg/Name` (or `pkg/Name`, as `ros2` accepts) to llfsm's message
-and service classes, with a "did you mean" for near misses (docs/cli.md, "The ros2-style verbs": TYPE).
+"""Interface types by name: `pkg/msg/Name` (or `pkg/Name`, as `ros2` accepts) to llfsm's message,
+service and action classes, with a "did you mean" for near misses (docs/cli.md, "The ros2-style
+verbs": TYPE).
 
 Every layer that takes a TYPE from a user reads it here: the ros2-style verbs
 (llfsm/ros2cli/interface.py turns a `TypeNameError` into their one-line usage error) and the
@@ -17,13 +18,19 @@ import re
 from pathlib import Path
 
 from ..interface_path import INTERFACE_KINDS, search_path
-from ._message import Message, Service
+from ._message import Action, Message, Service
 
 MSGS_DIR = Path(__file__).resolve().parent
 DEFINITIONS = MSGS_DIR / "_interfaces"
 _PACKAGE = re.compile(r"^(?!.*__)(?!.*_$)[a-z][a-z0-9_]*$")
 _NAME = re.compile(r"^[A-Z][A-Za-z0-9]*$")
-KINDS = ("msg", "srv")
+KINDS = ("msg", "srv", "action")
+_WHAT = {"msg": "message", "srv": "service", "action": "action"}
+_EXAMPLES = {
+    "msg": "geometry_msgs/msg/Twist",
+    "srv": "turtlesim/srv/Spawn",
+    "action": "turtlesim/action/RotateAbsolute",
+}
 
 
 class TypeNameError(ValueError):
@@ -38,10 +45,9 @@ def split_type(text: str, kind: str) -> tuple[str, str, str]:
     if len(parts) == 2:
         parts = [parts[0], kind, parts[1]]
     if len(parts) != 3 or parts[1] not in KINDS or not _PACKAGE.match(parts[0]) or not _NAME.match(parts[2]):
-        example = "geometry_msgs/msg/Twist" if kind == "msg" else "turtlesim/srv/Spawn"
         close = _closest(parts[0], parts[-1], kind) if len(parts) == 3 and parts[1] in KINDS else None
         hint = f" (did you mean '{close}'?)" if close else ""
-        raise TypeNameError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {example}){hint}")
+        raise TypeNameError(f"invalid type '{text}': expected pkg/{kind}/Name (e.g. {_EXAMPLES[kind]}){hint}")
     return parts[0], parts[1], parts[2]
 
 
@@ -137,14 +143,13 @@ def where_interfaces() -> str:
 def unknown(text: str, kind: str) -> TypeNameError:
     """The error for a TYPE that names nothing: the right kind when it is another kind's, the
     closest known type when one is close, and for a package found nowhere, where llfsm looked."""
-    name = "message" if kind == "msg" else "service" if kind == "srv" else "action"
+    name = _WHAT[kind]
     parts = text.split("/")
     pkg, tname = parts[0], parts[-1]
     for other in INTERFACE_KINDS:  # std_srvs/msg/Trigger: the kind is wrong
         twin = f"{pkg}/{other}/{tname}"
         if other != kind and len(parts) in (2, 3) and twin in known_types(other):
-            what = {"msg": "a message", "srv": "a service", "action": "an action"}[other]
-            return TypeNameError(f"unknown {name} type '{text}' ('{twin}' is {what} type)")
+            return TypeNameError(f"unknown {name} type '{text}' ('{twin}' is {_a(other)} type)")
     close = _closest(pkg, tname, kind)
     hint = f" (did you mean '{close}'?)" if close else ""
     if pkg not in packages():
@@ -156,7 +161,7 @@ def _import(pkg: str, kind: str, name: str, text: str) -> object:
     try:  # llfsm.msgs (this module's package) has installed the import hook for user packages
         module = importlib.import_module(f"llfsm.msgs.{pkg}.{kind}")
     except ModuleNotFoundError as e:
-        if e.name is not None and e.name.startswith(f"llfsm.msgs.{pkg}"):  # no such package, or no msg/srv in it
+        if e.name is not None and e.name.startswith(f"llfsm.msgs.{pkg}"):  # no such package, or not that kind in it
             raise unknown(text, kind) from None
         raise TypeNameError(f"{text}: {e}") from None
     except ImportError as e:  # a user's definition that does not compile: file and line
@@ -171,7 +176,7 @@ def message_class(text: str) -> type[Message]:
     """The message class that TYPE names (`std_msgs/msg/String`, `std_msgs/String`)."""
     pkg, kind, name = split_type(text, "msg")
     if kind != "msg":
-        raise TypeNameError(f"'{text}' is a service type; a topic carries a message type (pkg/msg/Name)")
+        raise TypeNameError(f"'{text}' is {_a(kind)} type; a topic carries a message type (pkg/msg/Name)")
     return _import(pkg, kind, name, text)  # type: ignore[return-value]  # its _TYPE is pkg/msg/name
 
 
@@ -179,5 +184,18 @@ def service_class(text: str) -> type[Service]:
     """The service class that TYPE names (`turtlesim/srv/Spawn`, `turtlesim/Spawn`)."""
     pkg, kind, name = split_type(text, "srv")
     if kind != "srv":
-        raise TypeNameError(f"'{text}' is a message type; a service has a service type (pkg/srv/Name)")
+        raise TypeNameError(f"'{text}' is {_a(kind)} type; a service has a service type (pkg/srv/Name)")
     return _import(pkg, kind, name, text)  # type: ignore[return-value]  # its _TYPE is pkg/srv/name
+
+
+def action_class(text: str) -> type[Action]:
+    """The action class that TYPE names (`turtlesim/action/RotateAbsolute`, `turtlesim/RotateAbsolute`)."""
+    pkg, kind, name = split_type(text, "action")
+    if kind != "action":
+        raise TypeNameError(f"'{text}' is {_a(kind)} type; an action has an action type (pkg/action/Name)")
+    return _import(pkg, kind, name, text)  # type: ignore[return-value]  # its _TYPE is pkg/action/name
+
+
+def _a(kind: str) -> str:
+    """ "a message", "a service", "an action"."""
+    return "an action" if kind == "action" else f"a {_WHAT[kind]}"

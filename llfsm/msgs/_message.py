@@ -70,12 +70,28 @@ class Service:
     Response: ClassVar[type[Message]]
 
 
+class Action:
+    """Base of generated action classes, as rclpy's: `RotateAbsolute.Goal`, `.Result`,
+    `.Feedback`, and under `Impl` the types on the wire (`SendGoalService`, `GetResultService`,
+    `FeedbackMessage`, and action_msgs' `CancelGoalService` and `GoalStatusMessage`)."""
+
+    _TYPE: ClassVar[str] = ""
+    Goal: ClassVar[type[Message]]
+    Result: ClassVar[type[Message]]
+    Feedback: ClassVar[type[Message]]
+    Impl: ClassVar[Any]
+
+
 def is_message_class(obj: object) -> TypeGuard[type[Message]]:
     return isinstance(obj, type) and issubclass(obj, Message) and obj is not Message
 
 
 def is_service_class(obj: object) -> TypeGuard[type[Service]]:
     return isinstance(obj, type) and issubclass(obj, Service) and obj is not Service
+
+
+def is_action_class(obj: object) -> TypeGuard[type[Action]]:
+    return isinstance(obj, type) and issubclass(obj, Action) and obj is not Action
 
 
 # -- helpers of the generated classes ----------------------------------------------------------

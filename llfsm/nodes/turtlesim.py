@@ -2,8 +2,10 @@
 
 Topics per turtle: `<turtle>/cmd_vel` (in), `<turtle>/pose` and `<turtle>/color_sensor` (out,
 every update); services `spawn`, `kill`, `clear`, `reset` and per turtle `<turtle>/set_pen`,
-`<turtle>/teleport_absolute`, `<turtle>/teleport_relative`; parameters background_r/g/b.
-The world updates every 16 ms of run time with dt = 0.016 s, as turtlesim's timer does.
+`<turtle>/teleport_absolute`, `<turtle>/teleport_relative`; the action
+`<turtle>/rotate_absolute` (turtlesim/action/RotateAbsolute: every goal and every cancel request
+accepted, as turtlesim's); parameters background_r/g/b.  The world updates every 16 ms of run
+time with dt = 0.016 s, as turtlesim's timer does.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from ..sim.world import TurtleError, TurtleWorld
 from . import NodeError, NodeOptions
 
 if TYPE_CHECKING:
+    from ..ros.action import ActionServer
     from ..ros.publisher import Publisher
     from ..ros.service import ServiceServer
     from ..ros.subscription import Subscription
@@ -29,15 +32,32 @@ class _Turtle:
 
     def __init__(self, sim: Turtlesim, name: str) -> None:
         # deferred: with the node (importing the node's module loads neither the bus nor its messages)
+        from .. import ros
         from ..msgs.geometry_msgs.msg import Twist
+        from ..msgs.turtlesim.action import RotateAbsolute
         from ..msgs.turtlesim.msg import Color, Pose
         from ..msgs.turtlesim.srv import SetPen, TeleportAbsolute, TeleportRelative
 
         node, world = sim.node, sim.world
         self.name = name
+        self.log = sim.log
+        self.action = RotateAbsolute
+        #: The rotate_absolute goal the world is turning the turtle for, if any.
+        self.goal: Any = None
 
         def on_cmd(msg: Any) -> None:
-            world.command(name, msg.linear.x, msg.linear.y, msg.angular.z, sim.clock.now)
+            delta = world.command(name, msg.linear.x, msg.linear.y, msg.angular.z, sim.clock.now)
+            if delta is not None:
+                self.log.warning("Velocity command received during rotation goal. Aborting goal")
+                self._end_goal("abort", delta)
+
+        def accepted(goal: Any) -> None:
+            goal.execute()  # turtlesim's server accepts and executes (ACCEPT_AND_EXECUTE)
+            delta = world.rotate_absolute(name, goal.request.theta)
+            if delta is not None:
+                self.log.warning("Rotation goal received before a previous goal finished. Aborting previous goal")
+                self._end_goal("abort", delta)
+            self.goal = goal
 
         def set_pen(req: Any, resp: Any) -> Any:
             world.set_pen(name, req.r, req.g, req.b, req.width, req.off)
@@ -51,7 +71,15 @@ class _Turtle:
             world.teleport_relative(name, req.linear, req.angular)
             return resp
 
-        self.entities: list[Subscription | ServiceServer | Publisher] = [
+        self.entities: list[Subscription | ServiceServer | Publisher | ActionServer] = [
+            ros.ActionServer(
+                node,
+                RotateAbsolute,
+                f"{name}/rotate_absolute",
+                goal_callback=lambda goal: ros.GoalResponse.ACCEPT,
+                cancel_callback=lambda goal: ros.CancelResponse.ACCEPT,
+                handle_accepted_callback=accepted,
+            ),
             node.create_subscription(Twist, f"{name}/cmd_vel", on_cmd, 1),
             node.create_service(SetPen, f"{name}/set_pen", set_pen),
             node.create_service(TeleportAbsolute, f"{name}/teleport_absolute", teleport_absolute),
@@ -77,6 +105,31 @@ class _Turtle:
             # bytes of the path image, 0..255 each: what the setters would check cannot fail
             color._r, color._g, color._b = world.color_under(self.name)
             self.color_pub.publish(color)
+
+    def _end_goal(self, how: str, delta: float) -> None:
+        """End the goal the world has let go of: "abort", "succeed" or "canceled", with its delta."""
+        goal, self.goal = self.goal, None
+        if goal is not None and goal.is_active:
+            getattr(goal, how)(self.action.Result(delta=delta))
+
+    def before_update(self, world: TurtleWorld) -> None:
+        """A cancel request accepted since the last update reaches the world (turtlesim looks
+        at it in its update)."""
+        if self.goal is not None and self.goal.is_cancel_requested:
+            world.cancel_rotation(self.name)
+
+    def rotation_event(self, kind: str, value: float) -> None:
+        goal = self.goal
+        if goal is None:
+            return
+        if kind == "feedback":
+            goal.publish_feedback(self.action.Feedback(remaining=value))
+        elif kind == "succeeded":
+            self.log.info("Rotation goal completed successfully")
+            self._end_goal("succeed", value)
+        else:
+            self.log.info("Rotation goal canceled")
+            self._end_goal("canceled", value)
 
     def destroy(self) -> None:
         for e in self.entities:
@@ -154,10 +207,15 @@ class Turtlesim:
         return resp
 
     def kill(self, req: Any, resp: Any) -> Any:
+        turtle = self.turtles.get(req.name)
         try:
+            delta = self.world.end_rotation(req.name) if req.name in self.world else None
             self.world.kill(req.name)
         except TurtleError as e:
             self.log.error(str(e))
+        else:
+            if turtle is not None and delta is not None:  # its goal ends with the turtle: aborted
+                turtle._end_goal("abort", delta)
         self._sync()
         return resp
 
@@ -167,6 +225,10 @@ class Turtlesim:
         return resp
 
     def reset(self, req: Any, resp: Any) -> Any:
+        for name, turtle in self.turtles.items():  # every turtle goes, and its goal with it
+            delta = self.world.end_rotation(name)
+            if delta is not None:
+                turtle._end_goal("abort", delta)
         self.world.set_background(*self._background())
         self.world.reset()
         self._sync()
@@ -175,10 +237,14 @@ class Turtlesim:
     # -- the 16 ms update ---------------------------------------------------------------------------
     def update(self) -> None:
         turtles = list(self.turtles.values())
-        sensing = [t.color_pub.get_subscription_count() > 0 for t in turtles]
-        for warning in self.world.update(self.clock.now, UPDATE_PERIOD, sense=any(sensing)):
-            self.log.warning(warning)
         world = self.world
+        for t in turtles:
+            t.before_update(world)
+        sensing = [t.color_pub.get_subscription_count() > 0 for t in turtles]
+        for warning in world.update(self.clock.now, UPDATE_PERIOD, sense=any(sensing)):
+            self.log.warning(warning)
+        for event in world.rotation_events:
+            self.turtles[event.turtle].rotation_event(event.kind, event.value)
         for t, sense in zip(turtles, sensing, strict=True):
             t.publish(world, sense)
         if self.viewer is not None and not self.viewer.closed:

@@ -11,14 +11,23 @@
 
 Deterministic under `--clock sim`; see docs/bus.md.  This module is the public door: each
 entity lives in a module of its own, as in rclpy (node, publisher, subscription, service,
-client, timer, qos, parameters, logging, clock, task, executor), on top of the bus (bus.py) and
-its transports (transports/).
+client, timer, qos, parameters, logging, clock, task, executor; actions in action/), on top of
+the bus (bus.py) and its transports (transports/).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from .action import (
+    ActionClient,
+    ActionServer,
+    CancelResponse,
+    ClientGoalHandle,
+    GoalResponse,
+    ServerGoalHandle,
+    qos_profile_action_status_default,
+)
 from .bus import Bus, bus_of
 from .client import Client
 from .clock import Time
@@ -49,11 +58,16 @@ from .task import Future
 from .timer import Timer
 
 __all__ = [
+    "ActionClient",
+    "ActionServer",
     "Bus",
+    "CancelResponse",
     "Client",
+    "ClientGoalHandle",
     "DurabilityPolicy",
     "Future",
     "FutureReturnCode",
+    "GoalResponse",
     "HistoryPolicy",
     "InvalidNameError",
     "Logger",
@@ -67,6 +81,7 @@ __all__ = [
     "QoSReliabilityPolicy",
     "ReliabilityPolicy",
     "Remap",
+    "ServerGoalHandle",
     "Service",
     "ServiceServer",
     "Subscription",
@@ -74,6 +89,7 @@ __all__ = [
     "Timer",
     "init",
     "ok",
+    "qos_profile_action_status_default",
     "qos_profile_parameter_events",
     "qos_profile_parameters",
     "qos_profile_rosout_default",

@@ -80,7 +80,17 @@ class _Request:
         server = self.bus.services.get(self.service)
         if server is None or self.future.done():
             return  # no server (any more): the future stays pending; spin_until_future_complete says TIMEOUT
-        self.future.set_result(server._answer(self.request)._copy())
+        answer = server._answer(self.request)
+        if isinstance(answer, Future):  # a server that answers later (an action's get_result)
+            future = self.future
+
+            def reply(done: Future) -> None:
+                if not future.done():
+                    future.set_result(done.result()._copy())
+
+            answer.add_done_callback(reply)
+            return
+        self.future.set_result(cast("Message", answer)._copy())
 
 
 class Bus(Executor):

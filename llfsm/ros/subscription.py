@@ -101,6 +101,12 @@ class Subscription:
                 return
             self.callback(queue.popleft())  # type: ignore[misc]  # not None: only PUSH subscriptions queue
 
+    def get_publisher_count(self) -> int:
+        """Publishers of the topic: of this process, and (DDS) those of other processes matched
+        with this subscription, as rclpy's counts the matched ones."""
+        remote = self._remote.publisher_count() if self._remote is not None else 0
+        return self._topic.publishers + remote
+
     def take(self) -> Any:
         """The newest message not taken yet, or None (PULL readers)."""
         if self._fresh:

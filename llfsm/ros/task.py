@@ -6,7 +6,7 @@ in a reply from another process; see docs/bus.md (Services, clients and futures)
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -60,6 +60,13 @@ class Future:
             fn(self)
         else:
             self._callbacks.append(fn)
+
+    def __await__(self) -> Generator[Future, None, Any]:
+        """`await future` in a coroutine the executor runs (an action's execute callback):
+        yields the future itself until it is done, then gives its result, as rclpy's does."""
+        while not self._done:
+            yield self
+        return self.result()
 
     def _finish(self) -> None:
         self._done = True

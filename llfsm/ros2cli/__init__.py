@@ -1,6 +1,6 @@
-"""The library under the ros2-style verbs (`llfsm topic|node|service|interface ...`), a module
-per verb group as ros2cli has a package per verb group; the commands in llfsm/cli/ are thin
-click layers over it, and tests call it without a subprocess.  No click here.
+"""The library under the ros2-style verbs (`llfsm topic|node|service|action|interface ...`), a
+module per verb group as ros2cli has a package per verb group; the commands in llfsm/cli/ are
+thin click layers over it, and tests call it without a subprocess.  No click here.
 
 Verb groups (each verb a function named after it, `list_` and `type_` where Python has the
 name):
@@ -8,6 +8,7 @@ name):
 - `topic/`: `list`, `info`, `type`, `find`, `echo`, `pub`, `hz`, a module each (the group is big).
 - `node`: `list`, `info`.
 - `service`: `list`, `type`, `find`, `call`.
+- `action`: `list`, `info`, `send_goal` (docs/actions.md).
 - `interface`: `show`, `list`, `package`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to
   llfsm's classes, with a "did you mean" for near misses (llfsm/msgs/_lookup.py, which the web
   view reads TYPEs through too), as the verbs' usage errors.  Offline.

@@ -1,5 +1,5 @@
 """`interface show`, and interface types by name for the verbs: `pkg/msg/Name` (or `pkg/Name`,
-as `ros2` accepts) to llfsm's message and service classes, a mistake being the verbs' one-line
+as `ros2` accepts) to llfsm's message, service and action classes, a mistake being the verbs' one-line
 usage error.  The lookup itself is llfsm/msgs/_lookup.py, which the web view reads TYPEs
 through too (a layer below both).
 
@@ -21,10 +21,12 @@ from ..interface_path import INTERFACE_KINDS
 from ..msgs import Message, Service, _lookup, add_search_path, find_package
 from ..msgs._lookup import CLOSE, KINDS, TypeNameError, builtin_packages, known_types, packages, types_of
 from ..msgs._lookup import DEFINITIONS as _DEFINITIONS
+from ..msgs._message import Action
 from . import NOT_FOUND, CliError
 
 __all__ = [
     "KINDS",
+    "action_class",
     "definition_file",
     "known_types",
     "list_",
@@ -71,6 +73,11 @@ def service_class(text: str) -> type[Service]:
     return _as_usage_error(_lookup.service_class, text)
 
 
+def action_class(text: str) -> type[Action]:
+    """The action class that TYPE names (`turtlesim/action/RotateAbsolute`)."""
+    return _as_usage_error(_lookup.action_class, text)
+
+
 # -- ros2 interface list, package -----------------------------------------------------------------
 
 _HEADINGS = {"msg": "Messages:", "srv": "Services:", "action": "Actions:"}
@@ -103,7 +110,7 @@ def package(name: str, *, kinds: tuple[str, ...] = ()) -> str:
 
 
 def definition_file(pkg: str, kind: str, name: str) -> Path | None:
-    """The .msg/.srv file that defines the type, or None."""
+    """The .msg/.srv/.action file that defines the type, or None."""
     if pkg in builtin_packages():
         folders = [_DEFINITIONS / pkg / kind]
     else:
@@ -119,16 +126,17 @@ def definition_file(pkg: str, kind: str, name: str) -> Path | None:
 def _nested_types(path: Path, pkg: str, kind: str, name: str, text: str) -> dict[int, str]:
     """Line number -> the message type its field holds, for the lines that hold a message."""
     # deferred: start-up (only `interface show` parses; resolving a TYPE never does)
-    from ..idl.parser import parse_message, parse_service
+    from ..idl.parser import parse_action, parse_message, parse_service
     from ..idl.spec import InterfaceError
 
     local = {p.stem for p in (path.parent.parent / "msg").glob("*.msg")}
     try:
         if kind == "msg":
             halves = [parse_message(text, f"{pkg}/msg/{name}", str(path), local=local)]
+        elif kind == "srv":
+            halves = list(parse_service(text, f"{pkg}/srv/{name}", str(path), local=local).parts)
         else:
-            spec = parse_service(text, f"{pkg}/srv/{name}", str(path), local=local)
-            halves = [spec.request, spec.response]
+            halves = list(parse_action(text, f"{pkg}/action/{name}", str(path), local=local).parts)
     except InterfaceError as e:
         raise CliError(str(e)) from None
     return {f.line: f.type.base for h in halves for f in h.fields if f.type.is_message and f.line is not None}
@@ -146,9 +154,9 @@ def show(text: str, *, comments: str = "top") -> str:
     followed by that message's definition one tab deeper.  `comments`: "top" keeps the comments
     and blank lines of the type itself (ros2's default), "all" of nested ones too, "none" of none."""
     kind = text.split("/")[1] if text.count("/") == 2 else None
-    if kind is None:  # pkg/Name: a message if there is one, else a service
+    if kind is None:  # pkg/Name: a message if there is one, else a service, else an action
         pkg, _, name = split_type(text, "msg")
-        kind = "msg" if definition_file(pkg, "msg", name) or not definition_file(pkg, "srv", name) else "srv"
+        kind = next((k for k in KINDS if definition_file(pkg, k, name)), "msg")
     pkg, kind, name = split_type(text, kind)
     out: list[str] = []
     _show(pkg, kind, name, text, comments != "none", comments == "all", 0, out, ())

@@ -15,6 +15,12 @@ floating-point operations, so that poses match a real turtlesim bit for bit:
 * Time `now` is the run time in integer nanoseconds (llfsm's clocks count in ns), so that the
   1 s command timeout (`now - last_command > 1 s`, strictly) is exact.
 
+A turtle may have one `rotate_absolute` goal (humble's action): each update turns it at 1 rad/s
+toward the goal heading, reports the `remaining` rotation and the `delta` turned so far, and
+ends it within 0.02 rad; a velocity command or a new goal aborts it, a cancel request ends it at
+the next update.  The goal's handle is the node's business: here a rotation is plain values,
+and what happened to it comes back from `update` in `rotation_events`.
+
 Drawing is recorded, not painted: every pen stroke is appended to a list of segments (pixel
 coordinates, colour, width) and rasterised into an RGBA image only when a colour or a picture is
 asked for, and then only the strokes added since the last time.  The path image starts
@@ -49,6 +55,7 @@ __all__ = [
     "UPDATE_PERIOD_NS",
     "WORLD_SIZE",
     "Pose",
+    "RotationEvent",
     "Segment",
     "TurtleError",
     "TurtleWorld",
@@ -102,6 +109,29 @@ class TurtleError(Exception):
     line, so the node can log `str(err)` and answer as turtlesim does (spawn: empty name)."""
 
 
+class RotationEvent(NamedTuple):
+    """What an update did to a turtle's rotate_absolute goal: "feedback" (value: the remaining
+    rotation), "succeeded" or "canceled" (value: the delta turned, the goal's result), all
+    rounded to float32 as the action's fields hold them."""
+
+    turtle: str
+    kind: str
+    value: float
+
+
+class _Rotation:
+    """One rotate_absolute goal: its heading, where the turtle started, a cancel request, and
+    the delta turned so far (the result turtlesim keeps updating)."""
+
+    __slots__ = ("canceling", "delta", "start", "theta")
+
+    def __init__(self, theta: float, start: float) -> None:
+        self.theta = theta
+        self.start = start
+        self.canceling = False
+        self.delta = 0.0
+
+
 class Pose(NamedTuple):
     """The fields of turtlesim/msg/Pose, already rounded to float32 as the message holds them."""
 
@@ -144,6 +174,7 @@ class _Turtle:
         "pen_width",
         "qx",
         "qy",
+        "rotation",
         "sensed",
         "sensed_at",
         "sensed_bg",
@@ -167,6 +198,7 @@ class _Turtle:
         self.pen_width = PEN_WIDTH
         # (relative, x_or_linear, y, theta): applied in order at the start of the next update.
         self.teleports: list[tuple[bool, float, float, float]] = []
+        self.rotation: _Rotation | None = None
         # Index in the stroke list of this turtle's last motion stroke (to extend straight lines).
         self.last_stroke = -1
         self.sensed: tuple[int, int, int] = (255, 255, 255)
@@ -213,6 +245,8 @@ class TurtleWorld:
         self._rastered = 0  # strokes already in the raster
         self._version = 0  # bumped by every change to the strokes
         self._updates = 0
+        #: What the last `update` did to rotate_absolute goals, in turtle order.
+        self.rotation_events: list[RotationEvent] = []
         self.spawn(CENTRE, CENTRE, 0.0)
 
     # --- parameters --------------------------------------------------------------------------
@@ -308,9 +342,11 @@ class TurtleWorld:
         then moves `linear` along the new heading."""
         self._get(name).teleports.append((True, f32(linear), 0.0, f32(angular)))
 
-    def command(self, name: str, linear_x: float, linear_y: float, angular_z: float, now: int) -> None:
+    def command(self, name: str, linear_x: float, linear_y: float, angular_z: float, now: int) -> float | None:
         """A Twist on `<turtle>/cmd_vel` received at run time `now` (ns).  linear.y moves
-        sideways: humble's turtle is holonomic (the `holonomic` parameter came after humble)."""
+        sideways: humble's turtle is holonomic (the `holonomic` parameter came after humble).
+        It aborts a rotate_absolute goal, as turtlesim's velocity callback does: the goal's
+        delta so far is returned (the result of the aborted goal), None if there was none."""
         t = self._get(name)
         if not isinstance(now, int):
             raise TypeError(f"now is the run time in integer nanoseconds, not {now!r}")
@@ -318,6 +354,40 @@ class TurtleWorld:
         t.lin_x = float(linear_x)
         t.lin_y = float(linear_y)
         t.ang = float(angular_z)
+        return self._end_rotation(t)
+
+    def rotate_absolute(self, name: str, theta: float) -> float | None:
+        """Accept a rotate_absolute goal (heading `theta`, rounded to float32 as the goal holds
+        it): from the next update the turtle turns toward it.  A goal still running is replaced
+        (turtlesim aborts it): its delta is returned, None if there was none."""
+        t = self._get(name)
+        replaced = self._end_rotation(t)
+        t.rotation = _Rotation(f32(theta), t.orient)
+        return replaced
+
+    def cancel_rotation(self, name: str) -> bool:
+        """A cancel request for the turtle's goal: it ends (canceled, the turtle stopped) at the
+        next update.  False if there is no goal."""
+        t = self._get(name)
+        if t.rotation is None:
+            return False
+        t.rotation.canceling = True
+        return True
+
+    def end_rotation(self, name: str) -> float | None:
+        """End the turtle's rotate_absolute goal where it is (the turtle is killed or reset):
+        its delta, None if there was none."""
+        return self._end_rotation(self._get(name))
+
+    def rotating(self, name: str) -> bool:
+        """Whether the turtle has a rotate_absolute goal that has not ended."""
+        return self._get(name).rotation is not None
+
+    @staticmethod
+    def _end_rotation(t: _Turtle) -> float | None:
+        r = t.rotation
+        t.rotation = None
+        return None if r is None else r.delta
 
     # --- the 16 ms tick ----------------------------------------------------------------------
 
@@ -336,9 +406,12 @@ class TurtleWorld:
         w = self.width
         h = self.height
         self._updates += 1
+        self.rotation_events = []
         for t in self._order:
             if t.teleports:
                 self._teleport(t)
+            if t.rotation is not None:
+                self._rotate(t, now)
             if now - t.last_cmd > COMMAND_TIMEOUT_NS:
                 t.lin_x = t.lin_y = t.ang = 0.0
             ox = t.qx
@@ -401,6 +474,32 @@ class TurtleWorld:
                 t.last_stroke = n
                 self._version += 1
         return warnings
+
+    def _rotate(self, t: _Turtle, now: int) -> None:
+        """turtlesim's rotate_absolute step, before the command timeout and the move: a cancel
+        request ends the goal; else the delta and the remaining rotation are worked out (float
+        casts where turtlesim casts), and the goal succeeds within 0.02 rad or the turtle turns
+        at 1 rad/s toward it, the shorter way."""
+        r = t.rotation
+        assert r is not None
+        events = self.rotation_events
+        if r.canceling:
+            events.append(RotationEvent(t.name, "canceled", f32(r.delta)))
+            t.rotation = None
+            t.lin_x = t.lin_y = t.ang = 0.0
+            return
+        theta = _normalise(r.theta)
+        remaining = _normalise(theta - f32(t.orient))
+        r.delta = f32(_normalise(f32(r.start - t.orient)))
+        events.append(RotationEvent(t.name, "feedback", f32(remaining)))
+        if abs(_normalise(f32(t.orient) - theta)) < 0.02:
+            events.append(RotationEvent(t.name, "succeeded", r.delta))
+            t.rotation = None
+            t.lin_x = t.lin_y = t.ang = 0.0
+        else:
+            t.lin_x = t.lin_y = 0.0
+            t.ang = -1.0 if remaining < 0.0 else 1.0
+            t.last_cmd = now
 
     def _teleport(self, t: _Turtle) -> None:
         for relative, a, b, theta in t.teleports:
@@ -517,6 +616,11 @@ class TurtleWorld:
         if raster[k + 3] == 0 and self._sensor_sees_background:
             return self._background
         return (raster[k], raster[k + 1], raster[k + 2])
+
+
+def _normalise(angle: float) -> float:
+    """turtlesim's normalizeAngle: into [-PI, PI), with its PI."""
+    return angle - _TWO_PI * math.floor((angle + _PI) / _TWO_PI)
 
 
 def _qround(v: float) -> int:

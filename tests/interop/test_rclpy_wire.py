@@ -1,6 +1,6 @@
 """llfsm's DDS forms against real ROS 2 (rclpy and rosidl from PyPI wheels in .venv-ros):
 CDR bytes equal to rclpy's serialize_message, and RIHS01 type hashes equal to the ones rosidl
-generated into the wheels' share/<pkg>/<msg|srv>/<Name>.json."""
+generated into the wheels' share/<pkg>/<msg|srv|action>/<Name>.json (actions' derived types too)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from samples import sample, shipped_classes
 
 from interop.ros2env import VENV_ROS, requires_ros
 from llfsm.msgs import _dds
-from llfsm.msgs._message import Message, is_message_class, is_service_class
+from llfsm.msgs._message import Message, is_action_class, is_message_class, is_service_class
 
 pytestmark = [pytest.mark.interop, requires_ros]
 
@@ -32,6 +32,8 @@ COMMON = (
     "sensor_msgs",
     "nav_msgs",
     "rcl_interfaces",
+    "action_msgs",
+    "unique_identifier_msgs",
 )
 
 # Runs in .venv-ros: reads {ros type: [payload hex]} on stdin; for each payload, rclpy
@@ -44,12 +46,26 @@ from geometry_msgs.msg import Twist, PolygonStamped, Point32
 from std_msgs.msg import String, Empty, Header
 from std_srvs.srv import SetBool, Trigger
 
+# an action's types by the suffix rosidl gives them: (attribute path from the action class)
+ACTION_PARTS = {"Goal": "Goal", "Result": "Result", "Feedback": "Feedback",
+                "SendGoal_Request": "Impl.SendGoalService.Request",
+                "SendGoal_Response": "Impl.SendGoalService.Response",
+                "GetResult_Request": "Impl.GetResultService.Request",
+                "GetResult_Response": "Impl.GetResultService.Response", "FeedbackMessage": "Impl.FeedbackMessage"}
+
 def cls_of(t):
     pkg, kind, name = t.split("/")
     module = importlib.import_module(f"{pkg}.{kind}")
     if kind == "srv":
         base, _, part = name.rpartition("_")
         return getattr(getattr(module, base), part)
+    if kind == "action":
+        for suffix, path in ACTION_PARTS.items():
+            if name.endswith("_" + suffix):
+                obj = getattr(module, name[: -len(suffix) - 1])
+                for attr in path.split("."):
+                    obj = getattr(obj, attr)
+                return obj
     return getattr(module, name)
 
 out = {"round_trip": {}, "built": {}, "default": {}}
@@ -114,7 +130,7 @@ def test_msgs_package(tmp_path_factory: pytest.TempPathFactory) -> Path:
     strings, bounded strings, wstrings, nested and multi-nested messages, defaults), copied as a
     user's package and compiled by llfsm's interface compiler."""
     root = tmp_path_factory.mktemp("interfaces")
-    for kind in ("msg", "srv"):
+    for kind in ("msg", "srv", "action"):
         (root / "test_msgs" / kind).mkdir(parents=True)
         for f in sorted((SHARE / "test_msgs" / kind).glob(f"*.{kind}")):
             shutil.copy(f, root / "test_msgs" / kind / f.name)
@@ -129,7 +145,7 @@ def user_interfaces(test_msgs_package: Path, monkeypatch: pytest.MonkeyPatch) ->
 
 def _test_msgs_classes() -> list[type[Message]]:
     out = []
-    for kind in ("msg", "srv"):
+    for kind in ("msg", "srv", "action"):
         module = importlib.import_module(f"llfsm.msgs.test_msgs.{kind}")
         out += [o for o in vars(module).values() if is_message_class(o) and o.__module__ == module.__name__]
     return out
@@ -145,6 +161,8 @@ def test_cdr_equals_rclpy_serialize_message(user_interfaces: Path) -> None:
 
     classes = [c for c in shipped_classes() if c._TYPE.split("/")[0] in COMMON] + _test_msgs_classes()
     assert len(classes) > 70
+    wanted = {"test_msgs/action/Fibonacci_SendGoal_Request", "action_msgs/msg/GoalStatusArray"}
+    assert wanted <= {c._TYPE for c in classes}
     messages: dict[str, list[Message]] = {}
     for cls in classes:
         rng = random.Random(cls._TYPE)
@@ -188,7 +206,7 @@ def test_cdr_equals_rclpy_serialize_message(user_interfaces: Path) -> None:
 
 def _wheel_hashes(package: str) -> dict[str, str]:
     hashes = {}
-    for kind in ("msg", "srv"):
+    for kind in ("msg", "srv", "action"):
         for f in sorted((SHARE / package / kind).glob("*.json")):
             data = json.loads(f.read_text())
             hashes.update({h["type_name"]: h["hash_string"] for h in data["type_hashes"]})
@@ -205,7 +223,7 @@ def test_type_hashes_equal_rosidl(user_interfaces: Path) -> None:
     """RIHS01 hashes of llfsm's classes equal the ones rosidl computed for the same types:
     the standard packages (llfsm's definitions come from rosbags' Humble store, the wheels'
     from the current release) and ROS 2's test_msgs compiled as a user package."""
-    checked, bad = 0, []
+    checked, bad, actions = 0, [], 0
     for package in (*COMMON, "test_msgs"):
         for type_name, expected in _wheel_hashes(package).items():
             if not type_name.startswith(f"{package}/") or type_name.endswith("_Event"):
@@ -215,9 +233,11 @@ def test_type_hashes_equal_rosidl(user_interfaces: Path) -> None:
                 # Types newer than Humble (geometry_msgs/PolygonInstance, VelocityStamped) and
                 # test_msgs' IDL-only keyed types have no llfsm class.
                 continue
-            assert is_message_class(cls) or is_service_class(cls)
+            assert is_message_class(cls) or is_service_class(cls) or is_action_class(cls)
             if _dds.type_hash(cls) != expected:
                 bad.append(f"{type_name}: llfsm {_dds.type_hash(cls)} rosidl {expected}")
             checked += 1
+            actions += "/action/" in type_name
     assert not bad, "\n".join(bad)
     assert checked > 90
+    assert actions >= 22  # test_msgs' Fibonacci and NestedMessage: the action and its 10 types each

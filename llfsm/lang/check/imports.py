@@ -73,8 +73,9 @@ def _message_import(c: Checking, code: Code, stmt: ast.Import | ast.ImportFrom, 
         kinds = [k for k in INTERFACE_KINDS if _names(folder, k)]
         wanted = [a.name for a in stmt.names] if isinstance(stmt, ast.ImportFrom) else []
         elsewhere = [f"{package}/{k}/{n}" for n in wanted for k in kinds if n in _names(folder, k)]
-        has = " and ".join(kinds) or "no interfaces"
-        hint = f": {elsewhere[0]} is a {_KIND_WORD[elsewhere[0].split('/')[1]]}" if elsewhere else ""
+        has = (", ".join(kinds[:-1]) + " and " + kinds[-1] if len(kinds) > 1 else "".join(kinds)) or "no interfaces"
+        what = _KIND_WORD[elsewhere[0].split("/")[1]] if elsewhere else ""
+        hint = f": {elsewhere[0]} is {'an' if what == 'action' else 'a'} {what}" if elsewhere else ""
         c.add("LF042", code.file, stmt.lineno, col, f"{MSGS}.{package} has {has}, not {kind!r}{hint}")
         return
     if len(parts) > 2 or not isinstance(stmt, ast.ImportFrom):

@@ -37,6 +37,7 @@ ROS_QOS_NAMES = frozenset(
         "qos_profile_services_default",
         "qos_profile_parameters",
         "qos_profile_parameter_events",
+        "qos_profile_action_status_default",
         "qos_profile_rosout_default",
     }
 )

@@ -93,6 +93,15 @@ class SubscriptionView(Protocol):
         """A message from another process, delivered as a local publisher's copy is."""
 
 
+class LaterAnswer(Protocol):
+    """An answer still to come (llfsm.ros.task.Future): a server that answers when it can (an
+    action's get_result, when the goal has finished) returns one of the response."""
+
+    def add_done_callback(self, fn: Callable[[Any], None]) -> None: ...
+
+    def result(self) -> Any: ...
+
+
 class ServiceView(Protocol):
     """A server whose requests may come from other processes."""
 
@@ -103,8 +112,9 @@ class ServiceView(Protocol):
     @property
     def srv_name(self) -> str: ...
 
-    def _answer(self, request: Message) -> Message:
-        """The server's callback run on a request (checked), as for a local client."""
+    def _answer(self, request: Message) -> Message | LaterAnswer:
+        """The server's callback run on a request (checked), as for a local client: the
+        response, or a LaterAnswer of it."""
 
 
 class ClientView(Protocol):
@@ -181,10 +191,22 @@ class RemoteClient(Protocol):
         """False once the server the request went to is gone: spin calls then return TIMEOUT
         instead of waiting forever."""
 
+    @property
+    def in_order(self) -> bool:
+        """True when replies are matched to requests by their order rather than by an id (a
+        Fast DDS server): a request that waits for its answer would take a later one's."""
+
     def close(self) -> None: ...
 
 
 class Closable(Protocol):
+    def close(self) -> None: ...
+
+
+class RemoteReader(Protocol):
+    def publisher_count(self) -> int:
+        """Writers in other processes matched with this reader."""
+
     def close(self) -> None: ...
 
 
@@ -201,7 +223,7 @@ class Transport:
     def publisher(self, pub: PublisherView) -> RemoteWriter | None:
         return None
 
-    def subscription(self, sub: SubscriptionView) -> Closable | None:
+    def subscription(self, sub: SubscriptionView) -> RemoteReader | None:
         return None
 
     def service(self, srv: ServiceView) -> Closable | None:

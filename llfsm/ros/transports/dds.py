@@ -327,6 +327,9 @@ class _Reader(_Endpoint):
         for msg, _info in self.samples.take():
             deliver(msg)
 
+    def publisher_count(self) -> int:
+        return int(self.reader.get_subscription_matched_status().current_count)
+
     def close(self) -> None:
         self.t.waits.detach(self.cond, self.token)
         self.t.waits.detach(self.reader, self.status_token)
@@ -346,6 +349,13 @@ class _RemoteRequest:
         if self.server.closed:
             return
         response = self.server.srv._answer(self.request)
+        later = getattr(response, "add_done_callback", None)  # a LaterAnswer (transports/base.py)
+        if later is not None:  # answered when it is done (an action's get_result)
+            later(lambda done: self._reply(done.result()))
+            return
+        self._reply(response)
+
+    def _reply(self, response: Any) -> None:
         self.server.reply(self, response, time.monotonic() + REPLY_PATIENCE_S)
 
 
@@ -621,6 +631,11 @@ class _Client(_Endpoint):
             return
         self.pending[seq] = future
         _write(self.writer, _dds.wrap(request, self.guid, seq))
+
+    @property
+    def in_order(self) -> bool:
+        """Replies are matched to requests by their order (a Fast DDS server, `_PlainClient`)."""
+        return self.fast
 
     def can_still_answer(self, future: PendingReply) -> bool:
         if self.t.closed:

@@ -1,0 +1,2 @@
+goal = sent.result()
+result = goal.get_result_async()

@@ -1,0 +1,1 @@
+sent = client.send_goal_async(RotateAbsolute.Goal(theta=headings[index]))
