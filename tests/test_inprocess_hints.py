@@ -43,4 +43,6 @@ def test_a_subscription_nothing_published_to_is_named_at_the_end(tmp_path: Path)
     )
     r = run_sim(m, "--duration", "10ms")
     assert r.status == 0
-    assert r.stderr.count(HINT) == 1 and "nothing published /chat, which was subscribed to, in this run" in r.stderr
+    assert (
+        r.stderr.count(HINT) == 1 and "nothing published /chat, which a machine subscribed to, in this run" in r.stderr
+    )

@@ -178,10 +178,15 @@ class Bus(Executor):
             fn(t)
 
     def _unheard(self) -> None:
-        """At the end of an in-process run: subscriptions of a topic nothing in the run published."""
+        """At the end of an in-process run: machine code's subscriptions (of nodes its variables
+        hold, lifetimes.py) of a topic nothing in the run published.  Not the built-in nodes'
+        (turtlesim listens to /turtle1/cmd_vel whether or not anyone drives it)."""
+        held = self.lifetimes.held
         for name, t in sorted(self.topics.items()):
-            if t.readers and not t.publishers and not t.published:
-                self.nobody_here(f"nothing published {name}, which was subscribed to,")
+            if t.publishers or t.published:
+                continue
+            if any(id(r.node) in held for r in t.readers):
+                self.nobody_here(f"nothing published {name}, which a machine subscribed to,")
 
     # -- services ----------------------------------------------------------------------------
     def call(self, service: str, request: Message) -> Future:
