@@ -4,7 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP := $(PY) -m pip --disable-pip-version-check -q
 
-.PHONY: demo test test-latest lint fuzz bench clean msgs ros-venv chromium asan lock
+.PHONY: demo test test-latest lint fuzz bench clean msgs ros-venv chromium spin asan lock
 
 # What `make` installs is locked: requirements/lock.txt holds the exact versions of everything
 # .venv gets (llfsm's dependencies, every extra, and the setuptools it is built with), and
@@ -67,6 +67,15 @@ chromium:
 			|| echo "make: could not install chromium: the browser tests will skip"; \
 	else echo "make: no chromium (apt-get install chromium as root): the browser tests will skip"; fi
 
+# `llfsm verify`'s tests run SPIN (Debian's spin) on its Promela exports: installed here where we
+# can (root with apt-get); elsewhere those tests skip and say why.
+spin:
+	@if command -v spin >/dev/null 2>&1; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		(apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q spin) >/dev/null \
+			|| echo "make: could not install spin: the SPIN tests of llfsm verify will skip"; \
+	else echo "make: no spin (apt-get install spin as root): the SPIN tests of llfsm verify will skip"; fi
+
 $(VENV_ROS)/.installed: requirements/ros.in $(ROS_LOCK)
 	$(PYTHON) -m venv $(VENV_ROS)
 	$(VENV_ROS)/bin/python -m pip --disable-pip-version-check -q install $(call constrain,$(ROS_LOCK)) -r requirements/ros.in
@@ -79,7 +88,7 @@ ros-venv:
 
 # LLFSM_REQUIRE_C=1: a C part that was not built fails its tests here instead of skipping them,
 # so that `make test` measures what the docs claim (a plain `pytest` skips them, saying why).
-test: $(VENV)/.installed-dev lint ros-venv chromium
+test: $(VENV)/.installed-dev lint ros-venv chromium spin
 	LLFSM_REQUIRE_C=1 LLFSM_ROS_VENV=$(abspath $(VENV_ROS)) $(PY) -m pytest -q
 	@echo "== the same recorder and painter tests with the C parts disabled (the pure-Python fallback)"
 	LLFSM_NO_C=1 $(PY) -m pytest -q tests/test_bag.py tests/test_sim.py tests/test_bag_tap.py

@@ -43,6 +43,7 @@ from .interface_path import add_search_path
 from .runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
 from .runtime.context import activate
 from .runtime.errors import passes_through, report_for
+from .runtime.inputs import TOPIC
 from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE
 from .runtime.watchdog import Watchdog
 from .targets import InvalidMachine, MachineLoadError, TargetError, load
@@ -405,6 +406,8 @@ class Session:
                 self.tracer = Tracer(verbose=sys.stderr if o.verbose else None, jsonl=self.trace_out)
             arr = self.arrangement = self._arrange(ctx)
             self._machines_on_graph(ctx)
+            if self.binds_inputs and self.bus is not None:
+                self._bind_inputs(arr, self.bus)
             grace = o.grace
             if self.classes:
                 arr.on_interrupt = lambda grace: self.say(
@@ -488,9 +491,9 @@ class Session:
                     echo_topic(bus, topic)
             except (InvalidNameError, ValueError) as e:
                 raise UsageError(str(e)) from None
-            if o.nodes or o.params or o.params_files:
-                # the nodes are up (ros.ok() is true from the first round), and the machines'
-                # nodes will be too: their parameters are set before their first ringlet
+            if o.nodes or o.params or o.params_files or self.binds_inputs:
+                # the nodes (and the input readers) are up (ros.ok() is true from the first round),
+                # and the machines' nodes will be too: their parameters are set before their first ringlet
                 bus.init()
             options = NodeOptions(image=Path(o.image) if o.image else None, view=o.view)
             for name in dict.fromkeys(o.nodes):
@@ -567,6 +570,19 @@ class Session:
         else:
             ctx.on_init.append(lambda bus: _enable(ctx))
 
+    def _bind_inputs(self, arr: Arrangement, bus: Bus) -> None:
+        """SPEC 11: each input bound to a topic reads its field from the newest message there,
+        through a PULL reader on the machine's node, opened before the first round."""
+        from .ros.inputs import BindError, bind  # deferred: start-up (only machines with bound inputs)
+
+        prev = activate(arr.ctx)
+        try:
+            bind(arr, bus, where=lambda m: _machine_yaml_of(m, self.options.targets))
+        except BindError as e:
+            raise UsageError(str(e)) from None
+        finally:
+            activate(prev)
+
     def _open_web(self, web: WebPage, ctx: RunContext, bus: Bus, arr: Arrangement) -> Stoppable:
         """--web: the page's server on its own thread, the bus up (so the machines' control
         services exist), and a run that waits, rather than ends, when every machine is
@@ -597,12 +613,27 @@ class Session:
             or o.transport != "inproc"
             or o.record
             or o.play
+            or self.binds_inputs
         )
+
+    @property
+    def binds_inputs(self) -> bool:
+        """Whether a machine binds an input to a topic (SPEC 11): the run then opens the bus."""
+        return any(entry[TOPIC] is not None for cls in self.classes for entry in cls.INPUTS)
 
     @property
     def world(self) -> TurtleWorld | None:
         """The turtle simulator's world (`--node turtlesim`), for the web view to draw live."""
         return getattr(self.nodes.get("turtlesim"), "world", None)
+
+
+def _machine_yaml_of(m: Machine, targets: tuple[str, ...]) -> str:
+    """The machine.yaml an error about `m`'s inputs names: its folder among the targets, else
+    the folder its module was built from."""
+    for t in targets:
+        if os.path.basename(os.path.normpath(t)) == f"{m.NAME}.machine":
+            return os.path.join(t, "machine.yaml")
+    return os.path.join(m.SOURCE_DIR or f"{m.NAME}.machine", "machine.yaml")
 
 
 def _enable(ctx: RunContext) -> None:

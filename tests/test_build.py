@@ -227,7 +227,7 @@ def test_schema_is_json_schema_of_machine_yaml() -> None:
     doc = json.loads(r.stdout)
     assert doc["title"] == "machine.yaml"
     assert doc["required"] == ["states"]
-    assert set(doc["properties"]) == {"description", "initial", "suspended", "states", "parameters"}
+    assert set(doc["properties"]) == {"description", "initial", "suspended", "states", "inputs", "parameters"}
     assert "/llfsm/<machine>" in doc["properties"]["parameters"]["description"]
     assert doc["additionalProperties"] is False
     name = doc["$defs"]["YamlState"]["properties"]["name"]["pattern"]

@@ -68,6 +68,8 @@ async def main(url):
                 if data["type"] == "hello":
                     names = [m["name"] for m in data["machines"]]
                     data = data["snapshot"]
+                elif data["type"] != "snapshot":  # the graph of nodes and topics
+                    continue
                 for m in data["machines"]:
                     rows[m["name"]] = m
             answer = None

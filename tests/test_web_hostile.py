@@ -439,6 +439,8 @@ async def main(url, want, seconds):
                     out["hellos"].append(sorted(m["name"] for m in data["machines"]))
                     out["svg"] = {m["name"]: m["svg"] for m in data["machines"]}
                     data = data["snapshot"]
+                elif data["type"] != "snapshot":  # the graph of nodes and topics
+                    continue
                 for m in data["machines"]:
                     if m["name"] == "ros2_ping_pong" and (not out["states"] or out["states"][-1] != m["state"]):
                         out["states"].append(m["state"])

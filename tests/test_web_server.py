@@ -60,11 +60,14 @@ def test_guard_text_is_escaped_in_the_diagram() -> None:
 
 def test_a_layout_keeps_states_apart() -> None:
     desc = description(load(str(MACHINES / "turtle_follower.machine")))
-    boxes, _, _ = diagram.layout(desc)
-    placed = list(boxes.values())
-    for i, a in enumerate(placed):
-        for b in placed[i + 1 :]:
-            assert a.layer != b.layer or a.right <= b.left or b.right <= a.left, (a, b)
+    placed = diagram.layout(desc)
+    boxes = []
+    for s in desc["states"]:
+        (x, y), w = placed.centres[s["name"]], diagram._state_w(s["name"])
+        boxes.append((x - w / 2, y - diagram.STATE_H / 2, x + w / 2, y + diagram.STATE_H / 2))
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1 :]:
+            assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1], (a, b)
 
 
 # -- values typed into the page ---------------------------------------------------------------------

@@ -20,6 +20,7 @@ from . import (  # noqa: F401  (each registers its commands)
     run,
     service,
     topic,
+    verify,
     view,
 )
 from ._base import EXIT_USAGE, run_guarded

@@ -22,7 +22,7 @@ from .. import __version__
 from ..lang.bindings import MACHINE_ALIAS, Edit, attribute_of, find, name_map, own_locals, state_map, used_names
 from ..lang.check import MachineCheck
 from ..lang.diagnostics import Diagnostic, diag
-from ..lang.model import Code, Machine, State
+from ..lang.model import INPUT_TYPES, Code, Machine, State
 from ..lang.parameter_types import parameter_type
 from ..lang.scopes import child_nodes
 from ..runtime.errors import map_line
@@ -369,6 +369,19 @@ def _variables_block(code: Code, tree: ast.Module, mapping: Mapping[str, str]) -
     return _block(code, tree, mapping, extra)
 
 
+def input_entries(m: Machine) -> tuple[tuple[object, ...], ...]:
+    """The class's INPUTS: per input (name, type, default, domain, topic, msg, field), values of
+    the input's type (a float input's `1` is 1.0), a missing default the type's zero, a bool's
+    domain both values when none is given (llfsm.runtime.inputs names the positions)."""
+    out = []
+    for i in m.inputs:
+        kind = INPUT_TYPES[i.type]
+        default = kind() if i.default is None else kind(i.default)
+        domain = tuple(kind(v) for v in i.values())
+        out.append((i.name, i.type, default, domain, i.topic, i.msg, i.field))
+    return tuple(out)
+
+
 class CompileError(Exception):
     """The generated module does not compile: reported against the user's file."""
 
@@ -384,7 +397,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
     m = checked.machine
     assert m is not None and checked.ok, "compile only machines that check clean"
     trees = checked.read.trees
-    mvars = [v.name for v in m.variables]
+    mvars = [v.name for v in m.variables] + [i.name for i in m.inputs]  # inputs read as variables are
     names = [s.name for s in m.states]
     index = {n: i for i, n in enumerate(names)}
     susp = index[m.suspended]
@@ -518,8 +531,11 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
             "state_variables": state_variables,
             "states": views,
             "slots": tuple(
-                [v.name for v in m.variables] + [attribute_of(s.name, v.name) for s in m.states for v in s.variables]
+                [v.name for v in m.variables]
+                + [attribute_of(s.name, v.name) for s in m.states for v in s.variables]
+                + [i.name for i in m.inputs]
             ),
+            "inputs": input_entries(m),
             "on_suspend": [f"_llfsm_on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
             "on_resume": [f"_llfsm_on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
         },

@@ -16,7 +16,7 @@ one DescriptionError whose message names the field, short enough for a warning l
 from __future__ import annotations
 
 import json
-from typing import Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -34,6 +34,9 @@ MAX_NAME = 256
 MAX_TEXT_FIELD = 16_384
 #: Transition indices (a priority: 0, 1, 2... within a state).
 MAX_INDEX = 1_000_000
+#: Inputs of one machine, and values in one input's domain.
+MAX_INPUTS = 1_000
+MAX_DOMAIN = 1_000
 
 Name = Field(min_length=1, max_length=MAX_NAME)
 
@@ -59,12 +62,35 @@ class State(_Strict):
     accepting: bool = False
 
 
+Scalar = bool | int | float | Annotated[str, Field(max_length=MAX_TEXT_FIELD)]
+
+
+class Input(_Strict):
+    """An input of the machine (SPEC 11), as llfsm.ros.control.description lists it."""
+
+    name: str = Name
+    type: Literal["bool", "int", "float", "str"]
+    default: Scalar | None = None
+    domain: list[Scalar] = Field(default_factory=list, max_length=MAX_DOMAIN)
+    topic: str | None = Field(default=None, max_length=MAX_TEXT_FIELD)
+    msg: str | None = Field(default=None, max_length=MAX_NAME)
+    field: str | None = Field(default=None, max_length=MAX_TEXT_FIELD)
+
+    def text(self) -> str:
+        """One line for the page: `wall_close: bool <- /wall_close (std_msgs/msg/Bool data)`."""
+        bound = f" <- {self.topic} ({self.msg} {self.field})" if self.topic is not None else ""
+        return f"{self.name}: {self.type}{bound}"
+
+
 class Description(_Strict):
     name: str = Name
     description: str | None = Field(default="", max_length=MAX_TEXT_FIELD)
     states: list[State] = Field(min_length=1, max_length=MAX_STATES)
     initial: str = Name
     suspend: str | None = Field(default=None, max_length=MAX_NAME)
+    inputs: list[Input] = Field(default_factory=list, max_length=MAX_INPUTS)
+    #: Wall time (seconds since the epoch) of the run's time 0 (a run on the wall clock says it).
+    started: float | None = Field(default=None, ge=0, le=1e11, allow_inf_nan=False)
 
     @model_validator(mode="after")
     def _references(self) -> Description:

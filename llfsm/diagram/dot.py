@@ -8,7 +8,7 @@ import shutil
 import subprocess
 from typing import TYPE_CHECKING
 
-from .text import guard_label
+from .text import guard_label, input_label
 
 if TYPE_CHECKING:
     from ..lang.model import Machine
@@ -36,6 +36,10 @@ def dot(m: Machine) -> str:
             continue
         attrs = ", peripheries=2" if s.accepting and s.name != m.suspended else ""
         out.append(f"    {_dot_str(s.name)} [label={_dot_str(s.name)}{attrs}];")
+    if m.inputs:  # SPEC 11: what the machine reads from outside, in a note (`\l`: a left-aligned line)
+        lines = ["inputs", *(input_label(i) for i in m.inputs)]
+        note = "".join(_dot_str(line)[1:-1] + "\\l" for line in lines)
+        out.append(f'    __inputs [shape=note, label="{note}"];')
     for s in m.states:
         for t in s.transitions:
             label = f"{t.index}. {guard_label(m, s.name, t.index)}"

@@ -1,106 +1,634 @@
-"""A small layered layout of a machine's states, in the manner of Sugiyama: enough for the few
-to few dozen states of an LLFSM (no Graphviz, nothing fetched).
+"""A layered layout of a directed graph, in Sugiyama's manner, as Graphviz's `dot` lays graphs
+out: the web view's machine diagrams and its graph of nodes and topics (docs/view.md), with no
+Graphviz and nothing fetched.
 
-1. Layers: breadth-first depth from the initial state, following transitions in priority
-   order; states it never reaches (the suspend state, usually) go on a layer below.
-2. Order within a layer: a few sweeps of the barycentre heuristic (each state moves towards the
-   mean position of its neighbours), which removes most crossings of small graphs.
+1. Cycles: a depth-first search from the nodes in the order given (a machine's initial state
+   first, transitions in priority order) reverses the edges that close a cycle, so that the
+   rest reads forward; a reversed edge is drawn back against the flow.
+2. Ranks: the longest path from the sources, each edge at least one rank long (two when any
+   edge has a label: the label gets the rank in between, as dot places labels).
+3. Every edge that spans ranks becomes a chain through one small dummy per rank it crosses;
+   its label is a dummy as wide as the label, and the edge passes at that dummy's left side,
+   so a label sits beside its edge, never on it, and no other edge passes through it.
+4. Order within ranks: barycentre sweeps down and up, each followed by transposing neighbours
+   while that removes crossings; the order with the fewest crossings seen is kept (crossings
+   counted per pair of ranks in O(E log V)).
+5. Positions along the ranks: each rank in turn is placed as close as its order and the gaps
+   allow to the weighted mean of its neighbours (long edges weigh most, so they run straight),
+   solved exactly by pooling adjacent violators.
+6. Routes: within a rank's band an edge runs straight through its dummy, so the curves between
+   ranks are the only places where edges meet; nodes and labels are never crossed.
 
-The input is a checked description (llfsm.diagram.description); llfsm.diagram.svg draws the
-edges between the boxes placed here.
+The graph is small (a diagram draws a bounded number of states: llfsm.diagram.svg), and the
+work per sweep is near linear, so the hostile descriptions `llfsm view` must survive are laid
+out in bounded time.  Everything is deterministic: the same graph gives the same layout.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+import itertools
+import math
+import random
+from collections.abc import Hashable, Sequence
+from dataclasses import dataclass, field
 
-NODE_H = 34
-LAYER_GAP = 96
-NODE_GAP = 56
-MARGIN = 24
-CHAR_W = 8.0  # of the 13 px state names
+#: Gaps along a rank: between two nodes, between a node and an edge, between two edges.
+NODE_GAP = 36.0
+EDGE_GAP = 14.0
+DUMMY_GAP = 8.0
+#: Room between two ranks, at least and at most (more when edges between them run far sideways).
+RANK_GAP_MIN = 18.0
+RANK_GAP_MAX = 64.0
+MARGIN = 16.0
+#: Where a label starts beside the edge that carries it.
+LABEL_OFFSET = 5.0
+#: Sweeps of the ordering (fewer on a big graph: see _sweeps).
+SWEEPS = 24
+#: Shuffled orders the sweeps also start from, on a small graph.
+RANDOM_STARTS = 12
+#: Coordinate passes over all ranks.
+PLACEMENT_PASSES = 12
 
 
 @dataclass
-class Box:
-    name: str
-    layer: int
-    x: float = 0.0  # centre
-    y: float = 0.0  # top
-    w: float = 0.0
+class NodeSpec:
+    """A node to place: its id, its size (width, height), and room to keep after it along its
+    rank (a self-loop and its labels)."""
 
-    @property
-    def left(self) -> float:
-        return self.x - self.w / 2
-
-    @property
-    def right(self) -> float:
-        return self.x + self.w / 2
-
-    @property
-    def bottom(self) -> float:
-        return self.y + NODE_H
-
-    @property
-    def mid(self) -> float:
-        return self.y + NODE_H / 2
+    id: Hashable
+    w: float
+    h: float
+    after: float = 0.0
 
 
-def layout(desc: dict[str, Any]) -> tuple[dict[str, Box], float, float]:
-    """Boxes by state name, and the drawing's width and height."""
-    states = [s["name"] for s in desc["states"]]
-    out: dict[str, list[str]] = {s["name"]: [t["target"] for t in s["transitions"]] for s in desc["states"]}
-    layer: dict[str, int] = {}
-    frontier = [desc["initial"]] if desc["initial"] in out else states[:1]
-    for s in frontier:
-        layer[s] = 0
-    while frontier:
-        nxt = []
-        for s in frontier:
-            for t in out.get(s, []):
-                if t not in layer:
-                    layer[t] = layer[s] + 1
-                    nxt.append(t)
-        frontier = nxt
-    bottom = max(layer.values(), default=-1) + 1
-    for s in states:  # unreached: on a layer of their own below the rest
-        layer.setdefault(s, bottom)
-    layers: list[list[str]] = [[] for _ in range(max(layer.values(), default=0) + 1)]
-    for s in states:
-        layers[layer[s]].append(s)
-    layers = [lay for lay in layers if lay]
-    for i, lay in enumerate(layers):
-        for s in lay:
-            layer[s] = i
-    neighbours: dict[str, set[str]] = {s: set() for s in states}
-    for s, targets in out.items():
-        for t in targets:
-            if t != s and t in neighbours:
-                neighbours[s].add(t)
-                neighbours[t].add(s)
-    for _ in range(4):  # barycentre sweeps
-        pos = {s: i / max(1, len(lay) - 1) for lay in layers for i, s in enumerate(lay)}
-        for lay in layers:
+@dataclass
+class EdgeSpec:
+    """An edge to route; `label` is the size (width, height) of its label, if it has one.  A
+    `back` edge is laid out against the flow whatever the search finds (the way back of a pair,
+    such as a resume beside its suspend)."""
+
+    src: Hashable
+    dst: Hashable
+    label: tuple[float, float] | None = None
+    back: bool = False
+
+
+@dataclass
+class Route:
+    """An edge as laid out: points from its source to its target (the first and last on the
+    nodes' borders), and its label's top-left corner."""
+
+    edge: int  # the index of its EdgeSpec
+    points: list[tuple[float, float]]
+    label: tuple[float, float] | None = None
+    reversed: bool = False  # drawn against the flow (it closed a cycle)
+
+
+@dataclass
+class Layout:
+    """Nodes' centres by id, the edges' routes (self-loops have none: the renderer draws them
+    beside their node, in the room `after` kept), the drawing's size and its direction."""
+
+    centres: dict[Hashable, tuple[float, float]]
+    routes: list[Route]
+    width: float
+    height: float
+    direction: str
+    ranks: dict[Hashable, int] = field(default_factory=dict)
+    crossings: int = 0
+
+
+@dataclass
+class _V:
+    """A node of the proper graph: a real node, a label, or a plain dummy of an edge."""
+
+    key: int
+    rank: int
+    breadth: float  # along the rank
+    depth: float  # across it
+    kind: str  # "node", "label", "dummy"
+    before: float = 0.0  # extent before the anchor, along the rank
+    after: float = 0.0  # extent after it
+    x: float = 0.0  # the anchor's position along the rank
+    up: list[int] = field(default_factory=list)
+    down: list[int] = field(default_factory=list)
+    spec: Hashable = None
+
+
+def layered(
+    nodes: Sequence[NodeSpec], edges: Sequence[EdgeSpec], direction: str = "TB", sweeps: int = SWEEPS
+) -> Layout:
+    """Lay the graph out, ranks from top to bottom ("TB") or from left to right ("LR")."""
+    if direction not in ("TB", "LR"):
+        raise ValueError(f"direction must be TB or LR, not {direction!r}")
+    index = {n.id: i for i, n in enumerate(nodes)}
+    live = [(k, e) for k, e in enumerate(edges) if e.src in index and e.dst in index and e.src != e.dst]
+    flip = _reversed_edges(
+        len(nodes), [(index[e.dst], index[e.src]) if e.back else (index[e.src], index[e.dst]) for _, e in live]
+    )
+    flip = [f != e.back for f, (_, e) in zip(flip, live, strict=True)]
+    span = 2 if any(e.label is not None for _, e in live) else 1
+    oriented = [
+        (k, index[e.dst], index[e.src], True) if flipped else (k, index[e.src], index[e.dst], False)
+        for (k, e), flipped in zip(live, flip, strict=True)
+    ]
+    rank = _ranks(len(nodes), [(a, b) for _, a, b, _ in oriented], span)
+    lr = direction == "LR"
+    vs: list[_V] = []
+    for i, n in enumerate(nodes):
+        breadth, depth = (n.h, n.w) if lr else (n.w, n.h)
+        vs.append(_V(i, rank[i], breadth, depth, "node", breadth / 2, breadth / 2 + n.after, spec=n.id))
+    chains: list[tuple[int, list[int], bool]] = []
+    for k, a, b, flipped in oriented:
+        chain = [a]
+        label = edges[k].label
+        middle = rank[a] + (rank[b] - rank[a]) // 2
+        for r in range(rank[a] + 1, rank[b]):
+            if label is not None and r == middle:
+                lb, ld = (label[1], label[0]) if lr else label
+                v = _V(len(vs), r, lb, ld, "label", 0.0, LABEL_OFFSET + lb)
+            else:
+                v = _V(len(vs), r, 0.0, 0.0, "dummy")
+            vs.append(v)
+            chain.append(v.key)
+        chain.append(b)
+        for u, w in itertools.pairwise(chain):
+            vs[u].down.append(w)
+            vs[w].up.append(u)
+        chains.append((k, chain, flipped))
+    layers = _order(vs, max(rank, default=0) + 1, sweeps)
+    crossings = _total_crossings(vs, layers)
+    _place(vs, layers, [chain for _, chain, _ in chains])
+    return _routes(vs, layers, chains, nodes, direction, crossings)
+
+
+# -- 1. cycles -------------------------------------------------------------------------------------
+
+
+def _reversed_edges(n: int, edges: list[tuple[int, int]]) -> list[bool]:
+    """Which edges close a cycle in a depth-first search from the nodes in order (iterative: a
+    long chain of states must not hit Python's recursion limit)."""
+    out: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+    for k, (a, b) in enumerate(edges):
+        out[a].append((k, b))
+    state = [0] * n  # 0 unseen, 1 on the stack, 2 done
+    flip = [False] * len(edges)
+    for root in range(n):
+        if state[root]:
+            continue
+        state[root] = 1
+        stack = [(root, 0)]
+        while stack:
+            v, i = stack[-1]
+            if i < len(out[v]):
+                stack[-1] = (v, i + 1)
+                k, w = out[v][i]
+                if state[w] == 1:
+                    flip[k] = True
+                elif state[w] == 0:
+                    state[w] = 1
+                    stack.append((w, 0))
+            else:
+                state[v] = 2
+                stack.pop()
+    return flip
+
+
+# -- 2. ranks ---------------------------------------------------------------------------------------
+
+
+def _ranks(n: int, edges: list[tuple[int, int]], span: int) -> list[int]:
+    """Longest path from the sources; then each source but the first node is moved down to just
+    above its nearest successor (a source left on rank 0 would pull long edges across the
+    drawing)."""
+    succ: list[list[int]] = [[] for _ in range(n)]
+    indeg = [0] * n
+    for a, b in edges:
+        succ[a].append(b)
+        indeg[b] += 1
+    order = [v for v in range(n) if indeg[v] == 0]
+    rank = [0] * n
+    left = indeg[:]
+    i = 0
+    while i < len(order):
+        v = order[i]
+        i += 1
+        for w in succ[v]:
+            rank[w] = max(rank[w], rank[v] + span)
+            left[w] -= 1
+            if left[w] == 0:
+                order.append(w)
+    for v in range(1, n):
+        if indeg[v] == 0 and succ[v]:
+            rank[v] = max(rank[v], min(rank[w] for w in succ[v]) - span)
+    return rank
+
+
+# -- 4. order within ranks ---------------------------------------------------------------------------
+
+
+def _sweeps(vs: list[_V], sweeps: int) -> int:
+    """Fewer sweeps on a big proper graph: a bounded diagram must still be laid out quickly."""
+    if len(vs) > 3000:
+        return min(sweeps, 4)
+    if len(vs) > 800:
+        return min(sweeps, 8)
+    return sweeps
+
+
+def _order(vs: list[_V], n_ranks: int, sweeps: int) -> list[list[int]]:
+    """The order with the fewest crossings that sweeps from a few starts find: the order given,
+    its mirror image and a few shuffles (seeded), with barycentres and with medians (a small
+    graph only: the heuristics get stuck in different places, and a diagram is worth the few
+    milliseconds)."""
+    layers: list[list[int]] = [[] for _ in range(n_ranks)]
+    # first order: each rank by the mean position of what is above it, rank 0 as given
+    for v in sorted(vs, key=lambda v: (v.rank, v.key)):
+        layers[v.rank].append(v.key)
+    pos = [0.0] * len(vs)
+    for r, layer in enumerate(layers):
+        if r:
+            layer.sort(key=lambda k: (_mean([pos[u] for u in vs[k].up], pos[k]), k))
+        for i, k in enumerate(layer):
+            pos[k] = i
+    starts = [(layers, False)]
+    if len(vs) <= 400:
+        mirrored = [layer[::-1] for layer in layers]
+        starts += [(layers, True), (mirrored, False), (mirrored, True)]
+        shuffle = random.Random(len(vs)).shuffle  # seeded: the same graph, the same layout
+        for i in range(RANDOM_STARTS):
+            mixed = [layer[:] for layer in layers]
+            for layer in mixed:
+                shuffle(layer)
+            starts.append((mixed, bool(i % 2)))
+    best: list[list[int]] = layers
+    best_c = -1
+    for start, median in starts:
+        found, c = _sweep(vs, [layer[:] for layer in start], _sweeps(vs, sweeps), median)
+        if best_c < 0 or c < best_c:
+            best, best_c = found, c
+        if best_c == 0:
+            break
+    if best_c > 0 and len(vs) <= 400:
+        best_c = _sift(vs, best, best_c)
+    return best
+
+
+def _sift(vs: list[_V], layers: list[list[int]], crossings: int) -> int:
+    """Move each node in turn to the place in its rank where it crosses least (sifting): what
+    the sweeps, which move whole ranks at once, cannot reach."""
+    pos = [0.0] * len(vs)
+    for layer in layers:
+        for i, k in enumerate(layer):
+            pos[k] = i
+    for _ in range(4):
+        for layer in layers:
+            for v in list(layer):
+                others = [w for w in layer if w != v]
+                left = [_pair(vs, w, v, pos) for w in others]  # w stays left of v
+                right = [_pair(vs, v, w, pos) for w in others]  # w stays right of v
+                cost = sum(right)
+                best_p, best_cost = 0, cost
+                for p, _w in enumerate(others):
+                    cost += left[p] - right[p]
+                    if cost < best_cost:
+                        best_p, best_cost = p + 1, cost
+                here = layer.index(v)
+                stay = sum(left[:here]) + sum(right[here:])
+                if best_cost < stay:
+                    others.insert(best_p, v)
+                    layer[:] = others
+                    for i, k in enumerate(layer):
+                        pos[k] = i
+        c = _total_crossings(vs, layers)
+        if c >= crossings:
+            return c
+        crossings = c
+    return crossings
+
+
+def _sweep(vs: list[_V], layers: list[list[int]], sweeps: int, median: bool) -> tuple[list[list[int]], int]:
+    n_ranks = len(layers)
+    pos = [0.0] * len(vs)
+    for layer in layers:
+        for i, k in enumerate(layer):
+            pos[k] = i
+    best = [layer[:] for layer in layers]
+    best_c = _total_crossings(vs, layers)
+    stale = 0
+    small = len(vs) <= 1500
+    for it in range(sweeps):
+        if best_c == 0:
+            break
+        down = it % 2 == 0
+        seq = range(1, n_ranks) if down else range(n_ranks - 2, -1, -1)
+        for r in seq:
+            layer = layers[r]
+            ref = layers[r - 1] if down else layers[r + 1]
+            scale = (len(ref) - 1) / max(1, len(layer) - 1)
             keyed = []
-            for i, s in enumerate(lay):
-                ns = [pos[n] for n in neighbours[s] if layer[n] != layer[s]]
-                keyed.append((sum(ns) / len(ns) if ns else pos[s], i, s))
-            lay[:] = [s for _, _, s in sorted(keyed)]
-    boxes: dict[str, Box] = {}
-    widths = []
-    for i, lay in enumerate(layers):
-        row = [Box(s, i, w=max(92.0, CHAR_W * len(s) + 30)) for s in lay]
-        widths.append(sum(b.w for b in row) + NODE_GAP * (len(row) - 1))
-        for b in row:
-            boxes[b.name] = b
-    inner = max(widths, default=0.0)
-    for i, lay in enumerate(layers):
-        x = MARGIN + (inner - widths[i]) / 2
-        for s in lay:
-            b = boxes[s]
-            b.x, b.y = x + b.w / 2, MARGIN + 18 + i * (NODE_H + LAYER_GAP)
-            x += b.w + NODE_GAP
-    width = MARGIN * 2 + inner
-    height = MARGIN * 2 + 18 + len(layers) * NODE_H + (len(layers) - 1) * LAYER_GAP
-    return boxes, width, height
+            for i, k in enumerate(layer):
+                at = [pos[u] for u in (vs[k].up if down else vs[k].down)]
+                key = _median(at, i * scale) if median else _mean(at, i * scale)
+                keyed.append((key, i, k))
+            keyed.sort()
+            layers[r] = [k for _, _, k in keyed]
+            for i, k in enumerate(layers[r]):
+                pos[k] = i
+        if small:
+            _transpose(vs, layers, pos)
+        c = _total_crossings(vs, layers)
+        if c < best_c:
+            best, best_c, stale = [layer[:] for layer in layers], c, 0
+        else:
+            stale += 1
+            if stale >= 6:
+                break
+    return best, best_c
+
+
+def _median(values: list[float], default: float) -> float:
+    if not values:
+        return default
+    s = sorted(values)
+    m = len(s) // 2
+    return s[m] if len(s) % 2 else (s[m - 1] + s[m]) / 2
+
+
+def _mean(values: list[float], default: float) -> float:
+    return sum(values) / len(values) if values else default
+
+
+def _transpose(vs: list[_V], layers: list[list[int]], pos: list[float]) -> None:
+    """Swap neighbours within a rank while that lowers the crossings with both adjacent ranks."""
+    for _ in range(4):
+        improved = False
+        for layer in layers:
+            for i in range(len(layer) - 1):
+                a, b = layer[i], layer[i + 1]
+                if _pair(vs, a, b, pos) > _pair(vs, b, a, pos):
+                    layer[i], layer[i + 1] = b, a
+                    pos[a], pos[b] = pos[b], pos[a]
+                    improved = True
+        if not improved:
+            return
+
+
+def _pair(vs: list[_V], a: int, b: int, pos: list[float]) -> int:
+    """Crossings between a's edges and b's when a stands left of b."""
+    c = 0
+    for side in ("up", "down"):
+        na, nb = getattr(vs[a], side), getattr(vs[b], side)
+        for x in na:
+            px = pos[x]
+            for y in nb:
+                if px > pos[y]:
+                    c += 1
+    return c
+
+
+def _total_crossings(vs: list[_V], layers: list[list[int]]) -> int:
+    total = 0
+    for r in range(len(layers) - 1):
+        lower_pos = {k: i for i, k in enumerate(layers[r + 1])}
+        pairs = []
+        for i, k in enumerate(layers[r]):
+            for w in vs[k].down:
+                pairs.append((i, lower_pos[w]))
+        total += _inversions([b for _, b in sorted(pairs)], len(layers[r + 1]))
+    return total
+
+
+def _inversions(seq: list[int], size: int) -> int:
+    """Pairs i < j with seq[i] > seq[j], with a Fenwick tree."""
+    tree = [0] * (size + 1)
+    count = 0
+    for seen, x in enumerate(seq):
+        i, below = x + 1, 0
+        while i > 0:
+            below += tree[i]
+            i -= i & -i
+        count += seen - below
+        i = x + 1
+        while i <= size:
+            tree[i] += 1
+            i += i & -i
+    return count
+
+
+# -- 5. positions along the ranks ---------------------------------------------------------------------
+
+
+def _gap(a: _V, b: _V) -> float:
+    if a.kind == "node" and b.kind == "node":
+        return NODE_GAP
+    if a.kind == "node" or b.kind == "node":
+        return EDGE_GAP
+    return DUMMY_GAP
+
+
+def _weight(a: _V, b: _V) -> float:
+    """Gansner's weights: an edge between two dummies is kept straightest."""
+    dummies = (a.kind != "node") + (b.kind != "node")
+    return (1.0, 2.0, 8.0)[dummies]
+
+
+def _place(vs: list[_V], layers: list[list[int]], chains: list[list[int]]) -> None:
+    """Pack, then alternate passes towards the neighbours with straightening the long edges, so
+    that the nodes settle around edges that already run straight."""
+    for layer in layers:  # packed from the left
+        x = 0.0
+        prev: _V | None = None
+        for k in layer:
+            v = vs[k]
+            if prev is not None:
+                x += prev.after + _gap(prev, v) + v.before
+            v.x = x
+            prev = v
+    for it in range(PLACEMENT_PASSES):
+        seq = range(len(layers)) if it % 2 == 0 else range(len(layers) - 1, -1, -1)
+        for r in seq:
+            _place_rank(vs, layers[r])
+        if it % 3 == 2:
+            _straighten(vs, layers, chains)
+    _straighten(vs, layers, chains)
+
+
+def _place_rank(vs: list[_V], layer: list[int]) -> None:
+    """The rank nearest its neighbours' mean positions, in its order with its gaps: weighted
+    least squares under `x[i+1] - x[i] >= gap[i]`, by pooling adjacent violators."""
+    if not layer:
+        return
+    targets, weights, offsets = [], [], []
+    offset = 0.0
+    for i, k in enumerate(layer):
+        v = vs[k]
+        if i:
+            p = vs[layer[i - 1]]
+            offset += p.after + _gap(p, v) + v.before
+        total = w_sum = 0.0
+        for u in v.up + v.down:
+            w = _weight(v, vs[u])
+            total += w * vs[u].x
+            w_sum += w
+        if w_sum == 0.0:  # alone: stay, gently
+            total, w_sum = 0.01 * v.x, 0.01
+        targets.append(total / w_sum - offset)
+        weights.append(w_sum)
+        offsets.append(offset)
+    blocks: list[list[float]] = []  # [weighted sum, weight, count]
+    for t, w in zip(targets, weights, strict=True):
+        blocks.append([t * w, w, 1])
+        while len(blocks) > 1 and blocks[-2][0] / blocks[-2][1] > blocks[-1][0] / blocks[-1][1]:
+            s, w2, c = blocks.pop()
+            blocks[-1][0] += s
+            blocks[-1][1] += w2
+            blocks[-1][2] += c
+    i = 0
+    for s, w, c in blocks:
+        y = s / w
+        for _ in range(int(c)):
+            vs[layer[i]].x = y + offsets[i]
+            i += 1
+
+
+def _straighten(vs: list[_V], layers: list[list[int]], chains: list[list[int]]) -> None:
+    """Make each edge's run of dummies (its label's included) one vertical line where their
+    neighbours leave room: a long edge that shifts a little at every rank reads as a wiggle."""
+    slot = {}
+    for layer in layers:
+        for i, k in enumerate(layer):
+            slot[k] = i
+
+    def room(k: int) -> tuple[float, float]:
+        v, layer, i = vs[k], layers[vs[k].rank], slot[k]
+        lo, hi = -math.inf, math.inf
+        if i > 0:
+            p = vs[layer[i - 1]]
+            lo = p.x + p.after + _gap(p, v) + v.before
+        if i + 1 < len(layer):
+            n = vs[layer[i + 1]]
+            hi = n.x - n.before - _gap(v, n) - v.after
+        return lo, hi
+
+    def align(run: list[int]) -> bool:
+        lo, hi = -math.inf, math.inf
+        for d in run:
+            a, b = room(d)
+            lo, hi = max(lo, a), min(hi, b)
+        if lo > hi:
+            return False
+        xs = sorted(vs[d].x for d in run)
+        x = min(max(xs[len(xs) // 2], lo), hi)
+        for d in run:
+            vs[d].x = x
+        return True
+
+    for _ in range(3):
+        for chain in chains:
+            run = chain[1:-1]
+            if len(run) > 1 and not align(run):  # no room for all: each side of the label alone
+                labels = [i for i, d in enumerate(run) if vs[d].kind == "label"]
+                if labels:
+                    align(run[: labels[0]])
+                    align(run[labels[0] + 1 :])
+
+
+# -- 6. routes ------------------------------------------------------------------------------------------
+
+
+def _routes(
+    vs: list[_V],
+    layers: list[list[int]],
+    chains: list[tuple[int, list[int], bool]],
+    nodes: Sequence[NodeSpec],
+    direction: str,
+    crossings: int,
+) -> Layout:
+    lo = min((v.x - v.before for v in vs), default=0.0)
+    hi = max((v.x + v.after for v in vs), default=0.0)
+    for v in vs:
+        v.x += MARGIN - lo
+    thickness = [max((vs[k].depth for k in layer), default=0.0) for layer in layers]
+    # room between ranks grows with how far sideways the edges between them run
+    gaps = []
+    for r in range(len(layers) - 1):
+        far = max((abs(vs[k].x - vs[w].x) for k in layers[r] for w in vs[k].down), default=0.0)
+        gaps.append(min(RANK_GAP_MAX, max(RANK_GAP_MIN, 0.22 * far)))
+    top: list[float] = []
+    y = MARGIN
+    for r, t in enumerate(thickness):
+        top.append(y)
+        y += t + (gaps[r] if r < len(gaps) else 0.0)
+    depth_total = y + MARGIN
+    breadth_total = hi - lo + 2 * MARGIN
+
+    def at(b: float, d: float) -> tuple[float, float]:
+        return (d, b) if direction == "LR" else (b, d)
+
+    def centre_d(v: _V) -> float:
+        return top[v.rank] + thickness[v.rank] / 2
+
+    # ports: the edges leaving a node downward (or entering it from above) spread along its side,
+    # in the order of where they go, so that they do not cross at the node
+    out_port: dict[tuple[int, int], float] = {}
+    in_port: dict[tuple[int, int], float] = {}
+    for side, ports in (("down", out_port), ("up", in_port)):
+        for v in vs:
+            if v.kind != "node":
+                continue
+            ends = getattr(v, side)
+            n = len(ends)
+            if not n:
+                continue
+            step = min(12.0, max(0.0, v.breadth - 14.0) / max(1, n - 1))
+            ordered = sorted(range(n), key=lambda i: (vs[ends[i]].x, i))
+            for slot, i in enumerate(ordered):
+                ports[(v.key, i)] = v.x + (slot - (n - 1) / 2) * step
+    used_out: dict[int, int] = {}
+    used_in: dict[int, int] = {}
+    routes = []
+    for k, chain, flipped in chains:
+        a, b = vs[chain[0]], vs[chain[-1]]
+        i = used_out.get(a.key, 0)
+        used_out[a.key] = i + 1
+        j = used_in.get(b.key, 0)
+        used_in[b.key] = j + 1
+        points = [at(out_port[(a.key, i)], centre_d(a) + a.depth / 2)]
+        label = None
+        for key in chain[1:-1]:
+            v = vs[key]
+            t = top[v.rank]
+            points.append(at(v.x, t))
+            points.append(at(v.x, t + thickness[v.rank]))
+            if v.kind == "label":
+                ld = top[v.rank] + (thickness[v.rank] - v.depth) / 2
+                label = at(v.x + LABEL_OFFSET, ld)
+        points.append(at(in_port[(b.key, j)], centre_d(b) - b.depth / 2))
+        if flipped:
+            points.reverse()
+        routes.append(Route(k, points, label, flipped))
+    centres = {nodes[v.key].id: at(v.x, centre_d(v)) for v in vs if v.kind == "node"}
+    ranks = {nodes[v.key].id: v.rank for v in vs if v.kind == "node"}
+    w, h = at(breadth_total, depth_total)
+    return Layout(centres, routes, w, h, direction, ranks, crossings)
+
+
+def path(points: Sequence[tuple[float, float]], direction: str = "TB") -> str:
+    """SVG path data through a route's points: straight where the route runs within a rank,
+    a curve that leaves and arrives along the flow between ranks."""
+    if not points:
+        return ""
+    x0, y0 = points[0]
+    out = [f"M{x0:.1f} {y0:.1f}"]
+    for x1, y1 in points[1:]:
+        if (direction == "TB" and math.isclose(x0, x1)) or (direction == "LR" and math.isclose(y0, y1)):
+            out.append(f"L{x1:.1f} {y1:.1f}")
+        elif direction == "TB":
+            m = (y1 - y0) / 2
+            out.append(f"C{x0:.1f} {y0 + m:.1f} {x1:.1f} {y1 - m:.1f} {x1:.1f} {y1:.1f}")
+        else:
+            m = (x1 - x0) / 2
+            out.append(f"C{x0 + m:.1f} {y0:.1f} {x1 - m:.1f} {y1:.1f} {x1:.1f} {y1:.1f}")
+        x0, y0 = x1, y1
+    return " ".join(out)

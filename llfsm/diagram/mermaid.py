@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .text import guard_label
+from .text import guard_label, input_label
 
 if TYPE_CHECKING:
     from ..lang.model import Machine
@@ -14,6 +14,8 @@ def mermaid(m: Machine) -> str:
     out = ["stateDiagram-v2"]
     if m.description:
         out.append(f"    %% {' '.join(m.description.split())}")
+    for i in m.inputs:  # SPEC 11: what the machine reads from outside, as comments
+        out.append(f"    %% input {input_label(i)}")
     out.append(f"    [*] --> {m.initial}")
     for s in m.states:
         if s.implicit:

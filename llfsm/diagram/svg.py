@@ -1,9 +1,11 @@
-"""A machine's diagram as SVG, on the boxes llfsm.diagram.layout places (no Graphviz, nothing
-fetched): the web view's diagrams.
+"""A machine's diagram as SVG, laid out in layers by llfsm.diagram.layout (no Graphviz, nothing
+fetched): the web view's diagrams (docs/view.md).
 
-Edges: downward ones are vertical S-curves; upward ones (loops back) swing round the right
-of everything they pass; same-layer ones dip below; a self-transition is a small loop.  Each
-carries `index: guard`, the guard text as written in the machine's files.
+States are boxes in ranks from the initial state down; each transition runs beside its label
+`index: guard` (the guard text as written in the machine's files), an edge that loops back runs
+up against the flow, a self-transition is a loop at its state's right.  The suspend state is
+drawn with what enters and leaves it: a dashed "any state" above it, `suspend` into it and
+`resume` back (a machine is suspended from whatever state it is in, and resumes there).
 
 Every state is a `<g class="state" data-machine=M data-state=S aria-current=...>`: the page
 moves `aria-current="true"` to the current state, and tests find states by these attributes.
@@ -13,7 +15,7 @@ Descriptions may come from any peer on a DDS domain (`llfsm view`), so (issue 18
 - a description is checked against llfsm.diagram.description before anything is drawn (an
   index is an integer, targets name states...), and every text in it is escaped, attributes
   included, with characters XML cannot carry replaced: nothing of a peer's making becomes markup;
-- the layout is quadratic in the edges, so what is drawn is bounded (`MAX_DRAWN_STATES`,
+- the layout's work grows with the edges and the ranks they span, so what is drawn is bounded (`MAX_DRAWN_STATES`,
   `MAX_DRAWN_TRANSITIONS`: the states nearest the initial one first) and the diagram says what
   it left out;
 - the SVG is cached per description (its content, not its object: a latched description
@@ -31,10 +33,20 @@ from collections import OrderedDict
 from html import escape
 from typing import Any
 
-from .layout import MARGIN, NODE_H, layout
+from .layout import EdgeSpec, Layout, NodeSpec, layered, path
 
-LABEL_CHAR_W = 6.4  # of the 11 px guard labels
+#: Advance of one character of the page's monospace fonts (DejaVu Sans Mono: 0.602 em) at the
+#: 11 px of guard labels and the 13 px of state names (style.css sets both).
+LABEL_CHAR_W = 6.7
+STATE_CHAR_W = 7.9
+STATE_H = 34.0
+LABEL_H = 16.0
+#: Room for the initial state's dot and arrow above the drawing.
+TOP = 26.0
 LABEL_MAX = 34  # characters of guard text shown on an arrow (the whole text is in its tooltip)
+#: The id of the "any state" a suspend comes from (no state of a description is named so: a
+#: name is a string).
+ANY = ("any",)
 #: At most this many states are drawn (a few dozen is what a diagram can show anyway).
 MAX_DRAWN_STATES = 60
 #: At most this many transitions are drawn (labels are placed in time quadratic in them).
@@ -60,12 +72,6 @@ def _label(index: int, guard: str) -> str:
     if len(text) > LABEL_MAX:
         text = text[: LABEL_MAX - 1] + "…"
     return f"{index}: {text}"
-
-
-def _bezier_mid(
-    p0: tuple[float, float], c1: tuple[float, float], c2: tuple[float, float], p3: tuple[float, float]
-) -> tuple[float, ...]:
-    return tuple(0.125 * a + 0.375 * b + 0.375 * c + 0.125 * d for a, b, c, d in zip(p0, c1, c2, p3, strict=True))
 
 
 def svg(desc: dict[str, Any], current: str | None = None) -> str:
@@ -150,98 +156,151 @@ def _select(desc: dict[str, Any]) -> tuple[dict[str, Any], int, int]:
     return {**desc, "states": drawn_states}, len(states) - len(drawn_states), total_t - drawn_t
 
 
+def _width(text: str, per_char: float) -> float:
+    """Drawn width of monospace text: wide (East Asian) characters take two cells."""
+    return per_char * sum(2 if ord(c) >= 0x1100 and _wide(c) else 1 for c in text)
+
+
+def _wide(c: str) -> bool:
+    import unicodedata  # deferred: only names beyond Latin get here
+
+    return unicodedata.east_asian_width(c) in ("W", "F")
+
+
+def layout(desc: dict[str, Any]) -> Layout:
+    """The layered layout of a checked description: its states (the initial one first, so the
+    depth-first search that finds the loops starts there), every transition with its label,
+    and the suspend state's `suspend` and `resume` edges to "any state"."""
+    states = desc["states"]
+    order = sorted(range(len(states)), key=lambda i: states[i]["name"] != desc["initial"])
+    nodes = []
+    for i in order:
+        s = states[i]
+        loops = [t for t in s["transitions"] if t["target"] == s["name"]]
+        after = 0.0
+        if loops:
+            after = 22.0 + 8.0 * (len(loops) - 1) + 10.0 + max(_label_w(t) for t in loops)
+        nodes.append(NodeSpec(s["name"], _state_w(s["name"]), STATE_H, after))
+    edges = [
+        EdgeSpec(s["name"], t["target"], (_label_w(t), LABEL_H))
+        for s in states
+        for t in s["transitions"]
+        if t["target"] != s["name"]
+    ]
+    suspend = desc.get("suspend")
+    if suspend is not None:
+        nodes.append(NodeSpec(ANY, _state_w("any state"), STATE_H - 6))
+        edges.append(EdgeSpec(ANY, suspend, (_width("suspend", LABEL_CHAR_W) + 8, LABEL_H)))
+        edges.append(EdgeSpec(suspend, ANY, (_width("resume", LABEL_CHAR_W) + 8, LABEL_H), back=True))
+    return layered(nodes, edges)
+
+
+def _state_w(name: str) -> float:
+    return max(92.0, _width(name, STATE_CHAR_W) + 30)
+
+
+def _label_w(t: dict[str, Any]) -> float:
+    return _width(_label_text(t), LABEL_CHAR_W) + 8
+
+
+def _label_text(t: dict[str, Any]) -> str:
+    return _label(int(t["index"]), t["guard"]) if t["guard"] else str(int(t["index"]))
+
+
 def _render(full: dict[str, Any]) -> str:
     """The SVG of a checked description, no state marked current."""
     desc, left_states, left_transitions = _select(full)
     machine = desc["name"]
-    boxes, width, height = layout(desc)
+    placed = layout(desc)
     mid = _esc(machine)
     marker = "arrow-" + hashlib.sha256(machine.encode("utf-8", "surrogatepass")).hexdigest()[:12]
-    parts: list[str] = []
-    right_extent = width
-    left_extent = 0.0
-    placed: list[tuple[float, float, float]] = []  # guard labels: centre x, centre y, width
     edges: list[str] = []
     labels: list[str] = []
-    pair_count: dict[tuple[str, str], int] = {}
-    up_count = 0
-    for s in desc["states"]:
-        src = boxes[s["name"]]
-        n_out = len(s["transitions"])
-        for k, t in enumerate(s["transitions"]):
-            dst = boxes.get(t["target"])
-            if dst is None:
-                continue
-            key = (src.name, dst.name)
-            dup = pair_count.get(key, 0)
-            pair_count[key] = dup + 1
-            spread = (k - (n_out - 1) / 2) * 12
-            if dst is src:
-                x0, y0 = src.right, src.mid - 8
-                x1, y1 = src.right, src.mid + 8
-                c1, c2 = (x0 + 44 + dup * 14, y0 - 22), (x1 + 44 + dup * 14, y1 + 22)
-                right_extent = max(right_extent, x0 + 60 + dup * 14)
-            elif dst.layer > src.layer:
-                x0, y0 = src.x + spread, src.bottom
-                x1, y1 = dst.x + dup * 10, dst.y
-                dy = (y1 - y0) / 2
-                c1, c2 = (x0, y0 + dy), (x1, y1 - dy)
-            elif dst.layer == src.layer:
-                x0, y0 = src.x + spread, src.bottom
-                x1, y1 = dst.x + dup * 10, dst.bottom
-                c1, c2 = (x0, y0 + 40 + dup * 10), (x1, y1 + 40 + dup * 10)
-            else:  # back up: round the side where the target is open (the ends of its layer)
-                between = [b for b in boxes.values() if dst.layer <= b.layer <= src.layer]
-                row = sorted((b for b in boxes.values() if b.layer == dst.layer), key=lambda b: b.x)
-                if row[0] is dst and row[-1] is not dst:
-                    swing = min(b.left for b in between) - 40 - up_count * 18
-                    x0, x1 = src.left, dst.left
-                    left_extent = min(left_extent, swing - 20)
-                else:
-                    swing = max(b.right for b in between) + 40 + up_count * 18
-                    x0, x1 = src.right, dst.right
-                    right_extent = max(right_extent, swing + 20)
-                up_count += 1
-                y0, y1 = src.mid + (spread / 3), dst.mid + dup * 6
-                c1, c2 = (swing, y0), (swing, y1)
-            d = f"M{x0:.1f} {y0:.1f} C{c1[0]:.1f} {c1[1]:.1f} {c2[0]:.1f} {c2[1]:.1f} {x1:.1f} {y1:.1f}"
-            guard, index = t["guard"], int(t["index"])
-            shown = guard if len(guard) <= TITLE_MAX else guard[: TITLE_MAX - 1] + "…"
-            title = _esc(f"{s['name']} → {t['target']} (transition {index}): {shown}")
+    # the routes come in the order of the edges given: the transitions (self-loops left out),
+    # then suspend and resume
+    listed = [(s, t) for s in desc["states"] for t in s["transitions"] if t["target"] != s["name"]]
+    for route in placed.routes:
+        d = path(route.points)
+        if route.edge < len(listed):
+            s, t = listed[route.edge]
+            index, guard = int(t["index"]), t["guard"]
+            title = _title(s["name"], t["target"], index, guard)
             edges.append(
                 f'<path class="transition" data-machine="{mid}" data-source="{_esc(s["name"])}" '
                 f'data-target="{_esc(t["target"])}" data-index="{index:d}" d="{d}" '
                 f'marker-end="url(#{marker})"><title>{title}</title></path>'
             )
-            lx, ly = _bezier_mid((x0, y0), c1, c2, (x1, y1))
-            text = _label(index, guard) if guard else str(index)
-            tw = LABEL_CHAR_W * len(text) + 8
-            for _ in range(8):  # step down past labels already placed (or past a state)
-                hit = any(abs(lx - ox) < (tw + ow) / 2 + 2 and abs(ly - oy) < 17 for ox, oy, ow in placed) or any(
-                    b.left - tw / 2 < lx < b.right + tw / 2 and b.y - 9 < ly < b.bottom + 9 for b in boxes.values()
-                )
-                if not hit:
-                    break
-                ly += 17
-            placed.append((lx, ly, tw))
-            right_extent = max(right_extent, lx + tw / 2 + 4)
-            left_extent = min(left_extent, lx - tw / 2 - 4)
-            labels.append(
-                f'<g class="guard"><title>{title}</title>'
-                f'<rect x="{lx - tw / 2:.1f}" y="{ly - 8:.1f}" width="{tw:.1f}" height="16" rx="3"/>'
-                f'<text x="{lx:.1f}" y="{ly + 4:.1f}">{_esc(text)}</text></g>'
+            text = _label_text(t)
+            attrs = f'data-source="{_esc(s["name"])}" data-index="{index:d}"'
+        else:
+            resume = route.edge > len(listed)
+            suspend = desc["suspend"]
+            source, target = (suspend, "") if resume else ("", suspend)
+            text = "resume" if resume else "suspend"
+            title = _esc(
+                f"resume: {suspend} goes back to the state the machine was suspended in"
+                if resume
+                else f"suspend: from any state to {suspend}"
             )
-    init = boxes.get(desc["initial"])
+            edges.append(
+                f'<path class="suspend-edge" data-machine="{mid}" data-source="{_esc(source)}" '
+                f'data-target="{_esc(target)}" d="{d}" marker-end="url(#{marker})"><title>{title}</title></path>'
+            )
+            attrs = f'data-command="{text}"'
+        if route.label is not None:
+            lx, ly = route.label
+            tw = _width(text, LABEL_CHAR_W) + 8
+            labels.append(
+                f'<g class="guard" {attrs}><title>{title}</title>'
+                f'<rect x="{lx:.1f}" y="{ly:.1f}" width="{tw:.1f}" height="{LABEL_H:.0f}" rx="3"/>'
+                f'<text x="{lx + 4:.1f}" y="{ly + 12:.1f}">{_esc(text)}</text></g>'
+            )
+    right = placed.width
+    for s in desc["states"]:
+        loops = [t for t in s["transitions"] if t["target"] == s["name"]]
+        if not loops:
+            continue
+        cx, cy = placed.centres[s["name"]]
+        x0 = cx + _state_w(s["name"]) / 2
+        tops = cy - LABEL_H * len(loops) / 2
+        for k, t in enumerate(loops):
+            reach = 22.0 + 8.0 * k
+            ly = tops + LABEL_H * k
+            d = (
+                f"M{x0:.1f} {cy - 6 - 3 * k:.1f} C{x0 + reach:.1f} {cy - 18 - 4 * k:.1f} "
+                f"{x0 + reach:.1f} {cy + 18 + 4 * k:.1f} {x0:.1f} {cy + 6 + 3 * k:.1f}"
+            )
+            index, guard = int(t["index"]), t["guard"]
+            title = _title(s["name"], s["name"], index, guard)
+            edges.append(
+                f'<path class="transition" data-machine="{mid}" data-source="{_esc(s["name"])}" '
+                f'data-target="{_esc(s["name"])}" data-index="{index:d}" d="{d}" '
+                f'marker-end="url(#{marker})"><title>{title}</title></path>'
+            )
+            lx = x0 + 22.0 + 8.0 * (len(loops) - 1) + 6
+            text = _label_text(t)
+            tw = _width(text, LABEL_CHAR_W) + 8
+            right = max(right, lx + tw + 8)
+            labels.append(
+                f'<g class="guard" data-source="{_esc(s["name"])}" data-index="{index:d}"><title>{title}</title>'
+                f'<rect x="{lx:.1f}" y="{ly:.1f}" width="{tw:.1f}" height="{LABEL_H:.0f}" rx="3"/>'
+                f'<text x="{lx + 4:.1f}" y="{ly + 12:.1f}">{_esc(text)}</text></g>'
+            )
+    init = placed.centres.get(desc["initial"])
     if init is not None:
+        x, top = init[0], init[1] - STATE_H / 2
         edges.append(
-            f'<circle class="initial-dot" cx="{init.x:.1f}" cy="{init.y - 26:.1f}" r="5"/>'
-            f'<path class="transition initial" d="M{init.x:.1f} {init.y - 21:.1f} L{init.x:.1f} {init.y:.1f}" '
+            f'<circle class="initial-dot" cx="{x:.1f}" cy="{top - 20:.1f}" r="5"/>'
+            f'<path class="transition initial" d="M{x:.1f} {top - 15:.1f} L{x:.1f} {top:.1f}" '
             f'marker-end="url(#{marker})"/>'
         )
     accepting = {s["name"] for s in desc["states"] if s.get("accepting")}
+    parts: list[str] = []
     for s in desc["states"]:
-        b = boxes[s["name"]]
         name = s["name"]
+        cx, cy = placed.centres[name]
+        w = _state_w(name)
+        left, top = cx - w / 2, cy - STATE_H / 2
         kind = ["state"]
         if name == desc.get("suspend"):
             kind.append("suspend-state")
@@ -252,18 +311,25 @@ def _render(full: dict[str, Any]) -> str:
         inner = ""
         if name in accepting:
             inner = (
-                f'<rect class="inner" x="{b.left + 4:.1f}" y="{b.y + 4:.1f}" width="{b.w - 8:.1f}" '
-                f'height="{NODE_H - 8}" rx="7"/>'
+                f'<rect class="inner" x="{left + 4:.1f}" y="{top + 4:.1f}" width="{w - 8:.1f}" '
+                f'height="{STATE_H - 8:.0f}" rx="7"/>'
             )
         parts.append(
             f'<g class="{" ".join(kind)}" data-machine="{mid}" data-state="{_esc(name)}" '
             f'aria-current="false" role="listitem" aria-label="state {_esc(name)}">'
-            f'<rect x="{b.left:.1f}" y="{b.y:.1f}" width="{b.w:.1f}" height="{NODE_H}" rx="10"/>{inner}'
-            f'<text x="{b.x:.1f}" y="{b.mid + 4.5:.1f}">{_esc(name)}</text></g>'
+            f'<rect x="{left:.1f}" y="{top:.1f}" width="{w:.1f}" height="{STATE_H:.0f}" rx="10"/>{inner}'
+            f'<text x="{cx:.1f}" y="{cy + 4.5:.1f}">{_esc(name)}</text></g>'
         )
-    x0 = min(0.0, left_extent - MARGIN / 2)
-    w = right_extent + MARGIN / 2 - x0
-    height = max([height] + [ly + 12 for _, ly, _ in placed])
+    if ANY in placed.centres:
+        cx, cy = placed.centres[ANY]
+        w, h = _state_w("any state"), STATE_H - 6
+        parts.append(
+            f'<g class="any-state"><title>a machine is suspended from whatever state it is in</title>'
+            f'<rect x="{cx - w / 2:.1f}" y="{cy - h / 2:.1f}" width="{w:.1f}" height="{h:.0f}" rx="10"/>'
+            f'<text x="{cx:.1f}" y="{cy + 4:.1f}">any state</text></g>'
+        )
+    height = placed.height
+    width = max(right, placed.width)
     note = ""
     if left_states or left_transitions:
         what = [f"{left_states:,} more states"] if left_states else []
@@ -272,18 +338,24 @@ def _render(full: dict[str, Any]) -> str:
             f"{' and '.join(what)} not drawn",
             f"(a diagram shows at most {MAX_DRAWN_STATES} states and {MAX_DRAWN_TRANSITIONS} transitions)",
         ]
-        w = max(w, LABEL_CHAR_W * 1.1 * max(map(len, lines)) + MARGIN)
+        width = max(width, LABEL_CHAR_W * 1.1 * max(map(len, lines)) + 24)
         note = "".join(
-            f'<text class="omitted" x="{x0 + MARGIN / 2:.1f}" y="{height + 14 + 16 * i:.1f}">{_esc(line)}</text>'
+            f'<text class="omitted" x="12" y="{TOP + height + 14 + 16 * i:.1f}">{_esc(line)}</text>'
             for i, line in enumerate(lines)
         )
         height += 44
+    total = TOP + height
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" class="diagram" data-machine="{mid}" '
-        f'viewBox="{x0:.0f} 0 {w:.0f} {height:.0f}" width="{w:.0f}" height="{height:.0f}" role="list" '
+        f'viewBox="0 0 {width:.0f} {total:.0f}" width="{width:.0f}" height="{total:.0f}" role="list" '
         f'aria-label="states of {mid}">'
         f'<defs><marker id="{marker}" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" markerHeight="7" '
         f'orient="auto-start-reverse"><path d="M0 0 L10 5 L0 10 z" class="arrowhead"/></marker></defs>'
-        f'<g class="edges">{"".join(edges)}</g><g class="states">{"".join(parts)}</g>'
-        f'<g class="labels">{"".join(labels)}</g>{note}</svg>'
+        f'<g transform="translate(0 {TOP:.0f})"><g class="edges">{"".join(edges)}</g>'
+        f'<g class="states">{"".join(parts)}</g><g class="labels">{"".join(labels)}</g></g>{note}</svg>'
     )
+
+
+def _title(source: str, target: str, index: int, guard: str) -> str:
+    shown = guard if len(guard) <= TITLE_MAX else guard[: TITLE_MAX - 1] + "…"
+    return _esc(f"{source} → {target} (transition {index}): {shown}")

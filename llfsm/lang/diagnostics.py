@@ -82,6 +82,10 @@ RULES: dict[str, Rule] = {
             "helper-inside-machine",
             "A helper module the code imports sits inside NAME.machine/, where imports do not look.",
         ),
+        _r("LF046", E, "input-assigned", "Code assigns an input (or a part of one): inputs are read-only."),
+        _r("LF047", E, "input-name", "An input's name is not usable or clashes with a variable."),
+        _r("LF048", E, "input-value", "An input's type is unknown, or its default or domain holds a wrong value."),
+        _r("LF049", E, "input-binding", "An input's topic, msg and field are incomplete, unknown or do not fit."),
         _r("LF060", E, "unknown-parameter", "`parameters:` names something that is not a machine variable."),
         _r(
             "LF061",
@@ -114,6 +118,11 @@ RULES: dict[str, Rule] = {
             "undeclared-dependency",
             "Machine code imports messages of a package package.xml does not declare.",
         ),
+        # `llfsm verify` only: code it cannot explore faithfully (never reported by check)
+        _r("LF200", E, "unexplorable-code", "Code verify cannot explore faithfully (a read of the world)."),
+        _r("LF201", E, "unexplorable-time", "An after* verify cannot follow (not a constant, or outside a state)."),
+        _r("LF202", E, "input-without-domain", "An int, float or str input has no domain for verify to explore."),
+        _r("LF203", E, "no-machine-source", "A built module whose machine directory verify cannot find."),
     ]
 }
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import keyword
 import re
 from pathlib import Path
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -49,6 +50,41 @@ class Variable(BaseModel):
     annotation: str
     initial: str | None = None  # source text of the initialiser, None when omitted
     loc: Loc
+
+
+#: The types an input may have (SPEC 11), and the Python type of their values.
+INPUT_TYPES: dict[str, type] = {"bool": bool, "int": int, "float": float, "str": str}
+
+#: A scalar value in machine.yaml (an input's default or a value of its domain).
+Scalar = bool | int | float | str
+
+
+class Input(BaseModel):
+    """An input (external variable) under `inputs:` in machine.yaml: a value from outside the
+    machine, read-only in its code, taken as a snapshot at the start of each of its ringlets,
+    optionally bound to a field of the newest message on a topic (docs/machine-format.md)."""
+
+    name: str
+    type: str  # bool | int | float | str (anything else is a check error, LF048)
+    default: Scalar | None = None  # as written; None when missing
+    domain: list[Scalar] | None = None  # as written; None when missing (bool: both values)
+    topic: str | None = None
+    msg: str | None = None
+    field: str | None = None
+    loc: Loc  # where the name is written
+    #: where each key's value is written (type, default, domain, topic, msg, field)
+    locs: dict[str, Loc] = Field(default_factory=dict)
+
+    @property
+    def bound(self) -> bool:
+        """Bound to a topic: at run time it takes a field of the newest message there."""
+        return self.topic is not None
+
+    def values(self) -> list[Scalar]:
+        """The values `llfsm verify` explores: the domain, or both values of a bool."""
+        if self.domain is not None:
+            return list(self.domain)
+        return [False, True] if self.type == "bool" else []
 
 
 class Code(BaseModel):
@@ -104,6 +140,7 @@ class Machine(BaseModel):
     includes: Code | None = None
     variables: list[Variable] = Field(default_factory=list)
     variables_file: Code | None = None  # Variables.py as written
+    inputs: list[Input] = Field(default_factory=list)
     initial_loc: Loc = Loc(file="machine.yaml")
     suspended_loc: Loc = Loc(file="machine.yaml")
     parameters: list[MachineParameter] = Field(default_factory=list)
@@ -139,6 +176,12 @@ class MachineYaml(BaseModel):
     states: list[YamlState] = Field(
         ..., min_length=1, description="The states, in order; the order is the state index."
     )
+    inputs: dict[str, YamlInput] | None = Field(
+        None,
+        description="External variables: read-only in code, taken as a snapshot at the start of each "
+        "ringlet; optionally bound to a field of the newest message on a topic (docs/verify.md).",
+        json_schema_extra={"propertyNames": {"pattern": "^" + NAME_RE.pattern[:-2] + "$"}},
+    )
     parameters: list[str] | None = Field(
         None,
         description="Machine variables that are parameters of the node /llfsm/<machine>: `llfsm param set` "
@@ -156,6 +199,23 @@ class YamlState(BaseModel):
         description="Target states in priority order; position N is guarded by "
         "State_<name>_Transition_N.expr.  No transitions: an accepting state.",
     )
+
+
+class YamlInput(BaseModel):
+    model_config = ConfigDict(extra="forbid", title="input")
+
+    type: Literal["bool", "int", "float", "str"] = Field(..., description="The type of its values.")
+    default: Scalar | None = Field(
+        None, description="Its value until a first message arrives (default: false, 0, 0.0 or an empty string)."
+    )
+    domain: list[Scalar] | None = Field(
+        None, min_length=1, description="The values `llfsm verify` explores (a bool: both, by default)."
+    )
+    topic: str | None = Field(None, description="At run time, read from the newest message on this topic.")
+    msg: str | None = Field(
+        None, pattern=r"^[a-z][a-z0-9_]*/msg/[A-Z][A-Za-z0-9]*$", description="The topic's message type."
+    )
+    field: str | None = Field(None, description="The field of the message, dotted for a nested one (linear.x).")
 
 
 MachineYaml.model_rebuild()

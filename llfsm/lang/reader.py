@@ -25,6 +25,7 @@ from .model import (
     IMPLICIT_SUSPENDED,
     SECTIONS,
     Code,
+    Input,
     Loc,
     Machine,
     MachineParameter,
@@ -302,7 +303,9 @@ class _Reader:
         root = self.yaml_tree(text)
         if root is None:
             return result
-        top = self.mapping(root, "machine.yaml", ("description", "initial", "suspended", "states", "parameters"))
+        top = self.mapping(
+            root, "machine.yaml", ("description", "initial", "suspended", "states", "inputs", "parameters")
+        )
         if top is None:
             return result
         states_node = top.get("states")
@@ -368,6 +371,7 @@ class _Reader:
             if description is None:
                 self.structure_error(d, "`description` must be text")
 
+        inputs = self.inputs(top["inputs"]) if "inputs" in top else []
         includes = self.code_file("Includes.py", entry_set)
         variables, variables_file = self.variables("Variables.py") if "Variables.py" in entry_set else ([], None)
 
@@ -395,11 +399,77 @@ class _Reader:
             includes=includes,
             variables=variables,
             variables_file=variables_file,
+            inputs=inputs,
             initial_loc=_mark_loc(top["initial"]) if "initial" in top else Loc(file="machine.yaml"),
             suspended_loc=_mark_loc(top["suspended"]) if "suspended" in top else Loc(file="machine.yaml"),
             parameters=self.parameters(top.get("parameters")),
         )
         return result
+
+    def inputs(self, node: yaml.Node) -> list[Input]:
+        """`inputs:`, a mapping of input name to its keys.  What the keys say (types, values,
+        bindings) is judged by the checker (llfsm.lang.check.inputs); here only the shape."""
+        if isinstance(node, yaml.ScalarNode) and node.tag.endswith("null"):
+            return []
+        if not isinstance(node, yaml.MappingNode):
+            self.structure_error(node, "`inputs` must be a mapping of input names to their type, default...")
+            return []
+        out: list[Input] = []
+        seen: set[str] = set()
+        for knode, value in node.value:
+            key = self.scalar(knode, "an input name")
+            if key is None:
+                continue
+            if key in seen:
+                self.structure_error(knode, f"input {key} is declared twice")
+                continue
+            seen.add(key)
+            keys = self.mapping(value, f"input {key}", INPUT_KEYS)
+            if keys is None:
+                continue
+            if "type" not in keys:
+                self.structure_error(value, f"input {key} needs a `type` (bool, int, float or str)")
+                continue
+            values: dict[str, object] = {}
+            for k, vnode in keys.items():
+                if k == "domain":
+                    if not isinstance(vnode, yaml.SequenceNode):
+                        self.structure_error(vnode, f"`domain` of input {key} must be a list of values")
+                        continue
+                    items = [self.value(item, f"a value of the domain of {key}") for item in vnode.value]
+                    if all(v is not _NOT_A_SCALAR for v in items):
+                        values[k] = items
+                elif k == "default":
+                    v = self.value(vnode, f"the default of {key}")
+                    if v is not _NOT_A_SCALAR:
+                        values[k] = v
+                else:
+                    text = self.scalar(vnode, f"`{k}` of input {key}")
+                    if text is not None:
+                        values[k] = text
+            if "type" not in values:
+                continue
+            locs = {k: _mark_loc(v) for k, v in keys.items()}
+            try:
+                out.append(Input(name=key, loc=_mark_loc(knode), locs=locs, **values))  # type: ignore[arg-type]
+            except ValueError:  # a value that is not a bool, number or string (a date, null...)
+                self.structure_error(value, f"input {key}: default and domain hold booleans, numbers or strings")
+        return out
+
+    def value(self, node: yaml.Node, what: str) -> object:
+        """A scalar as YAML types it (`false` a bool, `1.5` a float, `"1"` a string)."""
+        if not isinstance(node, yaml.ScalarNode):
+            self.structure_error(node, f"{what} must be a single value, not a {_kind(node)}")
+            return _NOT_A_SCALAR
+        try:
+            value = yaml.constructor.SafeConstructor().construct_object(node)
+        except (yaml.YAMLError, ValueError, OverflowError):
+            self.structure_error(node, f"{what} is not a value YAML can read")
+            return _NOT_A_SCALAR
+        if not isinstance(value, bool | int | float | str):
+            self.structure_error(node, f"{what} must be a boolean, a number or a string")
+            return _NOT_A_SCALAR
+        return value
 
     def parameters(self, node: yaml.Node | None) -> list[MachineParameter]:
         """`parameters:`, a list of variable names, each with where it is written (check's rule
@@ -441,6 +511,11 @@ class _Reader:
             variables_file=variables_file,
             loc=loc,
         )
+
+
+#: The keys of an input under `inputs:` (SPEC 11, docs/machine-format.md).
+INPUT_KEYS = ("type", "default", "domain", "topic", "msg", "field")
+_NOT_A_SCALAR = object()
 
 
 def read_machine(path: str | Path) -> ReadResult:

@@ -17,6 +17,7 @@ REGISTRY = {
     "turtlesim": "llfsm.nodes.turtlesim",
     "turtle_sensor_poster": "llfsm.nodes.turtle_sensor_poster",
     "teleop": "llfsm.nodes.teleop",
+    "wall_sensor": "llfsm.nodes.wall_sensor",
 }
 
 

@@ -27,6 +27,7 @@ so what the reader is handed is never stale.
 from __future__ import annotations
 
 import json
+import time
 from typing import TYPE_CHECKING, Any, cast
 
 from ..msgs.std_msgs.msg import String
@@ -76,6 +77,10 @@ def attach(arr: Arrangement, bus: Bus) -> MachineGraph:
     return graph
 
 
+#: The keys of an input in a description, in the order of a class's INPUTS entries.
+_INPUT_KEYS = ("name", "type", "default", "domain", "topic", "msg", "field")
+
+
 def description(cls: type[Machine]) -> dict[str, Any]:
     """The structure /llfsm/M/description carries, from the compiled class alone (its guard
     text is embedded by the compiler; a module built before that has none, and says so with
@@ -97,7 +102,30 @@ def description(cls: type[Machine]) -> dict[str, Any]:
         ],
         "initial": states[cls.INITIAL],
         "suspend": states[cls.SUSPENDED],
+        # SPEC 11: what the machine reads from outside (llfsm.runtime.inputs gives the positions)
+        "inputs": [
+            {
+                "name": name,
+                "type": kind,
+                "default": default,
+                "domain": list(domain),
+                "topic": topic,
+                "msg": msg,
+                "field": field,
+            }
+            for name, kind, default, domain, topic, msg, field in cls.INPUTS
+        ],
     }
+
+
+def _with_start(desc: dict[str, Any], clock: Any) -> dict[str, Any]:
+    """The description with `started`, the wall time (seconds since the epoch) of the run's
+    time 0 when the run keeps wall time, so that `llfsm view` in another process shows the
+    run's own times (a state's sample carries its wall time); a run on the sim clock has none."""
+    read = getattr(clock, "read", None)
+    if getattr(clock, "kind", None) != "wall" or read is None:
+        return desc
+    return {**desc, "started": round((time.time_ns() - read()) / 1e9, 6)}
 
 
 class _Entry:
@@ -128,7 +156,7 @@ class MachineGraph(Tracer):
             node = Node(m.NAME, namespace=NAMESPACE)
             self.nodes.append(node)
             desc = node.create_publisher(String, "~/description", LATCHED)
-            desc.publish(String(data=json.dumps(description(type(m)))))
+            desc.publish(String(data=json.dumps(_with_start(description(type(m)), arr.ctx.clock))))
             entry = _Entry(m, node.create_publisher(String, "~/state", LATCHED))
             self.entries.append(entry)
             self._publish(entry, m.STATES[m._state])

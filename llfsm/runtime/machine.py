@@ -11,6 +11,8 @@ state finishes the machine itself.  Everything here is small because it sits on 
 
 from __future__ import annotations
 
+from .inputs import Inputs
+
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -49,6 +51,7 @@ _SLOTS = (
     "_finished",
     "_held",
     "_id",
+    "_inputs",
     "_next",
     "_pending",
     "_resume_to",
@@ -84,6 +87,9 @@ class Machine:
     #: (target index, guard text as written): what /llfsm/NAME/description and the web view show.
     DESCRIPTION: ClassVar[str] = ""
     TRANSITIONS: ClassVar[tuple[tuple[tuple[int, str], ...], ...]] = ()
+    #: machine.yaml's inputs, one entry each: (name, type, default, domain, topic, msg, field);
+    #: topic, msg and field are None for an input bound to nothing (llfsm.runtime.inputs).
+    INPUTS: ClassVar[tuple[tuple[Any, ...], ...]] = ()
     #: machine.yaml's `parameters:`, each (variable, rclpy's type name: "DOUBLE", "INTEGER_ARRAY"
     #: ...): parameters of the node /llfsm/NAME (llfsm.ros.control), set between ringlets
     #: (Arrangement.set_variables).
@@ -103,6 +109,8 @@ class Machine:
         self._suspended: bool = False
         self._resume_to: int | None = None
         self._finished: bool = False
+        #: The inputs' newest values (llfsm.runtime.inputs); None for a machine without inputs.
+        self._inputs: Inputs | None = Inputs(self) if self.INPUTS else None
         #: What the scheduler calls, `_run(self)`: the ringlet of the next turn (the initial
         #: state counts as entered), or, while a command is pending or the machine is suspended,
         #: `_held`, the scheduler's gate, with the real ringlet kept in `_next`.  So the round loop

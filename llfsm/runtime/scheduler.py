@@ -96,6 +96,9 @@ class Arrangement:
         self._interrupted_at = 0.0  # time.monotonic() of the first interrupt: grace is real time too
         self._grace_ns = 1_000_000_000
         self.running = False  # inside run(): a stop may be raised into the running code
+        #: The between-round hooks (the bus) are running: no ringlet is, so a new input value can
+        #: go straight into its machine (llfsm.runtime.inputs) without the gate.
+        self.between_rounds = False
         self.rounds = 0
         #: The gate every held machine's `_run` points at (one bound method, compared with `is`).
         self._gate_fn: Callable[[Machine], int | None] = self._gate
@@ -163,6 +166,13 @@ class Arrangement:
             return  # a finished machine can only be restarted; it stays finished until then
         m._pending = cmd  # a later command replaces an earlier pending one
         _hold(m)  # a machine commanding itself may still fire a transition: _rehold fixes that
+        self._attention = True
+
+    def hold_for_inputs(self, m: Machine) -> None:
+        """A new input value came for `m` (llfsm.runtime.inputs): its next ringlet starts at the
+        gate, which takes the snapshot first.  (Called during m's own ringlet, the ringlet may
+        still point `_run` past the gate: `_rehold` puts it back after the round.)"""
+        _hold(m)
         self._attention = True
 
     def set_variables(self, name: str, values: dict[str, object]) -> None:
@@ -233,8 +243,12 @@ class Arrangement:
         return True
 
     def _release(self, m: Machine) -> bool:
-        """The turn of a held machine (new variable values, a command pending, or suspended):
-        set the variables, apply the command; True if the ringlet goes on."""
+        """The turn of a held machine (a new input value to take, new variable values, a command
+        pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
+        True if the ringlet goes on."""
+        inputs = m._inputs
+        if inputs is not None and inputs.fresh:
+            inputs.snapshot()
         if self._variables:
             values = self._variables.pop(m._id, None)
             if values is not None:
@@ -269,7 +283,9 @@ class Arrangement:
         """Between rounds: a machine that commanded itself and then fired a transition in the
         same ringlet pointed `_run` past its gate; put the gate back in front."""
         for m in self.machines:
-            if m._pending is not None or m._suspended or m._id in self._variables:
+            inputs = m._inputs
+            fresh = inputs is not None and inputs.fresh  # a new input value for its snapshot
+            if m._pending is not None or m._suspended or m._id in self._variables or fresh:
                 _hold(m)
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
@@ -407,8 +423,12 @@ class Arrangement:
                 if clock.now >= ctx.wake:
                     ctx.wake = FOREVER  # the hooks arm it again for whatever they still hold
                     ctx.round = rounds
-                    for h in hooks:
-                        h()
+                    self.between_rounds = True
+                    try:
+                        for h in hooks:
+                            h()
+                    finally:
+                        self.between_rounds = False
         finally:
             self.rounds = rounds
 

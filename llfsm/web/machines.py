@@ -29,13 +29,15 @@ from __future__ import annotations
 
 import hashlib
 import re
+import time
 from collections import deque
 from typing import TYPE_CHECKING, Any
 
 from ..diagram.description import MAX_NAME, DescriptionError, parse_description
 from ..msgs.std_msgs.msg import String
 from ..ros.control import LATCHED, NAMESPACE
-from ..ros.transports.dds_graph import message_class, service_class
+from ..ros.transports.dds_graph import Graph, message_class, service_class
+from .rosgraph import from_dds, robust_graph
 from .source import HISTORY, CommandError, Source
 
 if TYPE_CHECKING:
@@ -54,7 +56,9 @@ _MACHINE = re.compile(rf"[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME - 1}}}")
 
 
 class _Machine:
-    """One machine of one run seen on the graph."""
+    """One machine of one run seen on the graph.  Times are kept as they came (a state sample's
+    wall time, or the view's own run time when a sample has none) and shown in the run's time
+    once its description says when the run started."""
 
     def __init__(self, name: str, key: str, participant: str) -> None:
         self.name = name  # the machine's name (its topics': /llfsm/NAME/...)
@@ -65,8 +69,28 @@ class _Machine:
         self.size = 0  # states and transitions of `desc`
         self.accepting: frozenset[str] = frozenset()
         self.state: str | None = None
-        self.since = 0.0
-        self.history: deque[dict[str, Any]] = deque(maxlen=HISTORY)
+        self.since: _When = _When(None, 0.0)
+        self.history: deque[tuple[_When, str, str]] = deque(maxlen=HISTORY)
+        self.started: float | None = None  # the run's time 0, wall seconds (its description says)
+        self.pending: str | None = None  # a command from this page not yet seen applied
+        self.pending_at = 0  # wall ns when it was sent
+        self.gone = False  # its run has left the graph
+
+    def run_time(self, when: _When) -> float:
+        """A time in the run's own seconds when the run said when it started, else the view's."""
+        if when.wall_ns is not None and self.started is not None:
+            return round(max(0.0, when.wall_ns / 1e9 - self.started), 3)
+        return when.view
+
+
+class _When:
+    """When something happened: the sample's wall time (ns since the epoch, if it had one) and
+    the view's run time (seconds)."""
+
+    __slots__ = ("view", "wall_ns")
+
+    def __init__(self, wall_ns: int | None, view: float) -> None:
+        self.wall_ns, self.view = wall_ns, view
 
 
 #: How often a machine's own readers are taken from (run time, seconds): its transitions' times.
@@ -105,10 +129,20 @@ class _Readers:
             )
         self._peers: dict[int, str] = {}
 
-    def take(self, part: str) -> list[tuple[str, Any]]:
-        """(participant, message) of each sample that came, oldest first."""
+    def take(self, part: str) -> list[tuple[str, Any, int | None]]:
+        """(participant, message, the writer's wall time in ns) of each sample that came, oldest first."""
         samples = self.samples[part]
-        return [(self._peer(samples.reader, info.publication_handle), msg) for msg, info in samples.take()]
+        return [
+            (self._peer(samples.reader, info.publication_handle), msg, _stamp(info)) for msg, info in samples.take()
+        ]
+
+    def runs(self) -> set[str] | None:
+        """The participants whose state writers are matched now (None if DDS cannot say)."""
+        reader = self.samples["state"].reader
+        try:
+            return {self._peer(reader, h) for h in reader.get_matched_publications()}
+        except Exception:
+            return None
 
     def _peer(self, reader: Any, handle: int) -> str:
         peer = self._peers.get(handle)
@@ -124,8 +158,15 @@ class _Readers:
         return peer
 
 
+def _stamp(info: Any) -> int | None:
+    stamp = getattr(info, "source_timestamp", None)
+    return stamp if isinstance(stamp, int) and stamp > 0 else None
+
+
 class GraphSource(Source):
     """Machines, topics and services of every llfsm run (and ROS 2 node) the DDS graph shows."""
+
+    kind = "view"
 
     def __init__(self, bus: Bus) -> None:
         super().__init__(bus, "llfsm_view")
@@ -143,6 +184,8 @@ class GraphSource(Source):
         self._followed: set[str] = set()
         self._readers_of: dict[str, _Readers] = {}
         self._keep: list[Any] = []
+        self._counts: dict[str, int] = {}  # samples of each machine topic received
+        self._dds: Graph | None = robust_graph(dp, self.warn)
         self.node.create_timer(DISCOVERY_PERIOD, self._discover)
         self._discover()
 
@@ -168,6 +211,24 @@ class GraphSource(Source):
             self._discover_once()
         except Exception as e:  # never into the bus executor: the next round goes on
             self.warn(f"discovery failed: {type(e).__name__}: {e}", key="discovery failed")
+        try:
+            if self._dds is not None:
+                self._dds.update()
+                self.remote_graph = from_dds(self._dds)
+            self._which_runs_are_gone()
+        except Exception as e:  # the graph and the runs' liveliness are read again next round
+            self.warn(f"the graph could not be read: {type(e).__name__}: {e}", key="graph failed")
+
+    def _which_runs_are_gone(self) -> None:
+        """A machine whose run no longer writes its state has ended with its run: its card says
+        so and its buttons are disabled."""
+        for name, readers in list(self._readers_of.items()):
+            alive = readers.runs()
+            if alive is None:
+                continue
+            for (n, peer), m in list(self._machines.items()):
+                if n == name and m.state is not None:
+                    m.gone = peer not in alive
 
     def _discover_once(self) -> None:
         for s in self._take(self._pubs):
@@ -215,12 +276,23 @@ class GraphSource(Source):
     def _take_machines(self) -> None:
         try:
             for name, readers in list(self._readers_of.items()):
-                for peer, msg in readers.take("description"):
+                for peer, msg, _stamp_ns in readers.take("description"):
+                    self._count(f"{NAMESPACE}/{name}{_SUFFIX}")
                     self._on_description(name, peer, msg)
-                for peer, msg in readers.take("state"):
-                    self._on_state(name, peer, msg)
+                for peer, msg, stamp_ns in readers.take("state"):
+                    self._count(f"{NAMESPACE}/{name}/state")
+                    self._on_state(name, peer, msg, stamp_ns)
         except Exception as e:  # never into the bus executor: the next round goes on
             self.warn(f"machines: reading failed: {type(e).__name__}: {e}", key="machines failed")
+
+    def _count(self, topic: str) -> None:
+        self._counts[topic] = self._counts.get(topic, 0) + 1
+
+    def _machine_topic(self, name: str) -> tuple[int, str] | None:
+        """A machine topic's samples as the view received them (every run's, latched ones too)."""
+        if not name.startswith(NAMESPACE + "/"):
+            return None
+        return self._counts.get(name, 0), "a machine's state or description: the diagrams show it"
 
     def _machine(self, name: str, peer: str) -> _Machine | None:
         """The machine `name` of the run `peer`, made on its first sample (None beyond the bound)."""
@@ -275,20 +347,24 @@ class GraphSource(Source):
             )
             return
         m.accepting = frozenset(s["name"] for s in desc["states"] if s["accepting"])
+        m.started = desc.get("started")
         # the page names the machine by its key: another run of it is a card of its own
         m.desc, m.size = {**desc, "name": m.key, "machine": name, "participant": peer}, size
         if m.key not in self._order:
             self._order.append(m.key)
 
-    def _on_state(self, name: str, peer: str, msg: Any) -> None:
+    def _on_state(self, name: str, peer: str, msg: Any, stamp_ns: int | None = None) -> None:
         m = self._machine(name, peer)
         if m is None:
             return
         state = _bounded(msg.data)
-        now = round(self.clock.now / 1e9, 3)
+        when = _When(stamp_ns, round(self.clock.now / 1e9, 3))
         if m.state is not None:
-            m.history.appendleft({"t": now, "from": m.state, "to": state})
-        m.state, m.since = state, now
+            m.history.appendleft((when, m.state, state))
+        m.state, m.since = state, when
+        # a command applied publishes the state it leads to: one sent after the command was
+        if m.pending is not None and (stamp_ns is None or stamp_ns >= m.pending_at):
+            m.pending = None
 
     # -- what the page is sent (server thread) ------------------------------------------------------------
     def machines(self) -> list[dict[str, Any]]:
@@ -316,11 +392,14 @@ class GraphSource(Source):
                     "name": m.key,
                     "machine": m.name,
                     "participant": m.participant,
+                    "runs": sum(1 for n, _ in list(self._machines) if n == m.name),
+                    "ended": m.gone,
                     "state": state,
                     "status": status,
-                    "pending": None,
-                    "since": m.since,
-                    "transitions": list(m.history),
+                    "pending": m.pending,
+                    "since": m.run_time(m.since),
+                    "run_time": m.started is not None,
+                    "transitions": [{"t": m.run_time(when), "from": a, "to": b} for when, a, b in list(m.history)],
                 }
             )
         return rows
@@ -337,9 +416,14 @@ class GraphSource(Source):
         m = self._by_key.get(machine) if machine in self._order else None
         if m is None:
             raise CommandError(f"no machine named {machine!r} on the graph")
+        twins = [o for (n, _), o in list(self._machines.items()) if n == m.name]
+        sent = time.time_ns()
         response = await self._call(f"{NAMESPACE}/{m.name}/{verb}", "std_srvs/srv/Trigger", "")
+        for o in twins:  # each run serving the service was asked; each shows it pending until it publishes
+            if response.success and (o.pending is None or o.pending_at < sent):
+                o.pending, o.pending_at = verb, sent
         result = {"success": response.success, "message": response.message}
-        runs = sum(1 for n, _ in list(self._machines) if n == m.name)
+        runs = len(twins)
         if runs > 1:
             result["message"] = (
                 f"{response.message} (the {runs} runs of {m.name} on this domain share "

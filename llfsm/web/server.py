@@ -1,4 +1,4 @@
-"""The web view's server: aiohttp on a thread of its own, one page, one WebSocket.
+"""The web view's server: aiohttp on a thread of its own, one page, one WebSocket (docs/view.md).
 
 The server thread has its own event loop; the scheduler never waits on it.  While at least one
 page is connected, the server samples its source at most `RATE` times a second and pushes the
@@ -14,11 +14,12 @@ message values are parsed as YAML and checked by the message classes, as `llfsm 
 parses them (llfsm.msgs._yaml).
 
 What the page is sent may come from any peer on a DDS domain (`llfsm view`), so nothing a source
-returns may stop the server (issue 18): diagrams are drawn on a worker thread, never on the
-event loop (a big one takes a while even bounded, and pages and snapshots go on meanwhile); a
-machine that cannot be drawn is left out of the page with one warning and the others are drawn;
-a snapshot that fails is skipped with one warning and the push loop goes on.  A page is sent a
-machine's name, description text and SVG only, not the description itself.
+returns may stop the server (issue 18): diagrams (and the graph of nodes and topics) are drawn
+on a worker thread, never on the event loop (a big one takes a while even bounded, and pages
+and snapshots go on meanwhile); a machine that cannot be drawn is left out of the page with one
+warning and the others are drawn; a snapshot that fails is skipped with one warning and the
+push loop goes on.  A page is sent a machine's name, description text and SVG only, not the
+description itself.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from typing import Any
 from aiohttp import WSMsgType, web
 
 from ..diagram import svg as diagram
+from . import rosgraph
 from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
@@ -178,6 +180,8 @@ class WebServer:
         app.router.add_post("/api/command", self._command)
         app.router.add_post("/api/publish", self._publish)
         app.router.add_post("/api/call", self._call)
+        app.router.add_post("/api/parameters", self._parameters)
+        app.router.add_post("/api/parameter", self._set_parameter)
         self._runner = web.AppRunner(app, access_log=None, handle_signals=False, shutdown_timeout=1.0)
         await self._runner.setup()
         await web.SockSite(self._runner, sock).start()
@@ -248,17 +252,42 @@ class WebServer:
         descriptions = self._descriptions()
         loop = asyncio.get_running_loop()
         machines = await loop.run_in_executor(self._drawer, self._draw, descriptions)
+        graph = await self._graph_message(self._graph())
         snap = self._snapshot()
         current = {m.get("name"): m.get("state") for m in snap.get("machines", []) if isinstance(m, dict)}
         for m in machines:
             m["svg"] = diagram.mark(m["svg"], current.get(m["name"]))
-        return {"type": "hello", "machines": machines, "snapshot": snap}
+        return {"type": "hello", "machines": machines, "graph": graph, "snapshot": snap}
+
+    def _graph(self) -> rosgraph.RosGraph | None:
+        """The source's graph of nodes and topics (None for a source that has none)."""
+        read = getattr(self.source, "graph", None)
+        if read is None:
+            return None
+        try:
+            graph: rosgraph.RosGraph = read()
+            return graph
+        except Exception as e:  # the page keeps the last graph it was sent
+            self._warn(f"the graph could not be read: {type(e).__name__}: {e}", "graph")
+            return None
+
+    async def _graph_message(self, g: rosgraph.RosGraph | None) -> dict[str, Any] | None:
+        """The graph's drawing (on the worker thread: a big graph takes a while) and lists."""
+        if g is None:
+            return None
+        loop = asyncio.get_running_loop()
+        try:
+            drawn = await loop.run_in_executor(self._drawer, rosgraph.svg, rosgraph.visible(g))
+        except Exception as e:  # the lists still go; the drawing says it could not be made
+            self._warn(f"the graph could not be drawn: {type(e).__name__}: {e}", "graph draw")
+            drawn = ""
+        return {"svg": drawn, **g.data()}
 
     def _draw(self, descriptions: list[Any]) -> list[dict[str, Any]]:
         """(worker thread) Each machine's name, description text and SVG; one that cannot be
         drawn is left out, said once, and never stops the others."""
         # deferred: here, on the worker: pydantic (the description model) takes a while to import
-        from ..diagram.description import DescriptionError
+        from ..diagram.description import DescriptionError, Input
 
         out = []
         for d in descriptions:
@@ -273,7 +302,19 @@ class WebServer:
                 self._warn(f"machine {shown!r} not shown: drawing failed: {type(e).__name__}: {e}", f"draw {shown}")
                 continue
             text = d.get("description")
-            out.append({"name": name, "description": text if isinstance(text, str) else "", "svg": svg})
+            machine, participant = d.get("machine", name), d.get("participant", "")
+            # drawn, so it fits the model: its inputs too (SPEC 11), one line each
+            inputs = [Input.model_validate(i).text() for i in d.get("inputs") or ()]
+            out.append(
+                {
+                    "name": name,
+                    "machine": machine if isinstance(machine, str) else shown,
+                    "participant": participant if isinstance(participant, str) else "",
+                    "description": text if isinstance(text, str) else "",
+                    "svg": svg,
+                    "inputs": inputs,
+                }
+            )
         return out
 
     def _descriptions(self) -> list[Any]:
@@ -293,7 +334,7 @@ class WebServer:
     async def _ws(self, request: web.Request) -> web.WebSocketResponse:
         ws = web.WebSocketResponse(heartbeat=20, max_msg_size=64 * 1024)
         await ws.prepare(request)
-        for _ in range(5 * self.rate):
+        for _ in range(max(1, int(5 * self.rate))):  # five seconds of tries (a bench sets a float rate)
             try:
                 hello = await self._hello()
                 break
@@ -325,6 +366,9 @@ class WebServer:
         hello: asyncio.Task[None] | None = None
         loop = asyncio.get_running_loop()
         hello_at = -HELLO_PERIOD
+        graph = self._graph()
+        graph_task: asyncio.Task[None] | None = None
+        graph_at = -HELLO_PERIOD
         while True:
             await asyncio.sleep(1 / self.rate)
             if not self.clients:
@@ -339,6 +383,15 @@ class WebServer:
                     machines = now  # objects, not names: a description replaced is drawn afresh
                     hello_at = loop.time()
                     hello = loop.create_task(self._send_hello())
+                g = self._graph()
+                if (
+                    g is not None
+                    and g != graph
+                    and (graph_task is None or graph_task.done())
+                    and loop.time() - graph_at >= HELLO_PERIOD
+                ):
+                    graph, graph_at = g, loop.time()
+                    graph_task = loop.create_task(self._send_graph(g))
                 text = dumps(self._snapshot())
                 if text != last:
                     last = text
@@ -355,6 +408,14 @@ class WebServer:
             pass
         except Exception as e:
             self._warn(f"the page's diagrams could not be sent: {type(e).__name__}: {e}", "hello")
+
+    async def _send_graph(self, g: rosgraph.RosGraph) -> None:
+        try:
+            message = await self._graph_message(g)
+            if message is not None:
+                await self._broadcast({"type": "graph", **message})
+        except Exception as e:
+            self._warn(f"the page's graph could not be sent: {type(e).__name__}: {e}", "graph send")
 
     async def _broadcast(self, data: dict[str, Any]) -> None:
         await self._broadcast_text(dumps(data))
@@ -398,6 +459,14 @@ class WebServer:
     async def _call(self, request: web.Request) -> web.Response:
         return await self._answer(
             request, lambda d: self.source.call(_text(d, "service"), _text(d, "type"), _text(d, "values"))
+        )
+
+    async def _parameters(self, request: web.Request) -> web.Response:
+        return await self._answer(request, lambda d: self.source.parameters(_text(d, "node")))
+
+    async def _set_parameter(self, request: web.Request) -> web.Response:
+        return await self._answer(
+            request, lambda d: self.source.set_parameter(_text(d, "node"), _text(d, "name"), _text(d, "value"))
         )
 
 

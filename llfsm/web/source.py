@@ -1,4 +1,5 @@
-"""What the page shows, taken from a run in this process, and the way back into it.
+"""What the page shows, taken from a run in this process, and the way back into it (docs/view.md,
+"How it keeps up, and what it costs").
 
 The scheduler never waits on the page and does no work for it: the server's thread samples
 the run (at most 20 times a second, and only while a page is connected) by reading plain
@@ -17,6 +18,7 @@ import asyncio
 import json
 import time
 from collections import deque
+from collections.abc import Callable
 from concurrent.futures import Future as ThreadFuture
 from functools import partial
 from typing import TYPE_CHECKING, Any
@@ -24,9 +26,13 @@ from typing import TYPE_CHECKING, Any
 from ..msgs import to_yaml
 from ..msgs._lookup import TypeNameError, message_class, service_class
 from ..msgs._yaml import ValuesError, from_yaml
+from ..msgs.rcl_interfaces.msg import ParameterEvent
+from ..msgs.rcl_interfaces.srv import DescribeParameters, GetParameters, ListParameters, SetParameters
 from ..ros.control import NAMESPACE, description
 from ..ros.names import expand
 from ..ros.node import Node
+from . import parameters as params
+from .rosgraph import RosGraph, from_bus, from_dds, robust_graph
 
 if TYPE_CHECKING:
     from ..ros.bus import Bus
@@ -37,8 +43,12 @@ if TYPE_CHECKING:
 HISTORY = 12
 #: The turtle world is redrawn at most this often (it is the biggest part of a snapshot).
 WORLD_PERIOD = 0.25
-#: How long a service called from the page may take.
+#: How long a service called from the page may take (waiting for its server included).
 CALL_TIMEOUT = 5.0
+#: How often the graph of nodes and topics is read again (wall seconds).
+GRAPH_PERIOD = 0.5
+#: Nodes whose parameter events are counted at most (a peer may name any number).
+MAX_EVENT_NODES = 10_000
 
 
 class CommandError(Exception):
@@ -85,8 +95,12 @@ class _TopicStats:
 
 class Source:
     """What both sources share: the page's node, topic readers and statistics, publishing and
-    service calls through the bus (on the scheduler's thread), and the machines' commands
-    through their control services."""
+    service calls through the bus (on the scheduler's thread), the machines' commands through
+    their control services, the nodes' parameters through their parameter services, and the
+    graph of nodes and topics."""
+
+    #: What the page's header says it watches: "run" (llfsm run --web) or "view" (llfsm view).
+    kind = "run"
 
     def __init__(self, bus: Bus, node_name: str) -> None:
         self.bus = bus
@@ -100,6 +114,14 @@ class Source:
         self._clients: dict[tuple[str, str], Any] = {}
         self._warned: set[str] = set()
         self.ended = False
+        #: Parameter events seen per node: the page reads an open node's parameters again when
+        #: its count moves (a set from the page, `param set` or the node itself).
+        self.param_events: dict[str, int] = {}
+        self.node.create_subscription(ParameterEvent, "/parameter_events", self._on_parameter_event, 100)
+        self._graph = RosGraph()
+        self._graph_at = -GRAPH_PERIOD
+        #: The DDS graph beyond this process, read on the scheduler's thread (None in process).
+        self.remote_graph: RosGraph | None = None
 
     def warn(self, text: str, key: str | None = None) -> None:
         """A problem with what a peer sent or with drawing it: one line in the run's log, once
@@ -135,6 +157,10 @@ class Source:
         """Service name -> service class (or None)."""
         raise NotImplementedError
 
+    def local_graph(self) -> RosGraph:
+        """The nodes and topics of this process (none for the view, whose only node is its own)."""
+        return RosGraph()
+
     def world(self) -> str | None:
         return None
 
@@ -148,12 +174,30 @@ class Source:
         return {
             "t": round(self.clock.now / 1e9, 3),
             "clock": self.clock.kind,
+            "source": self.kind,
             "ended": self.ended,
             "machines": self.machine_rows(),
             "topics": self._topics(),
             "services": [{"name": n, "type": t._TYPE if t is not None else ""} for n, t in sorted(services.items())],
+            "param_events": dict(self.param_events),
             "world": self.world(),
         }
+
+    def graph(self) -> RosGraph:
+        """Nodes, topics and actions (server thread): this process's read now and then, merged
+        with what the scheduler's thread last read of the DDS graph."""
+        now = time.monotonic()
+        if now - self._graph_at >= GRAPH_PERIOD:
+            self._graph_at = now
+            g = self.local_graph()
+            remote = self.remote_graph
+            self._graph = g.merged(remote) if remote is not None else g
+        return self._graph
+
+    def _on_parameter_event(self, event: Any) -> None:
+        node = event.node
+        if node in self.param_events or len(self.param_events) < MAX_EVENT_NODES:
+            self.param_events[node] = self.param_events.get(node, 0) + 1
 
     # -- what the page asks for ------------------------------------------------------------------------
     async def command(self, machine: str, verb: str) -> dict[str, Any]:
@@ -211,22 +255,100 @@ class Source:
         else:
             raise CommandError(f"no service {name} is known: give its type, such as std_srvs/srv/Trigger")
         req, stamps = parse_values(srv.Request, text)
+        return await self._request(name, srv, req, stamps)
+
+    async def _request(self, name: str, srv: Any, request: Any, stamps: list[Any] | None = None) -> Any:
+        """The response of service `name` to `request`: the client is made and used on the
+        scheduler's thread; the call waits (at most CALL_TIMEOUT in all) for a server, since a
+        request sent before a server in another process is matched would reach nobody."""
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + CALL_TIMEOUT
+        key = (name, srv._TYPE)
+
+        def client() -> Any:
+            c = self._clients.get(key)
+            if c is None:
+                c = self._clients[key] = self.node.create_client(srv, name)
+            return c
+
+        cli = await self._ask(client, deadline)
+        while not await self._ask(cli.service_is_ready, deadline):
+            if loop.time() >= deadline:
+                raise CommandError(f"no server of {name} answered within {CALL_TIMEOUT:g} s: is its node running?")
+            await asyncio.sleep(0.05)
         done: ThreadFuture[Any] = ThreadFuture()
 
         def start() -> None:
-            self._stamp(stamps)
-            key = (name, srv._TYPE)
-            client = self._clients.get(key)
-            if client is None:
-                client = self._clients[key] = self.node.create_client(srv, name)
-            fut = client.call_async(req)
+            self._stamp(stamps or [])
+            fut = cli.call_async(request)
             fut.add_done_callback(lambda f: _settle(done, f))
 
         self._on_scheduler(start)
         try:
-            return await asyncio.wait_for(asyncio.wrap_future(done), CALL_TIMEOUT)
+            return await asyncio.wait_for(asyncio.wrap_future(done), max(0.1, deadline - loop.time()))
         except TimeoutError:
             raise CommandError(f"no response from {name} within {CALL_TIMEOUT:g} s") from None
+
+    async def _ask(self, fn: Callable[[], Any], deadline: float) -> Any:
+        """fn() run on the scheduler's thread, its result here."""
+        done: ThreadFuture[Any] = ThreadFuture()
+
+        def run() -> None:
+            try:
+                done.set_result(fn())
+            except Exception as e:  # handed to the page as one line, never into the executor
+                done.set_exception(CommandError(f"{type(e).__name__}: {e}"))
+
+        self._on_scheduler(run)
+        loop = asyncio.get_running_loop()
+        try:
+            return await asyncio.wait_for(asyncio.wrap_future(done), max(0.1, deadline - loop.time()))
+        except TimeoutError:
+            raise CommandError("the run did not answer in time (is it busy in a long ringlet?)") from None
+
+    async def parameters(self, node: str) -> dict[str, Any]:
+        """A node's parameters: names, then values and descriptors, as `param list`, `get` and
+        `describe` ask for them."""
+        full = self._node_name(node)
+        names = sorted(
+            (await self._request(f"{full}/list_parameters", ListParameters, ListParameters.Request())).result.names
+        )
+        names = names[: params.MAX_PARAMETERS]
+        values: list[Any] = []
+        descriptors: list[Any] = []
+        if names:
+            values = list(
+                (
+                    await self._request(f"{full}/get_parameters", GetParameters, GetParameters.Request(names=names))
+                ).values
+            )
+            descriptors = list(
+                (
+                    await self._request(
+                        f"{full}/describe_parameters", DescribeParameters, DescribeParameters.Request(names=names)
+                    )
+                ).descriptors
+            )
+        return {"success": True, "node": full, "parameters": params.rows(names, values, descriptors)}
+
+    async def set_parameter(self, node: str, name: str, text: str) -> dict[str, Any]:
+        """`param set NODE NAME TEXT`: the value read as param set reads it, and the node's answer."""
+        full = self._node_name(node)
+        try:
+            msg = params.message(name.strip(), text)
+        except params.ParameterInputError as e:
+            raise CommandError(str(e)) from None
+        response = await self._request(f"{full}/set_parameters", SetParameters, SetParameters.Request(parameters=[msg]))
+        if len(response.results) != 1:
+            raise CommandError(f"node {full} answered {len(response.results)} results for one parameter")
+        ok, said = params.result_text(response.results[0])
+        return {"success": ok, "message": said}
+
+    def _node_name(self, text: str) -> str:
+        try:
+            return params.node_name(text)
+        except params.ParameterInputError as e:
+            raise CommandError(str(e)) from None
 
     def _stamp(self, stamps: list[Any]) -> None:
         """Fill the stamps the values asked for (`header: auto`, `stamp: now`) with the run
@@ -246,8 +368,12 @@ class Source:
         out = []
         for name, type_ in sorted(self.topic_types().items()):
             entry: dict[str, Any] = {"name": name, "type": type_._TYPE if type_ is not None else ""}
-            if name.startswith(NAMESPACE + "/"):
-                entry.update(count=None, rate=None, last="a machine's state or description: the diagrams show it")
+            machine = self._machine_topic(name)
+            if machine is not None:
+                count, last = machine
+                stats = self._stats.setdefault(name, _TopicStats())
+                stats.update(wall, count)
+                entry.update(count=count, rate=round(stats.rate, 2), last=last, machine=True)
                 out.append(entry)
                 continue
             reader = self._readers.get(name)
@@ -267,6 +393,14 @@ class Source:
                 entry.update(count=count, rate=round(stats.rate, 2), last=stats.text)
             out.append(entry)
         return out
+
+    def _machine_topic(self, name: str) -> tuple[int, str] | None:
+        """For a machine's /llfsm/M/state or /description: (messages, what the row says), which
+        the source knows without a reader of the page's own (a reader of a state topic would
+        make the run publish every state change: docs/view.md, Cost); None for another topic."""
+        if not name.startswith(NAMESPACE + "/"):
+            return None
+        return self._published(name), "a machine's state or description: the diagrams show it"
 
     def _published(self, name: str) -> int:
         """Messages published on the topic in this process (also before the page's reader came)."""
@@ -293,9 +427,46 @@ class RunSource(Source):
         self._world_key: object = None
         self._world_at = 0.0
         self._world_svg: str | None = None
+        self._dds_graph = self._read_dds_graph()
+
+    def _read_dds_graph(self) -> Any:
+        """On DDS, the graph beyond this process too, read on the scheduler's thread now and then
+        (what `llfsm node list` would show); None on the in-process bus."""
+        dp = getattr(self.bus.transport, "dp", None)
+        if dp is None:
+            return None
+        graph = robust_graph(dp, self.warn)
+
+        def read() -> None:
+            try:
+                graph.update()
+                self.remote_graph = from_dds(graph)
+            except Exception as e:  # never into the bus executor: the page shows the last graph
+                self.warn(f"the graph could not be read: {type(e).__name__}: {e}", "graph")
+
+        self.node.create_timer(GRAPH_PERIOD, read)
+        return graph
 
     def machines(self) -> list[dict[str, Any]]:
         return self.descriptions
+
+    def local_graph(self) -> RosGraph:
+        return from_bus(self.bus, self.node)
+
+    def _machine_topic(self, name: str) -> tuple[int, str] | None:
+        """In process, a machine's state is published on a change only while someone listens
+        (docs/view.md, Cost): the count is what was published, and the row says so."""
+        if not name.startswith(NAMESPACE + "/"):
+            return None
+        count = self._published(name)
+        machine, _, part = name[len(NAMESPACE) + 1 :].rpartition("/")
+        m = self.arr.by_name.get(machine)
+        if part == "state" and m is not None:
+            return count, (
+                f"data: {m.STATES[m._state]}\n(published on a change while a subscriber listens; "
+                "the diagram shows every state it samples)"
+            )
+        return count, "the machine's description: its diagram shows it"
 
     def has_machine(self, name: str) -> bool:
         return name in self.arr.by_name
@@ -331,6 +502,10 @@ class RunSource(Source):
             machines.append(
                 {
                     "name": m.NAME,
+                    "machine": m.NAME,
+                    "participant": "",
+                    "runs": 1,
+                    "ended": False,
                     "state": m.STATES[state],
                     "status": status,
                     "pending": m._pending,

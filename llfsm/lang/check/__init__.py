@@ -7,6 +7,7 @@ what they look at, each a function over one `Checking` (llfsm.lang.check.checkin
 
 - structure:  the directory's name, states, transitions, guards' shape, reachability, suspend state
 - variables:  the variables declared (reserved names, duplicates, shadowing)
+- inputs:     the inputs declared (names, values, bindings) and code that assigns one
 - includes:   Includes.py
 - imports:    what imports name: message types (LF042), packages (LF109), helpers (LF043)
 - code:       sections, guards and initialisers (compile limits, bindings, undefined names)
@@ -37,7 +38,7 @@ from ..diagnostics import Diagnostic, Severity
 from ..discover import find_machines
 from ..model import Machine
 from ..reader import ReadResult, read_machine
-from . import code, includes, parameters, structure, variables
+from . import code, includes, inputs, parameters, structure, variables
 from .checking import Checking
 from .packages import undeclared_dependencies
 
@@ -86,10 +87,12 @@ def run_rules(c: Checking) -> None:
     structure.states(c, m)
     includes.includes(c, m)
     variables.declarations(c, m)
+    inputs.declarations(c, m)
     parameters.parameters(c, m)
     code.initialisers(c, m)
     for s in m.states:
         code.state_code(c, m, s)
+    inputs.assignments(c, m)
     structure.orphans(c)
     structure.reachability(c, m)
     structure.suspend_state(c, m)

@@ -73,7 +73,8 @@ def initialisers(c: Checking, m: Machine) -> None:
 def state_code(c: Checking, m: Machine, s: State) -> None:
     """Every section and guard of state `s`."""
     if c.base is None:  # once per machine: per state it would cost states x variables
-        c.base = name_map([v.name for v in m.variables], None, [], MACROS)
+        # inputs are read by their bare names as variables are (check.inputs refuses writes)
+        c.base = name_map([v.name for v in m.variables] + [i.name for i in m.inputs], None, [], MACROS)
         c.imported = imported_names(c)
     mapping = state_map(c.base, s.name, [v.name for v in s.variables])
     imported = c.imported

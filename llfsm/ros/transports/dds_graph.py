@@ -392,6 +392,17 @@ class Graph:
                     out.append(node)
         return out
 
+    def owners(self) -> dict[bytes, NodeName]:
+        """The node of every endpoint GID that ros_discovery_info names, at once (node_of for a
+        whole graph: the web view's drawing of it)."""
+        out: dict[bytes, NodeName] = {}
+        for key, nodes in self._nodes.items():
+            if key in self._participants:
+                for node, readers, writers in nodes:
+                    out.update(dict.fromkeys(readers, node))
+                    out.update(dict.fromkeys(writers, node))
+        return out
+
     def node_of(self, gid: bytes) -> NodeName | None:
         """The node that owns the endpoint with this GID, from ros_discovery_info."""
         for nodes in self._nodes.values():

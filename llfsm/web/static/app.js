@@ -1,16 +1,22 @@
-// llfsm view: live over one WebSocket; commands, publishing and service calls as JSON POSTs.
-// Everything user-provided is set with textContent; the only markup inserted is the SVG the
-// server generated (diagrams, turtle world), parsed as SVG, never as HTML.  The server escapes
-// every text of a peer's in that SVG (llfsm view shows what any DDS peer publishes); the page
-// also keeps only the elements a drawing is made of and drops event handlers and links, so a
-// mistake there still cannot put a peer's element or script into the page.
+// llfsm view: live over one WebSocket; commands, publishing, service calls and parameters as JSON
+// POSTs (docs/view.md).  Everything user-provided is set with textContent; the only markup
+// inserted is the SVG the server generated (diagrams, the graph of nodes and topics, the turtle
+// world), parsed as SVG, never as HTML.  The server escapes every text of a peer's in that SVG
+// (llfsm view shows what any DDS peer publishes); the page also keeps only the elements a drawing
+// is made of and drops event handlers and links, so a mistake there still cannot put a peer's
+// element or script into the page.
 "use strict";
 
-const cards = new Map(); // machine name -> {el, states: Map(state -> <g>), current}
+const cards = new Map(); // machine key -> {el, states: Map(state -> <g>), current, asked}
 let lastWorld = null;
+let ended = false;
 const token = new URLSearchParams(location.search).get("token");
+const openNodes = new Map(); // node -> the parameter events count its rows were read at
+let lastEvents = {}; // node -> parameter events seen (the snapshot's count)
+const answers = new Map(); // "node\nparameter" -> the node's last answer to a set from this page
 
-const SVG_ELEMENTS = new Set(["svg", "defs", "marker", "path", "g", "title", "rect", "text", "circle", "polygon"]);
+const SVG_ELEMENTS = new Set(["svg", "defs", "marker", "path", "g", "title", "rect", "text", "circle", "polygon",
+  "ellipse"]);
 
 function svgNode(text) {
   const doc = new DOMParser().parseFromString(text, "image/svg+xml");
@@ -34,6 +40,17 @@ function el(tag, text, cls) {
   return e;
 }
 
+// A name or type that may wrap only after its slashes or underscores (between words, never
+// inside one): `std_msgs/msg/String`, `RotateAbsolute_FeedbackMessage`.
+function breakable(tag, text, cls) {
+  const e = el(tag, null, cls);
+  for (const part of String(text).split(/(?<=[/_])/)) {
+    if (e.childNodes.length) e.append(document.createElement("wbr"));
+    e.append(part);
+  }
+  return e;
+}
+
 async function post(path, body) {
   const headers = { "Content-Type": "application/json" };
   if (token) headers["X-LLFSM-Token"] = token;
@@ -50,47 +67,104 @@ function show(output, result) {
   output.textContent = result.message + (result.yaml ? "\n" + result.yaml : "");
 }
 
+// -- machines -------------------------------------------------------------------------------------
+
 function buildMachines(machines) {
   const box = document.getElementById("machines");
   box.replaceChildren();
   cards.clear();
   const tpl = document.getElementById("machine-card");
   for (const m of machines) {
-    const el_ = tpl.content.firstElementChild.cloneNode(true);
-    el_.dataset.machine = m.name;
-    el_.querySelector(".machine-name").textContent = m.name;
-    el_.querySelector(".description").textContent = m.description || "";
-    el_.querySelector(".diagram-box").append(svgNode(m.svg));
+    const card = tpl.content.firstElementChild.cloneNode(true);
+    card.dataset.machine = m.name;
+    card.querySelector(".machine-name").textContent = m.machine || m.name;
+    card.querySelector(".description").textContent = m.description || "";
+    card.querySelector(".inputs").textContent = (m.inputs || []).length ? "inputs: " + m.inputs.join("; ") : "";
+    card.querySelector(".diagram-box").append(svgNode(m.svg));
     const states = new Map();
-    for (const g of el_.querySelectorAll(".state")) states.set(g.dataset.state, g);
-    for (const b of el_.querySelectorAll("button[data-command]")) {
+    for (const g of card.querySelectorAll(".state")) states.set(g.dataset.state, g);
+    const entry = { el: card, states, current: null, asked: null, status: null };
+    for (const b of card.querySelectorAll("button[data-command]")) {
       b.addEventListener("click", async () => {
-        const out = el_.querySelector(".command-result");
+        const out = card.querySelector(".command-result");
         out.textContent = "…";
-        show(out, await post("/api/command", { machine: m.name, command: b.dataset.command }));
+        entry.asked = null;
+        const result = await post("/api/command", { machine: m.name, command: b.dataset.command });
+        show(out, result);
+        if (result.success) entry.asked = { verb: b.dataset.command, seen: false, after: 0 };
       });
     }
-    box.append(el_);
-    cards.set(m.name, { el: el_, states, current: null });
+    box.append(card);
+    cards.set(m.name, entry);
   }
 }
 
-function updateMachine(m) {
+function updateMachine(m, s) {
   const card = cards.get(m.name);
   if (!card) return;
+  const el_ = card.el;
   if (card.current !== m.state) {
     for (const [name, g] of card.states) g.setAttribute("aria-current", name === m.state ? "true" : "false");
     card.current = m.state;
   }
-  card.el.dataset.status = m.status;
-  const badge = card.el.querySelector(".status");
-  badge.textContent = m.status + (m.pending ? ` (${m.pending} pending)` : "");
-  badge.dataset.status = m.status;
-  card.el.querySelector(".current").textContent = `${m.state} since ${m.since.toFixed(3)} s`;
-  const list = card.el.querySelector(".transitions");
+  const over = s.ended || m.ended;
+  const status = over ? "ended" : m.status;
+  el_.dataset.status = status;
+  const badge = el_.querySelector(".status");
+  badge.textContent = over ? (s.ended ? "run ended" : "run gone") : m.status + (m.pending ? ` (${m.pending} pending)` : "");
+  badge.dataset.status = status;
+  for (const b of el_.querySelectorAll("button[data-command]")) b.disabled = over;
+  el_.querySelector(".machine-name").textContent = m.machine || m.name;
+  const label = el_.querySelector(".run-label");
+  const run = runLabel(m);
+  label.hidden = !run;
+  label.textContent = run;
+  label.title = m.participant ? `the run of DDS participant ${m.participant}` : "";
+  el_.querySelector(".state-name").textContent = m.state ?? "(no state yet)";
+  const clock = s.source === "view" && !m.run_time ? "view time" : "run time";
+  el_.querySelector(".since").textContent = m.state == null ? "" : ` since ${m.since.toFixed(3)} s (${clock})`;
+  const twins = el_.querySelector(".twins");
+  if (m.runs > 1) {
+    twins.hidden = false;
+    twins.textContent = `One of ${m.runs} runs of ${m.machine} on this domain (this card: ${run}). They serve ` +
+      "the same service names, so a command from any of their cards reaches every one of them.";
+  } else {
+    twins.hidden = true;
+  }
+  const list = el_.querySelector(".transitions");
   const items = m.transitions.map((t) => el("li", `${t.t.toFixed(3)} s  ${t.from} → ${t.to}`));
   list.replaceChildren(...items);
+  // A command the run took is "pending until its next ringlet" until the run shows it applied:
+  // no longer pending in a snapshot that was surely sampled after the answer (the second one
+  // after it: the first may have been on its way when the answer came).
+  const asked = card.asked;
+  if (asked) {
+    const out = el_.querySelector(".command-result");
+    asked.after += 1;
+    if (m.pending) {
+      asked.seen = true;
+    } else if (asked.seen || asked.after >= 2) {
+      out.dataset.ok = "true";
+      out.textContent = `${asked.verb} applied: ${m.machine || m.name} is ${status} in ${m.state}`;
+      card.asked = null;
+    }
+  }
+  if (over) {
+    const out = el_.querySelector(".command-result");
+    if (card.asked) { out.textContent = ""; card.asked = null; }
+  }
+  card.status = status;
 }
+
+// Which run a card is: the digits the view keys another run by (NAME@xxxxxxxx: its participant's
+// GUID after the vendor and host part, the same for every run on one host), for the first too.
+function runLabel(m) {
+  if (!m.participant) return "";
+  const at = m.name.indexOf("@");
+  return "run " + (at >= 0 ? m.name.slice(at + 1) : m.participant.slice(8, 16));
+}
+
+// -- topics, services ------------------------------------------------------------------------------
 
 function updateTopics(topics) {
   const body = document.querySelector("#topics tbody");
@@ -98,18 +172,18 @@ function updateTopics(topics) {
   const names = [];
   for (const t of topics) {
     names.push(t.name);
-    const tr = el("tr");
+    const tr = el("tr", null, "topic");
     tr.dataset.topic = t.name;
-    tr.append(el("td", t.name), el("td", t.type),
+    tr.append(breakable("td", t.name, "name"), breakable("td", t.type, "type"),
       el("td", t.count === null ? "—" : String(t.count), "num count"),
       el("td", t.rate === null ? "—" : `${t.rate.toFixed(1)} Hz`, "num rate"));
     rows.push(tr);
-    if (t.count === null) { tr.className = "last"; tr.title = t.last; continue; } // /llfsm/...: the diagrams show it
+    if (!t.last) { tr.className = "topic bare"; continue; } // nothing received yet: no empty row under it
     const last = el("tr", null, "last");
     last.dataset.topic = t.name;
     const td = el("td");
     td.colSpan = 4;
-    td.append(el("pre", t.last || "", "yaml"));
+    td.append(el("pre", t.last || "", t.machine ? "yaml note" : "yaml"));
     last.append(td);
     rows.push(last);
   }
@@ -126,12 +200,135 @@ function fillList(id, names) {
   list.replaceChildren(...names.map((n) => { const o = el("option"); o.value = n; return o; }));
 }
 
+// -- the graph of nodes and topics, actions, parameters ----------------------------------------
+
+function updateGraph(g) {
+  if (!g) return;
+  const box = document.getElementById("graph");
+  box.replaceChildren(g.svg ? svgNode(g.svg) : el("p", "(the graph could not be drawn)", "hint"));
+  for (const n of box.querySelectorAll(".ros-node")) {
+    n.addEventListener("click", () => openNode(n.dataset.node));
+  }
+  const body = document.querySelector("#actions tbody");
+  body.replaceChildren(...g.actions.map((a) => {
+    const tr = el("tr");
+    tr.dataset.action = a.name;
+    tr.append(breakable("td", a.name, "name"), breakable("td", a.type || "(type unknown)", "type"),
+      el("td", a.servers.join(", ") || "(none)", "server"), el("td", a.clients.join(", ") || "—", "clients"));
+    return tr;
+  }));
+  document.getElementById("no-actions").hidden = g.actions.length > 0;
+  const nodes = document.getElementById("nodes");
+  const have = new Map([...nodes.children].map((d) => [d.dataset.node, d]));
+  const tpl = document.getElementById("node-params");
+  const list = [];
+  for (const name of g.nodes) {
+    let d = have.get(name);
+    if (!d) {
+      d = tpl.content.firstElementChild.cloneNode(true);
+      d.dataset.node = name;
+      d.querySelector(".node-name").textContent = name;
+      d.addEventListener("toggle", () => {
+        if (d.open) readParameters(d); else openNodes.delete(name);
+      });
+    }
+    list.push(d);
+  }
+  for (const [name, d] of have) if (!g.nodes.includes(name)) openNodes.delete(name);
+  nodes.replaceChildren(...list);
+}
+
+function openNode(name) {
+  const d = [...document.getElementById("nodes").children].find((x) => x.dataset.node === name);
+  if (!d) return;
+  d.open = true;
+  d.scrollIntoView({ block: "nearest" });
+}
+
+async function readParameters(d) {
+  const name = d.dataset.node;
+  const out = d.querySelector(".params-result");
+  openNodes.set(name, lastEvents[name] || 0);
+  d.dataset.loading = "true";
+  const result = await post("/api/parameters", { node: name });
+  delete d.dataset.loading;
+  if (!result.success) {
+    show(out, result);
+    return;
+  }
+  const box = d.querySelector(".params");
+  d.querySelector(".count").textContent = `(${result.parameters.length})`;
+  const focused = document.activeElement;
+  const keep = focused && box.contains(focused) ? focused.closest("form")?.dataset.param : null;
+  // what the user is typing survives the rows being read again (a parameter event may come at any time)
+  const edits = new Map();
+  for (const input of box.querySelectorAll("form.param input")) {
+    if (input.value !== input.defaultValue) edits.set(input.closest("form").dataset.param, input.value);
+  }
+  box.replaceChildren(...result.parameters.map((p) => paramRow(name, p, keep, edits.get(p.name))));
+}
+
+function paramRow(node, p, keep, edit) {
+  const f = el("form", null, "param");
+  f.dataset.param = p.name;
+  f.autocomplete = "off";
+  const label = el("label");
+  label.append(el("span", p.name, "param-name"), el("span", p.type, "param-type"));
+  if (p.range) label.append(el("span", `${p.range.from} … ${p.range.to}`, "param-range"));
+  const input = el("input");
+  input.name = "value";
+  input.defaultValue = p.value; // the node's value; the field differs from it while edited
+  if (edit !== undefined) input.value = edit;
+  input.spellcheck = false;
+  input.readOnly = p.read_only;
+  if (keep === p.name) queueMicrotask(() => input.focus());
+  label.append(input);
+  const button = el("button", "Set");
+  button.type = "submit";
+  button.disabled = p.read_only;
+  f.append(label, button);
+  if (p.description) f.title = p.description;
+  const out = el("output", null, "param-result");
+  out.setAttribute("role", "status");
+  const key = `${node}\n${p.name}`;
+  const said = answers.get(key); // the node's last answer, kept when its rows are read again
+  if (said) show(out, said);
+  f.append(out);
+  f.addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    out.textContent = "…";
+    const result = await post("/api/parameter", { node, name: p.name, value: input.value });
+    answers.set(key, result);
+    // the rows may have been read again meanwhile: say it in the form now on the page
+    const now = [...document.querySelectorAll("#nodes form.param")]
+      .find((x) => x.dataset.param === p.name && x.closest("details").dataset.node === node);
+    show(now ? now.querySelector("output") : out, result);
+  });
+  return f;
+}
+
+
+function parameterEvents(events) {
+  lastEvents = events || {};
+  for (const [name, seen] of openNodes) {
+    if ((lastEvents[name] || 0) !== seen) {
+      const d = [...document.getElementById("nodes").children].find((x) => x.dataset.node === name);
+      if (d && d.open && !d.dataset.loading) readParameters(d);
+    }
+  }
+}
+
+// -- the whole page -------------------------------------------------------------------------------
+
 function snapshot(s) {
+  ended = !!s.ended;
   document.getElementById("run-time").textContent =
-    `run time ${s.t.toFixed(3)} s (${s.clock} clock)` + (s.ended ? " — the run has ended" : "");
-  for (const m of s.machines) updateMachine(m);
+    (s.source === "view" ? `view time ${s.t.toFixed(3)} s` : `run time ${s.t.toFixed(3)} s (${s.clock} clock)`) +
+    (s.ended ? " — the run has ended" : "");
+  for (const m of s.machines) updateMachine(m, s);
   updateTopics(s.topics);
   fillList("service-names", s.services.map((x) => x.name));
+  parameterEvents(s.param_events);
   const panel = document.getElementById("world-panel");
   if (s.world) {
     panel.hidden = false;
@@ -140,7 +337,10 @@ function snapshot(s) {
       document.getElementById("world").replaceChildren(svgNode(s.world));
     }
   }
-  if (s.ended) setConnection("ended");
+  if (s.ended) {
+    setConnection("ended");
+    for (const b of document.querySelectorAll("form button")) b.disabled = true;
+  }
 }
 
 function setConnection(status) {
@@ -153,14 +353,22 @@ function connect() {
   const url = `ws://${location.host}/ws` + (token ? `?token=${encodeURIComponent(token)}` : "");
   const ws = new WebSocket(url);
   ws.onopen = () => setConnection("live");
-  ws.onclose = () => { if (document.getElementById("connection").dataset.status !== "ended") setConnection("closed"); };
+  ws.onclose = () => {
+    if (ended) return;
+    setConnection("closed");
+    // the server is gone: nothing on the page can reach the run any more
+    for (const b of document.querySelectorAll("button")) b.disabled = true;
+  };
   ws.onmessage = (ev) => {
     const msg = JSON.parse(ev.data);
     if (msg.type === "hello") {
       buildMachines(msg.machines);
+      updateGraph(msg.graph);
       snapshot(msg.snapshot);
     } else if (msg.type === "snapshot") {
       snapshot(msg);
+    } else if (msg.type === "graph") {
+      updateGraph(msg);
     }
   };
 }

@@ -1,0 +1,193 @@
+"""`llfsm verify`: explore an arrangement and judge properties (docs/verify.md)."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from .. import __version__
+from ._common import DURATION, cli, fail, progress, write_output
+
+
+@cli.command()
+@click.argument("targets", nargs=-1, required=True)
+@click.option(
+    "--property",
+    "properties",
+    multiple=True,
+    metavar="KIND:TEXT",
+    help="A property: always, never, reachable, eventually, leads_to, ctl or ltl, then its text "
+    '(`never: state(p) == "CRIT" and state(q) == "CRIT"`).  Repeatable.',
+)
+@click.option(
+    "--period", type=DURATION, default=None, help="Explore `--clock sim --period P` exactly (default: abstract time)."
+)
+@click.option("--interrupt", is_flag=True, default=None, help="ros.ok() may fall once, before any ringlet.")
+@click.option(
+    "--max-states", type=int, default=None, help="Stop past this many configurations (default 1,000,000): exit 3."
+)
+@click.option(
+    "--hash-compact",
+    is_flag=True,
+    help="Keep each configuration as a 64-bit hash only (about 60 bytes each; the chance of a collision is printed).",
+)
+@click.option(
+    "--counterexample",
+    "counterexample_dir",
+    type=click.Path(file_okay=False),
+    help="Write the first counterexample's inputs bound to topics as a rosbag2 bag in DIR (with --period).",
+)
+@click.option(
+    "--export",
+    "exports",
+    type=(click.Choice(["promela", "smv", "dot"]), click.Path(dir_okay=False)),
+    multiple=True,
+    metavar="promela|smv|dot FILE",
+    help="Write the explored structure and the properties as a SPIN or NuSMV model, or draw it.",
+)
+@click.option(
+    "--format", "fmt", type=click.Choice(["text", "json", "github", "sarif"]), default="text", show_default=True
+)
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the report to FILE instead of stdout.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress and no summary on stderr.")
+@click.option("-v", "--witnesses", is_flag=True, help="Also show the path to what a reachable (or EF) property found.")
+def verify(
+    targets: tuple[str, ...],
+    properties: tuple[str, ...],
+    period: int | None,
+    interrupt: bool | None,
+    max_states: int | None,
+    hash_compact: bool,
+    counterexample_dir: str | None,
+    exports: tuple[tuple[str, str], ...],
+    fmt: str,
+    output: str | None,
+    quiet: bool,
+    witnesses: bool,
+) -> None:
+    """Explore every reachable configuration of an arrangement and judge properties.
+
+    TARGET: machines as `llfsm run` takes them (in load order), or a NAME.verify.yaml that lists
+    the machines and the properties.  Exit status: 0 every property holds, 1 one fails (or
+    machine code raised), 2 bad input or code verify cannot explore, 3 the state limit.
+    """
+    # deferred: start-up (every command module is imported when `llfsm` starts)
+    from pathlib import Path
+
+    from ..lang.diagnostics import render as render_diagnostics
+    from ..runtime.clock import parse_duration
+    from ..verify.check import verify as run_verification
+    from ..verify.explorer import Options
+    from ..verify.load import VERIFY_SUFFIX, PropertySource, VerifyError, load_arrangement, read_verify_file
+    from ..verify.props import KINDS
+    from ..verify.report import render
+
+    sources: list[PropertySource] = []
+    machines: list[str] = []
+    file_options: dict[str, object] = {}
+    try:
+        for t in targets:
+            if t.endswith(VERIFY_SUFFIX):
+                vf = read_verify_file(Path(t))
+                machines += vf.machines
+                sources += vf.properties
+                file_options.update(vf.options)
+            else:
+                machines.append(t)
+        for text in properties:
+            kind, sep, body = text.partition(":")
+            if not sep or kind.strip() not in KINDS:
+                fail(f"--property {text!r}: write KIND:TEXT, KIND one of {', '.join(KINDS)}")
+            sources.append(PropertySource(kind.strip(), body.strip()))
+        if period is None and "period" in file_options:
+            try:
+                period = parse_duration(str(file_options["period"]))
+            except ValueError as e:
+                fail(f"period in the verification file: {e}")
+        if period is not None and period <= 0:
+            fail("--period must be greater than 0")
+        if interrupt is None:
+            interrupt = bool(file_options.get("interrupt", False))
+        if max_states is None:
+            ms = file_options.get("max_states", 1_000_000)
+            if not isinstance(ms, int) or isinstance(ms, bool):
+                fail("max_states in the verification file must be a whole number")
+            max_states = ms
+        if max_states < 1:
+            fail("--max-states must be at least 1")
+        if counterexample_dir is not None and period is None:
+            fail("--counterexample writes a bag replayed with `llfsm run --clock sim --period P`: give --period P")
+        loaded = load_arrangement(machines)
+        options = Options(period=period, interrupt=bool(interrupt), max_states=max_states, hash_compact=hash_compact)
+        show = None if quiet else _progress()
+        result = run_verification(loaded, sources, options, show, keep_graph=bool(exports))
+        if show is not None:
+            show.done()
+    except VerifyError as e:
+        if e.diagnostics:
+            click.echo(render_diagnostics(e.diagnostics, fmt, __version__), nl=False)
+        if e.details:
+            click.echo(e.details, nl=False, err=True)
+        click.echo(f"llfsm: {e.message}", err=True)
+        sys.exit(e.status)
+    for kind, path in exports:
+        from ..verify.export import write_export  # deferred: start-up (only --export writes one)
+
+        try:
+            data = write_export(kind, result)
+        except ValueError as e:
+            fail(str(e))
+        write_output(path, data.encode("utf-8"), f"--export {kind}")
+    if counterexample_dir is not None:
+        from ..verify.replay import ReplayError, write_counterexample  # deferred: start-up (only with the option)
+
+        try:
+            said = write_counterexample(result, counterexample_dir)
+        except ReplayError as e:
+            click.echo(f"llfsm: --counterexample: {e}", err=True)
+            said = None
+        if said and not quiet:
+            click.echo(f"llfsm: {said}", err=True)
+    report = render(result, fmt, __version__, witnesses)
+    if output:
+        write_output(output, report.encode("utf-8"), "-o")
+    else:
+        click.echo(report, nl=False)
+    if not quiet:
+        sys.stdout.flush()  # the report before the summary, when both go to one terminal
+        extra = ""
+        if hash_compact and result.configurations:
+            n = result.configurations
+            extra = f"; hash compaction: chance of a collision about {n * n / 2**65:.1e}"
+        failed = sum(o.verdict == "fails" for o in result.outcomes)
+        click.echo(
+            f"verified {len(result.outcomes)} propert{'y' if len(result.outcomes) == 1 else 'ies'}: "
+            f"{failed} failed; {result.configurations:,} configurations, {result.steps:,} steps, "
+            f"{result.seconds:.2f} s{extra}",
+            err=True,
+        )
+    sys.exit(result.status)
+
+
+class _progress:
+    """A progress line on stderr for explorations that take more than a second."""
+
+    def __init__(self) -> None:
+        self.shown = False
+        self.tty = sys.stderr.isatty()
+        self.last = 0.0
+
+    def __call__(self, explored: int, queue: int, seconds: float) -> None:
+        # on a terminal the line is rewritten each second; in a log, a line after 2 s, then every 10 s
+        if not self.tty and (seconds < 2 or (self.shown and seconds - self.last < 10)):
+            return
+        self.last = seconds
+        rate = explored / seconds if seconds else 0
+        line = f"llfsm verify: {explored:,} configurations ({rate:,.0f}/s), queue {queue:,}, {seconds:.0f} s"
+        progress(("\r" + line + "\x1b[K") if self.tty else line + "\n")
+        self.shown = True
+
+    def done(self) -> None:
+        if self.shown and self.tty:
+            progress("\r\x1b[K")

@@ -1,0 +1,288 @@
+"""One verification: the arrangement explored once, every property judged on it.
+
+Safety (`always`, `never`) and `reachable` are judged as each new configuration is found, so a
+failing `always` has a shortest counterexample and the exploration stops early when nothing is
+left to judge; liveness (`eventually`, `leads_to`, `ltl:`) and `ctl:` are judged on the explored
+structure afterwards (llfsm.verify.ltl, llfsm.verify.ctl).
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..runtime.errors import report_for
+from .ctl import CTL
+from .explorer import AtomError, Explorer, Loaded, MachineError, Options, StateLimit, Step
+from .load import PropertySource, VerifyError, machine_infos
+from .ltl import Structure, check_ltl
+from .props import Atom, Property, PropertyError, parse_property
+from .snapshot import VariableValueError
+
+
+@dataclass
+class Trace:
+    """A counterexample (or a witness): the steps from the initial configuration, and for a
+    lasso the step at which the loop starts (the last configuration steps back to it)."""
+
+    configs: list[int]
+    steps: list[tuple[tuple[Any, ...], Step | None]]
+    loop: int | None = None
+
+
+@dataclass
+class Outcome:
+    prop: Property
+    verdict: str  # holds | fails | unknown
+    seconds: float = 0.0
+    trace: Trace | None = None
+    why: str | None = None  # for unknown: why it was not decided; for a CTL failure without a trace
+
+
+@dataclass
+class Verification:
+    """Everything `llfsm verify` reports."""
+
+    loaded: Loaded
+    explorer: Explorer | None
+    outcomes: list[Outcome] = field(default_factory=list)
+    configurations: int = 0
+    steps: int = 0
+    seconds: float = 0.0
+    partial: str | None = None  # interrupted | state limit
+    growing: list[str] = field(default_factory=list)
+    error: str | None = None  # machine code raised: the report, with the path to it
+    error_trace: Trace | None = None
+    #: what the user should know about the result (a replay that did not give the same path)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def status(self) -> int:
+        if self.error is not None or any(o.verdict == "fails" for o in self.outcomes):
+            return 1
+        if self.partial == "state limit":
+            return 3
+        if self.partial == "interrupted":
+            return 130
+        return 0
+
+
+SAFETY = ("always", "never", "reachable")
+
+
+def verify(
+    loaded: Loaded,
+    sources: list[PropertySource],
+    options: Options,
+    progress: Callable[[int, int, float], None] | None = None,
+    keep_graph: bool = False,
+) -> Verification:
+    """Explore `loaded` and judge each property; bad properties raise VerifyError (status 2)."""
+    infos = machine_infos(loaded)
+    props: list[Property] = []
+    atoms: list[Atom] = []
+    atom_ids: list[list[int]] = []  # per property, the global number of each of its atoms
+    by_text: dict[str, int] = {}
+    for src in sources:
+        try:
+            prop, local = parse_property(src.kind, src.text, infos, src.name, src.where)
+        except PropertyError as e:
+            raise VerifyError(str(e)) from None
+        ids = []
+        for a in local:
+            k = by_text.get(a.text)
+            if k is None:
+                k = by_text[a.text] = len(atoms)
+                atoms.append(a)
+            ids.append(k)
+        props.append(prop)
+        atom_ids.append(ids)
+    if len(atoms) > 64:
+        raise VerifyError(f"the properties name {len(atoms)} different conditions; at most 64 in one verification")
+    needs_graph = keep_graph or any(p.kind not in SAFETY for p in props)
+    options.graph = needs_graph
+    try:
+        explorer = Explorer(loaded, options, [a.fn for a in atoms])
+    except VariableValueError as e:
+        raise VerifyError(str(e)) from None
+    except VerifyError:
+        raise
+    except BaseException as exc:  # a variable's initial value raised: machine code may raise anything
+        if isinstance(exc, KeyboardInterrupt | MemoryError):
+            raise
+        rep = report_for(exc)
+        if rep is None:
+            raise
+        err = VerifyError("a machine's variables raised while they were set", status=1)
+        err.details = rep.format()
+        raise err from None
+    explorer.progress = progress
+    result = Verification(loaded, explorer)
+
+    # safety, judged on each new configuration
+    first_bad: dict[int, int] = {}  # property -> the first configuration that decides it
+    pending = {
+        n: (p.kind, atom_ids[n][0]) for n, p in enumerate(props) if p.kind in SAFETY
+    }  # always/never: violated by; reachable: found by
+
+    def on_new(idx: int) -> bool:
+        if not pending:
+            return True
+        lab = explorer.labels[idx]
+        for n, (kind, bit) in list(pending.items()):
+            v = lab >> bit & 1
+            if (kind == "always" and not v) or (kind != "always" and v):
+                first_bad[n] = idx
+                del pending[n]
+        return bool(pending) or needs_graph
+
+    explorer.on_new = on_new if pending else None
+    start = time.monotonic()
+    try:
+        explorer.explore()
+    except StateLimit:
+        result.partial = "state limit"
+        result.growing = growing_variables(explorer)
+    except KeyboardInterrupt:
+        result.partial = "interrupted"
+    except VariableValueError as e:
+        raise VerifyError(str(e)) from None
+    except AtomError as e:
+        a = atoms[e.atom]
+        raise VerifyError(f"{a.where}: `{a.text}` could not be evaluated: {e}") from None
+    except MachineError as e:
+        rep = report_for(e.exc)
+        result.error = rep.format() if rep is not None else f"{type(e.exc).__name__}: {e.exc}"
+        path = explorer.path_to(e.config)
+        choices = [explorer.choice[c] for c in path[1:]] + [e.choice]
+        try:
+            steps = explorer.replay(choices[:-1])
+        except Exception:  # the path cannot be rebuilt: the report alone
+            steps = []
+        result.error_trace = Trace(path, steps)
+    result.seconds = time.monotonic() - start
+    for cls in loaded.classes:  # SPEC 12: set from outside at run time, which nothing here does
+        names = [name for name, _kind in cls.PARAMETERS]
+        if names:
+            result.warnings.append(
+                f"{cls.NAME}: its parameters ({', '.join(names)}) kept their initial values in the exploration; "
+                "a run may set them from outside (llfsm param set): make what may change an input to explore it"
+            )
+    result.configurations = explorer.count
+    result.steps = explorer.steps
+    explored = time.monotonic()
+
+    structure: Structure | None = None
+    ctl: CTL | None = None
+    for n, prop in enumerate(props):
+        t0 = time.monotonic()
+        out = Outcome(prop, "unknown")
+        if prop.kind in SAFETY:
+            idx = first_bad.get(n)
+            if prop.kind == "reachable":
+                out.verdict = "holds" if idx is not None else "fails"
+                if idx is not None:
+                    out.trace = _trace(explorer, explorer.path_to(idx))
+            elif idx is not None:
+                out.verdict = "fails"
+                out.trace = _trace(explorer, explorer.path_to(idx))
+            else:
+                out.verdict = "holds"
+            if (result.partial or result.error) and idx is None:
+                out.verdict = "unknown"
+        elif result.partial is None and result.error is None:
+            if structure is None:
+                structure = _structure(explorer)
+            if prop.kind == "ctl":
+                if ctl is None:
+                    ctl = CTL(structure, list(range(len(atoms))))
+                out.verdict, out.trace, out.why = _judge_ctl(explorer, ctl, prop, atom_ids[n])
+            else:
+                lasso = check_ltl(structure, prop.formula, atom_ids[n])
+                if lasso is None:
+                    out.verdict = "holds"
+                else:
+                    out.verdict = "fails"
+                    out.trace = _trace(explorer, lasso.path, lasso.loop)
+        if out.trace is not None and not _replays(explorer, out.trace):
+            result.warnings.append(
+                f"{prop.name}: its path, run again, did not give the configurations explored: the machines "
+                "read something verify does not keep (a global of a helper module?), so the result may be wrong"
+            )
+        out.seconds = (explored - start) + (time.monotonic() - t0)
+        if out.verdict == "unknown":
+            out.why = result.partial or "machine code raised before it was decided"
+        result.outcomes.append(out)
+    return result
+
+
+def _structure(explorer: Explorer) -> Structure:
+    return Structure(explorer.count, explorer.edges_of, explorer.labels, explorer.fair, explorer.n)
+
+
+def _trace(explorer: Explorer, path: list[int], loop: int | None = None) -> Trace:
+    choices = [explorer.choice_between(a, b) for a, b in itertools.pairwise(path)]
+    if loop is not None:  # the step back to the loop's start
+        choices.append(explorer.choice_between(path[-1], path[loop]))
+    return Trace(path, explorer.replay(choices), loop)
+
+
+def _replays(explorer: Explorer, trace: Trace) -> bool:
+    """Whether running the path again gave the configurations the exploration stored (exact
+    storage only: with hash compaction nothing is kept to compare)."""
+    if explorer.options.hash_compact:
+        return True
+    got = [config for config, _step in trace.steps]
+    return got == [explorer.configs[c] for c in trace.configs] + (
+        [explorer.configs[trace.configs[trace.loop]]] if trace.loop is not None else []
+    )
+
+
+def _judge_ctl(explorer: Explorer, ctl: CTL, prop: Property, ids: list[int]) -> tuple[str, Trace | None, str | None]:
+    """(verdict, trace, why) of a CTL property: a trace for AG f (a shortest path to where f
+    fails) and EF f (to where it holds); other forms say only where they fail."""
+    ctl.atom_ids = ids
+    sat = ctl.sat(prop.formula)
+    if sat[0]:
+        if prop.formula[0] == "E" and prop.formula[1][0] == "F":
+            inner = ctl.sat(prop.formula[1][1])
+            target = _nearest(explorer, inner)
+            return "holds", (_trace(explorer, explorer.path_to(target)) if target is not None else None), None
+        return "holds", None, None
+    if prop.formula[0] == "A" and prop.formula[1][0] == "G":
+        inner = ctl.sat(prop.formula[1][1])
+        target = _nearest(explorer, bytearray(1 - x for x in inner))
+        if target is not None:
+            return "fails", _trace(explorer, explorer.path_to(target)), None
+    return "fails", None, "it does not hold in the initial configuration"
+
+
+def _nearest(explorer: Explorer, where: bytearray) -> int | None:
+    """The configuration of `where` nearest the initial one: the first in breadth-first order."""
+    found = where.find(1)
+    return found if found >= 0 else None
+
+
+def growing_variables(explorer: Explorer) -> list[str]:
+    """The variables whose values kept growing: those with the most distinct values among the
+    configurations stored (each with its range, for numbers), most first."""
+    out: list[tuple[int, str]] = []
+    for i, codec in enumerate(explorer.codecs):
+        if explorer.options.hash_compact:
+            parts = [explorer.part(c, i) for _idx, c in explorer.frontier]
+        else:
+            parts = explorer.part_list[i]
+        if not parts:
+            continue
+        for k, name in enumerate(codec.shown_names):
+            values = {p[codec.first_variable + k] for p in parts}
+            if len(values) < 16:
+                continue
+            nums = [v for v in values if isinstance(v, int | float) and not isinstance(v, bool)]
+            span = f", from {min(nums)} to {max(nums)}" if len(nums) == len(values) else ""
+            out.append((len(values), f"{explorer.machines[i].NAME}.{name} ({len(values):,} values{span})"))
+    out.sort(key=lambda x: -x[0])
+    return [text for _n, text in out[:5]]

@@ -1,0 +1,135 @@
+"""`--counterexample DIR`: a counterexample's inputs as a rosbag2 bag that `llfsm run --clock sim
+--period P --play DIR` replays to the same configuration (docs/verify.md, "Replaying a
+counterexample").
+
+Under `--period P` the explorer follows the run's timing exactly: round r of a path starts at
+run time r*P, and an input bound to a topic takes, at each ringlet, the field of the newest
+message there.  So for each round the bag holds one message per bound topic, at r*P, with the
+values the path's ringlets of that round read: the player publishes it between rounds r-1 and
+r, the input's reader hands it over, and the ringlets of round r take it as their snapshot.
+Round 0 needs no message (the explorer gives bound inputs their defaults in the first round, as
+a run does: no message can have come yet).  The bag is marked as holding run times (as a bag
+llfsm records under `--clock sim`), so the player keeps them.
+
+What a bag cannot carry is refused with the reason: an input bound to no topic that the path
+gives another value than its default, two values of one field in one round, `ros.ok()`
+falling (a signal, not a message).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ..runtime.inputs import DEFAULT, FIELD, MSG, NAME, TOPIC
+from .check import Trace, Verification
+
+
+class ReplayError(Exception):
+    """The counterexample cannot be written as a bag (the message says why)."""
+
+
+def _chosen(v: Verification) -> tuple[str, Trace]:
+    for o in v.outcomes:
+        if o.verdict == "fails" and o.trace is not None:
+            return o.prop.name, o.trace
+    if v.error_trace is not None and v.error_trace.steps:
+        return "machine code raised", v.error_trace
+    raise ReplayError("no property failed with a counterexample: no bag written")
+
+
+def messages(v: Verification, trace: Trace) -> tuple[list[tuple[int, str, Any]], int]:
+    """(run time, topic, message) of each message the path needs, in order, and its rounds."""
+    e = v.explorer
+    assert e is not None and e.period is not None
+    from ..ros.inputs import message_class  # deferred: start-up (only a counterexample bag needs messages)
+
+    period = e.period
+    wanted: dict[int, dict[str, dict[str, Any]]] = {}  # round -> topic -> field -> value
+    types: dict[str, str] = {}
+    rounds = 0
+    for _config, step in trace.steps[1:]:
+        if step is None:
+            continue
+        rounds = max(rounds, step.round + 1)
+        if step.interrupted:
+            raise ReplayError(f"in round {step.round} ros.ok() falls (--interrupt): a bag cannot carry a signal")
+        m = e.machines[step.machine]
+        for entry in m.INPUTS:
+            value = step.inputs[entry[NAME]]
+            if entry[TOPIC] is None:
+                if value != entry[DEFAULT]:
+                    raise ReplayError(
+                        f"input {entry[NAME]} of {m.NAME} is bound to no topic, so a run keeps its default "
+                        f"{entry[DEFAULT]!r}, but the counterexample needs {value!r} in round {step.round}"
+                    )
+                continue
+            if step.round == 0:
+                continue  # the default, as in a run (the explorer chose nothing else)
+            topic = entry[TOPIC] if entry[TOPIC].startswith("/") else "/" + entry[TOPIC]
+            types.setdefault(topic, entry[MSG])
+            fields = wanted.setdefault(step.round, {}).setdefault(topic, {})
+            field = entry[FIELD]
+            if field in fields and fields[field] != value:
+                raise ReplayError(
+                    f"round {step.round} needs {topic} {field} to be both {fields[field]!r} and {value!r}: "
+                    "one message per round cannot give both"
+                )
+            fields[field] = value
+    out = []
+    current: dict[str, Any] = {}
+    for r in sorted(wanted):
+        for topic, fields in sorted(wanted[r].items()):
+            msg = current.get(topic)
+            msg = message_class(types[topic])() if msg is None else msg._copy()
+            for path, value in fields.items():
+                target = msg
+                *parents, last = path.split(".")
+                for name in parents:
+                    target = getattr(target, name)
+                kind = type(getattr(target, last))
+                setattr(target, last, kind(value))
+            current[topic] = msg
+            out.append((r * period, topic, msg))
+    return out, rounds
+
+
+def write_counterexample(v: Verification, folder: str) -> str:
+    """Write the bag of the first counterexample; what to tell the user."""
+    from ..bag import BagError  # deferred: start-up (bags are an optional extra)
+    from ..bag.recorder import SIM_CLOCK_KEY
+    from ..bag.typesupport import TypeSupport
+    from ..bag.writer import BagWriter, qos_profile
+
+    e = v.explorer
+    if e is None or e.period is None:
+        raise ReplayError("needs --period: only then does the explorer follow a run's timing exactly")
+    name, trace = _chosen(v)
+    msgs, rounds = messages(v, trace)
+    try:
+        writer = BagWriter(folder)
+        writer.custom[SIM_CLOCK_KEY] = "sim"
+        types = TypeSupport()
+        for t, topic, msg in msgs:
+            cls = type(msg)
+            definition, type_hash = types.definition(cls._TYPE)
+            conn = writer.connection(topic, cls._TYPE, definition, type_hash, [qos_profile()])
+            writer.write(conn, t, types.serializer(cls)(msg))
+        writer.close()
+    except BagError as e2:
+        raise ReplayError(str(e2)) from None
+    period = e.period
+    targets = " ".join(str(Path(p)) for p in v.loaded.paths)
+    return (
+        f"wrote the counterexample of {name!r} to {folder} ({len(msgs)} message{'s' if len(msgs) != 1 else ''}, "
+        f"{rounds} round{'s' if rounds != 1 else ''}); replay it with: llfsm run --clock sim --period "
+        f"{duration_text(period)} --play {folder} --duration {duration_text(rounds * period)} {targets}"
+    )
+
+
+def duration_text(ns: int) -> str:
+    """A duration as `llfsm run` reads it back exactly: 100ms, 2s, 250us, 7ns."""
+    for unit, scale in (("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000)):
+        if ns % scale == 0:
+            return f"{ns // scale}{unit}"
+    return f"{ns}ns"

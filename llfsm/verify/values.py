@@ -1,0 +1,138 @@
+"""Variable values compared by value (docs/verify.md, "What is explored").
+
+A configuration holds each machine's variables as values that compare and hash as the values
+they stand for: numbers, strings, bytes, None and tuples of those as they are (Python compares
+`1 == 1.0 == True`, and so does verify); a list, dict, set or message as a `Frozen` tuple of its
+kind and its frozen parts (messages by their fields); a handle to a bus entity (a node, a
+publisher) as an opaque token of what it is, its kind and name, standing for the first such
+handle made (later ones of the same kind and name behave alike: publishing on the same topic).
+
+`thaw` gives the ringlet a value it may change in place: a new list, a new message.  Anything
+else (an object of a class of the user's, a function, a file) cannot be compared by value:
+`freeze` raises `Unfreezable` naming its type, and verify reports the variable.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+#: The types a configuration holds as they are.
+SCALARS: frozenset[type] = frozenset({int, float, str, bool, type(None), bytes})
+
+
+class Frozen(tuple[Any, ...]):
+    """A frozen value that is not a scalar: (kind, parts...).  Compared and hashed as a tuple."""
+
+    __slots__ = ()
+
+
+class Unfreezable(TypeError):
+    """A value verify cannot compare by value (the message names its type)."""
+
+
+class Handles:
+    """The bus entities the machines made, by token: the first of each kind and name."""
+
+    def __init__(self) -> None:
+        self.objects: list[Any] = []
+        self.tokens: dict[tuple[str, ...], int] = {}
+
+    def token(self, obj: Any) -> Frozen | None:
+        key = _handle_key(obj)
+        if key is None:
+            return None
+        index = self.tokens.get(key)
+        if index is None:
+            index = self.tokens[key] = len(self.objects)
+            self.objects.append(obj)
+        return Frozen(("handle", index, *key))
+
+
+def _handle_key(obj: Any) -> tuple[str, ...] | None:
+    """What a handle is, for `Handles.token`: (kind, name...), or None for no handle."""
+    # deferred: start-up of `llfsm verify` without the bus (a machine that never uses it)
+    from ..ros.node import Node
+    from ..ros.publisher import Publisher
+
+    if isinstance(obj, Node):
+        return ("node", obj.get_fully_qualified_name())
+    if isinstance(obj, Publisher):
+        return ("publisher", obj.topic_name, obj.msg_type._TYPE, "latched" if obj.transient_local else "")
+    return None
+
+
+def freeze(value: Any, handles: Handles) -> Any:
+    """`value` as a configuration holds it (see the module's docstring)."""
+    t = type(value)
+    if t in SCALARS:
+        return value
+    if t is tuple:
+        if all(type(v) in SCALARS for v in value):
+            return value  # the common case (names, coordinates) without a call per item
+        parts = tuple(freeze(v, handles) for v in value)
+        return parts if all(type(p) in SCALARS or type(p) is tuple for p in parts) else Frozen(("tuple", *parts))
+    if t is list:
+        return Frozen(("list", *(freeze(v, handles) for v in value)))
+    if t is dict:
+        return Frozen(("dict", *(p for k, v in value.items() for p in (freeze(k, handles), freeze(v, handles)))))
+    if t is set or t is frozenset:
+        return Frozen(("set" if t is set else "frozenset", frozenset(freeze(v, handles) for v in value)))
+    fields = getattr(t, "_FIELDS", None)
+    if fields is not None and hasattr(value, "_copy"):  # a message: by its fields
+        return Frozen(("message", t, *(freeze(getattr(value, f), handles) for f, _ in fields)))
+    token = handles.token(value)
+    if token is not None:
+        return token
+    raise Unfreezable(f"a {t.__module__}.{t.__qualname__}")
+
+
+def thaw(value: Any, handles: Handles) -> Any:
+    """A fresh object for a frozen value (a scalar or a tuple of scalars is its own)."""
+    if type(value) is not Frozen:
+        return value
+    kind = value[0]
+    if kind == "list":
+        return [thaw(v, handles) for v in value[1:]]
+    if kind == "tuple":
+        return tuple(thaw(v, handles) for v in value[1:])
+    if kind == "dict":
+        items = value[1:]
+        return {thaw(items[i], handles): thaw(items[i + 1], handles) for i in range(0, len(items), 2)}
+    if kind == "set":
+        return {thaw(v, handles) for v in value[1]}
+    if kind == "frozenset":
+        return frozenset(thaw(v, handles) for v in value[1])
+    if kind == "message":
+        cls = value[1]
+        msg = cls()
+        for (name, _), v in zip(cls._FIELDS, value[2:], strict=True):
+            setattr(msg, name, thaw(v, handles))
+        return msg
+    if kind == "handle":
+        return handles.objects[value[1]]
+    raise AssertionError(kind)  # pragma: no cover
+
+
+def shown(value: Any) -> str:
+    """A frozen value as a person reads it in a counterexample: `[1, 2]`, `Twist(linear=...)`."""
+    if type(value) is not Frozen:
+        return repr(value)
+    kind = value[0]
+    if kind == "list":
+        return "[" + ", ".join(shown(v) for v in value[1:]) + "]"
+    if kind == "tuple":
+        inner = ", ".join(shown(v) for v in value[1:])
+        return f"({inner},)" if len(value) == 2 else f"({inner})"
+    if kind == "dict":
+        items = value[1:]
+        return "{" + ", ".join(f"{shown(items[i])}: {shown(items[i + 1])}" for i in range(0, len(items), 2)) + "}"
+    if kind in ("set", "frozenset"):
+        inner = ", ".join(sorted(shown(v) for v in value[1]))
+        return f"{{{inner}}}" if kind == "set" else f"frozenset({{{inner}}})"
+    if kind == "message":
+        cls = value[1]
+        fields = ", ".join(f"{name}={shown(v)}" for (name, _), v in zip(cls._FIELDS, value[2:], strict=True))
+        return f"{cls.__name__}({fields})"
+    if kind == "handle":
+        return f"<{value[2]} {value[3]}>"
+    return repr(value)  # pragma: no cover

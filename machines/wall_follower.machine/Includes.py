@@ -1,0 +1,2 @@
+from llfsm import ros
+from llfsm.msgs.geometry_msgs.msg import Twist

@@ -1,0 +1,3 @@
+node: ros.Node
+cmd_vel: ros.Publisher
+msg: Twist

@@ -1,0 +1,28 @@
+"""Inputs bound to topics on `--transport dds` (SPEC 11): the wall follower in one process reads
+its `wall_close` input from the wall sensor of turtlesim's process, over ROS 2's wire.  Runs in a
+private network namespace (dds_netns.py)."""
+
+from __future__ import annotations
+
+import re
+import time
+
+import pytest
+from dds_netns import NetNamespace, finish, interrupt
+from helpers import MACHINES
+
+
+@pytest.mark.dds
+def test_the_wall_follower_reads_its_sensor_from_another_process(netns: NetNamespace) -> None:
+    sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--node", "wall_sensor", "--duration", "16")
+    time.sleep(0.5)  # across processes: turtlesim's participant up first
+    bot = netns.llfsm("run", "--transport", "dds", MACHINES / "wall_follower.machine", "-v")
+    interrupt(bot, 13.0)
+    bot_status, _, bot_err = finish(bot, 40)
+    sim_status, _, sim_err = finish(sim, 40)
+    assert bot_status == 0 and sim_status == 0, bot_err + sim_err
+    assert "Traceback" not in bot_err + sim_err
+    states = re.findall(r"- wall_follower +- (\w+)", bot_err)
+    assert "TURN" in states, "the sensor's messages never reached the input across processes"
+    assert states[-1] == "END", bot_err
+    assert "I hit the wall" not in sim_err
