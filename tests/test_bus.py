@@ -371,7 +371,9 @@ def test_echo_prints_yaml_documents_and_remap_moves_the_topic(tmp_path: Path) ->
 
 
 def test_introspect_lists_nodes_topics_and_services(tmp_path: Path) -> None:
-    r = run_sim(_talker(tmp_path), "--introspect")
+    # --keep-accepting: a machine that finished releases its node (test_lifetimes.py), and this
+    # looks at the graph at the end of the run
+    r = run_sim(_talker(tmp_path), "--introspect", "--keep-accepting", "--duration", "50ms")
     assert (
         r.stderr.splitlines()
         == [

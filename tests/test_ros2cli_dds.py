@@ -359,6 +359,48 @@ def test_service_call_gets_an_answer_from_an_rclpy_service(netns: NetNamespace) 
     assert r.stdout.endswith("response:\nstd_srvs.srv.Trigger_Response(success=True, message='done by rclpy')\n\n")
 
 
+COUNTING_SERVER = textwrap.dedent(
+    """
+    import time, rclpy
+    from std_srvs.srv import Trigger
+    rclpy.init()
+    node = rclpy.create_node("rclpy_counter")
+    calls = 0
+
+    def answer(request, response):
+        global calls
+        calls += 1
+        response.success = True
+        response.message = f"call {calls}"
+        return response
+
+    node.create_service(Trigger, "count", answer)
+    end = time.monotonic() + 600
+    while time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.1)
+    """
+)
+
+
+@pytest.mark.interop
+@pytest.mark.skipif(not ros_installed(), reason="real ROS 2 not installed: run `make .venv-ros/.installed`")
+def test_service_call_repeated_100_times_gets_each_answer_from_an_rclpy_service(netns: NetNamespace) -> None:
+    """Issue 22, item 3: `service call -r` to a Fast DDS server; every call gets its own answer."""
+    start_python(netns, COUNTING_SERVER, python=ROS_PYTHON)
+    p = netns.popen([sys.executable, "-m", "llfsm", "service", "call", "/count", "std_srvs/srv/Trigger", "-r", "50",
+                     "--timeout", "20"], cwd=REPO)  # fmt: skip
+    assert p.stdout is not None
+    answers: list[str] = []
+    deadline = time.monotonic() + 90
+    while len(answers) < 100 and time.monotonic() < deadline and (line := p.stdout.readline()):
+        if line.startswith("std_srvs.srv.Trigger_Response("):
+            answers.append(line)
+    p.send_signal(signal.SIGINT)
+    status, _, err = finish(p, 20)
+    assert answers == [f"std_srvs.srv.Trigger_Response(success=True, message='call {i}')\n" for i in range(1, 101)], err
+    assert status == 130, err
+
+
 LATE_TALKER = textwrap.dedent(
     """
     import time

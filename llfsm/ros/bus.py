@@ -25,6 +25,7 @@ from typing import IO, TYPE_CHECKING, Any, Protocol, cast
 
 from ..runtime.context import RunContext, current
 from .executor import Executor
+from .lifetimes import Lifetimes
 from .names import Remap
 from .task import Future
 from .transports.base import NodeView, ServiceView, SubscriptionView, Transport
@@ -119,7 +120,13 @@ class Bus(Executor):
         #: The transport's poll when it can bring anything in (never for the in-process one).
         self._poll = self.transport.poll if self.transport.remote else None
         self.transport.start(self)
+        self._told: set[str] = set()  # what nobody_here said already
+        if not self.transport.remote:
+            ctx.at_end.append(self._unheard)
         ctx.between_rounds.append(self.spin_some)
+        #: What the machines' variables hold: dropped nodes and entities are destroyed (lifetimes.py).
+        self.lifetimes = Lifetimes(self)
+        ctx.between_rounds.append(self.lifetimes.collect)
         if self._poll is not None:
             ctx.wake = 0  # look at the transport after the first round, then every POLL_NS
 
@@ -170,11 +177,35 @@ class Bus(Executor):
         for t in list(self.topics.values()):
             fn(t)
 
+    def _unheard(self) -> None:
+        """At the end of an in-process run: machine code's subscriptions (of nodes its variables
+        hold, lifetimes.py) of a topic nothing in the run published.  Not the built-in nodes'
+        (turtlesim listens to /turtle1/cmd_vel whether or not anyone drives it)."""
+        held = self.lifetimes.held
+        for name, t in sorted(self.topics.items()):
+            if t.publishers or t.published:
+                continue
+            if any(id(r.node) in held for r in t.readers):
+                self.nobody_here(f"nothing published {name}, which a machine subscribed to,")
+
     # -- services ----------------------------------------------------------------------------
     def call(self, service: str, request: Message) -> Future:
         future = Future(service)
         self.queue(_Request(self, service, request, future))
         return future
+
+    def nobody_here(self, what: str) -> None:
+        """A run on the in-process bus waits for what no node of this process provides: say once
+        that this run cannot reach other processes and how to join them (a user who forgot
+        `--transport dds` on one side would otherwise blame the other side)."""
+        if self.transport.remote or what in self._told:
+            return
+        self._told.add(what)
+        print(
+            f"llfsm: {what} in this run, which is on the in-process bus: other processes cannot reach it. "
+            "To join nodes in other processes, run every side with --transport dds (or LLFSM_TRANSPORT=dds).",
+            file=self.log_output(),
+        )
 
     # -- logging -------------------------------------------------------------------------------
     def log_output(self) -> IO[str]:

@@ -51,6 +51,7 @@ class Client:
                     return True
             return False
         if timeout_sec is None or timeout_sec <= 0:
+            bus.nobody_here(f"{self.srv_name} has no server")
             return False
         deadline = bus.clock.now + round(timeout_sec * 1e9)
         while bus.clock.now < deadline:
@@ -59,6 +60,7 @@ class Client:
             bus.spin_once(deadline - bus.clock.now)
             if self.service_is_ready():
                 return True
+        bus.nobody_here(f"{self.srv_name} has no server")
         return False
 
     def call_async(self, request: Message) -> Future:

@@ -93,6 +93,9 @@ class Executor:
         scheduler spin the executor after its current round."""
         self.queue(_Call(fn))
 
+    def nobody_here(self, what: str) -> None:
+        """A wait for what no node of this process provides (the bus says how to reach others)."""
+
     def ok(self) -> bool:
         """`ros.ok()`: between the first `ros.init()` and `ros.shutdown()` or Ctrl-C."""
         return self.initialised and not self.shut and not self.ctx.interrupted
@@ -199,6 +202,7 @@ class Executor:
                 if not remote.can_still_answer(future):
                     return FutureReturnCode.TIMEOUT  # no server in any process, or it went away
             elif future._service is not None and future._service not in self.services:
+                self.nobody_here(f"{future._service} has no server")
                 return FutureReturnCode.TIMEOUT  # no server: nothing in this process can answer
             if self._poll is not None and self._poll() and future.done():
                 return FutureReturnCode.SUCCESS  # the reply was in what the poll took: no wait

@@ -58,6 +58,7 @@ class Node(ParameterHost):
         logger_name = ".".join([*ns.strip("/").split("/"), name]) if ns != "/" else name
         bus.nodes.append(self)
         bus.transport.node_changed(self)
+        bus.lifetimes.created()
         rosout = self.create_publisher(Log, "/rosout", rosout_qos_profile) if enable_rosout else None
         self._logger = Logger(bus, logger_name, rosout)
         events = (
@@ -110,6 +111,7 @@ class Node(ParameterHost):
         pub = kind(self._bus, self, msg_type, self.resolve_topic_name(topic), qos.depth, qos.reliability)
         self._entities.append(pub)
         self._bus.transport.node_changed(self)
+        self._bus.lifetimes.created()
         return pub
 
     def create_subscription(
@@ -130,6 +132,7 @@ class Node(ParameterHost):
         sub = Subscription(self._bus, self, msg_type, name, callback, qos.depth, qos.transient_local, qos.reliability)
         self._entities.append(sub)
         self._bus.transport.node_changed(self)
+        self._bus.lifetimes.created()
         return sub
 
     def create_service(
@@ -143,6 +146,7 @@ class Node(ParameterHost):
         srv = ServiceServer(self._bus, self, srv_type, self.resolve_service_name(srv_name), callback)
         self._entities.append(srv)
         self._bus.transport.node_changed(self)
+        self._bus.lifetimes.created()
         return srv
 
     def create_client(self, srv_type: type[Service], srv_name: str, **_ignored: Any) -> Client:
@@ -152,35 +156,50 @@ class Node(ParameterHost):
         cli = Client(self._bus, self, srv_type, self.resolve_service_name(srv_name))
         self._entities.append(cli)
         self._bus.transport.node_changed(self)
+        self._bus.lifetimes.created()
         return cli
 
     def create_timer(self, timer_period_sec: float, callback: Callable[[], Any], **_ignored: Any) -> Timer:
         self._check()
         timer = Timer(self._bus, timer_period_sec, callback)
         self._entities.append(timer)
+        self._bus.lifetimes.created()
         return timer
 
+    def _destroy_entity(self, e: Any) -> None:
+        """Destroy one of this node's entities and take it out of the graph (rclpy's
+        destroy_publisher and the like; llfsm.ros.lifetimes when machine code dropped it)."""
+        e.destroy()
+        if e in self._entities:
+            self._entities.remove(e)
+            self._bus.transport.node_changed(self)
+
     def destroy_publisher(self, p: Publisher) -> None:
-        p.destroy()
+        self._destroy_entity(p)
 
     def destroy_subscription(self, s: Subscription) -> None:
-        s.destroy()
+        self._destroy_entity(s)
 
     def destroy_service(self, s: ServiceServer) -> None:
-        s.destroy()
+        self._destroy_entity(s)
 
     def destroy_timer(self, t: Timer) -> None:
-        t.destroy()
+        self._destroy_entity(t)
 
     def destroy_client(self, c: Client) -> None:
-        c.destroy()
+        self._destroy_entity(c)
 
     def destroy_node(self) -> None:
+        """Destroy the node's entities and leave the graph (`node list` no longer shows it)."""
+        if self._destroyed:
+            return
         for e in self._entities:
             e.destroy()
         self._entities.clear()
         self._destroyed = True
         self._bus.transport.node_changed(self)
+        if self in self._bus.nodes:
+            self._bus.nodes.remove(self)
 
     # logging, time (parameters: ParameterHost)
     def get_logger(self) -> Logger:

@@ -31,8 +31,12 @@ class ServiceServer:
         """`srv_name` is resolved (the node expanded and remapped it)."""
         self._bus = bus
         self.srv_name = srv_name
-        if self.srv_name in self._bus.services:
+        old = self._bus.services.get(self.srv_name)
+        if old is not None and not _same_node(old.node, node):
             raise ValueError(f"create_service(): {self.srv_name} already has a server; a service has exactly one")
+        # A node made again under its old name (a machine restarted re-runs `node = ros.Node(...)`)
+        # takes over the old node's services: the old one is destroyed once the machine's
+        # variable no longer holds it (lifetimes.py), and its destroy() leaves the new server be.
         self.type = srv_type
         self.callback = callback
         self.node = node
@@ -54,6 +58,11 @@ class ServiceServer:
         if self._remote is not None:
             self._remote.close()
             self._remote = None
+
+
+def _same_node(a: NodeView, b: NodeView) -> bool:
+    """Two nodes of one name, a different object (the server of the same node twice stays refused)."""
+    return a is not b and (a.get_namespace(), a.get_name()) == (b.get_namespace(), b.get_name())
 
 
 Service = ServiceServer  # rclpy calls the server object `Service`

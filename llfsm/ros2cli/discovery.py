@@ -33,11 +33,14 @@ def open_graph() -> Graph:
 
 @contextmanager
 def discovered(spin_time: float) -> Iterator[Graph]:
-    """A graph reader that has listened to discovery for `spin_time` (closed afterwards): what
-    the list verbs print from."""
+    """A graph reader that has listened to discovery for `spin_time`, and then until every
+    participant seen has told its nodes and their endpoints have been seen (at most SETTLE_S
+    more: Fast DDS resends its ros_discovery_info only on its heartbeat), closed afterwards:
+    what the list verbs print from."""
     graph = open_graph()
     try:
         graph.spin(spin_time)
+        graph.settle()
         yield graph
     finally:
         graph.close()

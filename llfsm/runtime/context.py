@@ -45,6 +45,9 @@ class RunContext:
         #: again for whatever they still hold.  A hook that must run after every round sets
         #: `wake = 0` each time it runs.  Setting it is atomic, so another thread may do it.
         self.wake: int = FOREVER
+        #: A machine finished: what its variables held may be held no more, and the bus looks
+        #: between rounds (llfsm.ros.lifetimes).
+        self.references_dropped = False
         #: Called once when the run ends (nodes write their pictures, close windows).
         self.at_end: list[Callable[[], None]] = []
         #: The run's arrangement (set by the Arrangement itself): nodes that end the run (teleop's

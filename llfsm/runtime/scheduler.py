@@ -276,6 +276,8 @@ class Arrangement:
         m._suspended = False
         _regate(m)
         self._attention = True
+        self.ctx.references_dropped = True  # what it held is released between rounds
+        self.ctx.wake = 0
 
     def _rehold(self) -> None:
         """Between rounds: a machine that commanded itself and then fired a transition in the

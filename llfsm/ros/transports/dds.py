@@ -33,7 +33,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from cyclonedds._clayer import ddspy_write
-from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
+from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication, BuiltinTopicDcpsSubscription
 from cyclonedds.core import (
     DDSStatus,
     Entity,
@@ -50,7 +50,7 @@ from ...msgs import _dds
 from ...msgs.rmw_dds_common.msg import Gid, NodeEntitiesInfo, ParticipantEntitiesInfo
 from . import dds_config
 from .base import Transport
-from .dds_graph import message_class, user_data_value
+from .dds_graph import message_class, message_type, user_data_value
 from .dds_read import ANY, TAKE_BATCH, Samples
 
 if TYPE_CHECKING:
@@ -139,9 +139,11 @@ class _Incompatible:
     endpoint elsewhere was found whose QoS cannot match ours: a reliable subscription and a
     best-effort publisher, say.  Without it the subscription would just never receive."""
 
-    def __init__(self, endpoint: Any, topic: str, node: NodeView, *, reader: bool) -> None:
+    def __init__(self, endpoint: Any, topic: str, node: NodeView, *, reader: bool, msg_type: str = "") -> None:
         self.endpoint, self.topic, self.node, self.reader = endpoint, topic, node, reader
+        self.msg_type = msg_type  # ours, pkg/msg/Name
         self.said = 0
+        self.clashes: set[str] = set()  # the other types already named
 
     def on_trigger(self) -> None:
         if self.reader:
@@ -160,8 +162,42 @@ class _Incompatible:
                     f"after {MAX_INCOMPATIBLE_WARNINGS} warnings, further ones are not reported."
                 )
                 return
-            policy = _POLICY_NAMES.get(status.last_policy_id, "INVALID")
-            logger.warn(f"{said.format(self.topic)} Last incompatible policy: {policy}")
+            policy = _POLICY_NAMES.get(status.last_policy_id)
+            if policy is None:  # Cyclone says INVALID when the types differ, not a QoS policy
+                others = self.other_types() - self.clashes
+                if others:
+                    self.clashes |= others
+                    logger.warn(self.clash(sorted(others)))
+                    return
+            logger.warn(f"{said.format(self.topic)} Last incompatible policy: {policy or 'INVALID'}")
+
+    def other_types(self) -> set[str]:
+        """The types other endpoints of our topic have, where they differ from ours (what the
+        domain's built-in topics say; read only when Cyclone refused a match, which is rare)."""
+        kind = BuiltinTopicDcpsPublication if self.reader else BuiltinTopicDcpsSubscription
+        reader = BuiltinDataReader(self.endpoint.participant, kind)
+        try:
+            samples = reader.read(N=TAKE_BATCH)
+        finally:
+            _delete(reader)
+        name = "rt" + self.topic
+        types = {
+            message_type(getattr(x, "type_name", "") or "") for x in samples if getattr(x, "topic_name", "") == name
+        }
+        return {t for t in types if t and t != self.msg_type}
+
+    def clash(self, others: list[str]) -> str:
+        """As the in-process bus says it ("the topic already carries ..."), naming both types."""
+        theirs = " and ".join(others)
+        if self.reader:
+            return (
+                f"cannot subscribe to {self.topic} as {self.msg_type}: a publisher elsewhere publishes {theirs} on it; "
+                "the types differ, so no messages will be received from it"
+            )
+        return (
+            f"cannot publish {self.topic} as {self.msg_type}: a subscription elsewhere takes {theirs} on it; "
+            "the types differ, so no messages will be sent to it"
+        )
 
 
 class _WaitSet:
@@ -226,7 +262,9 @@ class _Writer(_Endpoint):
         self.writers = (self.writer,)
         self.matched = 0
         self.keeps = pub.transient_local  # the writer keeps its last samples for readers still to come
-        self.incompatible = _Incompatible(self.writer, pub.topic_name, pub.node, reader=False)
+        self.incompatible = _Incompatible(
+            self.writer, pub.topic_name, pub.node, reader=False, msg_type=pub.msg_type._TYPE
+        )
         self.writer.set_status_mask(DDSStatus.PublicationMatched | DDSStatus.OfferedIncompatibleQos)
         self.token = t.waits.attach(self.writer, self)
         t.add_endpoint(self)
@@ -280,7 +318,7 @@ class _Reader(_Endpoint):
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
         self.reader.set_status_mask(DDSStatus.RequestedIncompatibleQos)
-        incompatible = _Incompatible(self.reader, sub.topic_name, sub.node, reader=True)
+        incompatible = _Incompatible(self.reader, sub.topic_name, sub.node, reader=True, msg_type=sub.msg_type._TYPE)
         self.status_token = t.waits.attach(self.reader, incompatible)
         t.add_endpoint(self)
 

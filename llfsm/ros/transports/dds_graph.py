@@ -38,6 +38,9 @@ DISCOVERY_TOPIC = "ros_discovery_info"
 #: How long a verb that names nodes waits, after its spin time, for the ros_discovery_info of
 #: participants already seen (Graph.settle).
 SETTLE_S = 5.0
+#: How long after its first endpoint a participant with no ros_discovery_info writer yet is
+#: waited for (Graph.settle).
+PARTICIPANT_GRACE_S = 0.5
 INFINITE_NS = 0x7FFFFFFFFFFFFFFF  # Cyclone's DDS_INFINITY
 #: ros_discovery_info entries kept for participants not (yet) seen alive: a sample can come
 #: before its participant's, but a peer can also write gids of participants that never exist.
@@ -210,6 +213,8 @@ class Graph:
         }
         self._endpoints: dict[bytes, Endpoint] = {}
         self._participants: set[bytes] = set()
+        #: participant -> time.monotonic() its first endpoint was seen (Graph._nodes_known)
+        self._first_endpoint: dict[bytes, float] = {}
         self._nodes: dict[bytes, list[tuple[NodeName, list[bytes], list[bytes]]]] = {}
         self._info = self._discovery_info_reader(say)
 
@@ -257,6 +262,7 @@ class Graph:
             else:
                 self._participants.discard(key)
                 self._nodes.pop(key, None)
+                self._first_endpoint.pop(key, None)
                 for gid in [g for g, e in self._endpoints.items() if e.participant == key]:
                     del self._endpoints[gid]
         for kind, reader in self._readers.items():
@@ -269,6 +275,7 @@ class Graph:
                 if participant == self._own:
                     continue
                 self._endpoints[gid] = Endpoint(gid, participant, kind, sample.topic_name, sample.type_name, sample.qos)
+                self._first_endpoint.setdefault(participant, time.monotonic())
         for info, _sample_info in self._info.take():
             self._take_discovery_info(info)
 
@@ -311,11 +318,30 @@ class Graph:
         return self.spin(seconds, until=self._nodes_known)
 
     def _nodes_known(self) -> bool:
-        return all(
-            e.participant in self._nodes
-            for e in self._endpoints.values()
-            if e.kind == "publisher" and e.topic == DISCOVERY_TOPIC and e.participant in self._participants
-        )
+        """Every participant seen has told its nodes, and every endpoint those nodes name has
+        been seen.  A participant with a ros_discovery_info writer is waited for until its
+        sample is read, and one with no endpoint seen yet until one is (a ROS 2 participant has
+        endpoints: a Fast DDS one announces them up to a second after itself).  One with
+        endpoints but no ros_discovery_info writer is waited for PARTICIPANT_GRACE_S after its
+        first endpoint (the writer may come in a later announcement; a plain DDS participant
+        never has one, and is then not waited for)."""
+        now = time.monotonic()
+        informing = {
+            e.participant for e in self._endpoints.values() if e.kind == "publisher" and e.topic == DISCOVERY_TOPIC
+        }
+        for p in self._participants:
+            if p == self._own:
+                continue
+            nodes = self._nodes.get(p)
+            if nodes is None:
+                first = self._first_endpoint.get(p)
+                if p in informing or first is None or now - first < PARTICIPANT_GRACE_S:
+                    return False
+                continue
+            for _name, readers, writers in nodes:
+                if any(g not in self._endpoints for g in readers) or any(g not in self._endpoints for g in writers):
+                    return False
+        return True
 
     # -- queries ----------------------------------------------------------------------------
 
