@@ -63,6 +63,10 @@ U64 = (1 << 64) - 1
 REPLY_PATIENCE_S = 2.0
 #: How long a client trusts its last look at the server's matches (spin calls ask often).
 READY_CACHE_S = 0.05
+#: How long a client of a Fast DDS server waits after making its bare reply reader before it
+#: makes the request writer, so that the server has matched the reader before a request can
+#: reach it (docs/transports.md).
+PLAIN_WRITER_DELAY_S = 0.05
 #: rclpy's ReliabilityPolicy values (llfsm.ros.qos): a transport imports nothing of the bus above it.
 SYSTEM_DEFAULT, RELIABLE = 0, 1
 #: History depth of service endpoints: rmw's default service QoS (keep last 10, reliable, volatile).
@@ -601,6 +605,11 @@ class _Client(_Endpoint):
         if self.fast:
             # Fast DDS matched our (header) endpoints by name; it talks without the header
             if self.plain is None:
+                if not writers:
+                    # Cyclone does not know the server's reply writer yet: a reply reader made
+                    # now would miss the one heartbeat Fast DDS sends it (docs/transports.md)
+                    self._ready = False
+                    return False
                 self.plain = _PlainClient(self)
                 self.t._dirty = True  # announce the new reader and writer with this client's
             self._ready = self.plain.ready()
@@ -685,13 +694,13 @@ class _PlainClient:
     def __init__(self, owner: _Client) -> None:
         t, srv, name = owner.t, owner.cli.srv_type, owner.cli.srv_name
         self.t, self.owner = t, owner
-        self.writer = DataWriter(
-            t.publisher_, t.topic(f"rq{name}Request", _dds.dds_type(srv.Request)), qos=_qos(SERVICE_DEPTH)
-        )
         self.reader = DataReader(
             t.subscriber_, t.topic(f"rr{name}Reply", _dds.dds_type(srv.Response)), qos=_qos(SERVICE_DEPTH, reader=True)
         )
-        owner.readers, owner.writers = (owner.reader, self.reader), (owner.writer, self.writer)
+        self.made = time.monotonic()
+        self.writer: DataWriter | None = None  # made a little after the reader (ready())
+        self._request_topic = t.topic(f"rq{name}Request", _dds.dds_type(srv.Request))
+        owner.readers, owner.writers = (owner.reader, self.reader), (owner.writer,)
         self.waiting: deque[PendingReply] = deque()
         cls = srv.Response
         self.replies = Samples(
@@ -701,10 +710,18 @@ class _PlainClient:
         self.token = t.waits.attach(self.cond, self)
 
     def ready(self) -> bool:
+        if self.writer is None:
+            if time.monotonic() - self.made < PLAIN_WRITER_DELAY_S:
+                return False
+            self.writer = DataWriter(self.t.publisher_, self._request_topic, qos=_qos(SERVICE_DEPTH))
+            self.owner.writers = (self.owner.writer, self.writer)
+            self.t._dirty = True
+            return False
         return bool(self.writer.get_matched_subscriptions()) and bool(self.reader.get_matched_publications())
 
     def send(self, request: Message, future: PendingReply) -> None:
         self.waiting.append(future)
+        assert self.writer is not None  # sent only once ready()
         _write(self.writer, _dds.cdr(request))
 
     def on_trigger(self) -> None:
