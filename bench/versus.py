@@ -25,18 +25,20 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
 import textwrap
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 THIS = HERE.parent
+sys.path.insert(0, str(HERE))
+
+import run  # noqa: E402  (bench/run.py: its timers, which this file shares)
+
 NETNS_SETUP = "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo"
 Row = list[str]
 
@@ -145,19 +147,6 @@ def section_speed(other: Path, quick: bool, tmp: Path) -> list[Row]:
     return rows
 
 
-def wall(cmd: list[str], env: dict[str, str]) -> float:
-    t = time.perf_counter()
-    subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True, timeout=600)
-    return time.perf_counter() - t
-
-
-def cpu_of(cmd: list[str], env: dict[str, str]) -> float:
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True, timeout=600)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-
-
 def section_startup(other: Path, quick: bool, tmp: Path) -> list[Row]:
     m = tmp / "hello.machine"
     m.mkdir()
@@ -174,7 +163,7 @@ def section_startup(other: Path, quick: bool, tmp: Path) -> list[Row]:
                 if not target.exists():
                     subprocess.run([python_of(side), "-m", "llfsm", "build", "-q", str(m), "-o", str(target.parent)],
                                    env=env, check=True)  # fmt: skip
-            return wall([python_of(side), "-m", "llfsm", "run", "--clock", "sim", str(target)], env)
+            return run.wall([python_of(side), "-m", "llfsm", "run", "--clock", "sim", str(target)], env)
 
         for side in (THIS, other):
             once(side)  # caches and bytecode written outside the timed runs
@@ -184,7 +173,6 @@ def section_startup(other: Path, quick: bool, tmp: Path) -> list[Row]:
 
 
 def section_build(other: Path, quick: bool, tmp: Path) -> list[Row]:
-    sys.path.insert(0, str(HERE))
     from gen import write_big
 
     rows = []
@@ -197,7 +185,8 @@ def section_build(other: Path, quick: bool, tmp: Path) -> list[Row]:
         def once(side: Path, root: Path = root, fresh: Iterator[int] = fresh) -> float:
             i = next(fresh)  # a fresh cache and output folder: a cold build every time
             env = env_of(side, tmp / f"bcache-{i}")
-            return cpu_of([python_of(side), "-m", "llfsm", "build", "-q", str(root), "-o", str(tmp / f"bout-{i}")], env)
+            cmd = [python_of(side), "-m", "llfsm", "build", "-q", str(root), "-o", str(tmp / f"bout-{i}")]
+            return run.wall_cpu(cmd, env)[1]
 
         mine, theirs = alternate(3 if quick else 5, (THIS, other), once)
         rows.append(row(f"build: cold build of {count} machines (CPU)", mine, theirs, lambda x: f"{x:.2f} s"))
