@@ -88,6 +88,11 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
         head += f" (a lasso: {last} forever)"
     out = [head + ":"]
     loop_start = None if trace.loop is None else trace.loop + 1
+
+    def show(k: int) -> None:
+        config, step = steps[k]
+        out.extend("  " + line for line in step_lines(e, step, config))
+
     pos = 0
     while pos < len(steps):
         if pos == loop_start:
@@ -95,24 +100,21 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
         end = pos  # the last of a run of quiet ringlets starting here (never across the loop's start)
         while _quiet(steps[pos][1]) and end + 1 < len(steps) and end + 1 != loop_start and _quiet(steps[end + 1][1]):
             end += 1
-        if end - pos + 1 > FOLD:
-            folded_from, folded_to = steps[pos + 2][1], steps[end - 2][1]
-            assert folded_from is not None and folded_to is not None
-            shown_steps = [*steps[pos : pos + 2], None, *steps[end - 1 : end + 1]]
-            for item in shown_steps:
-                if item is None:
-                    out.append(
-                        f"  ... {end - pos - 3:,} more ringlets in which nothing fired, changed or was published "
-                        f"(rounds {folded_from.round}-{folded_to.round}; --format json lists each) ..."
-                    )
-                    continue
-                out += ["  " + line for line in step_lines(e, item[1], item[0])]
-            pos = end + 1
+        if end - pos + 1 <= FOLD:
+            show(pos)
+            pos += 1
             continue
-        config, step = steps[pos]
-        for line in step_lines(e, step, config):
-            out.append("  " + line)
-        pos += 1
+        folded_from, folded_to = steps[pos + 2][1], steps[end - 2][1]
+        assert folded_from is not None and folded_to is not None
+        show(pos)
+        show(pos + 1)
+        out.append(
+            f"  ... {end - pos - 3:,} more ringlets in which nothing fired, changed or was published "
+            f"(rounds {folded_from.round}-{folded_to.round}; --format json lists each) ..."
+        )
+        show(end - 1)
+        show(end)
+        pos = end + 1
     if trace.loop is not None:
         out.append("  -- and back to where the loop starts --")
     final = steps[-1][0]
