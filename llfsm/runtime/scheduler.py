@@ -11,6 +11,7 @@ apart means an untraced run pays nothing for tracing.
 from __future__ import annotations
 
 import _signal as signal  # the signal module without its enums: enum is a tenth of a run's start-up
+import os
 import time
 
 from .clock import Clock, SimClock, WallClock
@@ -18,6 +19,7 @@ from .context import FOREVER, RunContext, activate
 from .errors import ErrorReport, RunStopped, is_generated, passes_through, report_for, signal_name
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
+from .watchdog import cpu_and_wait
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
@@ -39,6 +41,13 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: After a first interrupt, machine code that still holds the run this long (seconds of real
 #: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
 STUCK_SLACK_S = 0.5
+#: Rounds the machines get after an interrupt before the grace time can end the run: on a host
+#: with more runnable processes than cores (sixty runs stopped at once on two) a run may wait
+#: for the CPU longer than its grace time, and its machines must still see `ros.ok()` turn false.
+GRACE_ROUNDS = 3
+#: A run not held by a section when the grace time and the slack have passed (_not_held) is
+#: given this much longer to end by its rounds.
+STARVED_S = 10.0
 
 
 #: Back-to-back firing rounds read the wall clock every BATCH rounds at most, while BATCH
@@ -94,6 +103,8 @@ class Arrangement:
         self._signal: int | None = None
         self._grace_end: int | None = None
         self._interrupted_at = 0.0  # time.monotonic() of the first interrupt: grace is real time too
+        self._grace_rounds = 0  # rounds since the interrupt was seen (GRACE_ROUNDS)
+        self._cpu_wait = (0.0, 0.0)  # the main thread's CPU time, and time waited for it, then
         self._grace_ns = 1_000_000_000
         self.running = False  # inside run(): a stop may be raised into the running code
         #: The between-round hooks (the bus) are running: no ringlet is, so a new input value can
@@ -297,6 +308,7 @@ class Arrangement:
         if self._signal is None:
             self._signal = signum
             self._interrupted_at = time.monotonic()
+            self._cpu_wait = cpu_and_wait(os.getpid())
         self.ctx.interrupted = True
         self._attention = True
 
@@ -333,9 +345,13 @@ class Arrangement:
                 self._grace_end = now + grace
                 if self.on_interrupt is not None:
                     self.on_interrupt(grace)
-            elif now >= self._grace_end or time.monotonic() - self._interrupted_at >= grace / 1e9:
-                # run time or real time, whichever passes first: under `--clock sim --period 1ns`
-                # a second of run time is a billion rounds
+                return None
+            self._grace_rounds += 1
+            if self._grace_rounds >= GRACE_ROUNDS and (
+                now >= self._grace_end or time.monotonic() - self._interrupted_at >= grace / 1e9
+            ):
+                # run time or real time, whichever passes first (under `--clock sim --period 1ns`
+                # a second of run time is a billion rounds), once the machines have had rounds
                 return self._result("interrupted", status)
         return None
 
@@ -373,6 +389,11 @@ class Arrangement:
             return RunResult("error", self.rounds, self.clock.now, EXIT_ERROR, rep)
         finally:
             self.running = False  # from here on a signal is only counted: at_end runs whole
+            # no machine code runs any more, so no section can hold the run: the timer that
+            # would stop one must not fire in the middle of at_end (closing DDS can take
+            # seconds while many peers leave at once), where its handler cannot answer the
+            # watchdog until the call returns
+            signal.setitimer(signal.ITIMER_REAL, 0)
             try:
                 for fn in self.ctx.at_end:
                     fn()
@@ -553,6 +574,22 @@ def _in_machine_code(frame: FrameType | None) -> bool:
     return False
 
 
+#: Where the scheduler waits for a round (the wall clock with a period, a sleep until a timer):
+#: a run found there when the grace time has passed ends at once, not after the wait.
+_ROUND_WAITS = (WallClock.advance.__code__, WallClock.sleep_until.__code__)
+
+
+def _not_held(arr: Arrangement, frame: FrameType | None) -> bool:
+    """Whether a run still running after its grace time and slack is not held by a section:
+    its own work is under way (unloading a finished machine's node can take seconds when many
+    DDS peers leave at once), or it was waiting for the CPU, not running, since the interrupt
+    (many runs stopped at once on few cores).  Then its rounds end it, and the timer waits on."""
+    ran, waited = cpu_and_wait(os.getpid())
+    if waited - arr._cpu_wait[1] >= STUCK_SLACK_S and ran - arr._cpu_wait[0] < STUCK_SLACK_S:
+        return True  # starved: whatever it was in, it had no time to finish it
+    return not _in_machine_code(frame) and (frame is None or frame.f_code not in _ROUND_WAITS)
+
+
 def signals_handled(arr: Arrangement) -> _SignalsHandled:
     """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run (a `with`).
 
@@ -575,6 +612,8 @@ def signals_handled(arr: Arrangement) -> _SignalsHandled:
         arr.interrupt(signum)
         if first:
             signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
+            if arr.watchdog is not None:
+                arr.watchdog.keep_answering(arr._grace_ns / 1e9 + STARVED_S)
         else:
             stop(frame, f"stopped by a second {signal_name(signum)}")
 
@@ -583,8 +622,12 @@ def signals_handled(arr: Arrangement) -> _SignalsHandled:
             arr.watchdog.answer()
         if arr._interrupts:
             grace = arr._grace_ns / 1e9
+            waited = time.monotonic() - arr._interrupted_at
+            if waited < grace + STARVED_S and _not_held(arr, frame):
+                signal.setitimer(signal.ITIMER_REAL, STUCK_SLACK_S)  # the rounds will end the run
+                return
             sig = signal_name(arr._signal or 0)
-            held = grace + STUCK_SLACK_S
+            held = grace + STUCK_SLACK_S if waited < grace + STARVED_S else round(waited, 1)
             stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
 
     return _SignalsHandled(handler, alarm, arr.watchdog)
