@@ -511,7 +511,7 @@ class TwoRuns:
             (Action("/turtle1/rotate_absolute", "turtlesim/action/RotateAbsolute", ("/turtlesim",), ("/teleop",)),),
         )
 
-    def sample(self) -> dict[str, Any]:
+    def state(self) -> dict[str, Any]:
         rows = [
             {
                 "name": d["name"],
@@ -528,17 +528,9 @@ class TwoRuns:
             }
             for d, state in zip(self.descs, ("PUBLISH", "WAIT_AND_COUNT"), strict=True)
         ]
-        return {
-            "t": 2.0,
-            "clock": "wall",
-            "source": "view",
-            "ended": False,
-            "machines": rows,
-            "topics": [],
-            "services": [],
-            "param_events": {},
-            "world": None,
-        }
+        from llfsm.web.channel import state_of
+
+        return state_of(t=2.0, source="view", machines=rows)
 
 
 def test_two_runs_of_one_machine_are_two_cards_saying_which_run_and_that_commands_reach_both(

@@ -42,6 +42,7 @@ from helpers import MACHINES, REPO
 pytest.importorskip("aiohttp")
 
 from llfsm.diagram import svg as diagram
+from llfsm.web.channel import state_of
 from llfsm.web.server import WebServer
 
 MACHINE = "ros2_ping_pong"
@@ -187,12 +188,12 @@ class FakeSource:
     def machines(self) -> list[Any]:
         return self.descriptions
 
-    def sample(self) -> dict[str, Any]:
+    def state(self) -> dict[str, Any]:
         self.samples += 1
         if self.samples in self.fail_at:
             raise AttributeError("'int' object has no attribute 'get'")
-        rows = [{"name": "ok", "state": "A" if self.samples % 2 else "B", "status": "running", "pending": None}]
-        return {"t": self.samples / 10, "clock": "wall", "ended": False, "machines": rows, "topics": [], "services": []}
+        row = {"name": "ok", "state": "A" if self.samples % 2 else "B", "status": "running", "pending": None}
+        return state_of(t=self.samples / 10, machines=[row])
 
 
 @pytest.fixture
@@ -230,9 +231,9 @@ def test_one_machine_that_cannot_be_drawn_stops_neither_the_others_nor_the_push_
     assert "ok" in names
     ok = next(m for m in hello["machines"] if m["name"] == "ok")
     assert 'data-state="A"' in ok["svg"]
-    assert all(m["type"] == "snapshot" for m in got[1:])
+    assert all(m["type"] == "delta" for m in got[1:])
     again = asyncio.run(_messages(srv.port, 3))  # a new page is served too
-    assert again[0]["type"] == "hello" and [m["type"] for m in again[1:]] == ["snapshot", "snapshot"]
+    assert again[0]["type"] == "hello" and [m["type"] for m in again[1:]] == ["delta", "delta"]
 
 
 def test_the_layout_runs_off_the_event_loop(
@@ -300,7 +301,7 @@ def test_a_replaced_description_is_redrawn_but_pages_are_not_rebuilt_at_a_peers_
     kinds = asyncio.run(watch())
     hellos = kinds.count("hello")
     assert 2 <= hellos <= 5, kinds  # the first, then about one a second
-    assert kinds.count("snapshot") >= 10, kinds
+    assert kinds.count("delta") >= 10, kinds
 
 
 def test_a_discovery_sample_that_cannot_be_read_is_dropped_alone() -> None:
@@ -419,8 +420,10 @@ def start_view(ns: NetNamespace) -> tuple[subprocess.Popen[str], str, list[str]]
 #: while the ping-pong goes on (each run of it is a new page: the first hello of every one).
 CLIENT = r"""
 import asyncio, json, sys, time, aiohttp
+from llfsm.web.channel import Mirror
 async def main(url, want, seconds):
     out = {"hellos": [], "states": [], "svg": {}, "bytes": 0}
+    mirror = Mirror()
     async with aiohttp.ClientSession() as s:
         async with s.ws_connect(url.replace("http://", "ws://") + "ws", max_msg_size=64 << 20) as ws:
             loop = asyncio.get_running_loop()
@@ -438,8 +441,8 @@ async def main(url, want, seconds):
                 if data["type"] == "hello":
                     out["hellos"].append(sorted(m["name"] for m in data["machines"]))
                     out["svg"] = {m["name"]: m["svg"] for m in data["machines"]}
-                    data = data["snapshot"]
-                elif data["type"] != "snapshot":  # the graph of nodes and topics
+                data = mirror.apply(data)
+                if data is None:  # the graph of nodes and topics
                     continue
                 for m in data["machines"]:
                     if m["name"] == "ros2_ping_pong" and (not out["states"] or out["states"][-1] != m["state"]):

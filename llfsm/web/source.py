@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import struct
 import time
 from collections import deque
 from collections.abc import Callable
@@ -33,7 +34,8 @@ from ..ros.names import expand
 from ..ros.node import Node
 from ..ros.transports.dds_graph import is_hidden
 from . import parameters as params
-from .rosgraph import RosGraph, from_bus, from_dds, robust_graph
+from .channel import state_of
+from .rosgraph import MAX_LISTED_NODES, RosGraph, from_bus, from_dds, robust_graph
 
 if TYPE_CHECKING:
     from ..ros.bus import Bus
@@ -50,6 +52,14 @@ CALL_TIMEOUT = 5.0
 GRAPH_PERIOD = 0.5
 #: Nodes whose parameter events are counted at most (a peer may name any number).
 MAX_EVENT_NODES = 10_000
+#: A node name longer than this in a parameter event is no node's (a ROS name is far shorter):
+#: the event is not counted, and its name never held.
+MAX_EVENT_NAME = 256
+#: What a page is sent at most (docs/view.md, "The page's channel"): rows of the topics table,
+#: services named in the call form, characters of a topic's last message.  The rest is counted.
+MAX_TOPIC_ROWS = 200
+MAX_SERVICE_ROWS = 500
+MAX_LAST_CHARS = 2000
 
 
 class CommandError(Exception):
@@ -118,7 +128,8 @@ class Source:
         #: Parameter events seen per node: the page reads an open node's parameters again when
         #: its count moves (a set from the page, `param set` or the node itself).
         self.param_events: dict[str, int] = {}
-        self.node.create_subscription(ParameterEvent, "/parameter_events", self._on_parameter_event, 100)
+        events = self.node.create_subscription(ParameterEvent, "/parameter_events", self._on_parameter_event, 100)
+        events.screen = _event_node  # over DDS: the node's name alone is read of a peer's event
         self._graph = RosGraph()
         self._graph_at = -GRAPH_PERIOD
         #: The DDS graph beyond this process, read on the scheduler's thread (None in process).
@@ -169,20 +180,28 @@ class Source:
         return any(d["name"] == name for d in self.machines())
 
     # -- what the page is sent ---------------------------------------------------------------------
-    def sample(self) -> dict[str, Any]:
-        """A snapshot (on the server's thread)."""
+    def state(self) -> dict[str, Any]:
+        """What the page shows now (server thread), each part bounded, keyed for the channel's
+        deltas (llfsm.web.channel.Channel)."""
+        topics, topics_total = self._topics()
         services = self.service_types()
-        return {
-            "t": round(self.clock.now / 1e9, 3),
-            "clock": self.clock.kind,
-            "source": self.kind,
-            "ended": self.ended,
-            "machines": self.machine_rows(),
-            "topics": self._topics(),
-            "services": [{"name": n, "type": t._TYPE if t is not None else ""} for n, t in sorted(services.items())],
-            "param_events": dict(self.param_events),
-            "world": self.world(),
-        }
+        names = sorted(services)
+        shown = set(self._graph.nodes[: MAX_LISTED_NODES])
+        events = self.param_events
+        return state_of(
+            t=round(self.clock.now / 1e9, 3),
+            clock=self.clock.kind,
+            source=self.kind,
+            ended=self.ended,
+            machines=self.machine_rows(),
+            topics=topics,
+            topics_total=topics_total,
+            services=[{"name": n, "type": t._TYPE if (t := services[n]) is not None else ""} for n in names[:MAX_SERVICE_ROWS]],
+            services_total=len(names),
+            # only for nodes the page lists: a peer naming thousands of nodes costs the page nothing
+            param_events={node: events[node] for node in shown if node in events},
+            world=self.world(),
+        )
 
     def graph(self) -> RosGraph:
         """Nodes, topics and actions (server thread): this process's read now and then, merged
@@ -197,7 +216,7 @@ class Source:
 
     def _on_parameter_event(self, event: Any) -> None:
         node = event.node
-        if node in self.param_events or len(self.param_events) < MAX_EVENT_NODES:
+        if len(node) <= MAX_EVENT_NAME and (node in self.param_events or len(self.param_events) < MAX_EVENT_NODES):
             self.param_events[node] = self.param_events.get(node, 0) + 1
 
     # -- what the page asks for ------------------------------------------------------------------------
@@ -364,12 +383,18 @@ class Source:
             raise CommandError("the run has ended")
         self.bus.call_soon_threadsafe(fn)
 
-    def _topics(self) -> list[dict[str, Any]]:
+    def _topics(self) -> tuple[list[dict[str, Any]], int]:
+        """The rows of the topics table, the first MAX_TOPIC_ROWS by name, and how many topics
+        there are.  The page's own readers are made for the rows shown only, and deleted (on
+        the scheduler's thread) for a topic no longer shown or no longer on the graph: a reader
+        of the view's would otherwise keep a dead topic alive for every other tool."""
         wall = time.monotonic()
+        types = self.topic_types()
+        names = sorted(n for n in types if not is_hidden(n) and self._alive(n))  # as `ros2 topic list`
+        shown = names[:MAX_TOPIC_ROWS]
         out = []
-        for name, type_ in sorted(self.topic_types().items()):
-            if is_hidden(name):  # as `ros2 topic list`: an action's _action/ topics are under Actions
-                continue
+        for name in shown:
+            type_ = types[name]
             entry: dict[str, Any] = {"name": name, "type": type_._TYPE if type_ is not None else ""}
             machine = self._machine_topic(name)
             if machine is not None:
@@ -392,10 +417,19 @@ class Source:
                 if count != stats.last_count:
                     stats.last_count = count
                     latest = reader.latest
-                    stats.text = to_yaml(latest) if latest is not None else ""
+                    stats.text = _bounded_text(to_yaml(latest)) if latest is not None else ""
                 entry.update(count=count, rate=round(stats.rate, 2), last=stats.text)
             out.append(entry)
-        return out
+        keep = set(shown)
+        for name in [n for n in self._asked if n not in keep]:
+            self._asked.discard(name)
+            self._stats.pop(name, None)
+            self.bus.call_soon_threadsafe(partial(self._unwatch, name))
+        return out, len(names)
+
+    def _alive(self, name: str) -> bool:
+        """Whether a topic has endpoints besides the page's own (a source that knows better says)."""
+        return True
 
     def _machine_topic(self, name: str) -> tuple[int, str] | None:
         """For a machine's /llfsm/M/state or /description: (messages, what the row says), which
@@ -412,7 +446,17 @@ class Source:
 
     def _watch(self, name: str, type_: Any) -> None:
         """(scheduler thread) A PULL reader for the page: counts messages, keeps the newest."""
+        if name not in self._asked:
+            return  # no longer shown meanwhile
         self._readers[name] = self.node.create_subscription(type_, name, None, 1)
+
+    def _unwatch(self, name: str) -> None:
+        """(scheduler thread) The page's reader of a topic it no longer shows, deleted."""
+        if name in self._asked:
+            return  # shown again meanwhile
+        reader = self._readers.pop(name, None)
+        if reader is not None:
+            self.node.destroy_subscription(reader)
 
 
 class RunSource(Source):
@@ -430,6 +474,7 @@ class RunSource(Source):
         self._world_key: object = None
         self._world_at = 0.0
         self._world_svg: str | None = None
+        self._remote_topics: frozenset[str] = frozenset()  # the DDS graph's topics beyond this process
         self._dds_graph = self._read_dds_graph()
 
     def _read_dds_graph(self) -> Any:
@@ -444,6 +489,7 @@ class RunSource(Source):
             try:
                 graph.update()
                 self.remote_graph = from_dds(graph)
+                self._remote_topics = frozenset(t for t, _ in self.remote_graph.topics)
             except Exception as e:  # never into the bus executor: the page shows the last graph
                 self.warn(f"the graph could not be read: {type(e).__name__}: {e}", "graph")
 
@@ -476,6 +522,16 @@ class RunSource(Source):
 
     def topic_types(self) -> dict[str, Any]:
         return {name: topic.type for name, topic in list(self.bus.topics.items())}
+
+    def _alive(self, name: str) -> bool:
+        """A topic of this process with a publisher, a tap or a reader that is not the page's,
+        or one the DDS graph beyond this process shows: the bus keeps every topic it ever had."""
+        topic = self.bus.topics.get(name)
+        if topic is None:
+            return False
+        if topic.publishers or topic.taps or any(r.node is not self.node for r in list(topic.readers)):
+            return True
+        return name in self._remote_topics
 
     def service_types(self) -> dict[str, Any]:
         return {name: server.type for name, server in list(self.bus.services.items())}
@@ -550,6 +606,27 @@ def _settle(done: ThreadFuture[Any], fut: Any) -> None:
         done.set_exception(CommandError("the call was cancelled"))
     else:
         done.set_result(fut.result())
+
+
+def _event_node(payload: bytes) -> Any:
+    """A peer's rcl_interfaces/msg/ParameterEvent as the page needs it: its node's name, read
+    from the CDR without decoding the parameters (a peer's event may list thousands), or False
+    for a name longer than MAX_EVENT_NAME; ValueError for a payload that holds no name."""
+    if len(payload) < 16 or payload[0] != 0 or payload[1] not in (0, 1):
+        raise ValueError("not a plain CDR ParameterEvent")
+    (size,) = struct.unpack_from("<I" if payload[1] else ">I", payload, 12)  # after the stamp
+    if size == 0 or size - 1 > MAX_EVENT_NAME:
+        return False
+    if 16 + size > len(payload):
+        raise ValueError("a node name longer than its sample")
+    return ParameterEvent(node=payload[16 : 16 + size - 1].decode("utf-8"))
+
+
+def _bounded_text(text: str) -> str:
+    """A topic's last message as the page shows it: at most MAX_LAST_CHARS, the rest said."""
+    if len(text) <= MAX_LAST_CHARS:
+        return text
+    return f"{text[:MAX_LAST_CHARS]}\n... ({len(text) - MAX_LAST_CHARS:,} more characters not shown)"
 
 
 def dumps(data: Any) -> str:
