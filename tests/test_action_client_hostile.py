@@ -12,7 +12,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from dds_netns import RAW_PEER, NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import RAW_PEER, NetNamespace, finish
 
 pytestmark = pytest.mark.dds
 

@@ -13,9 +13,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from llfsm import ros
+from llfsm.msgs import _dds
 from llfsm.msgs.action_msgs.msg import GoalStatus, GoalStatusArray
 from llfsm.msgs.action_msgs.srv import CancelGoal
-from llfsm.msgs import _dds
 from llfsm.msgs.turtlesim.action import RotateAbsolute
 from llfsm.ros.action.client import status_entries, statuses_of
 from llfsm.ros.action.server import MAX_GOALS
@@ -68,7 +68,7 @@ def test_goals_past_the_limit_are_rejected_with_one_warning(bus: Bus, capsys: py
 
 
 def test_the_default_limit_holds_a_thousand_goals(bus: Bus) -> None:
-    _, client, server, arrays = pull_server()
+    _, client, _server, arrays = pull_server()
     handles = send_many(bus, client, MAX_GOALS + 2)
     assert sum(h.accepted for h in handles) == MAX_GOALS == 1000 and not handles[-1].accepted
     assert len(arrays[-1].status_list) == MAX_GOALS
@@ -121,8 +121,9 @@ def test_the_array_after_a_turn_is_the_state_at_its_end(bus: Bus) -> None:
 
 @settings(deadline=None, max_examples=50)  # the first example builds the codec
 @given(
-    st.lists(st.tuples(st.binary(min_size=16, max_size=16), st.integers(-128, 127), st.integers(0, 2**31 - 1)),
-             max_size=40)
+    st.lists(
+        st.tuples(st.binary(min_size=16, max_size=16), st.integers(-128, 127), st.integers(0, 2**31 - 1)), max_size=40
+    )
 )
 def test_status_entries_reads_what_the_codec_wrote(entries: list[tuple[bytes, int, int]]) -> None:
     array = GoalStatusArray()

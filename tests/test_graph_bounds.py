@@ -11,7 +11,7 @@ import sys
 import textwrap
 
 import pytest
-from dds_netns import RAW_PEER, NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import RAW_PEER, NetNamespace, finish
 from helpers import REPO
 
 pytestmark = pytest.mark.dds

@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 import pytest
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish
 from helpers import REPO, write_machine
 
 pytestmark = pytest.mark.dds
@@ -31,7 +31,9 @@ def ticker(root: Path, name: str) -> Path:
         name,
         {"INITIAL": [("TICK", "True")], "TICK": [("END", "not ros.ok()"), ("TICK", "after_ms(100)")], "END": None},
         {
-            "INITIAL_OnEntry": f"ros.init()\nnode = ros.Node('{name}')\npub = node.create_publisher(Float64, '/tick', 10)",
+            "INITIAL_OnEntry": (
+                f"ros.init()\nnode = ros.Node('{name}')\npub = node.create_publisher(Float64, '/tick', 10)"
+            ),
             "TICK_OnEntry": "pub.publish(Float64(data=time.time()))",
         },
         variables="node: object = None\npub: object = None\n",

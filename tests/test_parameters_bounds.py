@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 import yaml
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, finish
+from helpers import llfsm, llfsm_process, run_sim, write_machine
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from helpers import llfsm, llfsm_process, run_sim, write_machine
 
 from llfsm.ros.parameter_files import (
     INT64_MAX,
@@ -28,9 +28,11 @@ from llfsm.ros.parameter_files import (
 
 OUTSIDE = f"is outside the 64-bit integers a parameter holds ({INT64_MIN} to {INT64_MAX})"
 #: A billion-laughs params file of 1 kB: nine levels of nine aliases.
-BOMB = "a0: &a0 [x, x, x, x, x, x, x, x, x]\n" + "".join(
-    f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]\n" for i in range(1, 9)
-) + "/**:\n  ros__parameters:\n    p: *a8\n"
+BOMB = (
+    "a0: &a0 [x, x, x, x, x, x, x, x, x]\n"
+    + "".join(f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]\n" for i in range(1, 9))
+    + "/**:\n  ros__parameters:\n    p: *a8\n"
+)
 
 
 def test_anchors_and_aliases_are_refused_before_anything_is_built(tmp_path: Path) -> None:
@@ -40,7 +42,9 @@ def test_anchors_and_aliases_are_refused_before_anything_is_built(tmp_path: Path
     with pytest.raises(ParameterTextError, match=rf"^{re.escape(str(f))}:1: anchors and aliases are not allowed"):
         read_params_file(f)
     r = run_sim("--node", "turtlesim", "--params-file", f, "--duration", "1s")
-    assert r.status == 2 and r.stderr.strip().splitlines() == [f"llfsm: {f}:1: anchors and aliases are not allowed in a params file"]
+    assert r.status == 2 and r.stderr.strip().splitlines() == [
+        f"llfsm: {f}:1: anchors and aliases are not allowed in a params file"
+    ]
 
 
 def test_nesting_without_end_is_refused(tmp_path: Path) -> None:

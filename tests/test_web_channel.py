@@ -18,8 +18,9 @@ from llfsm.msgs.rcl_interfaces.msg import ParameterEvent
 from llfsm.msgs.std_msgs.msg import String
 from llfsm.ros.bus import Bus
 from llfsm.runtime import Arrangement
-from llfsm.web.channel import PROTOCOL, Channel, Mirror, state_of
-from llfsm.web.source import MAX_EVENT_NAME, MAX_EVENT_NODES, MAX_TOPIC_ROWS, RunSource
+from llfsm.web.channel import MAX_TOPIC_ROWS, PROTOCOL, Channel, Mirror, state_of
+from llfsm.web.parameters import MAX_EVENT_NAME
+from llfsm.web.source import MAX_EVENT_NODES, RunSource
 
 # -- the channel --------------------------------------------------------------------------------------
 
@@ -28,7 +29,11 @@ def test_a_delta_carries_what_changed_and_nothing_when_nothing_did() -> None:
     ch = Channel()
     a = state_of(t=1.0, topics=[{"name": "/a", "count": 1}, {"name": "/b", "count": 5}], topics_total=7)
     hello = ch.reset(a)
-    assert hello["topics"] == {"upsert": [{"name": "/a", "count": 1}, {"name": "/b", "count": 5}], "remove": [], "total": 7}
+    assert hello["topics"] == {
+        "upsert": [{"name": "/a", "count": 1}, {"name": "/b", "count": 5}],
+        "remove": [],
+        "total": 7,
+    }
     assert ch.delta(a) is None  # the same state: no message at all
     b = state_of(t=1.0, topics=[{"name": "/a", "count": 2}, {"name": "/c", "count": 0}], topics_total=7)
     d = ch.delta(b)
@@ -37,7 +42,9 @@ def test_a_delta_carries_what_changed_and_nothing_when_nothing_did() -> None:
         "seq": 1,
         "topics": {"upsert": [{"name": "/a", "count": 2}, {"name": "/c", "count": 0}], "remove": ["/b"], "total": 7},
     }
-    assert ch.delta(state_of(t=1.5, topics=[{"name": "/a", "count": 2}, {"name": "/c", "count": 0}], topics_total=7)) == {
+    assert ch.delta(
+        state_of(t=1.5, topics=[{"name": "/a", "count": 2}, {"name": "/c", "count": 0}], topics_total=7)
+    ) == {
         "type": "delta",
         "seq": 2,
         "header": {"t": 1.5, "clock": "wall", "source": "run", "ended": False},
@@ -47,7 +54,11 @@ def test_a_delta_carries_what_changed_and_nothing_when_nothing_did() -> None:
 _row = st.fixed_dictionaries({"name": st.sampled_from(["/a", "/b", "/c", "/d"]), "count": st.integers(0, 3)})
 _state = st.builds(
     lambda t, topics, machines, events, world: state_of(
-        t=t, topics=topics, machines=[{"name": n, "state": s} for n, s in machines.items()], param_events=events, world=world
+        t=t,
+        topics=topics,
+        machines=[{"name": n, "state": s} for n, s in machines.items()],
+        param_events=events,
+        world=world,
     ),
     st.sampled_from([0.0, 1.0]),
     st.lists(_row, max_size=4, unique_by=lambda r: r["name"]),

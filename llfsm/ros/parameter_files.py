@@ -21,10 +21,11 @@ A params file names nodes, and under each its parameters:
 Node names may hold wildcards as rcl takes them: a part `**` for any number of namespaces, `*`
 for any part of one name (`/**/driver_*`).  They are matched part by part, never by a regular
 expression that could backtrack: a key costs at most (its parts x the name's parts) comparisons
-of one part each, each in one pass over the part.  Entries a node matches apply in file order, so a later one wins; then `-p NAME:=VALUE`,
-then `-p NODE:NAME:=VALUE`, as `--ros-args -p` wins over files.  Values are typed as rcl types
-them: an unquoted scalar is a bool (`true`, `yes`, `on`...), an integer (`0x1F` too), a double
-(`1e3`, `.inf`) or else a string; a quoted one is a string; a list holds one type.  Anything
+of one part each, each in one pass over the part.  Entries a node matches apply in file order,
+so a later one wins; then `-p NAME:=VALUE`, then `-p NODE:NAME:=VALUE`, as `--ros-args -p` wins
+over files.  Values are typed as rcl types them: an unquoted scalar is a bool (`true`, `yes`,
+`on`...), an integer (`0x1F` too), a double (`1e3`, `.inf`) or else a string; a quoted one is a
+string; a list holds one type.  Anything
 else (a list of mixed types, a node without `ros__parameters`, text that is not YAML, an integer
 outside int64, a YAML anchor or alias) is one error naming the file and line: a run refuses it
 before any node or machine starts.
@@ -176,7 +177,7 @@ def guess_value(text: str) -> Any:
     except yaml.YAMLError:
         return text
     except ValueError:  # an integer of more than 4300 digits, a date that is none
-        if re.search(r"[0-9]{%d}" % _MAX_DECIMAL, text):
+        if re.search(rf"[0-9]{{{_MAX_DECIMAL}}}", text):
             raise OutsideInt64(text) from None
         return text
     for item in value if isinstance(value, list) else (value,):

@@ -60,9 +60,8 @@ TYPE_CHECKING = False  # not typing's own: importing typing would cost every run
 if TYPE_CHECKING:
     from _signal import _Handler
     from collections.abc import Sequence
-    from types import FrameType
-
     from threading import Event, Thread
+    from types import FrameType
 
     from .machine import Machine
 

@@ -29,6 +29,22 @@ from typing import Any
 PROTOCOL = 1
 #: The keyed collections of a state, and the field that keys their rows.
 COLLECTIONS = {"machines": "name", "topics": "name", "services": "name"}
+#: What a page is sent at most (docs/view.md, "The page's channel"): rows of the topics table,
+#: services named in the call form, characters of a topic's last message.  The rest is counted.
+#: (Machines are bounded by their sources, the graph's lists by llfsm.web.rosgraph.)
+MAX_TOPIC_ROWS = 200
+MAX_SERVICE_ROWS = 500
+MAX_LAST_CHARS = 2000
+#: A topic's row (count, rate, last message) is read again at most this often (wall seconds): a
+#: busy topic's count changes at every sample, and the table need not be redrawn 20 times a second.
+ROW_PERIOD = 0.5
+
+
+def bounded_text(text: str) -> str:
+    """A topic's last message as the page shows it: at most MAX_LAST_CHARS, the rest said."""
+    if len(text) <= MAX_LAST_CHARS:
+        return text
+    return f"{text[:MAX_LAST_CHARS]}\n... ({len(text) - MAX_LAST_CHARS:,} more characters not shown)"
 
 
 class Channel:
@@ -167,9 +183,11 @@ class Mirror:
     def state(self) -> dict[str, Any]:
         out = dict(self.header)
         for name in COLLECTIONS:
-            out[name] = sorted(self.rows[name].values(), key=lambda r: r.get("order", 0)) if name == "machines" else [
-                self.rows[name][k] for k in sorted(self.rows[name])
-            ]
+            out[name] = (
+                sorted(self.rows[name].values(), key=lambda r: r.get("order", 0))
+                if name == "machines"
+                else [self.rows[name][k] for k in sorted(self.rows[name])]
+            )
             out[f"{name}_total"] = self.totals[name]
         out["param_events"] = dict(self.param_events)
         out["world"] = self.world

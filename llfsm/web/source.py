@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import struct
 import time
 from collections import deque
 from collections.abc import Callable
@@ -34,7 +33,7 @@ from ..ros.names import expand
 from ..ros.node import Node
 from ..ros.transports.dds_graph import is_hidden
 from . import parameters as params
-from .channel import state_of
+from .channel import MAX_SERVICE_ROWS, MAX_TOPIC_ROWS, ROW_PERIOD, bounded_text, state_of
 from .rosgraph import MAX_LISTED_NODES, RosGraph, from_bus, from_dds, robust_graph
 
 if TYPE_CHECKING:
@@ -52,14 +51,6 @@ CALL_TIMEOUT = 5.0
 GRAPH_PERIOD = 0.5
 #: Nodes whose parameter events are counted at most (a peer may name any number).
 MAX_EVENT_NODES = 10_000
-#: A node name longer than this in a parameter event is no node's (a ROS name is far shorter):
-#: the event is not counted, and its name never held.
-MAX_EVENT_NAME = 256
-#: What a page is sent at most (docs/view.md, "The page's channel"): rows of the topics table,
-#: services named in the call form, characters of a topic's last message.  The rest is counted.
-MAX_TOPIC_ROWS = 200
-MAX_SERVICE_ROWS = 500
-MAX_LAST_CHARS = 2000
 
 
 class CommandError(Exception):
@@ -121,6 +112,7 @@ class Source:
         self._readers: dict[str, Any] = {}
         self._asked: set[str] = set()
         self._stats: dict[str, _TopicStats] = {}
+        self._rows: dict[str, tuple[float, dict[str, Any]]] = {}  # each topic row shown, and when it was read
         self._publishers: dict[str, Any] = {}
         self._clients: dict[tuple[str, str], Any] = {}
         self._warned: set[str] = set()
@@ -129,7 +121,7 @@ class Source:
         #: its count moves (a set from the page, `param set` or the node itself).
         self.param_events: dict[str, int] = {}
         events = self.node.create_subscription(ParameterEvent, "/parameter_events", self._on_parameter_event, 100)
-        events.screen = _event_node  # over DDS: the node's name alone is read of a peer's event
+        events.screen = params.event_node  # over DDS: the node's name alone is read of a peer's event
         self._graph = RosGraph()
         self._graph_at = -GRAPH_PERIOD
         #: The DDS graph beyond this process, read on the scheduler's thread (None in process).
@@ -186,7 +178,7 @@ class Source:
         topics, topics_total = self._topics()
         services = self.service_types()
         names = sorted(services)
-        shown = set(self._graph.nodes[: MAX_LISTED_NODES])
+        shown = set(self._graph.nodes[:MAX_LISTED_NODES])
         events = self.param_events
         return state_of(
             t=round(self.clock.now / 1e9, 3),
@@ -196,7 +188,9 @@ class Source:
             machines=self.machine_rows(),
             topics=topics,
             topics_total=topics_total,
-            services=[{"name": n, "type": t._TYPE if (t := services[n]) is not None else ""} for n in names[:MAX_SERVICE_ROWS]],
+            services=[
+                {"name": n, "type": t._TYPE if (t := services[n]) is not None else ""} for n in names[:MAX_SERVICE_ROWS]
+            ],
             services_total=len(names),
             # only for nodes the page lists: a peer naming thousands of nodes costs the page nothing
             param_events={node: events[node] for node in shown if node in events},
@@ -216,7 +210,9 @@ class Source:
 
     def _on_parameter_event(self, event: Any) -> None:
         node = event.node
-        if len(node) <= MAX_EVENT_NAME and (node in self.param_events or len(self.param_events) < MAX_EVENT_NODES):
+        if len(node) <= params.MAX_EVENT_NAME and (
+            node in self.param_events or len(self.param_events) < MAX_EVENT_NODES
+        ):
             self.param_events[node] = self.param_events.get(node, 0) + 1
 
     # -- what the page asks for ------------------------------------------------------------------------
@@ -393,7 +389,12 @@ class Source:
         names = sorted(n for n in types if not is_hidden(n) and self._alive(n))  # as `ros2 topic list`
         shown = names[:MAX_TOPIC_ROWS]
         out = []
+        rows = self._rows
         for name in shown:
+            kept = rows.get(name)
+            if kept is not None and wall - kept[0] < ROW_PERIOD:
+                out.append(kept[1])  # the same row object: no change for the channel to send
+                continue
             type_ = types[name]
             entry: dict[str, Any] = {"name": name, "type": type_._TYPE if type_ is not None else ""}
             machine = self._machine_topic(name)
@@ -402,6 +403,7 @@ class Source:
                 stats = self._stats.setdefault(name, _TopicStats())
                 stats.update(wall, count)
                 entry.update(count=count, rate=round(stats.rate, 2), last=last, machine=True)
+                rows[name] = (wall, entry)
                 out.append(entry)
                 continue
             reader = self._readers.get(name)
@@ -417,10 +419,13 @@ class Source:
                 if count != stats.last_count:
                     stats.last_count = count
                     latest = reader.latest
-                    stats.text = _bounded_text(to_yaml(latest)) if latest is not None else ""
+                    stats.text = bounded_text(to_yaml(latest)) if latest is not None else ""
                 entry.update(count=count, rate=round(stats.rate, 2), last=stats.text)
+            rows[name] = (wall, entry)
             out.append(entry)
         keep = set(shown)
+        for name in [n for n in rows if n not in keep]:
+            del rows[name]
         for name in [n for n in self._asked if n not in keep]:
             self._asked.discard(name)
             self._stats.pop(name, None)
@@ -606,27 +611,6 @@ def _settle(done: ThreadFuture[Any], fut: Any) -> None:
         done.set_exception(CommandError("the call was cancelled"))
     else:
         done.set_result(fut.result())
-
-
-def _event_node(payload: bytes) -> Any:
-    """A peer's rcl_interfaces/msg/ParameterEvent as the page needs it: its node's name, read
-    from the CDR without decoding the parameters (a peer's event may list thousands), or False
-    for a name longer than MAX_EVENT_NAME; ValueError for a payload that holds no name."""
-    if len(payload) < 16 or payload[0] != 0 or payload[1] not in (0, 1):
-        raise ValueError("not a plain CDR ParameterEvent")
-    (size,) = struct.unpack_from("<I" if payload[1] else ">I", payload, 12)  # after the stamp
-    if size == 0 or size - 1 > MAX_EVENT_NAME:
-        return False
-    if 16 + size > len(payload):
-        raise ValueError("a node name longer than its sample")
-    return ParameterEvent(node=payload[16 : 16 + size - 1].decode("utf-8"))
-
-
-def _bounded_text(text: str) -> str:
-    """A topic's last message as the page shows it: at most MAX_LAST_CHARS, the rest said."""
-    if len(text) <= MAX_LAST_CHARS:
-        return text
-    return f"{text[:MAX_LAST_CHARS]}\n... ({len(text) - MAX_LAST_CHARS:,} more characters not shown)"
 
 
 def dumps(data: Any) -> str:

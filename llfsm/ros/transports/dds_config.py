@@ -8,7 +8,7 @@ other with the same settings:
 
 | range | multicast | peers | participant index |
 |---|---|---|---|
-| SUBNET (default) | Cyclone's default | ROS_STATIC_PEERS | Cyclone's choice: none with multicast and no peers, else auto (max 119) |
+| SUBNET (default) | Cyclone's default | ROS_STATIC_PEERS | Cyclone's: none (multicast, no peers), else auto, max 119 |
 | LOCALHOST | off | `localhost` + ROS_STATIC_PEERS | auto (max 119) |
 | OFF | off | none | none, with a per-process domain tag |
 | SYSTEM_DEFAULT | Cyclone's default | none (Cyclone's own config only) | Cyclone's default |

@@ -15,7 +15,7 @@ let ended = false;
 const view = { seq: -1, header: {}, machines: new Map(), topics: new Map(), services: new Map() };
 const topicRows = new Map(); // topic -> its <tbody> (its row, and the row of its last message)
 // How much the page has received and how long applying it took (read by the benchmark).
-window.llfsmStats = { messages: 0, bytes: 0, applyMs: 0, maxApplyMs: 0 };
+window.llfsmStats = { messages: 0, bytes: 0, applyMs: 0, maxApplyMs: 0, totalApplyMs: 0 };
 const token = new URLSearchParams(location.search).get("token");
 const openNodes = new Map(); // node -> the parameter events count its rows were read at
 let lastEvents = {}; // node -> parameter events seen (the snapshot's count)
@@ -456,6 +456,7 @@ function connect() {
     stats.bytes += ev.data.length;
     stats.applyMs = performance.now() - started;
     stats.maxApplyMs = Math.max(stats.maxApplyMs, stats.applyMs);
+    stats.totalApplyMs += stats.applyMs;
   };
 }
 
