@@ -25,6 +25,8 @@ import pytest
 from dds_netns import NetNamespace, finish
 from helpers import MACHINES, REPO
 
+from llfsm.web.channel import state_of
+
 pytestmark = pytest.mark.browser
 
 pytest.importorskip("aiohttp")
@@ -528,8 +530,6 @@ class TwoRuns:
             }
             for d, state in zip(self.descs, ("PUBLISH", "WAIT_AND_COUNT"), strict=True)
         ]
-        from llfsm.web.channel import state_of
-
         return state_of(t=2.0, source="view", machines=rows)
 
 
