@@ -12,6 +12,7 @@ from . import (  # noqa: F401  (each registers its commands)
     bag,
     build,
     check,
+    edit,
     graph,
     interface,
     new,
