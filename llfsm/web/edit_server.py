@@ -46,6 +46,14 @@ class EditServer(WebServer):
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="llfsm-edit")
         self.run = RunRelay(self._broadcast)
 
+    def start(self) -> str:
+        url = super().start()
+        # the page opens the first machine at once: check and draw it meanwhile
+        first = next(iter(self.workspace.machines), None)
+        if first is not None:
+            self._worker.submit(self.workspace.full, first)
+        return url
+
     def stop(self) -> None:
         loop = self._loop
         if loop is not None:

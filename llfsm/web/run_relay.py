@@ -157,6 +157,9 @@ class RunRelay:
 
     async def stop(self) -> None:
         proc, self.proc = self.proc, None
+        stopping = self.state in ("running", "starting")
+        if stopping:
+            self.state = "stopping"  # the relay, seeing the child's page close, must not call it ended
         if proc is not None and proc.returncode is None:
             proc.terminate()
             try:
@@ -167,8 +170,8 @@ class RunRelay:
         for t in self._tasks:
             t.cancel()
         self._tasks = []
-        if self.state in ("running", "starting"):
-            self.state, self.message = "stopped", "stopped"
+        if stopping:
+            self.state, self.message = "stopped", "stopped by Stop"
             await self._tell()
 
     async def _tell(self) -> None:
