@@ -22,6 +22,7 @@ from .. import __version__
 from ..lang.bindings import MACHINE_ALIAS, Edit, attribute_of, find, name_map, own_locals, state_map, used_names
 from ..lang.check import MachineCheck
 from ..lang.diagnostics import Diagnostic, diag
+from ..lang.files import expression
 from ..lang.model import INPUT_TYPES, Code, Machine, State
 from ..lang.parameter_types import parameter_type
 from ..lang.scopes import child_nodes
@@ -332,7 +333,9 @@ def _block(
         first += 1
     body = "\n".join(lines[first:]).rstrip()
     alias = any(e.text.startswith(_ALIASED) for e in edits)
-    return Block(pointer=f"{code.file}:{first + 1}", text=body, alias=alias)
+    # an inline guard points at its line of machine.yaml (a block guard's lines follow it one for one)
+    file, line = (code.origin.file, code.origin.line) if code.origin is not None else (code.file, 1)
+    return Block(pointer=f"{file}:{line + first}", text=body, alias=alias)
 
 
 def _guard_view(
@@ -353,8 +356,9 @@ def _guard_view(
     multiline = "\n" in block.text or has_comment
     expr = tree.body[0]
     constant = bool(expr.value.value) if isinstance(expr, ast.Expr) and isinstance(expr.value, ast.Constant) else None
+    where = block.pointer if code.origin is not None else code.file
     return GuardView(
-        index, target, target_name, block.pointer, block.text, multiline, to_suspend, block.alias, constant, code.file
+        index, target, target_name, block.pointer, block.text, multiline, to_suspend, block.alias, constant, where
     )
 
 
@@ -519,7 +523,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
             # per state, (target index, guard as written) in priority order: for the description
             # a run publishes on /llfsm/NAME/description and the web view draws
             "transitions": tuple(
-                tuple((index[t.target], t.guard.text.strip() if t.guard is not None else "") for t in s.transitions)
+                tuple((index[t.target], expression(t.guard.text) if t.guard is not None else "") for t in s.transitions)
                 for s in m.states
             ),
             # machine.yaml's `parameters:`: (variable, rclpy type name) for llfsm.ros.control

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 # is reported: a run that raises nothing does not pay for them at start-up.
 
 POINTER_PATTERN = (
-    r"^\s*# (?P<file>Includes\.py|Variables\.py|State_\w+?_(?:OnEntry|OnExit|Internal|OnSuspend|"
+    r"^\s*# (?P<file>machine\.yaml|Includes\.py|Variables\.py|State_\w+?_(?:OnEntry|OnExit|Internal|OnSuspend|"
     r"OnResume|Variables)\.py|State_\w+?_Transition_\d+\.expr):(?P<line>\d+)\s*$"
 )
 SOURCE_PATTERN = r"^# Source: (?P<dir>.+)$"
@@ -301,6 +301,8 @@ def locate(rep: ErrorReport, fname: str, lineno: int, source_map: SourceMap | No
     if fm:
         rep.state = fm["state"]
         rep.section = fm["section"].replace("_", " ")
+    elif user_file == "machine.yaml":
+        rep.section = "guard"  # an inline guard (docs/machine-format.md): of the state the machine is in
     else:
         rep.section = user_file.removesuffix(".py")
         rep.state = None  # Variables.py / Includes.py belong to the machine, not to a state

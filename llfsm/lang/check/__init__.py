@@ -94,6 +94,7 @@ def run_rules(c: Checking) -> None:
         code.state_code(c, m, s)
     inputs.assignments(c, m)
     structure.orphans(c)
+    structure.layout(c, m)
     structure.reachability(c, m)
     structure.suspend_state(c, m)
     c.diagnostics.extend(undeclared_dependencies(c.path, c.read.trees))
