@@ -21,7 +21,9 @@ pytestmark = pytest.mark.browser
 pytest.importorskip("aiohttp")
 sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
 if not have_chromium():
-    pytest.skip(f"no Chromium at {CHROMIUM}: `apt-get install chromium` (make test does it as root)", allow_module_level=True)
+    pytest.skip(
+        f"no Chromium at {CHROMIUM}: `apt-get install chromium` (make test does it as root)", allow_module_level=True
+    )
 
 
 @pytest.fixture(scope="module")
@@ -83,8 +85,9 @@ class Editor:
 
     def add_state(self, name: str) -> None:
         self.button("Add state").click()
-        self.page.get_by_role("textbox", name="Name", exact=True).fill(name)
-        self.page.get_by_role("dialog").get_by_role("button", name="Add").click()
+        dialog = self.page.get_by_role("dialog")
+        dialog.get_by_role("textbox", name="Name", exact=True).fill(name)
+        dialog.get_by_role("button", name="Add").click()
         self.state(name).wait_for()
 
     def add_transition(self, source: str, target: str, guard: str) -> None:
@@ -147,7 +150,7 @@ PUBLISH = 'message = String()\nmessage.data = f"The count is {count}"\npublisher
 def test_the_how_tos_ping_pong_built_from_an_empty_folder_checks_clean_and_runs(editor: Editor) -> None:
     e = editor
     e.button("New machine").click()
-    e.page.get_by_role("textbox", name="Name", exact=True).fill("ping_pong")
+    e.page.get_by_role("dialog").get_by_role("textbox", name="Name", exact=True).fill("ping_pong")
     e.page.get_by_role("dialog").get_by_role("button", name="Make").click()
     e.state("INITIAL").wait_for()
     for name in ("PUBLISH", "WAIT_AND_COUNT"):
@@ -198,7 +201,7 @@ def test_a_typo_shows_in_problems_and_on_the_diagram_and_leaves_when_fixed(ping_
     e.page.wait_for_selector('.state[data-state="WAIT_AND_COUNT"][data-problem="error"]')
     problems = e.problems()
     assert any("State_WAIT_AND_COUNT_OnEntry.py:1" in p for p in problems), problems
-    e.page.wait_for_selector('[data-file="State_WAIT_AND_COUNT_OnEntry.py"] .cm-lintRange-error')
+    e.page.wait_for_selector('[data-file="State_WAIT_AND_COUNT_OnEntry.py"] .cm-lint-marker-error')
     e.type_code("OnEntry", "count += 1\n")
     e.page.wait_for_selector('.state[data-state="WAIT_AND_COUNT"]:not([data-problem])')
     until(lambda: e.page.locator(".problems .clean").count() == 1, what="problems gone")
@@ -235,7 +238,9 @@ def test_a_reorder_of_priorities_keeps_each_guard_with_its_target(ping_pong: Edi
     priority.fill("0")
     priority.press("Enter")
     e.page.wait_for_selector('.transition[data-source="PUBLISH"][data-index="0"][data-target="WAIT_AND_COUNT"]')
-    assert re.search(r"- name: PUBLISH\n\s+transitions: \[WAIT_AND_COUNT, END\]", (machine / "machine.yaml").read_text())
+    assert re.search(
+        r"- name: PUBLISH\n\s+transitions: \[WAIT_AND_COUNT, END\]", (machine / "machine.yaml").read_text()
+    )
     assert "after_ms(500)" in (machine / "State_PUBLISH_Transition_0.expr").read_text()
     assert "not ros.ok()" in (machine / "State_PUBLISH_Transition_1.expr").read_text()
     assert llfsm("check", "--strict", str(machine)).status == 0

@@ -202,7 +202,9 @@ def test_a_file_linked_out_of_the_machine_is_neither_read_nor_written(tmp_path: 
         status, answer = _post(srv, "/api/machine", {"machine": "ros2_ping_pong"})
         assert status == 200 and "State_END_OnEntry.py" not in answer["machine"]["files"]
         before = _tree(folder.parent)
-        status, _ = _post(srv, "/api/write", {"machine": "ros2_ping_pong", "file": "State_END_OnEntry.py", "text": "x = 1\n"})
+        status, _ = _post(
+            srv, "/api/write", {"machine": "ros2_ping_pong", "file": "State_END_OnEntry.py", "text": "x = 1\n"}
+        )
         assert status == 400
         assert _tree(folder.parent) == before
         assert (tmp_path / "outside.txt").read_text() == "keep me\n"
@@ -215,7 +217,9 @@ def test_a_good_write_changes_only_its_file_and_undo_restores_it(server: EditSer
     status, answer = _post(server, "/api/machine", {"machine": "ros2_ping_pong"})
     version = answer["machine"]["versions"]["Includes.py"]
     status, answer = _post(
-        server, "/api/write", {"machine": "ros2_ping_pong", "file": "Includes.py", "text": "import math\n", "base": version}
+        server,
+        "/api/write",
+        {"machine": "ros2_ping_pong", "file": "Includes.py", "text": "import math\n", "base": version},
     )
     assert status == 200 and answer["files"] == ["Includes.py"], answer
     after = _tree(folder.parent)

@@ -25,7 +25,7 @@ from aiohttp import WSMsgType, web
 from .run_relay import RunError, RunRelay
 from .server import WebServer
 from .source import CommandError, dumps
-from .workspace import UNCHECKED, Workspace, WorkspaceError, WriteConflict
+from .workspace import UNCHECKED, Workspace, WorkspaceError, WriteConflict, digest
 
 #: Seconds between two looks at the disk for another program's changes.
 POLL = 0.5
@@ -150,7 +150,15 @@ class EditServer(WebServer):
             return web.json_response({"success": True, **(await self._do(action, data))})
         except WriteConflict as e:
             return web.json_response(
-                {"success": False, "conflict": True, "file": e.name, "disk": e.disk, "message": str(e)}, status=409
+                {
+                    "success": False,
+                    "conflict": True,
+                    "file": e.name,
+                    "disk": e.disk,
+                    "version": digest(e.disk) if e.disk is not None else None,
+                    "message": str(e),
+                },
+                status=409,
             )
         except (WorkspaceError, CommandError) as e:
             return web.json_response({"success": False, "message": str(e)}, status=400)

@@ -140,7 +140,9 @@ class RunRelay:
         code = self.proc.returncode if self.proc is not None else None
         if self.state == "running":
             self.state = "ended"
-            self.message = self.message or (f"the run ended (exit status {code})" if code is not None else "the run ended")
+            self.message = self.message or (
+                f"the run ended (exit status {code})" if code is not None else "the run ended"
+            )
             await self._tell()
 
     async def command(self, data: dict[str, Any]) -> dict[str, Any]:

@@ -243,9 +243,11 @@ class WebServer:
             response.set_cookie(COOKIE, self.token, httponly=True, samesite="Strict", path="/")
         if not isinstance(response, web.WebSocketResponse):
             host = request.host
-            # the editor's code editors (CodeMirror) add their style sheets with the page's nonce
+            # the editor's code editors (CodeMirror) add their style sheets with the page's nonce,
+            # and the browser's own editing of their text may write style attributes (never
+            # markup of ours: the page sets no style attribute and strips them from diagrams)
             nonce = request.get("csp_nonce")
-            styles = f"'self' 'nonce-{nonce}'" if nonce else "'self'"
+            styles = f"'self' 'nonce-{nonce}'; style-src-attr 'unsafe-inline'" if nonce else "'self'"
             response.headers["Content-Security-Policy"] = (
                 f"default-src 'self'; img-src 'self' data:; style-src {styles}; script-src 'self'; "
                 f"connect-src 'self' ws://{host}; frame-ancestors 'none'; base-uri 'none'; form-action 'self'"

@@ -26,6 +26,8 @@ from ..diagram import svg as diagram
 from ..lang.check import check_machine
 from ..lang.diagnostics import Severity
 from ..lang.discover import find_machines, is_machine_dir
+from ..lang.files import expression
+from ..lang.layout_file import Placement, placement
 from ..lang.model import Machine
 from ..machinedir import machine_name_of, refused_link
 
@@ -204,10 +206,9 @@ class Workspace:
             return
         o.structure = structure(m)
         o.stale = False
+        placed = placement(result.read)[0] or Placement()
         try:
-            o.svg = diagram.svg(_description(o.structure), positions=_positions(o.files.get("layout.yaml")))
-        except TypeError:  # a diagram module without positions (until layout.yaml is drawn)
-            o.svg = diagram.svg(_description(o.structure))
+            o.svg = diagram.svg(_description(o.structure), positions=placed.states, labels=placed.labels)
         except Exception as e:  # a bug of ours must not take the editor down: said in Problems
             o.diagnostics.append(_note(f"the diagram could not be drawn: {type(e).__name__}: {e}"))
 
@@ -352,8 +353,8 @@ def structure(m: Machine) -> dict[str, Any]:
                     {
                         "index": t.index,
                         "target": t.target,
-                        "guard": t.guard.text.strip() if t.guard is not None else "",
-                        "file": t.guard.file if t.guard is not None and t.guard.file.endswith(".expr") else None,
+                        "guard": expression(t.guard.text) if t.guard is not None else "",
+                        "file": t.guard.file if t.guard is not None and not t.guard.inline else None,
                     }
                     for t in s.transitions
                 ],
@@ -380,21 +381,13 @@ def _description(st: dict[str, Any]) -> dict[str, Any]:
             {
                 "name": s["name"],
                 "accepting": not s["transitions"],
-                "transitions": [{"index": t["index"], "target": t["target"], "guard": t["guard"]} for t in s["transitions"]],
+                "transitions": [
+                    {"index": t["index"], "target": t["target"], "guard": t["guard"]} for t in s["transitions"]
+                ],
             }
             for s in st["states"]
         ],
     }
-
-
-def _positions(text: str | None) -> dict[str, tuple[float, float]] | None:
-    """layout.yaml's state positions (llfsm.edit reads and validates the file)."""
-    if text is None:
-        return None
-    try:
-        return edit.read_layout(text)
-    except edit.EditError:
-        return None
 
 
 def _stamps(path: Path) -> dict[str, tuple[int, int]]:
@@ -475,7 +468,9 @@ def _transition_add(path: Path, a: dict[str, Any]) -> edit.Change:
     priority = a.get("priority")
     if priority is not None:
         priority = _int(a, "priority")
-    return edit.transition_add(path, _str(a, "source"), _str(a, "target"), guard=_opt_str(a, "guard"), priority=priority)
+    return edit.transition_add(
+        path, _str(a, "source"), _str(a, "target"), guard=_opt_str(a, "guard"), priority=priority
+    )
 
 
 #: The structure operations a page may ask for, by name: each validates its arguments' types

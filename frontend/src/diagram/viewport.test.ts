@@ -4,11 +4,17 @@ describe("viewport", () => {
   const content = { x: 0, y: 0, w: 400, h: 200 };
 
   it("fits the whole drawing with its margin, centred, in the viewport's aspect", () => {
-    const v = fit(content, 800, 800, 10);
+    const v = fit(content, 420, 420, 10);
     expect(v.w).toBeCloseTo(420);
     expect(v.h).toBeCloseTo(420); // square viewport: the height grows
     expect(v.x).toBeCloseTo(-10);
     expect(v.y + v.h / 2).toBeCloseTo(100); // centred on the drawing
+  });
+
+  it("does not blow a small drawing up", () => {
+    const v = fit(content, 2000, 1000, 0, 1.25);
+    expect(v.w).toBeCloseTo(1600);
+    expect(v.x + v.w / 2).toBeCloseTo(200);
   });
 
   it("zooms around the pointer: that point stays put", () => {

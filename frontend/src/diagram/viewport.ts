@@ -11,8 +11,9 @@ export interface Box {
 export const MIN_SCALE = 0.1;
 export const MAX_SCALE = 8;
 
-/** The viewBox showing all of `content` in a viewport of the given aspect, with a margin. */
-export function fit(content: Box, width: number, height: number, margin = 12): Box {
+/** The viewBox showing all of `content` in a viewport of the given aspect, with a margin;
+ * a small drawing is not blown up beyond `maxScale` (screen pixels per unit). */
+export function fit(content: Box, width: number, height: number, margin = 12, maxScale = 1.25): Box {
   const cw = content.w + 2 * margin;
   const ch = content.h + 2 * margin;
   const aspect = width > 0 && height > 0 ? width / height : cw / ch;
@@ -20,6 +21,10 @@ export function fit(content: Box, width: number, height: number, margin = 12): B
   let h = ch;
   if (cw / ch < aspect) w = ch * aspect;
   else h = cw / aspect;
+  if (width > 0 && width / w > maxScale) {
+    w = width / maxScale;
+    h = height / maxScale;
+  }
   return { x: content.x - margin - (w - cw) / 2, y: content.y - margin - (h - ch) / 2, w, h };
 }
 

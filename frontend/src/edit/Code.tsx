@@ -116,7 +116,8 @@ export function toLint(doc: Text, diagnostics: readonly Diagnostic[]): LintDiagn
   const out: LintDiagnostic[] = [];
   for (const d of diagnostics) {
     const line = doc.line(Math.min(Math.max(1, d.line), doc.lines));
-    const from = Math.min(line.from + Math.max(0, d.column - 1), line.to);
+    // at the end of a line (`count +=`): the last character, so that the mark can be seen
+    const from = Math.max(line.from, Math.min(line.from + Math.max(0, d.column - 1), line.to - 1));
     const to = from < line.to ? Math.max(from + 1, Math.min(line.to, wordEnd(line.text, from - line.from) + line.from)) : from;
     out.push({
       from,

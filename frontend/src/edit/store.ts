@@ -84,6 +84,8 @@ export class Buffer {
   timer: ReturnType<typeof setTimeout> | null = null;
   /** The disk's text while in conflict (null: the file was deleted); undefined: no conflict. */
   readonly conflict = signal<string | null | undefined>(undefined);
+  /** The version of the disk's text in conflict (what Keep mine writes over). */
+  conflictVersion: string | null = null;
   /** Text put into the editor from outside (a change on disk, undo), with a counter. */
   readonly external = signal<{ text: string; n: number }>({ text: "", n: 0 });
 
@@ -140,7 +142,7 @@ export async function save(b: Buffer): Promise<void> {
   if (b.conflict.value !== undefined || !b.dirty || b.inflight !== null) return;
   const text = b.text;
   b.inflight = text;
-  const r = await post<Answer & { machine?: Full; disk?: string | null; conflict?: boolean }>("/api/write", {
+  const r = await post<Answer & { machine?: Full; disk?: string | null; conflict?: boolean; version?: string | null }>("/api/write", {
     machine: b.machine,
     file: b.file,
     text,
@@ -154,6 +156,7 @@ export async function save(b: Buffer): Promise<void> {
       absorb(r.machine);
     }
   } else if (r.conflict) {
+    b.conflictVersion = r.version ?? null;
     b.conflict.value = r.disk ?? null;
     say(r.message, false);
   } else {
@@ -173,8 +176,7 @@ export async function saveAll(): Promise<void> {
 export async function resolve(b: Buffer, keep: "mine" | "theirs"): Promise<void> {
   const disk = b.conflict.value;
   if (disk === undefined) return;
-  const full = loaded.value[b.machine];
-  const version = full?.versions[b.file] ?? null;
+  const version = b.conflictVersion;
   b.conflict.value = undefined;
   if (keep === "theirs") {
     b.base = disk ?? "";
@@ -201,7 +203,10 @@ export function absorb(full: Full): void {
         b.conflict.value = undefined;
         b.base = text;
         b.version = version;
-      } else b.conflict.value = disk ?? null;
+      } else {
+        b.conflictVersion = version;
+        b.conflict.value = disk ?? null;
+      }
     } else if (text === b.text || text === b.inflight) {
       b.base = text;
       b.version = version;
@@ -210,7 +215,8 @@ export function absorb(full: Full): void {
       b.version = version;
       b.replace(text);
     } else if (version !== b.version) {
-      b.conflict.value = disk ?? null; // changed on disk under unsaved edits: keep both
+      b.conflictVersion = version; // changed on disk under unsaved edits: keep both
+      b.conflict.value = disk ?? null;
     }
   }
   countUnsaved();
