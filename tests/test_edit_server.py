@@ -7,6 +7,7 @@ import hashlib
 import http.client
 import json
 import os
+import re
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
@@ -227,3 +228,31 @@ def test_a_good_write_changes_only_its_file_and_undo_restores_it(server: EditSer
     status, answer = _post(server, "/api/undo", {})
     assert status == 200
     assert _tree(folder.parent) == before
+
+
+def test_a_state_placed_in_layout_yaml_is_drawn_there_and_the_rest_as_before(folder: Path) -> None:
+    ws = Workspace([folder])
+    before = ws.full("ros2_ping_pong")["svg"]
+    (folder / "ros2_ping_pong.machine" / "layout.yaml").write_text("states:\n  END: {x: 500, y: -40}\n")
+    assert ws.poll() == {"ros2_ping_pong": ["layout.yaml"]}
+    after = ws.full("ros2_ping_pong")["svg"]
+
+    def rect(svg: str, state: str) -> tuple[float, float, float, float]:
+        m = re.search(
+            rf'data-state="{state}"[^>]*><rect x="([-\d.]+)" y="([-\d.]+)" width="([\d.]+)" height="([\d.]+)"', svg
+        )
+        assert m, state
+        return tuple(float(v) for v in m.groups())  # type: ignore[return-value]
+
+    x, y, w, h = rect(after, "END")
+    assert (x + w / 2, y + h / 2) == (500.0, -40.0)
+    assert rect(after, "PUBLISH") == rect(before, "PUBLISH")
+    # the drawing reaches up to the placed state: the viewBox starts above 0
+    vb = [float(v) for v in re.search(r'viewBox="([^"]+)"', after).group(1).split()]  # type: ignore[union-attr]
+    assert vb[1] < 0 and vb[0] + vb[2] >= 500 + w / 2
+    # an edge into END ends on END's box
+    d = re.search(r'data-source="WAIT_AND_COUNT" data-target="END" data-index="0" d="([^"]+)"', after)
+    assert d is not None
+    ex, ey = (float(v) for v in d.group(1).split()[-2:])
+    assert x - 0.1 <= ex <= x + w + 0.1 and y - 0.1 <= ey <= y + h + 0.1
+    assert min(abs(ex - x), abs(ex - x - w), abs(ey - y), abs(ey - y - h)) < 0.2

@@ -219,13 +219,13 @@ def _label_text(t: dict[str, Any]) -> str:
     return _label(int(t["index"]), t["guard"]) if t["guard"] else str(int(t["index"]))
 
 
-def _render(full: dict[str, Any], positions: Mapping[str, Point], labels: Mapping[tuple[str, int], Point]) -> str:
+def _render(full: dict[str, Any], positions: Mapping[str, Point], corners: Mapping[tuple[str, int], Point]) -> str:
     """The SVG of a checked description, no state marked current."""
     desc, left_states, left_transitions = _select(full)
     machine = desc["name"]
     placed = layout(desc)
-    if positions or labels:
-        placed = _placed(desc, placed, positions, labels)
+    if positions or corners:
+        placed = _placed(desc, placed, positions, corners)
     mid = _esc(machine)
     marker = "arrow-" + hashlib.sha256(machine.encode("utf-8", "surrogatepass")).hexdigest()[:12]
     edges: list[str] = []
@@ -344,7 +344,7 @@ def _render(full: dict[str, Any], positions: Mapping[str, Point], labels: Mappin
         )
     height = placed.height
     width = max(right, placed.width)
-    low_x, low_y = _low(placed) if positions or labels else (0.0, 0.0)
+    low_x, low_y = _low(placed) if positions or corners else (0.0, 0.0)
     note = ""
     if left_states or left_transitions:
         what = [f"{left_states:,} more states"] if left_states else []

@@ -171,7 +171,7 @@ class EditServer(WebServer):
         return await self._editing(request, lambda d: {"machine": self.workspace.full(d.get("machine"))})
 
     def _changing(self, d: dict[str, Any], summary: str, files: list[str]) -> dict[str, Any]:
-        key = d.get("machine")
+        key = self.workspace.machine(d.get("machine")).key
         return {"key": key, "message": summary, "files": files, "machine": self.workspace.full(key)}
 
     async def _op(self, request: web.Request) -> web.Response:

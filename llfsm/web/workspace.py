@@ -92,8 +92,8 @@ class Workspace:
                 vf = read_verify_file(path)
             except VerifyError as e:
                 raise WorkspaceError(str(e)) from None
-            for m in vf.machines:
-                self._open(Path(m))
+            for listed in vf.machines:
+                self._open(Path(listed))
             return
         if not path.exists():
             raise WorkspaceError(f"{path}: no such machine directory or folder")
@@ -151,7 +151,7 @@ class Workspace:
             for o in self.machines.values()
         ]
 
-    def full(self, key: str) -> dict[str, Any]:
+    def full(self, key: object) -> dict[str, Any]:
         """One machine as the page edits it (checked and drawn first if it was not yet)."""
         o = self.machine(key)
         if not o.checked:
