@@ -7,7 +7,9 @@ One browser for the module; each test opens its own editor process on its own fo
 
 from __future__ import annotations
 
+import os
 import re
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -42,10 +44,10 @@ def browser() -> Iterator[Any]:
 class Editor:
     """An editor process on a folder and a page of it."""
 
-    def __init__(self, browser: Any, folder: Path, width: int = 1280) -> None:
+    def __init__(self, browser: Any, folder: Path, width: int = 1280, height: int = 900) -> None:
         self.folder = folder
         self.server = Served("edit", str(folder))
-        self.page = browser.new_page(viewport={"width": width, "height": 900})
+        self.page = browser.new_page(viewport={"width": width, "height": height})
         self.page.set_default_timeout(TIMEOUT_MS)
         self.errors: list[str] = []
         self.page.on("pageerror", lambda e: self.errors.append(str(e)))
@@ -120,8 +122,6 @@ def editor(browser: Any, tmp_path: Path) -> Iterator[Editor]:
 
 
 def _copy_ping_pong(folder: Path) -> Path:
-    import shutil
-
     return Path(shutil.copytree(MACHINES / "ros2_ping_pong.machine", folder / "ros2_ping_pong.machine"))
 
 
@@ -321,3 +321,25 @@ def test_run_turns_the_diagram_into_the_live_view_and_stop_ends_it(ping_pong: Ed
     e.page.wait_for_selector('.state[data-state="WAIT_AND_COUNT"][aria-current="true"]')
     e.button("Stop").click()
     until(lambda: e.page.get_by_role("status", name="run status").inner_text() == "stopped", what="stopped")
+
+
+@pytest.mark.parametrize("width", [1280, 800])
+def test_the_page_fits_its_width_with_a_problem_marked(browser: Any, tmp_path: Path, width: int) -> None:
+    """What docs/edit.md shows (the screenshots are taken here: LLFSM_SCREENSHOTS=DIR keeps them)."""
+    folder = tmp_path / "machines"
+    folder.mkdir()
+    machine = _copy_ping_pong(folder)
+    shutil.copytree(MACHINES / "ros2_wall_turtle_bot.machine", folder / "ros2_wall_turtle_bot.machine")
+    (machine / "State_WAIT_AND_COUNT_OnEntry.py").write_text("count += \n")
+    # tall enough to show the whole page: CodeMirror measures the editors it can see
+    e = Editor(browser, folder, width=width, height=1100 if width > 1000 else 1800)
+    try:
+        e.page.locator('nav.machines button[data-machine="ros2_ping_pong"]').click()
+        e.select_state("PUBLISH")
+        e.page.wait_for_selector('.state[data-state="WAIT_AND_COUNT"][data-problem="error"]')
+        assert e.page.evaluate("() => document.documentElement.scrollWidth") <= width
+        assert not e.errors
+        keep = os.environ.get("LLFSM_SCREENSHOTS")
+        e.page.screenshot(path=str(Path(keep or tmp_path) / f"edit-{width}.png"), full_page=True)
+    finally:
+        e.close()

@@ -140,7 +140,7 @@ function Problems() {
               <span class="where">
                 {d.file || m?.name}:{d.line}:{d.column}
               </span>{" "}
-              <span class="code">{d.code}</span> <span class="sev">{d.severity}</span>: {d.message}
+              <span class="rule">{d.code}</span> <span class="sev">{d.severity}</span>: {d.message}
             </button>
           </li>
         ))}
