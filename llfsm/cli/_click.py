@@ -19,6 +19,7 @@ from . import (  # noqa: F401  (each registers its commands)
     param,
     run,
     service,
+    structure,
     topic,
     verify,
     view,
