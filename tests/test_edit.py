@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from helpers import MACHINES, write_machine
+from helpers import MACHINES, llfsm, write_machine
 
 from llfsm import edit
 from llfsm.edit import change as change_module
@@ -302,3 +302,41 @@ def test_new_machine_layout_and_write_file(tmp_path: Path) -> None:
     edit.apply(edit.write_file(m, "State_PONG_OnEntry.py", "print('pong')\n"))
     assert (m / "State_PONG_OnEntry.py").read_text() == "print('pong')\n"
     assert edit.write_file(m, "State_PONG_OnEntry.py", "print('pong')\n").writes == {}
+
+
+# -- the commands ------------------------------------------------------------------------------------
+
+
+def test_the_commands_say_what_they_did_and_refuse_in_one_line(bot: Path) -> None:
+    r = llfsm("transition", "move", bot, "STOP", "2", "--to-priority", "0")
+    assert (r.status, r.stdout) == (0, "moved transition 2 of STOP (to SERVICE_FAILS) to priority 0\n")
+    r = llfsm("transition", "add", bot, "TEST", "STOP", "--guard", "after_ms(1)", "--priority", "0", "--inline")
+    assert (r.status, r.stdout) == (0, "added transition 0 of TEST to STOP (guard inline)\n")
+    assert (
+        "    transitions: [{to: STOP, guard: after_ms(1)}, END, STRAIGHT, BACK]\n" in (bot / "machine.yaml").read_text()
+    )
+    r = llfsm("transition", "retarget", bot, "TEST", "0", "BACK")
+    assert r.status == 0 and "{to: BACK, guard: after_ms(1)}" in (bot / "machine.yaml").read_text()
+    r = llfsm("state", "add", bot, "WAIT", "--after", "STOP")
+    assert r.stdout == "added state WAIT\n"
+    assert (
+        "  - name: STOP\n    transitions: [SERVICE_FAILS, END, TEST]\n  - name: WAIT\n"
+        in (bot / "machine.yaml").read_text()
+    )
+    assert llfsm("state", "rename", bot, "WAIT", "PAUSE").status == 0
+    assert llfsm("state", "remove", bot, "PAUSE").status == 0
+    assert llfsm("transition", "remove", bot, "TEST", "0").status == 0
+    assert clean(bot) == []
+    start = tree_hash(bot)
+    for args, message in (
+        (("state", "remove", bot, "INITIAL"), "INITIAL is the initial state of ros2_wall_turtle_bot.machine"),
+        (("state", "add", bot, "STOP"), "already has a state STOP"),
+        (("state", "rename", bot, "STOP", "a/b"), "'a/b' is not a valid name"),
+        (("transition", "add", bot, "STOP", "NOWHERE"), "has no state NOWHERE"),
+        (("transition", "move", bot, "STOP", "7", "--to-priority", "0"), "there is no transition 7"),
+        (("state", "add", bot.parent / "nope.machine", "X"), "no such directory"),
+    ):
+        r = llfsm(*args)
+        assert r.status == 1 and r.stdout == ""
+        assert r.stderr.count("\n") == 1 and message in r.stderr, r.stderr
+    assert tree_hash(bot) == start
