@@ -74,7 +74,7 @@ def diagnostics(browser: object, rounds: int) -> tuple[list[float], list[float]]
             marked, cleared = [], []
             for _ in range(rounds):
                 t0 = time.perf_counter()
-                page.keyboard.press("(")  # `last = 10\n(`: a syntax error
+                page.keyboard.press(":")  # a line holding `:`: a syntax error
                 page.wait_for_selector('.state[data-state="S010"][data-problem="error"]', timeout=10_000)
                 marked.append(time.perf_counter() - t0)
                 t0 = time.perf_counter()

@@ -302,6 +302,7 @@ def test_structure_by_keyboard_alone(ping_pong: Editor) -> None:
     machine = e.folder / "ros2_ping_pong.machine"
     e.button("Add state").focus()
     e.page.keyboard.press("Enter")
+    e.page.wait_for_selector("dialog[open] input[name=name]:focus")  # the dialog's first field has the focus
     e.page.keyboard.type("IDLE")
     e.page.keyboard.press("Enter")
     e.state("IDLE").wait_for()

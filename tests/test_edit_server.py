@@ -256,3 +256,21 @@ def test_a_state_placed_in_layout_yaml_is_drawn_there_and_the_rest_as_before(fol
     ex, ey = (float(v) for v in d.group(1).split()[-2:])
     assert x - 0.1 <= ex <= x + w + 0.1 and y - 0.1 <= ey <= y + h + 0.1
     assert min(abs(ex - x), abs(ex - x - w), abs(ey - y), abs(ey - y - h)) < 0.2
+
+
+def test_saves_of_one_file_while_typing_are_one_undo_step(folder: Path) -> None:
+    ws = Workspace([folder])
+    includes = folder / "ros2_ping_pong.machine" / "Includes.py"
+    original = includes.read_text()
+    for text in ("import m\n", "import ma\n", "import math\n"):
+        ws.write("ros2_ping_pong", "Includes.py", text)
+    ws.operate("ros2_ping_pong", "state_add", {"name": "PAUSE"})
+    ws.write("ros2_ping_pong", "Includes.py", "import math, os\n")
+    assert len(ws.undo_stack) == 3
+    ws.undo()
+    ws.undo()
+    assert includes.read_text() == "import math\n"
+    ws.undo()
+    assert includes.read_text() == original
+    ws.redo()
+    assert includes.read_text() == "import math\n"

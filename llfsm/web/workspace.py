@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,6 +39,8 @@ MAX_FILE = 1 << 20
 SHOWN_SUFFIXES = (".py", ".expr", ".yaml")
 #: Changes kept for undo.
 UNDO_DEPTH = 200
+#: Saves of one file closer together than this (seconds) are one undo step (typing).
+TYPING_PAUSE = 2.0
 #: A write that does not say which version it was edited from (the CLI's, a test's).
 UNCHECKED = object()
 
@@ -78,6 +81,7 @@ class Workspace:
         self.machines: dict[str, Opened] = {}
         self.undo_stack: list[tuple[str, edit.Change]] = []
         self.redo_stack: list[tuple[str, edit.Change]] = []
+        self._typing: float | None = None  # when the last save of typed text was
         self.ended = False  # set by the server when it stops (the view's sources have it too)
         for p in paths:
             self._open(p)
@@ -299,6 +303,7 @@ class Workspace:
             raise WorkspaceError(f"cannot {verb}: {e}") from None
         source.pop()
         target.append((key, back))
+        self._typing = None
         o = self.machines.get(key)
         if o is None:
             return key, f"{verb}: {change.summary}", []
@@ -317,6 +322,23 @@ class Workspace:
         return change.summary, _files_of(o, change)
 
     def _push_undo(self, key: str, change: edit.Change) -> None:
+        """One undo step per change, but the saves of one file while its text is typed (each a
+        pause of a fraction of a second) are one step: the first's `before`, the last's text."""
+        now = time.monotonic()
+        if self.undo_stack and self._typing is not None:
+            last_key, last = self.undo_stack[-1]
+            if (
+                last_key == key
+                and now - self._typing < TYPING_PAUSE
+                and len(change.writes) == 1
+                and last.writes.keys() == change.writes.keys()
+                and last.summary == change.summary
+            ):
+                self.undo_stack[-1] = (key, edit.Change(last.root, change.writes, last.before, last.summary))
+                self._typing = now
+                self.redo_stack.clear()
+                return
+        self._typing = now if change.summary.startswith("wrote ") and len(change.writes) == 1 else None
         self.undo_stack.append((key, change))
         del self.undo_stack[:-UNDO_DEPTH]
         self.redo_stack.clear()

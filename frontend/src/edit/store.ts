@@ -9,7 +9,7 @@ import type { Selection } from "../diagram/Diagram";
 import { type Live, NO_RUN, reduce } from "../live/live";
 import type { Diagnostic } from "./files";
 
-export const SAVE_DELAY = 150; // ms after the last keystroke
+export const SAVE_DELAY = 60; // ms after the last keystroke (a save is also what brings diagnostics)
 
 export interface Transition {
   index: number;
