@@ -16,9 +16,15 @@ one DescriptionError whose message names the field, short enough for a warning l
 from __future__ import annotations
 
 import json
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from ..lang.files import expression
+
+if TYPE_CHECKING:
+    from ..lang.layout_file import Placement
+    from ..lang.model import Machine
 
 #: Characters of JSON accepted at all (a run's description of a few dozen states is a few KiB).
 MAX_TEXT = 4 << 20
@@ -82,6 +88,20 @@ class Input(_Strict):
         return f"{self.name}: {self.type}{bound}"
 
 
+Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-1e6, le=1e6)]
+Point = Annotated[list[Coordinate], Field(min_length=2, max_length=2)]
+
+
+class Placed(_Strict):
+    """Where layout.yaml placed the states (centres) and transition labels (top-left corners, by
+    state and transition number as text): the editor's drawing, which the diagram keeps."""
+
+    states: dict[Annotated[str, Name], Point] = Field(default_factory=dict, max_length=MAX_STATES)
+    labels: dict[Annotated[str, Name], dict[Annotated[str, Field(max_length=7)], Point]] = Field(
+        default_factory=dict, max_length=MAX_STATES
+    )
+
+
 class Description(_Strict):
     name: str = Name
     description: str | None = Field(default="", max_length=MAX_TEXT_FIELD)
@@ -91,6 +111,8 @@ class Description(_Strict):
     inputs: list[Input] = Field(default_factory=list, max_length=MAX_INPUTS)
     #: Wall time (seconds since the epoch) of the run's time 0 (a run on the wall clock says it).
     started: float | None = Field(default=None, ge=0, le=1e11, allow_inf_nan=False)
+    #: The machine's layout.yaml, when the description is made from its directory (of_machine).
+    layout: Placed | None = None
 
     @model_validator(mode="after")
     def _references(self) -> Description:
@@ -112,6 +134,60 @@ class Description(_Strict):
         if self.suspend is not None and self.suspend not in names:
             raise ValueError(f"suspend: {_quote(self.suspend)} names no state")
         return self
+
+
+def of_machine(m: Machine, placed: Placement | None = None) -> dict[str, Any]:
+    """The description of a machine directory as read (no build, no run): the shape a run
+    publishes (llfsm.ros.control.description), guards as written (inline or in their files,
+    without their `# -> TARGET` comment), with layout.yaml's places when given.  What a broken
+    machine cannot describe is left out: a transition to no state, a second state of a name."""
+    names: dict[str, None] = {}
+    for s in m.states:
+        names.setdefault(s.name, None)
+    states = []
+    for s in m.states:
+        if s.name not in names:
+            continue
+        del names[s.name]
+        states.append(
+            {
+                "name": s.name,
+                "transitions": [
+                    {"index": t.index, "target": t.target, "guard": expression(t.guard.text) if t.guard else ""}
+                    for t in s.transitions
+                    if any(t.target == o.name for o in m.states)
+                ],
+                "accepting": s.accepting and s.name != m.suspended,
+            }
+        )
+    known = {s["name"] for s in states}
+    out: dict[str, Any] = {
+        "name": m.name,
+        "description": m.description or "",
+        "states": states,
+        "initial": m.initial if m.initial in known else states[0]["name"],
+        "suspend": m.suspended if m.suspended in known else None,
+        "inputs": [
+            {
+                "name": i.name,
+                "type": i.type,
+                "default": i.default,
+                "domain": i.values(),
+                "topic": i.topic,
+                "msg": i.msg,
+                "field": i.field,
+            }
+            for i in m.inputs
+            if i.type in ("bool", "int", "float", "str")
+        ],
+    }
+    if placed is not None:
+        labels: dict[str, dict[str, list[float]]] = {}
+        for (state, index), point in placed.labels.items():
+            if state in known:
+                labels.setdefault(state, {})[str(index)] = list(point)
+        out["layout"] = {"states": {k: list(v) for k, v in placed.states.items() if k in known}, "labels": labels}
+    return out
 
 
 def validate(desc: Any, machine: str | None = None) -> dict[str, Any]:

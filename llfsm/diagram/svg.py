@@ -30,10 +30,12 @@ import json
 import re
 import threading
 from collections import OrderedDict
+from collections.abc import Hashable
 from html import escape
 from typing import Any
 
 from .layout import EdgeSpec, Layout, NodeSpec, layered, path
+from .placed import fixed, straight
 
 #: Advance of one character of the page's monospace fonts (DejaVu Sans Mono: 0.602 em) at the
 #: 11 px of guard labels and the 13 px of state names (style.css sets both).
@@ -192,7 +194,19 @@ def layout(desc: dict[str, Any]) -> Layout:
         nodes.append(NodeSpec(ANY, _state_w("any state"), STATE_H - 6))
         edges.append(EdgeSpec(ANY, suspend, (_width("suspend", LABEL_CHAR_W) + 8, LABEL_H)))
         edges.append(EdgeSpec(suspend, ANY, (_width("resume", LABEL_CHAR_W) + 8, LABEL_H), back=True))
-    return layered(nodes, edges)
+    base = layered(nodes, edges)
+    placed = desc.get("layout") or {}
+    if not placed.get("states"):
+        return base
+    # the editor's places (layout.yaml); "any state" stays above the suspend state
+    centres: dict[Hashable, tuple[float, float]] = {k: (v[0], v[1]) for k, v in placed["states"].items()}
+    listed = [(s["name"], int(t["index"])) for s in states for t in s["transitions"] if t["target"] != s["name"]]
+    corners = {
+        k: (p[0], p[1])
+        for k, (name, index) in enumerate(listed)
+        if (p := (placed.get("labels") or {}).get(name, {}).get(str(index))) is not None
+    }
+    return fixed(base, nodes, edges, centres, corners, {suspend: ANY} if suspend is not None else None)
 
 
 def _state_w(name: str) -> float:
@@ -220,7 +234,7 @@ def _render(full: dict[str, Any]) -> str:
     # then suspend and resume
     listed = [(s, t) for s in desc["states"] for t in s["transitions"] if t["target"] != s["name"]]
     for route in placed.routes:
-        d = path(route.points)
+        d = straight(route.points) if placed.direction == "free" else path(route.points)
         if route.edge < len(listed):
             s, t = listed[route.edge]
             index, guard = int(t["index"]), t["guard"]
@@ -354,6 +368,33 @@ def _render(full: dict[str, Any]) -> str:
         f'<g transform="translate(0 {TOP:.0f})"><g class="edges">{"".join(edges)}</g>'
         f'<g class="states">{"".join(parts)}</g><g class="labels">{"".join(labels)}</g></g>{note}</svg>'
     )
+
+
+#: The look of the web view's diagrams (llfsm/web/static/style.css), for a drawing on its own.
+STANDALONE_STYLE = """
+svg.diagram { font-size: 13px; background: #fff; }
+svg.diagram text { font-family: "DejaVu Sans Mono", ui-monospace, monospace; }
+svg.diagram .state rect { fill: #e3f2fd; stroke: #1e3a5f; stroke-width: 1.4; }
+svg.diagram .state rect.inner { fill: none; }
+svg.diagram .state text { text-anchor: middle; fill: #1a1a1a; font-weight: 600; font-size: 13px; }
+svg.diagram .suspend-state rect { stroke-dasharray: 5 3; fill: #f3e5f5; }
+svg.diagram text.omitted { fill: #8d6e63; font-size: 12px; font-style: italic; }
+svg.diagram .transition { fill: none; stroke: #455a64; stroke-width: 1.3; }
+svg.diagram .arrowhead, svg.diagram .initial-dot { fill: #455a64; }
+svg.diagram .guard rect { fill: #fff; fill-opacity: .9; stroke: none; }
+svg.diagram .guard text { font-size: 11px; text-anchor: start; fill: #37474f; }
+svg.diagram .suspend-edge { fill: none; stroke: #8e24aa; stroke-width: 1.2; stroke-dasharray: 5 3; }
+svg.diagram .any-state rect { fill: #fff; stroke: #8e24aa; stroke-dasharray: 4 3; }
+svg.diagram .any-state text { text-anchor: middle; fill: #8e24aa; font-style: italic; font-size: 12px; }
+svg.diagram .guard[data-command] text { fill: #8e24aa; }
+"""
+
+
+def standalone(drawn: str) -> str:
+    """A diagram of `svg` as a file of its own (`llfsm graph --format svg`): an XML declaration,
+    and the page's look in a <style> element."""
+    head, sep, rest = drawn.partition(">")
+    return f'<?xml version="1.0" encoding="UTF-8"?>\n{head}{sep}<style>{STANDALONE_STYLE}</style>{rest}\n'
 
 
 def _title(source: str, target: str, index: int, guard: str) -> str:
