@@ -48,7 +48,11 @@ def graph(path: str, fmt: str, output: str | None) -> None:
         from ..diagram.svg import standalone, svg
         from ..lang.layout_file import placement
 
-        drawn = svg(of_machine(m, placement(result.read)[0]))
+        placed = placement(result.read)[0]
+        if placed is None:
+            drawn = svg(of_machine(m))
+        else:
+            drawn = svg(of_machine(m), positions=placed.states, labels=placed.labels)
         if fmt == "png":
             from ..diagram.png import render  # deferred: start-up (Pillow)
 

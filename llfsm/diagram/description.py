@@ -23,7 +23,6 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from ..lang.files import expression
 
 if TYPE_CHECKING:
-    from ..lang.layout_file import Placement
     from ..lang.model import Machine
 
 #: Characters of JSON accepted at all (a run's description of a few dozen states is a few KiB).
@@ -88,20 +87,6 @@ class Input(_Strict):
         return f"{self.name}: {self.type}{bound}"
 
 
-Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-1e6, le=1e6)]
-Point = Annotated[list[Coordinate], Field(min_length=2, max_length=2)]
-
-
-class Placed(_Strict):
-    """Where layout.yaml placed the states (centres) and transition labels (top-left corners, by
-    state and transition number as text): the editor's drawing, which the diagram keeps."""
-
-    states: dict[Annotated[str, Name], Point] = Field(default_factory=dict, max_length=MAX_STATES)
-    labels: dict[Annotated[str, Name], dict[Annotated[str, Field(max_length=7)], Point]] = Field(
-        default_factory=dict, max_length=MAX_STATES
-    )
-
-
 class Description(_Strict):
     name: str = Name
     description: str | None = Field(default="", max_length=MAX_TEXT_FIELD)
@@ -111,8 +96,6 @@ class Description(_Strict):
     inputs: list[Input] = Field(default_factory=list, max_length=MAX_INPUTS)
     #: Wall time (seconds since the epoch) of the run's time 0 (a run on the wall clock says it).
     started: float | None = Field(default=None, ge=0, le=1e11, allow_inf_nan=False)
-    #: The machine's layout.yaml, when the description is made from its directory (of_machine).
-    layout: Placed | None = None
 
     @model_validator(mode="after")
     def _references(self) -> Description:
@@ -136,11 +119,12 @@ class Description(_Strict):
         return self
 
 
-def of_machine(m: Machine, placed: Placement | None = None) -> dict[str, Any]:
+def of_machine(m: Machine) -> dict[str, Any]:
     """The description of a machine directory as read (no build, no run): the shape a run
     publishes (llfsm.ros.control.description), guards as written (inline or in their files,
-    without their `# -> TARGET` comment), with layout.yaml's places when given.  What a broken
-    machine cannot describe is left out: a transition to no state, a second state of a name."""
+    without their `# -> TARGET` comment).  What a broken machine cannot describe is left out: a
+    transition to no state, a second state of a name.  (layout.yaml's places are svg()'s own
+    arguments: llfsm.lang.layout_file.)"""
     names: dict[str, None] = {}
     for s in m.states:
         names.setdefault(s.name, None)
@@ -181,12 +165,6 @@ def of_machine(m: Machine, placed: Placement | None = None) -> dict[str, Any]:
             if i.type in ("bool", "int", "float", "str")
         ],
     }
-    if placed is not None:
-        labels: dict[str, dict[str, list[float]]] = {}
-        for (state, index), point in placed.labels.items():
-            if state in known:
-                labels.setdefault(state, {})[str(index)] = list(point)
-        out["layout"] = {"states": {k: list(v) for k, v in placed.states.items() if k in known}, "labels": labels}
     return out
 
 

@@ -91,10 +91,11 @@ def render(svg_text: str, scale: int = SCALE) -> bytes:
     root = ET.fromstring(svg_text)
     width = min(float(root.get("width", "100")), MAX_SIDE)
     height = min(float(root.get("height", "100")), MAX_SIDE)
+    box = [float(v) for v in root.get("viewBox", "0 0 0 0").split()[:2]]  # a placed state may lie left of 0
     k = scale * SUPER
     image = Image.new("RGB", (max(1, round(width * k)), max(1, round(height * k))), (255, 255, 255))
     draw = ImageDraw.Draw(image)
-    _walk(draw, root, (0.0, 0.0), [], k)
+    _walk(draw, root, (-box[0], -box[1]) if len(box) == 2 else (0.0, 0.0), [], k)
     out = image.resize((max(1, round(width * scale)), max(1, round(height * scale))), Image.Resampling.LANCZOS)
     buf = io.BytesIO()
     out.save(buf, "PNG", optimize=True)
