@@ -455,6 +455,33 @@ def _low(placed: Layout) -> Point:
     return (min(0.0, low_x - MARGIN) if low_x < 0 else 0.0, min(0.0, low_y - MARGIN + TOP) if low_y < 0 else 0.0)
 
 
+#: The look of the web view's diagrams (llfsm/web/static/style.css), for a drawing on its own.
+STANDALONE_STYLE = """
+svg.diagram { font-size: 13px; background: #fff; }
+svg.diagram text { font-family: "DejaVu Sans Mono", ui-monospace, monospace; }
+svg.diagram .state rect { fill: #e3f2fd; stroke: #1e3a5f; stroke-width: 1.4; }
+svg.diagram .state rect.inner { fill: none; }
+svg.diagram .state text { text-anchor: middle; fill: #1a1a1a; font-weight: 600; font-size: 13px; }
+svg.diagram .suspend-state rect { stroke-dasharray: 5 3; fill: #f3e5f5; }
+svg.diagram text.omitted { fill: #8d6e63; font-size: 12px; font-style: italic; }
+svg.diagram .transition { fill: none; stroke: #455a64; stroke-width: 1.3; }
+svg.diagram .arrowhead, svg.diagram .initial-dot { fill: #455a64; }
+svg.diagram .guard rect { fill: #fff; fill-opacity: .9; stroke: none; }
+svg.diagram .guard text { font-size: 11px; text-anchor: start; fill: #37474f; }
+svg.diagram .suspend-edge { fill: none; stroke: #8e24aa; stroke-width: 1.2; stroke-dasharray: 5 3; }
+svg.diagram .any-state rect { fill: #fff; stroke: #8e24aa; stroke-dasharray: 4 3; }
+svg.diagram .any-state text { text-anchor: middle; fill: #8e24aa; font-style: italic; font-size: 12px; }
+svg.diagram .guard[data-command] text { fill: #8e24aa; }
+"""
+
+
+def standalone(drawn: str) -> str:
+    """A diagram of `svg` as a file of its own (`llfsm graph --format svg`): an XML declaration,
+    and the page's look in a <style> element."""
+    head, sep, rest = drawn.partition(">")
+    return f'<?xml version="1.0" encoding="UTF-8"?>\n{head}{sep}<style>{STANDALONE_STYLE}</style>{rest}\n'
+
+
 def _title(source: str, target: str, index: int, guard: str) -> str:
     shown = guard if len(guard) <= TITLE_MAX else guard[: TITLE_MAX - 1] + "…"
     return _esc(f"{source} → {target} (transition {index}): {shown}")

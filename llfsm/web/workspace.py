@@ -24,6 +24,7 @@ from typing import Any
 
 from .. import edit
 from ..diagram import svg as diagram
+from ..diagram.description import of_machine
 from ..lang.check import check_machine
 from ..lang.diagnostics import Severity
 from ..lang.discover import find_machines, is_machine_dir
@@ -212,7 +213,7 @@ class Workspace:
         o.stale = False
         placed = placement(result.read)[0] or Placement()
         try:
-            o.svg = diagram.svg(_description(o.structure), positions=placed.states, labels=placed.labels)
+            o.svg = diagram.svg(of_machine(m), positions=placed.states, labels=placed.labels)
         except Exception as e:  # a bug of ours must not take the editor down: said in Problems
             o.diagnostics.append(_note(f"the diagram could not be drawn: {type(e).__name__}: {e}"))
 
@@ -389,26 +390,6 @@ def structure(m: Machine) -> dict[str, Any]:
         "initial": m.initial,
         "suspend": m.suspended if m.suspended in explicit else None,
         "states": states,
-    }
-
-
-def _description(st: dict[str, Any]) -> dict[str, Any]:
-    """The structure as llfsm.diagram.svg draws it (the web view's description of a machine)."""
-    return {
-        "name": st["name"],
-        "description": st["description"],
-        "initial": st["initial"],
-        "suspend": st["suspend"],
-        "states": [
-            {
-                "name": s["name"],
-                "accepting": not s["transitions"],
-                "transitions": [
-                    {"index": t["index"], "target": t["target"], "guard": t["guard"]} for t in s["transitions"]
-                ],
-            }
-            for s in st["states"]
-        ],
     }
 
 
