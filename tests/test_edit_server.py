@@ -274,3 +274,11 @@ def test_saves_of_one_file_while_typing_are_one_undo_step(folder: Path) -> None:
     assert includes.read_text() == original
     ws.redo()
     assert includes.read_text() == "import math\n"
+
+
+def test_a_verification_file_opens_the_machines_it_names_and_no_folder() -> None:
+    ws = Workspace([MACHINES / "suspend_resume.verify.yaml"])
+    assert sorted(ws.machines) == ["ros2_blind_turtle_bot", "ros2_turtle_suspend_resume"]
+    assert ws.folders == []
+    with pytest.raises(WorkspaceError, match="open a folder"):
+        ws.new_machine("extra")
