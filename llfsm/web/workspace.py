@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import stat
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,7 +29,7 @@ from ..diagram.description import of_machine
 from ..lang.check import check_machine
 from ..lang.diagnostics import Severity
 from ..lang.discover import find_machines, is_machine_dir
-from ..lang.files import expression
+from ..lang.files import expression, is_machine_file
 from ..lang.layout_file import Placement, placement
 from ..lang.model import Machine
 from ..machinedir import machine_name_of, refused_link
@@ -252,8 +253,8 @@ class Workspace:
         o = self.machine(key)
         if not isinstance(name, str) or not isinstance(text, str):
             raise WorkspaceError("a write names a file and gives its text")
-        self._read(o)
-        now = o.files.get(name)
+        # that file alone, as it is now (the others' changes are for poll() to report)
+        now = _disk_text(o.path, name)
         if base is not UNCHECKED and (digest(now) if now is not None else None) != base:
             raise WriteConflict(name, now)
         if now == text:
@@ -391,6 +392,21 @@ def structure(m: Machine) -> dict[str, Any]:
         "suspend": m.suspended if m.suspended in explicit else None,
         "states": states,
     }
+
+
+def _disk_text(machine: Path, name: str) -> str | None:
+    """A file of the machine as it is on disk now (None: no such file, or not one the page may
+    see).  The name is checked against the machine format before any path is built."""
+    if not is_machine_file(name):
+        return None
+    path = machine / name
+    try:
+        st = path.lstat()
+        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_FILE:
+            return None
+        return path.read_bytes().decode("utf-8", "replace")
+    except OSError:
+        return None
 
 
 def _stamps(path: Path) -> dict[str, tuple[int, int]]:
