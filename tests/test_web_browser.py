@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from browser import ARGS, CHROMIUM, TIMEOUT_MS, have_chromium, until
 from dds_netns import NetNamespace, finish
 from helpers import MACHINES, REPO
 
@@ -30,24 +31,11 @@ pytestmark = pytest.mark.browser
 pytest.importorskip("aiohttp")
 sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
 
-CHROMIUM = os.environ.get("LLFSM_CHROMIUM", "/usr/bin/chromium")
-if not (Path(CHROMIUM).exists() or shutil.which(CHROMIUM)):
+if not have_chromium():
     pytest.skip(
         f"no Chromium at {CHROMIUM}: `apt-get install chromium` (make test does it as root)", allow_module_level=True
     )
-
-ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 MACHINE = "ros2_ping_pong"
-TIMEOUT_MS = 15_000
 
 
 class LiveRun:
@@ -145,15 +133,6 @@ def _count(page: Any, topic: str) -> int:
     return int(text) if text.strip().isdigit() else -1
 
 
-def _until(condition: Any, timeout: float = TIMEOUT_MS / 1000) -> None:
-    """Poll from Python: the page's Content-Security-Policy forbids evaluating strings, and so
-    Playwright's wait_for_function, which the tests do not get around."""
-    deadline = time.monotonic() + timeout
-    while not condition():
-        assert time.monotonic() < deadline, "timed out"
-        time.sleep(0.1)
-
-
 def _command(page: Any, verb: str) -> None:
     page.locator(f'article[data-machine="{MACHINE}"] button[data-command="{verb}"]').click()
 
@@ -184,7 +163,7 @@ def test_suspend_stops_the_machine_and_its_publishing_and_resume_goes_on(page: A
     sync_api.expect(page.locator(".command-result")).to_contain_text("already suspended")
     _command(page, "resume")
     page.wait_for_selector(f'article[data-machine="{MACHINE}"][data-status="running"]')
-    _until(lambda: _count(page, "/pingpong") > before)
+    until(lambda: _count(page, "/pingpong") > before)
 
 
 def test_a_message_published_from_the_form_is_echoed(page: Any, live: LiveRun) -> None:
@@ -422,10 +401,10 @@ def test_a_parameter_set_from_the_page_changes_the_background_and_a_bad_one_says
         row.locator("input").fill("255")
         row.locator("button").click()
         sync_api.expect(out).to_contain_text("Set parameter successful")
-        _until(lambda: _background(p).lower().startswith("#ff"))
+        until(lambda: _background(p).lower().startswith("#ff"))
         assert _background(p) != before
         # the rows are read again after the node's parameter event: the value shown is the new one
-        _until(lambda: row.locator("input").input_value() == "255")
+        until(lambda: row.locator("input").input_value() == "255")
         # a value of the right type but out of the node's range is refused with the node's reason
         row = p.locator('#nodes details[data-node="/turtlesim"] form.param[data-param="background_g"]')
         row.locator("input").fill("300")
@@ -446,7 +425,7 @@ def test_screenshot_of_the_page(turtle: LiveRun, browser: Any, tmp_path: Path, w
     try:
         p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="suspended"]')
         p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="running"]')
-        _until(lambda: p.locator('article[data-machine="ros2_blind_turtle_bot"] .transitions li').count() >= 5)
+        until(lambda: p.locator('article[data-machine="ros2_blind_turtle_bot"] .transitions li').count() >= 5)
         p.locator('#nodes details[data-node="/turtlesim"] summary').click()
         p.locator('#nodes details[data-node="/turtlesim"] form.param[data-param="background_b"]').wait_for()
         out = _shot(p, tmp_path, f"view-{width}")

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, TypeVar
 
 import click
 
@@ -25,6 +27,8 @@ from ._base import (  # noqa: F401  (shared with the click-free fast path of `ll
     fail,
     output_errors,
 )
+
+F = TypeVar("F", bound=Callable[..., Any])
 
 
 class Duration(click.ParamType):
@@ -42,6 +46,22 @@ class Duration(click.ParamType):
 
 
 DURATION = Duration()
+
+
+def web_option(what: str) -> Callable[[F], F]:
+    """`--web [HOST:]PORT` of `llfsm view` and `llfsm edit` (`llfsm run` parses its own)."""
+    return click.option(
+        "--web",
+        "web",
+        default="8080",
+        show_default=True,
+        metavar="[HOST:]PORT",
+        help=f"Where to serve {what} (127.0.0.1 unless HOST is given; 0: a free port).",
+    )
+
+
+#: `--duration` of the commands that serve until Ctrl-C (`llfsm view`, `llfsm edit`).
+duration_option = click.option("--duration", type=DURATION, help="Stop after this much time (default: until Ctrl-C).")
 
 
 def write_output(path: str, data: bytes, what: str) -> None:

@@ -9,20 +9,13 @@ from pathlib import Path
 import click
 
 from ._base import echo
-from ._common import DURATION, cli, fail
+from ._common import cli, duration_option, fail, web_option
 
 
 @cli.command()
 @click.argument("paths", nargs=-1, type=click.Path())
-@click.option(
-    "--web",
-    "web",
-    default="8080",
-    show_default=True,
-    metavar="[HOST:]PORT",
-    help="Where to serve the editor (127.0.0.1 unless HOST is given; 0: a free port).",
-)
-@click.option("--duration", type=DURATION, help="Stop after this much time (default: until Ctrl-C).")
+@web_option("the editor")
+@duration_option
 def edit(paths: tuple[str, ...], web: str, duration: int | None) -> None:
     """Edit machines in a web page: diagrams, structure, code, live checks, Run.
 

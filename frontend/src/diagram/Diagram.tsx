@@ -202,21 +202,18 @@ function attach(host: HTMLElement, latest: { current: DiagramProps }): () => voi
     const py = view.y + ((e.clientY - r.top) / Math.max(1, r.height)) * view.h;
     setView(svg, zoom(view, e.deltaY < 0 ? 1.15 : 1 / 1.15, px, py, fitted(svg, host)));
   };
-  host.addEventListener("pointerdown", down);
-  host.addEventListener("pointermove", move);
-  host.addEventListener("pointerup", up);
-  host.addEventListener("pointercancel", up);
-  host.addEventListener("click", click);
-  host.addEventListener("keydown", key);
-  host.addEventListener("wheel", wheel, { passive: false });
+  const listeners: [string, EventListener, AddEventListenerOptions?][] = [
+    ["pointerdown", down as EventListener],
+    ["pointermove", move as EventListener],
+    ["pointerup", up as EventListener],
+    ["pointercancel", up as EventListener],
+    ["click", click as EventListener],
+    ["keydown", key as EventListener],
+    ["wheel", wheel as EventListener, { passive: false }],
+  ];
+  for (const [type, fn, options] of listeners) host.addEventListener(type, fn, options);
   return () => {
-    host.removeEventListener("pointerdown", down);
-    host.removeEventListener("pointermove", move);
-    host.removeEventListener("pointerup", up);
-    host.removeEventListener("pointercancel", up);
-    host.removeEventListener("click", click);
-    host.removeEventListener("keydown", key);
-    host.removeEventListener("wheel", wheel);
+    for (const [type, fn] of listeners) host.removeEventListener(type, fn);
   };
 }
 
