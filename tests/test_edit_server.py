@@ -282,3 +282,18 @@ def test_a_verification_file_opens_the_machines_it_names_and_no_folder() -> None
     assert ws.folders == []
     with pytest.raises(WorkspaceError, match="open a folder"):
         ws.new_machine("extra")
+
+
+def test_with_a_token_every_request_needs_it(folder: Path) -> None:
+    srv = EditServer(Workspace([folder]), "127.0.0.1", 0, token="s3cret")
+    srv.start()
+    try:
+        assert srv.url.endswith("/?token=s3cret")
+        before = _tree(folder.parent)
+        status, _ = _post(srv, "/api/new", {"name": "made"})
+        assert status == 403
+        assert _tree(folder.parent) == before
+        status, answer = _post(srv, "/api/new", {"name": "made"}, {"X-LLFSM-Token": "s3cret"})
+        assert status == 200 and (folder / "made.machine" / "machine.yaml").exists(), answer
+    finally:
+        srv.stop()
