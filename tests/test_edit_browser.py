@@ -121,6 +121,10 @@ def editor(browser: Any, tmp_path: Path) -> Iterator[Editor]:
         e.close()
 
 
+def _text(path: Path) -> str:
+    return path.read_text() if path.exists() else ""
+
+
 def _copy_ping_pong(folder: Path) -> Path:
     return Path(shutil.copytree(MACHINES / "ros2_ping_pong.machine", folder / "ros2_ping_pong.machine"))
 
@@ -202,6 +206,11 @@ def test_a_typo_shows_in_problems_and_on_the_diagram_and_leaves_when_fixed(ping_
     problems = e.problems()
     assert any("State_WAIT_AND_COUNT_OnEntry.py:1" in p for p in problems), problems
     e.page.wait_for_selector('[data-file="State_WAIT_AND_COUNT_OnEntry.py"] .cm-lint-marker-error')
+    # the problem leads to its place: another state selected first, then the problem clicked
+    e.select_state("INITIAL")
+    e.page.get_by_role("list", name="Problems").get_by_role("button").first.click()
+    e.page.wait_for_selector('.state[data-state="WAIT_AND_COUNT"][aria-selected="true"]')
+    e.page.wait_for_selector('[data-file="State_WAIT_AND_COUNT_OnEntry.py"] .cm-editor.cm-focused')
     e.type_code("OnEntry", "count += 1\n")
     e.page.wait_for_selector('.state[data-state="WAIT_AND_COUNT"]:not([data-problem])')
     until(lambda: e.page.locator(".problems .clean").count() == 1, what="problems gone")
@@ -228,6 +237,16 @@ def test_a_dragged_state_stays_where_it_was_dropped_and_layout_yaml_says_so(ping
     e.page.reload()
     e.state("END").wait_for()
     assert float(e.state("END").locator("rect").first.get_attribute("x") or 0) > before + 20
+    # a transition's label too
+    label = e.page.locator('.guard[data-source="INITIAL"][data-index="1"]')
+    box = label.bounding_box()
+    assert box is not None
+    e.page.mouse.move(box["x"] + 5, box["y"] + 5)
+    e.page.mouse.down()
+    e.page.mouse.move(box["x"] + 45, box["y"] + 45, steps=6)
+    e.page.mouse.up()
+    until(lambda: "labels:" in layout.read_text(), what="the label's place written")
+    assert re.search(r"INITIAL:\n\s+1: \{x: ", layout.read_text()), layout.read_text()
 
 
 def test_a_reorder_of_priorities_keeps_each_guard_with_its_target(ping_pong: Editor) -> None:
@@ -309,6 +328,10 @@ def test_structure_by_keyboard_alone(ping_pong: Editor) -> None:
     e.state("PUBLISH").focus()
     e.page.keyboard.press("Enter")
     e.page.wait_for_selector('.state[data-state="PUBLISH"][aria-selected="true"]')
+    # Alt+arrows move the focused state: a layout without a pointer
+    e.state("PUBLISH").focus()
+    e.page.keyboard.press("Alt+ArrowRight")
+    until(lambda: "PUBLISH" in _text(machine / "layout.yaml"), what="moved by the keyboard")
     suspend = e.page.get_by_role("checkbox", name="Suspend state")
     suspend.focus()
     e.page.keyboard.press("Space")

@@ -472,15 +472,25 @@ def _opt_str(args: dict[str, Any], key: str) -> str | None:
 
 
 def _layout(path: Path, args: dict[str, Any]) -> edit.Change:
-    raw = args["positions"]
+    """States' centres ({name: [x, y]}) and labels' corners ([{source, index, x, y}])."""
+    raw = args.get("positions", {})
     if not isinstance(raw, dict):
         raise TypeError("positions map states to [x, y]")
     positions: dict[str, tuple[float, float]] = {}
     for name, xy in raw.items():
-        if not (isinstance(xy, list) and len(xy) == 2 and all(isinstance(v, int | float) for v in xy)):
+        if not (isinstance(xy, list) and len(xy) == 2 and all(_number(v) for v in xy)):
             raise TypeError("positions map states to [x, y]")
         positions[str(name)] = (float(xy[0]), float(xy[1]))
-    return edit.set_layout(path, positions)
+    labels: dict[tuple[str, int], tuple[float, float]] = {}
+    for item in args.get("labels", []):
+        if not isinstance(item, dict) or not all(_number(item.get(k)) for k in ("x", "y")):
+            raise TypeError("labels are [{source, index, x, y}]")
+        labels[(_str(item, "source"), _int(item, "index"))] = (float(item["x"]), float(item["y"]))
+    return edit.set_layout(path, positions, labels=labels or None)
+
+
+def _number(v: object) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
 
 
 def _transition_add(path: Path, a: dict[str, Any]) -> edit.Change:

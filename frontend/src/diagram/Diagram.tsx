@@ -26,6 +26,8 @@ export interface DiagramProps {
   breakpoints?: ReadonlySet<string>;
   /** States may be dragged (the editor): the new centres when one is dropped. */
   onMove?: (positions: Record<string, [number, number]>) => void;
+  /** A transition's label dragged (the editor): its new top-left corner. */
+  onMoveLabel?: (transition: { source: string; index: number }, corner: [number, number]) => void;
   onSelect?: (sel: Selection) => void;
   label?: string;
 }
@@ -33,6 +35,12 @@ export interface DiagramProps {
 /** Where each diagram was zoomed and panned to, kept across redraws (per machine). */
 const views = new Map<string, Box>();
 const DRAG_THRESHOLD = 4;
+const ARROWS: Record<string, [number, number]> = {
+  ArrowLeft: [-1, 0],
+  ArrowRight: [1, 0],
+  ArrowUp: [0, -1],
+  ArrowDown: [0, 1],
+};
 
 export function Diagram(props: DiagramProps) {
   const box = useRef<HTMLDivElement>(null);
@@ -116,6 +124,7 @@ function decorate(svg: SVGSVGElement, p: DiagramProps): void {
 /** What a pointer or key on the drawing means; the handlers read the latest props. */
 function attach(host: HTMLElement, latest: { current: DiagramProps }): () => void {
   let drag: { g: SVGGElement; x0: number; y0: number; moved: boolean; ctm: DOMMatrix; id: number } | null = null;
+  let dragged = false; // the click that ends a drag selects nothing
   let panning: { x: number; y: number; view: Box; id: number } | null = null;
 
   const svgOf = () => host.querySelector("svg");
@@ -136,10 +145,13 @@ function attach(host: HTMLElement, latest: { current: DiagramProps }): () => voi
     const svg = svgOf();
     if (!svg || e.button !== 0) return;
     const { state, edge } = target(e);
-    if (state && latest.current.onMove) {
-      const ctm = (state.parentNode as SVGGraphicsElement).getScreenCTM();
+    const label = edge?.classList.contains("guard") && latest.current.onMoveLabel ? (edge as SVGGElement) : null;
+    const movable = state && latest.current.onMove ? state : label;
+    dragged = false;
+    if (movable) {
+      const ctm = (movable.parentNode as SVGGraphicsElement).getScreenCTM();
       if (!ctm) return;
-      drag = { g: state, x0: e.clientX, y0: e.clientY, moved: false, ctm: ctm.inverse(), id: e.pointerId };
+      drag = { g: movable, x0: e.clientX, y0: e.clientY, moved: false, ctm: ctm.inverse(), id: e.pointerId };
       host.setPointerCapture?.(e.pointerId);
       e.preventDefault();
     } else if (!state && !edge) {
@@ -167,13 +179,24 @@ function attach(host: HTMLElement, latest: { current: DiagramProps }): () => voi
   const up = (e: PointerEvent) => {
     if (drag && e.pointerId === drag.id) {
       const { g, moved } = drag;
+      const isState = g.classList.contains("state");
       if (moved) {
         const d = delta(drag.ctm, e.clientX - drag.x0, e.clientY - drag.y0);
-        const c = centre(g);
-        const name = g.dataset.state ?? "";
-        latest.current.onMove?.({ [name]: [round(c.x + d.x), round(c.y + d.y)] });
+        if (isState) {
+          const c = centre(g);
+          latest.current.onMove?.({ [g.dataset.state ?? ""]: [round(c.x + d.x), round(c.y + d.y)] });
+        } else {
+          const r = g.querySelector("rect");
+          const at = (a: string) => Number(r?.getAttribute(a) ?? 0);
+          latest.current.onMoveLabel?.(
+            { source: g.dataset.source ?? "", index: Number(g.dataset.index) },
+            [round(at("x") + d.x), round(at("y") + d.y)],
+          );
+        }
+        dragged = true;
       } else {
-        select(g, null);
+        select(isState ? g : null, isState ? null : g);
+        dragged = true;
       }
       drag = null;
     } else if (panning && e.pointerId === panning.id) {
@@ -181,6 +204,10 @@ function attach(host: HTMLElement, latest: { current: DiagramProps }): () => voi
     }
   };
   const click = (e: MouseEvent) => {
+    if (dragged) {
+      dragged = false;
+      return;
+    }
     const { state, edge } = target(e);
     if (!state && edge) select(null, edge);
     else if (state && !latest.current.onMove) select(state, null);
@@ -190,6 +217,14 @@ function attach(host: HTMLElement, latest: { current: DiagramProps }): () => voi
     if ((e.key === "Enter" || e.key === " ") && (state || edge)) {
       e.preventDefault();
       select(state, edge);
+    }
+    // Alt+arrows move the focused state (Shift: further): a layout without a pointer
+    const step = ARROWS[e.key];
+    if (step && e.altKey && state && latest.current.onMove) {
+      e.preventDefault();
+      const c = centre(state);
+      const k = e.shiftKey ? 50 : 10;
+      latest.current.onMove({ [state.dataset.state ?? ""]: [round(c.x + step[0] * k), round(c.y + step[1] * k)] });
     }
   };
   const wheel = (e: WheelEvent) => {

@@ -4,6 +4,7 @@ import { useEffect, useState } from "preact/hooks";
 import { Diagram, zoomDiagram } from "../diagram/Diagram";
 import { dialog, Dialogs } from "./Dialogs";
 import { ownerOf, problemStates, stateLines } from "./files";
+import { reveal } from "./Code";
 import { Inspector } from "./Inspector";
 import {
   command,
@@ -132,9 +133,10 @@ function Problems() {
                 const owner = ownerOf(d.file, names);
                 if (owner?.transition !== undefined) selection.value = { transition: { source: owner.state, index: owner.transition } };
                 else if (owner) selection.value = { state: owner.state };
-                requestAnimationFrame(() =>
-                  document.querySelector<HTMLElement>(`[data-file="${CSS.escape(d.file)}"] .cm-content`)?.focus(),
-                );
+                // once the state's editors are on the page: the file's, at the problem's place
+                let tries = 20;
+                const go = () => reveal(d.file, d.line, d.column) || (--tries > 0 && setTimeout(go, 25));
+                requestAnimationFrame(() => void go());
               }}
             >
               <span class="where">
@@ -185,6 +187,7 @@ function Canvas() {
           marks={marks}
           onSelect={(s) => (selection.value = s)}
           onMove={(positions) => void operate("set_layout", { positions })}
+          onMoveLabel={(t, corner) => void operate("set_layout", { positions: {}, labels: [{ ...t, x: corner[0], y: corner[1] }] })}
         />
       ) : (
         <p class="hint">machine.yaml does not read yet: see Problems.</p>

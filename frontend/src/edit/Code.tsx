@@ -38,6 +38,23 @@ export interface CodeProps {
   readOnly?: boolean;
   /** Enter in a one-line editor, or leaving it. */
   onCommit?: (text: string) => void;
+  /** The file it edits: a problem in the list goes to its line here (`reveal`). */
+  file?: string;
+}
+
+/** The code editors on the page, by the file each edits. */
+const open = new Map<string, EditorView>();
+
+/** Put the cursor at a line and column of a file's editor, scrolled into view and focused;
+ * false if no editor of that file is on the page. */
+export function reveal(file: string, line: number, column: number): boolean {
+  const v = open.get(file);
+  if (!v) return false;
+  const l = v.state.doc.line(Math.min(Math.max(1, line), v.state.doc.lines));
+  const pos = Math.min(l.from + Math.max(0, column - 1), l.to);
+  v.dispatch({ selection: { anchor: pos }, effects: EditorView.scrollIntoView(pos, { y: "center" }) });
+  v.focus();
+  return true;
 }
 
 export function Code(props: CodeProps) {
@@ -49,8 +66,13 @@ export function Code(props: CodeProps) {
   useEffect(() => {
     const v = new EditorView({ parent: host.current as HTMLElement, state: EditorState.create({ doc: props.text, extensions: extensions(latest) }) });
     view.current = v;
-    return () => v.destroy();
-  }, [props.oneLine, props.readOnly]);
+    const file = props.file;
+    if (file) open.set(file, v);
+    return () => {
+      if (file && open.get(file) === v) open.delete(file);
+      v.destroy();
+    };
+  }, [props.oneLine, props.readOnly, props.file]);
 
   useEffect(() => {
     const v = view.current;

@@ -19,6 +19,7 @@ function FileEditor(props: { m: Full; file: string; label: string }) {
       <span class="label">{props.label} <span class="file">{props.file}</span></span>
       <Code
         label={props.label}
+        file={props.file}
         text={b.text}
         revision={ext.n}
         python={!props.file.endsWith(".yaml")}
@@ -162,6 +163,7 @@ function TransitionPanel(props: { m: Full; source: string; index: number }) {
           oneLine
           onChange={setGuard}
           onCommit={commitGuard}
+          file={t.file ?? undefined}
           diagnostics={t.file ? m.diagnostics.filter((d) => d.file === t.file) : []}
         />
       </div>
