@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+import yaml
 from browser import ARGS, CHROMIUM, TIMEOUT_MS, Served, have_chromium, page_not_built, until
 from helpers import MACHINES, llfsm, llfsm_process
 
@@ -176,6 +177,7 @@ def test_the_how_tos_ping_pong_built_from_an_empty_folder_checks_clean_and_runs(
     e.add_transition("PUBLISH", "WAIT_AND_COUNT", "after_ms(500)")
     e.add_transition("WAIT_AND_COUNT", "END", "not ros.ok()")
     e.add_transition("WAIT_AND_COUNT", "PUBLISH", "after_ms(500)")
+    e.type_code("Description", "Publishes the count on /pingpong.")
     e.type_code("Includes", INCLUDES)
     e.type_code("Variables", VARIABLES)
     e.select_state("INITIAL")
@@ -189,6 +191,7 @@ def test_the_how_tos_ping_pong_built_from_an_empty_folder_checks_clean_and_runs(
     assert not e.errors
 
     machine = e.folder / "ping_pong.machine"
+    assert yaml.safe_load((machine / "machine.yaml").read_text())["description"] == "Publishes the count on /pingpong."
     assert llfsm("check", str(machine)).status == 0
     ran = llfsm_process("run", "--clock", "sim", str(machine), "--duration", "2.6s", "--echo", "/pingpong")
     assert ran.status == 0, ran.stderr

@@ -297,3 +297,17 @@ def test_with_a_token_every_request_needs_it(folder: Path) -> None:
         assert status == 200 and (folder / "made.machine" / "machine.yaml").exists(), answer
     finally:
         srv.stop()
+
+
+def test_the_description_is_written_into_machine_yaml_with_its_comments_kept(folder: Path) -> None:
+    ws = Workspace([folder])
+    yaml_file = folder / "ros2_ping_pong.machine" / "machine.yaml"
+    yaml_file.write_text("# the how-to's ping pong\n" + yaml_file.read_text())
+    ws.operate("ros2_ping_pong", "set_description", {"text": "Counts.\nTwice a second."})
+    text = yaml_file.read_text()
+    assert text.startswith("# the how-to's ping pong\n") and "description: |\n  Counts.\n  Twice a second.\n" in text
+    assert ws.full("ros2_ping_pong")["structure"]["description"] == "Counts.\nTwice a second.\n"
+    ws.operate("ros2_ping_pong", "set_description", {"text": ""})
+    assert "description" not in yaml_file.read_text()
+    ws.undo()
+    assert "Twice a second." in yaml_file.read_text()

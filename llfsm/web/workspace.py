@@ -517,5 +517,6 @@ OPERATIONS: dict[str, Any] = {
     "set_guard": lambda p, a: edit.set_guard(p, _str(a, "source"), _int(a, "index"), _str(a, "guard")),
     "set_initial": lambda p, a: edit.set_initial(p, _str(a, "state")),
     "set_suspend": lambda p, a: edit.set_suspend(p, _opt_str(a, "state")),
+    "set_description": lambda p, a: edit.set_description(p, _opt_str(a, "text")),
     "set_layout": _layout,
 }

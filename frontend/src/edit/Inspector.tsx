@@ -3,7 +3,7 @@
 // Every structure operation is a field or a button here or in the toolbar: nothing needs the
 // pointer.
 
-import { useEffect, useState } from "preact/hooks";
+import { useEffect, useRef, useState } from "preact/hooks";
 import { Code } from "./Code";
 import { MACHINE_FILES, STATE_SECTIONS, stateFile } from "./files";
 import { Buffer, buffer, edited, type Full, machine, operate, resolve, selection, type StateInfo } from "./store";
@@ -203,6 +203,10 @@ function MachinePanel(props: { m: Full }) {
   );
 }
 
+/** The description is machine.yaml's: written a little after typing stops (each write is a
+ * structure operation: machine.yaml is rewritten with its comments kept). */
+const DESCRIPTION_DELAY = 400;
+
 function DescriptionEditor(props: { m: Full }) {
   const { m } = props;
   const text = m.structure?.description ?? "";
@@ -212,13 +216,21 @@ function DescriptionEditor(props: { m: Full }) {
     setValue(text);
     setRev((r) => r + 1);
   }, [text, m.key]);
+  const timer = useRef<ReturnType<typeof setTimeout> | null>(null);
   const commit = (v: string) => {
-    if (v !== text) void operate("set_description", { text: v });
+    if (timer.current) clearTimeout(timer.current);
+    timer.current = null;
+    if (v.trim() !== text.trim()) void operate("set_description", { text: v });
+  };
+  const changed = (v: string) => {
+    setValue(v);
+    if (timer.current) clearTimeout(timer.current);
+    timer.current = setTimeout(() => commit(v), DESCRIPTION_DELAY);
   };
   return (
     <div class="field">
       <span class="label">Description <span class="file">machine.yaml</span></span>
-      <Code label="Description" text={value} revision={rev} python={false} onChange={setValue} onCommit={commit} />
+      <Code label="Description" text={value} revision={rev} python={false} onChange={changed} onCommit={commit} />
     </div>
   );
 }
