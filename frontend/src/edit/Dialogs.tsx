@@ -6,7 +6,7 @@ import { signal } from "@preact/signals";
 import type { ComponentChildren } from "preact";
 import { useEffect, useRef, useState } from "preact/hooks";
 import { Code } from "./Code";
-import { machine, newMachine, operate, selection } from "./store";
+import { folders, machine, newMachine, operate, selection } from "./store";
 
 export const dialog = signal<null | "machine" | "state" | "transition">(null);
 
@@ -43,12 +43,23 @@ function Modal(props: { title: string; onSubmit: () => Promise<boolean>; childre
 function NewMachine() {
   const [name, setName] = useState("");
   const [states, setStates] = useState("");
+  const [folder, setFolder] = useState(0);
   return (
     <Modal
       title="New machine"
       submit="Make"
-      onSubmit={() => newMachine(name.trim(), states.split(/[\s,]+/).filter(Boolean))}
+      onSubmit={() => newMachine(name.trim(), states.split(/[\s,]+/).filter(Boolean), folder)}
     >
+      {folders.value.length > 1 && (
+        <label>
+          Folder{" "}
+          <select value={folder} onChange={(e) => setFolder(Number(e.currentTarget.value))}>
+            {folders.value.map((f, i) => (
+              <option value={i}>{f}</option>
+            ))}
+          </select>
+        </label>
+      )}
       <label>Name <input name="name" required value={name} onInput={(e) => setName(e.currentTarget.value)} autoFocus spellcheck={false} /></label>
       <label>States <input name="states" placeholder="INITIAL, PUBLISH, END (optional)" value={states} onInput={(e) => setStates(e.currentTarget.value)} spellcheck={false} /></label>
     </Modal>

@@ -6,7 +6,7 @@
 import { useEffect, useRef, useState } from "preact/hooks";
 import { Code } from "./Code";
 import { MACHINE_FILES, STATE_SECTIONS, stateFile } from "./files";
-import { Buffer, buffer, edited, type Full, machine, operate, resolve, selection, type StateInfo } from "./store";
+import { buffer, edited, type Full, machine, operate, resolve, selection, type StateInfo } from "./store";
 import { Conflict } from "./Conflict";
 
 function FileEditor(props: { m: Full; file: string; label: string }) {
@@ -250,4 +250,3 @@ export function Inspector() {
   );
 }
 
-export type { Buffer };

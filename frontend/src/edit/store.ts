@@ -255,8 +255,8 @@ export async function operate(op: string, args: Record<string, unknown>): Promis
   return changedBy(await post<Changing>("/api/op", { machine: key, op, args }));
 }
 
-export async function newMachine(name: string, states?: string[]): Promise<boolean> {
-  const r = await post<Changing>("/api/new", { name, states: states?.length ? states : undefined });
+export async function newMachine(name: string, states?: string[], folder = 0): Promise<boolean> {
+  const r = await post<Changing>("/api/new", { name, folder, states: states?.length ? states : undefined });
   if (!changedBy(r)) return false;
   if (r.key) {
     shown.value = r.key;
