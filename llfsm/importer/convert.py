@@ -1,0 +1,174 @@
+"""One clfsm machine (llfsm.importer.clfsm) to the files of an llfsm machine directory.
+
+The structure is carried over exactly: the states in their order (the trace's `s` numbers
+stay clfsm's), each state's transitions in priority order with their targets, the initial
+and suspend states; `InitialPseudoState` stays the initial state it is in clfsm (its guard
+`true` moves on at once, and a restart passes through it again, as in clfsm).  The code is
+translated where it is clear (llfsm.importer.statements) and kept as marked lines elsewhere.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from .clfsm import ClfsmMachine, ClfsmState, Source
+from .expressions import Scope
+from .headers import translate_includes, translate_methods, translate_variables
+from .kinds import Imports
+from .report import Left, MachineReport
+from .statements import MARKER, Translation, translate_guard, translate_section
+
+#: Modules the translation may import: a variable never takes one of these names.
+MODULES = frozenset({"ros", "math", "sys", "os", "time", "copy", "contextlib"})
+_SECTION_FILES = {"OnEntry": "OnEntry", "OnExit": "OnExit", "Internal": "Internal", "OnSuspend": "OnSuspend",
+                  "OnResume": "OnResume"}  # fmt: skip
+
+
+@dataclass
+class Imported:
+    """The llfsm machine made from a clfsm one: relative path -> text, and its report."""
+
+    name: str
+    files: dict[str, str]
+    report: MachineReport
+
+
+@dataclass
+class _File:
+    """An output file being composed, and the lines left in it."""
+
+    name: str
+    lines: list[str] = field(default_factory=list)
+
+    def place(self, t: Translation, source: Source, report: MachineReport) -> None:
+        """Append `t`'s lines; each statement left is recorded at its line here and there."""
+        reasons = iter([(line, why) for line, why in t.left if why])
+        for text in t.lines:
+            self.lines.append(text)
+            if text.lstrip().startswith(MARKER + " ("):
+                src_line, why = next(reasons, (0, ""))
+                report.left.append(Left(self.name, len(self.lines), source.name, src_line, why))
+        report.code += t.code
+        report.left_lines += t.left_lines
+
+    def text(self) -> str:
+        return "\n".join(self.lines).rstrip("\n") + "\n" if any(ln.strip() for ln in self.lines) else ""
+
+
+def convert(m: ClfsmMachine, name: str, machines: Mapping[str, str], states: Mapping[str, str]) -> Imported:
+    """The llfsm machine `name` made from `m`; `machines` maps the names of the machines imported
+    together to their llfsm names (the `suspend("...")` family follows them), `states` this
+    machine's state names to llfsm's."""
+    report = MachineReport(source=m.path, name=name, original=m.name, notes=list(m.notes))
+    imports = Imports()
+    files: dict[str, str] = {}
+    machine_scope = Scope(imports, {}, machines, states, taken=set(MODULES))
+    variables = _File("Variables.py")
+    if m.variables is not None:
+        declared = translate_variables(m.variables.text, machine_scope)
+        variables.place(declared.translation, m.variables, report)
+        machine_vars = declared.names
+    else:
+        machine_vars = {}
+    includes = [m.includes] if m.includes is not None else []
+    methods = [m.methods] if m.methods is not None else []
+    for s in m.states:
+        _state(m, s, machine_vars, machine_scope, report, files)
+        if s.includes is not None:
+            includes.append(s.includes)
+        if s.methods is not None:
+            methods.append(s.methods)
+    includes_file = _includes(includes, methods, imports, report)
+    files["machine.yaml"] = _machine_yaml(m, name, states)
+    for f in (variables, includes_file):
+        if f.text():
+            files[f.name] = f.text()
+    if m.layout:
+        files["layout.yaml"] = _layout_yaml(m, states)
+    report.files = len(files)
+    return Imported(name, dict(sorted(files.items())), report)
+
+
+def _state(
+    m: ClfsmMachine,
+    s: ClfsmState,
+    machine_vars: dict[str, tuple[str, str | None]],
+    machine_scope: Scope,
+    report: MachineReport,
+    files: dict[str, str],
+) -> None:
+    """The files of one state: its variables (with the statics of its sections), sections and guards."""
+    new = machine_scope.states[s.name]
+    scope = Scope(machine_scope.imports, dict(machine_vars), machine_scope.machines, machine_scope.states,
+                  taken=set(machine_scope.taken))  # fmt: skip
+    variables = _File(f"State_{new}_Variables.py")
+    if s.variables is not None:
+        declared = translate_variables(s.variables.text, scope)
+        variables.place(declared.translation, s.variables, report)
+        scope.variables = {**machine_vars, **declared.names}
+    for section, src in s.sections.items():
+        t = translate_section(src.text, scope, section)
+        out = _File(f"State_{new}_{_SECTION_FILES[section]}.py")
+        out.place(t, src, report)
+        for st in t.statics:
+            variables.lines.append(
+                f"{st.name}: {st.annotation}" + (f" = {st.initial}" if st.initial is not None else "")
+                + f"  # static in {src.name}:{st.line}"
+            )
+            scope.taken.add(st.name)
+        if out.text():
+            files[out.name] = out.text()
+    for tr in s.transitions:
+        target = machine_scope.states[m.states[tr.target].name]
+        out = _File(f"State_{new}_Transition_{tr.index}.expr", [f"# -> {target}"])
+        if tr.guard is None:
+            why = f"State_{s.name}_Transition_{tr.index}.expr is missing in the clfsm machine"
+            t = Translation([f"{MARKER} ({why}): ", "False"], 1, [(1, why)])
+            out.place(t, Source(f"State_{s.name}_Transition_{tr.index}.expr", ""), report)
+        else:
+            out.place(translate_guard(tr.guard.text, scope), tr.guard, report)
+        files[out.name] = out.text()
+    if variables.text():
+        files[variables.name] = variables.text()
+
+
+def _includes(includes: list[Source], methods: list[Source], imports: Imports, report: MachineReport) -> _File:
+    """Includes.py: the imports the code needs, then what the headers held that has no Python."""
+    out = _File("Includes.py")
+    pending = []
+    for src in includes:
+        pending.append((translate_includes(src.text, imports), src))
+    for src in methods:
+        pending.append((translate_methods(src.text), src))
+    out.lines.extend(imports.lines())
+    for t, src in pending:
+        if t.lines:
+            out.lines.append(f"# from {src.name}")
+        out.place(t, src, report)
+    return out
+
+
+def _machine_yaml(m: ClfsmMachine, name: str, states: Mapping[str, str]) -> str:
+    lines = [f"description: Imported by llfsm import from the clfsm machine {m.name}.machine."]
+    if m.initial != 0:
+        lines.append(f"initial: {states[m.states[m.initial].name]}")
+    if m.suspended is not None:
+        lines.append(f"suspended: {states[m.states[m.suspended].name]}")
+    lines.append("states:")
+    for s in m.states:
+        lines.append(f"  - name: {states[s.name]}")
+        if s.transitions:
+            targets = ", ".join(states[m.states[t.target].name] for t in s.transitions)
+            lines.append(f"    transitions: [{targets}]")
+    return "\n".join(lines) + "\n"
+
+
+def _layout_yaml(m: ClfsmMachine, states: Mapping[str, str]) -> str:
+    lines = ["# Where MiEditLLFSM drew each state (from Layout.plist): llfsm edit reads it, build ignores it.",
+             "states:"]  # fmt: skip
+    for s in m.states:
+        if s.name in m.layout:
+            x, y = m.layout[s.name]
+            lines.append(f"  {states[s.name]}: {{x: {x:g}, y: {y:g}}}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,205 @@
+"""The headers of a clfsm machine: includes (`<M>_Includes.h`, `State_<S>_Includes.h`),
+variables (`<M>_Variables.h`, `State_<S>_Variables.h`) and functions (`*_Methods.h`).
+
+An include becomes the import its code needs (`rclcpp/rclcpp.hpp` -> `from llfsm import ros`,
+`geometry_msgs/msg/twist.hpp` -> `from llfsm.msgs.geometry_msgs.msg import Twist`); a C or
+C++ standard header needs nothing in Python (what its functions need, `math` or `sys`, is
+imported where the code uses them).  A header llfsm has no counterpart for (the whiteboard's,
+a robot's SDK) is kept as a marked line.  A variable becomes `name: annotation = value`
+(llfsm.importer.kinds), with its `///<` comment.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .cxx import Node, code_lines, end_line_of, line_of, parse_members, parse_unit
+from .expressions import Scope, Untranslatable
+from .kinds import Imports, annotation, kind_of
+from .statements import Statements, Translation, comment_lines, marked, python_name
+
+#: Headers of the C and C++ standard libraries and of clfsm itself: Python needs none of them.
+_NOTHING_NEEDED = re.compile(
+    r"(?:iostream|string|sstream|cmath|math\.h|cstdlib|stdlib\.h|cstdio|stdio\.h|cstring|string\.h|unistd\.h|"
+    r"fcntl\.h|memory|chrono|functional|vector|cstdint|stdint\.h|stdbool\.h|climits|limits\.h|ctime|time\.h|"
+    r"iomanip|algorithm|utility|cassert|assert\.h|errno\.h|cerrno|sys/types\.h|sys/stat\.h|CLMacros\.h|"
+    r"CLMachine\.h|CLState\.h|CLAction\.h|CLTransition\.h)\Z"
+)
+_MESSAGE_HEADER = re.compile(r"(?P<pkg>[a-z][a-z0-9_]*)/(?P<sub>msg|srv)/(?P<snake>[a-z][a-z0-9_]*)\.hpp?\Z")
+_BLOCK_WORKAROUND = re.compile(r"#\s*(?:undef\s+__block|define\s+__block\b.*)\Z")
+_INTERFACES = Path(__file__).resolve().parent.parent / "msgs" / "_interfaces"
+
+
+def message_type_name(pkg: str, sub: str, snake: str) -> str:
+    """The type a message header declares: `turtle_position.hpp` declares TurtlePosition.
+    Looked up among llfsm's interface definitions where the package ships (so `tf_message`
+    is TFMessage), else spelt in CamelCase."""
+    folder = _INTERFACES / pkg / sub
+    wanted = snake.replace("_", "").lower()
+    try:
+        for f in folder.iterdir():
+            if f.stem.lower() == wanted:
+                return f.stem
+    except OSError:
+        pass
+    return "".join(part.capitalize() for part in snake.split("_"))
+
+
+def translate_includes(text: str, imports: Imports) -> Translation:
+    parsed = parse_unit(text)
+    out: list[str] = []
+    left: list[tuple[int, str]] = []
+    for node in parsed.root.named_children:
+        first, last = line_of(node), end_line_of(node)
+        if node.type == "comment":
+            if _generated_comment(parsed.text(node)):
+                continue
+            out.extend(f"# {ln}".rstrip() for ln in comment_lines(parsed.text(node)))
+            continue
+        why = _include(node, parsed.text(node).strip(), imports)
+        if why is None:
+            continue
+        out.extend(marked("", why, parsed.text(node).strip()))
+        rows = sorted(code_lines(node, first, last))
+        left.extend((r, why if i == 0 else "") for i, r in enumerate(rows))
+    code = len(code_lines(parsed.root, 1, len(parsed.lines)))
+    return Translation(out, code, left)
+
+
+def _include(node: Node, text: str, imports: Imports) -> str | None:
+    """Why an include line cannot be carried over, or None once its import is recorded."""
+    if node.type == "preproc_include":
+        path_node = node.child_by_field_name("path")
+        header = path_node.text.decode("utf-8", "replace").strip("<>\"") if path_node is not None else ""
+        if _NOTHING_NEEDED.match(header):
+            return None
+        if header in ("rclcpp/rclcpp.hpp", "rclcpp/rclcpp.h"):
+            imports.ros = True
+            return None
+        m = _MESSAGE_HEADER.match(header)
+        if m:
+            imports.message(m["pkg"], m["sub"], message_type_name(m["pkg"], m["sub"], m["snake"]))
+            return None
+        return f"the header {header}: llfsm has no counterpart"
+    if node.type == "using_declaration" or text.startswith("using namespace"):
+        return None  # Python names need no namespace
+    if _BLOCK_WORKAROUND.match(re.sub(r"\s+", " ", text)):
+        return None  # clfsm's workaround for Apple's blocks: nothing in Python
+    return "C++ that Includes.py cannot hold"
+
+
+def _generated_comment(text: str) -> bool:
+    """The comment MiEditLLFSM writes at the top of a header (its name, "Automatically created")."""
+    body = " ".join(comment_lines(text))
+    return not body.strip() or "Automatically created" in body or bool(re.fullmatch(r"\s*[\w.]+\.(?:h|mm)\s*", body))
+
+
+@dataclass
+class Declared:
+    """The variables of one variables header: Python lines, and C name -> (Python name, kind)."""
+
+    translation: Translation
+    names: dict[str, tuple[str, str | None]] = field(default_factory=dict)
+
+
+def translate_variables(text: str, scope: Scope) -> Declared:
+    """`<M>_Variables.h` or `State_<S>_Variables.h` as a variables file.  A variable whose type
+    llfsm does not know is declared `name: object` after its marked line, so that code using
+    it is marked for that reason rather than for an unknown name."""
+    parsed = parse_members(text)
+    s = Statements(parsed, scope, "Variables")
+    out: list[str] = []
+    left: list[tuple[int, str]] = []
+    names: dict[str, tuple[str, str | None]] = {}
+    last_row = -1
+    for node in parsed.root.named_children:
+        if node.type == "comment":
+            if _generated_comment(parsed.text(node)):
+                continue
+            lines = comment_lines(parsed.text(node))
+            if line_of(node) == last_row and len(lines) == 1 and out and not out[-1].startswith("#"):
+                out[-1] += f"  # {lines[0]}" if lines[0] else ""
+            else:
+                out.extend(f"# {ln}".rstrip() for ln in lines)
+            continue
+        last_row = end_line_of(node)
+        try:
+            if node.type != "field_declaration" or node.has_error:
+                raise Untranslatable("not a variable declaration")
+            out.extend(_variables(s, node, names, scope))
+        except Untranslatable as e:
+            out.extend(marked("", str(e), parsed.text(node)))
+            rows = sorted(code_lines(node, line_of(node), end_line_of(node)))
+            left.extend((r, str(e) if i == 0 else "") for i, r in enumerate(rows))
+            for name in _declared_names(node):
+                if name not in names:
+                    py = python_name(name, scope.taken)
+                    scope.taken.add(py)
+                    names[name] = (py, None)
+                    out.append(f"{py}: object  # a placeholder for the line above")
+    code = len(code_lines(parsed.root, 1, len(parsed.lines)))
+    return Declared(Translation(out, code, left), names)
+
+
+def _variables(s: Statements, node: Node, names: dict[str, tuple[str, str | None]], scope: Scope) -> list[str]:
+    type_node = node.child_by_field_name("type")
+    if type_node is None:
+        raise Untranslatable("a declaration without a type")
+    type_text = s.text(type_node)
+    lines = []
+    for d in node.children_by_field_name("declarator"):
+        value = node.child_by_field_name("default_value")
+        pointer, size = False, None
+        while d.type in ("pointer_declarator", "array_declarator", "reference_declarator", "init_declarator"):
+            if d.type == "reference_declarator":
+                raise Untranslatable("a reference")
+            if d.type == "init_declarator":
+                value = d.child_by_field_name("value")
+            elif d.type == "pointer_declarator":
+                pointer = True
+            else:
+                size = d.child_by_field_name("size")
+                if size is None:
+                    raise Untranslatable("an array without a size")
+            d = d.child_by_field_name("declarator") or d.named_children[-1]
+        if d.type not in ("field_identifier", "identifier"):
+            raise Untranslatable(f"the declaration of {s.text(d)}")
+        name = s.text(d)
+        kind = kind_of(type_text, pointer, scope.imports)
+        if kind is None:
+            raise Untranslatable(f"the type {type_text.strip()}{' *' if pointer else ''}")
+        text, kind = s.declared_value(kind, pointer, size, value)
+        py = python_name(name, scope.taken)
+        scope.taken.add(py)
+        names[name] = (py, kind)
+        lines.append(f"{py}: {annotation(kind)}" + (f" = {text}" if text is not None else ""))
+    return lines
+
+
+def _declared_names(node: Node) -> list[str]:
+    """The names a declaration declares, found however its declarators are written."""
+    out = []
+    stack = list(node.children_by_field_name("declarator"))
+    while stack:
+        d = stack.pop(0)
+        if d.type in ("field_identifier", "identifier"):
+            out.append(d.text.decode("utf-8", "replace"))
+        else:
+            inner = d.child_by_field_name("declarator")
+            if inner is not None:
+                stack.append(inner)
+    return out
+
+
+def translate_methods(text: str) -> Translation:
+    """A `*_Methods.h`: C++ functions, each line kept for a person (llfsm machines keep their
+    functions in helper modules beside the machine, imported by Includes.py)."""
+    parsed = parse_unit(text)
+    code = sorted(code_lines(parsed.root, 1, len(parsed.lines)))
+    if not code:
+        return Translation([], 0)
+    why = "a function of the clfsm machine: write it in a helper module beside the machine"
+    lines = marked("", why, "\n".join(parsed.lines[code[0] - 1 : code[-1]]))
+    return Translation(lines, len(code), [(r, why if i == 0 else "") for i, r in enumerate(code)])
