@@ -79,11 +79,14 @@ def import_machines(paths: list[Path], out: Path, force: bool = False) -> list[M
         taken.add(new)
         f.report.name = new
         if f.machine.name in names:
-            f.report.notes.append(f"another machine imported here is named {f.machine.name} too: this one is {new}")
+            f.report.notes.append(
+                f"another machine imported here is named {f.machine.name} too: this one is {new}, and "
+                f'suspend("{f.machine.name}") calls mean the first'
+            )
         else:
             names[f.machine.name] = new
-        if new != f.machine.name:
-            f.report.notes.append(f"renamed {f.machine.name} to {new} (an llfsm name), and suspend(\"...\") calls follow")
+            if new != f.machine.name:
+                f.report.notes.append(f'renamed {f.machine.name} to {new} (an llfsm name); suspend("...") calls follow')
     for f in found:
         if f.machine is None:
             continue

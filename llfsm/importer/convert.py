@@ -17,7 +17,7 @@ from .expressions import Scope
 from .headers import translate_includes, translate_methods, translate_variables
 from .kinds import Imports
 from .report import Left, MachineReport
-from .statements import MARKER, Translation, translate_guard, translate_section
+from .statements import MARKER, Translation, marked, translate_guard, translate_section
 
 #: Modules the translation may import: a variable never takes one of these names.
 MODULES = frozenset({"ros", "math", "sys", "os", "time", "copy", "contextlib"})
@@ -124,7 +124,7 @@ def _state(
         out = _File(f"State_{new}_Transition_{tr.index}.expr", [f"# -> {target}"])
         if tr.guard is None:
             why = f"State_{s.name}_Transition_{tr.index}.expr is missing in the clfsm machine"
-            t = Translation([f"{MARKER} ({why}): ", "False"], 1, [(1, why)])
+            t = Translation([*marked("", why, ""), "False"], 1, [(1, why)])
             out.place(t, Source(f"State_{s.name}_Transition_{tr.index}.expr", ""), report)
         else:
             out.place(translate_guard(tr.guard.text, scope), tr.guard, report)

@@ -21,7 +21,7 @@ from typing import Any
 
 #: What a section is wrapped in: the prefix ends its own line, so row r of the tree is line r
 #: of the section (1-based).
-_WRAP = ("void _llfsm_section() {\n", "\n}\n")
+_WRAP = ("void _llfsm_section() { ;\n", "\n}\n")  # `;` first: `{ {} }` must not read as an initialiser
 _GUARD = ("bool _llfsm_guard() { return (\n", "\n); }\n")
 
 
@@ -38,6 +38,8 @@ class Parsed:
 
     root: Node
     lines: list[str]  # the source's lines, without line ends
+    ok: bool = True  # False: the wrapper itself did not parse (the source broke out of it)
+    whole: Node = None  # the whole tree (the root is the part translated)
 
     def text(self, node: Node) -> str:
         return node.text.decode("utf-8", "replace")  # type: ignore[no-any-return]
@@ -65,46 +67,51 @@ def parser() -> Any:
 def parse_statements(source: str) -> Parsed:
     """`source` as the statements of a function body: the tree's compound statement."""
     tree = parser().parse((_WRAP[0] + source + _WRAP[1]).encode("utf-8"))
+    lines = source.split("\n")
     body = None
     for child in tree.root_node.children:
         if child.type == "function_definition":
             body = child.child_by_field_name("body")
-    return Parsed(body if body is not None else tree.root_node, source.split("\n"))
+    # the body must end at the wrapper's `}`: a `}` too many in the source would end it early
+    ok = body is not None and int(body.end_point[0]) == len(lines) + 1
+    return Parsed(body if ok else tree.root_node, lines, ok, tree.root_node)
 
 
 def parse_expression(source: str) -> Parsed:
-    """`source` as one expression: the node inside `return (...)`, or the statement that
-    holds the parse error."""
+    """`source` as one expression: the node inside `return (...)`.  Not ok when the source
+    is not exactly one expression (it closed the parenthesis, or holds a statement)."""
     tree = parser().parse((_GUARD[0] + source + _GUARD[1]).encode("utf-8"))
-    node = tree.root_node
+    lines = source.split("\n")
+    node, ok = None, False
     for child in tree.root_node.children:
         if child.type == "function_definition":
             body = child.child_by_field_name("body")
-            ret = next((c for c in body.named_children if c.type == "return_statement"), None) if body else None
-            if ret is not None and ret.named_children:
-                node = ret.named_children[0]
-                if node.type == "parenthesized_expression" and node.named_child_count == 1:
-                    node = node.named_children[0]
-            elif body is not None:
-                node = body
-    return Parsed(node, source.split("\n"))
+            stmts = [c for c in body.named_children if c.type != "comment"] if body is not None else []
+            if len(stmts) == 1 and stmts[0].type == "return_statement" and stmts[0].named_children:
+                paren = stmts[0].named_children[0]
+                spans = paren.start_point[0] == 0 and int(paren.end_point[0]) == len(lines) + 1
+                if paren.type == "parenthesized_expression" and spans and paren.named_child_count >= 1:
+                    inner = [c for c in paren.named_children if c.type != "comment"]
+                    node, ok = (inner[0], True) if len(inner) == 1 else (None, False)
+    return Parsed(node if ok else tree.root_node, lines, ok, tree.root_node)
 
 
 def parse_members(source: str) -> Parsed:
     """A variables header (`int count; ///< ...`) as the members of a class."""
     tree = parser().parse(("struct _llfsm_variables {\n" + source + "\n};\n").encode("utf-8"))
-    node = tree.root_node
+    lines = source.split("\n")
+    body = None
     for child in tree.root_node.children:
         if child.type == "struct_specifier":
             body = child.child_by_field_name("body")
-            if body is not None:
-                node = body
-    return Parsed(node, source.split("\n"))
+    ok = body is not None and int(body.end_point[0]) == len(lines) + 1
+    return Parsed(body if ok else tree.root_node, lines, ok, tree.root_node)
 
 
 def parse_unit(source: str) -> Parsed:
     """An includes header as a translation unit (preprocessor lines, `using`, declarations)."""
-    return Parsed(parser().parse(("\n" + source).encode("utf-8")).root_node, source.split("\n"))
+    tree = parser().parse(("\n" + source).encode("utf-8"))
+    return Parsed(tree.root_node, source.split("\n"), True, tree.root_node)
 
 
 def line_of(node: Node) -> int:

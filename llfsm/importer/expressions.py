@@ -153,7 +153,7 @@ class Expressions:
             text, kind = number(self.text(node))
         except LiteralError as e:
             raise Untranslatable(str(e)) from None
-        return Expr(text, ATOM, kind)
+        return Expr(text, UNARY if text[0] in "+-" else ATOM, kind)
 
     def _true(self, node: Node) -> Expr:
         return Expr("True", ATOM, "bool")

@@ -110,6 +110,8 @@ def translate_variables(text: str, scope: Scope) -> Declared:
     it is marked for that reason rather than for an unknown name."""
     parsed = parse_members(text)
     s = Statements(parsed, scope, "Variables")
+    if not parsed.ok:
+        return Declared(translate_methods(text, "C++ the parser cannot read as variables"))
     out: list[str] = []
     left: list[tuple[int, str]] = []
     names: dict[str, tuple[str, str | None]] = {}
@@ -139,7 +141,7 @@ def translate_variables(text: str, scope: Scope) -> Declared:
                     scope.taken.add(py)
                     names[name] = (py, None)
                     out.append(f"{py}: object  # a placeholder for the line above")
-    code = len(code_lines(parsed.root, 1, len(parsed.lines)))
+    code = len(code_lines(parsed.whole, 1, len(parsed.lines)))
     return Declared(Translation(out, code, left), names)
 
 
@@ -193,13 +195,12 @@ def _declared_names(node: Node) -> list[str]:
     return out
 
 
-def translate_methods(text: str) -> Translation:
+def translate_methods(text: str, why: str = "a function of the clfsm machine: write it in a helper module beside the machine") -> Translation:
     """A `*_Methods.h`: C++ functions, each line kept for a person (llfsm machines keep their
     functions in helper modules beside the machine, imported by Includes.py)."""
     parsed = parse_unit(text)
     code = sorted(code_lines(parsed.root, 1, len(parsed.lines)))
     if not code:
         return Translation([], 0)
-    why = "a function of the clfsm machine: write it in a helper module beside the machine"
     lines = marked("", why, "\n".join(parsed.lines[code[0] - 1 : code[-1]]))
     return Translation(lines, len(code), [(r, why if i == 0 else "") for i, r in enumerate(code)])

@@ -19,6 +19,9 @@ class LiteralError(ValueError):
 
 def number(text: str) -> tuple[str, str]:
     """(Python literal, kind) of a C number literal: `0644` is `0o644`, `1.0f` is `1.0`."""
+    if text[:1] in "+-":  # tree-sitter reads `-2.0` as one literal
+        body, kind = number(text[1:].lstrip())
+        return text[0] + body, kind
     m = _INT.match(text)
     if m:
         body = m["body"].replace("'", "")

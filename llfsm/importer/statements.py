@@ -482,8 +482,13 @@ def translate_section(source: str, scope: Scope, section: str) -> Translation:
     parsed = parse_statements(source)
     scope.locals = {}
     s = Statements(parsed, scope, section)
+    code_rows = sorted(code_lines(parsed.whole, 1, len(parsed.lines)))
+    if not parsed.ok:  # `}` too many: the section ends the function it is parsed in
+        why = "C++ the parser cannot read"
+        return Translation(marked("", why, "\n".join(parsed.lines).strip("\n")), len(code_rows),
+                           [(r, why if i == 0 else "") for i, r in enumerate(code_rows)])  # fmt: skip
     s.block(parsed.root.children, 0)
-    code = len(code_lines(parsed.root, 1, len(parsed.lines)))
+    code = len(code_rows)
     while s.out and not s.out[-1].strip():
         s.out.pop()
     return Translation(s.out, code, s.left, s.statics)
@@ -495,30 +500,25 @@ def translate_guard(source: str, scope: Scope) -> Translation:
     does not build anyway while a marked line is left)."""
     scope.locals = {}
     if not source.strip():
-        return Translation(
-            [f"{MARKER} (the clfsm guard file is empty): ", "False"], 1, [(1, "the clfsm guard file is empty")]
-        )
+        why = "the clfsm guard file is empty"
+        return Translation([*marked("", why, ""), "False"], 1, [(1, why)])
     parsed = parse_expression(source)
     node = parsed.root
-    comments = [f"# {ln}".rstrip() for c in _comments(node) for ln in comment_lines(parsed.text(c))]
-    code = sorted(code_lines(_root(node), 1, len(parsed.lines)))
+    comments = [f"# {ln}".rstrip() for c in _comments(parsed.whole) for ln in comment_lines(parsed.text(c))]
+    code = sorted(code_lines(parsed.whole, 1, len(parsed.lines)))
     try:
-        if node.has_error or node.type == "compound_statement":
-            raise Untranslatable("C++ the parser cannot read")
-        return Translation([*comments, Expressions(scope).value(node).text], len(code))
+        if not parsed.ok or node.has_error:
+            raise Untranslatable("not one C++ expression the parser can read")
+        e = Expressions(scope).value(node)
+        text = e.text[1:-1] if node.type == "parenthesized_expression" else e.text  # (guard): no parentheses needed
+        return Translation([*comments, text], len(code))
     except Untranslatable as e:
         lines = marked("", str(e), source.strip("\n"))
         return Translation([*lines, "False"], len(code), [(ln, str(e) if i == 0 else "") for i, ln in enumerate(code)])
 
 
-def _root(node: Node) -> Node:
-    while node.parent is not None:
-        node = node.parent
-    return node
-
-
 def _comments(node: Node) -> list[Node]:
-    out, stack = [], [_root(node)]
+    out, stack = [], [node]
     while stack:
         n = stack.pop()
         if n.type == "comment":

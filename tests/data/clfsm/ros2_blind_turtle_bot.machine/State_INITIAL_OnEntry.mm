@@ -1,0 +1,16 @@
+int argc = 1; static char *argv[1];
+std::string node_name="ros2_blind_turtle_bot";
+char * cstr = new char [node_name.length()+1];
+std::strcpy (cstr, node_name.c_str());
+argv[0]= cstr;
+rclcpp::init(argc, argv);
+node = rclcpp::Node::make_shared(node_name);
+publisher_ = node->create_publisher<geometry_msgs::msg::Twist>("/turtle1/cmd_vel", 10);
+msg = geometry_msgs::msg::Twist();
+msg.linear.x = 0.0;
+msg.linear.y = 0.0;
+msg.linear.z = 0.0;
+msg.angular.x = 0.0;
+msg.angular.y = 0.0;
+msg.angular.z = 0.0;
+publisher_->publish(msg);

@@ -1,0 +1,5 @@
+//
+// State_STRAIGHT_VarRefs.mm
+//
+// Automatically created through MiCASE -- do not change manually!
+//

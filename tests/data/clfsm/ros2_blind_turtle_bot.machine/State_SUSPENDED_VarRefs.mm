@@ -1,0 +1,5 @@
+//
+// State_SUSPENDED_VarRefs.mm
+//
+// Automatically created through MiCASE -- do not change manually!
+//

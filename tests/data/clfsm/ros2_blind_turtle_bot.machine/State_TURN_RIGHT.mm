@@ -1,0 +1,1 @@
+// State_TURN_RIGHT.mm: the glue MiEditLLFSM generates

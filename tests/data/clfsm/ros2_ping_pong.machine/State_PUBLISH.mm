@@ -1,0 +1,1 @@
+// State_PUBLISH.mm: the glue MiEditLLFSM generates

@@ -1,0 +1,1 @@
+// State_WAIT_AND_COUNT.mm: the glue MiEditLLFSM generates

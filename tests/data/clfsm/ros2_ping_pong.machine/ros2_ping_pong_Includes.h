@@ -1,0 +1,3 @@
+#include "rclcpp/rclcpp.hpp"
+#include "std_msgs/msg/string.hpp"
+#include "CLMacros.h"

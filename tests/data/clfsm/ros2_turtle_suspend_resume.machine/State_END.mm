@@ -1,0 +1,1 @@
+// State_END.mm: the glue MiEditLLFSM generates

@@ -1,0 +1,1 @@
+// State_INITIAL.mm: the glue MiEditLLFSM generates

@@ -1,0 +1,1 @@
+// State_RESUME.mm: the glue MiEditLLFSM generates

@@ -1,0 +1,1 @@
+resume("ros2_blind_turtle_bot");

@@ -1,0 +1,1 @@
+// State_SUSPENDED.mm: the glue MiEditLLFSM generates

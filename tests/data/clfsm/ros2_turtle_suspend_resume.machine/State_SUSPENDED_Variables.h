@@ -1,0 +1,5 @@
+//
+// State_SUSPENDED_Variables.h
+//
+// Automatically created through MiCASE -- do not change manually!
+//

@@ -1,0 +1,1 @@
+// State_SUSPEND_BOT.mm: the glue MiEditLLFSM generates

@@ -1,0 +1,1 @@
+suspend("ros2_blind_turtle_bot");

@@ -1,0 +1,2 @@
+#include "rclcpp/rclcpp.hpp"
+#include "CLMacros.h"

@@ -1,0 +1,1 @@
+// State_BACK.mm: the glue MiEditLLFSM generates

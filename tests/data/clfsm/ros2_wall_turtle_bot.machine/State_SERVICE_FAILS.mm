@@ -1,0 +1,1 @@
+// State_SERVICE_FAILS.mm: the glue MiEditLLFSM generates

@@ -1,0 +1,1 @@
+// State_STOP.mm: the glue MiEditLLFSM generates

@@ -1,0 +1,1 @@
+// State_STRAIGHT.mm: the glue MiEditLLFSM generates

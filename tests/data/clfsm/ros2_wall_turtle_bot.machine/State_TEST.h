@@ -1,0 +1,39 @@
+//
+// State_TEST.h
+//
+// Automatically created through MiCASE -- do not change manually!
+//
+#include "CLState.h"
+
+namespace FSM { namespace CLM { namespace FSMros2_wall_turtle_bot { namespace State {
+            class TEST: public CLState
+            {
+                class OnEntry: public CLAction { virtual void perform(CLMachine *, CLState *) const; };
+                class OnExit: public CLAction { virtual void perform(CLMachine *, CLState *) const; };
+                class Internal: public CLAction { virtual void perform(CLMachine *, CLState *) const; };
+                class OnSuspend: public CLAction { virtual void perform(CLMachine *, CLState *) const; };
+                class OnResume: public CLAction { virtual void perform(CLMachine *, CLState *) const; };
+                class Transition_0: public CLTransition
+                {
+                public:
+                    Transition_0(int toState = 7): CLTransition(toState) {}
+                    virtual bool check(CLMachine *, CLState *) const;
+                };
+                class Transition_1: public CLTransition
+                {
+                public:
+                    Transition_1(int toState = 1): CLTransition(toState) {}
+                    virtual bool check(CLMachine *, CLState *) const;
+                };
+                class Transition_2: public CLTransition
+                {
+                public:
+                    Transition_2(int toState = 4): CLTransition(toState) {}
+                    virtual bool check(CLMachine *, CLState *) const;
+                };
+                CLTransition *_transitions[3];
+            public:
+                virtual int numberOfTransitions() const { return 3; }
+#               include "State_TEST_Variables.h"
+            };
+} } } }

@@ -1,0 +1,1 @@
+// State_TEST.mm: the glue MiEditLLFSM generates

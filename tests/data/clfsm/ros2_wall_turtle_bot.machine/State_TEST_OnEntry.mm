@@ -1,0 +1,2 @@
+position_x = result.get()->x;
+position_y = result.get()->y;
