@@ -434,7 +434,8 @@ class Expressions:
 
     def ros_function(self, name: str, targs: list[str], args: list[Node]) -> Expr:
         imports = self.scope.imports
-        imports.ros = True
+        if name.startswith("rclcpp::") or targs == ["rclcpp::Node"]:
+            imports.ros = True
         if name == "rclcpp::init":
             return Expr("ros.init()", ATOM, "void")
         if name in ("rclcpp::ok", "rclcpp::shutdown") and not args:

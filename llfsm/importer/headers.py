@@ -17,7 +17,7 @@ from pathlib import Path
 
 from .cxx import Node, code_lines, end_line_of, line_of, parse_members, parse_unit
 from .expressions import Scope, Untranslatable
-from .kinds import Imports, annotation, kind_of
+from .kinds import Imports, annotation
 from .statements import Statements, Translation, comment_lines, marked, python_name
 
 #: Headers of the C and C++ standard libraries and of clfsm itself: Python needs none of them.
@@ -169,10 +169,7 @@ def _variables(s: Statements, node: Node, names: dict[str, tuple[str, str | None
         if d.type not in ("field_identifier", "identifier"):
             raise Untranslatable(f"the declaration of {s.text(d)}")
         name = s.text(d)
-        kind = kind_of(type_text, pointer, scope.imports)
-        if kind is None:
-            raise Untranslatable(f"the type {type_text.strip()}{' *' if pointer else ''}")
-        text, kind = s.declared_value(kind, pointer, size, value)
+        text, kind = s.typed_value(type_text, pointer, size, value)
         py = python_name(name, scope.taken)
         scope.taken.add(py)
         names[name] = (py, kind)

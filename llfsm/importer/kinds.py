@@ -71,7 +71,7 @@ _FUTURE = re.compile(r"rclcpp::Client<.*>::(?:SharedFuture|FutureAndRequestId|Sh
 
 #: Python annotation and default initialiser (None: no initialiser, the variable starts None).
 _ANNOTATIONS = {"int": "int", "float": "float", "bool": "bool", "str": "str", "stream": "str", "any": "object"}
-_DEFAULTS = {"int": "0", "float": "0.0", "bool": "False", "stream": '""'}
+_DEFAULTS = {"int": "0", "float": "0.0", "bool": "False", "str": '""', "stream": '""'}
 
 
 @dataclass
@@ -154,7 +154,8 @@ def annotation(kind: str) -> str:
 
 def default(kind: str) -> str | None:
     """What a variable of `kind` declared without an initialiser starts as in C++ (a message
-    is default-constructed; a pointer or handle starts empty: None)."""
+    and a std::string are default-constructed; a handle starts empty: None; the caller gives
+    None for a pointer, `const char *` included)."""
     if kind in _DEFAULTS:
         return _DEFAULTS[kind]
     if kind.startswith("msg:"):

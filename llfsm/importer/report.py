@@ -64,7 +64,7 @@ def format_text(reports: list[MachineReport]) -> str:
     out = []
     for r in reports:
         if r.error is not None:
-            out.append(f"{shown(str(r.source))}: not imported: {shown(r.error)}\n")
+            out.append(f"not imported: {shown(r.error)}\n")  # the error names the file
             continue
         head = f"{shown(str(r.source))} -> {shown(str(r.output))}: {r.files} files, "
         head += f"{r.translated} of {r.code} code lines translated ({share(r.translated, r.code)})"

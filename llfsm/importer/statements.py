@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from ..runtime.machine import MACROS, RESERVED
 from .cxx import Node, Parsed, code_lines, end_line_of, line_of, parse_expression, parse_statements
 from .expressions import ADD, MUL, Expr, Expressions, Scope, Untranslatable, wrap
-from .kinds import annotation, default, kind_of
+from .kinds import annotation, default, kind_of, normalise
 
 #: The marker of a line left for a person (llfsm.lang.check.untranslated reads it back).
 MARKER = "# UNTRANSLATED"
@@ -299,10 +299,7 @@ class Statements:
         if d.type != "identifier":
             raise Untranslatable(f"the declaration of {self.text(d)}")
         name = self.text(d)
-        kind = kind_of(type_text, pointer, self.scope.imports)
-        if kind is None:
-            raise Untranslatable(f"the type {type_text.strip()}{' *' if pointer else ''}")
-        text, kind = self.declared_value(kind, pointer, size, value)
+        text, kind = self.typed_value(type_text, pointer, size, value)
         taken = self.scope.taken | set(self.scope.variables) | {s.name for s in self.statics}
         py = python_name(name, taken)
         self.scope.locals[name] = (py, kind)
@@ -311,6 +308,19 @@ class Statements:
             return
         self.scope.locals[name] = (py, kind)
         self.emit(depth, f"{py} = {text if text is not None else 'None'}")
+
+    def typed_value(self, type_text: str, pointer: bool, size: Node | None, value: Node | None) -> tuple[str | None, str]:
+        """The initial value and kind of a declared variable (a `char` array is a C string)."""
+        if size is not None and not pointer and normalise(type_text) == "char":
+            if value is None:
+                return '""', "str"
+            if value.type in ("string_literal", "concatenated_string"):
+                return self.ex.value(value).text, "str"
+            raise Untranslatable("a char array initialised from a value")
+        kind = kind_of(type_text, pointer, self.scope.imports)
+        if kind is None:
+            raise Untranslatable(f"the type {type_text.strip()}{' *' if pointer else ''}")
+        return self.declared_value(kind, pointer, size, value)
 
     def declared_value(self, kind: str, pointer: bool, size: Node | None, value: Node | None) -> tuple[str | None, str]:
         if size is not None:
@@ -429,13 +439,13 @@ class Statements:
         if var_node.type != "identifier" or kind_of(self.text(init.child_by_field_name("type")), False, self.scope.imports) != "int":
             return None
         var = self.text(var_node)
-        m = re.fullmatch(rf"{var}\s*(<|<=|>|>=|!=)\s*(.+)", self.text(cond), re.S)
+        if cond.type != "binary_expression" or self.text(cond.child_by_field_name("left")) != var:
+            return None
+        op = self.text(cond.child_by_field_name("operator"))
         step = self.step(var, self.text(update))
-        if m is None or step is None or self.assigns(node.child_by_field_name("body"), var):
+        if op not in ("<", "<=", ">", ">=", "!=") or step is None or self.assigns(node.child_by_field_name("body"), var):
             return None
-        if (m[1] in ("<", "<=") and step < 0) or (m[1] in (">", ">=") and step > 0):
-            return None
-        if m[1] == "!=" and abs(step) != 1:
+        if (op in ("<", "<=") and step < 0) or (op in (">", ">=") and step > 0) or (op == "!=" and abs(step) != 1):
             return None
         start = self.ex.value(decls[0].child_by_field_name("value"))
         stop = self.ex.value(cond.child_by_field_name("right"))
@@ -444,7 +454,7 @@ class Statements:
         py = python_name(var, set(self.scope.variables))
         self.scope.locals[var] = (py, "int")
         end = stop.text
-        if m[1] in ("<=", ">="):
+        if op in ("<=", ">="):
             end = f"{wrap(stop, ADD)} {'+' if step > 0 else '-'} 1"
         args = [start.text, end] + ([str(step)] if step != 1 else [])
         if args[0] == "0" and step == 1:
