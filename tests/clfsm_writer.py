@@ -50,7 +50,9 @@ def write_clfsm(
     (d / f"{name}_Includes.h").write_text(includes)
     (d / f"{name}_Variables.h").write_text(HEADER.format(file=f"{name}_Variables.h") + variables)
     (d / f"{name}_Methods.h").write_text("\n")
-    (d / f"{name}_VarRefs.mm").write_text(HEADER.format(file=f"{name}_VarRefs.mm") + f"{name} *_m = static_cast<{name} *>(_machine);\n")
+    (d / f"{name}_VarRefs.mm").write_text(
+        HEADER.format(file=f"{name}_VarRefs.mm") + f"{name} *_m = static_cast<{name} *>(_machine);\n"
+    )
     (d / f"{name}_FuncRefs.mm").write_text(HEADER.format(file=f"{name}_FuncRefs.mm"))
     (d / f"{name}.h").write_text(_machine_header(name, len(states)))
     (d / f"{name}.mm").write_text(_machine_code(name, states, index[initial] if initial else 0,
@@ -129,24 +131,33 @@ rclcpp::init(argc, argv);
 node = rclcpp::Node::make_shared(node_name);
 """
 MOVE = "msg.linear.x = {x};\nmsg.angular.z = {z};\npublisher_->publish(msg);\n"
-SUSPENDED = ClfsmState("SUSPENDED")
+
+
+def state(name: str, *transitions: tuple[str, str], entry: str = "") -> ClfsmState:
+    """A state whose transitions to END test `!rclcpp::ok()` first, as the how-to's all do."""
+    return ClfsmState(name, [("END", NOT_OK), *transitions], {"OnEntry": entry} if entry else {})
+
+
+def end_states() -> list[ClfsmState]:
+    return [ClfsmState("END"), ClfsmState("SUSPENDED")]
 
 
 def ping_pong(root: Path) -> Path:
+    publish = (
+        "auto message = std_msgs::msg::String();\nstd::stringstream ss;\n"
+        'ss << "The count is " << count;\nmessage.data = ss.str();\n'
+        "RCLCPP_INFO(node->get_logger(), \"Publishing: '%s'\", message.data.c_str());\n"
+        "publisher_->publish(message);\n"
+    )
+    setup = 'publisher_ = node->create_publisher<std_msgs::msg::String>("pingpong", 10);\ncount=0;\n'
     return write_clfsm(
         root,
         "ros2_ping_pong",
         [
-            ClfsmState("INITIAL", [("END", NOT_OK), ("PUBLISH", "after_ms(1000)")], {"OnEntry": ROS_INIT.format(node="ros_ping_pong") + (
-                'publisher_ = node->create_publisher<std_msgs::msg::String>("pingpong", 10);\ncount=0;\n')}),
-            ClfsmState("PUBLISH", [("END", NOT_OK), ("WAIT_AND_COUNT", "after_ms(500)")], {"OnEntry": (
-                "auto message = std_msgs::msg::String();\nstd::stringstream ss;\n"
-                'ss << "The count is " << count;\nmessage.data = ss.str();\n'
-                "RCLCPP_INFO(node->get_logger(), \"Publishing: '%s'\", message.data.c_str());\n"
-                "publisher_->publish(message);\n")}),
-            ClfsmState("WAIT_AND_COUNT", [("END", NOT_OK), ("PUBLISH", "after_ms(500)")], {"OnEntry": "count++;\n"}),
-            ClfsmState("END"),
-            SUSPENDED,
+            state("INITIAL", ("PUBLISH", "after_ms(1000)"), entry=ROS_INIT.format(node="ros_ping_pong") + setup),
+            state("PUBLISH", ("WAIT_AND_COUNT", "after_ms(500)"), entry=publish),
+            state("WAIT_AND_COUNT", ("PUBLISH", "after_ms(500)"), entry="count++;\n"),
+            *end_states(),
         ],
         includes='#include "rclcpp/rclcpp.hpp"\n#include "std_msgs/msg/string.hpp"\n#include "CLMacros.h"\n',
         variables=(
@@ -155,7 +166,7 @@ def ping_pong(root: Path) -> Path:
             "std::shared_ptr<rclcpp::Node>\tnode;\t///<\n"
         ),
         suspended="SUSPENDED",
-    )  # fmt: skip
+    )
 
 
 TURTLE_INCLUDES = '#include "rclcpp/rclcpp.hpp"\n#include "geometry_msgs/msg/twist.hpp"\n#include "CLMacros.h"\n'
@@ -168,84 +179,91 @@ HALT = "msg = geometry_msgs::msg::Twist();\n" + "".join(
     f"msg.{part}.{axis} = 0.0;\n" for part in ("linear", "angular") for axis in "xyz"
 )
 CMD_VEL = 'publisher_ = node->create_publisher<geometry_msgs::msg::Twist>("/turtle1/cmd_vel", 10);\n'
+POSE = "turtle_sensor_interface::srv::TurtlePosition"
 
 
 def blind_turtle_bot(root: Path) -> Path:
+    setup = ROS_INIT.format(node="ros2_blind_turtle_bot") + CMD_VEL + HALT + "publisher_->publish(msg);\n"
     return write_clfsm(
         root,
         "ros2_blind_turtle_bot",
         [
-            ClfsmState("INITIAL", [("END", NOT_OK), ("STRAIGHT", "after_ms(1000)")],
-                       {"OnEntry": ROS_INIT.format(node="ros2_blind_turtle_bot") + CMD_VEL + HALT + "publisher_->publish(msg);\n"}),
-            ClfsmState("STRAIGHT", [("END", NOT_OK), ("TURN_RIGHT", "after_ms(1000)")], {"OnEntry": MOVE.format(x="2.0", z="0.0")}),
-            ClfsmState("TURN_RIGHT", [("END", NOT_OK), ("STRAIGHT", "after_ms(1000)")], {"OnEntry": MOVE.format(x="0.0", z="-2.0")}),
-            ClfsmState("END"),
-            SUSPENDED,
+            state("INITIAL", ("STRAIGHT", "after_ms(1000)"), entry=setup),
+            state("STRAIGHT", ("TURN_RIGHT", "after_ms(1000)"), entry=MOVE.format(x="2.0", z="0.0")),
+            state("TURN_RIGHT", ("STRAIGHT", "after_ms(1000)"), entry=MOVE.format(x="0.0", z="-2.0")),
+            *end_states(),
         ],
         includes=TURTLE_INCLUDES,
         variables=TURTLE_VARIABLES,
         suspended="SUSPENDED",
-    )  # fmt: skip
+    )
 
 
 def wall_turtle_bot(root: Path) -> Path:
+    setup = ROS_INIT.format(node="ros2_wall_turtle_bot") + CMD_VEL
+    setup += f'client_ = node->create_client<{POSE}>("turtle_pose_service");\n' + HALT
     stop = MOVE.format(x="0.0", z="0.0") + (
-        "auto request = std::make_shared<turtle_sensor_interface::srv::TurtlePosition::Request>();\n"
+        f"auto request = std::make_shared<{POSE}::Request>();\n"
         "result = client_->async_send_request(request);\n"
         "I_wait = rclcpp::spin_until_future_complete(node, result) ;\n"
+    )
+    inside = "position_x > 2.0 && position_y > 2.0 && position_x < 9.0 && position_y < 9.0"
+    failed = (
+        'RCLCPP_ERROR(node->get_logger(), "/turtle_pose_service did not answer: is turtle_sensor_poster running?");\n'
     )
     return write_clfsm(
         root,
         "ros2_wall_turtle_bot",
         [
-            ClfsmState("INITIAL", [("END", NOT_OK), ("STRAIGHT", "after_ms(1000)")], {"OnEntry": (
-                ROS_INIT.format(node="ros2_wall_turtle_bot") + CMD_VEL
-                + 'client_ = node->create_client<turtle_sensor_interface::srv::TurtlePosition>("turtle_pose_service");\n'
-                + HALT)}),
-            ClfsmState("STRAIGHT", [("END", NOT_OK), ("STOP", "after_ms(1000)")], {"OnEntry": MOVE.format(x="2.0", z="0.0")}),
-            ClfsmState("STOP", [("END", NOT_OK), ("TEST", "(I_wait == rclcpp::FutureReturnCode::SUCCESS)"),
-                                ("SERVICE_FAILS", "I_wait != rclcpp::FutureReturnCode::SUCCESS")], {"OnEntry": stop}),
-            ClfsmState("TEST", [("END", NOT_OK),
-                                ("STRAIGHT", "position_x > 2.0 && position_y > 2.0 && position_x < 9.0 && position_y < 9.0"),
-                                ("BACK", "after_ms(500)")],
-                       {"OnEntry": "position_x = result.get()->x;\nposition_y = result.get()->y;\n"}),
-            ClfsmState("BACK", [("END", NOT_OK), ("TURN_RIGHT", "after_ms(1000)")], {"OnEntry": MOVE.format(x="-2.0", z="0.0")}),
-            ClfsmState("TURN_RIGHT", [("END", NOT_OK), ("STRAIGHT", "after_ms(1000)")], {"OnEntry": MOVE.format(x="0.0", z="-2.0")}),
-            ClfsmState("SERVICE_FAILS", [("END", "true")], {"OnEntry": (
-                'RCLCPP_ERROR(node->get_logger(), "/turtle_pose_service did not answer: is turtle_sensor_poster running?");\n')}),
-            ClfsmState("END"),
-            SUSPENDED,
+            state("INITIAL", ("STRAIGHT", "after_ms(1000)"), entry=setup),
+            state("STRAIGHT", ("STOP", "after_ms(1000)"), entry=MOVE.format(x="2.0", z="0.0")),
+            state(
+                "STOP",
+                ("TEST", "(I_wait == rclcpp::FutureReturnCode::SUCCESS)"),
+                ("SERVICE_FAILS", "I_wait != rclcpp::FutureReturnCode::SUCCESS"),
+                entry=stop,
+            ),
+            state(
+                "TEST",
+                ("STRAIGHT", inside),
+                ("BACK", "after_ms(500)"),
+                entry="position_x = result.get()->x;\nposition_y = result.get()->y;\n",
+            ),
+            state("BACK", ("TURN_RIGHT", "after_ms(1000)"), entry=MOVE.format(x="-2.0", z="0.0")),
+            state("TURN_RIGHT", ("STRAIGHT", "after_ms(1000)"), entry=MOVE.format(x="0.0", z="-2.0")),
+            ClfsmState("SERVICE_FAILS", [("END", "true")], {"OnEntry": failed}),
+            *end_states(),
         ],
         includes=TURTLE_INCLUDES + '#include "turtle_sensor_interface/srv/turtle_position.hpp"\n',
-        variables=TURTLE_VARIABLES + (
-            "rclcpp::Client<turtle_sensor_interface::srv::TurtlePosition>::SharedPtr\tclient_;\t///<\n"
+        variables=TURTLE_VARIABLES
+        + (
+            f"rclcpp::Client<{POSE}>::SharedPtr\tclient_;\t///<\n"
             "rclcpp::FutureReturnCode\tI_wait;\t///<\n"
-            "rclcpp::Client<turtle_sensor_interface::srv::TurtlePosition>::SharedFuture\tresult;\t///<\n"
+            f"rclcpp::Client<{POSE}>::SharedFuture\tresult;\t///<\n"
             "float\tposition_x;\t///<\nfloat\tposition_y;\t///<\n"
         ),
         suspended="SUSPENDED",
-    )  # fmt: skip
+    )
 
 
 def turtle_suspend_resume(root: Path) -> Path:
     bot = '"ros2_blind_turtle_bot"'
+    setup = (
+        "// rclcpp is up before the bot has run its own INITIAL\n"
+        f"int argc = 0;\nrclcpp::init(argc, nullptr);\nsuspend({bot});\n"
+    )
     return write_clfsm(
         root,
         "ros2_turtle_suspend_resume",
         [
-            ClfsmState("INITIAL", [("END", NOT_OK), ("RESUME", f"is_suspended({bot})")], {"OnEntry": (
-                "// rclcpp is up before the bot has run its own INITIAL\n"
-                f"int argc = 0;\nrclcpp::init(argc, nullptr);\nsuspend({bot});\n")}),
-            ClfsmState("RESUME", [("END", NOT_OK), ("SUSPEND_BOT", f"is_running({bot}) && after_ms(1500)")],
-                       {"OnEntry": f"resume({bot});\n"}),
-            ClfsmState("SUSPEND_BOT", [("END", NOT_OK), ("RESUME", f"is_suspended({bot}) && after_ms(500)")],
-                       {"OnEntry": f"suspend({bot});\n"}),
-            ClfsmState("END"),
-            SUSPENDED,
+            state("INITIAL", ("RESUME", f"is_suspended({bot})"), entry=setup),
+            state("RESUME", ("SUSPEND_BOT", f"is_running({bot}) && after_ms(1500)"), entry=f"resume({bot});\n"),
+            state("SUSPEND_BOT", ("RESUME", f"is_suspended({bot}) && after_ms(500)"), entry=f"suspend({bot});\n"),
+            *end_states(),
         ],
         includes='#include "rclcpp/rclcpp.hpp"\n#include "CLMacros.h"\n',
         suspended="SUSPENDED",
-    )  # fmt: skip
+    )
 
 
 HOW_TO = (ping_pong, blind_turtle_bot, wall_turtle_bot, turtle_suspend_resume)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -42,8 +43,7 @@ def files_under(root: Path) -> set[str]:
 def test_the_how_to_machines_in_clfsm_form_check_clean_and_trace_as_the_shipped_ones(tmp_path: Path) -> None:
     status, out, _ = import_(HOW_TO_DATA, "-o", tmp_path)
     assert status == 0, out
-    assert out.strip().endswith("imported 4 of 4 machine(s): 136 of 136 code lines translated (100%); "
-                                "`llfsm check` lists what is left")  # fmt: skip
+    assert out.strip().endswith("imported 4 of 4 machine(s): 136 of 136 code lines translated (100%)")
     r = llfsm("check", "--strict", tmp_path)
     assert r.status == 0, r.stdout
     runs = [
@@ -69,7 +69,9 @@ def test_the_wall_bot_translates_line_for_line(tmp_path: Path) -> None:
         "result = client_.call_async(request)\nI_wait = ros.spin_until_future_complete(node, result)\n"
     )
     assert (m / "State_STOP_Transition_1.expr").read_text() == "# -> TEST\nI_wait == ros.FutureReturnCode.SUCCESS\n"
-    assert (m / "State_TEST_OnEntry.py").read_text() == "position_x = result.result().x\nposition_y = result.result().y\n"
+    assert (
+        m / "State_TEST_OnEntry.py"
+    ).read_text() == "position_x = result.result().x\nposition_y = result.result().y\n"
     assert (m / "Includes.py").read_text() == (
         "from llfsm import ros\nfrom llfsm.msgs.geometry_msgs.msg import Twist\n"
         "from llfsm.msgs.turtle_sensor_interface.srv import TurtlePosition\n"
@@ -107,7 +109,7 @@ def test_structure_is_exact_pseudo_state_suspend_in_the_middle_six_transitions(t
     assert [s["name"] for s in doc["states"]] == ["InitialPseudoState", "A", "SUSPENDED", "C", "D", "E"]
     c = doc["states"][3]
     assert c["transitions"] == [t for t, _ in six]
-    for i, (target, guard) in enumerate(six):
+    for i, (target, _guard) in enumerate(six):
         text = (m / f"State_C_Transition_{i}.expr").read_text()
         assert text.startswith(f"# -> {target}\n"), text
     assert (m / "State_C_Transition_5.expr").read_text() == "# -> D\nTrue\n"
@@ -319,3 +321,19 @@ def test_how_to_fixtures_are_what_the_writer_writes(tmp_path: Path) -> None:
         assert files_under(made) == files_under(shipped)
         for f in made.iterdir():
             assert f.read_bytes() == (shipped / f.name).read_bytes(), f.name
+
+
+def test_check_build_and_run_never_load_the_importer_or_its_parser(tmp_path: Path) -> None:
+    import_(HOW_TO_DATA / "ros2_ping_pong.machine", "-o", tmp_path)
+    m = tmp_path / "ros2_ping_pong.machine"
+    for argv in (["check", m], ["build", m, "-o", tmp_path / "b"], ["run", "--clock", "sim", m, "--duration", "1s"]):
+        probe = (
+            "import atexit, sys\n"
+            "atexit.register(lambda: sys.stderr.write('LOADED %s\\n' % sorted(m for m in sys.modules"
+            " if m.startswith(('tree_sitter', 'llfsm.importer')))))\n"
+            "from llfsm.__main__ import main\n"
+            f"sys.argv = ['llfsm', *{[str(a) for a in argv]!r}]\n"
+            "main()\n"
+        )
+        r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+        assert "LOADED []" in r.stderr, (argv, r.stderr)

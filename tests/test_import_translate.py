@@ -7,9 +7,9 @@ import pytest
 
 pytest.importorskip("tree_sitter_cpp")
 
-from llfsm.importer.expressions import Scope  # noqa: E402
-from llfsm.importer.kinds import Imports  # noqa: E402
-from llfsm.importer.statements import Translation, translate_guard, translate_section  # noqa: E402
+from llfsm.importer.expressions import Scope
+from llfsm.importer.kinds import Imports
+from llfsm.importer.statements import Translation, translate_guard, translate_section
 
 VARIABLES = {
     "count": ("count", "int"),
@@ -55,7 +55,10 @@ def guard(source: str) -> str:
         ("ok = count < 3 == ok;", ["ok = (count < 3) == ok"]),  # Python would chain
         ("ok = count > 1 && (ratio < 2 || !ok);", ["ok = count > 1 and (ratio < 2 or not ok)"]),
         ("count = ok ? 1 : 2;", ["count = 1 if ok else 2"]),
-        ("count = (int)ratio + static_cast<int>(ratio) + int(ratio);", ["count = int(ratio) + int(ratio) + int(ratio)"]),
+        (
+            "count = (int)ratio + static_cast<int>(ratio) + int(ratio);",
+            ["count = int(ratio) + int(ratio) + int(ratio)"],
+        ),
         ("count = 0644 + 0x1F + 10UL;", ["count = 0o644 + 0x1F + 10"]),
         ("ratio = 1.5f + .5 + 2.;", ["ratio = 1.5 + 0.5 + 2.0"]),
         ('name = "a\\tb" "c";', ['name = "a\\tbc"']),
@@ -72,20 +75,30 @@ def guard(source: str) -> str:
         ('cout << "n = " << count << endl;', ['print(f"n = {count}")']),
         ('cout << ok << " " << ratio << "\\n";', ['print(f"{ok:d} {ratio:g}")']),  # 1/0 and %g, as C++
         ('cerr << "oops";', ['print("oops", end="", file=sys.stderr)']),
-        ("std::stringstream ss; ss << count << \"!\"; name = ss.str();", ['ss = ""', 'ss += f"{count}!"', "name = ss"]),
+        ('std::stringstream ss; ss << count << "!"; name = ss.str();', ['ss = ""', 'ss += f"{count}!"', "name = ss"]),
         ("name = std::to_string(count) + name;", ["name = str(count) + name"]),
         ("count = name.length() + strlen(name.c_str());", ["count = len(name) + len(name)"]),
-        ("if (ok) count = 1; else if (ratio > 2) count = 2; else { count = 3; }",
-         ["if ok:", "    count = 1", "elif ratio > 2:", "    count = 2", "else:", "    count = 3"]),
+        (
+            "if (ok) count = 1; else if (ratio > 2) count = 2; else { count = 3; }",
+            ["if ok:", "    count = 1", "elif ratio > 2:", "    count = 2", "else:", "    count = 3"],
+        ),
         ("for (int i = 0; i < 10; i++) count += i;", ["for i in range(10):", "    count += i"]),
         ("for (int i = 10; i >= 0; i -= 2) { count += i; }", ["for i in range(10, 0 - 1, -2):", "    count += i"]),
         ("for (int i = 0; i < 4; i++) { i++; }", ["i = 0", "while i < 4:", "    i += 1", "    i += 1"]),
-        ("while (count < 3) { count++; if (ok) break; }",
-         ["while count < 3:", "    count += 1", "    if ok:", "        break"]),
-        ("do { count--; } while (count > 0);", ["while True:", "    count -= 1", "    if not (count > 0):", "        break"]),
+        (
+            "while (count < 3) { count++; if (ok) break; }",
+            ["while count < 3:", "    count += 1", "    if ok:", "        break"],
+        ),
+        (
+            "do { count--; } while (count > 0);",
+            ["while True:", "    count -= 1", "    if not (count > 0):", "        break"],
+        ),
         ("{ using namespace std; count = 1; }", ["count = 1"]),
         ("static int visits = 0; visits++;", ["visits += 1"]),
-        ("// a comment\ncount = 1; // why\n/* block\n * two */", ["# a comment", "count = 1  # why", "# block", "# two"]),
+        (
+            "// a comment\ncount = 1; // why\n/* block\n * two */",
+            ["# a comment", "count = 1  # why", "# block", "# two"],
+        ),
         ('suspend("Other"); resume_at(machine_index());', ['suspend("Other")', "resume(machine_name())"]),
         ("pub->publish(msg);", ["pub.publish(msg)"]),
         ("msg.linear.x = -2.0;", ["msg.linear.x = -2.0"]),
@@ -93,7 +106,7 @@ def guard(source: str) -> str:
         ("ratio = fut.get()->x;", ["ratio = fut.result().x"]),
         ('unlink("/tmp/f");', ['with contextlib.suppress(OSError): os.unlink("/tmp/f")']),
         ('int f = open("/tmp/f", O_CREAT, 0644);', ['f = os.open("/tmp/f", os.O_CREAT, 0o644)']),
-        ("char buf[8]; strcpy(buf, \"x\");", ['buf = ""', 'buf = "x"']),  # a C string buffer
+        ('char buf[8]; strcpy(buf, "x");', ['buf = ""', 'buf = "x"']),  # a C string buffer
     ],
 )
 def test_constructs(cpp: str, python: list[str] | None) -> None:
@@ -111,7 +124,7 @@ def test_a_static_local_becomes_a_state_variable() -> None:
 
 
 def test_imports_follow_what_the_code_uses() -> None:
-    _, imports = section('cerr << sqrt(ratio) << M_PI;\nauto r = std::make_shared<turtlesim::srv::Spawn::Request>();')
+    _, imports = section("cerr << sqrt(ratio) << M_PI;\nauto r = std::make_shared<turtlesim::srv::Spawn::Request>();")
     assert imports.lines() == ["import math", "import sys", "from llfsm.msgs.turtlesim.srv import Spawn"]
 
 
@@ -147,7 +160,8 @@ def test_a_statement_left_inside_a_block_keeps_the_block() -> None:
         "    pass",
         "else:",
         "    count = 1",
-        "    # UNTRANSLATED (exit ends clfsm's whole process; an llfsm machine ends by reaching an accepting state): exit(1);",
+        "    # UNTRANSLATED (exit ends clfsm's whole process; an llfsm machine ends by reaching an accepting state): "
+        "exit(1);",
     ]
     assert [line for line, _ in t.left] == [2, 5]
     assert t.code == 5  # a line holding only `}` is no line of code
@@ -165,10 +179,11 @@ def test_a_brace_too_many_never_loses_code() -> None:
         ("(count == 2)", "count == 2"),
         ("!rclcpp::ok()", "not ros.ok()"),
         ("true", "True"),
+        ("timeout(1500)", "after_us(1500)"),  # CLMacros: microseconds in the state
         ("suspend_self() != CLError", "suspend_self() is None"),  # llfsm's control macros return None
         ('status("m") == CLSuspend', 'is_suspended("m")'),
         ("count > 1 && // more\n ok", "# more\ncount > 1 and ok"),
-        ("count = 2", '# UNTRANSLATED (assignment expression): count = 2\nFalse'),
+        ("count = 2", "# UNTRANSLATED (assignment expression): count = 2\nFalse"),
         ("ok); evil(", "# UNTRANSLATED (not one C++ expression the parser can read): ok); evil(\nFalse"),
     ],
 )

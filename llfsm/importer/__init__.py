@@ -32,7 +32,7 @@ def llfsm_name(name: str, taken: set[str] | frozenset[str] = frozenset()) -> str
     """`name` as an llfsm machine or state name (SPEC 1): what is not a letter, digit or `_`
     becomes `_`, a leading digit gets a `_` before it, a keyword or a name in `taken` a `_`
     after it."""
-    out = re.sub(r"[^A-Za-z0-9_]", "_", name)[:MAX_MACHINE_NAME - 4] or "_"
+    out = re.sub(r"[^A-Za-z0-9_]", "_", name)[: MAX_MACHINE_NAME - 4] or "_"
     if out[0].isdigit():
         out = "_" + out
     while keyword.iskeyword(out) or out in taken:
@@ -52,7 +52,12 @@ def _sources(paths: list[Path]) -> list[_Found]:
     for p in paths:
         machines = [p] if p.name.endswith(".machine") else [m for m in find_machines(p) if is_clfsm_machine(m)]
         if not machines:
-            r = MachineReport(source=p, name="", original="", error="no clfsm machine directory (NAME.machine with a States file) here")
+            r = MachineReport(
+                source=p,
+                name="",
+                original="",
+                error="no clfsm machine directory (NAME.machine with a States file) here",
+            )
             found.append(_Found(p, None, r))
         for m in machines:
             r = MachineReport(source=m, name="", original=m.name.removesuffix(".machine"))

@@ -6,11 +6,13 @@
 | transition n of S and its target | `State_<S>.h`: `Transition_<n>(int toState = <idx>)` (n is the priority) |
 | its guard | `State_<S>_Transition_<n>.expr` |
 | initial and suspend state | `<M>.mm`: `setInitialState(_states[N])`, `setSuspendState(_states[K])` |
-| the five sections | `State_<S>_OnEntry.mm`, `_OnExit.mm`, `_Internal.mm`, `_OnSuspend.mm`, `_OnResume.mm` (a missing one is empty: old machines have no OnSuspend/OnResume) |
+| the five sections | `State_<S>_OnEntry.mm`, `_OnExit.mm`, `_Internal.mm`, `_OnSuspend.mm`, `_OnResume.mm` (1) |
 | variables | `<M>_Variables.h`, `State_<S>_Variables.h` |
 | includes | `<M>_Includes.h`, `State_<S>_Includes.h` |
 | functions | `<M>_Methods.h`, `State_<S>_Methods.h` |
 | where the editor drew the states | `Layout.plist` |
+
+(1) A missing one is empty: machines older than suspension have no OnSuspend and OnResume.
 
 Everything else is generated glue (`*_VarRefs.mm`, `*_FuncRefs.mm`, `<M>.h`, `State_<S>.mm`,
 `WindowLayout.plist`), build settings (`IncludePath`, `Language`) or AppleDouble `._*` files,
@@ -301,4 +303,3 @@ def _used_files(name: str, states: list[ClfsmState]) -> set[str]:
         used.update(t.guard.name for t in s.transitions if t.guard is not None)
         used.update(f"State_{s.name}_{k}" for k in ("Variables.h", "Includes.h", "Methods.h"))
     return used
-

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from .clfsm import ClfsmMachine, ClfsmState, Source
 from .expressions import Scope
 from .headers import translate_includes, translate_methods, translate_variables
-from .kinds import Imports
+from .kinds import Imports, annotation
 from .report import Left, MachineReport
 from .statements import MARKER, Translation, marked, translate_guard, translate_section
 
@@ -65,21 +65,22 @@ def convert(m: ClfsmMachine, name: str, machines: Mapping[str, str], states: Map
     files: dict[str, str] = {}
     machine_scope = Scope(imports, {}, machines, states, taken=set(MODULES))
     variables = _File("Variables.py")
+    headers = [src for src in [m.includes, *(s.includes for s in m.states)] if src is not None]
+    included = [(translate_includes(src.text, src.name, machine_scope), src) for src in headers]
+    machine_vars: dict[str, tuple[str, str | None]] = {}
+    for inc, _src in included:
+        for d in inc.defines:  # constants first: the variables' initialisers may use them
+            variables.lines.append(f"{d.python}: {annotation(d.kind)} = {d.value}  # #define in {d.source}")
+            machine_vars[d.name] = (d.python, d.kind)
+    machine_scope.variables = dict(machine_vars)
     if m.variables is not None:
         declared = translate_variables(m.variables.text, machine_scope)
         variables.place(declared.translation, m.variables, report)
-        machine_vars = declared.names
-    else:
-        machine_vars = {}
-    includes = [m.includes] if m.includes is not None else []
-    methods = [m.methods] if m.methods is not None else []
+        machine_vars.update(declared.names)
+    methods = [src for src in [m.methods, *(s.methods for s in m.states)] if src is not None]
     for s in m.states:
         _state(m, s, machine_vars, machine_scope, report, files)
-        if s.includes is not None:
-            includes.append(s.includes)
-        if s.methods is not None:
-            methods.append(s.methods)
-    includes_file = _includes(includes, methods, imports, report)
+    includes_file = _includes([(inc.translation, src) for inc, src in included], methods, imports, report)
     files["machine.yaml"] = _machine_yaml(m, name, states)
     for f in (variables, includes_file):
         if f.text():
@@ -113,7 +114,8 @@ def _state(
         out.place(t, src, report)
         for st in t.statics:
             variables.lines.append(
-                f"{st.name}: {st.annotation}" + (f" = {st.initial}" if st.initial is not None else "")
+                f"{st.name}: {st.annotation}"
+                + (f" = {st.initial}" if st.initial is not None else "")
                 + f"  # static in {src.name}:{st.line}"
             )
             scope.taken.add(st.name)
@@ -133,14 +135,12 @@ def _state(
         files[variables.name] = variables.text()
 
 
-def _includes(includes: list[Source], methods: list[Source], imports: Imports, report: MachineReport) -> _File:
+def _includes(
+    included: list[tuple[Translation, Source]], methods: list[Source], imports: Imports, report: MachineReport
+) -> _File:
     """Includes.py: the imports the code needs, then what the headers held that has no Python."""
     out = _File("Includes.py")
-    pending = []
-    for src in includes:
-        pending.append((translate_includes(src.text, imports), src))
-    for src in methods:
-        pending.append((translate_methods(src.text), src))
+    pending = included + [(translate_methods(src.text), src) for src in methods]
     out.lines.extend(imports.lines())
     for t, src in pending:
         if t.lines:

@@ -42,7 +42,7 @@ class Parsed:
     whole: Node = None  # the whole tree (the root is the part translated)
 
     def text(self, node: Node) -> str:
-        return node.text.decode("utf-8", "replace")  # type: ignore[no-any-return]
+        return str(node.text.decode("utf-8", "replace"))
 
 
 _PARSER: Any = None
@@ -135,7 +135,9 @@ def leaves(node: Node) -> Iterator[Node]:
 
 
 #: Tokens that make no line a line of code on their own.
-_NOT_CODE = frozenset({"comment", "{", "}", ";", "", "translation_unit", "compound_statement", "field_declaration_list"})
+_NOT_CODE = frozenset(
+    {"comment", "{", "}", ";", "", "translation_unit", "compound_statement", "field_declaration_list"}
+)
 
 
 def code_lines(node: Node, first: int, last: int) -> set[int]:

@@ -296,7 +296,9 @@ class Expressions:
         yes = self.value(node.child_by_field_name("consequence"))
         no = self.value(node.child_by_field_name("alternative"))
         kind = yes.kind if yes.kind == no.kind else "any"
-        return Expr(f"{wrap(yes, TERNARY, True)} if {wrap(cond, TERNARY, True)} else {wrap(no, TERNARY)}", TERNARY, kind)
+        return Expr(
+            f"{wrap(yes, TERNARY, True)} if {wrap(cond, TERNARY, True)} else {wrap(no, TERNARY)}", TERNARY, kind
+        )
 
     def _cast_expression(self, node: Node) -> Expr:
         return self.cast(self.text(node.child_by_field_name("type")), node.child_by_field_name("value"))
@@ -314,16 +316,20 @@ class Expressions:
     def _field_expression(self, node: Node) -> Expr:
         base = self.value(node.child_by_field_name("argument"))
         name = self.text(node.child_by_field_name("field"))
-        if base.kind is not None and base.kind.startswith("msg:") or base.kind == "any":
+        if (base.kind is not None and base.kind.startswith("msg:")) or base.kind == "any":
             return Expr(f"{wrap(base, ATOM)}.{name}", ATOM, "any")
         raise Untranslatable(f"the member {name} of a {base.kind or 'value'}")
 
     def _subscript_expression(self, node: Node) -> Expr:
         base = self.value(node.child_by_field_name("argument"))
         index_node = node.child_by_field_name("indices") or node.child_by_field_name("index")
-        if index_node is None or not (base.kind or "").startswith("list:") and base.kind != "any":
+        if index_node is None or (not (base.kind or "").startswith("list:") and base.kind != "any"):
             raise Untranslatable("an index into something not a list")
-        items = [c for c in index_node.named_children if c.type != "comment"] if index_node.type.endswith("list") else [index_node]
+        items = (
+            [c for c in index_node.named_children if c.type != "comment"]
+            if index_node.type.endswith("list")
+            else [index_node]
+        )
         if len(items) != 1:
             raise Untranslatable("an index of several values")
         index = self.value(items[0])
@@ -367,12 +373,21 @@ class Expressions:
         imports = self.scope.imports
         bare = name[5:] if name.startswith("std::") else name
         if name in _BY_NAME:
-            return Expr(f"{name}({', '.join(self.machine_name(a) for a in args)})", ATOM, "void" if name in _CONTROL else "bool" if name.startswith("is_") else "str")
+            return Expr(
+                f"{name}({', '.join(self.machine_name(a) for a in args)})",
+                ATOM,
+                "void" if name in _CONTROL else "bool" if name.startswith("is_") else "str",
+            )
         if name in _MACROS or name == "suspend_self":
             kind = {"state_name": "str", "machine_name": "str", "machine_id": "int"}.get(name, "bool")
             return Expr(f"{name}({', '.join(self.args_text(args))})", ATOM, "void" if name == "suspend_self" else kind)
         if name in _AT_INDEX or name == "control_machine_at_index":
             return self.at_index(name, args)
+        if name == "timeout" and len(args) == 1:  # CLMacros: microseconds since the state was entered
+            return Expr(f"after_us({self.value(args[0]).text})", ATOM, "bool")
+        if bare == "fflush" and len(args) == 1 and self.text(args[0]) in ("stdout", "stderr"):
+            imports.modules.add("sys")
+            return Expr(f"sys.{self.text(args[0])}.flush()", ATOM, "void")
         if name == "machine_index" and not args:
             return Expr("machine_id()", ATOM, "int")
         if bare in ("open", "close") and name == bare and 1 <= len(args) <= 3:
@@ -415,8 +430,12 @@ class Expressions:
             return self.printf(args, end='""')
         if bare == "puts" and len(args) == 1:
             return Expr(f"print({self.value(args[0]).text})", ATOM, "void")
+        if bare in ("sleep", "usleep", "nanosleep"):
+            raise Untranslatable(f"{bare} holds up every machine: wait in a guard instead, after_ms(...)")
         if bare in ("exit", "abort", "_exit"):
-            raise Untranslatable("exit ends clfsm's whole process; an llfsm machine ends by reaching an accepting state")
+            raise Untranslatable(
+                "exit ends clfsm's whole process; an llfsm machine ends by reaching an accepting state"
+            )
         raise Untranslatable(f"{name} is not a function llfsm knows")
 
     def at_index(self, name: str, args: list[Node]) -> Expr:
@@ -441,7 +460,9 @@ class Expressions:
         if name in ("rclcpp::ok", "rclcpp::shutdown") and not args:
             return Expr(f"ros.{name[8:]}()", ATOM, "bool")
         if name == "rclcpp::spin_until_future_complete" and len(args) == 2:
-            return Expr(f"ros.spin_until_future_complete({', '.join(self.args_text(args))})", ATOM, "ros:FutureReturnCode")
+            return Expr(
+                f"ros.spin_until_future_complete({', '.join(self.args_text(args))})", ATOM, "ros:FutureReturnCode"
+            )
         node_made = name == "rclcpp::Node::make_shared" or (name == "std::make_shared" and targs == ["rclcpp::Node"])
         if node_made and 1 <= len(args) <= 2:
             parts = self.args_text(args)
@@ -524,11 +545,15 @@ class Expressions:
                 newline = newline or last
                 continue
             if item.type in ("string_literal", "concatenated_string", "char_literal"):
-                value = self.string(item) if item.type != "char_literal" else string_value('"' + self.text(item)[1:-1] + '"')
+                value = (
+                    self.string(item)
+                    if item.type != "char_literal"
+                    else string_value('"' + self.text(item)[1:-1] + '"')
+                )
                 parts.append(python_string(value, '"', fstring=True))
                 continue
             e = self.value(item)
-            if "\\" in e.text or '"' in e.text and "'" in e.text:
+            if "\\" in e.text or ('"' in e.text and "'" in e.text):
                 raise Untranslatable("an expression too involved for an f-string")
             inner = e.text.replace('"', "'")
             spec = {"bool": ":d", "float": ":g"}.get(e.kind or "", "")
@@ -536,7 +561,9 @@ class Expressions:
         text = "".join(parts)
         if text.endswith("\\n") and not newline:
             text, newline = text[:-2], True
-        return ('f"' + text + '"') if "{" in text.replace("{{", "") else ('"' + text.replace("{{", "{").replace("}}", "}") + '"'), newline
+        return ('f"' + text + '"') if "{" in text.replace("{{", "") else (
+            '"' + text.replace("{{", "{").replace("}}", "}") + '"'
+        ), newline
 
     def output(self, node: Node) -> list[str] | None:
         """A whole `<<` statement: `print(...)` for cout/cerr, `ss += ...` for a stringstream."""
@@ -554,7 +581,7 @@ class Expressions:
             return [f"print({', '.join(args)})"]
         name = self.scope.lookup(target)
         assert name is not None
-        return [f"{name[0]} += {text[:-1]}\\n\"" if newline else f"{name[0]} += {text}"]
+        return [f'{name[0]} += {text[:-1]}\\n"' if newline else f"{name[0]} += {text}"]
 
     def printf(self, args: list[Node], end: str) -> Expr:
         if not args:

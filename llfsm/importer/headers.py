@@ -15,8 +15,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .cxx import Node, code_lines, end_line_of, line_of, parse_members, parse_unit
-from .expressions import Scope, Untranslatable
+from .cxx import Node, code_lines, end_line_of, line_of, parse_expression, parse_members, parse_unit
+from .expressions import Expressions, Scope, Untranslatable
 from .kinds import Imports, annotation
 from .statements import Statements, Translation, comment_lines, marked, python_name
 
@@ -47,32 +47,77 @@ def message_type_name(pkg: str, sub: str, snake: str) -> str:
     return "".join(part.capitalize() for part in snake.split("_"))
 
 
-def translate_includes(text: str, imports: Imports) -> Translation:
+@dataclass
+class Define:
+    """`#define NAME value` of a constant: a machine variable of llfsm, declared first."""
+
+    name: str
+    python: str
+    kind: str
+    value: str
+    source: str
+
+
+@dataclass
+class Included:
+    """A translated includes header: its lines for Includes.py, and the constants it defines."""
+
+    translation: Translation
+    defines: list[Define] = field(default_factory=list)
+
+
+def translate_includes(text: str, source: str, scope: Scope) -> Included:
     parsed = parse_unit(text)
-    out: list[str] = []
-    left: list[tuple[int, str]] = []
+    out = Included(Translation([], len(code_lines(parsed.root, 1, len(parsed.lines)))))
     for node in parsed.root.named_children:
         first, last = line_of(node), end_line_of(node)
         if node.type == "comment":
-            if _generated_comment(parsed.text(node)):
-                continue
-            out.extend(f"# {ln}".rstrip() for ln in comment_lines(parsed.text(node)))
+            if not _generated_comment(parsed.text(node)):
+                out.translation.lines.extend(f"# {ln}".rstrip() for ln in comment_lines(parsed.text(node)))
             continue
-        why = _include(node, parsed.text(node).strip(), imports)
+        if node.type == "preproc_def":
+            why = _define(node, source, scope, out)
+        else:
+            why = _include(node, parsed.text(node).strip(), scope.imports)
         if why is None:
             continue
-        out.extend(marked("", why, parsed.text(node).strip()))
+        out.translation.lines.extend(marked("", why, parsed.text(node).strip()))
         rows = sorted(code_lines(node, first, last))
-        left.extend((r, why if i == 0 else "") for i, r in enumerate(rows))
-    code = len(code_lines(parsed.root, 1, len(parsed.lines)))
-    return Translation(out, code, left)
+        out.translation.left.extend((r, why if i == 0 else "") for i, r in enumerate(rows))
+    return out
+
+
+def _define(node: Node, source: str, scope: Scope, out: Included) -> str | None:
+    """`#define NAME 0.5` becomes the machine variable `NAME: float = 0.5`; `#define FLAG`
+    needs nothing in Python (an `#ifdef FLAG` that reads it is left for a person)."""
+    name = node.child_by_field_name("name").text.decode("utf-8", "replace")
+    value = node.child_by_field_name("value")
+    if _BLOCK_WORKAROUND.match(f"#define {name}"):
+        return None
+    if value is None:
+        out.translation.lines.append(f"# clfsm: #define {name}")
+        return None
+    text = value.text.decode("utf-8", "replace").strip()
+    parsed = parse_expression(text)
+    try:
+        if not parsed.ok:
+            raise Untranslatable("a macro that is not a constant")
+        e = Expressions(scope).value(parsed.root)
+    except Untranslatable:
+        return "a macro that is not a constant of a number or a string"
+    if e.kind not in ("int", "float", "str", "bool"):
+        return "a macro that is not a constant of a number or a string"
+    py = python_name(name, scope.taken)
+    scope.taken.add(py)
+    out.defines.append(Define(name, py, e.kind, e.text, source))
+    return None
 
 
 def _include(node: Node, text: str, imports: Imports) -> str | None:
     """Why an include line cannot be carried over, or None once its import is recorded."""
     if node.type == "preproc_include":
         path_node = node.child_by_field_name("path")
-        header = path_node.text.decode("utf-8", "replace").strip("<>\"") if path_node is not None else ""
+        header = path_node.text.decode("utf-8", "replace").strip('<>"') if path_node is not None else ""
         if _NOTHING_NEEDED.match(header):
             return None
         if header in ("rclcpp/rclcpp.hpp", "rclcpp/rclcpp.h"):
@@ -85,6 +130,8 @@ def _include(node: Node, text: str, imports: Imports) -> str | None:
         return f"the header {header}: llfsm has no counterpart"
     if node.type == "using_declaration" or text.startswith("using namespace"):
         return None  # Python names need no namespace
+    if node.type == "preproc_call" and text.startswith("#pragma"):
+        return None  # a compiler's settings: Python has none
     if _BLOCK_WORKAROUND.match(re.sub(r"\s+", " ", text)):
         return None  # clfsm's workaround for Apple's blocks: nothing in Python
     return "C++ that Includes.py cannot hold"
@@ -94,6 +141,9 @@ def _generated_comment(text: str) -> bool:
     """The comment MiEditLLFSM writes at the top of a header (its name, "Automatically created")."""
     body = " ".join(comment_lines(text))
     return not body.strip() or "Automatically created" in body or bool(re.fullmatch(r"\s*[\w.]+\.(?:h|mm)\s*", body))
+
+
+_PLACEHOLDER = "# a placeholder for the line above"
 
 
 @dataclass
@@ -122,7 +172,9 @@ def translate_variables(text: str, scope: Scope) -> Declared:
                 continue
             lines = comment_lines(parsed.text(node))
             if line_of(node) == last_row and len(lines) == 1 and out and not out[-1].startswith("#"):
-                out[-1] += f"  # {lines[0]}" if lines[0] else ""
+                if lines[0]:  # `///< what it is`, after the declaration (or its placeholder)
+                    out[-1] = out[-1].replace(_PLACEHOLDER, f"# {lines[0]} ({_PLACEHOLDER[2:]})", 1)
+                    out[-1] += "" if lines[0] in out[-1] else f"  # {lines[0]}"
             else:
                 out.extend(f"# {ln}".rstrip() for ln in lines)
             continue
@@ -140,7 +192,7 @@ def translate_variables(text: str, scope: Scope) -> Declared:
                     py = python_name(name, scope.taken)
                     scope.taken.add(py)
                     names[name] = (py, None)
-                    out.append(f"{py}: object  # a placeholder for the line above")
+                    out.append(f"{py}: object  {_PLACEHOLDER}")
     code = len(code_lines(parsed.whole, 1, len(parsed.lines)))
     return Declared(Translation(out, code, left), names)
 
@@ -192,7 +244,9 @@ def _declared_names(node: Node) -> list[str]:
     return out
 
 
-def translate_methods(text: str, why: str = "a function of the clfsm machine: write it in a helper module beside the machine") -> Translation:
+def translate_methods(
+    text: str, why: str = "a function of the clfsm machine: write it in a helper module beside the machine"
+) -> Translation:
     """A `*_Methods.h`: C++ functions, each line kept for a person (llfsm machines keep their
     functions in helper modules beside the machine, imported by Includes.py)."""
     parsed = parse_unit(text)

@@ -64,10 +64,16 @@ _SCALARS = {
     "ostringstream": "stream",
 }
 _FIXED_INT = re.compile(r"u?int(?:8|16|32|64)_t\Z")
-_MSG = re.compile(r"(?:::)?(?P<pkg>[a-z][a-z0-9_]*)::(?P<sub>msg|srv)::(?P<name>[A-Z][A-Za-z0-9]*)(?:::(?P<part>Request|Response))?\Z")
+_MSG = re.compile(
+    r"(?:::)?(?P<pkg>[a-z][a-z0-9_]*)::(?P<sub>msg|srv)::(?P<name>[A-Z][A-Za-z0-9]*)(?:::(?P<part>Request|Response))?\Z"
+)
 _SHARED = re.compile(r"(?:std::)?shared_ptr<(?P<inner>.+)>\Z")
-_HANDLE = re.compile(r"rclcpp::(?P<cls>[A-Za-z]+)(?:<.*>)?(?:::(?:SharedPtr|SharedFuture|SharedPtrConst|ConstSharedPtr))?\Z")
-_FUTURE = re.compile(r"rclcpp::Client<.*>::(?:SharedFuture|FutureAndRequestId|SharedFutureAndRequestId)\Z|std::shared_future<.*>\Z")
+_HANDLE = re.compile(
+    r"rclcpp::(?P<cls>[A-Za-z]+)(?:<.*>)?(?:::(?:SharedPtr|SharedFuture|SharedPtrConst|ConstSharedPtr))?\Z"
+)
+_FUTURE = re.compile(
+    r"rclcpp::Client<.*>::(?:SharedFuture|FutureAndRequestId|SharedFutureAndRequestId)\Z|std::shared_future<.*>\Z"
+)
 
 #: Python annotation and default initialiser (None: no initialiser, the variable starts None).
 _ANNOTATIONS = {"int": "int", "float": "float", "bool": "bool", "str": "str", "stream": "str", "any": "object"}

@@ -76,10 +76,9 @@ def format_text(reports: list[MachineReport]) -> str:
     done = [r for r in reports if r.error is None]
     code = sum(r.code for r in done)
     translated = sum(r.translated for r in done)
-    out.append(
-        f"imported {len(done)} of {len(reports)} machine(s): {translated} of {code} code lines translated "
-        f"({share(translated, code)}); `llfsm check` lists what is left\n"
-    )
+    tail = f": {translated} of {code} code lines translated ({share(translated, code)})" if done else ""
+    left = "; `llfsm check` lists what is left" if translated < code else ""
+    out.append(f"imported {len(done)} of {len(reports)} machine(s){tail}{left}\n")
     return "".join(out)
 
 

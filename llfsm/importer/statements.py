@@ -205,7 +205,9 @@ class Statements:
         elif node.type == "binary_expression" and self.ex.stream_target(node) is not None:
             for line in self.ex.output(node) or []:
                 self.emit(depth, line)
-        elif node.type == "call_expression" and (self.strcpy(node, depth) or self.ignoring_errors(node, depth)):
+        elif node.type == "call_expression" and (
+            self.strcpy(node, depth) or self.ignoring_errors(node, depth) or self.assertion(node, depth)
+        ):
             pass
         else:
             self.emit(depth, self.ex.expr(node).text)
@@ -220,6 +222,14 @@ class Statements:
         if dst.kind != "str":
             raise Untranslatable("strcpy into something not a string")
         self.emit(depth, f"{dst.text} = {src.text}")
+        return True
+
+    def assertion(self, node: Node, depth: int) -> bool:
+        """`assert(x);` is Python's `assert x`."""
+        args = self.ex.arguments(node)
+        if self.text(node.child_by_field_name("function")) != "assert" or len(args) != 1:
+            return False
+        self.emit(depth, f"assert {self.ex.value(args[0]).text}")
         return True
 
     def ignoring_errors(self, node: Node, depth: int) -> bool:
@@ -309,7 +319,9 @@ class Statements:
         self.scope.locals[name] = (py, kind)
         self.emit(depth, f"{py} = {text if text is not None else 'None'}")
 
-    def typed_value(self, type_text: str, pointer: bool, size: Node | None, value: Node | None) -> tuple[str | None, str]:
+    def typed_value(
+        self, type_text: str, pointer: bool, size: Node | None, value: Node | None
+    ) -> tuple[str | None, str]:
         """The initial value and kind of a declared variable (a `char` array is a C string)."""
         if size is not None and not pointer and normalise(type_text) == "char":
             if value is None:
@@ -332,7 +344,7 @@ class Statements:
                 return f"[{', '.join(items)}]", f"list:{kind}"
             start = "None" if pointer else (default(kind) or "None")
             return f"[{start}] * {wrap(n, MUL, True)}", f"list:{kind}"
-        if value is None or value.type == "initializer_list" and not value.named_children:
+        if value is None or (value.type == "initializer_list" and not value.named_children):
             return (None if pointer else default(kind)), kind
         if value.type in ("argument_list", "initializer_list"):
             args = [a for a in value.named_children if a.type != "comment"]
@@ -418,7 +430,11 @@ class Statements:
                 self.declaration(init, depth)
             else:
                 self.expression_statement(init, depth)
-        cond = self.ex.value(node.child_by_field_name("condition")).text if node.child_by_field_name("condition") else "True"
+        cond = (
+            self.ex.value(node.child_by_field_name("condition")).text
+            if node.child_by_field_name("condition")
+            else "True"
+        )
         self.emit(depth, f"while {cond}:")
         tail_start = len(self.out)
         if update is not None:
@@ -436,14 +452,21 @@ class Statements:
         if len(decls) != 1 or decls[0].type != "init_declarator":
             return None
         var_node = decls[0].child_by_field_name("declarator")
-        if var_node.type != "identifier" or kind_of(self.text(init.child_by_field_name("type")), False, self.scope.imports) != "int":
+        if (
+            var_node.type != "identifier"
+            or kind_of(self.text(init.child_by_field_name("type")), False, self.scope.imports) != "int"
+        ):
             return None
         var = self.text(var_node)
         if cond.type != "binary_expression" or self.text(cond.child_by_field_name("left")) != var:
             return None
         op = self.text(cond.child_by_field_name("operator"))
         step = self.step(var, self.text(update))
-        if op not in ("<", "<=", ">", ">=", "!=") or step is None or self.assigns(node.child_by_field_name("body"), var):
+        if (
+            op not in ("<", "<=", ">", ">=", "!=")
+            or step is None
+            or self.assigns(node.child_by_field_name("body"), var)
+        ):
             return None
         if (op in ("<", "<=") and step < 0) or (op in (">", ">=") and step > 0) or (op == "!=" and abs(step) != 1):
             return None
