@@ -431,7 +431,7 @@ class Expressions:
         if bare == "puts" and len(args) == 1:
             return Expr(f"print({self.value(args[0]).text})", ATOM, "void")
         if bare in ("sleep", "usleep", "nanosleep"):
-            raise Untranslatable(f"{bare} holds up every machine: wait in a guard instead, after_ms(...)")
+            raise Untranslatable(f"{bare} holds up every machine: wait in a guard instead, with after_ms")
         if bare in ("exit", "abort", "_exit"):
             raise Untranslatable(
                 "exit ends clfsm's whole process; an llfsm machine ends by reaching an accepting state"
