@@ -194,3 +194,12 @@ def test_guards(cpp: str, python: str) -> None:
 def test_the_suspend_family_follows_renamed_machines() -> None:
     t, _ = section('suspend("2-fast"); if (is_running("2-fast")) count = 1;', {"2-fast": "_2_fast"})
     assert t.lines == ['suspend("_2_fast")', 'if is_running("_2_fast"):', "    count = 1"]
+
+
+def test_deep_nesting_is_refused_not_a_crash() -> None:
+    deep = "(" * 3000 + "count" + ")" * 3000
+    assert "nested deeper than" in guard(deep)
+    t, _ = section(f"count = {deep};\nok = true;")
+    assert t.lines[-1] == "ok = True" and "nested deeper than" in t.left[0][1]
+    t, _ = section("if (ok) {" * 400 + "count = 1;" + "}" * 400)
+    assert t.left and t.left_lines == t.code

@@ -123,6 +123,22 @@ def end_line_of(node: Node) -> int:
     return int(node.end_point[0])
 
 
+#: Deeper trees than this are refused (the translator walks expressions recursively): no
+#: hand-written guard or statement nests a tenth as deep.
+MAX_DEPTH = 150
+
+
+def too_deep(node: Node, limit: int = MAX_DEPTH) -> bool:
+    """Whether the tree under `node` is deeper than `limit` (an explicit stack: no recursion)."""
+    stack = [(node, 0)]
+    while stack:
+        n, depth = stack.pop()
+        if depth > limit:
+            return True
+        stack.extend((c, depth + 1) for c in n.children)
+    return False
+
+
 def leaves(node: Node) -> Iterator[Node]:
     """The tokens under `node`, in order (an explicit stack: deep code must not recurse)."""
     stack = [node]

@@ -15,7 +15,17 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .cxx import Node, code_lines, end_line_of, line_of, parse_expression, parse_members, parse_unit
+from .cxx import (
+    MAX_DEPTH,
+    Node,
+    code_lines,
+    end_line_of,
+    line_of,
+    parse_expression,
+    parse_members,
+    parse_unit,
+    too_deep,
+)
 from .expressions import Expressions, Scope, Untranslatable
 from .kinds import Imports, annotation
 from .statements import Statements, Translation, comment_lines, marked, python_name
@@ -182,6 +192,8 @@ def translate_variables(text: str, scope: Scope) -> Declared:
         try:
             if node.type != "field_declaration" or node.has_error:
                 raise Untranslatable("not a variable declaration")
+            if too_deep(node):
+                raise Untranslatable(f"nested deeper than {MAX_DEPTH} levels")
             out.extend(_variables(s, node, names, scope))
         except Untranslatable as e:
             out.extend(marked("", str(e), parsed.text(node)))

@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass, field
 
 from ..runtime.machine import MACROS, RESERVED
-from .cxx import Node, Parsed, code_lines, end_line_of, line_of, parse_expression, parse_statements
+from .cxx import MAX_DEPTH, Node, Parsed, code_lines, end_line_of, line_of, parse_expression, parse_statements, too_deep
 from .expressions import ADD, MUL, Expr, Expressions, Scope, Untranslatable, wrap
 from .kinds import annotation, default, kind_of, normalise
 
@@ -145,6 +145,8 @@ class Statements:
         try:
             if node.has_error:
                 raise Untranslatable("C++ the parser cannot read")
+            if depth == 0 and too_deep(node):
+                raise Untranslatable(f"nested deeper than {MAX_DEPTH} levels")
             self.statement(node, depth)
         except Untranslatable as e:
             del self.out[mark:]
@@ -542,6 +544,8 @@ def translate_guard(source: str, scope: Scope) -> Translation:
     try:
         if not parsed.ok or node.has_error:
             raise Untranslatable("not one C++ expression the parser can read")
+        if too_deep(node):
+            raise Untranslatable(f"nested deeper than {MAX_DEPTH} levels")
         e = Expressions(scope).value(node)
         text = e.text[1:-1] if node.type == "parenthesized_expression" else e.text  # (guard): no parentheses needed
         return Translation([*comments, text], len(code))
