@@ -64,17 +64,23 @@ def parser() -> Any:
     return _PARSER
 
 
-def parse_statements(source: str) -> Parsed:
-    """`source` as the statements of a function body: the tree's compound statement."""
-    tree = parser().parse((_WRAP[0] + source + _WRAP[1]).encode("utf-8"))
+def _wrapped(source: str, prefix: str, suffix: str, kind: str) -> Parsed:
+    """`source` parsed between `prefix` and `suffix` (one line each), and the body of the
+    `kind` node they make.  Not ok unless that body ends at the suffix: a `}` too many in the
+    source would close it early, and what followed would not be the source's any more."""
+    tree = parser().parse((prefix + source + suffix).encode("utf-8"))
     lines = source.split("\n")
     body = None
     for child in tree.root_node.children:
-        if child.type == "function_definition":
+        if child.type == kind:
             body = child.child_by_field_name("body")
-    # the body must end at the wrapper's `}`: a `}` too many in the source would end it early
     ok = body is not None and int(body.end_point[0]) == len(lines) + 1
     return Parsed(body if ok else tree.root_node, lines, ok, tree.root_node)
+
+
+def parse_statements(source: str) -> Parsed:
+    """`source` as the statements of a function body: the tree's compound statement."""
+    return _wrapped(source, *_WRAP, "function_definition")
 
 
 def parse_expression(source: str) -> Parsed:
@@ -98,14 +104,7 @@ def parse_expression(source: str) -> Parsed:
 
 def parse_members(source: str) -> Parsed:
     """A variables header (`int count; ///< ...`) as the members of a class."""
-    tree = parser().parse(("struct _llfsm_variables {\n" + source + "\n};\n").encode("utf-8"))
-    lines = source.split("\n")
-    body = None
-    for child in tree.root_node.children:
-        if child.type == "struct_specifier":
-            body = child.child_by_field_name("body")
-    ok = body is not None and int(body.end_point[0]) == len(lines) + 1
-    return Parsed(body if ok else tree.root_node, lines, ok, tree.root_node)
+    return _wrapped(source, "struct _llfsm_variables {\n", "\n};\n", "struct_specifier")
 
 
 def parse_unit(source: str) -> Parsed:

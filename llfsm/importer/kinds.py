@@ -24,6 +24,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
+from ..lang.cpp import C_TYPES
+
 #: ROS handle types: the C++ class (any spelling of a shared pointer to it) -> llfsm's name.
 _ROS_CLASSES = {
     "Node": "ros:Node",
@@ -37,13 +39,10 @@ _ROS_CLASSES = {
     "FutureReturnCode": "ros:FutureReturnCode",
 }
 
+#: Scalar types (spaces taken out: `unsigned int` is `unsignedint`) -> kind.  A lone `char` is
+#: taken for a one-character string, as `'c'` is written "c".
 _SCALARS = {
-    "int": "int",
-    "long": "int",
-    "short": "int",
-    "unsigned": "int",
-    "signed": "int",
-    "size_t": "int",
+    **{t: a for t, a in C_TYPES.items() if a},
     "ssize_t": "int",
     "unsignedint": "int",
     "longint": "int",
@@ -52,12 +51,7 @@ _SCALARS = {
     "unsignedlonglong": "int",
     "unsignedshort": "int",
     "longlongint": "int",
-    "float": "float",
-    "double": "float",
     "longdouble": "float",
-    "bool": "bool",
-    "std::string": "str",
-    "string": "str",
     "std::stringstream": "stream",
     "stringstream": "stream",
     "std::ostringstream": "stream",
