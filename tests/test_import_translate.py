@@ -27,7 +27,7 @@ VARIABLES = {
 
 def section(source: str, machines: dict[str, str] | None = None) -> tuple[Translation, Imports]:
     imports = Imports()
-    t = translate_section(source, Scope(imports, dict(VARIABLES), machines or {}), "OnEntry")
+    t = translate_section(source, Scope(imports, dict(VARIABLES), machines or {}))
     compile("\n".join(t.lines) + "\n", "<translated>", "exec")  # Python, never run
     return t, imports
 

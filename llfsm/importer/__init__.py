@@ -1,8 +1,9 @@
 """`llfsm import`: clfsm (MiEditLLFSM) machine directories to llfsm machine directories.
 
 - `clfsm`: reading a clfsm directory (which file carries what), safely;
-- `cxx`, `kinds`, `literals`, `expressions`, `statements`, `headers`: translating its C++
-  where the meaning is clear, keeping the rest as lines `llfsm check` reports (LF080);
+- `cxx` (tree-sitter), `statements`, `expressions`, `calls`, `headers`, `terms`, `kinds`,
+  `literals`: translating its C++ where the meaning is clear, keeping the rest as lines
+  `llfsm check` reports (LF080);
 - `convert`: one clfsm machine to the files of an llfsm machine;
 - `write`: writing a machine directory all at once or not at all;
 - `report`: what was written, translated and left.

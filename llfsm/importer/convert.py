@@ -21,8 +21,6 @@ from .statements import MARKER, Translation, marked, translate_guard, translate_
 
 #: Modules the translation may import: a variable never takes one of these names.
 MODULES = frozenset({"ros", "math", "sys", "os", "time", "copy", "contextlib"})
-_SECTION_FILES = {"OnEntry": "OnEntry", "OnExit": "OnExit", "Internal": "Internal", "OnSuspend": "OnSuspend",
-                  "OnResume": "OnResume"}  # fmt: skip
 
 
 @dataclass
@@ -109,8 +107,8 @@ def _state(
         variables.place(declared.translation, s.variables, report)
         scope.variables = {**machine_vars, **declared.names}
     for section, src in s.sections.items():
-        t = translate_section(src.text, scope, section)
-        out = _File(f"State_{new}_{_SECTION_FILES[section]}.py")
+        t = translate_section(src.text, scope)
+        out = _File(f"State_{new}_{section}.py")
         out.place(t, src, report)
         for st in t.statics:
             variables.lines.append(

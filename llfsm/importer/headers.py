@@ -169,7 +169,7 @@ def translate_variables(text: str, scope: Scope) -> Declared:
     llfsm does not know is declared `name: object` after its marked line, so that code using
     it is marked for that reason rather than for an unknown name."""
     parsed = parse_members(text)
-    s = Statements(parsed, scope, "Variables")
+    s = Statements(scope)
     if not parsed.ok:
         return Declared(translate_methods(text, "C++ the parser cannot read as variables"))
     out: list[str] = []

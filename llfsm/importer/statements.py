@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass, field
 
 from ..runtime.machine import MACROS, RESERVED
-from .cxx import MAX_DEPTH, Node, Parsed, code_lines, end_line_of, line_of, parse_expression, parse_statements, too_deep
+from .cxx import MAX_DEPTH, Node, code_lines, end_line_of, line_of, parse_expression, parse_statements, too_deep
 from .expressions import ADD, MUL, Expr, Expressions, Scope, Untranslatable, wrap
 from .kinds import annotation, default, kind_of, normalise
 
@@ -93,11 +93,9 @@ def marked(indent: str, why: str, source: str) -> list[str]:
 class Statements:
     """Translates the statements of one section."""
 
-    def __init__(self, parsed: Parsed, scope: Scope, section: str) -> None:
-        self.parsed = parsed
+    def __init__(self, scope: Scope) -> None:
         self.scope = scope
         self.ex = Expressions(scope)
-        self.section = section
         self.out: list[str] = []
         self.left: list[tuple[int, str]] = []
         self.statics: list[Static] = []
@@ -512,11 +510,11 @@ class Statements:
         return False
 
 
-def translate_section(source: str, scope: Scope, section: str) -> Translation:
+def translate_section(source: str, scope: Scope) -> Translation:
     """The Python of one section (`State_S_OnEntry.mm`): a fresh set of locals, statics hoisted."""
     parsed = parse_statements(source)
     scope.locals = {}
-    s = Statements(parsed, scope, section)
+    s = Statements(scope)
     code_rows = sorted(code_lines(parsed.whole, 1, len(parsed.lines)))
     if not parsed.ok:  # `}` too many: the section ends the function it is parsed in
         why = "C++ the parser cannot read"
