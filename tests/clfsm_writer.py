@@ -3,8 +3,9 @@ MiEditLLFSM keeps for a machine, in the shape it writes them (the glue headers a
 files too, which the importer must read for targets and otherwise ignore).
 
 This is the tests' own writer, not MiPal's: it writes what the importer reads, so that each
-corner of the format has a small machine (tests/test_import*.py), and it wrote the how-to's
-four machines in tests/data/clfsm/ (`python tests/clfsm_writer.py` writes them again).
+corner of the format has a small machine (tests/test_import.py), and the how-to's four
+machines in clfsm's form, transcribed from its listings (`python tests/clfsm_writer.py DIR`
+writes them into DIR: docs/import.md starts from there).
 """
 
 from __future__ import annotations
@@ -269,6 +270,6 @@ def turtle_suspend_resume(root: Path) -> Path:
 HOW_TO = (ping_pong, blind_turtle_bot, wall_turtle_bot, turtle_suspend_resume)
 
 if __name__ == "__main__":
-    out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parent / "data" / "clfsm"
+    out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("clfsm")
     for make in HOW_TO:
         print(make(out))

@@ -1,1 +1,0 @@
-// State_TURN_RIGHT.mm: the glue MiEditLLFSM generates

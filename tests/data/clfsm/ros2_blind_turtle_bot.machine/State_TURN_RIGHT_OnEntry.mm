@@ -1,3 +1,0 @@
-msg.linear.x = 0.0;
-msg.angular.z = -2.0;
-publisher_->publish(msg);

@@ -1,5 +1,0 @@
-//
-// State_END_Variables.h
-//
-// Automatically created through MiCASE -- do not change manually!
-//

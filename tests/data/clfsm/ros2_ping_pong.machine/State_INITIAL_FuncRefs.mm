@@ -1,5 +1,0 @@
-//
-// State_INITIAL_FuncRefs.mm
-//
-// Automatically created through MiCASE -- do not change manually!
-//

@@ -1,5 +1,0 @@
-//
-// State_INITIAL_Variables.h
-//
-// Automatically created through MiCASE -- do not change manually!
-//

@@ -1,1 +1,0 @@
-// State_PUBLISH.mm: the glue MiEditLLFSM generates

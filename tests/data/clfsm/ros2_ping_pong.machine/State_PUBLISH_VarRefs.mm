@@ -1,5 +1,0 @@
-//
-// State_PUBLISH_VarRefs.mm
-//
-// Automatically created through MiCASE -- do not change manually!
-//

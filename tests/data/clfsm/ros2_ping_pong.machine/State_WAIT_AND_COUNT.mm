@@ -1,1 +1,0 @@
-// State_WAIT_AND_COUNT.mm: the glue MiEditLLFSM generates

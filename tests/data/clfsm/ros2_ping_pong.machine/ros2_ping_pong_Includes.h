@@ -1,3 +1,0 @@
-#include "rclcpp/rclcpp.hpp"
-#include "std_msgs/msg/string.hpp"
-#include "CLMacros.h"

@@ -1,1 +1,0 @@
-// State_END.mm: the glue MiEditLLFSM generates

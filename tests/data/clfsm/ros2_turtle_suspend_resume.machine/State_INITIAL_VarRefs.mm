@@ -1,5 +1,0 @@
-//
-// State_INITIAL_VarRefs.mm
-//
-// Automatically created through MiCASE -- do not change manually!
-//

@@ -1,1 +1,0 @@
-// State_RESUME.mm: the glue MiEditLLFSM generates

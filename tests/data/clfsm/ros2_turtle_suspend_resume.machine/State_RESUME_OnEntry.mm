@@ -1,1 +1,0 @@
-resume("ros2_blind_turtle_bot");

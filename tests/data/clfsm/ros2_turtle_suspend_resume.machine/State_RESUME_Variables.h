@@ -1,5 +1,0 @@
-//
-// State_RESUME_Variables.h
-//
-// Automatically created through MiCASE -- do not change manually!
-//

@@ -1,1 +1,0 @@
-// State_SUSPEND_BOT.mm: the glue MiEditLLFSM generates

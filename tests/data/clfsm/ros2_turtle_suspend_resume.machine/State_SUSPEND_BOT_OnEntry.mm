@@ -1,1 +1,0 @@
-suspend("ros2_blind_turtle_bot");

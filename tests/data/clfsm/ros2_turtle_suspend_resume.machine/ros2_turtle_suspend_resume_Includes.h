@@ -1,2 +1,0 @@
-#include "rclcpp/rclcpp.hpp"
-#include "CLMacros.h"

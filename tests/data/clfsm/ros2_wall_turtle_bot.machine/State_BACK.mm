@@ -1,1 +1,0 @@
-// State_BACK.mm: the glue MiEditLLFSM generates

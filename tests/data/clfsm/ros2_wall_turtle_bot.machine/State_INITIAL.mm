@@ -1,1 +1,0 @@
-// State_INITIAL.mm: the glue MiEditLLFSM generates

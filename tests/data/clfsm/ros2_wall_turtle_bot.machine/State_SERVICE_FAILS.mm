@@ -1,1 +1,0 @@
-// State_SERVICE_FAILS.mm: the glue MiEditLLFSM generates

@@ -1,1 +1,0 @@
-// State_STOP.mm: the glue MiEditLLFSM generates

@@ -1,5 +1,0 @@
-//
-// State_STOP_FuncRefs.mm
-//
-// Automatically created through MiCASE -- do not change manually!
-//

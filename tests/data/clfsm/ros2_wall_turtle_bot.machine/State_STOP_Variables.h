@@ -1,5 +1,0 @@
-//
-// State_STOP_Variables.h
-//
-// Automatically created through MiCASE -- do not change manually!
-//

@@ -1,1 +1,0 @@
-// State_STRAIGHT.mm: the glue MiEditLLFSM generates

@@ -1,1 +1,0 @@
-// State_SUSPENDED.mm: the glue MiEditLLFSM generates

@@ -1,1 +1,0 @@
-// State_TEST.mm: the glue MiEditLLFSM generates

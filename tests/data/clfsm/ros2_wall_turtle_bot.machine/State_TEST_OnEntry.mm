@@ -1,2 +1,0 @@
-position_x = result.get()->x;
-position_y = result.get()->y;
