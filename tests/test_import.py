@@ -338,3 +338,32 @@ def test_check_build_and_run_never_load_the_importer_or_its_parser(how_to: Path,
         )
         r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
         assert "LOADED []" in r.stderr, (argv, r.stderr)
+
+
+def test_a_failure_midway_leaves_no_half_written_machine_and_keeps_the_old_one(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    src = write_clfsm(tmp_path / "src", "M", [ClfsmState("A", [("B", "true")], {"OnEntry": "x = 1;"}), ClfsmState("B")])
+    out = tmp_path / "out"
+    real = os.fdopen
+    written = []
+
+    def full_disk(fd: int, *args: object, **kw: object) -> object:
+        written.append(fd)
+        if len(written) == 3:
+            raise OSError(28, "No space left on device")
+        return real(fd, *args, **kw)  # type: ignore[call-overload]
+
+    monkeypatch.setattr(os, "fdopen", full_disk)
+    status, text, _ = import_(src, "-o", out)
+    assert status == 1 and "M.machine: not written (No space left on device)" in text
+    assert list(out.iterdir()) == []  # neither a machine nor a temporary folder
+    monkeypatch.setattr(os, "fdopen", real)
+    assert import_(src, "-o", out)[0] == 0
+    before = {p.name: p.read_bytes() for p in (out / "M.machine").iterdir()}
+    written.clear()
+    monkeypatch.setattr(os, "fdopen", full_disk)
+    status, text, _ = import_(src, "-o", out, "--force")
+    assert status == 1
+    assert {p.name: p.read_bytes() for p in (out / "M.machine").iterdir()} == before
+    assert sorted(p.name for p in out.iterdir()) == ["M.machine"]
