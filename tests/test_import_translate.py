@@ -7,9 +7,9 @@ import pytest
 
 pytest.importorskip("tree_sitter_cpp")
 
-from llfsm.importer.expressions import Scope
 from llfsm.importer.kinds import Imports
-from llfsm.importer.statements import Translation, translate_guard, translate_section
+from llfsm.importer.statements import Translation, python_name, translate_guard, translate_section
+from llfsm.importer.terms import Scope
 
 VARIABLES = {
     "count": ("count", "int"),
@@ -203,3 +203,9 @@ def test_deep_nesting_is_refused_not_a_crash() -> None:
     assert t.lines[-1] == "ok = True" and "nested deeper than" in t.left[0][1]
     t, _ = section("if (ok) {" * 400 + "count = 1;" + "}" * 400)
     assert t.left and t.left_lines == t.code
+
+
+def test_names_python_or_llfsm_reserve_are_changed() -> None:
+    assert [python_name(n) for n in ("lambda", "self", "after_ms", "_llfsm_x", "__init__", "count")] == [
+        "lambda_", "self_", "after_ms_", "c_llfsm_x", "c_init", "count"]  # fmt: skip
+    assert python_name("count", {"count", "count_"}) == "count__"

@@ -13,11 +13,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from .clfsm import ClfsmMachine, ClfsmState, Source
-from .expressions import Scope
 from .headers import translate_includes, translate_methods, translate_variables
 from .kinds import Imports, annotation
 from .report import Left, MachineReport
 from .statements import MARKER, Translation, marked, translate_guard, translate_section
+from .terms import Scope
 
 #: Modules the translation may import: a variable never takes one of these names.
 MODULES = frozenset({"ros", "math", "sys", "os", "time", "copy", "contextlib"})

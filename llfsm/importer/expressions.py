@@ -35,8 +35,6 @@ from .terms import (
     wrap,
 )
 
-__all__ = ["Expr", "Expressions", "Scope", "Untranslatable", "wrap"]
-
 _BINARY = {"||": ("or", OR), "&&": ("and", AND), "|": ("|", BOR), "^": ("^", XOR), "&": ("&", BAND),
            "==": ("==", CMP), "!=": ("!=", CMP), "<": ("<", CMP), ">": (">", CMP), "<=": ("<=", CMP),
            ">=": (">=", CMP), "<<": ("<<", SHIFT), ">>": (">>", SHIFT), "+": ("+", ADD), "-": ("-", ADD),

@@ -26,9 +26,10 @@ from .cxx import (
     parse_unit,
     too_deep,
 )
-from .expressions import Expressions, Scope, Untranslatable
+from .expressions import Expressions
 from .kinds import Imports, annotation
 from .statements import Statements, Translation, comment_lines, marked, python_name
+from .terms import Scope, Untranslatable
 
 #: Headers of the C and C++ standard libraries and of clfsm itself: Python needs none of them.
 _NOTHING_NEEDED = re.compile(

@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 
 from ..runtime.machine import MACROS, RESERVED
 from .cxx import MAX_DEPTH, Node, code_lines, end_line_of, line_of, parse_expression, parse_statements, too_deep
-from .expressions import ADD, MUL, Expr, Expressions, Scope, Untranslatable, wrap
+from .expressions import Expressions
 from .kinds import annotation, default, kind_of, normalise
+from .terms import ADD, MUL, Expr, Scope, Untranslatable, wrap
 
 #: The marker of a line left for a person (llfsm.lang.check.untranslated reads it back).
 MARKER = "# UNTRANSLATED"
@@ -60,7 +61,9 @@ def python_name(name: str, taken: set[str] | frozenset[str] = frozenset()) -> st
     """`name` as a name machine code may bind: a Python keyword, a name llfsm reserves (or
     one in `taken`) gets `_` appended until it is free."""
     out = name
-    while keyword.iskeyword(out) or out in RESERVED or out in MACROS or out.startswith("_llfsm") or out in taken:
+    if out.startswith("_llfsm") or (out.startswith("__") and out.endswith("__")):
+        out = "c_" + out.strip("_")  # no `_` appended ever makes these free
+    while keyword.iskeyword(out) or out in RESERVED or out in MACROS or out in taken:
         out += "_"
     return out
 
