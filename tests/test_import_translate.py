@@ -208,4 +208,4 @@ def test_deep_nesting_is_refused_not_a_crash() -> None:
 def test_names_python_or_llfsm_reserve_are_changed() -> None:
     assert [python_name(n) for n in ("lambda", "self", "after_ms", "_llfsm_x", "__init__", "count")] == [
         "lambda_", "self_", "after_ms_", "c_llfsm_x", "c_init", "count"]  # fmt: skip
-    assert python_name("count", {"count", "count_"}) == "count__"
+    assert python_name("count", {"count"}, {"count_": 1}) == "count__"

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import keyword
 import re
+from collections.abc import Container
 from dataclasses import dataclass, field
 
 from ..runtime.machine import MACROS, RESERVED
@@ -57,13 +58,13 @@ class Translation:
         return len({line for line, _ in self.left})
 
 
-def python_name(name: str, taken: set[str] | frozenset[str] = frozenset()) -> str:
+def python_name(name: str, *taken: Container[str]) -> str:
     """`name` as a name machine code may bind: a Python keyword, a name llfsm reserves (or
     one in `taken`) gets `_` appended until it is free."""
     out = name
     if out.startswith("_llfsm") or (out.startswith("__") and out.endswith("__")):
         out = "c_" + out.strip("_")  # no `_` appended ever makes these free
-    while keyword.iskeyword(out) or out in RESERVED or out in MACROS or out in taken:
+    while keyword.iskeyword(out) or out in RESERVED or out in MACROS or any(out in t for t in taken):
         out += "_"
     return out
 
@@ -102,6 +103,8 @@ class Statements:
         self.out: list[str] = []
         self.left: list[tuple[int, str]] = []
         self.statics: list[Static] = []
+        self.static_names: set[str] = set()
+        self.bound: list[tuple[str, tuple[str, str | None] | None]] = []
         self.loops = 0
         self.last_row = -1
 
@@ -141,8 +144,7 @@ class Statements:
 
     def guarded(self, node: Node, depth: int) -> None:
         """Translate one statement, or mark its lines when it cannot be translated."""
-        mark, left_at = len(self.out), len(self.left)
-        saved_locals, saved_statics = dict(self.scope.locals), list(self.statics)
+        mark, left_at, bound_at, statics_at = len(self.out), len(self.left), len(self.bound), len(self.statics)
         try:
             if node.has_error:
                 raise Untranslatable("C++ the parser cannot read")
@@ -152,13 +154,24 @@ class Statements:
         except Untranslatable as e:
             del self.out[mark:]
             del self.left[left_at:]
-            self.scope.locals.clear()
-            self.scope.locals.update(saved_locals)
-            self.statics[:] = saved_statics
+            while len(self.bound) > bound_at:  # the statement's locals are unknown after all
+                name, before = self.bound.pop()
+                if before is None:
+                    del self.scope.locals[name]
+                else:
+                    self.scope.locals[name] = before
+            for st in self.statics[statics_at:]:
+                self.static_names.discard(st.name)
+            del self.statics[statics_at:]
             self.out.extend(marked(INDENT * depth, str(e), self.text(node)))
             first, last = line_of(node), end_line_of(node)
             lines = sorted(code_lines(node, first, last))
             self.left.extend((ln, str(e) if i == 0 else "") for i, ln in enumerate(lines))
+
+    def bind(self, name: str, python: str, kind: str | None) -> None:
+        """`name` is a local from here on (undone if its statement is left for a person)."""
+        self.bound.append((name, self.scope.locals.get(name)))
+        self.scope.locals[name] = (python, kind)
 
     def emit(self, depth: int, line: str) -> None:
         self.out.append(INDENT * depth + line)
@@ -313,13 +326,12 @@ class Statements:
             raise Untranslatable(f"the declaration of {self.text(d)}")
         name = self.text(d)
         text, kind = self.typed_value(type_text, pointer, size, value)
-        taken = self.scope.taken | set(self.scope.variables) | {s.name for s in self.statics}
-        py = python_name(name, taken)
-        self.scope.locals[name] = (py, kind)
+        py = python_name(name, self.scope.taken, self.scope.variables, self.static_names)
+        self.bind(name, py, kind)
         if static:
             self.statics.append(Static(py, annotation(kind), text, line))
+            self.static_names.add(py)
             return
-        self.scope.locals[name] = (py, kind)
         self.emit(depth, f"{py} = {text if text is not None else 'None'}")
 
     def typed_value(
@@ -477,8 +489,8 @@ class Statements:
         stop = self.ex.value(cond.child_by_field_name("right"))
         if stop.kind not in ("int", "any") or start.kind not in ("int", "any"):
             return None
-        py = python_name(var, set(self.scope.variables))
-        self.scope.locals[var] = (py, "int")
+        py = python_name(var, self.scope.variables)
+        self.bind(var, py, "int")
         end = stop.text
         if op in ("<=", ">="):
             end = f"{wrap(stop, ADD)} {'+' if step > 0 else '-'} 1"

@@ -17,11 +17,11 @@ from ..model import Code, Machine
 from .checking import Checking
 
 #: The marker `llfsm import` writes (llfsm.importer.statements.MARKER), with its reason.
-_MARKED = re.compile(r"^(?P<indent>[ \t]*)# UNTRANSLATED(?: \((?P<why>[^)\n]*)\))?:(?P<text>[^\n]*)$", re.MULTILINE)
+_MARKED = re.compile(r"(?P<indent>[ \t]*)# UNTRANSLATED(?: \((?P<why>[^)]*)\))?:(?P<text>.*)")
 
 
 def untranslated(c: Checking, m: Machine) -> None:
-    """Every marked line of every code file of the machine."""
+    """Every marked line of every code file of the machine (one pass over each file's lines)."""
     files: list[Code | None] = [m.includes, m.variables_file]
     for s in m.states:
         files.append(s.variables_file)
@@ -30,10 +30,12 @@ def untranslated(c: Checking, m: Machine) -> None:
     for code in files:
         if code is None or "# UNTRANSLATED" not in code.text:
             continue
-        for match in _MARKED.finditer(code.text):
-            line = code.text.count("\n", 0, match.start()) + code.loc.line
+        for i, line in enumerate(code.text.split("\n")):
+            match = _MARKED.fullmatch(line) if "# UNTRANSLATED" in line else None
+            if match is None:
+                continue
             text = match["text"].strip()
             why = f" ({match['why']})" if match["why"] else ""
             what = f"`{text}`" if text else "this line"
-            c.add("LF080", code.file, line, len(match["indent"]) + 1,
-                  f"clfsm code left untranslated{why}: write {what} in Python, then delete this line")  # fmt: skip
+            message = f"clfsm code left untranslated{why}: write {what} in Python, then delete this line"
+            c.add("LF080", code.file, code.loc.line + i, len(match["indent"]) + 1, message)
