@@ -164,7 +164,8 @@ class EditServer(WebServer):
             return web.json_response({"success": False, "message": str(e)}, status=400)
 
     async def _after(self, result: dict[str, Any], origin: str = "page") -> None:
-        if result.get("files") or result.get("key"):
+        """Every page hears of what a request changed (a write that changed nothing: nobody)."""
+        if result.get("files") or result.get("new"):
             await self._changed(result["key"], result.get("files", []), origin, result.get("message", ""))
 
     async def _machine(self, request: web.Request) -> web.Response:
@@ -179,17 +180,14 @@ class EditServer(WebServer):
             args = d.get("args", {})
             if not isinstance(args, dict) or not isinstance(d.get("op"), str):
                 raise WorkspaceError("an operation has a name (op) and arguments (args)")
-            return self._changing(d, *self.workspace.operate(d.get("machine"), d["op"], args))  # type: ignore[arg-type]
+            return self._changing(d, *self.workspace.operate(d.get("machine"), d["op"], args))
 
         return await self._answered(request, act)
 
     async def _write(self, request: web.Request) -> web.Response:
         def act(d: dict[str, Any]) -> dict[str, Any]:
             summary, files = self.workspace.write(
-                d.get("machine"),  # type: ignore[arg-type]
-                d.get("file"),
-                d.get("text"),
-                d.get("base", UNCHECKED),
+                d.get("machine"), d.get("file"), d.get("text"), d.get("base", UNCHECKED)
             )
             return self._changing(d, summary, files)
 
@@ -198,7 +196,13 @@ class EditServer(WebServer):
     async def _new(self, request: web.Request) -> web.Response:
         def act(d: dict[str, Any]) -> dict[str, Any]:
             key = self.workspace.new_machine(d.get("name"), d.get("folder", 0), d.get("states"))
-            return {"key": key, "message": f"made machine {key}", "files": [], "machine": self.workspace.full(key)}
+            return {
+                "key": key,
+                "message": f"made machine {key}",
+                "new": True,
+                "files": [],
+                "machine": self.workspace.full(key),
+            }
 
         return await self._answered(request, act)
 

@@ -232,7 +232,7 @@ class Workspace:
         return out
 
     # -- changing -----------------------------------------------------------------------------------------
-    def operate(self, key: str, op: str, args: dict[str, Any]) -> tuple[str, list[str]]:
+    def operate(self, key: object, op: str, args: dict[str, Any]) -> tuple[str, list[str]]:
         """One structure operation of llfsm.edit by name; (its summary, the files it changed)."""
         o = self.machine(key)
         plan = OPERATIONS.get(op)
@@ -246,7 +246,7 @@ class Workspace:
             raise WorkspaceError(f"{op}: a bad request ({type(e).__name__}: {e})") from None
         return self._apply(o, change)
 
-    def write(self, key: str, name: object, text: object, base: object = UNCHECKED) -> tuple[str, list[str]]:
+    def write(self, key: object, name: object, text: object, base: object = UNCHECKED) -> tuple[str, list[str]]:
         """Write one file's text; refused as a conflict (WriteConflict, with the disk's text) when
         the disk no longer holds the version the page edited from (`base`: a digest, or None
         for a file that did not exist)."""
