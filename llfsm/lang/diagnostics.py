@@ -98,6 +98,12 @@ RULES: dict[str, Rule] = {
         _r("LF071", W, "guard-comment", "A guard file's `# -> TARGET` names another target than its transition."),
         _r("LF072", W, "layout-unknown", "layout.yaml places a state or transition the machine does not have."),
         _r("LF073", E, "layout-invalid", "layout.yaml is not YAML of the documented form."),
+        _r(
+            "LF080",
+            E,
+            "untranslated-code",
+            "A line of clfsm C++ that `llfsm import` left for a person to write in Python.",
+        ),
         _r("LF101", W, "orphan-file", "A code file belongs to a state or transition that does not exist."),
         _r("LF102", W, "unreachable-state", "No path of transitions leads from the initial state to this state."),
         _r("LF103", W, "guard-always-false", "A guard is the constant False: the transition never fires."),
