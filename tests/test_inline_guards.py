@@ -162,3 +162,22 @@ def test_new_machine_with_states_is_a_chain(tmp_path: Path) -> None:
         assert llfsm("new", "machine", "x", "--dir", tmp_path, "--states", bad).status != 0
         assert not (tmp_path / "x.machine").exists()
     shutil.rmtree(m)
+
+
+def test_descriptions_show_guards_as_written_without_their_comment(tmp_path: Path) -> None:
+    from llfsm.diagram.description import of_machine, validate
+    from llfsm.ros.control import description
+    from llfsm.targets import load
+
+    m = counter(tmp_path)
+    (m / "machine.yaml").write_text(COUNTER.replace('      - {to: COUNT, guard: "True"}', "      - COUNT"))
+    (m / "State_COUNT_Transition_1.expr").write_text("# -> COUNT\nafter_ms(5)\n")
+    model = check_machine(m).machine
+    assert model is not None
+    drawn = validate(of_machine(model))  # the editor's and `llfsm graph`'s, from the directory
+    published = description(load(str(m)))  # what a run publishes on /llfsm/c/description
+    for desc in (drawn, published):
+        assert [(t["target"], t["guard"]) for t in desc["states"][0]["transitions"]] == [
+            ("END", "n >= 3"),
+            ("COUNT", "after_ms(5)"),
+        ]

@@ -153,6 +153,16 @@ class Plan:
         ts.ca.items.clear()
         ts.ca.items.update({j: comments[i] for j, i in enumerate(order) if i is not None and i in comments})
 
+    def reorder(self, source: str, order: list[int | None], new: Any = None, new_target: str = "") -> None:
+        """`source`'s transitions in a new order (`rearrange`), each guard file with its
+        transition (`place_guards`); `new`, the entry of the one new transition (None in
+        `order`), goes to `new_target`."""
+        entries = self.entries(source)
+        old = self.guards(source)
+        targets = [target_of(entries[i]) if i is not None else new_target for i in order]
+        self.rearrange(source, order, {order.index(None): new} if None in order else None)
+        self.place_guards(source, old, order, targets)
+
     def index(self, source: str, n: object) -> int:
         """Transition `n` of `source`, checked."""
         count = len(self.entries(source))

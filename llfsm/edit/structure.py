@@ -106,9 +106,7 @@ def state_remove(machine: Path, name: str) -> Change:
         keep = [i for i, e in enumerate(entries) if target_of(e) != name]
         if len(keep) != len(entries):
             into += len(entries) - len(keep)
-            old = p.guards(other)
-            p.rearrange(other, list(keep))
-            p.place_guards(other, old, list(keep), [target_of(entries[i]) for i in keep])
+            p.reorder(other, list(keep))
     for j in range(len(p.entries(name))):
         p.write(guard_file(name, j), None)
     for f in state_files(name):
@@ -140,11 +138,7 @@ def transition_add(
     k = n if priority is None else _priority(priority, n + 1, source)
     text = _guard_text(DEFAULT_GUARD if guard is None else guard)
     form = p.inline_form(source) if inline is None else bool(inline)
-    old = p.guards(source)
-    order: list[int | None] = [*range(k), None, *range(k, n)]
-    targets = [target_of(entries[i]) if i is not None else target for i in order]
-    p.rearrange(source, order, {k: p.new_entry(source, target, _inline_value(text), form)})
-    p.place_guards(source, old, order, targets)
+    p.reorder(source, [*range(k), None, *range(k, n)], p.new_entry(source, target, _inline_value(text), form), target)
     if not form:
         p.write(guard_file(source, k), header(target) + text + "\n")
     return p.change(f"added transition {k} of {source} to {target}" + (" (guard inline)" if form else ""))
@@ -159,9 +153,7 @@ def transition_move(machine: Path, source: str, index: int, to_priority: int) ->
     k = _priority(to_priority, len(entries), source)
     order: list[int | None] = [j for j in range(len(entries)) if j != i]
     order.insert(k, i)
-    old = p.guards(source)
-    p.rearrange(source, order)
-    p.place_guards(source, old, order, [target_of(entries[j]) for j in order if j is not None])
+    p.reorder(source, order)
     return p.change(f"moved transition {i} of {source} (to {target_of(entries[i])}) to priority {k}")
 
 
@@ -190,10 +182,7 @@ def transition_remove(machine: Path, source: str, index: int) -> Change:
     p.state(source, "source state")
     entries = p.entries(source)
     i = p.index(source, index)
-    order: list[int | None] = [j for j in range(len(entries)) if j != i]
-    old = p.guards(source)
-    p.rearrange(source, order)
-    p.place_guards(source, old, order, [target_of(entries[j]) for j in order if j is not None])
+    p.reorder(source, [j for j in range(len(entries)) if j != i])
     return p.change(f"removed transition {i} of {source} (to {target_of(entries[i])})")
 
 

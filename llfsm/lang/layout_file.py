@@ -27,7 +27,7 @@ import yaml
 from ..machinedir import LAYOUT_FILE
 from .diagnostics import Diagnostic, diag
 from .model import Loc, is_valid_name
-from .reader import YAML_LOADER, ReadResult, library_limit, structure_refusal
+from .reader import ReadResult, compose
 
 #: Coordinates beyond this are no drawing anyone made.
 MAX_COORD = 1e6
@@ -53,7 +53,7 @@ def placement(read: ReadResult) -> tuple[Placement | None, list[Diagnostic]]:
     return parse_layout(read.layout_text, str(read.path / LAYOUT_FILE))
 
 
-def parse_layout(text: str, where: str, loader: type = YAML_LOADER) -> tuple[Placement | None, list[Diagnostic]]:
+def parse_layout(text: str, where: str, loader: type | None = None) -> tuple[Placement | None, list[Diagnostic]]:
     """layout.yaml's text (already read with the reader's limits) as a Placement, or None with
     LF073 at the line where it stops being of the documented form."""
 
@@ -62,16 +62,7 @@ def parse_layout(text: str, where: str, loader: type = YAML_LOADER) -> tuple[Pla
 
     if not text.strip():
         return Placement(), []
-    try:
-        refusal = structure_refusal(text, loader)
-        root = yaml.compose(text, Loader=loader) if refusal is None else None
-    except yaml.MarkedYAMLError as e:
-        refusal = library_limit(text, e)
-        if refusal is None:
-            m = e.problem_mark or e.context_mark
-            return refuse(m.line + 1 if m else 1, m.column + 1 if m else 1, f"invalid YAML: {e.problem or e.context}")
-    except (yaml.YAMLError, RecursionError) as e:
-        return refuse(1, 1, f"invalid YAML: {type(e).__name__}")
+    root, refusal = compose(text, loader)
     if refusal is not None:
         return refuse(refusal[1], refusal[2], refusal[3].replace("machine.yaml", "layout.yaml"))
     out = Placement()

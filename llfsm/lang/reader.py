@@ -239,23 +239,9 @@ class _Reader:
 
     # -- yaml ----------------------------------------------------------------------------
     def yaml_tree(self, text: str) -> yaml.Node | None:
-        name = "machine.yaml"
-        try:
-            refusal = structure_refusal(text, YAML_LOADER)
-            node = yaml.compose(text, Loader=YAML_LOADER) if refusal is None else None
-        except yaml.MarkedYAMLError as e:
-            refusal = library_limit(text, e)
-            if refusal is None:
-                m = e.problem_mark or e.context_mark
-                line, col = (m.line + 1, m.column + 1) if m else (1, 1)
-                self.report("LF003", name, line, col, f"invalid YAML: {e.problem or e.context}")
-                return None
-        except (yaml.YAMLError, RecursionError) as e:
-            self.report("LF003", name, 1, 1, f"invalid YAML: {type(e).__name__}")
-            return None
+        node, refusal = compose(text)
         if refusal is not None:
-            self.report(refusal[0], name, refusal[1], refusal[2], refusal[3])
-            return None
+            self.report(refusal[0], "machine.yaml", refusal[1], refusal[2], refusal[3])
         return node
 
     def structure_error(self, node: yaml.Node | None, msg: str) -> None:
@@ -649,6 +635,25 @@ def _describe(stmt: ast.stmt) -> str:
 
 
 _Refusal = tuple[str, int, int, str]
+
+
+def compose(text: str, loader: type | None = None) -> tuple[yaml.Node | None, _Refusal | None]:
+    """The YAML tree of `text` (machine.yaml, layout.yaml), or None and why: anchors, aliases and
+    deep nesting refused before a tree is built, the library's own limits, or LF003 where the
+    text stops being YAML.  `loader`: YAML_LOADER, as it is when called."""
+    loader = loader or YAML_LOADER
+    try:
+        refusal = structure_refusal(text, loader)
+        return (yaml.compose(text, Loader=loader), None) if refusal is None else (None, refusal)
+    except yaml.MarkedYAMLError as e:
+        refusal = library_limit(text, e)
+        if refusal is not None:
+            return None, refusal
+        m = e.problem_mark or e.context_mark
+        line, col = (m.line + 1, m.column + 1) if m else (1, 1)
+        return None, ("LF003", line, col, f"invalid YAML: {e.problem or e.context}")
+    except (yaml.YAMLError, RecursionError) as e:
+        return None, ("LF003", 1, 1, f"invalid YAML: {type(e).__name__}")
 
 
 def structure_refusal(text: str, loader: type) -> _Refusal | None:
