@@ -311,3 +311,17 @@ def test_the_description_is_written_into_machine_yaml_with_its_comments_kept(fol
     assert "description" not in yaml_file.read_text()
     ws.undo()
     assert "Twice a second." in yaml_file.read_text()
+
+
+def test_a_machine_yaml_that_does_not_read_keeps_the_last_diagram_until_it_is_fixed(folder: Path) -> None:
+    ws = Workspace([folder])
+    good = ws.full("ros2_ping_pong")
+    yaml_file = folder / "ros2_ping_pong.machine" / "machine.yaml"
+    text = yaml_file.read_text()
+    ws.write("ros2_ping_pong", "machine.yaml", "states: [\n")
+    broken = ws.full("ros2_ping_pong")
+    assert broken["stale"] and broken["svg"] == good["svg"]
+    assert any(d["file"] == "machine.yaml" and d["severity"] == "error" for d in broken["diagnostics"])
+    ws.write("ros2_ping_pong", "machine.yaml", text)
+    fixed = ws.full("ros2_ping_pong")
+    assert not fixed["stale"] and fixed["diagnostics"] == []
