@@ -37,7 +37,7 @@ def main() -> None:
         if options is None:
             from ._click import main as click_main
         else:
-            from ._base import run_guarded
+            from ._exits import run_guarded
             from ._run import run
     except KeyboardInterrupt:  # while importing: as llfsm.__main__ does
         sys.exit(130)

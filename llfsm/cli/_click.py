@@ -23,8 +23,8 @@ from . import (  # noqa: F401  (each registers its commands)
     verify,
     view,
 )
-from ._base import EXIT_USAGE, run_guarded
 from ._common import cli
+from ._exits import EXIT_USAGE, run_guarded
 
 __all__ = ["cli", "main"]
 

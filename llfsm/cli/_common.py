@@ -14,7 +14,7 @@ from pathlib import Path
 import click
 
 from .. import __version__
-from ._base import (  # noqa: F401  (shared with the click-free fast path of `llfsm run`)
+from ._exits import (  # noqa: F401  (shared with the click-free fast path of `llfsm run`)
     EXIT_ERRORS,
     EXIT_OK,
     EXIT_USAGE,
@@ -90,7 +90,7 @@ class _Group(click.Group):
     def invoke(self, ctx: click.Context) -> object:
         try:
             return super().invoke(ctx)
-        except OSError as e:  # a closed pipe, a full disk under stdout (as the fast path: _base)
+        except OSError as e:  # a closed pipe, a full disk under stdout (as the fast path: _exits)
             output_errors(e)
             raise
 
