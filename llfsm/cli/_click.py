@@ -23,8 +23,8 @@ from . import (  # noqa: F401  (each registers its commands)
     verify,
     view,
 )
-from ._common import cli
 from ._exits import EXIT_USAGE, run_guarded
+from ._group import cli
 
 __all__ = ["cli", "main"]
 

@@ -8,7 +8,7 @@ import sys
 import click
 
 from ..ros2cli import CliError
-from ._common import cli
+from ._group import cli
 from ._ros2 import verb
 
 

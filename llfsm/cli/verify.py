@@ -7,7 +7,7 @@ import sys
 import click
 
 from .. import __version__
-from ._common import DURATION, cli, fail, progress, write_output
+from ._group import DURATION, cli, fail, progress, write_output
 
 
 @cli.command()
