@@ -99,7 +99,7 @@ def internal_error(exc: Exception) -> NoReturn:
 
 def run_guarded(command: Callable[[], object]) -> None:
     """Run a command so that whatever escapes it ends in a message and an exit status, never a
-    traceback: the fast path of `llfsm run`, and every click command (llfsm.cli._click.main),
+    traceback: the fast path of `llfsm run`, and every click command (llfsm.cli._commands.main),
     so that both say the same."""
     try:
         try:

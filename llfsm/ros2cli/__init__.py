@@ -30,7 +30,7 @@ Adding a verb (as `service type` was): write `def type_(service: str, *, timeout
 and returning the text `ros2` prints (or, for a verb that streams, writing to `out`); check
 the user's input (names, TYPE, VALUES) before the domain is joined.  Then add its click
 command to llfsm/cli/service.py (a new group: a new llfsm/cli/ module, registered in
-llfsm/cli/_click.py), calling the function and echoing its text; docs/cli.md lists the verbs.
+llfsm/cli/_commands.py), calling the function and echoing its text; docs/cli.md lists the verbs.
 
 Errors the user causes are `CliError(message, status)`: the command prints the one line and
 exits with the status (2 for bad input, NOT_FOUND (1) for nothing found).
