@@ -77,8 +77,8 @@ def verify(
 
     from ..lang.diagnostics import render as render_diagnostics
     from ..runtime.clock import parse_duration
-    from ..verify.check import verify as run_verification
     from ..verify.explorer import Options
+    from ..verify.judge import verify as run_verification
     from ..verify.load import VERIFY_SUFFIX, PropertySource, VerifyError, load_arrangement, read_verify_file
     from ..verify.props import KINDS
     from ..verify.report import render
