@@ -15,7 +15,8 @@ import time
 
 from .clock import Clock, SimClock, WallClock
 from .context import FOREVER, RunContext, activate
-from .errors import ErrorReport, RunStopped, is_generated, passes_through, report_for, signal_name
+from .errors import ErrorReport, RunStopped, passes_through, report_for, signal_name
+from .generated import is_generated
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
 
