@@ -1,5 +1,6 @@
-"""The click side of the `llfsm` command: every verb registered on the group, and the entry
-point that turns what escapes the commands into a message and a status, not a traceback."""
+"""Every command of `llfsm` registered on the click group (llfsm.cli._group), and click's entry
+point, which turns what escapes the commands into a message and a status, not a traceback.
+A new verb group is imported here."""
 
 from __future__ import annotations
 

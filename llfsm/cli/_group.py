@@ -1,4 +1,6 @@
-"""What every command shares: the group, `fail`, durations, a closed pipe.
+"""The `llfsm` click group, and what its commands share on click's side: the DURATION parameter
+type, `write_output`, `progress`, and the names of llfsm.cli._exits (exit statuses, `fail`) that
+the click-free fast path of `llfsm run` shares with them.
 
 Each command imports what it needs when it runs: `llfsm run` must start fast and never load
 the compiler's libraries when its cached modules are fresh.  Every failure the user can cause
