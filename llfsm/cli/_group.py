@@ -9,7 +9,6 @@ ends in a one-line-per-problem message and an exit status (1 or 2), never a trac
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
@@ -65,13 +64,9 @@ def progress(text: str) -> None:
     try:
         click.echo(text, nl=False, err=True)
     except (BrokenPipeError, ValueError):
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        try:
-            os.dup2(devnull, sys.stderr.fileno())
-        except (OSError, ValueError):
-            pass
-        finally:
-            os.close(devnull)
+        from ..progress import abandon  # deferred: start-up (only once stderr's reader has gone)
+
+        abandon(sys.stderr)
 
 
 def _existing(paths: tuple[str, ...]) -> list[Path]:
