@@ -9,9 +9,7 @@ name):
 - `node`: `list`, `info`.
 - `service`: `list`, `type`, `find`, `call`.
 - `action`: `list`, `info`, `send_goal` (docs/actions.md).
-- `interface`: `show`, `list`, `package`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to
-  llfsm's classes, with a "did you mean" for near misses (llfsm/msgs/_lookup.py, which the web
-  view reads TYPEs through too), as the verbs' usage errors.  Offline.
+- `interface`: `show`, `list`, `package`.  Offline.
 
 What the groups share:
 
@@ -21,6 +19,11 @@ What the groups share:
   a hidden node of llfsm's bus for the verbs that talk.  cyclonedds is optional and heavy:
   only here and in the verbs it is imported, inside functions (`llfsm --help` never loads it).
 - `arguments`: topic and service names, VALUES (YAML as `ros2 topic pub` takes it).
+- `lookup`: TYPE strings (`pkg/msg/Name`, `pkg/Name`) to llfsm's classes, as the verbs' usage
+  errors, and the working directory on the interface search path.
+
+The groups never import each other (the `verb-groups` contract of pyproject.toml): what two of
+them need is one of these.
 
 The close names the graph has, for the lines that say something was not found, are
 llfsm.suggest's.
