@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
-from helpers import write_machine
+from helpers import REPO, write_machine
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc to find the watchdog")
 
@@ -222,3 +222,42 @@ def test_a_second_ctrl_c_in_python_code_is_still_handled_by_the_run_itself(tmp_p
         "    while True:",
     ], err
     assert _gone_soon(watchdog), "the watchdog outlived the run"
+
+
+def test_a_run_and_its_watchdog_write_nothing_into_the_installed_package(tmp_path: Path) -> None:
+    """With PYTHONDONTWRITEBYTECODE=1 (or a read-only install), `llfsm run` leaves the package as
+    it found it: so does its watchdog, whose interpreter (`python -I`) does not read that
+    variable and would otherwise cache its bytecode beside the installed runtime."""
+    import shutil
+
+    root = tmp_path / "site"
+    shutil.copytree(REPO / "llfsm", root / "llfsm", ignore=shutil.ignore_patterns("__pycache__"))
+    before = {p for p in (root / "llfsm").rglob("*")}
+    m = write_machine(
+        tmp_path,
+        "waiter",
+        {"A": [("END", "os.path.exists('stop')")], "END": None},
+        {"A_OnEntry": "print('go', flush=True)"},
+        includes="import os\n",
+    )
+    env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONDONTWRITEBYTECODE="1", PYTHONPATH=str(root))
+    p = subprocess.Popen(
+        [PY, "-m", "llfsm", "run", str(m)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+    )
+    try:
+        _wait_for_go(p)
+        watchdog = _watchdog_of(p)
+        assert watchdog, "no watchdog while machines run"
+        (tmp_path / "stop").write_text("")
+        _out, err = _finish(p, timeout=20)
+    finally:
+        _kill_tree(p.pid)
+    assert p.returncode == 0, err
+    assert _gone_soon(watchdog), "the watchdog outlived the run"
+    new = sorted(str(p.relative_to(root)) for p in set((root / "llfsm").rglob("*")) - before)
+    assert not new, f"written into the package: {new}"
