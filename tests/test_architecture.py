@@ -290,6 +290,31 @@ def test_no_import_cycle_hidden_behind_a_deferred_import() -> None:
     )
 
 
+def test_the_runtime_reads_bottom_up_even_for_type_checkers() -> None:
+    """runtime/ is what every generated module imports: its modules import one another in one
+    direction only, counting every import (those under TYPE_CHECKING, for annotations, and those
+    deferred into functions too).  What a lower module knows of a higher one it knows through
+    runtime/protocols.py (the arrangement's port, the machine's port)."""
+    paths = {module_name(p): p for p in modules() if module_name(p).startswith("llfsm.runtime.")}
+    known = set(paths)
+    graph = {
+        name: {
+            m
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+            if isinstance(node, ast.Import | ast.ImportFrom)
+            for m in _resolve(name, path.name == "__init__.py", node, known)
+        }
+        - {name}
+        for name, path in paths.items()
+    }
+    # trace.py imports machine.py for its annotations only: the walk must see such imports
+    assert "llfsm.runtime.machine" in graph["llfsm.runtime.trace"]
+    found = cycles(graph)
+    assert not found, "runtime modules that import each other, annotations counted:\n" + "\n".join(
+        " <-> ".join(c) for c in found
+    )
+
+
 #: What each contract of [tool.importlinter] governs: the package (or container) whose every module
 #: and subpackage the contract names (`layers`, `modules`, `forbidden_modules`), but for those
 #: it leaves out on purpose, each with why.  A new contract needs its entry here.
