@@ -102,8 +102,12 @@ def python_of(checkout: Path) -> str:
 
 
 def env_of(checkout: Path, cache: Path) -> dict[str, str]:
+    """The side's environment: its llfsm first on the path.  PYTHONSAFEPATH: `python -c` and
+    `python -m` would otherwise put the working directory first, and run from this checkout's
+    root (as the docstring says) the other side imported this checkout's llfsm too."""
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONDONTWRITEBYTECODE")}
     env["PYTHONPATH"] = str(checkout)
+    env["PYTHONSAFEPATH"] = "1"
     env["LLFSM_CACHE_DIR"] = str(cache)
     return env
 
