@@ -20,9 +20,9 @@ verify (llfsm.verify) read it.  They agree on:
   OnSuspend/OnResume as `hook_function(...)`, every one named with `FUNCTION_PREFIX`; the
   class lists them by state number in ENTER and STEADY;
 - **ringlet numbers**, for whoever stores which ringlet a machine runs next as a number (verify's
-  configurations): state s's entry ringlet is `entry_number(s)` = 2s, its steady ringlet
-  `steady_number(s)` = 2s + 1, and the scheduler's gate `gate_number(n)` = 2n for n states
-  (`numbered_ringlets` lists them in that order).
+  configurations): state s's entry ringlet is `entry_number(s)` = 2s, its steady ringlet 2s + 1,
+  and the scheduler's gate `gate_number(n)` = 2n for n states (`numbered_ringlets` lists them
+  in that order).
 
 docs/architecture.md ("The generated module") says how to change any of it.  Light, as the
 rest of the runtime: what it reads is read only when an error or a log is reported.
@@ -210,11 +210,6 @@ def entry_number(state: int) -> int:
     return 2 * state
 
 
-def steady_number(state: int) -> int:
-    """The number of state `state`'s steady ringlet (STEADY[state])."""
-    return 2 * state + 1
-
-
 def gate_number(states: int) -> int:
     """The number of the scheduler's gate, for a machine of `states` states."""
     return 2 * states
@@ -223,7 +218,8 @@ def gate_number(states: int) -> int:
 def numbered_ringlets(
     enter: tuple[Callable[..., Any], ...], steady: tuple[Callable[..., Any], ...], gate: Callable[..., Any]
 ) -> list[Callable[..., Any]]:
-    """A class's ringlets (its ENTER and STEADY) and the gate, each at its number."""
+    """A class's ringlets (its ENTER and STEADY) and the gate, each at its number: ENTER[s] at
+    `entry_number(s)`, STEADY[s] after it, the gate last, at `gate_number`."""
     out = [f for pair in zip(enter, steady, strict=True) for f in pair]
     out.append(gate)
     return out
