@@ -22,13 +22,13 @@ STUCK_LINE = "sum(range(10**14))"  # hours of work inside one C call that never 
 SIGNALS = {"SIGINT": signal.SIGINT, "SIGTERM": signal.SIGTERM}
 
 
-def _spawn(args: list[str], cwd: Path) -> subprocess.Popen[str]:
+def _spawn(args: list[str], cwd: Path, **env: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
         [PY, "-m", "llfsm", *args],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env=dict(os.environ, PYTHONUNBUFFERED="1"),
+        env=dict(os.environ, PYTHONUNBUFFERED="1", **env),
         cwd=cwd,
     )
 
@@ -155,7 +155,9 @@ def test_a_single_signal_ends_a_section_stuck_in_c_soon_after_the_grace(tmp_path
     assert watchdog and _gone_soon(watchdog), "the watchdog outlived the run"
 
 
-def test_a_normal_run_has_a_silent_watchdog_that_ends_with_it(tmp_path: Path) -> None:
+def _run_waiter(tmp_path: Path, **env: str) -> tuple[int | None, str, str, list[int]]:
+    """A run of a machine that waits for a file `stop`, with its watchdog found while it runs,
+    then stopped: (exit status, stdout, stderr, the watchdog's process)."""
     m = write_machine(
         tmp_path,
         "waiter",
@@ -163,7 +165,7 @@ def test_a_normal_run_has_a_silent_watchdog_that_ends_with_it(tmp_path: Path) ->
         {"A_OnEntry": "print('go', flush=True)", "END_OnEntry": "print('done')"},
         includes="import os\n",
     )
-    p = _spawn(["run", str(m)], cwd=tmp_path)
+    p = _spawn(["run", str(m)], cwd=tmp_path, **env)
     try:
         _wait_for_go(p)
         watchdog = _watchdog_of(p)
@@ -172,7 +174,12 @@ def test_a_normal_run_has_a_silent_watchdog_that_ends_with_it(tmp_path: Path) ->
         out, err = _finish(p, timeout=20)
     finally:
         _kill_tree(p.pid)
-    assert p.returncode == 0, err
+    return p.returncode, out, err, watchdog
+
+
+def test_a_normal_run_has_a_silent_watchdog_that_ends_with_it(tmp_path: Path) -> None:
+    status, out, err, watchdog = _run_waiter(tmp_path)
+    assert status == 0, err
     assert (out, err) == ("done\n", "")
     assert _gone_soon(watchdog), "the watchdog outlived the run"
 
@@ -232,32 +239,9 @@ def test_a_run_and_its_watchdog_write_nothing_into_the_installed_package(tmp_pat
 
     root = tmp_path / "site"
     shutil.copytree(REPO / "llfsm", root / "llfsm", ignore=shutil.ignore_patterns("__pycache__"))
-    before = {p for p in (root / "llfsm").rglob("*")}
-    m = write_machine(
-        tmp_path,
-        "waiter",
-        {"A": [("END", "os.path.exists('stop')")], "END": None},
-        {"A_OnEntry": "print('go', flush=True)"},
-        includes="import os\n",
-    )
-    env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONDONTWRITEBYTECODE="1", PYTHONPATH=str(root))
-    p = subprocess.Popen(
-        [PY, "-m", "llfsm", "run", str(m)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-        cwd=tmp_path,
-    )
-    try:
-        _wait_for_go(p)
-        watchdog = _watchdog_of(p)
-        assert watchdog, "no watchdog while machines run"
-        (tmp_path / "stop").write_text("")
-        _out, err = _finish(p, timeout=20)
-    finally:
-        _kill_tree(p.pid)
-    assert p.returncode == 0, err
+    before = set((root / "llfsm").rglob("*"))
+    status, _out, err, watchdog = _run_waiter(tmp_path, PYTHONDONTWRITEBYTECODE="1", PYTHONPATH=str(root))
+    assert status == 0, err
     assert _gone_soon(watchdog), "the watchdog outlived the run"
     new = sorted(str(p.relative_to(root)) for p in set((root / "llfsm").rglob("*")) - before)
     assert not new, f"written into the package: {new}"
