@@ -8,8 +8,8 @@ from pathlib import Path
 
 import click
 
-from ._base import echo
-from ._common import cli, duration_option, fail, web_option
+from ._exits import echo, fail
+from ._group import cli, duration_option, web_option
 
 
 @cli.command()

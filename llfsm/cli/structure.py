@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from ._common import EXIT_ERRORS, cli, fail
+from ._group import EXIT_ERRORS, cli, fail
 
 if TYPE_CHECKING:
     from ..edit import Change

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ._base import echo
-from ._common import cli, duration_option, web_option
+from ._exits import echo
+from ._group import cli, duration_option, web_option
 
 
 @cli.command()
