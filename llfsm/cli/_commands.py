@@ -21,6 +21,7 @@ from . import (  # noqa: F401  (each registers its commands)
     param,
     run,
     service,
+    structure,
     topic,
     verify,
     view,
