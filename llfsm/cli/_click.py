@@ -14,6 +14,7 @@ from . import (  # noqa: F401  (each registers its commands)
     check,
     graph,
     interface,
+    launch,
     new,
     node,
     param,
