@@ -30,7 +30,7 @@ import selectors
 import signal
 import subprocess
 import time
-from typing import Any
+from typing import IO, Any
 
 from .logs import LaunchLog, _Sink
 from .plan import ProcessSpec
@@ -77,7 +77,8 @@ class Supervisor:
         self.log = log
         self.children = [_Child(s, log.routes(s)) for s in specs]
         self.groups: dict[int, _Group] = {}
-        self.pipes: dict[int, tuple[_Child, bytearray, list[_Sink]]] = {}
+        #: fd -> (its stream, whose it is, the partial line, where lines go)
+        self.pipes: dict[int, tuple[IO[bytes], _Child, bytearray, list[_Sink]]] = {}
         self.selector = selectors.DefaultSelector()
         self.failed: set[str] = set()
         self.stopping = False
@@ -89,6 +90,7 @@ class Supervisor:
     def run(self) -> int:
         """Start every process, supervise them until the launch ends; the exit status."""
         previous = self._install_signals()
+        _become_subreaper()
         try:
             for child in self.children:
                 self._start(child)
@@ -126,7 +128,7 @@ class Supervisor:
         for key, _ in self.selector.select(min(timeout, 0.5)):
             if key.fd == self._wake_r:
                 self._signals()
-            else:
+            elif key.fd in self.pipes:  # not closed meanwhile (a signal's stop reaps and drains)
                 self._drain(key.fd)
 
     def _signals(self) -> None:
@@ -191,7 +193,7 @@ class Supervisor:
             assert stream is not None
             fd = stream.fileno()
             os.set_blocking(fd, False)
-            self.pipes[fd] = (child, bytearray(), sinks)
+            self.pipes[fd] = (stream, child, bytearray(), sinks)
             self.selector.register(fd, selectors.EVENT_READ)
         self.log.message("INFO", spec.label, f"process started with pid [{p.pid}]")
         if spec.node == "teleop" and not spec.prefixed and child.starts == 1:
@@ -200,7 +202,7 @@ class Supervisor:
     # -- output ------------------------------------------------------------------------------------
     def _drain(self, fd: int, final: bool = False) -> None:
         """Read what the pipe holds now; at its end (or `final`), write the last partial line."""
-        child, buf, sinks = self.pipes[fd]
+        stream, child, buf, sinks = self.pipes[fd]
         while True:
             try:
                 data = os.read(fd, 65536)
@@ -218,7 +220,7 @@ class Supervisor:
                     buf.clear()
                 self.selector.unregister(fd)
                 del self.pipes[fd]
-                os.close(fd)
+                stream.close()
             return
 
     def _lines(self, child: _Child, buf: bytearray, sinks: list[_Sink]) -> None:
@@ -246,7 +248,7 @@ class Supervisor:
             if p is None or p.poll() is None:
                 continue
             for stream in (p.stdout, p.stderr):  # what it printed before it ended comes first
-                if stream is not None and stream.fileno() in self.pipes:
+                if stream is not None and not stream.closed:
                     self._drain(stream.fileno())
             child.popen = None
             self._exited(child, p)
@@ -287,8 +289,8 @@ class Supervisor:
             g.term_at = now + spec.sigterm_timeout
             g.kill_at = g.term_at + spec.sigkill_timeout
             if not quiet or g.child.popen is None:
-                label = spec.label if g.child.popen is not None else f"what {spec.label} started"
-                self.log.message("INFO", spec.label, f"sending signal 'SIGINT' to process[{label}]")
+                who = f"process[{spec.label}]" if g.child.popen is not None else f"what {spec.label} started"
+                self.log.message("INFO", spec.label, f"sending signal 'SIGINT' to {who}")
             self._signal(g, signal.SIGINT)
 
     def _timers(self) -> None:
@@ -301,25 +303,27 @@ class Supervisor:
         self._prune_groups()
         for g in list(self.groups.values()):
             spec = g.child.spec
+            # its own process, or what it started when it has ended itself
+            who = f"process[{spec.label}]" if g.child.popen is not None else f"what {spec.label} started"
             if g.sent == signal.SIGINT and now >= g.term_at:
                 self.log.message(
                     "ERROR",
                     spec.label,
-                    f"process[{spec.label}] failed to terminate '{spec.sigterm_timeout}' seconds after "
-                    "receiving 'SIGINT', escalating to 'SIGTERM'",
+                    f"{who} failed to terminate '{spec.sigterm_timeout}' seconds after receiving 'SIGINT', "
+                    "escalating to 'SIGTERM'",
                 )
                 self._signal(g, signal.SIGTERM)
             elif g.sent == signal.SIGTERM and now >= g.kill_at:
                 self.log.message(
                     "ERROR",
                     spec.label,
-                    f"process[{spec.label}] failed to terminate '{spec.sigterm_timeout + spec.sigkill_timeout}' "
-                    "seconds after receiving 'SIGTERM', escalating to 'SIGKILL'",
+                    f"{who} failed to terminate '{spec.sigterm_timeout + spec.sigkill_timeout}' seconds after "
+                    "receiving 'SIGTERM', escalating to 'SIGKILL'",
                 )
                 self._signal(g, signal.SIGKILL)
                 g.given_up_at = now + KILL_WAIT
             elif g.sent == signal.SIGKILL and now >= g.given_up_at:
-                self.log.message("ERROR", spec.label, f"process group {g.pgid} is still there after SIGKILL")
+                self.log.message("ERROR", spec.label, f"{who} is still there after SIGKILL (process group {g.pgid})")
                 del self.groups[g.pgid]
 
     def _signal(self, g: _Group, sig: int) -> None:
@@ -336,13 +340,38 @@ class Supervisor:
         it holds a process (POSIX), and a leader is reaped here before its group is checked, so
         a group that still answers is ours."""
         self._reap()
-        for pgid in list(self.groups):
+        for pgid, g in list(self.groups.items()):
+            if g.child.popen is None or g.child.popen.pid != pgid:
+                _reap_orphans(pgid)
             try:
                 os.killpg(pgid, 0)
             except ProcessLookupError:
                 del self.groups[pgid]
             except PermissionError:
                 pass  # a process of the group changed its user: it is still there
+
+
+def _become_subreaper() -> None:
+    """What the launch's processes leave behind when they end (a shell's background job) becomes
+    the launcher's child rather than init's (Linux's PR_SET_CHILD_SUBREAPER), so it is reaped as
+    soon as it ends and its group is seen empty at once; elsewhere, init reaps it in its time."""
+    try:
+        import ctypes  # deferred: start-up (only a launch that starts processes needs prctl)
+
+        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)  # PR_SET_CHILD_SUBREAPER
+    except (OSError, AttributeError):
+        pass
+
+
+def _reap_orphans(pgid: int) -> None:
+    """Reap the ended processes of a group whose leader has been reaped (our orphans, as a
+    subreaper); never a leader, which its Popen reaps."""
+    while True:
+        try:
+            if os.waitid(os.P_PGID, pgid, os.WEXITED | os.WNOHANG) is None:
+                return
+        except ChildProcessError:
+            return
 
 
 def _ignore(signum: int, frame: object) -> None:
