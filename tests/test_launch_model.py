@@ -6,12 +6,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from helpers import llfsm
 
 from llfsm.launch import LaunchError, plan
 from llfsm.launch.evaluate import ExpressionError, evaluate
 from llfsm.launch.substitutions import Context, SubstitutionError, parse, perform
-
-from helpers import llfsm
 
 
 def write(path: Path, text: str) -> Path:
@@ -270,7 +269,8 @@ def test_yaml_quoted_parameter_values_stay_strings(tmp_path: Path) -> None:
         ),
         (
             "child.launch.xml",
-            "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node'>\n    <arg name='a' value='b'/>\n  </node>\n</launch>",
+            "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node'>\n    <arg name='a' value='b'/>\n"
+            "  </node>\n</launch>",
             3,
             "<node> cannot hold <arg> (it holds env, param, remap)",
         ),

@@ -86,7 +86,7 @@ def test_output_is_prefixed_and_routed_by_output(tmp_path: Path) -> None:
     assert sorted(out.splitlines()) == ["[screen-1] to-out"]
     assert "[screen-1] to-err\n" in err and "[logged-2] log-err\n" in err
     assert "log-out" not in out + err and "own-out" not in out + err and "own-err" not in out + err
-    folder = next(l for l in err.splitlines() if "All log files can be found below" in l).rsplit(" ", 1)[1]
+    folder = next(x for x in err.splitlines() if "All log files can be found below" in x).rsplit(" ", 1)[1]
     assert Path(folder).parent == tmp_path / "logs" and (tmp_path / "logs" / "latest").resolve() == Path(folder)
     launch_log = (Path(folder) / "launch.log").read_text()
     assert re.search(r"^\d+\.\d{7} \[logged-2\] log-out$", launch_log, re.M)
@@ -148,7 +148,8 @@ def test_respawn_restarts_after_its_delay_up_to_its_retries(tmp_path: Path) -> N
 def test_respawn_goes_on_until_ctrl_c(tmp_path: Path) -> None:
     f = write(
         tmp_path / "forever.launch.yaml",
-        "launch:\n  - executable:\n      cmd: 'true'\n      name: tick\n      respawn: 'true'\n      respawn_delay: '0.1'\n",
+        "launch:\n  - executable:\n      cmd: 'true'\n      name: tick\n"
+        "      respawn: 'true'\n      respawn_delay: '0.1'\n",
     )
     run = Launch(f, tmp_path / "logs")
     run.wait_for(r"\[tick-1\]: process started", count=4)
@@ -180,7 +181,8 @@ def test_on_exit_shutdown_stops_the_others(tmp_path: Path) -> None:
 def test_a_process_that_exits_leaves_the_others_running(tmp_path: Path) -> None:
     f = write(
         tmp_path / "one.launch.xml",
-        "<launch>\n  <executable cmd=\"sh -c 'exit 4'\" name=\"quits\"/>\n  <executable cmd='sleep 60' name='stays'/>\n</launch>\n",
+        '<launch>\n  <executable cmd="sh -c \'exit 4\'" name="quits"/>\n'
+        "  <executable cmd='sleep 60' name='stays'/>\n</launch>\n",
     )
     run = Launch(f, tmp_path / "logs")
     run.wait_for(r"\[quits-1\]: process has died \[pid \d+, exit code 4")
@@ -216,8 +218,8 @@ def test_ctrl_c_stops_everything_escalating_for_what_ignores_it(tmp_path: Path) 
     # a shell's background jobs ignore SIGINT: the SIGTERM to its group ends them once the shell has gone
     assert "[ERROR] [parent-2]: what parent-2 started failed to terminate '0.5' seconds after receiving 'SIGINT'" in err
     assert (
-        "[ERROR] [deaf-3]: process[deaf-3] failed to terminate '0.5' seconds after receiving 'SIGINT', escalating to 'SIGTERM'"
-        in err
+        "[ERROR] [deaf-3]: process[deaf-3] failed to terminate '0.5' seconds after receiving 'SIGINT', "
+        "escalating to 'SIGTERM'" in err
     )
     assert "escalating to 'SIGKILL'" in err
     assert run.leftovers() == []
@@ -226,7 +228,8 @@ def test_ctrl_c_stops_everything_escalating_for_what_ignores_it(tmp_path: Path) 
 def test_a_second_ctrl_c_does_not_wait_for_the_grace(tmp_path: Path) -> None:
     f = write(
         tmp_path / "grace.launch.xml",
-        "<launch>\n  <executable cmd=\"sh -c 'trap &quot;&quot; INT; sleep 60'\" name='slow' sigterm_timeout='60'/>\n</launch>\n",
+        "<launch>\n  <executable cmd=\"sh -c 'trap &quot;&quot; INT; sleep 60'\" name='slow' sigterm_timeout='60'/>\n"
+        "</launch>\n",
     )
     run = Launch(f, tmp_path / "logs")
     run.wait_for(r"\[slow-1\]: process started")
@@ -242,9 +245,10 @@ def test_a_second_ctrl_c_does_not_wait_for_the_grace(tmp_path: Path) -> None:
 def test_the_launch_ends_when_its_processes_do(tmp_path: Path) -> None:
     f = write(
         tmp_path / "end.launch.xml",
-        "<launch>\n  <executable cmd='true' name='a'/>\n  <executable cmd=\"sh -c 'sleep 0.2'\" name='b'/>\n</launch>\n",
+        "<launch>\n  <executable cmd='true' name='a'/>\n  <executable cmd=\"sh -c 'sleep 0.2'\" name='b'/>\n"
+        "</launch>\n",
     )
-    status, out, err = Launch(f, tmp_path / "logs").finish()
+    status, _, err = Launch(f, tmp_path / "logs").finish()
     assert status == 0, err
     assert re.search(r"\[INFO\] \[a-1\]: process has finished cleanly \[pid \d+\]", err)
     assert re.search(r"\[INFO\] \[b-2\]: process has finished cleanly \[pid \d+\]", err)
