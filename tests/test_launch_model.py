@@ -3,10 +3,11 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
-from helpers import llfsm
+from helpers import MACHINES, llfsm
 
 from llfsm.launch import LaunchError, plan
 from llfsm.launch.evaluate import ExpressionError, evaluate
@@ -227,6 +228,20 @@ def test_xml_and_yaml_read_to_the_same_model_of_every_tag(tmp_path: Path) -> Non
     assert sim.env["ROS_DOMAIN_ID"] == "7" and sim.env["EXTRA"] == "x" and "ROS_LOCALHOST_ONLY" not in sim.env
     assert (sim.output, sim.respawn, sim.respawn_delay) == ("screen", True, 1.5)
     assert once.argv == ["true"] and once.shutdown_on_exit
+
+
+@pytest.mark.parametrize("name", ["turtle_follower", "ros2_wall_turtle_bot"])
+def test_the_shipped_launch_files_start_the_same_processes_in_xml_and_yaml(name: str) -> None:
+    env = {"PATH": os.environ["PATH"]}
+    xml, yaml = (plan(str(MACHINES / f"{name}.launch.{ext}"), {}, env) for ext in ("xml", "yaml"))
+    assert [(p.label, p.argv, p.output) for p in xml] == [(p.label, p.argv, p.output) for p in yaml]
+    assert xml[-1].argv[3:] == ["run", "--transport", "dds", str(MACHINES / f"{name}.machine")]
+
+
+def test_the_wall_bot_launch_file_opens_turtlesims_window_when_asked() -> None:
+    for ext in ("xml", "yaml"):
+        sim = plan(str(MACHINES / f"ros2_wall_turtle_bot.launch.{ext}"), {"view": "true"}, {})[0]
+        assert sim.argv[3:] == ["run", "--transport", "dds", "--node", "turtlesim", "--view"]
 
 
 def test_yaml_quoted_parameter_values_stay_strings(tmp_path: Path) -> None:
