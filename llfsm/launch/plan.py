@@ -21,8 +21,8 @@ import shlex
 import shutil
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from types import ModuleType
 
-from ..ros.names import InvalidNameError, Remap, normalise_namespace, validate_node_name
 from . import executables, frontend, model
 from .model import Where
 from .substitutions import Context, SubstitutionError, Text, literal, perform, show
@@ -204,10 +204,20 @@ def _namespace(previous: str | None, pushed: str, where: Where) -> str:
     the previous one, an absolute one replaces it."""
     if previous and not pushed.startswith("/"):
         pushed = previous.rstrip("/") + "/" + pushed
+    names = _ros_names()
     try:
-        return normalise_namespace(pushed or "/")
-    except InvalidNameError as e:
+        return names.normalise_namespace(pushed or "/")
+    except names.InvalidNameError as e:
         raise LaunchError(f"{where}: {e}") from None
+
+
+def _ros_names() -> ModuleType:
+    """ROS 2's name rules, as `llfsm run` will apply them."""
+    # deferred: start-up (llfsm.ros loads the whole rclpy look-alike; most launch files name no
+    # node, namespace or remap, and every tenth of a second here delays every process)
+    from ..ros import names
+
+    return names
 
 
 def _perform(text: Text, ctx: Context, where: Where) -> str:
@@ -338,9 +348,10 @@ def _node_argv(
         # machine's own and /llfsm/M), which one name would make clash: there, `name` only
         # names the process (docs/launch.md)
         node_name = _perform(e.name, ctx, where)
+        names = _ros_names()
         try:
-            validate_node_name(node_name)
-        except InvalidNameError as err:
+            names.validate_node_name(node_name)
+        except names.InvalidNameError as err:
             raise LaunchError(f"{where}: name: {err}") from None
         ros += ["--remap", f"__node:={node_name}"]
     ns = _perform(e.namespace, ctx, where) if e.namespace is not None else None
@@ -351,9 +362,10 @@ def _node_argv(
         ros += _param_args(p, "", ctx)
     for r in e.remaps:
         rule = f"{_perform(r.from_, ctx, r.where)}:={_perform(r.to, ctx, r.where)}"
+        names = _ros_names()
         try:
-            Remap.parse(rule)
-        except InvalidNameError as err:
+            names.Remap.parse(rule)
+        except names.InvalidNameError as err:
             raise LaunchError(f"{r.where}: {err}") from None
         ros += ["--remap", rule]
     if not what.llfsm:  # a command on PATH: ROS 2 arguments as launch_ros passes them
