@@ -67,8 +67,8 @@ def test_the_follower_of_the_course_launch_file_moves_after_the_leader(netns: Ne
     assert status == 0, err
     assert "[turtle_follower-3] " in out + err  # its lines, prefixed
     assert (
-        "[WARNING] [turtle_teleop_key-2]: a launched process cannot read this terminal (as under ros2 launch): to drive "
-        "turtle1 with the arrow keys, run `llfsm run --transport dds --node teleop` in a second terminal"
+        "[WARNING] [turtle_teleop_key-2]: a launched process cannot read this terminal (as under ros2 launch): "
+        "to drive turtle1 with the arrow keys, run `llfsm run --transport dds --node teleop` in a second terminal"
     ) in err
     assert re.search(r"\[INFO\] \[turtle_follower-3\]: process has finished cleanly", err), err
     assert "Traceback" not in out + err
