@@ -420,3 +420,156 @@ def test_plan_errors_are_launch_errors(tmp_path: Path) -> None:
     f = write(tmp_path / "a.launch.yaml", "launch:\n  - arg: {name: must}\n")
     with pytest.raises(LaunchError, match=r"a.launch.yaml:2: the launch argument 'must'"):
         plan(str(f), {}, {})
+
+
+def echoes(path: Path, arguments: dict[str, str] | None = None, env: dict[str, str] | None = None) -> list[str]:
+    """The words after `echo` of each process the file starts."""
+    return [" ".join(p.argv[1:]) for p in plan(str(path), arguments or {}, {"PATH": os.environ["PATH"], **(env or {})})]
+
+
+def test_groups_scope_configurations_and_environment_and_includes_do_not(tmp_path: Path) -> None:
+    write(
+        tmp_path / "inner.launch.yaml",
+        "launch:\n  - arg: {name: given}\n  - let: {name: leaked, value: from-inner}\n"
+        "  - executable: {cmd: echo $(var given) $(dirname)}\n",
+    )
+    f = write(
+        tmp_path / "scopes.launch.xml",
+        """<launch>
+  <let name="a" value="outer"/>
+  <set_env name="E" value="outer-env"/>
+  <group>
+    <let name="a" value="inner"/>
+    <set_env name="E" value="inner-env"/>
+    <executable cmd="echo $(var a) $(env E)"/>
+  </group>
+  <executable cmd="echo $(var a) $(env E)"/>
+  <group scoped="false">
+    <let name="a" value="unscoped"/>
+  </group>
+  <executable cmd="echo $(var a)"/>
+  <group forwarding="false">
+    <keep name="k" value="kept"/>
+    <executable cmd="echo $(var a fresh) $(var k) $(env E first)"/>
+  </group>
+  <include file="$(dirname)/inner.launch.yaml">
+    <arg name="given" value="$(var a)-arg"/>
+  </include>
+  <executable cmd="echo $(var leaked) $(var given)"/>
+  <unset_env name="E"/>
+  <executable cmd="echo $(env E gone)"/>
+</launch>
+""",
+    )
+    assert echoes(f) == [
+        "inner inner-env",
+        "outer outer-env",
+        "unscoped",
+        "fresh kept first",
+        f"unscoped-arg {tmp_path}",
+        "from-inner unscoped-arg",
+        "gone",
+    ]
+
+
+def test_arguments_take_their_default_only_when_not_given(tmp_path: Path) -> None:
+    f = write(
+        tmp_path / "args.launch.xml",
+        "<launch>\n  <arg name='n' default=\"$(eval '6 * 7')\"/>\n  <arg name='n' default='ignored'/>\n"
+        "  <executable cmd='echo $(var n)'/>\n</launch>\n",
+    )
+    assert echoes(f) == ["42"]
+    assert echoes(f, {"n": "1"}) == ["1"]
+
+
+def test_conditions(tmp_path: Path) -> None:
+    f = write(
+        tmp_path / "if.launch.yaml",
+        """launch:
+  - arg: {name: on, default: "true"}
+  - executable: {cmd: echo if-on, if: $(var on)}
+  - executable: {cmd: echo unless-on, unless: $(var on)}
+  - executable: {cmd: echo one, if: "1"}
+  - executable: {cmd: echo TRUE, if: " TRUE "}
+  - group:
+      if: $(eval "'$(var on)' == 'false'")
+      children:
+        - executable: {cmd: echo in-group}
+""",
+    )
+    assert echoes(f) == ["if-on", "one", "TRUE"]
+    assert echoes(f, {"on": "false"}) == ["unless-on", "one", "TRUE", "in-group"]
+    assert echoes(f, {"on": "FALSE"}) == ["unless-on", "one", "TRUE"]  # conditions ignore case, == does not
+
+
+def test_namespaces_are_pushed_and_joined(tmp_path: Path) -> None:
+    f = write(
+        tmp_path / "ns.launch.xml",
+        """<launch>
+  <push_ros_namespace namespace="fleet"/>
+  <group>
+    <push-ros-namespace namespace="robot1"/>
+    <node pkg="turtlesim" exec="turtlesim_node"/>
+    <node pkg="turtlesim" exec="turtlesim_node" namespace="sim"/>
+    <node pkg="turtlesim" exec="turtlesim_node" namespace="/absolute"/>
+  </group>
+  <node pkg="llfsm" exec="run" name="bot" args="$(dirname)/bot.machine --period 10ms"/>
+</launch>
+""",
+    )
+    (tmp_path / "bot.machine").mkdir()
+    specs = plan(str(f), {}, {})
+    assert [p.argv[p.argv.index("--remap") + 1] for p in specs] == [
+        "__ns:=/fleet/robot1",
+        "__ns:=/fleet/robot1/sim",
+        "__ns:=/absolute",
+        "__ns:=/fleet",
+    ]
+    bot = specs[-1]  # a run of machines: `name` names the process, not its nodes
+    assert bot.label == "bot-4" and "__node:=bot" not in bot.argv
+    assert bot.argv[3:] == [
+        "run",
+        "--transport",
+        "dds",
+        f"{tmp_path}/bot.machine",
+        "--period",
+        "10ms",
+        "--remap",
+        "__ns:=/fleet",
+    ]
+
+
+def test_process_attributes(tmp_path: Path) -> None:
+    (tmp_path / "params.yaml").write_text("/**:\n  ros__parameters:\n    a: 1\n")
+    f = write(
+        tmp_path / "proc.launch.xml",
+        f"""<launch>
+  <let name="sigterm_timeout" value="2"/>
+  <executable cmd="echo 'two words' $(var missing 'a b')x" cwd="{tmp_path}" name="say" output="both"
+              launch-prefix="env A=1" respawn="True" respawn_max_retries="3" sigkill_timeout="0.5">
+    <env name="ONLY_HERE" value="1"/>
+  </executable>
+  <executable cmd="echo $HOME | tr a-z A-Z" shell="true" args="one 'two words'"/>
+  <node pkg="turtlesim" exec="turtlesim_node" exec_name="sim" args="--view">
+    <param from="$(dirname)/params.yaml"/>
+    <param name="colours" value="1,2,3" value-sep=","/>
+  </node>
+  <node exec="echo" name="talker" args="hello">
+    <remap from="chatter" to="talk"/>
+  </node>
+</launch>
+""",
+    )
+    say, shell, sim, talker = plan(str(f), {}, {"PATH": os.environ["PATH"]})
+    assert say.argv == ["env", "A=1", "echo", "two words", "a bx"]
+    assert (say.cwd, say.label, say.output, say.env["ONLY_HERE"]) == (str(tmp_path), "say-1", "both", "1")
+    assert (say.respawn, say.respawn_max_retries, say.sigterm_timeout, say.sigkill_timeout) == (True, 3, 2.0, 0.5)
+    assert shell.argv == ["/bin/sh", "-c", "echo $HOME | tr a-z A-Z one 'two words'"] and shell.label == "echo-2"
+    assert sim.label == "sim-3"
+    assert sim.argv[3:] == [
+        "run", "--transport", "dds", "--node", "turtlesim", "--view",
+        "--params-file", f"{tmp_path}/params.yaml", "-p", "colours:=[1, 2, 3]",
+    ]  # fmt: skip
+    assert "ONLY_HERE" not in sim.env and sim.env["PYTHONUNBUFFERED"] == "1"
+    assert talker.argv == ["echo", "hello", "--ros-args", "-r", "__node:=talker", "-r", "chatter:=talk"]
+    assert talker.label == "echo-4"
