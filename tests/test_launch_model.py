@@ -573,3 +573,21 @@ def test_process_attributes(tmp_path: Path) -> None:
     assert "ONLY_HERE" not in sim.env and sim.env["PYTHONUNBUFFERED"] == "1"
     assert talker.argv == ["echo", "hello", "--ros-args", "-r", "__node:=talker", "-r", "chatter:=talk"]
     assert talker.label == "echo-4"
+
+
+def test_a_machine_of_an_installed_package_runs_by_its_package_and_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (tmp_path / "install" / "share" / "bots" / "llfsm").mkdir(parents=True)
+    (tmp_path / "install" / "share" / "bots" / "llfsm" / "wall_bot.py").write_text("")
+    monkeypatch.setenv("AMENT_PREFIX_PATH", str(tmp_path / "install"))
+    f = write(
+        tmp_path / "pkg.launch.xml",
+        "<launch>\n  <node pkg='bots' exec='wall_bot' name='first'/>\n  <node pkg='bots' exec='wal_bot'/>\n</launch>\n",
+    )
+    message = r"pkg.launch.xml:3: pkg='bots' exec='wal_bot': no installed machine 'wal_bot' in package 'bots' \(package bots has: wall_bot; did you mean wall_bot\?\)"
+    with pytest.raises(LaunchError, match=message):
+        plan(str(f), {}, {})
+    f.write_text("<launch>\n  <node pkg='bots' exec='wall_bot' name='first'/>\n</launch>\n")
+    (bot,) = plan(str(f), {}, {})
+    assert bot.argv[3:] == ["run", "--transport", "dds", "bots/wall_bot"] and bot.label == "first-1"

@@ -16,6 +16,7 @@ pose service are llfsm's own nodes, and machines run with `llfsm run` (docs/laun
 
 from __future__ import annotations
 
+import os
 import shlex
 import sys
 from dataclasses import dataclass
@@ -70,12 +71,24 @@ def started(pkg: str | None, exe: str) -> Started:
     try:
         find_installed(f"{pkg}/{exe}")  # as the launched `llfsm run P/MACHINE` will find it
     except TargetError as e:
+        why = str(e).removeprefix(f"{pkg}/{exe}: ")
+        if _has_machines(pkg):
+            raise UnknownExecutable(f"pkg={pkg!r} exec={exe!r}: {why}") from None
         known = ", ".join(f"{p}/{x}" for p, x in _ROS_NODES)
         raise UnknownExecutable(
             f"pkg={pkg!r} exec={exe!r}: not one of llfsm's nodes ({known}, llfsm/run), "
-            f"nor an installed llfsm machine: {e}"
+            f"nor an installed llfsm machine ({why})"
         ) from None
     return Started((*RUN_PREFIX, f"{pkg}/{exe}"), machines=True)
+
+
+def _has_machines(pkg: str) -> bool:
+    """An installed package of llfsm machines by that name is on AMENT_PREFIX_PATH."""
+    for prefix in filter(None, os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep)):
+        share = os.path.join(prefix, "share", pkg)
+        if os.path.isdir(os.path.join(share, "llfsm")) or os.path.isdir(os.path.join(share, "machine")):
+            return True
+    return False
 
 
 def shown(argv: list[str]) -> str:
