@@ -585,7 +585,10 @@ def test_a_machine_of_an_installed_package_runs_by_its_package_and_name(
         tmp_path / "pkg.launch.xml",
         "<launch>\n  <node pkg='bots' exec='wall_bot' name='first'/>\n  <node pkg='bots' exec='wal_bot'/>\n</launch>\n",
     )
-    message = r"pkg.launch.xml:3: pkg='bots' exec='wal_bot': no installed machine 'wal_bot' in package 'bots' \(package bots has: wall_bot; did you mean wall_bot\?\)"
+    message = (
+        r"pkg.launch.xml:3: pkg='bots' exec='wal_bot': no installed machine 'wal_bot' in package 'bots' "
+        r"\(package bots has: wall_bot; did you mean wall_bot\?\)"
+    )
     with pytest.raises(LaunchError, match=message):
         plan(str(f), {}, {})
     f.write_text("<launch>\n  <node pkg='bots' exec='wall_bot' name='first'/>\n</launch>\n")
