@@ -594,3 +594,13 @@ def test_a_machine_of_an_installed_package_runs_by_its_package_and_name(
     f.write_text("<launch>\n  <node pkg='bots' exec='wall_bot' name='first'/>\n</launch>\n")
     (bot,) = plan(str(f), {}, {})
     assert bot.argv[3:] == ["run", "--transport", "dds", "bots/wall_bot"] and bot.label == "first-1"
+
+
+def test_includes_that_fan_out_are_bounded(tmp_path: Path) -> None:
+    """Each file includes the next ten times: 10**4 includes if nothing stopped it."""
+    for n in range(4):
+        body = "".join(f"  <include file='$(dirname)/f{n + 1}.launch.xml'/>\n" for _ in range(10))
+        write(tmp_path / f"f{n}.launch.xml", f"<launch>\n{body}</launch>\n")
+    write(tmp_path / "f4.launch.xml", "<launch>\n  <let name='x' value='y'/>\n</launch>\n")
+    out = refused(tmp_path / "f0.launch.xml")
+    assert out.endswith(": more than 256 includes in one launch"), out

@@ -27,8 +27,12 @@ from . import executables, frontend, model
 from .model import Where
 from .substitutions import Context, SubstitutionError, Text, literal, perform, show
 
-#: Includes nested deeper than this are refused (a cycle is refused by name before that).
+#: Includes nested deeper than this are refused (a cycle is refused by name before that), and
+#: so are more includes in all, or more processes, than this: a file that includes another ten
+#: times, which includes a third ten times... would otherwise cost time exponential in its size.
 MAX_INCLUDE_DEPTH = 32
+MAX_INCLUDES = 256
+MAX_PROCESSES = 256
 #: `output` values, as launch.logging's aliases.
 OUTPUTS = ("screen", "log", "both", "own_log", "full")
 #: launch's defaults: ExecuteProcess's output, and the `sigterm_timeout` / `sigkill_timeout`
@@ -91,6 +95,8 @@ class _Walk:
     first_environment: dict[str, str]
     processes: list[ProcessSpec] = field(default_factory=list)
     including: list[str] = field(default_factory=list)  # real paths of the files being walked
+    read: dict[str, model.Launch] = field(default_factory=dict)  # each file is read once
+    includes: int = 0
 
 
 def load(path: str) -> model.Launch:
@@ -117,7 +123,13 @@ def _file(path: str, scope: _Scope, walk: _Walk, included_at: Where | None) -> N
         raise LaunchError(f"{included_at}: include cycle: {' includes '.join([*chain, frontend.shown(path)])}")
     if len(walk.including) >= MAX_INCLUDE_DEPTH:
         raise LaunchError(f"{included_at}: includes nested deeper than {MAX_INCLUDE_DEPTH}")
-    root = load(path)
+    if included_at is not None:
+        walk.includes += 1
+        if walk.includes > MAX_INCLUDES:
+            raise LaunchError(f"{included_at}: more than {MAX_INCLUDES} includes in one launch")
+    root = walk.read.get(real)
+    if root is None:
+        root = walk.read[real] = load(path)
     walk.including.append(real)
     _entities(root.children, scope, walk)
     walk.including.pop()
@@ -148,6 +160,8 @@ def _entities(entities: Iterable[model.AnyEntity], scope: _Scope, walk: _Walk) -
                 scope.configurations[_perform(a.name, ctx, a.where)] = _perform(a.value, ctx, a.where)
             _file(_existing(_perform(e.file, ctx, e.where), e.where, "launch file"), scope, walk, e.where)
         else:
+            if len(walk.processes) >= MAX_PROCESSES:
+                raise LaunchError(f"{e.where}: more than {MAX_PROCESSES} processes in one launch")
             walk.processes.append(_process(e, scope, ctx, len(walk.processes) + 1))
 
 
