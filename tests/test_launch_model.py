@@ -563,6 +563,7 @@ def test_process_attributes(tmp_path: Path) -> None:
     say, shell, sim, talker = plan(str(f), {}, {"PATH": os.environ["PATH"]})
     assert say.argv == ["env", "A=1", "echo", "two words", "a bx"]
     assert (say.cwd, say.label, say.output, say.env["ONLY_HERE"]) == (str(tmp_path), "say-1", "both", "1")
+    assert say.env["LLFSM_TRANSPORT"] == "dds"
     assert (say.respawn, say.respawn_max_retries, say.sigterm_timeout, say.sigkill_timeout) == (True, 3, 2.0, 0.5)
     assert shell.argv == ["/bin/sh", "-c", "echo $HOME | tr a-z A-Z one 'two words'"] and shell.label == "echo-2"
     assert sim.label == "sim-3"

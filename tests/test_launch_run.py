@@ -252,3 +252,34 @@ def test_the_launch_ends_when_its_processes_do(tmp_path: Path) -> None:
     assert status == 0, err
     assert re.search(r"\[INFO\] \[a-1\]: process has finished cleanly \[pid \d+\]", err)
     assert re.search(r"\[INFO\] \[b-2\]: process has finished cleanly \[pid \d+\]", err)
+
+
+def test_a_launch_with_no_option_starts_without_click(tmp_path: Path) -> None:
+    """The launcher's start-up delays every process: `llfsm launch FILE [NAME:=VALUE]` takes the
+    fast path (no click), and says what the click command says."""
+    f = write(
+        tmp_path / "a.launch.xml",
+        "<launch>\n  <arg name='n'/>\n  <executable cmd='echo $(var n)' output='screen'/>\n</launch>\n",
+    )
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path / "logs")}
+    r = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "llfsm", "launch", str(f), "n:=7"],
+        capture_output=True, text=True, env=env, timeout=60,
+    )  # fmt: skip
+    assert r.returncode == 0 and r.stdout == "[echo-1] 7\n", r.stderr
+    assert not [line for line in r.stderr.splitlines() if line.startswith("import time:") and " click" in line]
+    r = subprocess.run(
+        [sys.executable, "-m", "llfsm", "launch", str(f)], capture_output=True, text=True, env=env, timeout=60
+    )
+    assert (r.returncode, r.stderr) == (2, f"llfsm: {f}:2: the launch argument 'n' is required: give it as n:=VALUE\n")
+    r = subprocess.run(
+        [sys.executable, "-m", "llfsm", "launch", str(f), "n=7"], capture_output=True, text=True, timeout=60
+    )
+    assert (r.returncode, r.stderr) == (
+        2,
+        "llfsm: malformed launch argument 'n=7', expected format '<name>:=<value>'\n",
+    )
+    r = subprocess.run(
+        [sys.executable, "-m", "llfsm", "launch", str(tmp_path)], capture_output=True, text=True, timeout=60
+    )
+    assert r.returncode == 2 and "is a directory" in r.stderr  # click's own word for a folder

@@ -19,7 +19,7 @@ from typing import Annotated, Any, ClassVar, TypeAlias
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, ValidationError, model_validator
 
 from .frontend import Attr, Element, shown
-from .substitutions import Sub, SubstitutionError, Text, literal, parse  # noqa: F401  (pydantic resolves Text's `Sub` here)
+from .substitutions import Sub, SubstitutionError, Text, literal, parse  # noqa: F401  (Text's Sub, for pydantic)
 
 _NAME_RE = re.compile(r"[A-Za-z][A-Za-z0-9_-]*\Z")
 

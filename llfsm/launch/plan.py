@@ -321,6 +321,7 @@ def _process(e: model.Node | model.Executable, scope: _Scope, ctx: Context, numb
         argv = [_on_path(prefix[0], env, cwd, where), *prefix[1:], *argv]
     if node is not None or argv[: len(executables.LLFSM)] == executables.LLFSM:
         env.setdefault("PYTHONUNBUFFERED", "1")  # its lines reach the launch as they are printed
+    env.setdefault("LLFSM_TRANSPORT", "dds")  # an `executable` running llfsm is on the launch's wire too
     output = _perform(e.output, ctx, where) if e.output is not None else DEFAULT_OUTPUT
     if output not in OUTPUTS:
         raise LaunchError(f"{where}: output={output!r}: expected one of {', '.join(OUTPUTS)}")
