@@ -234,7 +234,9 @@ def test_xml_and_yaml_read_to_the_same_model_of_every_tag(tmp_path: Path) -> Non
 def test_the_shipped_launch_files_start_the_same_processes_in_xml_and_yaml(name: str) -> None:
     env = {"PATH": os.environ["PATH"]}
     xml, yaml = (plan(str(MACHINES / f"{name}.launch.{ext}"), {}, env) for ext in ("xml", "yaml"))
-    assert [(p.label, p.argv, p.output) for p in xml] == [(p.label, p.argv, p.output) for p in yaml]
+    assert [(p.label, p.argv, p.output, p.respawn, p.respawn_delay) for p in xml] == [
+        (p.label, p.argv, p.output, p.respawn, p.respawn_delay) for p in yaml
+    ]
     assert xml[-1].argv[3:] == ["run", "--transport", "dds", str(MACHINES / f"{name}.machine")]
 
 
