@@ -406,6 +406,7 @@ def test_show_args_lists_the_arguments_of_the_file_and_its_includes(tmp_path: Pa
         tmp_path / "outer.launch.xml",
         "<launch>\n  <arg name='speed' default='2.0' description='how fast'/>\n"
         "  <group if='false'><arg name='hidden' default='$(var speed)'/></group>\n"
+        "  <arg name='mode' default='a'><choice value='a'/><choice value='b'/></arg>\n"
         "  <include file='$(dirname)/inner.launch.yaml'/>\n</launch>\n",
     )
     r = llfsm("launch", f, "--show-args")
@@ -414,6 +415,7 @@ def test_show_args_lists_the_arguments_of_the_file_and_its_includes(tmp_path: Pa
         "Arguments (pass arguments as '<name>:=<value>'):\n\n"
         "    'speed':\n        how fast\n        (default: '2.0')\n\n"
         "    'hidden':\n        no description given\n        (default: '$(var speed)')\n\n"
+        "    'mode':\n        One of: ['a', 'b']\n        (default: 'a')\n\n"
         "    'depth':\n        no description given\n"
     )
 

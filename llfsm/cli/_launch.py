@@ -75,7 +75,7 @@ def _show_arguments(args: list[ArgumentInfo]) -> None:
     """As `ros2 launch --show-args` prints them."""
     lines = ["Arguments (pass arguments as '<name>:=<value>'):"]
     for a in args:
-        lines.append(f"\n    '{a.name}':\n        {a.description or 'no description given'}")
+        lines.append(f"\n    '{a.name}':\n        {a.described}")
         if a.default is not None:
             lines.append(f"        (default: '{a.default}')")
     if not args:

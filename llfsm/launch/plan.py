@@ -79,6 +79,16 @@ class ArgumentInfo:
     name: str
     description: str | None
     default: str | None
+    choices: list[str] = field(default_factory=list)
+
+    @property
+    def described(self) -> str:
+        """Its description as DeclareLaunchArgument words it (with its choices)."""
+        if not self.choices:
+            return self.description or "no description given"
+        if self.description is None:
+            return f"One of: {self.choices}"
+        return f"{self.description.removesuffix('.')}. Valid choices are: {self.choices}"
 
 
 @dataclass
@@ -493,7 +503,7 @@ def declared_arguments(path: str, arguments: Mapping[str, str], environ: Mapping
             ctx = Context(configurations, dict(environ), e.where.file)
             if isinstance(e, model.Arg):
                 default = None if e.default is None else (literal(e.default) or show(e.default))
-                out.append(ArgumentInfo(e.name, e.description, default))
+                out.append(ArgumentInfo(e.name, e.description, default, [c.value for c in e.choices]))
                 if e.name not in configurations and e.default is not None:
                     try:
                         configurations[e.name] = perform(e.default, ctx)
