@@ -70,9 +70,7 @@ def literal(text: Text) -> str | None:
 def parse(source: str) -> Text:
     """The text `source` as launch reads an attribute value; SubstitutionError when a `$(` is
     not closed, names a substitution llfsm does not perform, or has the wrong arguments."""
-    parser = _Parser(source)
-    parts = parser.template()
-    return tuple(parts)
+    return tuple(_Parser(source).fragments(None))
 
 
 class _Parser:
@@ -84,12 +82,18 @@ class _Parser:
     def fail(self, message: str) -> SubstitutionError:
         return SubstitutionError(f"bad substitution in {self.s!r}: {message}")
 
-    def template(self) -> list[str | Sub]:
+    def fragments(self, quote: str | None) -> list[str | Sub]:
+        """Text and substitutions up to the closing `quote` (read past), or to the end."""
         out: list[str | Sub] = []
         buf: list[str] = []
         s, n = self.s, len(self.s)
+        opened = self.i - 1
         while self.i < n:
             c = s[self.i]
+            if c == quote:
+                self.i += 1
+                _flush(buf, out)
+                return out or [""]
             if c == "$" and s.startswith("$(", self.i):
                 _flush(buf, out)
                 out.append(self.substitution())
@@ -99,6 +103,8 @@ class _Parser:
             else:
                 buf.append(c)
                 self.i += 1
+        if quote is not None:
+            raise self.fail(f"the quote {quote} at character {opened + 1} is never closed")
         _flush(buf, out)
         return out
 
@@ -142,7 +148,8 @@ class _Parser:
     def argument(self) -> list[str | Sub]:
         s, n = self.s, len(self.s)
         if s[self.i] in "'\"":
-            return self.quoted(s[self.i])
+            self.i += 1
+            return self.fragments(s[self.i - 1])
         out: list[str | Sub] = []
         buf: list[str] = []
         parens = 0
@@ -172,34 +179,6 @@ class _Parser:
             self.i += 1
         _flush(buf, out)
         return out
-
-    def quoted(self, quote: str) -> list[str | Sub]:
-        s, n = self.s, len(self.s)
-        opened = self.i
-        self.i += 1
-        out: list[str | Sub] = []
-        buf: list[str] = []
-        while True:
-            if self.i >= n:
-                raise self.fail(f"the quote {quote} at character {opened + 1} is never closed")
-            c = s[self.i]
-            if c == quote:
-                self.i += 1
-                break
-            if c == "$" and s.startswith("$(", self.i):
-                _flush(buf, out)
-                out.append(self.substitution())
-            elif c == "\\" and self.i + 1 < n:
-                buf.append(s[self.i + 1])
-                self.i += 2
-            else:
-                buf.append(c)
-                self.i += 1
-        _flush(buf, out)
-        if not out:
-            out.append("")
-        return out
-
 
 def _flush(buf: list[str], out: list[str | Sub]) -> None:
     if buf:
