@@ -180,6 +180,7 @@ class _Parser:
         _flush(buf, out)
         return out
 
+
 def _flush(buf: list[str], out: list[str | Sub]) -> None:
     if buf:
         out.append("".join(buf))
