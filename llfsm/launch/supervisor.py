@@ -82,7 +82,7 @@ class Supervisor:
         self.selector = selectors.DefaultSelector()
         self.failed: set[str] = set()
         self.stopping = False
-        self.interrupts = 0
+        self.hurries = 0  # stop signals received while stopping
         self._wake_r, self._wake_w = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
         self.selector.register(self._wake_r, selectors.EVENT_READ)
 
@@ -141,15 +141,17 @@ class Supervisor:
                 self._interrupted(number)
 
     def _interrupted(self, number: int) -> None:
+        """The first stop signal stops the launch; one while it stops hurries it: SIGTERM now,
+        then SIGKILL now."""
         name = signal.Signals(number).name
-        self.interrupts += 1
-        if self.interrupts == 1:
+        if not self.stopping:
             what = "ctrl-c (SIGINT)" if number == signal.SIGINT else name
             self.log.message("WARNING", "launch", f"user interrupted with {what}")
             self._stop()
             return
+        self.hurries += 1
         now = time.monotonic()
-        hurry = signal.SIGTERM if self.interrupts == 2 else signal.SIGKILL
+        hurry = signal.SIGTERM if self.hurries == 1 else signal.SIGKILL
         self.log.message("WARNING", "launch", f"{name} again: sending {signal.Signals(hurry).name} now")
         for g in self.groups.values():
             if hurry == signal.SIGTERM:
@@ -313,7 +315,7 @@ class Supervisor:
                     "escalating to 'SIGTERM'",
                 )
                 self._signal(g, signal.SIGTERM)
-            elif g.sent == signal.SIGTERM and now >= g.kill_at:
+            if g.sent == signal.SIGTERM and now >= g.kill_at:
                 self.log.message(
                     "ERROR",
                     spec.label,
@@ -322,7 +324,7 @@ class Supervisor:
                 )
                 self._signal(g, signal.SIGKILL)
                 g.given_up_at = now + KILL_WAIT
-            elif g.sent == signal.SIGKILL and now >= g.given_up_at:
+            if g.sent == signal.SIGKILL and now >= g.given_up_at:
                 self.log.message("ERROR", spec.label, f"{who} is still there after SIGKILL (process group {g.pgid})")
                 del self.groups[g.pgid]
 
