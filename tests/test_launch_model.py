@@ -609,3 +609,35 @@ def test_includes_that_fan_out_are_bounded(tmp_path: Path) -> None:
     write(tmp_path / "f4.launch.xml", "<launch>\n  <let name='x' value='y'/>\n</launch>\n")
     out = refused(tmp_path / "f0.launch.xml")
     assert out.endswith(": more than 256 includes in one launch"), out
+
+
+def test_parameter_types_and_ros_args(tmp_path: Path) -> None:
+    f = write(
+        tmp_path / "types.launch.xml",
+        """<launch>
+  <node pkg="turtlesim" exec="turtlesim_node" ros_args="-r a:=b --param x:=1 --remap c:=d">
+    <param name="s" value="100" type="str"/>
+    <param name="l" value="2, 5, 8" value-sep=", " type="list_of_str"/>
+    <param name="n" value="2.5, 3" value-sep=", " type="list_of_float"/>
+    <param name="t" value="True" type="bool"/>
+  </node>
+</launch>
+""",
+    )
+    (p,) = plan(str(f), {}, {})
+    assert p.argv[8:] == [
+        "-p", "s:='100'", "-p", "l:=['2', '5', '8']", "-p", "n:=[2.5, 3]", "-p", "t:=True",
+        "--remap", "a:=b", "-p", "x:=1", "--remap", "c:=d",
+    ]  # fmt: skip
+    f.write_text(
+        "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node'>\n    <param name='n' value='x' type='int'/>\n  </node>\n</launch>\n"
+    )
+    assert refused(f) == f"llfsm: {f}:3: 'x' is not of type int"
+    f.write_text(
+        "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node'>\n    <param name='n' value='1' type='long'/>\n  </node>\n</launch>\n"
+    )
+    assert "'long' is not a type (one of str, bool, float" in refused(f)
+    f.write_text("<launch>\n  <node pkg='turtlesim' exec='turtlesim_node' ros_args='--log-level debug'/>\n</launch>\n")
+    assert refused(f) == (
+        f"llfsm: {f}:2: ros_args: --log-level: llfsm run takes -r, --remap, -p, --param, --params-file with one value each"
+    )

@@ -91,6 +91,17 @@ def _param_value(v: Any) -> ParamValue:
     return ParamValue(_text(v), quoted=v.quoted)
 
 
+#: A parameter's `type`, as launch's get_data_type_from_identifier takes it.
+PARAM_TYPES = ("str", "bool", "float", "int", "list_of_str", "list_of_bool", "list_of_float", "list_of_int", "yaml")
+
+
+def _param_type(v: Any) -> str:
+    text = _plain(v)
+    if text not in PARAM_TYPES:
+        raise ValueError(f"{text!r} is not a type (one of {', '.join(PARAM_TYPES)})")
+    return text
+
+
 SubText: TypeAlias = Annotated[Text, PlainValidator(_text)]
 Plain: TypeAlias = Annotated[str, PlainValidator(_plain)]
 Flag: TypeAlias = Annotated[bool, PlainValidator(_flag)]
@@ -190,17 +201,20 @@ class Param(Part):
     value: Annotated[ParamValue, PlainValidator(_param_value)] | None = None
     from_: SubText | None = Field(None, alias="from")
     value_sep: Plain | None = Field(None, alias="value-sep")
+    type: Annotated[str, PlainValidator(_param_type)] | None = None
     params: tuple[Param, ...] = Field((), alias="@params")
 
     @model_validator(mode="after")
     def _shape(self) -> Param:
         if self.from_ is not None:
-            if self.name is not None or self.value is not None or self.params:
+            if self.name is not None or self.value is not None or self.params or self.type is not None:
                 raise ValueError("`from` (a params file) goes alone, without name, value or nested params")
         elif self.name is None:
             raise ValueError("needs `name` (with `value` or nested params) or `from`")
         elif (self.value is None) == (not self.params):
             raise ValueError("needs either `value` or nested params")
+        elif self.params and self.type is not None:
+            raise ValueError("`type` goes with a `value`, not with nested params")
         return self
 
 
@@ -254,6 +268,7 @@ class Node(Process):
     exec_: SubText = Field(alias="exec")
     namespace: SubText | None = None
     exec_name: SubText | None = None
+    ros_args: SubText | None = None
     params: tuple[Param, ...] = Field((), alias="@params")
     remaps: tuple[Remap, ...] = Field((), alias="@remaps")
 

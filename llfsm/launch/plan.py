@@ -385,6 +385,8 @@ def _node_argv(
         ros += ["--remap", f"__ns:={_namespace(base, ns or '', where)}"]
     for p in e.params:
         ros += _param_args(p, "", ctx)
+    if e.ros_args is not None:
+        ros += _ros_args(split_command(e.ros_args, ctx, where), where)
     for r in e.remaps:
         rule = f"{_perform(r.from_, ctx, r.where)}:={_perform(r.to, ctx, r.where)}"
         names = _ros_names()
@@ -418,15 +420,46 @@ def _param_args(p: model.Param, prefix: str, ctx: Context) -> list[str]:
 
 
 def _param_text(v: model.ParamValue, p: model.Param, ctx: Context) -> str:
-    """The value as `-p` reads it (YAML): a quoted YAML string stays a string."""
+    """The value as `-p` reads it (YAML): a quoted YAML string, or one of `type="str"`, stays a
+    string; `value-sep` makes a list."""
+    kind = (p.type or "yaml").removeprefix("list_of_")
     if v.items is not None:
         return "[" + ", ".join(_param_text(x, p, ctx) for x in v.items) + "]"
     text = _perform(v.text, ctx, p.where)
     if p.value_sep is not None and v is p.value:
-        return "[" + ", ".join(x.strip() for x in text.split(p.value_sep)) + "]"
-    if v.quoted:
+        return "[" + ", ".join(_typed(x.strip(), kind, p) for x in text.split(p.value_sep)) + "]"
+    return _typed(text, "str" if v.quoted else kind, p)
+
+
+def _typed(text: str, kind: str, p: model.Param) -> str:
+    """One value for `-p`, checked against its `type`."""
+    if kind == "str":
         return "'" + text.replace("'", "''") + "'"
+    checks = {"int": int, "float": float, "bool": lambda t: {"true": 1, "false": 0}[t.lower()]}
+    if kind in checks:
+        try:
+            checks[kind](text)
+        except (ValueError, KeyError):
+            raise LaunchError(f"{p.where}: {text!r} is not of type {p.type}") from None
     return text
+
+
+#: ROS 2's `--ros-args` options and the `llfsm run` options they are.
+_ROS_ARGS = {"-r": "--remap", "--remap": "--remap", "-p": "-p", "--param": "-p", "--params-file": "--params-file"}
+
+
+def _ros_args(words: list[str], where: Where) -> list[str]:
+    """A node's `ros_args` as `llfsm run` options (each of these options takes one value)."""
+    out: list[str] = []
+    it = iter(words)
+    for w in it:
+        option = _ROS_ARGS.get(w)
+        value = next(it, None)
+        if option is None or value is None:
+            what = f"{w} without its value" if option is not None else w
+            raise LaunchError(f"{where}: ros_args: {what}: llfsm run takes {', '.join(_ROS_ARGS)} with one value each")
+        out += [option, value]
+    return out
 
 
 def _machines_exist(args: list[str], cwd: str | None, where: Where) -> None:
