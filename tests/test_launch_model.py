@@ -629,15 +629,13 @@ def test_parameter_types_and_ros_args(tmp_path: Path) -> None:
         "-p", "s:='100'", "-p", "l:=['2', '5', '8']", "-p", "n:=[2.5, 3]", "-p", "t:=True",
         "--remap", "a:=b", "-p", "x:=1", "--remap", "c:=d",
     ]  # fmt: skip
-    f.write_text(
-        "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node'>\n    <param name='n' value='x' type='int'/>\n  </node>\n</launch>\n"
-    )
+    node = "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node'>\n    {}\n  </node>\n</launch>\n"
+    f.write_text(node.format("<param name='n' value='x' type='int'/>"))
     assert refused(f) == f"llfsm: {f}:3: 'x' is not of type int"
-    f.write_text(
-        "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node'>\n    <param name='n' value='1' type='long'/>\n  </node>\n</launch>\n"
-    )
+    f.write_text(node.format("<param name='n' value='1' type='long'/>"))
     assert "'long' is not a type (one of str, bool, float" in refused(f)
     f.write_text("<launch>\n  <node pkg='turtlesim' exec='turtlesim_node' ros_args='--log-level debug'/>\n</launch>\n")
     assert refused(f) == (
-        f"llfsm: {f}:2: ros_args: --log-level: llfsm run takes -r, --remap, -p, --param, --params-file with one value each"
+        f"llfsm: {f}:2: ros_args: --log-level: "
+        "llfsm run takes -r, --remap, -p, --param, --params-file with one value each"
     )

@@ -435,12 +435,15 @@ def _typed(text: str, kind: str, p: model.Param) -> str:
     """One value for `-p`, checked against its `type`."""
     if kind == "str":
         return "'" + text.replace("'", "''") + "'"
-    checks = {"int": int, "float": float, "bool": lambda t: {"true": 1, "false": 0}[t.lower()]}
-    if kind in checks:
-        try:
-            checks[kind](text)
-        except (ValueError, KeyError):
-            raise LaunchError(f"{p.where}: {text!r} is not of type {p.type}") from None
+    try:
+        if kind == "int":
+            int(text)
+        elif kind == "float":
+            float(text)
+        elif kind == "bool" and text.lower() not in ("true", "false"):
+            raise ValueError(text)
+    except ValueError:
+        raise LaunchError(f"{p.where}: {text!r} is not of type {p.type}") from None
     return text
 
 
