@@ -204,8 +204,8 @@ class Supervisor:
     # -- output ------------------------------------------------------------------------------------
     def _drain(self, fd: int, final: bool = False) -> None:
         """Read what the pipe holds now; at its end (or `final`), write the last partial line."""
-        stream, child, buf, sinks = self.pipes[fd]
-        while True:
+        _, child, buf, sinks = self.pipes[fd]
+        for _ in range(64):  # a process that never stops talking gets a turn, not the launcher
             try:
                 data = os.read(fd, 65536)
             except BlockingIOError:
@@ -217,13 +217,18 @@ class Supervisor:
                 self._lines(child, buf, sinks)
                 continue
             if data == b"" or final:
-                if buf:
-                    self._emit(child, bytes(buf), sinks)
-                    buf.clear()
-                self.selector.unregister(fd)
-                del self.pipes[fd]
-                stream.close()
+                self._close(fd)
             return
+        if final:
+            self._close(fd)
+
+    def _close(self, fd: int) -> None:
+        """The pipe's end: its last partial line written, the pipe closed."""
+        stream, child, buf, sinks = self.pipes.pop(fd)
+        if buf:
+            self._emit(child, bytes(buf), sinks)
+        self.selector.unregister(fd)
+        stream.close()
 
     def _lines(self, child: _Child, buf: bytearray, sinks: list[_Sink]) -> None:
         start = 0
