@@ -6,20 +6,25 @@ These run real processes, so they wait on them (across processes, never a timed 
 from __future__ import annotations
 
 import os
+import queue
 import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 import uuid
+from collections.abc import Callable
 from pathlib import Path
+from typing import IO
 
 #: The environment variable every test launch carries, to find its processes in /proc.
 MARK = "LLFSM_LAUNCH_TEST"
 
 
 class Launch:
-    """`llfsm launch FILE` as a process of its own, its log folder under `logs`."""
+    """`llfsm launch FILE` as a process of its own, its log folder under `logs`; its stdout and
+    stderr read by threads as they come (so a waiting test never blocks on a pipe)."""
 
     def __init__(self, file: Path, logs: Path, *args: str, env: dict[str, str] | None = None) -> None:
         self.mark = uuid.uuid4().hex
@@ -31,26 +36,44 @@ class Launch:
             text=True,
             env={**os.environ, "ROS_LOG_DIR": str(logs), MARK: self.mark, **(env or {})},
         )
+        self.err: queue.Queue[str | None] = queue.Queue()
         self.err_lines: list[str] = []
+        self.out: list[str] = []
+        threading.Thread(target=self._read, args=(self.p.stderr, self.err.put), daemon=True).start()
+        self.out_done = threading.Thread(target=self._read, args=(self.p.stdout, self.out.append), daemon=True)
+        self.out_done.start()
 
-    def wait_for(self, pattern: str, count: int = 1, timeout: float = 60) -> None:
+    @staticmethod
+    def _read(stream: IO[str] | None, put: Callable[[str | None], None]) -> None:
+        assert stream is not None
+        for line in stream:
+            put(line)
+        put(None)
+
+    def wait_for(self, pattern: str, count: int = 1, timeout: float = 120) -> None:
         """Read stderr until `count` lines match `pattern` (the launch's own lines are there)."""
-        assert self.p.stderr is not None
         found = 0
+        deadline = time.monotonic() + timeout
         while found < count:
-            line = self.p.stderr.readline()
-            assert line, f"the launch ended before {pattern!r} ({count}):\n" + "".join(self.err_lines)
+            try:
+                line = self.err.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                raise AssertionError(f"no {pattern!r} ({count}) in {timeout} s:\n" + "".join(self.err_lines)) from None
+            assert line is not None, f"the launch ended before {pattern!r} ({count}):\n" + "".join(self.err_lines)
             self.err_lines.append(line)
             found += bool(re.search(pattern, line))
 
-    def finish(self, timeout: float = 60) -> tuple[int, str, str]:
+    def finish(self, timeout: float = 120) -> tuple[int, str, str]:
         try:
-            out, err = self.p.communicate(timeout=timeout)
+            self.p.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
             self.p.kill()
-            out, err = self.p.communicate()
-            raise AssertionError("the launch did not end:\n" + "".join(self.err_lines) + err) from None
-        return self.p.returncode, out, "".join(self.err_lines) + err
+            self.p.wait()
+            raise AssertionError("the launch did not end:\n" + "".join(self.err_lines)) from None
+        while (line := self.err.get(timeout=30)) is not None:
+            self.err_lines.append(line)
+        self.out_done.join(timeout=30)
+        return self.p.returncode, "".join(x for x in self.out if x is not None), "".join(self.err_lines)
 
     def leftovers(self) -> list[str]:
         """Processes still running with this launch's mark in their environment."""
@@ -201,13 +224,13 @@ def test_ctrl_c_stops_everything_escalating_for_what_ignores_it(tmp_path: Path) 
         """<launch>
   <executable cmd="sleep 60" name="polite"/>
   <executable cmd="sh -c 'sleep 60 &amp; sleep 60 &amp; wait'" name="parent" sigterm_timeout="0.5"/>
-  <executable cmd="sh -c 'trap \\&quot;\\&quot; INT TERM; sleep 60 &amp; while :; do sleep 1; done'" name="deaf"
-              sigterm_timeout="0.5" sigkill_timeout="0.5"/>
+  <executable cmd="sh -c 'trap \\&quot;\\&quot; INT TERM; sleep 60 &amp; echo deaf >&amp;2; while :; do sleep 1; done'"
+              name="deaf" sigterm_timeout="0.5" sigkill_timeout="0.5" output="screen"/>
 </launch>
 """,
     )
     run = Launch(f, tmp_path / "logs")
-    run.wait_for(r"process started with pid", count=3)
+    run.wait_for(r"\[deaf-3\] deaf")  # its trap is set (a SIGINT before it would end it at once)
     deadline = time.monotonic() + 30
     while len(run.leftovers()) < 7 and time.monotonic() < deadline:  # the shells start their children
         time.sleep(0.05)
@@ -228,11 +251,12 @@ def test_ctrl_c_stops_everything_escalating_for_what_ignores_it(tmp_path: Path) 
 def test_a_second_ctrl_c_does_not_wait_for_the_grace(tmp_path: Path) -> None:
     f = write(
         tmp_path / "grace.launch.xml",
-        "<launch>\n  <executable cmd=\"sh -c 'trap &quot;&quot; INT; sleep 60'\" name='slow' sigterm_timeout='60'/>\n"
+        "<launch>\n  <executable cmd=\"sh -c 'trap &quot;&quot; INT; echo slow >&amp;2; sleep 60'\" name='slow'\n"
+        "              sigterm_timeout='60' output='screen'/>\n"
         "</launch>\n",
     )
     run = Launch(f, tmp_path / "logs")
-    run.wait_for(r"\[slow-1\]: process started")
+    run.wait_for(r"\[slow-1\] slow")  # its trap is set
     run.p.send_signal(signal.SIGINT)
     run.wait_for(r"sending signal 'SIGINT'")
     run.p.send_signal(signal.SIGINT)
