@@ -37,13 +37,13 @@ def main() -> None:
         # deferred: start-up (a run or a launch on the fast path never imports click; other verbs
         # never the run)
         if options is not None:
-            from ._base import run_guarded
+            from ._exits import run_guarded
             from ._run import run
         elif launching is not None:
-            from ._base import run_guarded
+            from ._exits import run_guarded
             from ._launch import launch
         else:
-            from ._click import main as click_main
+            from ._commands import main as click_main
     except KeyboardInterrupt:  # while importing: as llfsm.__main__ does
         sys.exit(130)
     if options is not None:
@@ -74,7 +74,7 @@ def _fast_launch(args: list[str]) -> tuple[str, list[str]] | None:
 
 def __getattr__(name: str) -> Any:
     if name == "cli":
-        from ._click import cli  # deferred: start-up (click on first use)
+        from ._commands import cli  # deferred: start-up (click on first use)
 
         return cli
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import sys
 
-from ._base import EXIT_OK, echo, fail
+from ._exits import EXIT_OK, echo, fail
 
 TYPE_CHECKING = False  # not typing's own: the launcher's start-up delays every process
 if TYPE_CHECKING:
