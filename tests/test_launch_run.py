@@ -14,12 +14,32 @@ import sys
 import threading
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import IO
 
+import pytest
+
 #: The environment variable every test launch carries, to find its processes in /proc.
 MARK = "LLFSM_LAUNCH_TEST"
+
+
+#: Every launch a test started, stopped at its end even when the test failed half-way.
+STARTED: list[subprocess.Popen[str]] = []
+
+
+@pytest.fixture(autouse=True)
+def _stop_launches() -> Iterator[None]:
+    yield
+    while STARTED:
+        p = STARTED.pop()
+        if p.poll() is None:
+            p.send_signal(signal.SIGINT)  # the launcher stops what it started
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
 
 
 class Launch:
@@ -36,6 +56,7 @@ class Launch:
             text=True,
             env={**os.environ, "ROS_LOG_DIR": str(logs), MARK: self.mark, **(env or {})},
         )
+        STARTED.append(self.p)
         self.err: queue.Queue[str | None] = queue.Queue()
         self.err_lines: list[str] = []
         self.out: list[str] = []
