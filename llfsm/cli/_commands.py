@@ -16,6 +16,7 @@ from . import (  # noqa: F401  (each registers its commands)
     graph,
     import_,
     interface,
+    launch,
     new,
     node,
     param,
