@@ -536,6 +536,8 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
                 + [i.name for i in m.inputs]
             ),
             "inputs": input_entries(m),
+            # declared for type checkers and mypyc (--native), which otherwise know no such attribute
+            "input_annotations": tuple((i.name, i.type) for i in m.inputs),
             "on_suspend": [f"_llfsm_on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
             "on_resume": [f"_llfsm_on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
         },
