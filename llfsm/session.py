@@ -491,9 +491,10 @@ class Session:
                     echo_topic(bus, topic)
             except (InvalidNameError, ValueError) as e:
                 raise UsageError(str(e)) from None
-            if o.nodes or o.params or o.params_files or self.binds_inputs:
+            if o.nodes or o.params or o.params_files or self.binds_inputs or self.has_parameters:
                 # the nodes (and the input readers) are up (ros.ok() is true from the first round),
-                # and the machines' nodes will be too: their parameters are set before their first ringlet
+                # and the machines' nodes will be too: their parameters are set before their first
+                # ringlet, and a machine that declares parameters is on the graph without a ros.init()
                 bus.init()
             options = NodeOptions(image=Path(o.image) if o.image else None, view=o.view)
             for name in dict.fromkeys(o.nodes):
@@ -614,12 +615,19 @@ class Session:
             or o.record
             or o.play
             or self.binds_inputs
+            or self.has_parameters
         )
 
     @property
     def binds_inputs(self) -> bool:
         """Whether a machine binds an input to a topic (SPEC 11): the run then opens the bus."""
         return any(entry[TOPIC] is not None for cls in self.classes for entry in cls.INPUTS)
+
+    @property
+    def has_parameters(self) -> bool:
+        """Whether a machine declares `parameters:` (SPEC 12): they are parameters of its node
+        /llfsm/M, so the run opens the bus, whether or not the machine's code calls ros.init()."""
+        return any(cls.PARAMETERS for cls in self.classes)
 
     @property
     def world(self) -> TurtleWorld | None:
