@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from helpers import MACHINES, llfsm
+from helpers import MACHINES, llfsm, llfsm_process
 
 pytest.importorskip("aiohttp")
 
@@ -267,6 +267,17 @@ def test_a_page_that_leaves_right_after_the_handshake_costs_no_traceback(
     assert [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING] == []
     assert not server.clients
     assert _upgrade(server) == 101  # and it still serves
+
+
+def test_each_pages_node_has_a_name_of_its_own() -> None:
+    """Issue 27, item 8: two `--web` runs on one domain were both /llfsm_web, and `node list`
+    warned about llfsm's own nodes."""
+    names = []
+    for _ in range(2):
+        r = llfsm_process("run", "--clock", "sim", PING_PONG, "--web", "0", "--duration", "5ms", "--introspect")
+        assert r.status == 0, r.stderr
+        names += [line.strip() for line in r.stderr.split("topics:")[0].splitlines() if "/llfsm_web" in line]
+    assert len(names) == 2 and names[0] != names[1], names
 
 
 def test_the_page_tells_running_suspended_and_finished_machines_apart(tmp_path: Path) -> None:

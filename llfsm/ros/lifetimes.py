@@ -64,11 +64,16 @@ class Lifetimes:
         self.bus.ctx.wake = 0
 
     def collect(self) -> None:
-        """Between rounds: destroy what was held and is held no more."""
+        """Between rounds: destroy what was held and is held no more; then, with what is left,
+        say once of each node name that two nodes of the run share (Bus.same_names)."""
         ctx = self.bus.ctx
         if not (self.dirty or ctx.references_dropped):
             return
         self.dirty = ctx.references_dropped = False
+        self._collect(ctx)
+        self.bus.same_names()
+
+    def _collect(self, ctx: Any) -> None:
         arr = ctx.arrangement
         if arr is None:
             return
