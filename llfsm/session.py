@@ -56,6 +56,7 @@ if TYPE_CHECKING:
     from .bag import RunBags
     from .outputs import StreamedOutput
     from .ros.bus import Bus
+    from .ros.logging import LogSettings
     from .ros.transports.base import Transport
     from .runtime.errors import ErrorReport
     from .runtime.machine import Machine
@@ -99,6 +100,8 @@ FIELDS = (
     "remaps",
     "params",
     "params_files",
+    "log_levels",
+    "log_file",
     "echoes",
     "image",
     "view",
@@ -135,6 +138,8 @@ class RunOptions:
     remaps: tuple[str, ...]
     params: tuple[str, ...]
     params_files: tuple[str, ...]
+    log_levels: tuple[str, ...]
+    log_file: bool
     echoes: tuple[str, ...]
     image: str | None
     view: bool
@@ -166,6 +171,8 @@ class RunOptions:
         remaps: tuple[str, ...] = (),
         params: tuple[str, ...] = (),
         params_files: tuple[str, ...] = (),
+        log_levels: tuple[str, ...] = (),
+        log_file: bool = False,
         echoes: tuple[str, ...] = (),
         image: str | None = None,
         view: bool = False,
@@ -314,6 +321,8 @@ class Session:
         self.tracer: Tracer | None = None
         self.arrangement: Arrangement | None = None
         self.web_server: Stoppable | None = None
+        #: `--log-level` and `--log-file`, read by _check_options (None without them).
+        self.log_settings: LogSettings | None = None
         self._check_options()
 
     # -- checks before anything opens ---------------------------------------------------------------
@@ -325,6 +334,13 @@ class Session:
             raise UsageError(
                 "nothing to run: give a machine (TARGET), or --node NAME / --echo TOPIC to run on their own"
             )
+        if o.log_levels or o.log_file:
+            from .ros.logging import LogSettings  # deferred: start-up (only a run given them reads them)
+
+            try:
+                self.log_settings = LogSettings(o.log_levels, o.log_file)
+            except ValueError as e:
+                raise UsageError(str(e)) from None
         if o.transport == "dds" and o.clock == "sim":
             raise UsageError(
                 "--clock sim cannot be used with --transport dds: DDS peers live on the wall clock (their messages "
@@ -389,6 +405,9 @@ class Session:
         ran = False
         failed_outputs: list[str] = []
         bag_error: str | None = None
+        if self.log_settings is not None:  # before any node: the bus takes them when it is initialised
+            settings = self.log_settings
+            ctx.on_init.append(lambda bus: settings.apply(bus, self.say, o.verbose))
         try:
             if o.transport != "inproc":
                 self.transport = self._open_transport()

@@ -116,6 +116,10 @@ class Bus(Executor):
         #: None: whatever sys.stderr (or sys.stdout) is when a line is logged, so that a
         #: redirection made after the bus started is honoured.
         self.log_stream: IO[str] | None = None
+        #: `--log-level`: logger name ("" for every logger) -> level (logging.level_for).
+        self.log_levels: dict[str, Any] = {}
+        #: `--log-file`: where the log lines also go, as ROS 2's ~/.ros/log files (None: nowhere).
+        self.log_file: IO[str] | None = None
         self.transport: Transport = cast("Transport | None", ctx.transport) or InProcess()
         #: The transport's poll when it can bring anything in (never for the in-process one).
         self._poll = self.transport.poll if self.transport.remote else None

@@ -40,8 +40,9 @@ def references(c: Checking, code: Code, tree: ast.AST) -> None:
             and isinstance(node.args[0], ast.Constant)
             and isinstance(node.args[0].value, str)
         ):
-            arg = node.args[0]
-            c.references.append((str(c.path / code.file), arg.lineno, node_col(code.text, arg), arg.value))
+            arg, name = node.args[0], node.args[0].value
+            assert isinstance(name, str)  # tested above; mypy does not narrow an attribute's attribute
+            c.references.append((str(c.path / code.file), arg.lineno, node_col(code.text, arg), name))
 
 
 def unknown_machines(names: Iterable[str], refs: Iterable[tuple[str, int, int, str]]) -> list[Diagnostic]:

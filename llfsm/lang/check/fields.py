@@ -163,12 +163,13 @@ def chains(tree: ast.AST, names: Mapping[str, str]) -> Iterator[tuple[str, list[
         node, hidden = stack.pop()
         t = type(node)
         if t is attribute:
-            chain, root = [], node
-            while type(root) is attribute:
+            chain: list[ast.Attribute] = []
+            root = node
+            while isinstance(root, attribute):
                 chain.append(root)
-                root = root.value  # type: ignore[attr-defined]  # an ast.Attribute
-            if type(root) is ast.Name and root.id in names and root.id not in hidden:  # type: ignore[attr-defined]
-                yield root.id, chain[::-1]  # type: ignore[attr-defined]
+                root = root.value
+            if isinstance(root, ast.Name) and root.id in names and root.id not in hidden:
+                yield root.id, chain[::-1]
                 continue
         elif t in nested:
             hidden = hidden | _bound(node)
@@ -204,7 +205,8 @@ def _spec(c: Checking, type_name: str) -> MessageSpec | None:
             c.message_specs[type_name] = message_spec(type_name, c.interface_roots or ())
         except ImportError:
             c.message_specs[type_name] = None
-    return c.message_specs[type_name]
+    spec: MessageSpec | None = c.message_specs[type_name]
+    return spec
 
 
 def _check_chain(c: Checking, code: Code, name: str, type_name: str, chain: list[ast.Attribute]) -> None:
