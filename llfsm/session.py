@@ -44,7 +44,7 @@ from .runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer
 from .runtime.context import activate
 from .runtime.errors import passes_through, report_for
 from .runtime.inputs import TOPIC
-from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE
+from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE, check_names
 from .runtime.watchdog import Watchdog
 from .targets import InvalidMachine, MachineLoadError, TargetError, load
 
@@ -371,6 +371,10 @@ class Session:
                 ) from None
             except MachineLoadError as e:
                 raise MachineFailed(e.report) from None
+        try:  # before any node or transport starts: nothing else is said or opened for nothing
+            check_names(self.classes, self.options.suspended)
+        except ArrangementError as e:
+            raise UsageError(str(e)) from None
 
     def _check_outputs(self) -> None:
         o = self.options
@@ -444,6 +448,8 @@ class Session:
                 with signals_handled(arr):
                     ran = True  # from here the run's end hooks (ctx.at_end) close what the nodes and bus opened
                     result = arr.run(o.duration, grace)
+                if result.reason == "interrupted" and (left := unfinished(arr)):
+                    self.say(f"llfsm: the grace time ({grace / 1e9:g} s) ran out before {left} finished")
             finally:
                 if self.web_server is not None:
                     self.web_server.stop()
@@ -652,6 +658,15 @@ class Session:
     def world(self) -> TurtleWorld | None:
         """The turtle simulator's world (`--node turtlesim`), for the web view to draw live."""
         return getattr(self.nodes.get("turtlesim"), "world", None)
+
+
+def unfinished(arr: Arrangement) -> str:
+    """The machines of a run that did not finish, each with where it stands: `bot (in TURN)`."""
+    return ", ".join(
+        f"{m.NAME} ({'suspended in' if m._suspended else 'in'} {m.STATES[m._state]})"
+        for m in arr.machines
+        if not m._finished
+    )
 
 
 def _machine_yaml_of(m: Machine, targets: tuple[str, ...]) -> str:
