@@ -125,7 +125,8 @@ def test_a_machine_with_parameters_and_no_bus_code_is_a_node_on_dds(netns: NetNa
     run = netns.popen([sys.executable, "-m", "llfsm", "run", "--transport", "dds", m, "--duration", "8s"], cwd=REPO)
     wait_for_node(netns, "/llfsm/tuned")
     assert llfsm(netns, "param", "get", "/llfsm/tuned", "gain").stdout == "Double value is: 1.0\n"
-    assert llfsm(netns, "param", "set", "/llfsm/tuned", "gain", "2.5").stdout == "Set parameter successful\n"
+    r = llfsm(netns, "param", "set", "/llfsm/tuned", "gain", "2.5")
+    assert r.stdout == "Set parameter successful\n", r.stderr
     status, out, err = finish(run, 30)
     assert status == 0, err
     assert out.splitlines()[0] == "gain 1.0" and out.splitlines()[-1] == "gain 2.5"
