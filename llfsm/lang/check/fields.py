@@ -177,24 +177,32 @@ def chains(tree: ast.AST, names: Mapping[str, str]) -> Iterator[tuple[str, list[
 
 
 def message_fields(c: Checking, m: Machine, s: State, code: Code, tree: ast.Module) -> None:
-    """LF051 for one section or guard of state `s`."""
+    """LF051 for one section or guard of state `s`.  Every file of every machine comes here, so
+    a file that no import of a message reaches costs a few lookups."""
     if c.message_paths is None:  # once per machine
-        c.message_paths = imported_paths(c.read.trees.get("Includes.py"))
+        c.message_paths = _of_messages(imported_paths(c.read.trees.get("Includes.py")))
         c.message_variables = _annotated(m.variables, c.message_paths)
-    paths, typed = c.message_paths, dict(c.message_variables or {})
+    text, paths = code.text, c.message_paths
+    if "import" in text:
+        paths = {**paths, **_of_messages(imported_paths(tree))}
+    if not paths:
+        return  # nothing here can name a message type
+    typed = {k: v for k, v in (c.message_variables or {}).items() if f"{k}." in text}
     if s.variables:
-        typed.update(_annotated(s.variables, paths))
-    if "import" in code.text:
-        paths = {**paths, **imported_paths(tree)}
-    if "=" in code.text:
-        typed.update(_locals(tree, paths))
-    typed = {k: v for k, v in typed.items() if f"{k}." in code.text}
+        typed.update((k, v) for k, v in _annotated(s.variables, paths).items() if f"{k}." in text)
+    if "=" in text:
+        typed.update((k, v) for k, v in _locals(tree, paths).items() if f"{k}." in text)
     if not typed:
         return
     if c.interface_roots is None:  # where `llfsm run` finds a user's packages (as LF042 looks)
         c.interface_roots = folders_around(os.fspath(c.path))
     for name, chain in chains(tree, typed):
         _check_chain(c, code, name, typed[name], chain)
+
+
+def _of_messages(paths: dict[str, str]) -> dict[str, str]:
+    """The imports that may lead to a message type: of llfsm.msgs, or of llfsm itself."""
+    return {k: v for k, v in paths.items() if v == "llfsm" or v.startswith(MSGS)}
 
 
 def _spec(c: Checking, type_name: str) -> MessageSpec | None:
