@@ -29,8 +29,8 @@ import itertools
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from .check import Verification
 from .explorer import Explorer
+from .judge import Verification
 
 Formula = tuple[Any, ...]
 

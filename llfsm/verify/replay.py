@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from ..runtime.inputs import DEFAULT, FIELD, MSG, NAME, TOPIC
-from .check import Trace, Verification
+from .judge import Trace, Verification
 
 
 class ReplayError(Exception):
