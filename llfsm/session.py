@@ -448,7 +448,7 @@ class Session:
                 with signals_handled(arr):
                     ran = True  # from here the run's end hooks (ctx.at_end) close what the nodes and bus opened
                     result = arr.run(o.duration, grace)
-                if result.reason == "interrupted" and (left := unfinished(arr)):
+                if result.reason == "interrupted" and (left := _unfinished(arr)):
                     self.say(f"llfsm: the grace time ({grace / 1e9:g} s) ran out before {left} finished")
             finally:
                 if self.web_server is not None:
@@ -660,7 +660,7 @@ class Session:
         return getattr(self.nodes.get("turtlesim"), "world", None)
 
 
-def unfinished(arr: Arrangement) -> str:
+def _unfinished(arr: Arrangement) -> str:
     """The machines of a run that did not finish, each with where it stands: `bot (in TURN)`."""
     return ", ".join(
         f"{m.NAME} ({'suspended in' if m._suspended else 'in'} {m.STATES[m._state]})"
