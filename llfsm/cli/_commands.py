@@ -17,6 +17,7 @@ from . import (  # noqa: F401  (each registers its commands)
     graph,
     import_,
     interface,
+    launch,
     new,
     node,
     param,
