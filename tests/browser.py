@@ -12,10 +12,11 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import pytest
 from helpers import REPO
 
 CHROMIUM = os.environ.get("LLFSM_CHROMIUM", "/usr/bin/chromium")
@@ -53,9 +54,34 @@ def until(condition: Callable[[], object], timeout: float = TIMEOUT_MS / 1000, w
         time.sleep(0.05)
 
 
+def playwright_or_skip() -> Any:
+    """Playwright's sync API; the calling test module is skipped, saying why, without it, the
+    web extra or Chromium."""
+    pytest.importorskip("aiohttp")
+    sync_api = pytest.importorskip(
+        "playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')"
+    )
+    if not have_chromium():
+        pytest.skip(
+            f"no Chromium at {CHROMIUM}: `apt-get install chromium` (make test does it as root)",
+            allow_module_level=True,
+        )
+    return sync_api
+
+
+def chromium(sync_api: Any) -> Iterator[Any]:
+    """A headless Chromium for a test module's tests (a generator for a fixture to yield from)."""
+    with sync_api.sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        try:
+            yield b
+        finally:
+            b.close()
+
+
 class Served:
     """`llfsm VERB ... --web 127.0.0.1:0` as a process: its URL (from the line holding
-    `http://`), its output kept as it comes."""
+    `http://`), its standard output and error kept as they come."""
 
     def __init__(self, *args: str, cwd: Path = REPO, env: dict[str, str] | None = None) -> None:
         self.proc = subprocess.Popen(
@@ -66,25 +92,27 @@ class Served:
             cwd=cwd,
             env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
         )
-        self.output: list[str] = []
+        self.stdout: list[str] = []
+        self.stderr: list[str] = []
         self.url = ""
         assert self.proc.stderr is not None
         deadline = time.monotonic() + 60
         for line in self.proc.stderr:
-            self.output.append(line)
+            self.stderr.append(line)
             m = re.search(r"http://\S+", line)
             if m:
                 self.url = m.group(0)
                 break
             if time.monotonic() > deadline:
                 break
-        assert self.url, f"no http:// address printed: {''.join(self.output)}"
-        for stream in (self.proc.stdout, self.proc.stderr):
-            threading.Thread(target=self._drain, args=(stream,), daemon=True).start()
+        assert self.url, f"no http:// address printed: {''.join(self.stderr)}"
+        threading.Thread(target=self._drain, args=(self.proc.stdout, self.stdout), daemon=True).start()
+        threading.Thread(target=self._drain, args=(self.proc.stderr, self.stderr), daemon=True).start()
 
-    def _drain(self, stream: Any) -> None:
+    @staticmethod
+    def _drain(stream: Any, into: list[str]) -> None:
         for line in stream:
-            self.output.append(line)
+            into.append(line)
 
     def stop(self) -> None:
         self.proc.terminate()

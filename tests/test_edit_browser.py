@@ -16,17 +16,12 @@ from typing import Any
 
 import pytest
 import yaml
-from browser import ARGS, CHROMIUM, TIMEOUT_MS, Served, have_chromium, page_not_built, until
+from browser import TIMEOUT_MS, Served, chromium, page_not_built, playwright_or_skip, until
 from helpers import MACHINES, llfsm, llfsm_process
 
 pytestmark = pytest.mark.browser
 
-pytest.importorskip("aiohttp")
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
-if not have_chromium():
-    pytest.skip(
-        f"no Chromium at {CHROMIUM}: `apt-get install chromium` (make test does it as root)", allow_module_level=True
-    )
+sync_api = playwright_or_skip()
 
 
 @pytest.fixture(scope="module")
@@ -34,12 +29,7 @@ def browser() -> Iterator[Any]:
     why = page_not_built()
     if why:
         pytest.fail(why, pytrace=False)
-    with sync_api.sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+    yield from chromium(sync_api)
 
 
 class Editor:

@@ -13,7 +13,6 @@ import os
 import re
 import shutil
 import struct
-import subprocess
 import sys
 import threading
 import time
@@ -22,75 +21,25 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from browser import ARGS, CHROMIUM, TIMEOUT_MS, have_chromium, until
+from browser import ARGS, CHROMIUM, TIMEOUT_MS, Served, chromium, playwright_or_skip, until
 from dds_netns import NetNamespace, finish
 from helpers import MACHINES, REPO
 
 pytestmark = pytest.mark.browser
 
-pytest.importorskip("aiohttp")
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
-
-if not have_chromium():
-    pytest.skip(
-        f"no Chromium at {CHROMIUM}: `apt-get install chromium` (make test does it as root)", allow_module_level=True
-    )
+sync_api = playwright_or_skip()
 MACHINE = "ros2_ping_pong"
 
 
-class LiveRun:
-    """`llfsm run ... --web` in a subprocess: its URL, and its stdout collected as it comes."""
+class LiveRun(Served):
+    """`llfsm run --clock wall MACHINE... --web` in a subprocess (120 s unless `extra` says
+    otherwise): its URL, and its stdout collected as it comes."""
 
     def __init__(self, cache: Path, *extra: str, machines: tuple[str, ...] = (MACHINE,)) -> None:
-        env = {**os.environ, "LLFSM_CACHE_DIR": str(cache), "PYTHONUNBUFFERED": "1"}
-        self.proc = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "llfsm",
-                "run",
-                "--clock",
-                "wall",
-                *(str(MACHINES / f"{m}.machine") for m in machines),
-                "--web",
-                "127.0.0.1:0",
-                "--duration",
-                "120",
-                *extra,
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            cwd=REPO,
-            env=env,
+        paths = (str(MACHINES / f"{m}.machine") for m in machines)
+        super().__init__(
+            "run", "--clock", "wall", *paths, "--duration", "120", *extra, env={"LLFSM_CACHE_DIR": str(cache)}
         )
-        self.stdout: list[str] = []
-        self.url = ""
-        deadline = time.monotonic() + 60
-        assert self.proc.stderr is not None
-        for line in self.proc.stderr:
-            m = re.search(r"http://\S+", line)
-            if m:
-                self.url = m.group(0)
-                break
-            if time.monotonic() > deadline:
-                break
-        assert self.url, "the run printed no http:// address"
-        threading.Thread(target=self._drain, args=(self.proc.stdout, self.stdout), daemon=True).start()
-        threading.Thread(target=self._drain, args=(self.proc.stderr, []), daemon=True).start()
-
-    @staticmethod
-    def _drain(stream: Any, into: list[str]) -> None:
-        for line in stream:
-            into.append(line)
-
-    def stop(self) -> None:
-        self.proc.terminate()
-        try:
-            self.proc.wait(15)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait(5)
 
 
 @pytest.fixture(scope="module")
@@ -104,12 +53,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveRun]:
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    with sync_api.sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+    yield from chromium(sync_api)
 
 
 @pytest.fixture
