@@ -76,11 +76,11 @@ def verify(
     from pathlib import Path
 
     from ..lang.diagnostics import render as render_diagnostics
+    from ..props.kinds import KINDS
     from ..runtime.clock import parse_duration
     from ..verify.check import verify as run_verification
     from ..verify.explorer import Options
     from ..verify.load import VERIFY_SUFFIX, PropertySource, VerifyError, load_arrangement, read_verify_file
-    from ..verify.props import KINDS
     from ..verify.report import render
 
     sources: list[PropertySource] = []
@@ -121,7 +121,9 @@ def verify(
         loaded = load_arrangement(machines)
         options = Options(period=period, interrupt=bool(interrupt), max_states=max_states, hash_compact=hash_compact)
         show = None if quiet else _progress()
-        result = run_verification(loaded, sources, options, show, keep_graph=bool(exports))
+        result = run_verification(
+            loaded, sources, options, show, keep_graph=bool(exports), judging=None if show is None else show.judging
+        )
         if show is not None:
             show.done()
     except VerifyError as e:
@@ -185,6 +187,15 @@ class _progress:
         self.last = seconds
         rate = explored / seconds if seconds else 0
         line = f"llfsm verify: {explored:,} configurations ({rate:,.0f}/s), queue {queue:,}, {seconds:.0f} s"
+        progress(("\r" + line + "\x1b[K") if self.tty else line + "\n")
+        self.shown = True
+
+    def judging(self, name: str, nodes: int, states: int, seconds: float) -> None:
+        """An `ltl:` property judged on the explored structure: its product with the automaton."""
+        if not self.tty and (seconds < 2 or (self.shown and seconds - self.last < 10)):
+            return
+        self.last = seconds
+        line = f"llfsm verify: judging {name}: {nodes:,} product states ({states:,} automaton states), {seconds:.0f} s"
         progress(("\r" + line + "\x1b[K") if self.tty else line + "\n")
         self.shown = True
 

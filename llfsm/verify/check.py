@@ -14,12 +14,17 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..props.atoms import Atom, PropertyError
+from ..props.automaton import Automaton
+from ..props.formula import core, neg
+from ..props.kinds import CTL as BY_CTL
+from ..props.kinds import ON_THE_FLY
+from ..props.parse import Property, parse_property
 from ..runtime.errors import report_for
 from .ctl import CTL
 from .explorer import AtomError, Explorer, Loaded, MachineError, Options, StateLimit, Step
 from .load import PropertySource, VerifyError, machine_infos
-from .ltl import Structure, check_ltl
-from .props import Atom, Property, PropertyError, parse_property
+from .ltl import ProductLimit, Structure, check_ltl
 from .snapshot import VariableValueError
 
 
@@ -70,17 +75,17 @@ class Verification:
         return 0
 
 
-SAFETY = ("always", "never", "reachable")
-
-
 def verify(
     loaded: Loaded,
     sources: list[PropertySource],
     options: Options,
     progress: Callable[[int, int, float], None] | None = None,
     keep_graph: bool = False,
+    judging: Callable[[str, int, int, float], None] | None = None,
 ) -> Verification:
-    """Explore `loaded` and judge each property; bad properties raise VerifyError (status 2)."""
+    """Explore `loaded` and judge each property; bad properties raise VerifyError (status 2).
+    `progress` is told how the exploration goes, `judging(property, product states, automaton
+    states, seconds)` how an `ltl:` judgement on the structure goes, about once a second."""
     infos = machine_infos(loaded)
     props: list[Property] = []
     atoms: list[Atom] = []
@@ -102,7 +107,14 @@ def verify(
         atom_ids.append(ids)
     if len(atoms) > 64:
         raise VerifyError(f"the properties name {len(atoms)} different conditions; at most 64 in one verification")
-    needs_graph = keep_graph or any(p.kind not in SAFETY for p in props)
+    automata: dict[int, Automaton] = {}
+    for n, p in enumerate(props):  # built (and bounded) before anything is explored
+        if p.spec.verify not in (ON_THE_FLY, BY_CTL):
+            try:
+                automata[n] = Automaton(core(neg(p.formula)), text=f"{p.where}: {p.kind}: `{p.text}`")
+            except PropertyError as e:
+                raise VerifyError(str(e)) from None
+    needs_graph = keep_graph or any(p.spec.verify != ON_THE_FLY for p in props)
     options.graph = needs_graph
     try:
         explorer = Explorer(loaded, options, [a.fn for a in atoms])
@@ -124,17 +136,16 @@ def verify(
 
     # safety, judged on each new configuration
     first_bad: dict[int, int] = {}  # property -> the first configuration that decides it
-    pending = {
-        n: (p.kind, atom_ids[n][0]) for n, p in enumerate(props) if p.kind in SAFETY
-    }  # always/never: violated by; reachable: found by
+    pending = {  # the property -> (the atom's value that decides it, its bit)
+        n: (int(p.spec.decided_by), atom_ids[n][0]) for n, p in enumerate(props) if p.spec.verify == ON_THE_FLY
+    }
 
     def on_new(idx: int) -> bool:
         if not pending:
             return True
         lab = explorer.labels[idx]
-        for n, (kind, bit) in list(pending.items()):
-            v = lab >> bit & 1
-            if (kind == "always" and not v) or (kind != "always" and v):
+        for n, (deciding, bit) in list(pending.items()):
+            if lab >> bit & 1 == deciding:
                 first_bad[n] = idx
                 del pending[n]
         return bool(pending) or needs_graph
@@ -180,9 +191,9 @@ def verify(
     for n, prop in enumerate(props):
         t0 = time.monotonic()
         out = Outcome(prop, "unknown")
-        if prop.kind in SAFETY:
+        if prop.spec.verify == ON_THE_FLY:
             idx = first_bad.get(n)
-            if prop.kind == "reachable":
+            if prop.spec.witness:
                 out.verdict = "holds" if idx is not None else "fails"
                 if idx is not None:
                     out.trace = _trace(explorer, explorer.path_to(idx))
@@ -196,16 +207,31 @@ def verify(
         elif result.partial is None and result.error is None:
             if structure is None:
                 structure = _structure(explorer)
-            if prop.kind == "ctl":
+            if prop.spec.verify == BY_CTL:
                 if ctl is None:
                     ctl = CTL(structure, list(range(len(atoms))))
                 out.verdict, out.trace, out.why = _judge_ctl(explorer, ctl, prop, atom_ids[n])
             else:
-                lasso = check_ltl(structure, prop.formula, atom_ids[n])
-                if lasso is None:
-                    out.verdict = "holds"
+                told = None
+                if judging is not None:
+                    t_start = time.monotonic()
+
+                    def told(nodes: int, states: int, name: str = prop.name, t_start: float = t_start) -> None:
+                        judging(name, nodes, states, time.monotonic() - t_start)
+
+                try:
+                    lasso = check_ltl(
+                        structure, automata[n], atom_ids[n], told, max_nodes=options.max_states * 4,
+                        memory_ok=explorer.memory_ok,
+                    )  # fmt: skip
+                except PropertyError as e:  # the automaton passed its bound while the product grew
+                    raise VerifyError(str(e)) from None
+                except ProductLimit as e:
+                    lasso = None
+                    out.verdict, out.why = "unknown", str(e)
                 else:
-                    out.verdict = "fails"
+                    out.verdict = "holds" if lasso is None else "fails"
+                if lasso is not None:
                     out.trace = _trace(explorer, lasso.path, lasso.loop)
         if out.trace is not None and not _replays(explorer, out.trace):
             result.warnings.append(
@@ -213,9 +239,10 @@ def verify(
                 "read something verify does not keep (a global of a helper module?), so the result may be wrong"
             )
         out.seconds = (explored - start) + (time.monotonic() - t0)
-        if out.verdict == "unknown":
+        if out.verdict == "unknown" and out.why is None:
             out.why = result.partial or "machine code raised before it was decided"
         result.outcomes.append(out)
+    result.seconds = time.monotonic() - start  # exploring and judging: the whole check
     return result
 
 

@@ -1006,6 +1006,10 @@ class Explorer:
         """Configurations stored."""
         return len(self.parent)
 
+    def memory_ok(self) -> bool:
+        """Whether the process is still within the exploration's memory bound."""
+        return True
+
     # -- paths ----------------------------------------------------------------------------------------
     def path_to(self, idx: int) -> list[int]:
         """The configurations from the initial one to `idx`, along the BFS tree (a shortest path)."""
