@@ -1,6 +1,6 @@
 """This checkout against another one, side by side: did a change make llfsm slower?
 
-    .venv/bin/python bench/versus.py OTHER [--quick] [--sections speed startup build dds]
+    .venv/bin/python bench/versus.py OTHER [--quick] [--sections speed startup build verify dds]
 
 OTHER is another checkout of llfsm (a `git worktree add /tmp/base <commit>` with its own
 `make .venv/.installed-dev`).  Each figure is measured in both checkouts in the same run,
@@ -16,6 +16,9 @@ helpers (bench/run.py's contestants, bench/dds.py's roles), so what differs is t
 - startup: wall time of `llfsm run --clock sim hello.machine` with a warm cache, and of a
   built module.
 - build: CPU time (user + system) of a cold `llfsm build` of 10 and 100 generated machines.
+- verify: configurations per second of `llfsm verify` (from its JSON report: configurations over
+  the check's seconds) on bench/verify.py's counter of 10^5 configurations and its 5 mutex
+  machines, exact storage and hash compaction.
 - dds: Twist round trip p50 and an idle machine's rounds per second on the DDS transport,
   inside a private network namespace.
 """
@@ -193,6 +196,35 @@ def section_build(other: Path, quick: bool, tmp: Path) -> list[Row]:
     return rows
 
 
+def section_verify(other: Path, quick: bool, tmp: Path) -> list[Row]:
+    from verify import mutex_property, write_counter, write_mutex
+
+    counter = write_counter(tmp / "counter", 20_000 if quick else 100_000)
+    mutex = write_mutex(tmp / "mutex", 4 if quick else 5)
+    cases = [
+        ("counter", [counter], "always: counter.count >= 0"),
+        ("mutex", mutex, mutex_property(len(mutex))),
+    ]
+    rows = []
+    for label, paths, prop in cases:
+        for extra in ((), ("--hash-compact",)):
+
+            def once(side: Path, paths: list[Path] = paths, prop: str = prop, extra: tuple[str, ...] = extra) -> float:
+                cmd = [python_of(side), "-m", "llfsm", "verify", *map(str, paths), "--property", prop]
+                cmd += [*extra, "--format", "json", "-q"]
+                env = env_of(side, tmp / f"cache-{side.name}")
+                out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False).stdout
+                doc = json.loads(out)
+                return doc["configurations"] / doc["seconds"]
+
+            for side in (THIS, other):
+                once(side)  # the machines built into each side's cache outside the timed runs
+            mine, theirs = alternate(3 if quick else 7, (THIS, other), once)
+            name = f"verify: {label}{' ' + extra[0] if extra else ''} (configurations/s)"
+            rows.append(row(name, mine, theirs, lambda x: f"{x:,.0f}/s"))
+    return rows
+
+
 def section_dds(other: Path, quick: bool, tmp: Path) -> list[Row]:
     cmd = [sys.executable, str(Path(__file__)), str(other), "--dds-inside"] + (["--quick"] if quick else [])
     r = subprocess.run(
@@ -225,7 +257,13 @@ def dds_inside(other: Path, quick: bool) -> None:
         print(json.dumps(row(f"dds: {key}", mine, theirs, lambda x: f"{x:.3g}")))
 
 
-SECTIONS = {"speed": section_speed, "startup": section_startup, "build": section_build, "dds": section_dds}
+SECTIONS = {
+    "speed": section_speed,
+    "startup": section_startup,
+    "build": section_build,
+    "verify": section_verify,
+    "dds": section_dds,
+}
 
 
 def main() -> None:
