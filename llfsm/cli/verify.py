@@ -28,6 +28,12 @@ from ._common import DURATION, cli, fail, progress, write_output
     "--max-states", type=int, default=None, help="Stop past this many configurations (default 1,000,000): exit 3."
 )
 @click.option(
+    "--max-memory",
+    metavar="SIZE",
+    default=None,
+    help="Stop past this much memory in use (200MB, 2GB; default: half of what this process may use): exit 3.",
+)
+@click.option(
     "--hash-compact",
     is_flag=True,
     help="Keep each configuration as a 64-bit hash only (about 60 bytes each; the chance of a collision is printed).",
@@ -58,6 +64,7 @@ def verify(
     period: int | None,
     interrupt: bool | None,
     max_states: int | None,
+    max_memory: str | None,
     hash_compact: bool,
     counterexample_dir: str | None,
     exports: tuple[tuple[str, str], ...],
@@ -70,7 +77,8 @@ def verify(
 
     TARGET: machines as `llfsm run` takes them (in load order), or a NAME.verify.yaml that lists
     the machines and the properties.  Exit status: 0 every property holds, 1 one fails (or
-    machine code raised), 2 bad input or code verify cannot explore, 3 the state limit.
+    machine code raised), 2 bad input or code verify cannot explore, 3 the state limit or the
+    memory bound.
     """
     # deferred: start-up (every command module is imported when `llfsm` starts)
     from pathlib import Path
@@ -81,6 +89,7 @@ def verify(
     from ..verify.check import verify as run_verification
     from ..verify.explorer import Options
     from ..verify.load import VERIFY_SUFFIX, PropertySource, VerifyError, load_arrangement, read_verify_file
+    from ..verify.memory import parse_size
     from ..verify.report import render
 
     sources: list[PropertySource] = []
@@ -116,10 +125,18 @@ def verify(
             max_states = ms
         if max_states < 1:
             fail("--max-states must be at least 1")
+        memory: int | None = None
+        size = max_memory if max_memory is not None else file_options.get("max_memory")
+        if size is not None:
+            try:
+                memory = parse_size(str(size))
+            except ValueError as e:
+                fail(f"--max-memory: {e}" if max_memory is not None else f"max_memory in the verification file: {e}")
         if counterexample_dir is not None and period is None:
             fail("--counterexample writes a bag replayed with `llfsm run --clock sim --period P`: give --period P")
         loaded = load_arrangement(machines)
         options = Options(period=period, interrupt=bool(interrupt), max_states=max_states, hash_compact=hash_compact)
+        options.max_memory = memory
         show = None if quiet else _progress()
         result = run_verification(
             loaded, sources, options, show, keep_graph=bool(exports), judging=None if show is None else show.judging

@@ -26,6 +26,8 @@ from .explorer import AtomError, Explorer, Loaded, MachineError, Options, StateL
 from .load import PropertySource, VerifyError, machine_infos
 from .ltl import ProductLimit, Structure, check_ltl
 from .snapshot import VariableValueError
+from .step import input_product_refusal
+from .store import MemoryLimit
 
 
 @dataclass
@@ -57,7 +59,9 @@ class Verification:
     configurations: int = 0
     steps: int = 0
     seconds: float = 0.0
-    partial: str | None = None  # interrupted | state limit
+    partial: str | None = None  # interrupted | state limit | memory bound
+    #: at the memory bound: (bytes in use when it was seen, the bound)
+    memory: tuple[int, int] | None = None
     growing: list[str] = field(default_factory=list)
     error: str | None = None  # machine code raised: the report, with the path to it
     error_trace: Trace | None = None
@@ -68,7 +72,7 @@ class Verification:
     def status(self) -> int:
         if self.error is not None or any(o.verdict == "fails" for o in self.outcomes):
             return 1
-        if self.partial == "state limit":
+        if self.partial in ("state limit", "memory bound"):
             return 3
         if self.partial == "interrupted":
             return 130
@@ -114,6 +118,9 @@ def verify(
                 automata[n] = Automaton(core(neg(p.formula)), text=f"{p.where}: {p.kind}: `{p.text}`")
             except PropertyError as e:
                 raise VerifyError(str(e)) from None
+    refusal = input_product_refusal(loaded, options.max_states)
+    if refusal is not None:
+        raise VerifyError(refusal)
     needs_graph = keep_graph or any(p.spec.verify != ON_THE_FLY for p in props)
     options.graph = needs_graph
     try:
@@ -154,8 +161,16 @@ def verify(
     start = time.monotonic()
     try:
         explorer.explore()
+    except MemoryLimit as e:
+        result.partial = "memory bound"
+        result.memory = (e.used, explorer.meter.bound)
+        result.growing = growing_variables(explorer)
     except StateLimit:
         result.partial = "state limit"
+        result.growing = growing_variables(explorer)
+    except MemoryError:  # past the bound between two looks: what is left is enough to say so
+        result.partial = "memory bound"
+        result.memory = (explorer.meter.bound, explorer.meter.bound)
         result.growing = growing_variables(explorer)
     except KeyboardInterrupt:
         result.partial = "interrupted"
@@ -310,6 +325,19 @@ def growing_variables(explorer: Explorer) -> list[str]:
                 continue
             nums = [v for v in values if isinstance(v, int | float) and not isinstance(v, bool)]
             span = f", from {min(nums)} to {max(nums)}" if len(nums) == len(values) else ""
+            sizes = [_size(v) for v in values]
+            grew = max(sizes) - min(sizes)
+            if grew > 4:  # in size as well as in value: a list that keeps growing
+                span += f", in size from {min(sizes):,} to {max(sizes):,} items"
             out.append((len(values), f"{explorer.machines[i].NAME}.{name} ({len(values):,} values{span})"))
     out.sort(key=lambda x: -x[0])
     return [text for _n, text in out[:5]]
+
+
+def _size(value: Any) -> int:
+    """How many items a frozen value holds, all the way down (a scalar: 1)."""
+    if isinstance(value, tuple):  # tuples and Frozen (lists, dicts, messages: their kind first)
+        return sum(_size(v) for v in value[1:]) if type(value) is not tuple else sum(_size(v) for v in value)
+    if isinstance(value, str | bytes):
+        return max(1, len(value) // 16)
+    return 1

@@ -22,7 +22,7 @@ from typing import Any
 from ..runtime.context import activate
 from ..runtime.machine import Machine
 from .snapshot import FINISHED, STATE, SUSPENDED, VariableValueError
-from .step import AtomError, MachineError, Step, Stepper
+from .step import AtomError, MachineError, Step, Stepper, Valuations
 from .store import FIRST_ROUND, GLOBALS, LIVE, NODES, PARTS, PUBLISHED, TIMES, TURN, Loaded, Options, StateLimit
 
 __all__ = ["AtomError", "Explorer", "Loaded", "MachineError", "Options", "StateLimit", "Step"]
@@ -134,6 +134,8 @@ class Explorer(Stepper):
                         return
                     if len(self.parent) > limit:
                         raise StateLimit()
+                    if not len(self.parent) & 0xFF:
+                        self.check_memory()
             if self.progress is not None and self.steps & 0x3FF == 0:
                 now = time.monotonic()
                 if now - last >= 1.0:
@@ -174,7 +176,8 @@ class Explorer(Stepper):
         limit = self.options.max_states
         progress = self.progress
         probe, insert = self._probe, self._insert
-        choice_cache: dict[tuple[Any, ...], list[tuple[tuple[Any, ...], int, bool]]] = {}
+        check_memory = self.check_memory
+        choice_cache: dict[tuple[Any, ...], Sequence[tuple[tuple[Any, ...], int, bool]]] = {}
         fair_cache: dict[tuple[int, Any, int], int] = {}
         full = (1 << n) - 1
         start = last = time.monotonic()
@@ -263,7 +266,8 @@ class Explorer(Stepper):
                 key = (turn, p0[0], p0[1], p0[2], p0[3], p0[4], g0, tlist[t0][turn])
                 choices = choice_cache.get(key)
                 if choices is None:
-                    choices = choice_cache[key] = self.choices(config)
+                    made = self.choices(config)
+                    choices = choice_cache[key] = list(made) if len(made) <= Valuations.KEEP else made
                 m = machines[turn]
                 names = input_names[turn]
                 for c, (values, tm, intr) in enumerate(choices):
@@ -384,6 +388,8 @@ class Explorer(Stepper):
                             return
                         if j >= limit:
                             raise StateLimit()
+                        if not j & 0xFF:
+                            check_memory()
                     if graph:
                         edges.append(j)
                 if progress is not None and not idx & 0x3FF:

@@ -16,6 +16,7 @@ from typing import Any
 from ..lang.diagnostics import file_uri, shown
 from .check import Outcome, Trace, Verification
 from .explorer import TURN, Explorer, Step
+from .memory import size_text
 from .values import shown as value_text
 
 
@@ -146,6 +147,13 @@ def text(v: Verification, witnesses: bool = False) -> str:
         lines.append(
             f"stopped at the state limit ({v.configurations:,} configurations; --max-states raises it)"
             + (": the variables that kept growing: " + "; ".join(v.growing) if v.growing else "")
+        )
+    elif v.partial == "memory bound" and v.memory is not None:
+        used, bound = v.memory
+        lines.append(
+            f"stopped at the memory bound ({size_text(used)} in use, --max-memory {size_text(bound)}; "
+            f"{v.configurations:,} configurations; --max-memory raises it)"
+            + (": the variables that grew: " + "; ".join(v.growing) if v.growing else "")
         )
     elif v.partial == "interrupted":
         lines.append(f"interrupted: a partial result ({v.configurations:,} configurations explored so far)")

@@ -27,8 +27,9 @@ from __future__ import annotations
 import bisect
 import io
 import itertools
+import math
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -121,6 +122,74 @@ class Step:
     finished: bool  # the machine finished in this ringlet
 
 
+class Valuations(Sequence[tuple[Any, ...]]):
+    """Every valuation of a machine's inputs, in the order of `itertools.product` over their
+    domains: made one at a time, never as one list up front (SPEC 18), unless there are few."""
+
+    #: Up to this many valuations are kept as a list (faster to go through again).
+    KEEP = 4096
+
+    def __init__(self, domains: list[tuple[Any, ...]]) -> None:
+        self.domains = domains
+        self.size = math.prod(len(d) for d in domains)
+        self.kept: list[tuple[Any, ...]] | None = list(itertools.product(*domains)) if self.size <= self.KEEP else None
+
+    def __len__(self) -> int:
+        return self.size
+
+    def __iter__(self) -> Iterator[tuple[Any, ...]]:
+        return iter(self.kept) if self.kept is not None else itertools.product(*self.domains)
+
+    def __getitem__(self, k: int) -> tuple[Any, ...]:  # type: ignore[override]  # no slices
+        if self.kept is not None:
+            return self.kept[k]
+        out = []
+        for d in reversed(self.domains):  # the last domain varies fastest
+            k, r = divmod(k, len(d))
+            out.append(d[r])
+        return tuple(reversed(out))
+
+
+class Choices(Sequence[tuple[tuple[Any, ...], int, bool]]):
+    """The choices of one step, (input values, time, interrupt) in a fixed order (the values
+    varying fastest, then the time, then the interrupt), made as they are gone through."""
+
+    __slots__ = ("interrupts", "times", "valuations")
+
+    def __init__(self, valuations: Valuations, times: Sequence[int], interrupts: tuple[bool, ...]) -> None:
+        self.valuations, self.times, self.interrupts = valuations, times, interrupts
+
+    def __len__(self) -> int:
+        return len(self.valuations) * len(self.times) * len(self.interrupts)
+
+    def __iter__(self) -> Iterator[tuple[tuple[Any, ...], int, bool]]:
+        for it in self.interrupts:
+            for tm in self.times:
+                for v in self.valuations:
+                    yield v, tm, it
+
+    def __getitem__(self, c: int) -> tuple[tuple[Any, ...], int, bool]:  # type: ignore[override]  # no slices
+        if not 0 <= c < len(self):
+            raise IndexError(c)
+        nv, nt = len(self.valuations), len(self.times)
+        return self.valuations[c % nv], self.times[c // nv % nt], self.interrupts[c // (nv * nt)]
+
+
+def input_product_refusal(loaded: Loaded, max_states: int) -> str | None:
+    """Why an arrangement cannot be explored as its inputs' domains are: a machine whose inputs
+    multiply to more valuations a ringlet than --max-states allows configurations."""
+    for cls in loaded.classes:
+        sizes = [(entry[0], len(entry[3])) for entry in cls.INPUTS]
+        product = math.prod(n for _name, n in sizes)
+        if product > max_states:
+            names = ", ".join(f"{name} ({n})" for name, n in sizes if n > 1)
+            return (
+                f"machine {cls.NAME}: its inputs {names} multiply to {product:,} valuations a ringlet, more than "
+                f"--max-states ({max_states:,}) allows configurations: make their domains smaller or split them"
+            )
+    return None
+
+
 class Stepper(Store):
     """The machine objects of one arrangement, on the bus verify makes, and the steps between
     configurations (`step`, and `replay` of a path)."""
@@ -166,13 +235,12 @@ class Stepper(Store):
         ]
         # per machine: input names, domains, which are bound (their first round takes the default)
         self.input_names = [c.inputs for c in self.codecs]
-        self.domains: list[list[tuple[Any, ...]]] = []
-        self.first_round_domains: list[list[tuple[Any, ...]]] = []
+        self.domains: list[Valuations] = []
+        self.first_round_domains: list[Valuations] = []
         for cls in loaded.classes:
-            doms = [tuple(entry[3]) for entry in cls.INPUTS]
-            self.domains.append(list(itertools.product(*doms)))
+            self.domains.append(Valuations([tuple(entry[3]) for entry in cls.INPUTS]))
             first = [(entry[DEFAULT],) if entry[TOPIC] is not None else tuple(entry[3]) for entry in cls.INPUTS]
-            self.first_round_domains.append(list(itertools.product(*first)))
+            self.first_round_domains.append(Valuations(first))
         self.cuts = loaded.cuts
         # abstract time: a representative time of each interval of each state
         self.reps = [[(0, *(c + 1 for c in cuts)) for cuts in per] for per in self.cuts]
@@ -239,7 +307,7 @@ class Stepper(Store):
         return made
 
     # -- the choices of a step ------------------------------------------------------------------
-    def choices(self, config: tuple[Any, ...]) -> list[tuple[tuple[Any, ...], int, bool]]:
+    def choices(self, config: tuple[Any, ...]) -> Choices:
         """(input values, time, interrupt now) for each choice of the step from `config`, in
         order; time: the abstract interval chosen, or the exact time in the state."""
         i = config[TURN]
@@ -260,7 +328,7 @@ class Stepper(Store):
         else:
             times = (t,)
         interrupts = (False, True) if self.options.interrupt and not g[INTERRUPTED] else (False,)
-        return [(v, tm, it) for it in interrupts for tm in times for v in valuations]
+        return Choices(valuations, times, interrupts)
 
     # -- one step --------------------------------------------------------------------------------
     def step(

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..runtime.machine import Machine
+from .memory import Meter, default_bound
 
 #: Positions in a configuration tuple.
 TURN, LIVE, GLOBALS, PUBLISHED, TIMES = range(5)
@@ -39,6 +40,14 @@ INITIALISED, SHUT, INTERRUPTED, FIRST_ROUND, NODES = range(5)
 
 class StateLimit(Exception):
     """More configurations than --max-states."""
+
+
+class MemoryLimit(StateLimit):
+    """More memory in use than --max-memory (`used` bytes when it was seen)."""
+
+    def __init__(self, used: int) -> None:
+        super().__init__(used)
+        self.used = used
 
 
 @dataclass
@@ -57,6 +66,8 @@ class Options:
     period: int | None = None  # ns: explore `--clock sim --period P` exactly; None: abstract time
     interrupt: bool = False
     max_states: int = 1_000_000
+    #: bytes the process may hold in memory while exploring (None: half of what it may use)
+    max_memory: int | None = None
     hash_compact: bool = False
     #: keep every edge (liveness, CTL, exports need the graph; safety alone does not)
     graph: bool = False
@@ -71,6 +82,7 @@ class Store:
     def __init__(self, options: Options, n: int, atoms: int) -> None:
         self.options = options
         self.n = n
+        self.meter = Meter(options.max_memory if options.max_memory is not None else default_bound())
         # the structure: per configuration (numbered in breadth-first order, so by depth) its
         # parent in the BFS tree, the choice that reached it, its atoms' values, its fairness
         # bits, in arrays of the narrowest item that holds them; the edges if kept
@@ -183,8 +195,13 @@ class Store:
         return len(self.parent)
 
     def memory_ok(self) -> bool:
-        """Whether the process is still within the exploration's memory bound."""
-        return True
+        """Whether the process is still within the exploration's memory bound (--max-memory)."""
+        return self.meter.ok()
+
+    def check_memory(self) -> None:
+        """MemoryLimit past the bound: called every few hundred new configurations."""
+        if not self.meter.ok():
+            raise MemoryLimit(self.meter.used)
 
     # -- paths ----------------------------------------------------------------------------------------
     def path_to(self, idx: int) -> list[int]:
