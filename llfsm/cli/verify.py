@@ -95,6 +95,8 @@ def verify(
     sources: list[PropertySource] = []
     machines: list[str] = []
     file_options: dict[str, object] = {}
+    environment = None
+    bounds: dict[str, float] = {}
     try:
         for t in targets:
             if t.endswith(VERIFY_SUFFIX):
@@ -102,6 +104,9 @@ def verify(
                 machines += vf.machines
                 sources += vf.properties
                 file_options.update(vf.options)
+                if vf.environment:
+                    environment = vf.environment
+                bounds.update(vf.bounds)
             else:
                 machines.append(t)
         for text in properties:
@@ -134,7 +139,7 @@ def verify(
                 fail(f"--max-memory: {e}" if max_memory is not None else f"max_memory in the verification file: {e}")
         if counterexample_dir is not None and period is None:
             fail("--counterexample writes a bag replayed with `llfsm run --clock sim --period P`: give --period P")
-        loaded = load_arrangement(machines)
+        loaded = load_arrangement(machines, environment, bounds)
         options = Options(period=period, interrupt=bool(interrupt), max_states=max_states, hash_compact=hash_compact)
         options.max_memory = memory
         show = None if quiet else _progress()

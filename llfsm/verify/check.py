@@ -22,11 +22,12 @@ from ..props.kinds import ON_THE_FLY
 from ..props.parse import Property, parse_property
 from ..runtime.errors import report_for
 from .ctl import CTL
+from .environment import EnvironmentError_
 from .explorer import AtomError, Explorer, Loaded, MachineError, Options, StateLimit, Step
 from .load import PropertySource, VerifyError, machine_infos
 from .ltl import ProductLimit, Structure, check_ltl
 from .snapshot import VariableValueError
-from .step import input_product_refusal
+from .step import VerifyError_, input_product_refusal
 from .store import MemoryLimit
 
 
@@ -67,6 +68,8 @@ class Verification:
     error_trace: Trace | None = None
     #: what the user should know about the result (a replay that did not give the same path)
     warnings: list[str] = field(default_factory=list)
+    #: configurations past a bound of the verification file, not explored further
+    cut: int = 0
 
     @property
     def status(self) -> int:
@@ -122,10 +125,12 @@ def verify(
     if refusal is not None:
         raise VerifyError(refusal)
     needs_graph = keep_graph or any(p.spec.verify != ON_THE_FLY for p in props)
+    if loaded.environment:
+        options.generic = True  # the environment's choices are made inside a step: the generic loop tries each
     options.graph = needs_graph
     try:
         explorer = Explorer(loaded, options, [a.fn for a in atoms])
-    except VariableValueError as e:
+    except (VariableValueError, EnvironmentError_, VerifyError_) as e:
         raise VerifyError(str(e)) from None
     except VerifyError:
         raise
@@ -199,6 +204,7 @@ def verify(
             )
     result.configurations = explorer.count
     result.steps = explorer.steps
+    result.cut = explorer.cut
     explored = time.monotonic()
 
     structure: Structure | None = None

@@ -93,6 +93,7 @@ class Explorer(Stepper):
             return
         pos = 0
         limit = self.options.max_states
+        oracle = self.world.oracle if self.world is not None else None
         while True:
             if hc:
                 if not self.frontier:
@@ -105,6 +106,8 @@ class Explorer(Stepper):
                 pos += 1
             if graph:
                 self.edge_start.append(len(self.edges))
+            if self.bounds and self.beyond(config):
+                continue  # past a bound of the verification file: not explored further
             if config[TURN] < 0:  # the run has ended: it stays so, publishing nothing
                 succ = (*config[:PUBLISHED], self._intern(self.etab, self.elist, frozenset()), *config[TIMES:])
                 self.load(config)
@@ -116,26 +119,37 @@ class Explorer(Stepper):
                 if new and self.on_new is not None and not self.on_new(j):
                     return
                 continue
-            for c, choice in enumerate(self.choices(config)):
-                try:
-                    succ, _r = self.step(config, choice)
-                except VariableValueError:
-                    raise
-                except BaseException as exc:  # machine code may raise anything
-                    if isinstance(exc, KeyboardInterrupt | MemoryError):
+            choices = self.choices(config)
+            for base, choice in enumerate(choices):
+                forced: list[int] | None = []
+                while forced is not None:  # each sequence of the environment's choices (one without one)
+                    if oracle is not None:
+                        oracle.start(forced)
+                    c = base
+                    try:
+                        succ, _r = self.step(config, choice)
+                        if oracle is not None:
+                            c += len(choices) * oracle.number()
+                    except VariableValueError:
                         raise
-                    raise MachineError(exc, idx, c) from exc
-                self.steps += 1
-                j, new = self._add(succ, idx, c)
-                if graph:
-                    self.edges.append(j)
-                if new:
-                    if self.on_new is not None and not self.on_new(j):
-                        return
-                    if len(self.parent) > limit:
-                        raise StateLimit()
-                    if not len(self.parent) & 0xFF:
-                        self.check_memory()
+                    except BaseException as exc:  # machine code may raise anything
+                        if isinstance(exc, KeyboardInterrupt | MemoryError):
+                            raise
+                        raise MachineError(exc, idx, c) from exc
+                    forced = oracle.next_forced() if oracle is not None else None
+                    self.steps += 1
+                    j, new = self._add(succ, idx, c)
+                    if graph:
+                        self.edges.append(j)
+                        if oracle is not None:
+                            self.edge_choice.append(c)
+                    if new:
+                        if self.on_new is not None and not self.on_new(j):
+                            return
+                        if len(self.parent) > limit:
+                            raise StateLimit()
+                        if not len(self.parent) & 0xFF:
+                            self.check_memory()
             if self.progress is not None and self.steps & 0x3FF == 0:
                 now = time.monotonic()
                 if now - last >= 1.0:
@@ -177,6 +191,7 @@ class Explorer(Stepper):
         progress = self.progress
         probe, insert = self._probe, self._insert
         check_memory = self.check_memory
+        bounded = bool(self.bounds)
         choice_cache: dict[tuple[Any, ...], Sequence[tuple[tuple[Any, ...], int, bool]]] = {}
         fair_cache: dict[tuple[int, Any, int], int] = {}
         full = (1 << n) - 1
@@ -244,6 +259,8 @@ class Explorer(Stepper):
                     pos += 1
                 if graph:
                     edge_start.append(len(edges))
+                if bounded and self.beyond(config):
+                    continue  # past a bound of the verification file: not explored further
                 turn = config[TURN]
                 if turn < 0:  # the run has ended: it stays so, publishing nothing
                     succ = (*config[:PUBLISHED], empty, *config[TIMES:])

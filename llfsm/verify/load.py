@@ -16,7 +16,7 @@ from ..lang.diagnostics import Diagnostic, Severity, diag
 from ..machinedir import MACHINE_SUFFIX
 from ..props.atoms import MachineInfo
 from ..props.file import VERIFY_SUFFIX as VERIFY_SUFFIX  # re-exported: the CLI's and tests' names
-from ..props.file import FileError, VerifyFile
+from ..props.file import Environment, FileError, VerifyFile
 from ..props.file import PropertySource as PropertySource
 from ..props.file import read_verify_file as read_file
 from ..targets import InvalidMachine, MachineLoadError, TargetError, find_installed, load
@@ -68,8 +68,12 @@ def machine_dir(target: str) -> Path | None:
     return None
 
 
-def load_arrangement(targets: list[str]) -> Loaded:
-    """The arrangement of `targets`, in load order, checked and read; VerifyError otherwise."""
+def load_arrangement(
+    targets: list[str], environment: Environment | None = None, bounds: dict[str, float] | None = None
+) -> Loaded:
+    """The arrangement of `targets`, in load order, checked and read; VerifyError otherwise.
+    `environment` (a verification file's) is what the machines may call and read instead of
+    being refused; `bounds` where the exploration stops going further."""
     if not targets:
         raise VerifyError("nothing to verify: give machines (TARGET...) or a NAME.verify.yaml")
     models = []
@@ -90,7 +94,7 @@ def load_arrangement(targets: list[str]) -> Loaded:
         if errors or result.machine is None:
             diags.extend(errors)
             continue
-        found = refusals(result.machine, result.read.trees, d)
+        found = refusals(result.machine, result.read.trees, d, environment)
         diags.extend(found.diagnostics)
         models.append(result.machine)
         cuts.append(found.cuts)
@@ -113,7 +117,7 @@ def load_arrangement(targets: list[str]) -> Loaded:
     for n in names:
         if names.count(n) > 1:
             raise VerifyError(f"machine {n} is loaded twice; an arrangement addresses machines by name")
-    return Loaded(classes, models, cuts, paths)
+    return Loaded(classes, models, cuts, paths, environment if environment else None, dict(bounds or {}))
 
 
 def machine_infos(loaded: Loaded) -> dict[str, MachineInfo]:

@@ -29,8 +29,9 @@ import io
 import itertools
 import math
 import sys
+from array import array
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from ..runtime.clock import SimClock
@@ -39,6 +40,7 @@ from ..runtime.inputs import DEFAULT, TOPIC
 from ..runtime.machine import RESUME, Machine
 from ..runtime.scheduler import Arrangement
 from ..runtime.trace import Tracer
+from .environment import World
 from .snapshot import FINISHED, PENDING, STATE, SUSPENDED, Codec
 from .store import (
     FIRST_ROUND,
@@ -120,6 +122,11 @@ class Step:
     changed: dict[str, tuple[Any, Any]]  # variable -> (before, after), of any machine
     round: int  # the round the ringlet ran in (counted from 0 along the path)
     finished: bool  # the machine finished in this ringlet
+    environment: list[str] = field(default_factory=list)  # what the environment chose, in order
+
+
+class VerifyError_(ValueError):
+    """A verification file's bound that names no variable (one line)."""
 
 
 class Valuations(Sequence[tuple[Any, ...]]):
@@ -221,6 +228,9 @@ class Stepper(Store):
             activate(prev)
         self.arr = arr
         self.machines: list[Machine] = arr.machines
+        #: the environment a verification file declares (llfsm.verify.environment), on the bus
+        self.world = World(loaded.environment, self.bus) if loaded.environment else None
+        self.edge_choice = array("L")  # with an environment: each edge's choice number
         # the bus as the machines found it (nodes their initialisers made stay, as in a run)
         self.base_nodes = list(self.bus.nodes)
         self.base_services = dict(self.bus.services)
@@ -233,6 +243,17 @@ class Stepper(Store):
             Codec(cls, model, arr._gate_fn, self.handles)
             for cls, model in zip(loaded.classes, loaded.models, strict=True)
         ]
+        #: a verification file's bounds: (machine, position in its part, the largest value explored on)
+        self.bounds: list[tuple[int, int, float]] = []
+        for key, bound in loaded.bounds.items():
+            name, _, var = key.partition(".")
+            k = next((k for k, c in enumerate(loaded.classes) if name == c.NAME), None)
+            codec = self.codecs[k] if k is not None else None
+            if codec is None or var not in codec.shown_names:
+                raise VerifyError_(f"bounds: {key}: no machine {name} with a variable {var}")
+            self.bounds.append((k, codec.first_variable + codec.shown_names.index(var), bound))  # type: ignore[arg-type]
+        #: configurations past a bound, not explored further
+        self.cut = 0
         # per machine: input names, domains, which are bound (their first round takes the default)
         self.input_names = [c.inputs for c in self.codecs]
         self.domains: list[Valuations] = []
@@ -345,6 +366,9 @@ class Stepper(Store):
         for name, v in zip(self.input_names[i], values, strict=True):
             setattr(m, name, v)
         self.cur[i] = -1
+        if self.world is not None:  # the environment's messages, before the ringlet (as between rounds)
+            self.world.before_ringlet(m, self.codecs[i].variables)
+            self._drain()
         # abstract time: a time of the interval chosen; exact: the time itself
         now = self.reps[i][m._state][tm] if self.period is None else tm
         m._t0 = 0
@@ -369,6 +393,8 @@ class Stepper(Store):
                     r = m._run(m)
             finally:
                 arr.tracer = None
+        if self.bus.ready:  # requests and callbacks the ringlet left: the executor's, between rounds
+            self._drain()
         # the machine's new part, and those its commands touched
         parts = list(config[PARTS:])
         codecs = self.codecs
@@ -398,6 +424,21 @@ class Stepper(Store):
         e = self._intern(self.etab, self.elist, published)
         t = self._intern(self.ttab, self.tlist, tuple(times))
         return (turn, live, g, e, t, *parts), r
+
+    def beyond(self, config: tuple[Any, ...]) -> bool:
+        """Whether a variable of `config` is past its bound (then it is counted in `cut`)."""
+        for k, pos, bound in self.bounds:
+            v = self.part(config, k)[pos]
+            if isinstance(v, int | float) and v > bound:
+                self.cut += 1
+                return True
+        return False
+
+    def _drain(self) -> None:
+        """Run what waits for the executor (the environment's answers, PUSH callbacks) now."""
+        ready = self.bus.ready
+        while ready:
+            ready.popleft()._run()
 
     def _time_after(self, i: int, m: Machine, now: int) -> int:
         """Machine i's time in its state after its ringlet ran with the clock at `now`."""
@@ -524,7 +565,10 @@ class Stepper(Store):
                     out.append((config, None))
                     continue
                 i = config[TURN]
-                choice = self.choices(config)[c]
+                mine = self.choices(config)
+                choice = mine[c % len(mine)]
+                if self.world is not None:  # the environment makes the choices it made then
+                    self.world.oracle.start(code=c // len(mine), describe=True)
                 before = [self.part(config, k) for k in range(self.n)]
                 state_before = before[i][STATE]
                 rec = _Recorder()
@@ -550,6 +594,7 @@ class Stepper(Store):
                     changed=changed,
                     round=rnd,
                     finished=bool(after[i][FINISHED]) and not before[i][FINISHED],
+                    environment=list(self.world.oracle.said) if self.world is not None else [],
                 )
                 out.append((succ, step))
                 if succ[TURN] < 0 or succ[TURN] <= i:

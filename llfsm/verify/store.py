@@ -59,6 +59,10 @@ class Loaded:
     models: list[Any]  # llfsm.lang.model.Machine each
     cuts: list[list[tuple[int, ...]]]
     paths: list[str] = field(default_factory=list)  # the machine directories, for messages
+    #: what a verification file declares of the world (llfsm.props.file.Environment), or None
+    environment: Any = None
+    #: `machine.variable` -> the largest value explored on (a verification file's `bounds:`)
+    bounds: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -187,7 +191,9 @@ class Store:
         """The number of a choice of the step from configuration a that reaches b."""
         if self.parent[b] == a:
             return self.choice[b]
-        return list(self.edges_of(a)).index(b)
+        k = list(self.edges_of(a)).index(b)
+        edge_choice = getattr(self, "edge_choice", None)  # an environment's choices number edges apart
+        return edge_choice[self.edge_start[a] + k] if edge_choice else k
 
     @property
     def count(self) -> int:

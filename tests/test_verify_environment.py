@@ -1,0 +1,109 @@
+"""SPEC 16: the world as a verification file declares it (`environment:`), bounds, the how-to's
+four machines verified as written, and refusals at every place of use."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from helpers import MACHINES, llfsm, write_machine
+
+WALL = MACHINES / "ros2_wall_turtle_bot.machine"
+
+
+def _wall_file(tmp_path: Path, may_fail: bool, props: str) -> Path:
+    f = tmp_path / "wall.verify.yaml"
+    f.write_text(
+        f"machines: [{WALL}]\n"
+        "environment:\n  services:\n    /turtle_pose_service:\n"
+        "      type: turtle_sensor_interface/srv/TurtlePosition\n"
+        "      responses: [{x: 5.5, y: 5.5}, {x: 9.5, y: 5.5}]\n"
+        f"      may_fail: {'true' if may_fail else 'false'}\n"
+        f"properties:\n{props}"
+    )
+    return f
+
+
+@pytest.mark.parametrize("name", ["ping_pong", "blind_turtle_bot", "wall_turtle_bot", "suspend_resume"])
+def test_the_shipped_verification_files_hold(name: str) -> None:
+    r = llfsm("verify", MACHINES / f"{name}.verify.yaml", "--format", "json")
+    assert r.status == 0, r.stdout + r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["properties"] and all(p["verdict"] == "holds" for p in doc["properties"])
+
+
+def test_the_wall_bot_is_refused_without_an_environment_and_told_how() -> None:
+    r = llfsm("verify", WALL)
+    assert r.status == 2
+    assert "State_STOP_OnEntry.py:5" in r.stdout and "call_async" in r.stdout
+    assert "environment:" in r.stdout
+
+
+def test_the_wall_bot_with_and_without_may_fail(tmp_path: Path) -> None:
+    never_fails = '  - never: state(ros2_wall_turtle_bot) == "SERVICE_FAILS"\n'
+    r = llfsm("verify", _wall_file(tmp_path, False, never_fails))
+    assert r.status == 0, r.stdout + r.stderr
+    r = llfsm("verify", _wall_file(tmp_path, True, never_fails))
+    assert r.status == 1
+    assert "environment: /turtle_pose_service did not answer (may_fail)" in r.stdout
+    assert "I_wait: None -> FutureReturnCode.TIMEOUT" in r.stdout
+
+
+def test_the_counterexample_names_the_response_chosen(tmp_path: Path) -> None:
+    r = llfsm("verify", _wall_file(tmp_path, False, '  - never: state(ros2_wall_turtle_bot) == "BACK"\n'))
+    assert r.status == 1
+    assert "environment: /turtle_pose_service answered response 1 {x: 9.5, y: 5.5}" in r.stdout
+    assert "position_x: 0.0 -> 9.5" in r.stdout
+
+
+def test_a_declaration_that_names_an_unknown_field_is_one_line(tmp_path: Path) -> None:
+    f = tmp_path / "w.verify.yaml"
+    f.write_text(
+        f"machines: [{WALL}]\nenvironment:\n  services:\n    /turtle_pose_service:\n"
+        "      type: turtle_sensor_interface/srv/TurtlePosition\n      responses: [{z: 1.0}]\n"
+    )
+    r = llfsm("verify", f)
+    assert r.status == 2
+    assert f"{f}:4: service /turtle_pose_service" in r.stderr and "no field 'z'" in r.stderr
+
+
+def _reader(tmp_path: Path) -> Path:
+    return write_machine(
+        tmp_path,
+        "reader",
+        {"WAIT": [("HIT", "sub.latest is not None and sub.latest.data")], "HIT": None},
+        {
+            "WAIT_OnEntry": 'ros.init()\nnode = ros.Node("reader")\n'
+            'sub = node.create_subscription(Bool, "/bump", None, 10)\n'
+        },
+        variables="node: ros.Node\nsub: ros.Subscription\n",
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n",
+    )
+
+
+def test_a_pull_reader_takes_the_topics_values(tmp_path: Path) -> None:
+    m = _reader(tmp_path)
+    f = tmp_path / "r.verify.yaml"
+    f.write_text(
+        f"machines: [{m}]\nenvironment:\n  topics:\n    /bump:\n      type: std_msgs/msg/Bool\n"
+        "      values: [{data: false}, {data: true}]\n"
+        'properties:\n  - never: state(reader) == "HIT"\n'
+    )
+    r = llfsm("verify", f)
+    assert r.status == 1, r.stdout + r.stderr
+    assert "environment: /bump: a message {data: True}" in r.stdout
+    # without the environment the reader is refused where it reads
+    r = llfsm("verify", m)
+    assert r.status == 2 and "State_WAIT_Transition_0.expr" in r.stdout
+
+
+def test_a_bound_stops_a_growing_counter(tmp_path: Path) -> None:
+    f = tmp_path / "p.verify.yaml"
+    f.write_text(f"machines: [{MACHINES / 'ros2_ping_pong.machine'}]\nbounds:\n  ros2_ping_pong.count: 2\n")
+    r = llfsm("verify", f)
+    assert r.status == 0, r.stdout + r.stderr
+    assert "bounded: ros2_ping_pong.count <= 2" in r.stdout
+    f.write_text(f"machines: [{MACHINES / 'ros2_ping_pong.machine'}]\nbounds:\n  ros2_ping_pong.counter: 2\n")
+    r = llfsm("verify", f)
+    assert r.status == 2 and "bounds: ros2_ping_pong.counter" in r.stderr
