@@ -102,3 +102,11 @@ def _duration(ns: int) -> str:
         if ns >= scale:
             return f"{ns / scale:g} {unit}"
     return f"{ns} ns"
+
+
+def duration_text(ns: int) -> str:
+    """A duration as `llfsm run` reads it back exactly: 100ms, 2s, 250us, 7ns."""
+    for unit, scale in (("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000)):
+        if ns % scale == 0:
+            return f"{ns // scale}{unit}"
+    return f"{ns}ns"

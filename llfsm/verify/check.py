@@ -9,7 +9,9 @@ structure afterwards (llfsm.verify.ltl, llfsm.verify.ctl).
 from __future__ import annotations
 
 import itertools
+import math
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -19,7 +21,7 @@ from ..props.automaton import Automaton
 from ..props.formula import core, neg
 from ..props.kinds import CTL as BY_CTL
 from ..props.kinds import ON_THE_FLY
-from ..props.parse import Property, parse_property
+from ..props.parse import Property, duration_text, parse_property
 from ..runtime.errors import report_for
 from .ctl import CTL
 from .environment import EnvironmentError_
@@ -28,7 +30,7 @@ from .load import PropertySource, VerifyError, machine_infos
 from .ltl import ProductLimit, Structure, check_ltl
 from .snapshot import VariableValueError
 from .step import VerifyError_, input_product_refusal
-from .store import MemoryLimit
+from .store import TURN, MemoryLimit
 
 
 @dataclass
@@ -70,6 +72,8 @@ class Verification:
     warnings: list[str] = field(default_factory=list)
     #: configurations past a bound of the verification file, not explored further
     cut: int = 0
+    #: at a limit in exact time: what grew and the coarsest --period that keeps every threshold exact
+    hint: str | None = None
 
     @property
     def status(self) -> int:
@@ -100,7 +104,7 @@ def verify(
     by_text: dict[str, int] = {}
     for src in sources:
         try:
-            prop, local = parse_property(src.kind, src.text, infos, src.name, src.where)
+            prop, local = parse_property(src.kind, src.text, infos, src.name, src.where, src.within)
         except PropertyError as e:
             raise VerifyError(str(e)) from None
         ids = []
@@ -116,6 +120,18 @@ def verify(
         raise VerifyError(f"the properties name {len(atoms)} different conditions; at most 64 in one verification")
     automata: dict[int, Automaton] = {}
     for n, p in enumerate(props):  # built (and bounded) before anything is explored
+        if p.within is not None:
+            if options.period is None:
+                raise VerifyError(
+                    f"{p.where}: {p.kind} within {p.within / 1e9:g} s: a deadline needs exact time (--period P, or "
+                    "`period:` in the verification file): abstract time lets any time pass between two ringlets, "
+                    "so no deadline can hold there"
+                )
+            if options.hash_compact:
+                raise VerifyError(
+                    f"{p.where}: a deadline (within) is judged on the configurations kept: not with --hash-compact"
+                )
+            continue
         if p.spec.verify not in (ON_THE_FLY, BY_CTL):
             try:
                 automata[n] = Automaton(core(neg(p.formula)), text=f"{p.where}: {p.kind}: `{p.text}`")
@@ -205,6 +221,8 @@ def verify(
     result.configurations = explorer.count
     result.steps = explorer.steps
     result.cut = explorer.cut
+    if result.partial in ("state limit", "memory bound") and options.period is not None:
+        result.hint = waiting_hint(loaded, options.period)
     explored = time.monotonic()
 
     structure: Structure | None = None
@@ -228,7 +246,12 @@ def verify(
         elif result.partial is None and result.error is None:
             if structure is None:
                 structure = _structure(explorer)
-            if prop.spec.verify == BY_CTL:
+            if prop.within is not None:
+                missed = _deadline_missed(explorer, atom_ids[n], prop.within // (options.period or 1))
+                out.verdict = "holds" if missed is None else "fails"
+                if missed is not None:
+                    out.trace = _trace(explorer, missed)
+            elif prop.spec.verify == BY_CTL:
                 if ctl is None:
                     ctl = CTL(structure, list(range(len(atoms))))
                 out.verdict, out.trace, out.why = _judge_ctl(explorer, ctl, prop, atom_ids[n])
@@ -347,3 +370,65 @@ def _size(value: Any) -> int:
     if isinstance(value, str | bytes):
         return max(1, len(value) // 16)
     return 1
+
+
+def _deadline_missed(explorer: Explorer, ids: list[int], rounds: int) -> list[int] | None:
+    """`leads_to: [A, B]` within a deadline of `rounds` periods, in exact time: a shortest path to
+    where B has not come `rounds` periods after A, or None.  Breadth first over the
+    configurations paired with the age (in periods) of the oldest A not yet answered by B, and
+    whether the next ringlet starts a new round (the turn wrapped, or the run has ended: time
+    goes on), which is when the clock moves on by a period.  A configuration's time is that of
+    the round whose ringlet reached it."""
+    a, b = ids
+    labels, configs = explorer.labels, explorer.configs
+
+    def after(c: int, age: int | None) -> int | None:
+        if labels[c] >> b & 1:
+            return None
+        return 0 if age is None and labels[c] >> a & 1 else age
+
+    Node = tuple[int, int | None, bool]
+    start: Node = (0, after(0, None), False)  # the first ringlet is round 0's: time 0
+    parent: dict[Node, Node | None] = {start: None}
+    queue = deque([start])
+    while queue:
+        node = queue.popleft()
+        c, age, new_round = node
+        tc = configs[c][TURN]
+        for d in set(explorer.edges_of(c)):
+            td = configs[d][TURN]
+            aged = None if age is None else age + new_round
+            if aged is not None and aged > rounds:  # B came too late, or not at all
+                path = [d]
+                back: Node | None = node
+                while back is not None:
+                    path.append(back[0])
+                    back = parent[back]
+                return path[::-1]
+            nxt: Node = (d, after(d, aged), td < 0 or td <= tc)
+            if nxt not in parent:
+                parent[nxt] = node
+                queue.append(nxt)
+    return None
+
+
+def waiting_hint(loaded: Loaded, period: int) -> str | None:
+    """In exact time each period waited in a state is a configuration of its own: what waits
+    longest (its largest threshold / the period), and the coarsest period that keeps every
+    threshold exact (their greatest common divisor), when it is coarser than this one."""
+    waits = []
+    thresholds = []
+    for cls, per in zip(loaded.classes, loaded.cuts, strict=True):
+        for state, cuts in enumerate(per):
+            thresholds += [c for c in cuts if c > 0]
+            if cuts and cuts[-1] // period >= 10:
+                waits.append((cuts[-1] // period, f"{cls.NAME} {cls.STATES[state]} {cuts[-1] // period:,}"))
+    if not waits:
+        return None
+    waits.sort(reverse=True)
+    coarsest = math.gcd(*thresholds)
+    said = "; ".join(text for _n, text in waits[:4])
+    out = f"waiting is what grew: in exact time each period waited is a configuration (threshold / period: {said})"
+    if coarsest > period:
+        out += f"; --period {duration_text(coarsest)} keeps every after* threshold exact"
+    return out

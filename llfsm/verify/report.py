@@ -165,6 +165,8 @@ def text(v: Verification, witnesses: bool = False) -> str:
             f"bounded: {shown_bounds} ({v.cut:,} configurations past a bound were not explored further): "
             "the verdicts hold for the runs within these bounds"
         )
+    if v.hint is not None:
+        lines.append(v.hint)
     for w in v.warnings:
         lines.append(f"warning: {w}")
     if not v.outcomes and v.error is None:
