@@ -30,8 +30,11 @@ if TYPE_CHECKING:
 
     from .watchdog import Watchdog
 
-#: Exit statuses (docs/cli.md, "Exit statuses"): a normal end, an exception in machine code, bad input.
-EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+#: Exit statuses (docs/cli.md, "Exit statuses"): a normal end, an exception in machine code, bad input,
+#: a monitored property violated with --on-violation stop.
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_MONITOR = 0, 1, 2, 4
+#: What a watcher (Arrangement.watcher) asks for after a ringlet.
+GO, STOP, PAUSE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
 #: Signals that interrupt a run: Ctrl-C, `kill`, and a closed terminal (SIGHUP).
@@ -114,6 +117,15 @@ class Arrangement:
         #: Keep running rounds with no machine left (nodes on their own, docs/turtlesim.md): the run then
         #: ends by an interrupt or --duration only.
         self.serve_forever = False
+        #: Called after every ringlet (and a release that ended one) with the machine, when set
+        #: (a run's monitor, llfsm.monitor; the debugger's breakpoints): it returns GO, or STOP
+        #: to end the run at this ringlet boundary (status `stop_status`), or PAUSE (the
+        #: debugger's, issue 30; `on_pause` is called).  A run without one pays nothing: the
+        #: plain round loops never look at it.
+        self.watcher: Callable[[Machine], int] | None = None
+        self.stop_status = EXIT_MONITOR
+        self.on_pause: Callable[[Machine], None] | None = None
+        self._stopped: int | None = None
         names = [c.NAME for c in classes]
         for n in names:
             if names.count(n) > 1:
@@ -301,6 +313,30 @@ class Arrangement:
         self._attention = True
 
     # -- rounds ----------------------------------------------------------------------------
+    def _watched_round(self, live: list[Machine], tr: Tracer | None, watch: Callable[[Machine], int]) -> bool:
+        """A round with the watcher told of each ringlet boundary (and the tracer, if any)."""
+        fired = False
+        for m in live:
+            if m._run is m._held and not self._release(m):
+                asked = watch(m)  # a suspend applied: the boundary is still one
+            else:
+                s = m._state
+                if tr is not None and m._entered:
+                    tr.entry(m, s)
+                r = m._run(m)
+                if r is not None:
+                    fired = True
+                    if tr is not None:
+                        tr.transition(m, s, m._state, r)
+                asked = watch(m)
+            if asked == STOP:
+                self._stopped = self.stop_status
+                self._attention = True
+                break
+            if asked == PAUSE and self.on_pause is not None:
+                self.on_pause(m)
+        return fired
+
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
         for m in live:
@@ -318,6 +354,8 @@ class Arrangement:
     def _attend(self, now: int, grace: int) -> RunResult | None:
         """Whatever changed since the last round: unloads, suspensions, interrupts."""
         self._attention = False
+        if self._stopped is not None:
+            return self._result("stopped", self._stopped)
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
         if not self._live:
             if not self.serve_forever:
@@ -405,10 +443,12 @@ class Arrangement:
                 if end < ctx.wake:
                     ctx.wake = end  # one test a round covers the end of the run as well
                 live = self._live
-                if tr is not None:
-                    tr.round, tr.now = rounds, now
+                watch = self.watcher
+                if tr is not None or watch is not None:
+                    if tr is not None:
+                        tr.round, tr.now = rounds, now
                     ctx.round = rounds
-                    fired = self._traced_round(live, tr)
+                    fired = self._watched_round(live, tr, watch) if watch is not None else self._traced_round(live, tr)  # type: ignore[arg-type]
                     rounds += 1
                     if sim is not None:
                         sim.now += sim.period
