@@ -428,7 +428,8 @@ class Session:
                 grace = 0
             if o.transport != "inproc":  # other processes can resume machines (docs/view.md): all suspended is no end
                 arr.end_when_suspended = False
-            monitor = self._open_monitor(arr) if o.monitor or o.monitor_properties else None
+            if o.monitor or o.monitor_properties:
+                self._open_monitor(arr)  # it says its verdicts as the run goes, the last ones as it ends
             if self.web is not None and self.bus is not None:
                 self.web_server = self._open_web(self.web, ctx, self.bus, arr)
             try:
@@ -438,9 +439,6 @@ class Session:
             finally:
                 if self.web_server is not None:
                     self.web_server.stop()
-            if monitor is not None:
-                for line in monitor.at_end():
-                    self.say(line)
         finally:
             # a named output that could not be written whole is an error, never a silent success
             failed_outputs += ctx.output_errors

@@ -79,7 +79,8 @@ PURE: dict[str, Any] = {
 }
 #: The functions of the property language.
 FUNCTIONS = ("state", "suspended", "finished", "published")
-_HELPERS = {"_repeat": _repeat, "_format": _format}
+#: The bounded `*` and `%` an atom's tree calls by these names (whoever compiles the tree again needs them).
+HELPERS = {"_repeat": _repeat, "_format": _format}
 
 
 @dataclass
@@ -169,7 +170,7 @@ class _Compiler:
         ast.fix_missing_locations(fn_tree)
         code = compile(fn_tree, f"<property {src[:40]}>", "eval", dont_inherit=True)
         # the checked and rewritten tree, with only the pure builtins (and the bounded * and %) in reach
-        fn = eval(code, {"__builtins__": dict(PURE), **_HELPERS})
+        fn = eval(code, {"__builtins__": dict(PURE), **HELPERS})
         return Atom(src, fn, self.where, frozenset(self.read), self.published, body)
 
     def _machine(self, node: ast.AST, text: str) -> MachineInfo:

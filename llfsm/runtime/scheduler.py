@@ -4,8 +4,9 @@ The untraced loops (`_sim_rounds`, `_wall_rounds`, `_rounds`) are the fast path:
 plain call per live machine, `m._run(m)`, and nothing else runs between rounds unless something
 asked for it: `_attention` (a command, an unload, a signal) or the run context's `wake` time
 (the bus: a message queued for a callback, a timer falling due; see RunContext).
-`_traced_round` also reports entries and transitions for `-v` and `--trace`.  Keeping them
-apart means an untraced run pays nothing for tracing.
+`_watched_round` also reports entries and transitions for `-v` and `--trace`, and calls the
+watcher (a monitor's, a debugger's) after each ringlet while one is set.  Keeping them apart
+means an untraced, unwatched run pays nothing for either.
 """
 
 from __future__ import annotations
@@ -120,12 +121,19 @@ class Arrangement:
         #: Called after every ringlet (and a release that ended one) with the machine, when set
         #: (a run's monitor, llfsm.monitor; the debugger's breakpoints): it returns GO, or STOP
         #: to end the run at this ringlet boundary (status `stop_status`), or PAUSE (the
-        #: debugger's, issue 30; `on_pause` is called).  A run without one pays nothing: the
-        #: plain round loops never look at it.
+        #: debugger's, issue 30; `on_pause` is called).  It may be set or cleared at any time,
+        #: from a ringlet or between rounds: a round in progress reads it after each ringlet, and
+        #: a plain loop in progress stops after its round when the setter also asks for
+        #: attention (`ctx.wake = 0`).  A run without one pays nothing: the plain round loops
+        #: never look at it.
         self.watcher: Callable[[Machine], int] | None = None
         self.stop_status = EXIT_MONITOR
         self.on_pause: Callable[[Machine], None] | None = None
         self._stopped: int | None = None
+        #: Ringlets run before the current round loop (its rounds times its live machines),
+        #: counted once per loop, never per ringlet: with the loop's live list, what numbers a
+        #: ringlet boundary for a watcher (the monitor's violation lines).
+        self.ringlets = 0
         names = [c.NAME for c in classes]
         for n in names:
             if names.count(n) > 1:
@@ -258,6 +266,8 @@ class Arrangement:
         """The turn of a held machine (a new input value to take, new variable values, a command
         pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
         True if the ringlet goes on."""
+        if self._stopped is not None:
+            return False  # the run ends at this boundary (stop_at_boundary)
         inputs = m._inputs
         if inputs is not None and inputs.fresh:
             inputs.snapshot()
@@ -312,14 +322,30 @@ class Arrangement:
         self.ctx.interrupted = True
         self._attention = True
 
+    def stop_at_boundary(self, status: int | None = None) -> None:
+        """End the run at the ringlet boundary where this is called (from a ringlet, a watcher
+        or between rounds): no further ringlet runs, the rest of the round included, and the
+        run ends with `status` (by default `stop_status`)."""
+        self._stopped = self.stop_status if status is None else status
+        for m in self.machines:
+            _hold(m)  # the rest of the round meets the gate, which lets nothing through now
+        self._attention = True
+
+    def hold_all(self) -> None:
+        """Put the gate in front of every machine's next ringlet, so that whoever wraps the gate
+        (`_gate_fn`: a monitor) is called at the next boundary, even inside a plain loop.  The
+        gate lets a machine held for nothing else through at once."""
+        for m in self.machines:
+            _hold(m)
+
     # -- rounds ----------------------------------------------------------------------------
-    def _watched_round(self, live: list[Machine], tr: Tracer | None, watch: Callable[[Machine], int]) -> bool:
-        """A round with the watcher told of each ringlet boundary (and the tracer, if any)."""
+    def _watched_round(self, live: list[Machine], tr: Tracer | None) -> bool:
+        """A round with the tracer, if any, told of entries and transitions, and the watcher,
+        while one is set (read after each ringlet: set during the round, it is called at once),
+        told of each ringlet boundary."""
         fired = False
         for m in live:
-            if m._run is m._held and not self._release(m):
-                asked = watch(m)  # a suspend applied: the boundary is still one
-            else:
+            if m._run is not m._held or self._release(m):
                 s = m._state
                 if tr is not None and m._entered:
                     tr.entry(m, s)
@@ -328,27 +354,15 @@ class Arrangement:
                     fired = True
                     if tr is not None:
                         tr.transition(m, s, m._state, r)
+            # else a suspend applied, or the run stopped: for a watcher the boundary is still one
+            watch = self.watcher
+            if watch is not None:
                 asked = watch(m)
-            if asked == STOP:
-                self._stopped = self.stop_status
-                self._attention = True
-                break
-            if asked == PAUSE and self.on_pause is not None:
-                self.on_pause(m)
-        return fired
-
-    def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
-        fired = False
-        for m in live:
-            if m._run is m._held and not self._release(m):
-                continue
-            s = m._state
-            if m._entered:
-                tr.entry(m, s)
-            r = m._run(m)
-            if r is not None:
-                fired = True
-                tr.transition(m, s, m._state, r)
+                if asked == STOP:
+                    self.stop_at_boundary()
+                    break
+                if asked == PAUSE and self.on_pause is not None:
+                    self.on_pause(m)
         return fired
 
     def _attend(self, now: int, grace: int) -> RunResult | None:
@@ -443,23 +457,24 @@ class Arrangement:
                 if end < ctx.wake:
                     ctx.wake = end  # one test a round covers the end of the run as well
                 live = self._live
-                watch = self.watcher
-                if tr is not None or watch is not None:
+                if tr is not None or self.watcher is not None:
                     if tr is not None:
                         tr.round, tr.now = rounds, now
                     ctx.round = rounds
-                    fired = self._watched_round(live, tr, watch) if watch is not None else self._traced_round(live, tr)  # type: ignore[arg-type]
-                    rounds += 1
+                    fired = self._watched_round(live, tr)
+                    n = 1
                     if sim is not None:
                         sim.now += sim.period
                     else:
                         clock.advance(fired)
                 elif sim is not None:
-                    rounds += self._sim_rounds(live, sim)
+                    n = self._sim_rounds(live, sim)
                 elif wall is not None:
-                    rounds += self._wall_rounds(live, wall)
+                    n = self._wall_rounds(live, wall)
                 else:
-                    rounds += self._rounds(live)
+                    n = self._rounds(live)
+                rounds += n
+                self.ringlets += n * len(live)
                 if clock.now >= ctx.wake:
                     ctx.wake = FOREVER  # the hooks arm it again for whatever they still hold
                     ctx.round = rounds
