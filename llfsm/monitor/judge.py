@@ -77,6 +77,7 @@ class Judged:
         self.prop = prop
         self.atoms = atoms  # the global number of each of its atoms
         self.mode = prop.spec.monitor
+        self.decided_by = prop.spec.decided_by  # a safety atom's value that violates it
         self.done = False  # decided for good (violated, satisfied, or seen)
         self.seen = False  # reachable / eventually: its condition held at some boundary
         self.pending: tuple[int, Boundary] | None = None  # leads_to: (run time, where) of the oldest A
@@ -223,15 +224,28 @@ class Judge:
         machines: Sequence[Any],
         published: Any,
         now: int,
-        where: Boundary,
+        where: Callable[[], Boundary],
         which: Sequence[Judged] | None = None,
     ) -> list[Verdict]:
         """Judge the properties (`which`, by default all) at one boundary; the violations found.
-        `where` is kept with a leads_to's A, for its line."""
+        `where()` says which boundary, asked only for a verdict or a leads_to's A (a monitor
+        numbers boundaries only when it must)."""
         out: list[Verdict] = []
         values: dict[int, bool] = {}
+        atoms = self.atoms
         for j in self.judged if which is None else which:
             if j.done:
+                continue
+            if j.safety:  # the common case, without the general step's lists
+                k = j.atoms[0]
+                try:
+                    x = bool(atoms[k].fn(machines, published))
+                except Exception as e:
+                    self.failed(k, e)
+                    x = False
+                if x == j.decided_by:
+                    j.done = True
+                    out.append(Verdict(j, VIOLATED, now, where()))
                 continue
             v = []
             for k in j.atoms:
@@ -244,7 +258,7 @@ class Judge:
                 out.append(found)
         return out
 
-    def step(self, j: Judged, v: list[bool], now: int, where: Boundary) -> Verdict | None:
+    def step(self, j: Judged, v: list[bool], now: int, where: Callable[[], Boundary]) -> Verdict | None:
         """Judge one property with its atoms' values `v`; a violation, or None."""
         since = None
         if j.mode == EVERY_BOUNDARY:
@@ -264,7 +278,7 @@ class Judge:
                 j.pending = None
                 return None
             elif held_a and j.pending is None:
-                j.pending = (now, where)
+                j.pending = (now, where())
                 if within is not None:
                     self.deadlines_open += 1
                 return None
@@ -282,7 +296,7 @@ class Judge:
             if v[0]:
                 j.seen = j.done = True
             return None
-        return Verdict(j, VIOLATED, now, where, since)
+        return Verdict(j, VIOLATED, now, where(), since)
 
     def at_end(self, now: int, where: Boundary) -> list[Verdict]:
         """What is answered at the end: pending obligations and formulas, satisfied formulas,

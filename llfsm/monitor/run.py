@@ -215,19 +215,34 @@ class Monitor:
     def _full(self, m: Any, offset: int) -> None:
         """Judge every property at a boundary, then what it calls for."""
         self._pending = self._once = False
-        if self.arr is not None and self.arr._stopped is not None:
+        arr = self.arr
+        if arr is None or arr._stopped is not None:
             return
-        had = bool(self.published)
-        found = self.judge.boundary(self.machines, self.published, self._now(), self._where(m, offset))
-        self.published.clear()
+        published = self.published
+        had = bool(published)
+        found = self.judge.boundary(self.machines, published, arr.clock.now, lambda: self._where(m, offset))
+        if had:
+            published.clear()
         self._fall = had
         for v in found:
             self._record(v)
-        self._update()
+        if not self.always:
+            self._update()
 
     def _watch(self, m: Any) -> int:
         """The watcher: the boundary after m's ringlet."""
-        self._full(m, 1)
+        if self.always:  # watching for good: the judging alone
+            self._pending = self._once = False
+            arr = self.arr
+            assert arr is not None
+            if arr._stopped is None:
+                found = self.judge.boundary(self.machines, self.published, arr.clock.now, lambda: self._where(m, 1))
+                if self.published:
+                    self.published.clear()
+                for v in found:
+                    self._record(v)
+        else:
+            self._full(m, 1)
         before = self._before
         return before(m) if before is not None else GO
 
@@ -275,7 +290,7 @@ class Monitor:
         if arr is not None and arr._stopped is not None:
             return
         which = [self.judge.judged[i] for i in indices]
-        found = self.judge.boundary(self.machines, self.published, self._now(), self._where(m, 1), which)
+        found = self.judge.boundary(self.machines, self.published, self._now(), lambda: self._where(m, 1), which)
         for v in found:
             self._record(v)
         if self.judge.deadlines_open:

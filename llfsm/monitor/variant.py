@@ -166,10 +166,14 @@ def _rewrite_block(
 
 
 def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], checks: list[Check]) -> list[ast.stmt]:
-    """The checks, then the return (its value kept first when it is not a constant)."""
+    """The checks, then the return (its value kept first when it is not a constant).  A
+    constant return after a last inline check returns from inside it when the property holds
+    (`if holds: return 0`): the common case then costs the test alone."""
     state = cls.STATES[known] if known is not None else None
     body: list[ast.stmt] = []
     ids: list[int] = []
+    last: tuple[ast.Try, ast.expr, int] | None = None
+    holding: list[ast.expr] = []  # what each inline check's holding is, for the fast path below
     for c in checks:
         if c.tree is None:
             ids.append(c.index)
@@ -180,6 +184,7 @@ def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], che
         if isinstance(cond, ast.Constant):
             if cond.value:
                 body.append(_call(VIOLATED, c.index))  # violated whenever it returns here
+                last = None
             continue
         test = ast.If(test=cond, body=[_call(VIOLATED, c.index)], orelse=[])
         handler = ast.ExceptHandler(
@@ -187,18 +192,79 @@ def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], che
             name=PREFIX + "e",
             body=[_call(FAILED, c.index, ast.Name(id=PREFIX + "e", ctx=ast.Load()))],
         )
-        body.append(ast.Try(body=[test], handlers=[handler], orelse=[], finalbody=[]))
+        guarded = ast.Try(body=[test], handlers=[handler], orelse=[], finalbody=[])
+        body.append(guarded)
+        last = guarded, cond, c.index
+        holding.append(_fold(ast.UnaryOp(op=ast.Not(), operand=copy.deepcopy(cond))))
     if ids:
         body.append(_call(JUDGE, ast.Tuple(elts=[ast.Constant(i) for i in ids], ctx=ast.Load())))
+        last = None
     if not body:
         return [ret]
+    constant = ret.value is None or isinstance(ret.value, ast.Constant)
+    if last is not None and constant and len(holding) > 1 and not ids and len(body) == len(holding):
+        # several checks: one test of them all returns at once when all hold (atoms are pure, so
+        # the checks one by one below, which say which failed, may evaluate them again)
+        test = _Shared().share(ast.BoolOp(op=ast.And(), values=holding))
+        fast = ast.If(test=test, body=[copy.deepcopy(ret)], orelse=[])
+        quiet = ast.ExceptHandler(type=ast.Name(id="Exception", ctx=ast.Load()), name=None, body=[ast.Pass()])
+        body.insert(0, ast.Try(body=[fast], handlers=[quiet], orelse=[], finalbody=[]))
+    elif last is not None and constant:
+        guarded, cond, index = last
+        holds = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+        guarded.body = [ast.If(test=holds, body=[copy.deepcopy(ret)], orelse=[]), _call(VIOLATED, index)]
     for node in body:
-        ast.copy_location(node, ret)
-    if ret.value is None or isinstance(ret.value, ast.Constant):
+        _locate(node, ret)
+    if constant:
         return [*body, ret]
     keep = ast.Assign(targets=[ast.Name(id=PREFIX + "r", ctx=ast.Store())], value=ret.value)
     new_ret = ast.Return(value=ast.Name(id=PREFIX + "r", ctx=ast.Load()))
-    return [ast.copy_location(keep, ret), *body, ast.copy_location(new_ret, ret)]
+    return [_locate(keep, ret), *body, _locate(new_ret, ret)]
+
+
+class _Shared(ast.NodeTransformer):
+    """`self.x` read more than once in a test: read once into a local (`(_llfsm_mon_x := self.x)`
+    where it is first evaluated, the local after).  Used in the fast path only, under a `try`
+    that falls back to the checks one by one, so a first read a branch skipped costs nothing
+    but the fallback."""
+
+    def share(self, node: ast.expr) -> ast.expr:
+        counts: dict[str, int] = {}
+        for n in ast.walk(node):
+            if _self_attr_load(n):
+                counts[n.attr] = counts.get(n.attr, 0) + 1  # type: ignore[attr-defined]
+        self.shared = {a for a, c in counts.items() if c > 1}
+        self.seen: set[str] = set()
+        out = self.visit(node)
+        assert isinstance(out, ast.expr)
+        return out
+
+    def visit_Attribute(self, node: ast.Attribute) -> ast.AST:
+        if not _self_attr_load(node) or node.attr not in self.shared:
+            return self.generic_visit(node)
+        local = PREFIX + "a_" + node.attr
+        if node.attr in self.seen:
+            return ast.Name(id=local, ctx=ast.Load())
+        self.seen.add(node.attr)
+        return ast.NamedExpr(target=ast.Name(id=local, ctx=ast.Store()), value=node)
+
+
+def _self_attr_load(node: ast.AST) -> bool:
+    return (
+        isinstance(node, ast.Attribute)
+        and isinstance(node.ctx, ast.Load)
+        and isinstance(node.value, ast.Name)
+        and node.value.id == "self"
+    )
+
+
+def _locate(node: ast.AST, at: ast.AST) -> Any:
+    """`node` and everything in it at the line of `at` (a check reads as the return it precedes)."""
+    for n in ast.walk(node):
+        for attr in ("lineno", "col_offset", "end_lineno", "end_col_offset"):
+            if attr in n._attributes:
+                setattr(n, attr, getattr(at, attr, 0))
+    return node
 
 
 def _call(fn: str, *args: Any) -> ast.stmt:
@@ -264,6 +330,8 @@ def _fold(node: ast.expr) -> ast.expr:
         inner = _fold(node.operand)
         if isinstance(inner, ast.Constant):
             return ast.Constant(not inner.value)
+        if isinstance(inner, ast.UnaryOp) and isinstance(inner.op, ast.Not):
+            return inner.operand  # in a test, `not not x` is x
         return ast.UnaryOp(op=node.op, operand=inner)
     if isinstance(node, ast.BoolOp):
         is_and = isinstance(node.op, ast.And)
