@@ -249,10 +249,10 @@ class Judge:
                 continue
             v = []
             for k in j.atoms:
-                x = values.get(k)
-                if x is None:
-                    x = values[k] = self.value(k, machines, published)
-                v.append(x)
+                known = values.get(k)
+                if known is None:
+                    known = values[k] = self.value(k, machines, published)
+                v.append(known)
             found = self.step(j, v, now, where)
             if found is not None:
                 out.append(found)

@@ -205,8 +205,8 @@ def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], che
     if last is not None and constant and len(holding) > 1 and not ids and len(body) == len(holding):
         # several checks: one test of them all returns at once when all hold (atoms are pure, so
         # the checks one by one below, which say which failed, may evaluate them again)
-        test = _Shared().share(ast.BoolOp(op=ast.And(), values=holding))
-        fast = ast.If(test=test, body=[copy.deepcopy(ret)], orelse=[])
+        all_hold = _Shared().share(ast.BoolOp(op=ast.And(), values=holding))
+        fast = ast.If(test=all_hold, body=[copy.deepcopy(ret)], orelse=[])
         quiet = ast.ExceptHandler(type=ast.Name(id="Exception", ctx=ast.Load()), name=None, body=[ast.Pass()])
         body.insert(0, ast.Try(body=[fast], handlers=[quiet], orelse=[], finalbody=[]))
     elif last is not None and constant:
@@ -215,7 +215,7 @@ def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], che
         guarded.body = [ast.If(test=holds, body=[copy.deepcopy(ret)], orelse=[]), _call(VIOLATED, index)]
     for node in body:
         _locate(node, ret)
-    if constant:
+    if ret.value is None or isinstance(ret.value, ast.Constant):
         return [*body, ret]
     keep = ast.Assign(targets=[ast.Name(id=PREFIX + "r", ctx=ast.Store())], value=ret.value)
     new_ret = ast.Return(value=ast.Name(id=PREFIX + "r", ctx=ast.Load()))
