@@ -39,6 +39,7 @@ from ..props.file import PropertySource
 from ..runtime.scheduler import GO, Arrangement
 from .judge import VIOLATED, Boundary, Judge, Judged, MonitorError, Verdict, atom_reads
 from .reads import ClassReads, class_reads
+from .topic import MonitorTopic
 from .variant import FAILED, JUDGE, MACHINES, PUBLISHED, Check, make_variant
 from .variant import VIOLATED as VIOLATED_FN
 
@@ -98,8 +99,9 @@ class Monitor:
         return sum(v.verdict == VIOLATED for v in self.verdicts)
 
     # -- attaching ------------------------------------------------------------------------------
-    def attach(self, arr: Arrangement, bus: Any = None) -> None:
-        """Watch `arr` from its next ringlet on (called before it runs)."""
+    def attach(self, arr: Arrangement, bus: Any = None, publish: bool = True) -> None:
+        """Watch `arr` from its next ringlet on (called before it runs); with `publish`, the
+        verdicts go to /llfsm/monitor too once the run has a bus (llfsm.monitor.topic)."""
         self.arr = arr
         self.machines = arr.machines
         self.always = not self.targeted or not self._instrument(arr)
@@ -138,6 +140,8 @@ class Monitor:
                 bus.add_tap(self._tap)
             else:
                 ctx.on_init.append(lambda b: b.add_tap(self._tap))
+        if publish:
+            MonitorTopic(self, ctx)
         self._full(None, 0)  # the boundary before the first ringlet
         if self.always:
             self._watch_on()
