@@ -57,3 +57,14 @@ def test_a_violation_reaches_another_process_over_dds(netns: NetNamespace) -> No
     (event,) = _events(out)  # the reader may come late: TRANSIENT_LOCAL hands it the violation
     assert "name: 'never: ros2_ping_pong.count >= 1'" in event and "verdict: violated" in event, out + echo_err
     assert re.search(r"ringlet: [1-9]\d*", event)
+
+
+def test_what_a_peer_sends_on_the_topic_is_bounded_for_the_page() -> None:
+    from llfsm.msgs.llfsm_msgs.msg import MonitorEvent
+    from llfsm.web.verdicts import MAX_MACHINES, MAX_TEXT, entry
+
+    names = [f"m{i}" for i in range(100_000)]
+    huge = MonitorEvent(name="n" * 1_000_000, verdict="violated", machines=names, states=names, reads=names)
+    e = entry(huge)
+    assert len(e["property"]) == MAX_TEXT and e["property"].endswith("…")
+    assert len(e["states"]) == len(e["reads"]) == MAX_MACHINES

@@ -124,6 +124,8 @@ class Verdict:
     #: filled by whoever knows the run: every machine's state, the variables the property names
     states: list[tuple[str, str]] = field(default_factory=list)
     variables: str = ""
+    #: the machines the property reads, by name
+    reads: list[str] = field(default_factory=list)
 
     @property
     def name(self) -> str:
@@ -165,6 +167,7 @@ class Verdict:
             "time": self.time_ns / 1e9,
             self.where.unit: self.where.number,
             "states": dict(self.states),
+            "reads": self.reads,
             "variables": self.variables,
             "detail": self.detail,
         }

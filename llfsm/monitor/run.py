@@ -305,6 +305,7 @@ class Monitor:
         its boundary is numbered."""
         v.states = [(m.NAME, m.STATES[m._state]) for m in self.machines]
         v.variables = self._variables(v.judged)
+        v.reads = self._reads(v.judged)
         self._unsaid.append(v)
         arr = self.arr
         if arr is None:
@@ -312,6 +313,11 @@ class Monitor:
         arr.ctx.wake = 0
         if v.verdict == VIOLATED and self.on_violation == "stop":
             arr.stop_at_boundary()
+
+    def _reads(self, j: Judged) -> list[str]:
+        """The machines a property reads, in load order."""
+        read = {r.machine for k in j.atoms for r in atom_reads(self.judge.atoms[k])}
+        return [m.NAME for m in self.machines if m._id in read]
 
     def _variables(self, j: Judged) -> str:
         names = []

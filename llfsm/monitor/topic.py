@@ -41,6 +41,7 @@ def message(v: Verdict) -> MonitorEvent:
         ringlet=max(0, v.where.number or 0),
         machines=[m for m, _ in v.states],
         states=[s for _, s in v.states],
+        reads=v.reads,
         variables=v.variables,
         detail=v.detail,
     )

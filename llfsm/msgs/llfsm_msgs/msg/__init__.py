@@ -29,6 +29,7 @@ class MonitorEvent(_m.Message):
         ("ringlet", "uint64"),
         ("machines", "string[]"),
         ("states", "string[]"),
+        ("reads", "string[]"),
         ("variables", "string"),
         ("detail", "string"),
     )
@@ -37,6 +38,7 @@ class MonitorEvent(_m.Message):
         "_kind",
         "_machines",
         "_name",
+        "_reads",
         "_ringlet",
         "_stamp",
         "_states",
@@ -56,6 +58,7 @@ class MonitorEvent(_m.Message):
         ringlet: int = 0,
         machines: list[str] = _DEFAULT,
         states: list[str] = _DEFAULT,
+        reads: list[str] = _DEFAULT,
         variables: str = "",
         detail: str = "",
     ) -> None:
@@ -67,6 +70,7 @@ class MonitorEvent(_m.Message):
         self.ringlet = ringlet
         self._machines = [] if machines is _DEFAULT else _m.check_array(machines, self, "machines", "string")
         self._states = [] if states is _DEFAULT else _m.check_array(states, self, "states", "string")
+        self._reads = [] if reads is _DEFAULT else _m.check_array(reads, self, "reads", "string")
         self.variables = variables
         self.detail = detail
 
@@ -143,6 +147,14 @@ class MonitorEvent(_m.Message):
         self._states = _m.check_array(value, self, "states", "string")
 
     @property
+    def reads(self) -> list[str]:
+        return self._reads
+
+    @reads.setter
+    def reads(self, value: list[str]) -> None:
+        self._reads = _m.check_array(value, self, "reads", "string")
+
+    @property
     def variables(self) -> str:
         return self._variables
 
@@ -168,6 +180,7 @@ class MonitorEvent(_m.Message):
         new._ringlet = self._ringlet
         new._machines = self._machines.copy()
         new._states = self._states.copy()
+        new._reads = self._reads.copy()
         new._variables = self._variables
         new._detail = self._detail
         return new

@@ -36,11 +36,12 @@ class MonitorEvent_(_IdlStruct, typename="llfsm_msgs::msg::dds_::MonitorEvent_")
     ringlet: _t.uint64
     machines: _t.sequence[str]
     states: _t.sequence[str]
+    reads: _t.sequence[str]
     variables: str
     detail: str
 
 
-def _mk_MonitorEvent(a0, a1, a2, a3, a4, a5, a6, a7, a8, a9):
+def _mk_MonitorEvent(a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
     m = _new(_c_MonitorEvent)
     m._stamp = a0
     m._name = a1
@@ -50,8 +51,9 @@ def _mk_MonitorEvent(a0, a1, a2, a3, a4, a5, a6, a7, a8, a9):
     m._ringlet = a5
     m._machines = a6
     m._states = a7
-    m._variables = a8
-    m._detail = a9
+    m._reads = a8
+    m._variables = a9
+    m._detail = a10
     return m
 
 
@@ -94,15 +96,24 @@ def _cdr_MonitorEvent(m):
         b += _S1.pack(len(s10) + 1)
         b += s10
         b.append(0)
-    s11 = m._variables.encode()
+    v11 = m._reads
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(s11) + 1)
-    b += s11
+    b += _S1.pack(len(v11))
+    for e12 in v11:
+        s13 = e12.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S1.pack(len(s13) + 1)
+        b += s13
+        b.append(0)
+    s14 = m._variables.encode()
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(s14) + 1)
+    b += s14
     b.append(0)
-    s12 = m._detail.encode()
+    s15 = m._detail.encode()
     b += _Z[(4 - len(b)) & 3]
-    b += _S1.pack(len(s12) + 1)
-    b += s12
+    b += _S1.pack(len(s15) + 1)
+    b += s15
     b.append(0)
     return bytes(b)
 
@@ -168,15 +179,31 @@ def _msg_MonitorEvent(d):
     t27 = _S1.unpack_from(d, o)
     o += 4
     n28 = t27[0]
-    s29 = str(d[o : o + n28 - 1], "utf-8") if n28 else ""
-    o += n28
+    if n28 > len(d) - o:
+        raise ValueError(f"{n28} elements announced, {len(d) - o} bytes left")
+    v29 = []
+    for _ in range(n28):
+        o += (4 - o) & 3
+        t31 = _S1.unpack_from(d, o)
+        o += 4
+        n32 = t31[0]
+        s33 = str(d[o : o + n32 - 1], "utf-8") if n32 else ""
+        o += n32
+        e30 = s33
+        v29.append(e30)
     o += (4 - o) & 3
-    t30 = _S1.unpack_from(d, o)
+    t34 = _S1.unpack_from(d, o)
     o += 4
-    n31 = t30[0]
-    s32 = str(d[o : o + n31 - 1], "utf-8") if n31 else ""
-    o += n31
-    m = _mk_MonitorEvent(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3, s6, s9, s12, t13[0], v15, v22, s29, s32)
+    n35 = t34[0]
+    s36 = str(d[o : o + n35 - 1], "utf-8") if n35 else ""
+    o += n35
+    o += (4 - o) & 3
+    t37 = _S1.unpack_from(d, o)
+    o += 4
+    n38 = t37[0]
+    s39 = str(d[o : o + n38 - 1], "utf-8") if n38 else ""
+    o += n38
+    m = _mk_MonitorEvent(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3, s6, s9, s12, t13[0], v15, v22, v29, s36, s39)
     return m, o
 
 
@@ -190,6 +217,7 @@ def _to_MonitorEvent(m):
         ringlet=m._ringlet,
         machines=list(m._machines),
         states=list(m._states),
+        reads=list(m._reads),
         variables=m._variables,
         detail=m._detail,
     )
@@ -205,6 +233,7 @@ def _from_MonitorEvent(s):
     m._ringlet = s.ringlet
     m._machines = list(s.machines)
     m._states = list(s.states)
+    m._reads = list(s.reads)
     m._variables = s.variables
     m._detail = s.detail
     return m
@@ -226,5 +255,5 @@ CODECS = {
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {
-    "MonitorEvent": "RIHS01_417c7408e50c9fee191cd0013bbe8cf615f3b86983ac47e8ef5fd44d9edf5fe9",
+    "MonitorEvent": "RIHS01_e05793e89d3835296a8509b8e0d9786f943601492e0fcd4c32da3783f3445a0c",
 }
