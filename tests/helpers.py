@@ -3,7 +3,8 @@ command in-process or as a process, the C parts' skip rules, and the checks of g
 that more than one test module makes.  Test modules import from here (`from helpers import ...`),
 never from conftest.py (which holds only fixtures and hooks) nor from one another; other helper
 modules beside this one: strategies.py (hypothesis), samples.py (shipped message classes and
-samples of them), dds_netns.py (the private network namespace of the DDS tests).
+samples of them), dds_netns.py (the private network namespace of the DDS tests), clfsm_writer.py
+(clfsm machine directories, for the tests of `llfsm import`).
 """
 
 from __future__ import annotations

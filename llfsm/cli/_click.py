@@ -13,6 +13,7 @@ from . import (  # noqa: F401  (each registers its commands)
     build,
     check,
     graph,
+    import_,
     interface,
     new,
     node,
