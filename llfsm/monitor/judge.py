@@ -207,6 +207,21 @@ class Judge:
         #: leads_to obligations with a deadline are open (the caller judges every boundary then)
         self.deadlines_open = 0
 
+    def topics_named(self) -> set[str]:
+        """The topics the properties' `published(...)` name (`"/t" in E` in an atom's tree)."""
+        out: set[str] = set()
+        for a in self.atoms:
+            if a.reads_published and a.tree is not None:
+                for node in ast.walk(a.tree):
+                    if (
+                        isinstance(node, ast.Compare)
+                        and isinstance(node.left, ast.Constant)
+                        and isinstance(node.comparators[0], ast.Name)
+                        and node.comparators[0].id == "E"
+                    ):
+                        out.add(str(node.left.value))
+        return out
+
     def value(self, k: int, machines: Sequence[Any], published: Any) -> bool:
         """Atom k now; an atom that cannot be evaluated counts as false, said once."""
         a = self.atoms[k]

@@ -75,7 +75,7 @@ class Monitor:
         #: Told of each verdict once it is said (the /llfsm/monitor publisher, the web page).
         self.listeners: list[Callable[[Verdict], None]] = []
         self.published: set[str] = set()
-        self.topics = _topics_named(self.judge)
+        self.topics = self.judge.topics_named()
         self.arr: Arrangement | None = None
         self.machines: list[Any] = []
         self._unsaid: list[Verdict] = []
@@ -408,21 +408,3 @@ def _check(judge: Judge, j: Judged) -> Check:
     if j.safety:
         return Check(j.index, judge.atoms[j.atoms[0]].tree, j.prop.spec.decided_by)
     return Check(j.index)
-
-
-def _topics_named(judge: Judge) -> set[str]:
-    """The topics the properties' `published(...)` name."""
-    import ast  # deferred: start-up (only a monitor reads atoms' trees)
-
-    out: set[str] = set()
-    for a in judge.atoms:
-        if a.reads_published and a.tree is not None:
-            for node in ast.walk(a.tree):
-                if (
-                    isinstance(node, ast.Compare)
-                    and isinstance(node.left, ast.Constant)
-                    and isinstance(node.comparators[0], ast.Name)
-                    and node.comparators[0].id == "E"
-                ):
-                    out.add(str(node.left.value))
-    return out

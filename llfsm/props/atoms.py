@@ -91,6 +91,9 @@ class MachineInfo:
     name: str
     states: tuple[str, ...]
     variables: tuple[str, ...]  # machine variables, then inputs
+    #: `states` are all of them (a state compared with `state(m)` is checked against them); False
+    #: where only some are known (a bag without the machine's description)
+    known_states: bool = True
 
 
 @dataclass
@@ -289,6 +292,8 @@ class _Compiler:
             if len(op.args) != 1:
                 continue
             info = self._machine(op.args[0], text)
+            if not info.known_states:
+                continue
             for other in operands[:k] + operands[k + 1 :]:
                 values = other.elts if isinstance(other, ast.Tuple | ast.List | ast.Set) else [other]
                 for v in values:
