@@ -79,8 +79,8 @@ def mutex_property(n: int) -> str:
 
 def explore(paths: list[Path], prop: str, hash_compact: bool, graph: bool = False) -> tuple[object, float]:
     """(the verification, CPU seconds of the exploration)."""
-    from llfsm.verify.check import verify
     from llfsm.verify.explorer import Options
+    from llfsm.verify.judge import verify
     from llfsm.verify.load import PropertySource, load_arrangement
 
     kind, _, text = prop.partition(":")
@@ -345,7 +345,7 @@ def environment_table(tmp: Path, modulo: int, rounds: int) -> Table:
     """Configurations/s with an environment of three responses against the same machine with an
     input of three values instead, interleaved."""
     from llfsm.props.file import Environment, ServiceDecl
-    from llfsm.verify.check import verify
+    from llfsm.verify.judge import verify
     from llfsm.verify.explorer import Options
     from llfsm.verify.load import PropertySource, load_arrangement
 

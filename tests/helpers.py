@@ -25,6 +25,7 @@ import pytest
 from click.testing import CliRunner
 
 from llfsm.cli import cli
+from llfsm.runtime.generated import SOURCE_MAP
 from llfsm.templating import CODING_LINE
 
 REPO = Path(__file__).resolve().parent.parent
@@ -221,7 +222,7 @@ def only_expected_statements(tree: ast.Module) -> None:
             continue
         if isinstance(stmt, ast.FunctionDef | ast.ClassDef):
             continue
-        if isinstance(stmt, ast.Assign) and [getattr(t, "id", "") for t in stmt.targets] == ["_LLFSM_SOURCE_MAP"]:
+        if isinstance(stmt, ast.Assign) and [getattr(t, "id", "") for t in stmt.targets] == [SOURCE_MAP]:
             continue
         raise AssertionError(f"unexpected statement at line {stmt.lineno}: {ast.unparse(stmt)[:80]}")
     assert isinstance(tree.body[-1], ast.Assign)

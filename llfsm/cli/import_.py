@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail
+from ._group import EXIT_ERRORS, EXIT_OK, _existing, cli, fail
 
 
 @cli.command(name="import")

@@ -33,7 +33,8 @@ def _r(code: str, sev: Severity, name: str, summary: str) -> Rule:
 
 E, W = Severity.ERROR, Severity.WARNING
 
-#: Every rule llfsm checks.  docs/rules.md is generated from (and tested against) this table.
+#: Every rule llfsm checks.  docs/rules.md is written by hand, a section per rule of this table
+#: (`### LFnnn name`); tests/test_check.py fails on a rule it does not document.
 RULES: dict[str, Rule] = {
     r.code: r
     for r in [

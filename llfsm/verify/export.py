@@ -31,7 +31,7 @@ from typing import Any
 
 from ..props.formula import has
 from ..props.kinds import CTL, ON_THE_FLY
-from .check import Verification
+from .judge import Verification
 from .explorer import Explorer
 
 Formula = tuple[Any, ...]

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ..lang.diagnostics import file_uri, shown
-from .check import Outcome, Trace, Verification
+from .judge import Outcome, Trace, Verification
 from .explorer import TURN, Explorer, Step
 from .memory import size_text
 from .values import shown as value_text
