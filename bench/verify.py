@@ -345,8 +345,8 @@ def environment_table(tmp: Path, modulo: int, rounds: int) -> Table:
     """Configurations/s with an environment of three responses against the same machine with an
     input of three values instead, interleaved."""
     from llfsm.props.file import Environment, ServiceDecl
-    from llfsm.verify.judge import verify
     from llfsm.verify.explorer import Options
+    from llfsm.verify.judge import verify
     from llfsm.verify.load import PropertySource, load_arrangement
 
     env = Environment(

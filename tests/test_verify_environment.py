@@ -146,8 +146,8 @@ def test_a_push_callback_runs_with_the_topics_values(tmp_path: Path) -> None:
 @pytest.mark.parametrize("case", ["services", "push topic"])
 def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_alike(case: str, tmp_path: Path) -> None:
     from llfsm.props.file import read_verify_file
-    from llfsm.verify.judge import verify
     from llfsm.verify.explorer import Options
+    from llfsm.verify.judge import verify
     from llfsm.verify.load import load_arrangement
 
     if case == "services":
