@@ -294,10 +294,9 @@ class Explorer(Stepper):
                 m = machines[turn]
                 names = input_names[turn]
                 for base, (values, tm, intr) in enumerate(choices):
-                    forced: list[int] | None = []
-                    while forced is not None:  # each sequence of the environment's choices (one without one)
-                        if oracle is not None:
-                            oracle.start(forced)
+                    if oracle is not None:
+                        oracle.start(())
+                    while True:  # each sequence of the environment's choices (one without an environment)
                         c = base
                         # the configuration into the objects (what the previous choice changed)
                         for k in range(n):
@@ -431,7 +430,12 @@ class Explorer(Stepper):
                             edges.append(j)
                             if oracle is not None:
                                 edge_choice.append(c)
-                        forced = oracle.next_forced() if oracle is not None else None
+                        if oracle is None:
+                            break
+                        forced = oracle.next_forced()
+                        if forced is None:
+                            break
+                        oracle.start(forced)
                 if progress is not None and not idx & 0x3FF:
                     now_s = time.monotonic()
                     if now_s - last >= 1.0:
