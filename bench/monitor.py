@@ -39,6 +39,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from gen import write_toggle  # noqa: E402
+from run import render  # noqa: E402  (bench/run.py's tables)
 
 from llfsm.monitor import Monitor  # noqa: E402
 from llfsm.props.file import PropertySource  # noqa: E402
@@ -111,17 +112,6 @@ def table(cls: type, n: int, rounds: int) -> Table:
         ["run", "ringlets/s", "time ÷ no monitor", "target (SPEC 16)"],
         rows,
     )
-
-
-def render(tables: list[Table]) -> str:
-    out = []
-    for title, header, rows in tables:
-        out.append(f"### {title}\n")
-        out.append("| " + " | ".join(header) + " |")
-        out.append("|" + "|".join("---" for _ in header) + "|")
-        out += ["| " + " | ".join(r) + " |" for r in rows]
-        out.append("")
-    return "\n".join(out)
 
 
 def main() -> None:

@@ -68,16 +68,24 @@ def test_a_declaration_that_names_an_unknown_field_is_one_line(tmp_path: Path) -
     assert f"{f}:4: service /turtle_pose_service" in r.stderr and "no field 'z'" in r.stderr
 
 
-def _reader(tmp_path: Path) -> Path:
+def _reader(tmp_path: Path, push: bool = False) -> Path:
+    """A machine reading /bump: PULL (a guard on `sub.latest`), or PUSH (a callback keeping the
+    values in `hits`, a guard on them)."""
+    name = "pusher" if push else "reader"
+    callback, guard = (
+        ("lambda msg: hits.add(msg.data)", "True in hits")
+        if push
+        else ("None", "sub.latest is not None and sub.latest.data")
+    )
     return write_machine(
         tmp_path,
-        "reader",
-        {"WAIT": [("HIT", "sub.latest is not None and sub.latest.data")], "HIT": None},
+        name,
+        {"WAIT": [("HIT", guard)], "HIT": None},
         {
-            "WAIT_OnEntry": 'ros.init()\nnode = ros.Node("reader")\n'
-            'sub = node.create_subscription(Bool, "/bump", None, 10)\n'
+            "WAIT_OnEntry": f'ros.init()\nnode = ros.Node("{name}")\n'
+            f'sub = node.create_subscription(Bool, "/bump", {callback}, 10)\n'
         },
-        variables="node: ros.Node\nsub: ros.Subscription\n",
+        variables="node: ros.Node\nsub: ros.Subscription\nhits: set = set()\n",
         includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n",
     )
 
@@ -109,22 +117,8 @@ def test_a_bound_stops_a_growing_counter(tmp_path: Path) -> None:
     assert r.status == 2 and "bounds: ros2_ping_pong.counter" in r.stderr
 
 
-def _pusher(tmp_path: Path) -> Path:
-    return write_machine(
-        tmp_path,
-        "pusher",
-        {"WAIT": [("HIT", "True in hits")], "HIT": None},
-        {
-            "WAIT_OnEntry": 'ros.init()\nnode = ros.Node("pusher")\n'
-            'sub = node.create_subscription(Bool, "/bump", lambda msg: hits.add(msg.data), 10)\n'
-        },
-        variables="node: ros.Node\nsub: ros.Subscription\nhits: set = set()\n",
-        includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n",
-    )
-
-
 def test_a_push_callback_runs_with_the_topics_values(tmp_path: Path) -> None:
-    m = _pusher(tmp_path)
+    m = _reader(tmp_path, push=True)
     f = tmp_path / "p.verify.yaml"
     f.write_text(
         f"machines: [{m}]\nenvironment:\n  topics:\n    /bump:\n      type: std_msgs/msg/Bool\n"
@@ -153,7 +147,7 @@ def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_a
     if case == "services":
         vf = read_verify_file(_wall_file(tmp_path, True, '  - never: state(ros2_wall_turtle_bot) == "BACK"\n'))
     else:
-        m = _pusher(tmp_path)
+        m = _reader(tmp_path, push=True)
         f = tmp_path / "p.verify.yaml"
         f.write_text(
             f"machines: [{m}]\nenvironment:\n  topics:\n    /bump:\n      type: std_msgs/msg/Bool\n"
