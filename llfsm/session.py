@@ -595,8 +595,9 @@ class Session:
             activate(prev)
 
     def _open_monitor(self, arr: Arrangement) -> Any:
-        """--monitor, --monitor-property (docs/monitor.md): the properties judged at each
-        ringlet boundary through the scheduler's watcher; a bad one is a usage error."""
+        """--monitor, --monitor-property (docs/monitor.md): the properties judged at the ringlet
+        boundaries where they can change, said on stderr and /llfsm/monitor as the run goes and
+        as it ends; a bad one is a usage error."""
         # deferred: start-up (a run without a monitor never imports the property language)
         from pathlib import Path
 

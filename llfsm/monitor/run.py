@@ -94,10 +94,6 @@ class Monitor:
         self._reads_inputs = not targeted  # an input a property reads (found by _instrument)
         self.ended = False
 
-    @property
-    def violations(self) -> int:
-        return sum(v.verdict == VIOLATED for v in self.verdicts)
-
     # -- attaching ------------------------------------------------------------------------------
     def attach(self, arr: Arrangement, bus: Any = None, publish: bool = True) -> None:
         """Watch `arr` from its next ringlet on (called before it runs); with `publish`, the
@@ -396,10 +392,6 @@ class Monitor:
         where = Boundary(self.arr.ringlets if self.arr is not None else 0)
         self._unsaid = self.judge.at_end(self._now(), where)
         self._say()
-
-    def at_end(self) -> list[str]:
-        """The lines of what is answered at the end (said already by the run's end)."""
-        return [v.line() for v in self.verdicts if v.verdict != VIOLATED]
 
 
 def _check(judge: Judge, j: Judged) -> Check:
