@@ -8,7 +8,7 @@ monitor judges it only there, and the semantics stay "judged at every ringlet bo
   into a monitored variant of the machine's ringlets (llfsm.monitor.variant); every other
   ringlet runs as compiled, in the scheduler's plain loops;
 - at the boundaries after something the ringlets' code does not show: a command, a parameter or
-  an input applied by the scheduler's gate (the monitor wraps `Arrangement._release`), an input
+  an input applied by the scheduler's gate (`Arrangement.on_release`), an input
   set between rounds, a publish on a topic a property names (a tap): then the monitor
   *watches*, judging every property at each boundary until nothing calls for it any more (the
   next boundary; the boundary after a publish, where `published` turns false again; while a
@@ -101,7 +101,7 @@ class Monitor:
         self.arr = arr
         self.machines = arr.machines
         self.always = not self.targeted or not self._instrument(arr)
-        orig_gate, orig_release = arr._gate_fn, arr._release
+        orig_gate = arr._gate_fn
 
         def gate(m: Any) -> int | None:
             if self._pending:
@@ -113,15 +113,14 @@ class Monitor:
                     arr.hold_all()  # the rest of this round meets the gate too
             return r
 
-        def release(m: Any) -> bool:
+        def released(m: Any) -> None:
             inputs = m._inputs
             if m._pending is not None or m._id in arr._variables or (inputs is not None and inputs.fresh):
                 self._once = True  # a command, a parameter, an input: judge the boundary after it
                 self._watch_on()
-            return orig_release(m)
 
         arr._gate_fn = gate
-        arr._release = release  # type: ignore[method-assign]
+        arr.on_release = released
         for m in arr.machines:
             if m._run is m._held:
                 m._run = gate

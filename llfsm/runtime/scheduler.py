@@ -16,19 +16,14 @@ import time
 
 from .clock import Clock, SimClock, WallClock
 from .context import FOREVER, RunContext, activate
-from .errors import ErrorReport, RunStopped, passes_through, report_for, signal_name
-from .generated import is_generated
+from .errors import ErrorReport, RunStopped, passes_through, report_for
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
-    from _signal import _Handler
     from collections.abc import Callable, Sequence
-    from types import FrameType, TracebackType
     from typing import Final
-
-    SignalHandler = Callable[[int, FrameType | None], None]
 
     from .watchdog import Watchdog
 
@@ -39,11 +34,6 @@ EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_MONITOR = 0, 1, 2, 4
 GO, STOP, PAUSE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
-#: Signals that interrupt a run: Ctrl-C, `kill`, and a closed terminal (SIGHUP).
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-#: After a first interrupt, machine code that still holds the run this long (seconds of real
-#: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
-STUCK_SLACK_S = 0.5
 
 
 #: Back-to-back firing rounds read the wall clock every BATCH rounds at most, while BATCH
@@ -130,6 +120,10 @@ class Arrangement:
         self.watcher: Callable[[Machine], int] | None = None
         self.stop_status = EXIT_MONITOR
         self.on_pause: Callable[[Machine], None] | None = None
+        #: Told of each machine the gate is about to release (a command, parameters or an input
+        #: to apply, before they are applied), when set: what changes a machine outside its
+        #: ringlets, for a monitor.  The gate is a rare path; a run without it pays nothing.
+        self.on_release: Callable[[Machine], None] | None = None
         self._stopped: int | None = None
         #: Ringlets run before the current round loop (its rounds times its live machines),
         #: counted once per loop, never per ringlet: with the loop's live list, what numbers a
@@ -269,6 +263,8 @@ class Arrangement:
         True if the ringlet goes on."""
         if self._stopped is not None:
             return False  # the run ends at this boundary (stop_at_boundary)
+        if self.on_release is not None:
+            self.on_release(m)
         inputs = m._inputs
         if inputs is not None and inputs.fresh:
             inputs.snapshot()
@@ -599,73 +595,3 @@ def _regate(m: Machine, variables: dict[int, dict[str, object]]) -> None:
         _hold(m)
     elif m._run is m._held:
         m._run = m._next
-
-
-def _in_machine_code(frame: FrameType | None) -> bool:
-    """Whether a generated module's code is on the stack (a signal handler's view of it)."""
-    while frame is not None:
-        if is_generated(frame.f_code.co_filename):
-            return True
-        frame = frame.f_back
-    return False
-
-
-def signals_handled(arr: Arrangement) -> _SignalsHandled:
-    """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run (a `with`).
-
-    The first one asks the machines to finish (the scheduler sees it between rounds).  A second
-    one, or the grace time passing in real time while machine code still loops or blocks (a real
-    timer, SIGALRM, catches that), raises RunStopped from the handler: Python delivers it inside
-    whatever code is running, machine code included, and a blocking `time.sleep` ends with it,
-    so nothing a section does can keep the run from stopping."""
-
-    def stop(frame: FrameType | None, text: str) -> None:
-        if arr.running:
-            # outside machine code (the scheduler sleeping between rounds, the bus) there is no
-            # place of the user's to name: the run ends as the grace time's end would end it
-            raise RunStopped(arr._signal or signal.SIGINT, text, in_machine_code=_in_machine_code(frame))
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        if arr.watchdog is not None:
-            arr.watchdog.answer()  # this handler could run: the run is not stuck in a C call
-        first = not arr._interrupts
-        arr.interrupt(signum)
-        if first:
-            signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
-        else:
-            stop(frame, f"stopped by a second {signal_name(signum)}")
-
-    def alarm(_signum: int, frame: FrameType | None) -> None:
-        if arr.watchdog is not None:
-            arr.watchdog.answer()
-        if arr._interrupts:
-            grace = arr._grace_ns / 1e9
-            sig = signal_name(arr._signal or 0)
-            held = grace + STUCK_SLACK_S
-            stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
-
-    return _SignalsHandled(handler, alarm, arr.watchdog)
-
-
-class _SignalsHandled:
-    """The handlers of signals_handled, installed on entry and the old ones put back on exit.
-    (Not contextlib.contextmanager: contextlib is a tenth of a run's start-up.)"""
-
-    def __init__(self, handler: SignalHandler, alarm: SignalHandler, watchdog: Watchdog | None) -> None:
-        self.handler = handler
-        self.alarm = alarm
-        self.watchdog = watchdog
-        self.old: dict[int, _Handler] = {}
-
-    def __enter__(self) -> None:
-        self.old = {s: signal.signal(s, self.handler) for s in STOP_SIGNALS}
-        self.old[signal.SIGALRM] = signal.signal(signal.SIGALRM, self.alarm)
-        if self.watchdog is not None:  # after the handlers: every signal it sees is one they answer
-            self.watchdog.arm()
-
-    def __exit__(self, t: type[BaseException] | None, e: BaseException | None, tb: TracebackType | None) -> None:
-        if self.watchdog is not None:
-            self.watchdog.disarm()
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        for s, h in self.old.items():
-            signal.signal(s, h)
