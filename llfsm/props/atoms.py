@@ -113,15 +113,16 @@ class Atom:
 
 def infos_of(classes: Iterable[Any], variables: Callable[[Any], Iterable[str]] | None = None) -> dict[str, MachineInfo]:
     """What atoms may name of each machine class of an arrangement (a live run's): its states,
-    and its variables (by default the class's slots that are neither llfsm's nor a state
-    variable's, which hold `STATE__name`) then its inputs."""
+    and its variables (by default the class's slots, or a native build's attributes, that are
+    neither llfsm's nor a state variable's, which hold `STATE__name`) then its inputs."""
     out = {}
     for k, cls in enumerate(classes):
         if variables is not None:
             names = tuple(variables(cls))
         else:
             slots = [s for c in type.mro(cls) for s in vars(c).get("__slots__", ())]
-            names = tuple(s for s in slots if not s.startswith("_") and "__" not in s)
+            slots += getattr(cls, "__mypyc_attrs__", ())  # a class built native (--native) has these instead
+            names = tuple(dict.fromkeys(s for s in slots if not s.startswith("_") and "__" not in s))
         inputs = tuple(entry[0] for entry in getattr(cls, "INPUTS", ()))
         out[cls.NAME] = MachineInfo(k, cls.NAME, tuple(cls.STATES), names + tuple(i for i in inputs if i not in names))
     return out

@@ -99,13 +99,15 @@ class Lifetimes:
 
 def _variables(m: object) -> list[object]:
     """The values of a machine's own variables (its class's slots below the base class's, and a
-    __dict__ if it has one)."""
-    base = set(Machine.__slots__)
+    __dict__ if it has one; a class built native lists its attributes in `__mypyc_attrs__`, and
+    has no `__slots__`)."""
+    base = set(getattr(Machine, "__slots__", ())) | set(getattr(Machine, "__mypyc_attrs__", ()))
+    names = [n for cls in type(m).__mro__ for n in cls.__dict__.get("__slots__", ())]
+    names += getattr(type(m), "__mypyc_attrs__", ())
     out: list[object] = []
-    for cls in type(m).__mro__:
-        for name in cls.__dict__.get("__slots__", ()):
-            if name not in base and hasattr(m, name):
-                out.append(getattr(m, name))
+    for name in dict.fromkeys(names):
+        if name not in base and hasattr(m, name):
+            out.append(getattr(m, name))
     d = getattr(m, "__dict__", None)
     if d:
         out.extend(d.values())
