@@ -96,6 +96,7 @@ def run_rules(c: Checking) -> None:
     inputs.assignments(c, m)
     untranslated.untranslated(c, m)
     structure.orphans(c)
+    structure.layout(c, m)
     structure.reachability(c, m)
     structure.suspend_state(c, m)
     c.diagnostics.extend(undeclared_dependencies(c.path, c.read.trees))

@@ -81,6 +81,10 @@ class Checking:
         )
 
     def add(self, code: str, file: str, line: int, col: int, msg: str) -> None:
+        inline = self.read.inline.get(file)
+        if inline is not None:  # an inline guard: the rules name it by its file's name; it is in machine.yaml
+            loc = inline.place(line, col)
+            file, line, col = loc.file, loc.line, loc.column
         self.diagnostics.append(diag(code, self.path / file, line, col, msg))
 
     def at(self, code: str, loc: Loc, msg: str) -> None:
