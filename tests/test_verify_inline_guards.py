@@ -1,19 +1,12 @@
-"""verify, the monitor and bag check with inline guards (`{to: T, guard: EXPR}` in machine.yaml,
+"""verify and the monitor with inline guards (`{to: T, guard: EXPR}` in machine.yaml,
 SPEC 13): explored as guard files are, refused at their place in machine.yaml, judged where
 they can change."""
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
-import pytest
 from helpers import llfsm
-
-# the inline-guard format comes with llfsm.edit (branch editfmt); until it is merged, nothing to test
-pytestmark = pytest.mark.skipif(
-    importlib.util.find_spec("llfsm.edit") is None, reason="inline guards are not in this llfsm yet (branch editfmt)"
-)
 
 MACHINE = """\
 states:
