@@ -14,8 +14,8 @@ import yaml
 from helpers import llfsm, run_sim, write_machine
 
 from llfsm.lang.check import check_machine
-from llfsm.verify.judge import verify
 from llfsm.verify.explorer import Options
+from llfsm.verify.judge import verify
 from llfsm.verify.load import PropertySource, load_arrangement
 
 COUNTER = """\
