@@ -469,6 +469,8 @@ def _template_context(
                 + [i.name for i in m.inputs]
             ),
             "inputs": input_entries(m),
+            # declared for type checkers and mypyc (--native), which otherwise know no such attribute
+            "input_annotations": tuple((i.name, i.type) for i in m.inputs),
             "on_suspend": [hook_function("on_suspend", v.name) if v.has_on_suspend else "None" for v in views],
             "on_resume": [hook_function("on_resume", v.name) if v.has_on_resume else "None" for v in views],
         },

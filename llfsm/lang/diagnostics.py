@@ -87,6 +87,13 @@ RULES: dict[str, Rule] = {
         _r("LF047", E, "input-name", "An input's name is not usable or clashes with a variable."),
         _r("LF048", E, "input-value", "An input's type is unknown, or its default or domain holds a wrong value."),
         _r("LF049", E, "input-binding", "An input's topic, msg and field are incomplete, unknown or do not fit."),
+        _r(
+            "LF050",
+            W,
+            "unknown-machine",
+            'suspend("M") and its family name a machine none of the machines checked (or beside them) is.',
+        ),
+        _r("LF051", E, "unknown-message-field", "Code uses a field that the message type of a variable does not have."),
         _r("LF060", E, "unknown-parameter", "`parameters:` names something that is not a machine variable."),
         _r(
             "LF061",
