@@ -115,6 +115,9 @@ FIELDS = (
     "play_topics",
     "play_rate",
     "native",
+    "monitor",
+    "monitor_properties",
+    "on_violation",
 )
 
 
@@ -153,6 +156,9 @@ class RunOptions:
     play_topics: tuple[str, ...]
     play_rate: float
     native: bool
+    monitor: str | None
+    monitor_properties: tuple[str, ...]
+    on_violation: str  # log | pause | stop
 
     def __init__(
         self,
@@ -186,6 +192,9 @@ class RunOptions:
         play_topics: tuple[str, ...] = (),
         play_rate: float = 1.0,
         native: bool = False,
+        monitor: str | None = None,
+        monitor_properties: tuple[str, ...] = (),
+        on_violation: str = "log",
     ) -> None:
         given = locals()  # every parameter by name: one loop instead of 26 assignments
         for name in FIELDS:
@@ -442,6 +451,8 @@ class Session:
                 grace = 0
             if o.transport != "inproc":  # other processes can resume machines (docs/view.md): all suspended is no end
                 arr.end_when_suspended = False
+            if o.monitor or o.monitor_properties:
+                self._open_monitor(arr)  # it says its verdicts as the run goes, the last ones as it ends
             if self.web is not None and self.bus is not None:
                 self.web_server = self._open_web(self.web, ctx, self.bus, arr)
             try:
@@ -608,6 +619,26 @@ class Session:
             raise UsageError(str(e)) from None
         finally:
             activate(prev)
+
+    def _open_monitor(self, arr: Arrangement) -> Any:
+        """--monitor, --monitor-property (docs/monitor.md): the properties judged at the ringlet
+        boundaries where they can change, said on stderr and /llfsm/monitor as the run goes and
+        as it ends; a bad one is a usage error."""
+        # deferred: start-up (a run without a monitor never imports the property language)
+        from pathlib import Path
+
+        from .monitor import Monitor, MonitorError, property_source
+        from .props.file import FileError, read_verify_file
+
+        o = self.options
+        try:
+            sources = read_verify_file(Path(o.monitor)).properties if o.monitor else []
+            sources += [property_source(t) for t in o.monitor_properties]
+            monitor = Monitor(sources, self.classes, o.on_violation, self.say)
+        except (FileError, MonitorError) as e:
+            raise UsageError(str(e)) from None
+        monitor.attach(arr, self.bus)
+        return monitor
 
     def _open_web(self, web: WebPage, ctx: RunContext, bus: Bus, arr: Arrangement) -> Stoppable:
         """--web: the page's server on its own thread, the bus up (so the machines' control

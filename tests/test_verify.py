@@ -233,11 +233,14 @@ def test_code_that_reads_the_world_is_refused_one_line_per_place(tmp_path: Path)
         ("Includes.py", "1", "LF200"),
         ("Includes.py", "2", "LF200"),
         ("State_A_OnEntry.py", "3", "LF200"),
+        ("State_A_OnEntry.py", "4", "LF200"),  # time.time(): where `time` is used, as well as its import
         ("State_A_OnResume.py", "1", "LF201"),
         ("State_A_Transition_0.expr", "1", "LF201"),
+        ("State_A_Transition_1.expr", "1", "LF200"),  # random.random() in the guard (SPEC 16)
         ("machine.yaml", "2", "LF202"),
     ]
     assert "make what it reads an input" in r.stdout
+    assert "State_A_Transition_1.expr:1:1: LF200 error: `random` (randomness" in r.stdout
     assert "nothing was explored" in r.stderr
 
 

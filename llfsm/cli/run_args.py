@@ -181,6 +181,31 @@ RUN_OPTIONS: tuple[RunOption, ...] = (
     _O(("--play-topic",), "play_topics", TEXT, "Play only TOPIC (repeatable).", multiple=True, metavar="TOPIC"),
     _O(("--play-rate",), "play_rate", FLOAT, "--play: time scale (2 = twice as fast).", default=1.0, show_default=True),
     _O(("--native",), "native", FLAG, "Run machines compiled with mypyc (see docs/native.md)."),
+    # -- the monitor (llfsm.monitor, docs/monitor.md) --
+    _O(
+        ("--monitor",),
+        "monitor",
+        TEXT,
+        "Judge the properties of FILE.verify.yaml while the run goes on.",
+        metavar="FILE",
+    ),
+    _O(
+        ("--monitor-property",),
+        "monitor_properties",
+        TEXT,
+        "Judge a property while the run goes on (repeatable).",
+        multiple=True,
+        metavar="KIND:TEXT",
+    ),
+    _O(
+        ("--on-violation",),
+        "on_violation",
+        CHOICE,
+        "What a violated property does: log it, or stop the run (exit status 4); pause needs the debugger.",
+        choices=("log", "pause", "stop"),
+        default="log",
+        show_default=True,
+    ),
 )
 del _O
 

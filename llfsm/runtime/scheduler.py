@@ -4,8 +4,9 @@ The untraced loops (`_sim_rounds`, `_wall_rounds`, `_rounds`) are the fast path:
 plain call per live machine, `m._run(m)`, and nothing else runs between rounds unless something
 asked for it: `_attention` (a command, an unload, a signal) or the run context's `wake` time
 (the bus: a message queued for a callback, a timer falling due; see RunContext).
-`_traced_round` also reports entries and transitions for `-v` and `--trace`.  Keeping them
-apart means an untraced run pays nothing for tracing.
+`_watched_round` also reports entries and transitions for `-v` and `--trace`, and calls the
+watcher (a monitor's, a debugger's) after each ringlet while one is set.  Keeping them apart
+means an untraced, unwatched run pays nothing for either.
 """
 
 from __future__ import annotations
@@ -15,31 +16,24 @@ import time
 
 from .clock import Clock, SimClock, WallClock
 from .context import FOREVER, RunContext, activate
-from .errors import ErrorReport, RunStopped, passes_through, report_for, signal_name
-from .generated import is_generated
+from .errors import ErrorReport, RunStopped, passes_through, report_for
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
-    from _signal import _Handler
     from collections.abc import Callable, Sequence
-    from types import FrameType, TracebackType
     from typing import Final
-
-    SignalHandler = Callable[[int, FrameType | None], None]
 
     from .watchdog import Watchdog
 
-#: Exit statuses (docs/cli.md, "Exit statuses"): a normal end, an exception in machine code, bad input.
-EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+#: Exit statuses (docs/cli.md, "Exit statuses"): a normal end, an exception in machine code, bad input,
+#: a monitored property violated with --on-violation stop.
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_MONITOR = 0, 1, 2, 4
+#: What a watcher (Arrangement.watcher) asks for after a ringlet.
+GO, STOP, PAUSE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
-#: Signals that interrupt a run: Ctrl-C, `kill`, and a closed terminal (SIGHUP).
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-#: After a first interrupt, machine code that still holds the run this long (seconds of real
-#: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
-STUCK_SLACK_S = 0.5
 
 
 #: Back-to-back firing rounds read the wall clock every BATCH rounds at most, while BATCH
@@ -127,6 +121,26 @@ class Arrangement:
         #: Keep running rounds with no machine left (nodes on their own, docs/turtlesim.md): the run then
         #: ends by an interrupt or --duration only.
         self.serve_forever = False
+        #: Called after every ringlet (and a release that ended one) with the machine, when set
+        #: (a run's monitor, llfsm.monitor; the debugger's breakpoints): it returns GO, or STOP
+        #: to end the run at this ringlet boundary (status `stop_status`), or PAUSE (the
+        #: debugger's, issue 30; `on_pause` is called).  It may be set or cleared at any time,
+        #: from a ringlet or between rounds: a round in progress reads it after each ringlet, and
+        #: a plain loop in progress stops after its round when the setter also asks for
+        #: attention (`ctx.wake = 0`).  A run without one pays nothing: the plain round loops
+        #: never look at it.
+        self.watcher: Callable[[Machine], int] | None = None
+        self.stop_status = EXIT_MONITOR
+        self.on_pause: Callable[[Machine], None] | None = None
+        #: Told of each machine the gate is about to release (a command, parameters or an input
+        #: to apply, before they are applied), when set: what changes a machine outside its
+        #: ringlets, for a monitor.  The gate is a rare path; a run without it pays nothing.
+        self.on_release: Callable[[Machine], None] | None = None
+        self._stopped: int | None = None
+        #: Ringlets run before the current round loop (its rounds times its live machines),
+        #: counted once per loop, never per ringlet: with the loop's live list, what numbers a
+        #: ringlet boundary for a watcher (the monitor's violation lines).
+        self.ringlets = 0
         check_names(classes, suspended)
         for i, cls in enumerate(classes):
             m = cls(self, i)
@@ -253,6 +267,10 @@ class Arrangement:
         """The turn of a held machine (a new input value to take, new variable values, a command
         pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
         True if the ringlet goes on."""
+        if self._stopped is not None:
+            return False  # the run ends at this boundary (stop_at_boundary)
+        if self.on_release is not None:
+            self.on_release(m)
         inputs = m._inputs
         if inputs is not None and inputs.fresh:
             inputs.snapshot()
@@ -307,24 +325,54 @@ class Arrangement:
         self.ctx.interrupted = True
         self._attention = True
 
+    def stop_at_boundary(self, status: int | None = None) -> None:
+        """End the run at the ringlet boundary where this is called (from a ringlet, a watcher
+        or between rounds): no further ringlet runs, the rest of the round included, and the
+        run ends with `status` (by default `stop_status`)."""
+        self._stopped = self.stop_status if status is None else status
+        for m in self.machines:
+            _hold(m)  # the rest of the round meets the gate, which lets nothing through now
+        self._attention = True
+
+    def hold_all(self) -> None:
+        """Put the gate in front of every machine's next ringlet, so that whoever wraps the gate
+        (`_gate_fn`: a monitor) is called at the next boundary, even inside a plain loop.  The
+        gate lets a machine held for nothing else through at once."""
+        for m in self.machines:
+            _hold(m)
+
     # -- rounds ----------------------------------------------------------------------------
-    def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
+    def _watched_round(self, live: list[Machine], tr: Tracer | None) -> bool:
+        """A round with the tracer, if any, told of entries and transitions, and the watcher,
+        while one is set (read after each ringlet: set during the round, it is called at once),
+        told of each ringlet boundary."""
         fired = False
         for m in live:
-            if m._run is m._held and not self._release(m):
-                continue
-            s = m._state
-            if m._entered:
-                tr.entry(m, s)
-            r = m._run(m)
-            if r is not None:
-                fired = True
-                tr.transition(m, s, m._state, r)
+            if m._run is not m._held or self._release(m):
+                s = m._state
+                if tr is not None and m._entered:
+                    tr.entry(m, s)
+                r = m._run(m)
+                if r is not None:
+                    fired = True
+                    if tr is not None:
+                        tr.transition(m, s, m._state, r)
+            # else a suspend applied, or the run stopped: for a watcher the boundary is still one
+            watch = self.watcher
+            if watch is not None:
+                asked = watch(m)
+                if asked == STOP:
+                    self.stop_at_boundary()
+                    break
+                if asked == PAUSE and self.on_pause is not None:
+                    self.on_pause(m)
         return fired
 
     def _attend(self, now: int, grace: int) -> RunResult | None:
         """Whatever changed since the last round: unloads, suspensions, interrupts."""
         self._attention = False
+        if self._stopped is not None:
+            return self._result("stopped", self._stopped)
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
         if not self._live:
             if not self.serve_forever:
@@ -414,21 +462,24 @@ class Arrangement:
                 if end < ctx.wake:
                     ctx.wake = end  # one test a round covers the end of the run as well
                 live = self._live
-                if tr is not None:
-                    tr.round, tr.now = rounds, now
+                if tr is not None or self.watcher is not None:
+                    if tr is not None:
+                        tr.round, tr.now = rounds, now
                     ctx.round = rounds
-                    fired = self._traced_round(live, tr)
-                    rounds += 1
+                    fired = self._watched_round(live, tr)
+                    n = 1
                     if sim is not None:
                         sim.now += sim.period
                     else:
                         clock.advance(fired)
                 elif sim is not None:
-                    rounds += self._sim_rounds(live, sim)
+                    n = self._sim_rounds(live, sim)
                 elif wall is not None:
-                    rounds += self._wall_rounds(live, wall)
+                    n = self._wall_rounds(live, wall)
                 else:
-                    rounds += self._rounds(live)
+                    n = self._rounds(live)
+                rounds += n
+                self.ringlets += n * len(live)
                 if clock.now >= ctx.wake:
                     ctx.wake = FOREVER  # the hooks arm it again for whatever they still hold
                     ctx.round = rounds
@@ -552,73 +603,3 @@ def _regate(m: Machine, variables: dict[int, dict[str, object]]) -> None:
         _hold(m)
     elif m._run is m._held:
         m._run = m._next
-
-
-def _in_machine_code(frame: FrameType | None) -> bool:
-    """Whether a generated module's code is on the stack (a signal handler's view of it)."""
-    while frame is not None:
-        if is_generated(frame.f_code.co_filename):
-            return True
-        frame = frame.f_back
-    return False
-
-
-def signals_handled(arr: Arrangement) -> _SignalsHandled:
-    """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run (a `with`).
-
-    The first one asks the machines to finish (the scheduler sees it between rounds).  A second
-    one, or the grace time passing in real time while machine code still loops or blocks (a real
-    timer, SIGALRM, catches that), raises RunStopped from the handler: Python delivers it inside
-    whatever code is running, machine code included, and a blocking `time.sleep` ends with it,
-    so nothing a section does can keep the run from stopping."""
-
-    def stop(frame: FrameType | None, text: str) -> None:
-        if arr.running:
-            # outside machine code (the scheduler sleeping between rounds, the bus) there is no
-            # place of the user's to name: the run ends as the grace time's end would end it
-            raise RunStopped(arr._signal or signal.SIGINT, text, in_machine_code=_in_machine_code(frame))
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        if arr.watchdog is not None:
-            arr.watchdog.answer()  # this handler could run: the run is not stuck in a C call
-        first = not arr._interrupts
-        arr.interrupt(signum)
-        if first:
-            signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
-        else:
-            stop(frame, f"stopped by a second {signal_name(signum)}")
-
-    def alarm(_signum: int, frame: FrameType | None) -> None:
-        if arr.watchdog is not None:
-            arr.watchdog.answer()
-        if arr._interrupts:
-            grace = arr._grace_ns / 1e9
-            sig = signal_name(arr._signal or 0)
-            held = grace + STUCK_SLACK_S
-            stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
-
-    return _SignalsHandled(handler, alarm, arr.watchdog)
-
-
-class _SignalsHandled:
-    """The handlers of signals_handled, installed on entry and the old ones put back on exit.
-    (Not contextlib.contextmanager: contextlib is a tenth of a run's start-up.)"""
-
-    def __init__(self, handler: SignalHandler, alarm: SignalHandler, watchdog: Watchdog | None) -> None:
-        self.handler = handler
-        self.alarm = alarm
-        self.watchdog = watchdog
-        self.old: dict[int, _Handler] = {}
-
-    def __enter__(self) -> None:
-        self.old = {s: signal.signal(s, self.handler) for s in STOP_SIGNALS}
-        self.old[signal.SIGALRM] = signal.signal(signal.SIGALRM, self.alarm)
-        if self.watchdog is not None:  # after the handlers: every signal it sees is one they answer
-            self.watchdog.arm()
-
-    def __exit__(self, t: type[BaseException] | None, e: BaseException | None, tb: TracebackType | None) -> None:
-        if self.watchdog is not None:
-            self.watchdog.disarm()
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        for s, h in self.old.items():
-            signal.signal(s, h)

@@ -27,6 +27,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+from ..props.parse import duration_text
 from ..runtime.inputs import DEFAULT, FIELD, MSG, NAME, TOPIC
 from .judge import Trace, Verification
 
@@ -150,11 +151,3 @@ def write_counterexample(v: Verification, folder: str) -> str:
         f"{rounds} round{'s' if rounds != 1 else ''}); replay it with: llfsm run --clock sim --period "
         f"{duration_text(period)} --play {folder} --duration {duration_text(shown * period)} {targets}"
     )
-
-
-def duration_text(ns: int) -> str:
-    """A duration as `llfsm run` reads it back exactly: 100ms, 2s, 250us, 7ns."""
-    for unit, scale in (("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000)):
-        if ns % scale == 0:
-            return f"{ns // scale}{unit}"
-    return f"{ns}ns"

@@ -16,6 +16,7 @@ from typing import Any
 from ..lang.diagnostics import file_uri, shown
 from .explorer import TURN, Explorer, Step
 from .judge import Outcome, Trace, Verification
+from .memory import size_text
 from .values import shown as value_text
 
 
@@ -55,6 +56,8 @@ def step_lines(e: Explorer, step: Step | None, config: tuple[Any, ...]) -> list[
     else:
         done = "no transition"
     out.append(f"[round {step.round}] {m.NAME}: {done}" + (f" ({'; '.join(what)})" if what else ""))
+    for said in step.environment:
+        out.append(f"    environment: {said}")
     for name, (old, new) in step.changed.items():
         out.append(f"    {name}: {value_text(old)} -> {value_text(new)}")
     if step.published:
@@ -160,8 +163,23 @@ def text(v: Verification, witnesses: bool = False) -> str:
             f"stopped at the state limit ({v.configurations:,} configurations; --max-states raises it)"
             + (": the variables that kept growing: " + "; ".join(v.growing) if v.growing else "")
         )
+    elif v.partial == "memory bound" and v.memory is not None:
+        used, bound = v.memory
+        lines.append(
+            f"stopped at the memory bound ({size_text(used)} in use, --max-memory {size_text(bound)}; "
+            f"{v.configurations:,} configurations; --max-memory raises it)"
+            + (": the variables that grew: " + "; ".join(v.growing) if v.growing else "")
+        )
     elif v.partial == "interrupted":
         lines.append(f"interrupted: a partial result ({v.configurations:,} configurations explored so far)")
+    if v.loaded.bounds:
+        shown_bounds = ", ".join(f"{k} <= {b:g}" for k, b in v.loaded.bounds.items())
+        lines.append(
+            f"bounded: {shown_bounds} ({v.cut:,} configurations past a bound were not explored further): "
+            "the verdicts hold for the runs within these bounds"
+        )
+    if v.hint is not None:
+        lines.append(v.hint)
     for w in v.warnings:
         lines.append(f"warning: {w}")
     if not v.outcomes and v.error is None:
@@ -194,6 +212,7 @@ def _trace_json(e: Explorer, trace: Trace) -> dict[str, Any]:
                 "state": m.STATES[part[2]],
                 "changed": {n: [value_text(a), value_text(b)] for n, (a, b) in step.changed.items()},
                 "published": sorted(step.published),
+                "environment": step.environment,
             }
         )
     return {"steps": steps, "loop": trace.loop}
@@ -214,6 +233,8 @@ def as_json(v: Verification) -> str:
         "properties": [],
         "error": v.error,
         "warnings": v.warnings,
+        "bounds": v.loaded.bounds,
+        "cut": v.cut,
     }
     for o in v.outcomes:
         item: dict[str, Any] = {

@@ -129,3 +129,19 @@ def _step_path(a: int, b: int, succ: Callable[[int], Iterable[int]], inside: Cal
                 parent[w] = v
                 queue.append(w)
     raise AssertionError("a strongly connected component has a path between any two nodes")
+
+
+def reachable_accepting_cycle(
+    start: int, succ: Callable[[int], Sequence[int]], bits: Callable[[int], int], full: int
+) -> bool:
+    """Whether a cycle reachable from `start` meets every set: some strongly connected component
+    with a cycle whose nodes' `bits`, together, make `full`."""
+    for comp in sccs([start], succ, lambda _n: True):
+        if not nontrivial(comp, succ):
+            continue
+        got = 0
+        for n in comp:
+            got |= bits(n)
+        if got & full == full:
+            return True
+    return False
