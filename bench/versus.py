@@ -1,6 +1,6 @@
 """This checkout against another one, side by side: did a change make llfsm slower?
 
-    .venv/bin/python bench/versus.py OTHER [--quick] [--sections speed startup build dds]
+    .venv/bin/python bench/versus.py OTHER [--quick] [--sections speed startup build verify dds]
 
 OTHER is another checkout of llfsm (a `git worktree add /tmp/base <commit>` with its own
 `make .venv/.installed-dev`).  Each figure is measured in both checkouts in the same run,
@@ -16,6 +16,8 @@ helpers (bench/run.py's contestants, bench/dds.py's roles), so what differs is t
 - startup: wall time of `llfsm run --clock sim hello.machine` with a warm cache, and of a
   built module.
 - build: CPU time (user + system) of a cold `llfsm build` of 10 and 100 generated machines.
+- verify: `llfsm verify`'s exploration speed (configurations per CPU second, exact storage) on
+  bench/verify.py's counter and mutex arrangements, each side with its own bench/verify.py.
 - dds: Twist round trip p50 and an idle machine's rounds per second on the DDS transport,
   inside a private network namespace.
 """
@@ -51,8 +53,9 @@ SPEED_WORKER = textwrap.dedent(
     sys.path.insert(0, sys.argv[1] + "/bench")
     import run
     tmp = Path(tempfile.mkdtemp(prefix="llfsm-versus-"))
-    toggles, idles = run.machine_paths(tmp)
-    named = {**run.bounds(), **run.contestants(toggles, idles)}
+    paths = run.machine_paths(tmp)  # one list; (toggles, idles) in a bench/run.py before issue 27's
+    mine = run.contestants(*paths) if isinstance(paths, tuple) else run.contestants(paths)
+    named = {**run.bounds(), **mine}
     print(" ".join(n.replace(" ", "_") for n in named), flush=True)
     for line in sys.stdin:
         name, _, n = line.strip().rpartition(" ")
@@ -74,14 +77,38 @@ DDS_PROBE = textwrap.dedent(
 )
 
 
+#: The verify section's probe: one exploration with the side's own bench/verify.py, answering
+#: "configurations cpu_seconds".
+VERIFY_PROBE = textwrap.dedent(
+    """
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, sys.argv[1] + "/bench")
+    import verify as bench
+    root = Path(sys.argv[3])
+    if sys.argv[2] == "counter":
+        paths, prop = [bench.write_counter(root, int(sys.argv[4]))], "always: counter.count >= 0"
+    else:
+        n = int(sys.argv[4])
+        paths, prop = bench.write_mutex(root, n), bench.mutex_property(n)
+    v, t = bench.explore(paths, prop, False)
+    print(v.configurations, t)
+    """
+)
+
+
 def python_of(checkout: Path) -> str:
     py = checkout / ".venv" / "bin" / "python"
     return str(py) if py.exists() else sys.executable
 
 
 def env_of(checkout: Path, cache: Path) -> dict[str, str]:
+    """The side's environment: its llfsm first on the path.  PYTHONSAFEPATH: `python -c` and
+    `python -m` would otherwise put the working directory first, and run from this checkout's
+    root (as the docstring says) the other side imported this checkout's llfsm too."""
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONDONTWRITEBYTECODE")}
     env["PYTHONPATH"] = str(checkout)
+    env["PYTHONSAFEPATH"] = "1"
     env["LLFSM_CACHE_DIR"] = str(cache)
     return env
 
@@ -193,6 +220,24 @@ def section_build(other: Path, quick: bool, tmp: Path) -> list[Row]:
     return rows
 
 
+def section_verify(other: Path, quick: bool, tmp: Path) -> list[Row]:
+    rows = []
+    for kind, size in (("counter", 20_000 if quick else 100_000), ("mutex", 4 if quick else 5)):
+
+        def once(side: Path, kind: str = kind, size: int = size) -> float:
+            folder = tmp / f"{kind}-{side.name}"
+            cmd = [python_of(side), "-c", VERIFY_PROBE, str(side), kind, str(folder), str(size)]
+            r = subprocess.run(cmd, capture_output=True, text=True, env=env_of(side, tmp / f"cache-{side.name}"),
+                               timeout=600, check=True)  # fmt: skip
+            configurations, seconds = r.stdout.split()
+            return int(configurations) / float(seconds)
+
+        mine, theirs = alternate(3 if quick else 7, (THIS, other), once)
+        label = f"verify: {kind} {size:,}" if kind == "counter" else f"verify: {size} mutex machines"
+        rows.append(row(f"{label} (configurations per CPU s)", mine, theirs, lambda x: f"{x:,.0f}/s"))
+    return rows
+
+
 def section_dds(other: Path, quick: bool, tmp: Path) -> list[Row]:
     cmd = [sys.executable, str(Path(__file__)), str(other), "--dds-inside"] + (["--quick"] if quick else [])
     r = subprocess.run(
@@ -225,7 +270,13 @@ def dds_inside(other: Path, quick: bool) -> None:
         print(json.dumps(row(f"dds: {key}", mine, theirs, lambda x: f"{x:.3g}")))
 
 
-SECTIONS = {"speed": section_speed, "startup": section_startup, "build": section_build, "dds": section_dds}
+SECTIONS = {
+    "speed": section_speed,
+    "startup": section_startup,
+    "build": section_build,
+    "verify": section_verify,
+    "dds": section_dds,
+}
 
 
 def main() -> None:

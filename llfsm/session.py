@@ -44,7 +44,7 @@ from .runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer
 from .runtime.context import activate
 from .runtime.errors import passes_through, report_for
 from .runtime.inputs import TOPIC
-from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE
+from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE, check_names
 from .runtime.watchdog import Watchdog
 from .targets import InvalidMachine, MachineLoadError, TargetError, load
 
@@ -56,6 +56,7 @@ if TYPE_CHECKING:
     from .bag import RunBags
     from .outputs import StreamedOutput
     from .ros.bus import Bus
+    from .ros.logging import LogSettings
     from .ros.transports.base import Transport
     from .runtime.errors import ErrorReport
     from .runtime.machine import Machine
@@ -99,6 +100,8 @@ FIELDS = (
     "remaps",
     "params",
     "params_files",
+    "log_levels",
+    "log_file",
     "echoes",
     "image",
     "view",
@@ -112,6 +115,9 @@ FIELDS = (
     "play_topics",
     "play_rate",
     "native",
+    "monitor",
+    "monitor_properties",
+    "on_violation",
 )
 
 
@@ -135,6 +141,8 @@ class RunOptions:
     remaps: tuple[str, ...]
     params: tuple[str, ...]
     params_files: tuple[str, ...]
+    log_levels: tuple[str, ...]
+    log_file: bool
     echoes: tuple[str, ...]
     image: str | None
     view: bool
@@ -148,6 +156,9 @@ class RunOptions:
     play_topics: tuple[str, ...]
     play_rate: float
     native: bool
+    monitor: str | None
+    monitor_properties: tuple[str, ...]
+    on_violation: str  # log | pause | stop
 
     def __init__(
         self,
@@ -166,6 +177,8 @@ class RunOptions:
         remaps: tuple[str, ...] = (),
         params: tuple[str, ...] = (),
         params_files: tuple[str, ...] = (),
+        log_levels: tuple[str, ...] = (),
+        log_file: bool = False,
         echoes: tuple[str, ...] = (),
         image: str | None = None,
         view: bool = False,
@@ -179,6 +192,9 @@ class RunOptions:
         play_topics: tuple[str, ...] = (),
         play_rate: float = 1.0,
         native: bool = False,
+        monitor: str | None = None,
+        monitor_properties: tuple[str, ...] = (),
+        on_violation: str = "log",
     ) -> None:
         given = locals()  # every parameter by name: one loop instead of 26 assignments
         for name in FIELDS:
@@ -314,6 +330,8 @@ class Session:
         self.tracer: Tracer | None = None
         self.arrangement: Arrangement | None = None
         self.web_server: Stoppable | None = None
+        #: `--log-level` and `--log-file`, read by _check_options (None without them).
+        self.log_settings: LogSettings | None = None
         self._check_options()
 
     # -- checks before anything opens ---------------------------------------------------------------
@@ -325,6 +343,13 @@ class Session:
             raise UsageError(
                 "nothing to run: give a machine (TARGET), or --node NAME / --echo TOPIC to run on their own"
             )
+        if o.log_levels or o.log_file:
+            from .ros.logging import LogSettings  # deferred: start-up (only a run given them reads them)
+
+            try:
+                self.log_settings = LogSettings(o.log_levels, o.log_file)
+            except ValueError as e:
+                raise UsageError(str(e)) from None
         if o.transport == "dds" and o.clock == "sim":
             raise UsageError(
                 "--clock sim cannot be used with --transport dds: DDS peers live on the wall clock (their messages "
@@ -355,6 +380,10 @@ class Session:
                 ) from None
             except MachineLoadError as e:
                 raise MachineFailed(e.report) from None
+        try:  # before any node or transport starts: nothing else is said or opened for nothing
+            check_names(self.classes, self.options.suspended)
+        except ArrangementError as e:
+            raise UsageError(str(e)) from None
 
     def _check_outputs(self) -> None:
         o = self.options
@@ -389,6 +418,9 @@ class Session:
         ran = False
         failed_outputs: list[str] = []
         bag_error: str | None = None
+        if self.log_settings is not None:  # before any node: the bus takes them when it is initialised
+            settings = self.log_settings
+            ctx.on_init.append(lambda bus: settings.apply(bus, self.say, o.verbose))
         try:
             if o.transport != "inproc":
                 self.transport = self._open_transport()
@@ -419,12 +451,16 @@ class Session:
                 grace = 0
             if o.transport != "inproc":  # other processes can resume machines (docs/view.md): all suspended is no end
                 arr.end_when_suspended = False
+            if o.monitor or o.monitor_properties:
+                self._open_monitor(arr)  # it says its verdicts as the run goes, the last ones as it ends
             if self.web is not None and self.bus is not None:
                 self.web_server = self._open_web(self.web, ctx, self.bus, arr)
             try:
                 with signals_handled(arr):
                     ran = True  # from here the run's end hooks (ctx.at_end) close what the nodes and bus opened
                     result = arr.run(o.duration, grace)
+                if result.reason == "interrupted" and (left := _unfinished(arr)):
+                    self.say(f"llfsm: the grace time ({grace / 1e9:g} s) ran out before {left} finished")
             finally:
                 if self.web_server is not None:
                     self.web_server.stop()
@@ -491,9 +527,10 @@ class Session:
                     echo_topic(bus, topic)
             except (InvalidNameError, ValueError) as e:
                 raise UsageError(str(e)) from None
-            if o.nodes or o.params or o.params_files or self.binds_inputs:
+            if o.nodes or o.params or o.params_files or self.binds_inputs or self.has_parameters:
                 # the nodes (and the input readers) are up (ros.ok() is true from the first round),
-                # and the machines' nodes will be too: their parameters are set before their first ringlet
+                # and the machines' nodes will be too: their parameters are set before their first
+                # ringlet, and a machine that declares parameters is on the graph without a ros.init()
                 bus.init()
             options = NodeOptions(image=Path(o.image) if o.image else None, view=o.view)
             for name in dict.fromkeys(o.nodes):
@@ -583,6 +620,26 @@ class Session:
         finally:
             activate(prev)
 
+    def _open_monitor(self, arr: Arrangement) -> Any:
+        """--monitor, --monitor-property (docs/monitor.md): the properties judged at the ringlet
+        boundaries where they can change, said on stderr and /llfsm/monitor as the run goes and
+        as it ends; a bad one is a usage error."""
+        # deferred: start-up (a run without a monitor never imports the property language)
+        from pathlib import Path
+
+        from .monitor import Monitor, MonitorError, property_source
+        from .props.file import FileError, read_verify_file
+
+        o = self.options
+        try:
+            sources = read_verify_file(Path(o.monitor)).properties if o.monitor else []
+            sources += [property_source(t) for t in o.monitor_properties]
+            monitor = Monitor(sources, self.classes, o.on_violation, self.say)
+        except (FileError, MonitorError) as e:
+            raise UsageError(str(e)) from None
+        monitor.attach(arr, self.bus)
+        return monitor
+
     def _open_web(self, web: WebPage, ctx: RunContext, bus: Bus, arr: Arrangement) -> Stoppable:
         """--web: the page's server on its own thread, the bus up (so the machines' control
         services exist), and a run that waits, rather than ends, when every machine is
@@ -614,6 +671,7 @@ class Session:
             or o.record
             or o.play
             or self.binds_inputs
+            or self.has_parameters
         )
 
     @property
@@ -622,9 +680,24 @@ class Session:
         return any(entry[TOPIC] is not None for cls in self.classes for entry in cls.INPUTS)
 
     @property
+    def has_parameters(self) -> bool:
+        """Whether a machine declares `parameters:` (SPEC 12): they are parameters of its node
+        /llfsm/M, so the run opens the bus, whether or not the machine's code calls ros.init()."""
+        return any(cls.PARAMETERS for cls in self.classes)
+
+    @property
     def world(self) -> TurtleWorld | None:
         """The turtle simulator's world (`--node turtlesim`), for the web view to draw live."""
         return getattr(self.nodes.get("turtlesim"), "world", None)
+
+
+def _unfinished(arr: Arrangement) -> str:
+    """The machines of a run that did not finish, each with where it stands: `bot (in TURN)`."""
+    return ", ".join(
+        f"{m.NAME} ({'suspended in' if m._suspended else 'in'} {m.STATES[m._state]})"
+        for m in arr.machines
+        if not m._finished
+    )
 
 
 def _machine_yaml_of(m: Machine, targets: tuple[str, ...]) -> str:

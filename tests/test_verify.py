@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 from helpers import MACHINES, llfsm, write_machine
 
-from llfsm.verify.check import verify
 from llfsm.verify.explorer import Options
+from llfsm.verify.judge import verify
 from llfsm.verify.load import PropertySource, VerifyError, load_arrangement
 
 
@@ -233,11 +233,14 @@ def test_code_that_reads_the_world_is_refused_one_line_per_place(tmp_path: Path)
         ("Includes.py", "1", "LF200"),
         ("Includes.py", "2", "LF200"),
         ("State_A_OnEntry.py", "3", "LF200"),
+        ("State_A_OnEntry.py", "4", "LF200"),  # time.time(): where `time` is used, as well as its import
         ("State_A_OnResume.py", "1", "LF201"),
         ("State_A_Transition_0.expr", "1", "LF201"),
+        ("State_A_Transition_1.expr", "1", "LF200"),  # random.random() in the guard (SPEC 16)
         ("machine.yaml", "2", "LF202"),
     ]
     assert "make what it reads an input" in r.stdout
+    assert "State_A_Transition_1.expr:1:1: LF200 error: `random` (randomness" in r.stdout
     assert "nothing was explored" in r.stderr
 
 
@@ -455,6 +458,23 @@ def test_a_path_that_does_not_replay_alike_is_said(tmp_path: Path) -> None:
     r = llfsm("verify", m, "--property", "never: h.x == 3")
     assert r.status == 1
     assert "warning: never: h.x == 3: its path, run again, did not give the configurations explored" in r.stdout
+
+
+def test_a_wait_while_inputs_stay_the_same_is_folded_too() -> None:
+    """Issue 27, item 10: a machine with inputs reads them in every ringlet, so its waits were
+    never folded (a 154-step path printed 174 lines)."""
+    r = llfsm(
+        "verify", MACHINES / "wall_follower.machine", "--period", "10ms", "-v",
+        "--property", 'reachable: state(wall_follower) == "FORWARD" and wall_follower.msg.angular.z == 1.5',
+    )  # fmt: skip
+    lines = r.stdout.splitlines()
+    assert "  witness, 34 steps:" in lines and len(lines) < 25, r.stdout
+    assert (
+        "    ... 26 more ringlets in which nothing fired, changed or was published, the inputs as before "
+        "(rounds 5-30; --format json lists each) ..." in lines
+    )
+    # a ringlet that reads other inputs is shown: the sensor turning clear in round 2
+    assert "    [round 2] wall_follower: no transition (inputs wall_close=False)" in lines
 
 
 def test_a_long_wait_in_a_counterexample_is_folded_in_text_and_whole_in_json() -> None:

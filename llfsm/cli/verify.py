@@ -7,7 +7,7 @@ import sys
 import click
 
 from .. import __version__
-from ._common import DURATION, cli, fail, progress, write_output
+from ._group import DURATION, cli, fail, write_output
 
 
 @cli.command()
@@ -26,6 +26,12 @@ from ._common import DURATION, cli, fail, progress, write_output
 @click.option("--interrupt", is_flag=True, default=None, help="ros.ok() may fall once, before any ringlet.")
 @click.option(
     "--max-states", type=int, default=None, help="Stop past this many configurations (default 1,000,000): exit 3."
+)
+@click.option(
+    "--max-memory",
+    metavar="SIZE",
+    default=None,
+    help="Stop past this much memory in use (200MB, 2GB; default: half of what this process may use): exit 3.",
 )
 @click.option(
     "--hash-compact",
@@ -58,6 +64,7 @@ def verify(
     period: int | None,
     interrupt: bool | None,
     max_states: int | None,
+    max_memory: str | None,
     hash_compact: bool,
     counterexample_dir: str | None,
     exports: tuple[tuple[str, str], ...],
@@ -70,22 +77,26 @@ def verify(
 
     TARGET: machines as `llfsm run` takes them (in load order), or a NAME.verify.yaml that lists
     the machines and the properties.  Exit status: 0 every property holds, 1 one fails (or
-    machine code raised), 2 bad input or code verify cannot explore, 3 the state limit.
+    machine code raised), 2 bad input or code verify cannot explore, 3 the state limit or the
+    memory bound.
     """
     # deferred: start-up (every command module is imported when `llfsm` starts)
     from pathlib import Path
 
     from ..lang.diagnostics import render as render_diagnostics
+    from ..props.kinds import KINDS
     from ..runtime.clock import parse_duration
-    from ..verify.check import verify as run_verification
     from ..verify.explorer import Options
+    from ..verify.judge import verify as run_verification
     from ..verify.load import VERIFY_SUFFIX, PropertySource, VerifyError, load_arrangement, read_verify_file
-    from ..verify.props import KINDS
+    from ..verify.memory import parse_size
     from ..verify.report import render
 
     sources: list[PropertySource] = []
     machines: list[str] = []
     file_options: dict[str, object] = {}
+    environment = None
+    bounds: dict[str, float] = {}
     try:
         for t in targets:
             if t.endswith(VERIFY_SUFFIX):
@@ -93,6 +104,9 @@ def verify(
                 machines += vf.machines
                 sources += vf.properties
                 file_options.update(vf.options)
+                if vf.environment:
+                    environment = vf.environment
+                bounds.update(vf.bounds)
             else:
                 machines.append(t)
         for text in properties:
@@ -116,12 +130,29 @@ def verify(
             max_states = ms
         if max_states < 1:
             fail("--max-states must be at least 1")
-        if counterexample_dir is not None and period is None:
-            fail("--counterexample writes a bag replayed with `llfsm run --clock sim --period P`: give --period P")
-        loaded = load_arrangement(machines)
+        memory: int | None = None
+        size = max_memory if max_memory is not None else file_options.get("max_memory")
+        if size is not None:
+            try:
+                memory = parse_size(str(size))
+            except ValueError as e:
+                fail(f"--max-memory: {e}" if max_memory is not None else f"max_memory in the verification file: {e}")
+        if counterexample_dir is not None:
+            if period is None:
+                fail("--counterexample writes a bag replayed with `llfsm run --clock sim --period P`: give --period P")
+            from ..verify.replay import ReplayError, check_folder  # deferred: start-up (only with the option)
+
+            try:
+                check_folder(counterexample_dir)
+            except ReplayError as e:
+                fail(f"--counterexample {counterexample_dir}: {e}")
+        loaded = load_arrangement(machines, environment, bounds)
         options = Options(period=period, interrupt=bool(interrupt), max_states=max_states, hash_compact=hash_compact)
+        options.max_memory = memory
         show = None if quiet else _progress()
-        result = run_verification(loaded, sources, options, show, keep_graph=bool(exports))
+        result = run_verification(
+            loaded, sources, options, show, keep_graph=bool(exports), judging=None if show is None else show.judging
+        )
         if show is not None:
             show.done()
     except VerifyError as e:
@@ -139,6 +170,12 @@ def verify(
         except ValueError as e:
             fail(str(e))
         write_output(path, data.encode("utf-8"), f"--export {kind}")
+    report = render(result, fmt, __version__, witnesses)
+    if output:
+        write_output(output, report.encode("utf-8"), "-o")
+    else:
+        click.echo(report, nl=False)
+    sys.stdout.flush()  # the report first, whatever happens to the bag, and before the summary
     if counterexample_dir is not None:
         from ..verify.replay import ReplayError, write_counterexample  # deferred: start-up (only with the option)
 
@@ -149,13 +186,7 @@ def verify(
             said = None
         if said and not quiet:
             click.echo(f"llfsm: {said}", err=True)
-    report = render(result, fmt, __version__, witnesses)
-    if output:
-        write_output(output, report.encode("utf-8"), "-o")
-    else:
-        click.echo(report, nl=False)
     if not quiet:
-        sys.stdout.flush()  # the report before the summary, when both go to one terminal
         extra = ""
         if hash_compact and result.configurations:
             n = result.configurations
@@ -171,23 +202,25 @@ def verify(
 
 
 class _progress:
-    """A progress line on stderr for explorations that take more than a second."""
+    """The exploration's progress (the explorer reports about every second) on the status line
+    of llfsm.progress: rewritten each second on a terminal; in a log, a line after 2 s, then
+    every 10 s."""
 
     def __init__(self) -> None:
-        self.shown = False
-        self.tty = sys.stderr.isatty()
-        self.last = 0.0
+        # deferred: start-up (every command module is imported when `llfsm` starts)
+        from ..progress import Status
+
+        self.status = Status(log_after=2.0, log_every=10.0)
 
     def __call__(self, explored: int, queue: int, seconds: float) -> None:
-        # on a terminal the line is rewritten each second; in a log, a line after 2 s, then every 10 s
-        if not self.tty and (seconds < 2 or (self.shown and seconds - self.last < 10)):
-            return
-        self.last = seconds
         rate = explored / seconds if seconds else 0
         line = f"llfsm verify: {explored:,} configurations ({rate:,.0f}/s), queue {queue:,}, {seconds:.0f} s"
-        progress(("\r" + line + "\x1b[K") if self.tty else line + "\n")
-        self.shown = True
+        self.status.progress(line, seconds)
+
+    def judging(self, name: str, nodes: int, states: int, seconds: float) -> None:
+        """An `ltl:` property judged on the explored structure: its product with the automaton."""
+        line = f"llfsm verify: judging {name}: {nodes:,} product states ({states:,} automaton states), {seconds:.0f} s"
+        self.status.progress(line, seconds)
 
     def done(self) -> None:
-        if self.shown and self.tty:
-            progress("\r\x1b[K")
+        self.status.clear()

@@ -33,7 +33,8 @@ def _r(code: str, sev: Severity, name: str, summary: str) -> Rule:
 
 E, W = Severity.ERROR, Severity.WARNING
 
-#: Every rule llfsm checks.  docs/rules.md is generated from (and tested against) this table.
+#: Every rule llfsm checks.  docs/rules.md is written by hand, a section per rule of this table
+#: (`### LFnnn name`); tests/test_check.py fails on a rule it does not document.
 RULES: dict[str, Rule] = {
     r.code: r
     for r in [
@@ -56,7 +57,7 @@ RULES: dict[str, Rule] = {
         _r("LF020", E, "unknown-target", "A transition names a state that does not exist."),
         _r("LF021", E, "unknown-initial", "`initial` names a state that does not exist."),
         _r("LF022", E, "unknown-suspended", "`suspended` names a state that does not exist."),
-        _r("LF023", E, "missing-guard", "A transition has no State_S_Transition_N.expr file."),
+        _r("LF023", E, "missing-guard", "A transition has no guard: no State_S_Transition_N.expr file, none inline."),
         _r("LF024", E, "guard-not-expression", "A guard file is not exactly one Python expression."),
         _r("LF030", E, "syntax-error", "A code file is not valid Python."),
         _r("LF031", E, "includes-not-imports", "Includes.py holds something other than imports."),
@@ -86,6 +87,13 @@ RULES: dict[str, Rule] = {
         _r("LF047", E, "input-name", "An input's name is not usable or clashes with a variable."),
         _r("LF048", E, "input-value", "An input's type is unknown, or its default or domain holds a wrong value."),
         _r("LF049", E, "input-binding", "An input's topic, msg and field are incomplete, unknown or do not fit."),
+        _r(
+            "LF050",
+            W,
+            "unknown-machine",
+            'suspend("M") and its family name a machine none of the machines checked (or beside them) is.',
+        ),
+        _r("LF051", E, "unknown-message-field", "Code uses a field that the message type of a variable does not have."),
         _r("LF060", E, "unknown-parameter", "`parameters:` names something that is not a machine variable."),
         _r(
             "LF061",
@@ -94,6 +102,16 @@ RULES: dict[str, Rule] = {
             "A variable in `parameters:` is not annotated bool, int, float, str or list[...] of one of them.",
         ),
         _r("LF062", E, "duplicate-parameter", "`parameters:` names a variable twice."),
+        _r("LF070", E, "guard-twice", "A guard is written inline in machine.yaml and in its .expr file too."),
+        _r("LF071", W, "guard-comment", "A guard file's `# -> TARGET` names another target than its transition."),
+        _r("LF072", W, "layout-unknown", "layout.yaml places a state or transition the machine does not have."),
+        _r("LF073", E, "layout-invalid", "layout.yaml is not YAML of the documented form."),
+        _r(
+            "LF080",
+            E,
+            "untranslated-code",
+            "A line of clfsm C++ that `llfsm import` left for a person to write in Python.",
+        ),
         _r("LF101", W, "orphan-file", "A code file belongs to a state or transition that does not exist."),
         _r("LF102", W, "unreachable-state", "No path of transitions leads from the initial state to this state."),
         _r("LF103", W, "guard-always-false", "A guard is the constant False: the transition never fires."),

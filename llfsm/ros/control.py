@@ -15,8 +15,8 @@ For each loaded machine M, a node `/llfsm/M` offers
   changes made by M's own code included (docs/parameters.md).
 
 Everything goes through the public `ros` API, so it works on any transport.  It joins the
-graph with the bus (the first `ros.init()` or a `--node`): a run that never uses the bus
-never pays for one.
+graph with the bus (the first `ros.init()`, a `--node`, or a machine declaring `parameters:`):
+a run that never uses the bus never pays for one.
 
 Cost: states are published from scheduler events (a tracer), and that tracer is installed
 only while some state topic has a reader; otherwise the scheduler runs its plain loop and a
@@ -55,7 +55,7 @@ def enable(ctx: RunContext) -> None:
     """Put the run's machines on the graph as soon as its bus is initialised (now, if it is).
 
     Call once the Arrangement exists (it registers itself in `ctx.arrangement`)."""
-    arr = ctx.arrangement
+    arr = cast("Arrangement | None", ctx.arrangement)  # held by its port, below the scheduler
     if arr is None or ctx.machine_graph is not None:
         return
     bus = ctx.bus

@@ -4,50 +4,40 @@ The untraced loops (`_sim_rounds`, `_wall_rounds`, `_rounds`) are the fast path:
 plain call per live machine, `m._run(m)`, and nothing else runs between rounds unless something
 asked for it: `_attention` (a command, an unload, a signal) or the run context's `wake` time
 (the bus: a message queued for a callback, a timer falling due; see RunContext).
-`_traced_round` also reports entries and transitions for `-v` and `--trace`.  Keeping them
-apart means an untraced run pays nothing for tracing.
+`_watched_round` also reports entries and transitions for `-v` and `--trace`, and calls the
+watcher (a monitor's, a debugger's) after each ringlet while one is set.  Keeping them apart
+means an untraced, unwatched run pays nothing for either.
 """
 
 from __future__ import annotations
 
 import _signal as signal  # the signal module without its enums: enum is a tenth of a run's start-up
-import os
 import time
 
 from .clock import Clock, SimClock, WallClock
 from .context import FOREVER, RunContext, activate
-from .errors import ErrorReport, RunStopped, is_generated, passes_through, report_for, signal_name
+from .errors import ErrorReport, RunStopped, passes_through, report_for
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
-from .watchdog import cpu_and_wait
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
-    from _signal import _Handler
     from collections.abc import Callable, Sequence
-    from types import FrameType, TracebackType
     from typing import Final
-
-    SignalHandler = Callable[[int, FrameType | None], None]
 
     from .watchdog import Watchdog
 
-#: Exit statuses (docs/cli.md, "Exit statuses"): a normal end, an exception in machine code, bad input.
-EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+#: Exit statuses (docs/cli.md, "Exit statuses"): a normal end, an exception in machine code, bad input,
+#: a monitored property violated with --on-violation stop.
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_MONITOR = 0, 1, 2, 4
+#: What a watcher (Arrangement.watcher) asks for after a ringlet.
+GO, STOP, PAUSE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
-#: Signals that interrupt a run: Ctrl-C, `kill`, and a closed terminal (SIGHUP).
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-#: After a first interrupt, machine code that still holds the run this long (seconds of real
-#: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
-STUCK_SLACK_S = 0.5
 #: Rounds the machines get after an interrupt before the grace time can end the run: on a host
 #: with more runnable processes than cores (sixty runs stopped at once on two) a run may wait
 #: for the CPU longer than its grace time, and its machines must still see `ros.ok()` turn false.
 GRACE_ROUNDS = 3
-#: A run not held by a section when the grace time and the slack have passed (_not_held) is
-#: given this much longer to end by its rounds.
-STARVED_S = 10.0
 
 
 #: Back-to-back firing rounds read the wall clock every BATCH rounds at most, while BATCH
@@ -78,6 +68,18 @@ class ArrangementError(ValueError):
     is not loaded): a usage error, unlike an exception raised by machine code."""
 
 
+def check_names(classes: Sequence[type[Machine]], suspended: Sequence[str] = ()) -> None:
+    """ArrangementError for a machine loaded twice or a --suspended machine not loaded: asked
+    by a run before anything beside its machines starts (a node, a transport), and again here."""
+    names = [c.NAME for c in classes]
+    for n in names:
+        if names.count(n) > 1:
+            raise ArrangementError(f"machine {n} is loaded twice; an arrangement addresses machines by name")
+    for n in suspended:
+        if n not in names:
+            raise ArrangementError(f"--suspended {n}: no machine named {n} is loaded")
+
+
 class Arrangement:
     """Machines in load order, the clock they share, and the round-robin that runs them."""
 
@@ -104,7 +106,7 @@ class Arrangement:
         self._grace_end: int | None = None
         self._interrupted_at = 0.0  # time.monotonic() of the first interrupt: grace is real time too
         self._grace_rounds = 0  # rounds since the interrupt was seen (GRACE_ROUNDS)
-        self._cpu_wait = (0.0, 0.0)  # the main thread's CPU time, and time waited for it, then
+        self._cpu_wait = (0.0, 0.0)  # the main thread's CPU time and time waited for it (signals.py)
         self._grace_ns = 1_000_000_000
         self.running = False  # inside run(): a stop may be raised into the running code
         #: The between-round hooks (the bus) are running: no ringlet is, so a new input value can
@@ -125,13 +127,27 @@ class Arrangement:
         #: Keep running rounds with no machine left (nodes on their own, docs/turtlesim.md): the run then
         #: ends by an interrupt or --duration only.
         self.serve_forever = False
-        names = [c.NAME for c in classes]
-        for n in names:
-            if names.count(n) > 1:
-                raise ArrangementError(f"machine {n} is loaded twice; an arrangement addresses machines by name")
-        for n in suspended:
-            if n not in names:
-                raise ArrangementError(f"--suspended {n}: no machine named {n} is loaded")
+        #: Called after every ringlet (and a release that ended one) with the machine, when set
+        #: (a run's monitor, llfsm.monitor; the debugger's breakpoints): it returns GO, or STOP
+        #: to end the run at this ringlet boundary (status `stop_status`), or PAUSE (the
+        #: debugger's, issue 30; `on_pause` is called).  It may be set or cleared at any time,
+        #: from a ringlet or between rounds: a round in progress reads it after each ringlet, and
+        #: a plain loop in progress stops after its round when the setter also asks for
+        #: attention (`ctx.wake = 0`).  A run without one pays nothing: the plain round loops
+        #: never look at it.
+        self.watcher: Callable[[Machine], int] | None = None
+        self.stop_status = EXIT_MONITOR
+        self.on_pause: Callable[[Machine], None] | None = None
+        #: Told of each machine the gate is about to release (a command, parameters or an input
+        #: to apply, before they are applied), when set: what changes a machine outside its
+        #: ringlets, for a monitor.  The gate is a rare path; a run without it pays nothing.
+        self.on_release: Callable[[Machine], None] | None = None
+        self._stopped: int | None = None
+        #: Ringlets run before the current round loop (its rounds times its live machines),
+        #: counted once per loop, never per ringlet: with the loop's live list, what numbers a
+        #: ringlet boundary for a watcher (the monitor's violation lines).
+        self.ringlets = 0
+        check_names(classes, suspended)
         for i, cls in enumerate(classes):
             m = cls(self, i)
             self.machines.append(m)
@@ -237,7 +253,7 @@ class Arrangement:
                 hook(m)
             target = m.INITIAL if m._resume_to is None else m._resume_to
             m._state, m._suspended, m._resume_to = target, False, None
-            _regate(m)
+            _regate(m, self._variables)
             hook = m.ON_RESUME[target]
             if hook is not None:
                 hook(m)
@@ -248,7 +264,7 @@ class Arrangement:
         # RESTART (which also brings a finished machine back)
         m._state, m._suspended, m._resume_to, m._entered = m.INITIAL, False, None, True
         m._finished = False
-        _regate(m)
+        _regate(m, self._variables)
         if tr is not None:
             tr.command("restart", m, m.INITIAL)
         return True
@@ -257,6 +273,10 @@ class Arrangement:
         """The turn of a held machine (a new input value to take, new variable values, a command
         pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
         True if the ringlet goes on."""
+        if self._stopped is not None:
+            return False  # the run ends at this boundary (stop_at_boundary)
+        if self.on_release is not None:
+            self.on_release(m)
         inputs = m._inputs
         if inputs is not None and inputs.fresh:
             inputs.snapshot()
@@ -270,7 +290,7 @@ class Arrangement:
                 return False  # the command (suspend) ended the ringlet
         elif m._suspended:
             return False  # suspended: no ringlet
-        _regate(m)
+        _regate(m, self._variables)
         return True
 
     def _gate(self, m: Machine) -> int | None:
@@ -285,7 +305,7 @@ class Arrangement:
             self.tracer.finish(m)
         m._finished = True
         m._suspended = False
-        _regate(m)
+        _regate(m, self._variables)
         self._attention = True
         self.ctx.references_dropped = True  # what it held is released between rounds
         self.ctx.wake = 0
@@ -308,28 +328,57 @@ class Arrangement:
         if self._signal is None:
             self._signal = signum
             self._interrupted_at = time.monotonic()
-            self._cpu_wait = cpu_and_wait(os.getpid())
         self.ctx.interrupted = True
         self._attention = True
 
+    def stop_at_boundary(self, status: int | None = None) -> None:
+        """End the run at the ringlet boundary where this is called (from a ringlet, a watcher
+        or between rounds): no further ringlet runs, the rest of the round included, and the
+        run ends with `status` (by default `stop_status`)."""
+        self._stopped = self.stop_status if status is None else status
+        for m in self.machines:
+            _hold(m)  # the rest of the round meets the gate, which lets nothing through now
+        self._attention = True
+
+    def hold_all(self) -> None:
+        """Put the gate in front of every machine's next ringlet, so that whoever wraps the gate
+        (`_gate_fn`: a monitor) is called at the next boundary, even inside a plain loop.  The
+        gate lets a machine held for nothing else through at once."""
+        for m in self.machines:
+            _hold(m)
+
     # -- rounds ----------------------------------------------------------------------------
-    def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
+    def _watched_round(self, live: list[Machine], tr: Tracer | None) -> bool:
+        """A round with the tracer, if any, told of entries and transitions, and the watcher,
+        while one is set (read after each ringlet: set during the round, it is called at once),
+        told of each ringlet boundary."""
         fired = False
         for m in live:
-            if m._run is m._held and not self._release(m):
-                continue
-            s = m._state
-            if m._entered:
-                tr.entry(m, s)
-            r = m._run(m)
-            if r is not None:
-                fired = True
-                tr.transition(m, s, m._state, r)
+            if m._run is not m._held or self._release(m):
+                s = m._state
+                if tr is not None and m._entered:
+                    tr.entry(m, s)
+                r = m._run(m)
+                if r is not None:
+                    fired = True
+                    if tr is not None:
+                        tr.transition(m, s, m._state, r)
+            # else a suspend applied, or the run stopped: for a watcher the boundary is still one
+            watch = self.watcher
+            if watch is not None:
+                asked = watch(m)
+                if asked == STOP:
+                    self.stop_at_boundary()
+                    break
+                if asked == PAUSE and self.on_pause is not None:
+                    self.on_pause(m)
         return fired
 
     def _attend(self, now: int, grace: int) -> RunResult | None:
         """Whatever changed since the last round: unloads, suspensions, interrupts."""
         self._attention = False
+        if self._stopped is not None:
+            return self._result("stopped", self._stopped)
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
         if not self._live:
             if not self.serve_forever:
@@ -341,6 +390,8 @@ class Arrangement:
             status = EXIT_SIGNAL.get(self._signal, EXIT_OK)  # signal 0: a stop asked for from inside
             if self._interrupts > 1:
                 return self._result("killed", status)
+            if not self.machines:  # nodes on their own: an interrupt is how they end, as `ros2 run`'s
+                return self._result("interrupted", EXIT_OK)
             if self._grace_end is None:
                 self._grace_end = now + grace
                 if self.on_interrupt is not None:
@@ -426,21 +477,24 @@ class Arrangement:
                 if end < ctx.wake:
                     ctx.wake = end  # one test a round covers the end of the run as well
                 live = self._live
-                if tr is not None:
-                    tr.round, tr.now = rounds, now
+                if tr is not None or self.watcher is not None:
+                    if tr is not None:
+                        tr.round, tr.now = rounds, now
                     ctx.round = rounds
-                    fired = self._traced_round(live, tr)
-                    rounds += 1
+                    fired = self._watched_round(live, tr)
+                    n = 1
                     if sim is not None:
                         sim.now += sim.period
                     else:
                         clock.advance(fired)
                 elif sim is not None:
-                    rounds += self._sim_rounds(live, sim)
+                    n = self._sim_rounds(live, sim)
                 elif wall is not None:
-                    rounds += self._wall_rounds(live, wall)
+                    n = self._wall_rounds(live, wall)
                 else:
-                    rounds += self._rounds(live)
+                    n = self._rounds(live)
+                rounds += n
+                self.ringlets += n * len(live)
                 if clock.now >= ctx.wake:
                     ctx.wake = FOREVER  # the hooks arm it again for whatever they still hold
                     ctx.round = rounds
@@ -557,101 +611,10 @@ def _hold(m: Machine) -> None:
         m._next, m._run = m._run, m._held
 
 
-def _regate(m: Machine) -> None:
-    """Point the machine's `_run` at the gate while it is held, at its next ringlet otherwise."""
-    if m._pending is not None or m._suspended or m._id in m._arr._variables:
+def _regate(m: Machine, variables: dict[int, dict[str, object]]) -> None:
+    """Point the machine's `_run` at the gate while it is held (a command, suspended, new values
+    for its variables waiting: `variables`, the arrangement's), at its next ringlet otherwise."""
+    if m._pending is not None or m._suspended or m._id in variables:
         _hold(m)
     elif m._run is m._held:
         m._run = m._next
-
-
-def _in_machine_code(frame: FrameType | None) -> bool:
-    """Whether a generated module's code is on the stack (a signal handler's view of it)."""
-    while frame is not None:
-        if is_generated(frame.f_code.co_filename):
-            return True
-        frame = frame.f_back
-    return False
-
-
-#: Where the scheduler waits for a round (the wall clock with a period, a sleep until a timer):
-#: a run found there when the grace time has passed ends at once, not after the wait.
-_ROUND_WAITS = (WallClock.advance.__code__, WallClock.sleep_until.__code__)
-
-
-def _not_held(arr: Arrangement, frame: FrameType | None) -> bool:
-    """Whether a run still running after its grace time and slack is not held by a section:
-    its own work is under way (unloading a finished machine's node can take seconds when many
-    DDS peers leave at once), or it was waiting for the CPU, not running, since the interrupt
-    (many runs stopped at once on few cores).  Then its rounds end it, and the timer waits on."""
-    ran, waited = cpu_and_wait(os.getpid())
-    if waited - arr._cpu_wait[1] >= STUCK_SLACK_S and ran - arr._cpu_wait[0] < STUCK_SLACK_S:
-        return True  # starved: whatever it was in, it had no time to finish it
-    return not _in_machine_code(frame) and (frame is None or frame.f_code not in _ROUND_WAITS)
-
-
-def signals_handled(arr: Arrangement) -> _SignalsHandled:
-    """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run (a `with`).
-
-    The first one asks the machines to finish (the scheduler sees it between rounds).  A second
-    one, or the grace time passing in real time while machine code still loops or blocks (a real
-    timer, SIGALRM, catches that), raises RunStopped from the handler: Python delivers it inside
-    whatever code is running, machine code included, and a blocking `time.sleep` ends with it,
-    so nothing a section does can keep the run from stopping."""
-
-    def stop(frame: FrameType | None, text: str) -> None:
-        if arr.running:
-            # outside machine code (the scheduler sleeping between rounds, the bus) there is no
-            # place of the user's to name: the run ends as the grace time's end would end it
-            raise RunStopped(arr._signal or signal.SIGINT, text, in_machine_code=_in_machine_code(frame))
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        if arr.watchdog is not None:
-            arr.watchdog.answer()  # this handler could run: the run is not stuck in a C call
-        first = not arr._interrupts
-        arr.interrupt(signum)
-        if first:
-            signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
-            if arr.watchdog is not None:
-                arr.watchdog.keep_answering(arr._grace_ns / 1e9 + STARVED_S)
-        else:
-            stop(frame, f"stopped by a second {signal_name(signum)}")
-
-    def alarm(_signum: int, frame: FrameType | None) -> None:
-        if arr.watchdog is not None:
-            arr.watchdog.answer()
-        if arr._interrupts:
-            grace = arr._grace_ns / 1e9
-            waited = time.monotonic() - arr._interrupted_at
-            if waited < grace + STARVED_S and _not_held(arr, frame):
-                signal.setitimer(signal.ITIMER_REAL, STUCK_SLACK_S)  # the rounds will end the run
-                return
-            sig = signal_name(arr._signal or 0)
-            held = grace + STUCK_SLACK_S if waited < grace + STARVED_S else round(waited, 1)
-            stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
-
-    return _SignalsHandled(handler, alarm, arr.watchdog)
-
-
-class _SignalsHandled:
-    """The handlers of signals_handled, installed on entry and the old ones put back on exit.
-    (Not contextlib.contextmanager: contextlib is a tenth of a run's start-up.)"""
-
-    def __init__(self, handler: SignalHandler, alarm: SignalHandler, watchdog: Watchdog | None) -> None:
-        self.handler = handler
-        self.alarm = alarm
-        self.watchdog = watchdog
-        self.old: dict[int, _Handler] = {}
-
-    def __enter__(self) -> None:
-        self.old = {s: signal.signal(s, self.handler) for s in STOP_SIGNALS}
-        self.old[signal.SIGALRM] = signal.signal(signal.SIGALRM, self.alarm)
-        if self.watchdog is not None:  # after the handlers: every signal it sees is one they answer
-            self.watchdog.arm()
-
-    def __exit__(self, t: type[BaseException] | None, e: BaseException | None, tb: TracebackType | None) -> None:
-        if self.watchdog is not None:
-            self.watchdog.disarm()
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        for s, h in self.old.items():
-            signal.signal(s, h)

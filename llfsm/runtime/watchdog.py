@@ -1,6 +1,6 @@
 """The run's watchdog: ends a run whose machine code is stuck in a C call that holds the GIL.
 
-`signals_handled` (llfsm.runtime.scheduler) stops machine code from a Python signal handler.
+`signals_handled` (llfsm.runtime.signals) stops machine code from a Python signal handler.
 Python runs such a handler only between bytecodes, in the main thread, with the GIL: a section
 inside one long C call that keeps the GIL (`sum(range(10**14))`, a C extension that never
 releases it) runs no handler, so no number of SIGINTs or SIGTERMs stops it, and no Python
@@ -69,7 +69,7 @@ if TYPE_CHECKING:
 #: handler that can run at all runs within milliseconds, even on a loaded machine.
 ANSWER_S = 0.5
 #: A run with a single interrupt is stuck once it still runs this long after its grace time, as
-#: in signals_handled (llfsm.runtime.scheduler.STUCK_SLACK_S).
+#: in signals_handled (llfsm.runtime.signals.STUCK_SLACK_S).
 SLACK_S = 0.5
 #: A run that owes an answer but was waiting for the CPU (sixty runs stopped at once on two
 #: cores) is not stuck; it is given up to this much longer after its grace time to answer.
@@ -87,6 +87,9 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: What the watchdog's interpreter runs: this module, imported from its own folder (so that its
 #: cached bytecode is used: running the file as a script would compile it, 3 ms each run), then
 #: that folder off the path again (its modules' names are not to shadow the standard library's).
+#: The interpreter runs with -B: it reads the bytecode the run's own imports cached, and writes
+#: none into the installed package itself (-I ignores PYTHONDONTWRITEBYTECODE; a package may be
+#: read-only, or its owner may want it left as installed).
 _ENTRY = "import sys; sys.path.insert(0, sys.argv[1]); import watchdog; del sys.path[0]; watchdog._main(sys.argv[2:])"
 
 
@@ -127,7 +130,7 @@ class Watchdog:
         os.set_blocking(answers[1], False)
         here = os.path.dirname(os.path.abspath(__file__))
         package_root = os.path.dirname(os.path.dirname(here))
-        args = [exe, "-I", "-S", "-c", _ENTRY, here, str(os.getpid()), str(_thread.get_ident())]
+        args = [exe, "-I", "-S", "-B", "-c", _ENTRY, here, str(os.getpid()), str(_thread.get_ident())]
         args += [str(grace_ns), str(wake[0]), str(answers[0]), str(dump[0]), package_root]
         for m in machines:
             args += [m.NAME, getattr(sys.modules.get(m.__module__), "__file__", None) or ""]

@@ -14,7 +14,7 @@ from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
-from .graph import nontrivial, sccs
+from ..props.graph import nontrivial, sccs
 from .ltl import Structure
 
 Formula = tuple[Any, ...]

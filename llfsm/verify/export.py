@@ -29,8 +29,10 @@ import itertools
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from .check import Verification
+from ..props.formula import has
+from ..props.kinds import CTL, ON_THE_FLY
 from .explorer import Explorer
+from .judge import Verification
 
 Formula = tuple[Any, ...]
 
@@ -80,10 +82,6 @@ def _render(f: Formula, ops: dict[str, str], atom: Callable[[int], str]) -> str:
             return f"{op} [{_render(path[1], ops, atom)} U {_render(path[2], ops, atom)}]"
         return f"{op}{path[0]} ({_render(path[1], ops, atom)})"
     raise ValueError(op)
-
-
-def _has(f: Formula, op: str) -> bool:
-    return f[0] == op or any(isinstance(x, tuple) and _has(x, op) for x in f[1:])
 
 
 def _comment(text: str) -> str:
@@ -174,17 +172,20 @@ def promela(v: Verification) -> str:
         prop = o.prop
         f = prop.formula
         out.append(f"/* llfsm: p{p} {prop.kind}: {_comment(prop.name)} -- llfsm says {o.verdict} */")
-        if prop.kind == "ctl":
+        if prop.spec.verify == CTL:
             out.append(f"/* p{p} is a CTL property, which SPIN does not check: {_comment(prop.text)} */")
             continue
-        if prop.kind == "reachable":
+        if prop.within is not None:
+            out.append(f"/* p{p} has a deadline (within), which this export does not carry: not written */")
+            continue
+        if prop.spec.witness:
             f = ("G", ("not", f[1][1]))
             out.append(f"/* p{p}: reachable holds exactly when SPIN finds this claim violated */")
-        if _has(f, "X"):
+        if has(f, "X"):
             out.append(f"/* p{p} uses X (next), which SPIN's ltl does not have: not written */")
             continue
         body = _render(f, ops, lambda a, mine=mine: f"a{mine[a]}")  # type: ignore[misc]
-        fair = premise and prop.kind not in ("always", "never", "reachable")
+        fair = premise and prop.spec.verify != ON_THE_FLY
         out.append(f"ltl p{p} {{ ({premise}) -> {body} }}" if fair else f"ltl p{p} {{ {body} }}")
     return "\n".join(out) + "\n"
 
@@ -219,7 +220,10 @@ def smv(v: Verification) -> str:
         prop = o.prop
         body = _render(prop.formula, ops, lambda a, mine=mine: f"a{mine[a]}")  # type: ignore[misc]
         out.append(f"-- p{p} {prop.kind}: {' '.join(prop.name.split())} (llfsm says {o.verdict})")
-        spec = "CTLSPEC" if prop.kind in ("ctl", "reachable") else "LTLSPEC"
+        if prop.within is not None:
+            out.append(f"-- p{p} has a deadline (within), which this export does not carry: not written")
+            continue
+        spec = "CTLSPEC" if prop.formula[0] in ("A", "E") else "LTLSPEC"
         out.append(f"{spec} NAME p{p} := {body};")
     return "\n".join(out) + "\n"
 

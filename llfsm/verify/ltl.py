@@ -1,126 +1,25 @@
 """LTL over the explored structure, under fairness (SPEC 11; docs/verify.md, "Fairness").
 
-The negation of the formula becomes a generalized Büchi automaton by the elementary-set
-construction (Baier and Katoen, Principles of Model Checking, 5.2): its states are the maximal
-consistent sets of subformulas of the closure, a transition reads the configuration's atoms,
-and each `a U b` gives an acceptance set.  The product with the structure is explored from the
-initial configuration; the formula fails exactly when the product has a reachable cycle that
-visits every acceptance set of the automaton and every fairness set of the structure (one per
-machine: its time passes), and that cycle, with a shortest path to it, is the counterexample: a
-lasso of configurations.
+The negation of the formula becomes a generalized Büchi automaton (llfsm.props.automaton: built
+on the fly, bounded); its product with the structure is explored from the initial
+configuration, the automaton's states made as the product reaches them; the formula fails
+exactly when the product has a reachable cycle that visits every acceptance set of the
+automaton and every fairness set of the structure (one per machine: its time passes), and that
+cycle, with a shortest path to it, is the counterexample: a lasso of configurations.
 
-Formulas are small, so the automaton's states are enumerated outright.
+The product is bounded like the exploration (`max_nodes`, and the memory check the caller
+passes in); `progress` is told how far it got about once a second.
 """
 
 from __future__ import annotations
 
-import itertools
+import time
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
-from .graph import cycle_through, nontrivial, sccs
-
-Formula = tuple[Any, ...]
-TRUE: Formula = ("true",)
-
-
-def core(f: Formula) -> Formula:
-    """`f` with only true, atoms, not, and, X, U (F, G, or, implies rewritten)."""
-    op = f[0]
-    if op in ("atom", "true"):
-        return f
-    if op == "not":
-        return neg(core(f[1]))
-    if op == "and":
-        return ("and", core(f[1]), core(f[2]))
-    if op == "or":
-        return neg(("and", neg(core(f[1])), neg(core(f[2]))))
-    if op == "implies":
-        return neg(("and", core(f[1]), neg(core(f[2]))))
-    if op == "X":
-        return ("X", core(f[1]))
-    if op == "U":
-        return ("U", core(f[1]), core(f[2]))
-    if op == "F":
-        return ("U", TRUE, core(f[1]))
-    if op == "G":
-        return neg(("U", TRUE, neg(core(f[1]))))
-    raise ValueError(f"not an LTL operator: {op}")
-
-
-def neg(f: Formula) -> Formula:
-    return f[1] if f[0] == "not" else ("not", f)
-
-
-def _subformulas(f: Formula, out: dict[Formula, None]) -> None:
-    if f[0] == "not":
-        _subformulas(f[1], out)
-        return
-    for sub in f[1:] if f[0] not in ("atom",) else ():
-        _subformulas(sub, out)
-    out[f] = None
-
-
-@dataclass
-class Automaton:
-    """A generalized Büchi automaton for a core formula over atoms (their local numbers)."""
-
-    states: list[frozenset[Formula]]  # the true positive subformulas of each state
-    initial: list[int]
-    #: per state, per label (bits of the atoms it reads): the successor states
-    moves: list[dict[int, list[int]]]
-    labels: list[int]  # per state, the atoms true in it (bits)
-    accepting: list[list[bool]]  # per acceptance set, per state
-    atoms: list[int]  # the atom numbers the formula reads, ascending
-
-
-def automaton(f: Formula) -> Automaton:
-    """The automaton accepting exactly the paths that satisfy the core formula `f`."""
-    subs: dict[Formula, None] = {}
-    _subformulas(f, subs)
-    positives = list(subs)  # children before parents
-    atoms = sorted({g[1] for g in positives if g[0] == "atom"})
-    free = [g for g in positives if g[0] in ("atom", "X", "U")]
-    untils = [g for g in positives if g[0] == "U"]
-    nexts = [g for g in positives if g[0] == "X"]
-
-    def holds(g: Formula, true: frozenset[Formula]) -> bool:
-        if g[0] == "not":
-            return not holds(g[1], true)
-        if g[0] == "true":
-            return True
-        if g[0] == "and":
-            return holds(g[1], true) and holds(g[2], true)
-        return g in true
-
-    states: list[frozenset[Formula]] = []
-    for bits in itertools.product((False, True), repeat=len(free)):
-        true = frozenset(g for g, b in zip(free, bits, strict=True) if b)
-        ok = True
-        for u in untils:
-            a, b = u[1], u[2]
-            if holds(b, true) and u not in true:
-                ok = False  # b holds: a U b holds
-            elif u in true and not holds(b, true) and not holds(a, true):
-                ok = False  # a U b holds but neither does: impossible now
-        if ok:
-            states.append(true)
-    labels = [sum(1 << atoms.index(g[1]) for g in s if g[0] == "atom") for s in states]
-    initial = [k for k, s in enumerate(states) if holds(f, s)]
-    moves: list[dict[int, list[int]]] = []
-    for s in states:
-        by_label: dict[int, list[int]] = {}
-        for k2, s2 in enumerate(states):
-            if any((x in s) != holds(x[1], s2) for x in nexts):
-                continue
-            if any((u in s) != (holds(u[2], s) or (holds(u[1], s) and u in s2)) for u in untils):
-                continue
-            by_label.setdefault(labels[k2], []).append(k2)
-        moves.append(by_label)
-    accepting = [[(u not in s) or holds(u[2], s) for s in states] for u in untils]
-    return Automaton(states, initial, moves, labels, accepting, atoms)
+from ..props.automaton import Automaton
+from ..props.graph import cycle_through, nontrivial, sccs
 
 
 @dataclass
@@ -130,6 +29,10 @@ class Lasso:
 
     path: list[int]
     loop: int
+
+
+class ProductLimit(Exception):
+    """The product of the structure and the automaton passed its bound (the message says which)."""
 
 
 class Structure:
@@ -151,12 +54,20 @@ class Structure:
         self.fair_sets = fair_sets
 
 
-def check_ltl(structure: Structure, formula: Formula, atom_ids: Sequence[int]) -> Lasso | None:
-    """None if every fair path from the initial configuration satisfies `formula` (atoms are
-    numbered locally; atom_ids gives each one's bit in the structure's labels); else a lasso."""
-    aut = automaton(core(neg(formula)))
+def check_ltl(
+    structure: Structure,
+    aut: Automaton,
+    atom_ids: Sequence[int],
+    progress: Callable[[int, int], None] | None = None,
+    every: float = 1.0,
+    max_nodes: int | None = None,
+    memory_ok: Callable[[], bool] | None = None,
+) -> Lasso | None:
+    """None if every fair path from the initial configuration is rejected by `aut` (the
+    automaton of the negated formula: atoms numbered locally, atom_ids giving each one's bit in
+    the structure's labels); else a lasso.  `progress(product nodes, automaton states)` is
+    called about every `every` seconds while the product is explored."""
     bits = [atom_ids[a] for a in aut.atoms]
-    nb = len(aut.states)
     local: dict[int, int] = {}
 
     def label(c: int) -> int:
@@ -166,62 +77,90 @@ def check_ltl(structure: Structure, formula: Formula, atom_ids: Sequence[int]) -
             v = local[c] = sum(1 << k for k, b in enumerate(bits) if lab >> b & 1)
         return v
 
-    def succ(node: int) -> list[int]:
-        c, b = divmod(node, nb)
-        moves = aut.moves[b]
-        out = []
-        for c2 in structure.succ(c):
-            for b2 in moves.get(label(c2), ()):
-                out.append(c2 * nb + b2)
-        return out
-
-    starts = [0 * nb + b for b in aut.initial if aut.labels[b] == label(0)]
-    # the reachable product, breadth first (its BFS tree gives the shortest prefix)
-    parent: dict[int, int] = {s: -1 for s in starts}
-    depth: dict[int, int] = {s: 0 for s in starts}
-    order: list[int] = list(starts)
-    queue = deque(starts)
+    # product nodes are numbered as found; `node` -> (configuration, automaton state)
+    ids: dict[tuple[int, int], int] = {}
+    nodes: list[tuple[int, int]] = []
+    parent: list[int] = []
+    depth: list[int] = []
     succ_cache: dict[int, list[int]] = {}
 
-    def cached(node: int) -> list[int]:
-        out = succ_cache.get(node)
+    def node(c: int, q: int, par: int) -> tuple[int, bool]:
+        key = (c, q)
+        n = ids.get(key)
+        if n is not None:
+            return n, False
+        n = ids[key] = len(nodes)
+        nodes.append(key)
+        parent.append(par)
+        depth.append(depth[par] + 1 if par >= 0 else 0)
+        return n, True
+
+    def cached(n: int) -> list[int]:
+        out = succ_cache.get(n)
         if out is None:
-            out = succ_cache[node] = succ(node)
+            c, q = nodes[n]
+            out = []
+            for c2 in structure.succ(c):
+                for q2 in aut.successors(q, label(c2)):
+                    out.append(node(c2, q2, n)[0])
+            succ_cache[n] = out
         return out
 
+    queue: deque[int] = deque()
+    for q in aut.initial(label(0)):
+        n, new = node(0, q, -1)
+        if new:
+            queue.append(n)
+    last = time.monotonic()
+    count = 0
     while queue:
         v = queue.popleft()
-        for w in cached(v):
-            if w not in parent:
-                parent[w] = v
-                depth[w] = depth[v] + 1
-                order.append(w)
-                queue.append(w)
+        before = len(nodes)
+        cached(v)
+        queue.extend(range(before, len(nodes)))
+        count += 1
+        if max_nodes is not None and len(nodes) > max_nodes:
+            raise ProductLimit(f"the product with the formula's automaton passed {max_nodes:,} states")
+        if not count & 0x3FF:
+            if memory_ok is not None and not memory_ok():
+                raise ProductLimit("the product with the formula's automaton passed the memory bound (--max-memory)")
+            if progress is not None:
+                now = time.monotonic()
+                if now - last >= every:
+                    last = now
+                    progress(len(nodes), aut.count)
+    full = (1 << aut.acceptance_sets) - 1
 
-    def accepts(acc: list[bool]) -> Callable[[int], bool]:
-        return lambda node: acc[node % nb]
+    def accepting(k: int) -> Callable[[int], bool]:
+        return lambda n: bool(aut.accepting[nodes[n][1]] >> k & 1)
 
     def fair_in(k: int) -> Callable[[int], bool]:
-        return lambda node: bool(structure.fair[node // nb] >> k & 1)
+        return lambda n: bool(structure.fair[nodes[n][0]] >> k & 1)
 
-    want = [accepts(acc) for acc in aut.accepting] + [fair_in(k) for k in range(structure.fair_sets)]
+    want = [accepting(k) for k in range(aut.acceptance_sets)] + [fair_in(k) for k in range(structure.fair_sets)]
     best: Lasso | None = None
-    for comp in sccs(order, cached, lambda _n: True):
-        if not nontrivial(comp, cached) or not all(any(w(n) for n in comp) for w in want):
+    for comp in sccs(range(len(nodes)), cached, lambda _n: True):
+        if not nontrivial(comp, cached):
+            continue
+        acc = 0
+        for n in comp:
+            acc |= aut.accepting[nodes[n][1]]
+        fair = all(any(structure.fair[nodes[n][0]] >> k & 1 for n in comp) for k in range(structure.fair_sets))
+        if acc & full != full or not fair:
             continue
         if best is not None and min(depth[n] for n in comp) >= len(best.path):
             continue  # its prefix alone is no shorter than the lasso found
         members = set(comp)
         entry = min(comp, key=depth.__getitem__)  # the member nearest the initial configuration
         cycle = cycle_through(entry, want, cached, members.__contains__)
-        nodes = _prefix(parent, entry) + cycle[1:-1]  # the last of the cycle is the entry again
-        lasso = Lasso([n // nb for n in nodes], depth[entry])
+        path = _prefix(parent, entry) + cycle[1:-1]  # the last of the cycle is the entry again
+        lasso = Lasso([nodes[n][0] for n in path], depth[entry])
         if best is None or len(lasso.path) < len(best.path):
             best = lasso
     return best
 
 
-def _prefix(parent: dict[int, int], node: int) -> list[int]:
+def _prefix(parent: list[int], node: int) -> list[int]:
     out = [node]
     while parent[out[-1]] != -1:
         out.append(parent[out[-1]])

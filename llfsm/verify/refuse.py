@@ -22,6 +22,7 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from ..lang.diagnostics import Diagnostic, diag
 from ..lang.model import Code, Machine
@@ -31,6 +32,9 @@ from ..lang.positions import node_col
 AFTER_SCALE = {"after": 1_000_000_000, "after_ms": 1_000_000, "after_us": 1_000}
 
 _INPUT_ADVICE = "make what it reads an input (`inputs:` in machine.yaml, bound to a topic at run time)"
+_ENVIRONMENT_ADVICE = (
+    ', or declare the service or topic under `environment:` in a verification file (docs/verify.md, "The environment")'
+)
 
 #: Modules whose every use reads the world (imported by Includes.py or in a section).
 _MODULES: dict[str, str] = {
@@ -136,20 +140,46 @@ class Refusals:
     cuts: list[tuple[int, ...]] = field(default_factory=list)
 
 
-def refusals(m: Machine, trees: dict[str, ast.Module], path: Path) -> Refusals:
-    """LF200, LF201, LF202 for one machine (a model the checker passed, with its trees)."""
+def refusals(m: Machine, trees: dict[str, ast.Module], path: Path, environment: Any = None) -> Refusals:
+    """LF200, LF201, LF202 for one machine (a model the checker passed, with its trees); what
+    `environment` (llfsm.props.file.Environment) declares is explored, not refused."""
     out = Refusals()
+    allowed = _allowed(environment)
 
     def report(code: str, file: str, node: ast.AST, message: str) -> None:
-        text = next((c.text for c in _codes(m) if c.file == file), "")
+        where = next((c for c in _codes(m) if c.file == file), None)
+        text = where.text if where is not None else ""
         col = node_col(text, node) if text and isinstance(node, ast.expr | ast.stmt) else 1
-        out.diagnostics.append(diag(code, path / file, getattr(node, "lineno", 1), col, message))
+        line = getattr(node, "lineno", 1)
+        loc = where.place(line, col) if where is not None else None  # an inline guard is in machine.yaml
+        if loc is not None:
+            file, line, col = loc.file, loc.line, loc.column
+        out.diagnostics.append(diag(code, path / file, line, col, message))
 
+    # names an import binds to what reads the world, wherever they are used (SPEC 16)
+    imported: dict[str, tuple[str, str]] = {}
     for code in _codes(m):
         tree = trees.get(code.file)
         if tree is not None:
-            for node, what in _world_reads(tree):
-                report("LF200", code.file, node, f"{what}: verify cannot explore this faithfully; {_INPUT_ADVICE}")
+            for name, what in _world_names(tree):
+                imported.setdefault(name, (what, f"{code.file}:{getattr(tree, 'lineno', 1)}"))
+    for code in _codes(m):
+        tree = trees.get(code.file)
+        if tree is None:
+            continue
+        for node, what in _world_reads(tree, allowed):
+            advice = _ENVIRONMENT_ADVICE if any(w in what for w in ("service", "subscription", "spin")) else ""
+            report("LF200", code.file, node, f"{what}: verify cannot explore this faithfully; {_INPUT_ADVICE}{advice}")
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load) and node.id in imported:
+                what, _where = imported[node.id]
+                report(
+                    "LF200",
+                    code.file,
+                    node,
+                    f"`{node.id}` ({what}, imported in Includes.py or this file): verify cannot explore this "
+                    f"faithfully; {_INPUT_ADVICE}",
+                )
     for i in m.inputs:
         if i.type != "bool" and not i.domain:
             out.diagnostics.append(
@@ -220,9 +250,64 @@ def _dotted(node: ast.AST) -> list[str]:
     return []
 
 
-def _world_reads(tree: ast.AST) -> Iterator[tuple[ast.AST, str]]:
-    """(node, what it reads) for each place in `tree` that reads the world."""
+#: What an environment makes explorable (llfsm.verify.environment): services, subscriptions.
+_SERVICE_CALLS = frozenset({"call_async", "call", "spin_until_future_complete", "wait_for_service", "service_is_ready"})
+_READS = frozenset({"take", "latest"})
+
+
+def _allowed(environment: Any) -> dict[str, set[str]]:
+    """What the environment declares: {"create_client": names, "create_subscription": topics}."""
+    out: dict[str, set[str]] = {"create_client": set(), "create_subscription": set()}
+    if environment:
+        out["create_client"] = {n.lstrip("/") for n in environment.services}
+        out["create_subscription"] = {n.lstrip("/") for n in environment.topics}
+    return out
+
+
+def _declared(node: ast.Call, names: set[str]) -> bool:
+    """Whether a `create_client(T, "name")` / `create_subscription(T, "topic", ...)` names a
+    declared service or topic (its name written as a string)."""
+    arg = (
+        node.args[1]
+        if len(node.args) > 1
+        else next((k.value for k in node.keywords if k.arg in ("srv_name", "topic")), None)
+    )
+    return isinstance(arg, ast.Constant) and isinstance(arg.value, str) and arg.value.lstrip("/~").lstrip("/") in names
+
+
+def _world_names(tree: ast.AST) -> Iterator[tuple[str, str]]:
+    """(name, what it reads) for each name an import in `tree` binds to a module that reads the world."""
     for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                top = a.name.split(".")[0]
+                if top in _MODULES:
+                    yield (a.asname or top), _MODULES[top]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            top = node.module.split(".")[0]
+            if top in _MODULES:
+                for a in node.names:
+                    yield (a.asname or a.name), _MODULES[top]
+
+
+def _world_reads(tree: ast.AST, allowed: dict[str, set[str]] | None = None) -> Iterator[tuple[ast.AST, str]]:
+    """(node, what it reads) for each place in `tree` that reads the world (less what the
+    environment declares, `allowed`)."""
+    allowed = allowed or {"create_client": set(), "create_subscription": set()}
+    services, topics = bool(allowed["create_client"]), bool(allowed["create_subscription"])
+    declared: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+            names = allowed.get(node.func.attr)
+            if names and _declared(node, names):
+                declared.add(id(node.func))
+    for node in ast.walk(tree):
+        if id(node) in declared:
+            continue
+        if isinstance(node, ast.Attribute) and (
+            (services and node.attr in _SERVICE_CALLS) or (topics and node.attr in _READS)
+        ):
+            continue
         if isinstance(node, ast.Import):
             for a in node.names:
                 top = a.name.split(".")[0]

@@ -14,19 +14,39 @@ llfsm records under `--clock sim`), so the player keeps them.
 What a bag cannot carry is refused with the reason: an input bound to no topic that the path
 gives another value than its default, two values of one field in one round, `ros.ok()`
 falling (a signal, not a message).
+
+The suggested `--duration` covers one round more than the path when its last step fired a
+transition: `-v` prints a state's line before the ringlet that enters it, so only then does the
+replayed trace show the state the counterexample ends in.
 """
 
 from __future__ import annotations
 
+import os
+import shutil
 from pathlib import Path
 from typing import Any
 
+from ..props.parse import duration_text
 from ..runtime.inputs import DEFAULT, FIELD, MSG, NAME, TOPIC
-from .check import Trace, Verification
+from .judge import Trace, Verification
 
 
 class ReplayError(Exception):
     """The counterexample cannot be written as a bag (the message says why)."""
+
+
+def check_folder(folder: str) -> None:
+    """Before exploring: ReplayError when no bag could be written in `folder` (the bag extra is
+    missing, or the folder exists), so the user hears it before waiting for the verdict."""
+    from ..bag import BagError, need_libraries  # deferred: start-up (bags are an optional extra)
+
+    try:
+        need_libraries()
+    except BagError as e:
+        raise ReplayError(str(e)) from None
+    if os.path.lexists(folder):
+        raise ReplayError(f"output folder '{folder}' already exists")
 
 
 def _chosen(v: Verification) -> tuple[str, Trace]:
@@ -106,6 +126,7 @@ def write_counterexample(v: Verification, folder: str) -> str:
         raise ReplayError("needs --period: only then does the explorer follow a run's timing exactly")
     name, trace = _chosen(v)
     msgs, rounds = messages(v, trace)
+    created = not os.path.lexists(folder)
     try:
         writer = BagWriter(folder)
         writer.custom[SIM_CLOCK_KEY] = "sim"
@@ -116,20 +137,17 @@ def write_counterexample(v: Verification, folder: str) -> str:
             conn = writer.connection(topic, cls._TYPE, definition, type_hash, [qos_profile()])
             writer.write(conn, t, types.serializer(cls)(msg))
         writer.close()
-    except BagError as e2:
-        raise ReplayError(str(e2)) from None
+    except (BagError, ImportError) as e2:  # ImportError: a broken bag extra (check_folder saw it installed)
+        if created:
+            shutil.rmtree(folder, ignore_errors=True)  # never a half-written bag
+        why = f"{e2.name} cannot be imported: pip install 'llfsm[bag]'" if isinstance(e2, ImportError) else str(e2)
+        raise ReplayError(why) from None
     period = e.period
+    last = next((step for _config, step in reversed(trace.steps) if step is not None), None)
+    shown = rounds + 1 if last is not None and last.transition is not None else rounds
     targets = " ".join(str(Path(p)) for p in v.loaded.paths)
     return (
         f"wrote the counterexample of {name!r} to {folder} ({len(msgs)} message{'s' if len(msgs) != 1 else ''}, "
         f"{rounds} round{'s' if rounds != 1 else ''}); replay it with: llfsm run --clock sim --period "
-        f"{duration_text(period)} --play {folder} --duration {duration_text(rounds * period)} {targets}"
+        f"{duration_text(period)} --play {folder} --duration {duration_text(shown * period)} {targets}"
     )
-
-
-def duration_text(ns: int) -> str:
-    """A duration as `llfsm run` reads it back exactly: 100ms, 2s, 250us, 7ns."""
-    for unit, scale in (("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000)):
-        if ns % scale == 0:
-            return f"{ns // scale}{unit}"
-    return f"{ns}ns"

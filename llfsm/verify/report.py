@@ -14,8 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from ..lang.diagnostics import file_uri, shown
-from .check import Outcome, Trace, Verification
 from .explorer import TURN, Explorer, Step
+from .judge import Outcome, Trace, Verification
+from .memory import size_text
 from .values import shown as value_text
 
 
@@ -55,6 +56,8 @@ def step_lines(e: Explorer, step: Step | None, config: tuple[Any, ...]) -> list[
     else:
         done = "no transition"
     out.append(f"[round {step.round}] {m.NAME}: {done}" + (f" ({'; '.join(what)})" if what else ""))
+    for said in step.environment:
+        out.append(f"    environment: {said}")
     for name, (old, new) in step.changed.items():
         out.append(f"    {name}: {value_text(old)} -> {value_text(new)}")
     if step.published:
@@ -68,14 +71,25 @@ def step_lines(e: Explorer, step: Step | None, config: tuple[Any, ...]) -> list[
 FOLD = 6
 
 
-def _quiet(step: Step | None) -> bool:
-    """A ringlet that fired nothing, entered nothing, changed and published nothing."""
-    return (
-        step is not None
-        and step.transition is None
-        and not (step.finished or step.commands or step.entered or step.inputs or step.changed)
-        and not (step.published or step.interrupted)
-    )
+def _quiet(steps: list[tuple[tuple[Any, ...], Step | None]]) -> list[bool]:
+    """Per step: a ringlet that fired nothing, entered nothing, changed and published nothing,
+    and read the inputs its machine read in its ringlet before (a machine with inputs reads
+    them in every ringlet: waiting for `after_ms(300)` with the sensor clear is idle too)."""
+    out = []
+    last: dict[int, dict[str, Any]] = {}  # machine -> the inputs of its latest ringlet
+    for _config, step in steps:
+        if step is None:
+            out.append(False)
+            continue
+        same_inputs = not step.inputs or last.get(step.machine) == step.inputs
+        last[step.machine] = step.inputs
+        out.append(
+            same_inputs
+            and step.transition is None
+            and not (step.finished or step.commands or step.entered or step.changed)
+            and not (step.published or step.interrupted)
+        )
+    return out
 
 
 def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list[str]:
@@ -93,12 +107,13 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
         config, step = steps[k]
         out.extend("  " + line for line in step_lines(e, step, config))
 
+    quiet = _quiet(steps)
     pos = 0
     while pos < len(steps):
         if pos == loop_start:
             out.append("  -- the loop starts here --")
         end = pos  # the last of a run of quiet ringlets starting here (never across the loop's start)
-        while _quiet(steps[pos][1]) and end + 1 < len(steps) and end + 1 != loop_start and _quiet(steps[end + 1][1]):
+        while quiet[pos] and end + 1 < len(steps) and end + 1 != loop_start and quiet[end + 1]:
             end += 1
         if end - pos + 1 <= FOLD:
             show(pos)
@@ -109,7 +124,8 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
         show(pos)
         show(pos + 1)
         out.append(
-            f"  ... {end - pos - 3:,} more ringlets in which nothing fired, changed or was published "
+            f"  ... {end - pos - 3:,} more ringlets in which nothing fired, changed or was published"
+            f"{', the inputs as before' if folded_from.inputs else ''} "
             f"(rounds {folded_from.round}-{folded_to.round}; --format json lists each) ..."
         )
         show(end - 1)
@@ -147,8 +163,23 @@ def text(v: Verification, witnesses: bool = False) -> str:
             f"stopped at the state limit ({v.configurations:,} configurations; --max-states raises it)"
             + (": the variables that kept growing: " + "; ".join(v.growing) if v.growing else "")
         )
+    elif v.partial == "memory bound" and v.memory is not None:
+        used, bound = v.memory
+        lines.append(
+            f"stopped at the memory bound ({size_text(used)} in use, --max-memory {size_text(bound)}; "
+            f"{v.configurations:,} configurations; --max-memory raises it)"
+            + (": the variables that grew: " + "; ".join(v.growing) if v.growing else "")
+        )
     elif v.partial == "interrupted":
         lines.append(f"interrupted: a partial result ({v.configurations:,} configurations explored so far)")
+    if v.loaded.bounds:
+        shown_bounds = ", ".join(f"{k} <= {b:g}" for k, b in v.loaded.bounds.items())
+        lines.append(
+            f"bounded: {shown_bounds} ({v.cut:,} configurations past a bound were not explored further): "
+            "the verdicts hold for the runs within these bounds"
+        )
+    if v.hint is not None:
+        lines.append(v.hint)
     for w in v.warnings:
         lines.append(f"warning: {w}")
     if not v.outcomes and v.error is None:
@@ -181,6 +212,7 @@ def _trace_json(e: Explorer, trace: Trace) -> dict[str, Any]:
                 "state": m.STATES[part[2]],
                 "changed": {n: [value_text(a), value_text(b)] for n, (a, b) in step.changed.items()},
                 "published": sorted(step.published),
+                "environment": step.environment,
             }
         )
     return {"steps": steps, "loop": trace.loop}
@@ -201,6 +233,8 @@ def as_json(v: Verification) -> str:
         "properties": [],
         "error": v.error,
         "warnings": v.warnings,
+        "bounds": v.loaded.bounds,
+        "cut": v.cut,
     }
     for o in v.outcomes:
         item: dict[str, Any] = {

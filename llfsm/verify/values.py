@@ -14,6 +14,7 @@ else (an object of a class of the user's, a function, a file) cannot be compared
 
 from __future__ import annotations
 
+from enum import Enum
 from typing import Any
 
 #: The types a configuration holds as they are.
@@ -36,8 +37,14 @@ class Handles:
     def __init__(self) -> None:
         self.objects: list[Any] = []
         self.tokens: dict[tuple[str, ...], int] = {}
+        #: each object's token by its id, with the object (kept alive, so the id is its own):
+        #: what a handle is never changes, and a configuration is frozen at every step
+        self.known: dict[int, tuple[Any, Frozen]] = {}
 
     def token(self, obj: Any) -> Frozen | None:
+        hit = self.known.get(id(obj))
+        if hit is not None and hit[0] is obj:
+            return hit[1]
         key = _handle_key(obj)
         if key is None:
             return None
@@ -45,19 +52,27 @@ class Handles:
         if index is None:
             index = self.tokens[key] = len(self.objects)
             self.objects.append(obj)
-        return Frozen(("handle", index, *key))
+        token = Frozen(("handle", index, *key))
+        self.known[id(obj)] = (obj, token)
+        return token
 
 
 def _handle_key(obj: Any) -> tuple[str, ...] | None:
     """What a handle is, for `Handles.token`: (kind, name...), or None for no handle."""
     # deferred: start-up of `llfsm verify` without the bus (a machine that never uses it)
+    from ..ros.client import Client
     from ..ros.node import Node
     from ..ros.publisher import Publisher
+    from ..ros.subscription import Subscription
 
     if isinstance(obj, Node):
         return ("node", obj.get_fully_qualified_name())
     if isinstance(obj, Publisher):
         return ("publisher", obj.topic_name, obj.msg_type._TYPE, "latched" if obj.transient_local else "")
+    if isinstance(obj, Client):
+        return ("client", obj.srv_name, obj.srv_type._TYPE)
+    if isinstance(obj, Subscription):
+        return ("subscription", obj.topic_name, obj.msg_type._TYPE, "push" if obj.callback is not None else "pull")
     return None
 
 
@@ -80,8 +95,16 @@ def freeze(value: Any, handles: Handles) -> Any:
     fields = getattr(t, "_FIELDS", None)
     if fields is not None and hasattr(value, "_copy"):  # a message: by its fields
         return Frozen(("message", t, *(freeze(getattr(value, f), handles) for f, _ in fields)))
+    if isinstance(value, Enum):  # immutable, compared by identity: FutureReturnCode.SUCCESS
+        return value
+    if t.__name__ == "Future" and hasattr(value, "_service"):  # a service call: by what it came to
+        if value._exception is not None or value._callbacks or value._remote is not None:
+            raise Unfreezable("a future with callbacks, an exception or a remote server")
+        return Frozen(("future", value._service, value._done, freeze(value._result, handles)))
     token = handles.token(value)
     if token is not None:
+        if token[2] == "subscription":  # a reader: what it holds is part of the configuration
+            return Frozen(("reader", token, freeze(value.latest, handles), value._fresh))
         return token
     raise Unfreezable(f"a {t.__module__}.{t.__qualname__}")
 
@@ -110,11 +133,25 @@ def thaw(value: Any, handles: Handles) -> Any:
         return msg
     if kind == "handle":
         return handles.objects[value[1]]
+    if kind == "future":
+        from ..ros.task import Future  # deferred: start-up (only a machine that calls a service)
+
+        future = Future(value[1])
+        if value[2]:
+            future.set_result(thaw(value[3], handles))
+        return future
+    if kind == "reader":
+        sub = handles.objects[value[1][1]]
+        sub.latest = thaw(value[2], handles)
+        sub._fresh = value[3]
+        return sub
     raise AssertionError(kind)  # pragma: no cover
 
 
 def shown(value: Any) -> str:
     """A frozen value as a person reads it in a counterexample: `[1, 2]`, `Twist(linear=...)`."""
+    if isinstance(value, Enum):
+        return f"{type(value).__name__}.{value.name}"
     if type(value) is not Frozen:
         return repr(value)
     kind = value[0]
@@ -135,4 +172,8 @@ def shown(value: Any) -> str:
         return f"{cls.__name__}({fields})"
     if kind == "handle":
         return f"<{value[2]} {value[3]}>"
+    if kind == "future":
+        return f"<future {'done: ' + shown(value[3]) if value[2] else 'pending'}>"
+    if kind == "reader":
+        return f"<subscription {value[1][3]}, latest {shown(value[2])}>"
     return repr(value)  # pragma: no cover

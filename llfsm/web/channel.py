@@ -8,7 +8,7 @@ A page is sent the whole of what it shows once, then only what changed:
 - `delta`: `{"type": "delta", "seq": n, ...}` holding only the parts that changed since the
   message before: `header` (run time, clock, source, ended), each collection (`machines`,
   `topics`, `services`) as `{"upsert": [rows], "remove": [keys], "total": n}`, `param_events`
-  (node -> count, the changed ones), `world` (the turtle world's SVG);
+  (node -> count, the changed ones), `world` (the turtle world's SVG), `monitor` (verdicts);
 - `graph`: the drawing of nodes and topics and the lists beside it, when they change.
 
 Every collection is bounded before it is sent (the source bounds its rows; `total` counts what
@@ -29,6 +29,9 @@ from typing import Any
 PROTOCOL = 1
 #: The keyed collections of a state, and the field that keys their rows.
 COLLECTIONS = {"machines": "name", "topics": "name", "services": "name"}
+#: The parts of a state sent whole when they change: the turtle world's SVG, the monitor's
+#: verdicts (llfsm.web.verdicts: a count and the newest 20).
+WHOLE = ("world", "monitor")
 #: What a page is sent at most (docs/view.md, "The page's channel"): rows of the topics table,
 #: services named in the call form, characters of a topic's last message.  The rest is counted.
 #: (Machines are bounded by their sources, the graph's lists by llfsm.web.rosgraph.)
@@ -87,8 +90,9 @@ class Channel:
         events = {node: n for node, n in state["param_events"].items() if last["param_events"].get(node) != n}
         if events:
             out["param_events"] = events
-        if state["world"] != last["world"]:
-            out["world"] = state["world"]
+        for part in WHOLE:
+            if state.get(part) != last.get(part):
+                out[part] = state.get(part)
         self._last = state
         if not out:
             return None
@@ -109,6 +113,7 @@ def state_of(
     services_total: int | None = None,
     param_events: dict[str, int] | None = None,
     world: str | None = None,
+    monitor: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """A state as a source hands it to the channel: rows keyed by name (machines keep their
     order in `order`), totals counting what the rows leave out."""
@@ -122,6 +127,7 @@ def state_of(
         "services_total": len(rows["services"]) if services_total is None else services_total,
         "param_events": dict(param_events or {}),
         "world": world,
+        "monitor": monitor,
     }
 
 
@@ -132,14 +138,16 @@ def full(state: dict[str, Any], seq: int) -> dict[str, Any]:
         rows = state[name]
         out[name] = {"upsert": list(rows.values()), "remove": [], "total": state.get(f"{name}_total", len(rows))}
     out["param_events"] = dict(state["param_events"])
-    out["world"] = state["world"]
+    for part in WHOLE:
+        out[part] = state.get(part)
     return out
 
 
 class Mirror:
     """What a page holds after the messages it received (protocol 1): `apply(message)` returns
     the state as one dict, `{"t", "clock", "source", "ended", "machines": [rows], "topics":
-    [rows], "topics_total", "services": [rows], "services_total", "param_events", "world"}`,
+    [rows], "topics_total", "services": [rows], "services_total", "param_events", "world",
+    "monitor"}`,
     after a hello or a delta, and None after any other message."""
 
     def __init__(self) -> None:
@@ -147,7 +155,7 @@ class Mirror:
         self.rows: dict[str, dict[str, Any]] = {name: {} for name in COLLECTIONS}
         self.totals: dict[str, int] = {name: 0 for name in COLLECTIONS}
         self.param_events: dict[str, int] = {}
-        self.world: str | None = None
+        self.whole: dict[str, Any] = dict.fromkeys(WHOLE)
         self.seq = -1
 
     def apply(self, message: dict[str, Any]) -> dict[str, Any] | None:
@@ -177,8 +185,9 @@ class Mirror:
                 rows[row[key]] = row
             self.totals[name] = change.get("total", len(rows))
         self.param_events.update(d.get("param_events") or {})
-        if "world" in d:
-            self.world = d["world"]
+        for part in WHOLE:
+            if part in d:
+                self.whole[part] = d[part]
 
     def state(self) -> dict[str, Any]:
         out = dict(self.header)
@@ -190,5 +199,5 @@ class Mirror:
             )
             out[f"{name}_total"] = self.totals[name]
         out["param_events"] = dict(self.param_events)
-        out["world"] = self.world
+        out.update(self.whole)
         return out

@@ -51,6 +51,9 @@ HELLO_PERIOD = 1.0
 COOKIE = "llfsm_token"
 LOOPBACK_NAMES = {"localhost", "127.0.0.1", "::1", "[::1]"}
 _STATIC = {"app.js": "text/javascript", "style.css": "text/css"}
+#: What the front end's build (frontend/, `make`) writes into static/app/.
+_APP = {"app.js": "text/javascript", "app.css": "text/css"}
+APP_MISSING = "llfsm/web/static/app/app.js is missing"
 
 
 class AddressError(Exception):
@@ -83,7 +86,14 @@ def is_loopback(host: str) -> bool:
 
 
 class WebServer:
-    """Serves a source (llfsm.web.source.RunSource, or a graph source) on a background thread."""
+    """Serves a source (llfsm.web.source.RunSource, or a graph source) on a background thread.
+    llfsm.web.edit_server.EditServer serves `llfsm edit` with the same lifecycle and security,
+    its own page (`PAGE`) and routes (`_routes`)."""
+
+    #: The page's HTML (in static/).
+    PAGE = "index.html"
+    #: The largest request body accepted (a bigger one is refused, 413, before it is read).
+    MAX_BODY = 256 * 1024
 
     def __init__(self, source: Any, host: str = "127.0.0.1", port: int = 0, token: str | None = None) -> None:
         self.source = source
@@ -92,7 +102,6 @@ class WebServer:
         #: Required on any address but loopback.
         self.token = token if token is not None else (None if is_loopback(host) else secrets.token_urlsafe(18))
         self.clients: set[web.WebSocketResponse] = set()
-        self._locks: dict[web.WebSocketResponse, asyncio.Lock] = {}  # each page's, for its order
         #: Snapshots per second at most.
         self.rate = RATE
         self.url = ""
@@ -108,6 +117,7 @@ class WebServer:
         self._warned: set[str] = set()
         #: The deltas every page is sent, from one baseline (llfsm.web.channel).
         self.channel = Channel()
+        self._locks: dict[web.WebSocketResponse, asyncio.Lock] = {}  # each page's, for its order
 
     # -- lifecycle (caller's thread) -----------------------------------------------------------------
     def start(self) -> str:
@@ -177,27 +187,36 @@ class WebServer:
             loop.close()
 
     async def _start(self, sock: socket.socket) -> None:
-        app = web.Application(middlewares=[self._guard], client_max_size=256 * 1024)
+        app = web.Application(middlewares=[self._guard], client_max_size=self.MAX_BODY)
         app.router.add_get("/", self._index)
+        app.router.add_get("/static/app/{name}", self._app_asset)
         app.router.add_get("/static/{name}", self._static)
         app.router.add_get("/ws", self._ws)
         app.router.add_get("/favicon.ico", _no_icon)
-        app.router.add_post("/api/command", self._command)
-        app.router.add_post("/api/publish", self._publish)
-        app.router.add_post("/api/call", self._call)
-        app.router.add_post("/api/parameters", self._parameters)
-        app.router.add_post("/api/parameter", self._set_parameter)
+        self._routes(app)
         self._runner = web.AppRunner(app, access_log=None, handle_signals=False, shutdown_timeout=1.0)
         await self._runner.setup()
         await web.SockSite(self._runner, sock).start()
         self._wake = asyncio.Event()
         self._pusher = asyncio.get_running_loop().create_task(self._push())
 
+    def _routes(self, app: web.Application) -> None:
+        """The view's requests (the editor's server has its own)."""
+        app.router.add_post("/api/command", self._command)
+        app.router.add_post("/api/publish", self._publish)
+        app.router.add_post("/api/call", self._call)
+        app.router.add_post("/api/parameters", self._parameters)
+        app.router.add_post("/api/parameter", self._set_parameter)
+
+    async def _farewell(self) -> None:
+        """The last message to the pages as the server stops (the view's: the run ended)."""
+        delta = self.channel.delta(self._state())
+        if delta is not None:
+            await self._broadcast(delta)
+
     async def _shutdown(self) -> None:
         try:
-            delta = self.channel.delta(self._state())  # the last one says the run ended
-            if delta is not None:
-                await self._broadcast(delta)
+            await self._farewell()
         except Exception:
             pass
         if self._pusher is not None:
@@ -231,8 +250,13 @@ class WebServer:
             response.set_cookie(COOKIE, self.token, httponly=True, samesite="Strict", path="/")
         if not isinstance(response, web.WebSocketResponse):
             host = request.host
+            # the editor's code editors (CodeMirror) add their style sheets with the page's nonce,
+            # and the browser's own editing of their text may write style attributes (never
+            # markup of ours: the page sets no style attribute and strips them from diagrams)
+            nonce = request.get("csp_nonce")
+            styles = f"'self' 'nonce-{nonce}'; style-src-attr 'unsafe-inline'" if nonce else "'self'"
             response.headers["Content-Security-Policy"] = (
-                "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; "
+                f"default-src 'self'; img-src 'self' data:; style-src {styles}; script-src 'self'; "
                 f"connect-src 'self' ws://{host}; frame-ancestors 'none'; base-uri 'none'; form-action 'self'"
             )
             response.headers["X-Content-Type-Options"] = "nosniff"
@@ -242,8 +266,23 @@ class WebServer:
 
     # -- the page --------------------------------------------------------------------------------------------
     async def _index(self, request: web.Request) -> web.Response:
-        text = (resources.files(__package__) / "static" / "index.html").read_text(encoding="utf-8")
+        text = (resources.files(__package__) / "static" / self.PAGE).read_text(encoding="utf-8")
+        if "{{nonce}}" in text:  # a page that adds style sheets from script: a fresh nonce each time
+            request["csp_nonce"] = nonce = secrets.token_urlsafe(16)
+            text = text.replace("{{nonce}}", nonce)
         return web.Response(text=text, content_type="text/html", charset="utf-8")
+
+    async def _app_asset(self, request: web.Request) -> web.Response:
+        """The application built from frontend/ (`make`): only the names the build writes."""
+        name = request.match_info["name"]
+        kind = _APP.get(name)
+        if kind is None:
+            raise web.HTTPNotFound()
+        try:
+            data = (resources.files(__package__) / "static" / "app" / name).read_bytes()
+        except OSError:
+            return _refuse(503, f"the page was not built: run `make` in llfsm's checkout ({APP_MISSING})")
+        return web.Response(body=data, content_type=kind, charset="utf-8")
 
     async def _static(self, request: web.Request) -> web.Response:
         name = request.match_info["name"]
@@ -344,6 +383,22 @@ class WebServer:
 
     async def _ws(self, request: web.Request) -> web.WebSocketResponse:
         ws = web.WebSocketResponse(heartbeat=20, max_msg_size=64 * 1024)
+        try:
+            if not await self._greet(ws, request):
+                return ws
+        except ConnectionError:  # the page left right after the handshake (a tab closed, a browser exiting)
+            return ws
+        try:
+            async for msg in ws:  # the page only listens here; commands come as POSTs
+                if msg.type == WSMsgType.ERROR:
+                    break
+        finally:
+            self._drop(ws)
+        return ws
+
+    async def _greet(self, ws: web.WebSocketResponse, request: web.Request) -> bool:
+        """The handshake and the hello; then the page is one of the clients the push loop feeds.
+        False when there was nothing to greet it with (the WebSocket is closed)."""
         await ws.prepare(request)
         for _ in range(max(1, int(5 * self.rate))):  # five seconds of tries (a bench sets a float rate)
             try:
@@ -353,26 +408,19 @@ class WebServer:
                 await asyncio.sleep(1 / self.rate)
         else:  # said already (once); the page shows itself closed, and may reconnect
             await ws.close()
-            return ws
+            return False
         # one of the pages from here on: the next delta is computed from the baseline its hello
         # holds, and its lock, taken before any broadcast can see it, sends the hello first
-        lock = self._locks[ws] = asyncio.Lock()
-        async with lock:
+        async with self._locks.setdefault(ws, asyncio.Lock()):
             self.clients.add(ws)
             if self._wake is not None:
                 self._wake.set()
             try:
-                await asyncio.wait_for(ws.send_str(dumps(hello)), 2)
-            except Exception:  # gone already, or too slow
+                await ws.send_str(dumps(hello))
+            except BaseException:
                 self._drop(ws)
-                return ws
-        try:
-            async for msg in ws:  # the page only listens here; commands come as POSTs
-                if msg.type == WSMsgType.ERROR:
-                    break
-        finally:
-            self._drop(ws)
-        return ws
+                raise
+        return True
 
     async def _push(self) -> None:
         """Sample and push at most RATE times a second, only while a page is connected.  When
@@ -438,11 +486,10 @@ class WebServer:
 
     async def _broadcast_text(self, text: str) -> None:
         """To every page, in the order messages were made (each page's lock keeps it)."""
+        for gone in [ws for ws in self._locks if ws not in self.clients and not self._locks[ws].locked()]:
+            del self._locks[gone]  # a page a subclass dropped itself (the editor's)
         for ws in list(self.clients):
-            lock = self._locks.get(ws)
-            if lock is None:
-                continue
-            async with lock:
+            async with self._locks.setdefault(ws, asyncio.Lock()):
                 if ws not in self.clients:
                     continue
                 try:
@@ -503,7 +550,7 @@ class WebServer:
 
 
 class _NoSnapshot(Exception):
-    """The source could not be sampled this time (said once by WebServer._snapshot)."""
+    """The source could not be sampled this time (said once by WebServer._state)."""
 
 
 async def _no_icon(request: web.Request) -> web.Response:

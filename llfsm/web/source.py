@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import time
 from collections import deque
 from collections.abc import Callable
@@ -35,6 +36,7 @@ from ..ros.transports.dds_graph import is_hidden
 from . import parameters as params
 from .channel import MAX_SERVICE_ROWS, MAX_TOPIC_ROWS, ROW_PERIOD, bounded_text, state_of
 from .rosgraph import MAX_LISTED_NODES, RosGraph, from_bus, from_dds, robust_graph
+from .verdicts import Verdicts
 
 if TYPE_CHECKING:
     from ..ros.bus import Bus
@@ -108,7 +110,9 @@ class Source:
         self.bus = bus
         self.ctx = bus.ctx
         self.clock = bus.clock
-        self.node: Node = Node(node_name)  # on the scheduler's thread, before the run
+        # on the scheduler's thread, before the run; each page's node its own name (as rqt's
+        # rqt_gui_py_node_<pid>), so that two views on one graph are not two nodes of one name
+        self.node: Node = Node(f"{node_name}_{os.getpid()}")
         self._readers: dict[str, Any] = {}
         self._asked: set[str] = set()
         self._stats: dict[str, _TopicStats] = {}
@@ -122,6 +126,8 @@ class Source:
         self.param_events: dict[str, int] = {}
         events = self.node.create_subscription(ParameterEvent, "/parameter_events", self._on_parameter_event, 100)
         events.screen = params.event_node  # over DDS: the node's name alone is read of a peer's event
+        #: What monitors said on /llfsm/monitor (this run's, or any run's on the domain).
+        self.verdicts = Verdicts(self.node)
         self._graph = RosGraph()
         self._graph_at = -GRAPH_PERIOD
         #: The DDS graph beyond this process, read on the scheduler's thread (None in process).
@@ -195,6 +201,7 @@ class Source:
             # only for nodes the page lists: a peer naming thousands of nodes costs the page nothing
             param_events={node: events[node] for node in shown if node in events},
             world=self.world(),
+            monitor=self.verdicts.sample(),
         )
 
     def graph(self) -> RosGraph:
@@ -226,7 +233,7 @@ class Source:
 
     async def publish(self, topic: str, type_name: str, text: str) -> dict[str, Any]:
         try:
-            name = expand(topic.strip(), "llfsm_web", "/")
+            name = expand(topic.strip(), self.node.get_name(), "/")
         except Exception as e:  # InvalidNameError and friends: one line
             raise CommandError(str(e)) from None
         existing = self.topic_types().get(name)
@@ -258,7 +265,7 @@ class Source:
 
     async def _call(self, service: str, type_name: str, text: str) -> Any:
         try:
-            name = expand(service, "llfsm_web", "/")
+            name = expand(service, self.node.get_name(), "/")
         except Exception as e:
             raise CommandError(str(e)) from None
         known = self.service_types().get(name)

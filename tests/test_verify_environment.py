@@ -1,0 +1,166 @@
+"""SPEC 16: the world as a verification file declares it (`environment:`), bounds, the how-to's
+four machines verified as written, and refusals at every place of use."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from helpers import MACHINES, llfsm, write_machine
+
+WALL = MACHINES / "ros2_wall_turtle_bot.machine"
+
+
+def _wall_file(tmp_path: Path, may_fail: bool, props: str) -> Path:
+    f = tmp_path / "wall.verify.yaml"
+    f.write_text(
+        f"machines: [{WALL}]\n"
+        "environment:\n  services:\n    /turtle_pose_service:\n"
+        "      type: turtle_sensor_interface/srv/TurtlePosition\n"
+        "      responses: [{x: 5.5, y: 5.5}, {x: 9.5, y: 5.5}]\n"
+        f"      may_fail: {'true' if may_fail else 'false'}\n"
+        f"properties:\n{props}"
+    )
+    return f
+
+
+@pytest.mark.parametrize("name", ["ping_pong", "blind_turtle_bot", "wall_turtle_bot", "suspend_resume"])
+def test_the_shipped_verification_files_hold(name: str) -> None:
+    r = llfsm("verify", MACHINES / f"{name}.verify.yaml", "--format", "json")
+    assert r.status == 0, r.stdout + r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["properties"] and all(p["verdict"] == "holds" for p in doc["properties"])
+
+
+def test_the_wall_bot_is_refused_without_an_environment_and_told_how() -> None:
+    r = llfsm("verify", WALL)
+    assert r.status == 2
+    assert "State_STOP_OnEntry.py:5" in r.stdout and "call_async" in r.stdout
+    assert "environment:" in r.stdout
+
+
+def test_the_wall_bot_with_and_without_may_fail(tmp_path: Path) -> None:
+    never_fails = '  - never: state(ros2_wall_turtle_bot) == "SERVICE_FAILS"\n'
+    r = llfsm("verify", _wall_file(tmp_path, False, never_fails))
+    assert r.status == 0, r.stdout + r.stderr
+    r = llfsm("verify", _wall_file(tmp_path, True, never_fails))
+    assert r.status == 1
+    assert "environment: /turtle_pose_service did not answer (may_fail)" in r.stdout
+    assert "I_wait: None -> FutureReturnCode.TIMEOUT" in r.stdout
+
+
+def test_the_counterexample_names_the_response_chosen(tmp_path: Path) -> None:
+    r = llfsm("verify", _wall_file(tmp_path, False, '  - never: state(ros2_wall_turtle_bot) == "BACK"\n'))
+    assert r.status == 1
+    assert "environment: /turtle_pose_service answered response 1 {x: 9.5, y: 5.5}" in r.stdout
+    assert "position_x: 0.0 -> 9.5" in r.stdout
+
+
+def test_a_declaration_that_names_an_unknown_field_is_one_line(tmp_path: Path) -> None:
+    f = tmp_path / "w.verify.yaml"
+    f.write_text(
+        f"machines: [{WALL}]\nenvironment:\n  services:\n    /turtle_pose_service:\n"
+        "      type: turtle_sensor_interface/srv/TurtlePosition\n      responses: [{z: 1.0}]\n"
+    )
+    r = llfsm("verify", f)
+    assert r.status == 2
+    assert f"{f}:4: service /turtle_pose_service" in r.stderr and "no field 'z'" in r.stderr
+
+
+def _reader(tmp_path: Path, push: bool = False) -> Path:
+    """A machine reading /bump: PULL (a guard on `sub.latest`), or PUSH (a callback keeping the
+    values in `hits`, a guard on them)."""
+    name = "pusher" if push else "reader"
+    callback, guard = (
+        ("lambda msg: hits.add(msg.data)", "True in hits")
+        if push
+        else ("None", "sub.latest is not None and sub.latest.data")
+    )
+    return write_machine(
+        tmp_path,
+        name,
+        {"WAIT": [("HIT", guard)], "HIT": None},
+        {
+            "WAIT_OnEntry": f'ros.init()\nnode = ros.Node("{name}")\n'
+            f'sub = node.create_subscription(Bool, "/bump", {callback}, 10)\n'
+        },
+        variables="node: ros.Node\nsub: ros.Subscription\nhits: set = set()\n",
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n",
+    )
+
+
+def test_a_pull_reader_takes_the_topics_values(tmp_path: Path) -> None:
+    m = _reader(tmp_path)
+    f = tmp_path / "r.verify.yaml"
+    f.write_text(
+        f"machines: [{m}]\nenvironment:\n  topics:\n    /bump:\n      type: std_msgs/msg/Bool\n"
+        "      values: [{data: false}, {data: true}]\n"
+        'properties:\n  - never: state(reader) == "HIT"\n'
+    )
+    r = llfsm("verify", f)
+    assert r.status == 1, r.stdout + r.stderr
+    assert "environment: /bump: a message {data: True}" in r.stdout
+    # without the environment the reader is refused where it reads
+    r = llfsm("verify", m)
+    assert r.status == 2 and "State_WAIT_Transition_0.expr" in r.stdout
+
+
+def test_a_bound_stops_a_growing_counter(tmp_path: Path) -> None:
+    f = tmp_path / "p.verify.yaml"
+    f.write_text(f"machines: [{MACHINES / 'ros2_ping_pong.machine'}]\nbounds:\n  ros2_ping_pong.count: 2\n")
+    r = llfsm("verify", f)
+    assert r.status == 0, r.stdout + r.stderr
+    assert "bounded: ros2_ping_pong.count <= 2" in r.stdout
+    f.write_text(f"machines: [{MACHINES / 'ros2_ping_pong.machine'}]\nbounds:\n  ros2_ping_pong.counter: 2\n")
+    r = llfsm("verify", f)
+    assert r.status == 2 and "bounds: ros2_ping_pong.counter" in r.stderr
+
+
+def test_a_push_callback_runs_with_the_topics_values(tmp_path: Path) -> None:
+    m = _reader(tmp_path, push=True)
+    f = tmp_path / "p.verify.yaml"
+    f.write_text(
+        f"machines: [{m}]\nenvironment:\n  topics:\n    /bump:\n      type: std_msgs/msg/Bool\n"
+        "      values: [{data: false}, {data: true}]\n"
+        'properties:\n  - never: state(pusher) == "HIT"\n  - reachable: False in pusher.hits\n'
+    )
+    r = llfsm("verify", f)
+    assert r.status == 1, r.stdout + r.stderr
+    out = r.stdout
+    assert 'never: state(pusher) == "HIT": fails (' in out and "reachable: False in pusher.hits: holds (" in out
+    # the callback ran with the value chosen before the ringlet that then took the transition
+    assert "environment: /bump: a message {data: True}" in out
+    assert "pusher.hits: {} -> {True}" in out
+    # without the environment the subscription is refused where it is made
+    r = llfsm("verify", m)
+    assert r.status == 2 and "State_WAIT_OnEntry.py:3" in r.stdout
+
+
+@pytest.mark.parametrize("case", ["services", "push topic"])
+def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_alike(case: str, tmp_path: Path) -> None:
+    from llfsm.props.file import read_verify_file
+    from llfsm.verify.explorer import Options
+    from llfsm.verify.judge import verify
+    from llfsm.verify.load import load_arrangement
+
+    if case == "services":
+        vf = read_verify_file(_wall_file(tmp_path, True, '  - never: state(ros2_wall_turtle_bot) == "BACK"\n'))
+    else:
+        m = _reader(tmp_path, push=True)
+        f = tmp_path / "p.verify.yaml"
+        f.write_text(
+            f"machines: [{m}]\nenvironment:\n  topics:\n    /bump:\n      type: std_msgs/msg/Bool\n"
+            "      values: [{data: false}, {data: true}]\n"
+            'properties:\n  - eventually: state(pusher) == "HIT"\n'
+        )
+        vf = read_verify_file(f)
+    loaded = load_arrangement(vf.machines, vf.environment)
+    shapes = []
+    for hash_compact, generic in ((False, False), (False, True), (True, False)):
+        r = verify(loaded, vf.properties, Options(hash_compact=hash_compact, generic=generic), keep_graph=True)
+        e = r.explorer
+        assert r.error is None and r.partial is None
+        shapes.append((r.configurations, r.steps, list(e.edges), list(e.edge_choice), list(e.labels), list(e.choice)))
+    assert shapes[0] == shapes[1] == shapes[2]
+    assert shapes[0][0] > 4 and shapes[0][3]
