@@ -74,7 +74,10 @@ def test_many_processes_on_one_domain_end_cleanly_on_one_sigint(
     assert status == 0 and "/tick" in out.split(), err
     status, out, err = verb(netns, "service", "list")
     assert status == 0 and {f"/llfsm/{n}/suspend" for n in names} <= set(out.split()), err
-    status, out, err = verb(netns, "topic", "info", "/tick")
+    for _ in range(20):  # discovery of a hundred participants takes a while on a loaded host
+        status, out, err = verb(netns, "topic", "info", "/tick")
+        if f"Publisher count: {runs}\n" in out:
+            break
     assert status == 0 and f"Publisher count: {runs}\n" in out, (out, err)
     for name, p in echo.items():  # every echo is up and printing
         assert p.stdout is not None and p.stdout.readline().startswith("data: "), name
@@ -84,10 +87,14 @@ def test_many_processes_on_one_domain_end_cleanly_on_one_sigint(
     for p in everyone.values():
         p.send_signal(signal.SIGINT)
     ended = {name: finish(p, 120) for name, p in everyone.items()}
-    for name, (status, _out, err) in ended.items():
-        expected = 130 if name.startswith("echo") else 0  # a verb's Ctrl-C; a run whose machines left, the view
-        assert status == expected, (name, status, err[-3000:])
-        assert "killed" not in err and "Traceback" not in err, (name, err[-3000:])
+    # a verb ends with Ctrl-C's 130; a run whose machines left, and the view, with 0; none killed
+    expected = {name: 130 if name.startswith("echo") else 0 for name in ended}
+    wrong = {
+        name: (status, err[-2000:])
+        for name, (status, _out, err) in ended.items()
+        if status != expected[name] or "killed" in err or "Traceback" in err
+    }
+    assert not wrong, wrong
 
 
 def test_past_the_participant_index_limit_one_line_names_it(netns: NetNamespace, tmp_path: Path) -> None:

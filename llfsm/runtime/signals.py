@@ -33,9 +33,6 @@ STUCK_SLACK_S = 0.5
 #: A run not held by a section when the grace time and the slack have passed (_not_held) is
 #: given this much longer to end by its rounds.
 STARVED_S = 10.0
-#: Where the scheduler waits for a round (the wall clock with a period, a sleep until a timer):
-#: a run found there when the grace time has passed ends at once, not after the wait.
-_ROUND_WAITS = (WallClock.advance.__code__, WallClock.sleep_until.__code__)
 
 
 def _in_machine_code(frame: FrameType | None) -> bool:
@@ -55,7 +52,25 @@ def _not_held(arr: Arrangement, frame: FrameType | None) -> bool:
     ran, waited = cpu_and_wait(os.getpid())
     if waited - arr._cpu_wait[1] >= STUCK_SLACK_S and ran - arr._cpu_wait[0] < STUCK_SLACK_S:
         return True  # starved: whatever it was in, it had no time to finish it
-    return not _in_machine_code(frame) and (frame is None or frame.f_code not in _ROUND_WAITS)
+    return not _in_machine_code(frame) and not _waits_for_a_far_round(frame)
+
+
+def _waits_for_a_far_round(frame: FrameType | None) -> bool:
+    """Whether the scheduler sleeps until a round further off than the slack (the wall clock's
+    period, a timer far ahead): a run found there when the grace time has passed ends at once,
+    not after the wait.  A short sleep between rounds (the idle time) is no such wait."""
+    if frame is None:
+        return False
+    clock = frame.f_locals.get("self")
+    if not isinstance(clock, WallClock):
+        return False
+    if frame.f_code is WallClock.advance.__code__ and clock.period:
+        until = clock._next
+    elif frame.f_code is WallClock.sleep_until.__code__:
+        until = frame.f_locals.get("t", 0)
+    else:
+        return False
+    return isinstance(until, int) and until - clock.read() > STUCK_SLACK_S * 1e9
 
 
 def signals_handled(arr: Arrangement) -> _SignalsHandled:

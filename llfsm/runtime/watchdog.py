@@ -344,14 +344,22 @@ def _watch(
 
 
 def cpu_and_wait(pid: int) -> tuple[float, float]:
-    """Seconds the main thread of process `pid` has run on a CPU, and seconds it has waited,
-    runnable, for one (its schedstat in /proc: the time a loaded host kept it waiting);
-    (0.0, 0.0) where the kernel keeps none."""
+    """Seconds the main thread of process `pid` has run on a CPU, and seconds its threads have
+    waited, runnable, for one (their schedstat in /proc: the time a loaded host kept them
+    waiting; a thread, keep_answering's, may wait for the CPU while the main thread waits in a
+    call); (0.0, 0.0) where the kernel keeps none."""
     try:
         with open(f"/proc/{pid}/task/{pid}/schedstat", "rb") as f:
-            ran, waited = f.read().split()[:2]
-        return int(ran) / 1e9, int(waited) / 1e9
-    except (OSError, ValueError):
+            ran = int(f.read().split()[0])
+        waited = 0
+        for tid in os.listdir(f"/proc/{pid}/task"):
+            try:
+                with open(f"/proc/{pid}/task/{tid}/schedstat", "rb") as f:
+                    waited += int(f.read().split()[1])
+            except (OSError, ValueError, IndexError):  # a thread that ended meanwhile
+                continue
+        return ran / 1e9, waited / 1e9
+    except (OSError, ValueError, IndexError):
         return 0.0, 0.0
 
 
