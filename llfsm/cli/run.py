@@ -10,7 +10,7 @@ from typing import Any
 import click
 
 from ._common import DURATION, cli
-from .run_args import CHOICE, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
+from .run_args import CHOICE, COUNT, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
 from .run_args import DURATION as DURATION_KIND
 
 _TYPES: dict[str, Callable[[RunOption], Any]] = {
@@ -18,6 +18,7 @@ _TYPES: dict[str, Callable[[RunOption], Any]] = {
     CHOICE: lambda o: click.Choice(list(o.choices)),
     DURATION_KIND: lambda o: DURATION,
     FLOAT: lambda o: float,
+    COUNT: lambda o: click.IntRange(min=1),
 }
 
 

@@ -524,6 +524,7 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
             ),
             # machine.yaml's `parameters:`: (variable, rclpy type name) for llfsm.ros.control
             "parameters": _parameters(m),
+            "variable_types": tuple((v.name, " ".join(v.annotation.split())) for v in m.variables),
             "enter": [f"_llfsm_enter_{v.name}" for v in views],
             "steady": [f"_llfsm_steady_{v.name}" for v in views],
             "includes": includes,

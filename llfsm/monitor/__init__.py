@@ -8,7 +8,8 @@ every boundary; `leads_to` as pending obligations (with `within:`, a deadline on
 clock); `ltl` three-valued on the run so far (violated, satisfied, pending); `reachable` and
 `eventually` answered at the end; `ctl` refused with the reason.  A violation is one line on
 stderr (the property, run time, ringlet, every machine's state and the variables the property
-names) and, with `--on-violation stop`, the end of the run with status 4.
+names) and, with `--on-violation stop`, the end of the run with status 4; with `pause`, the
+debugger's pause (llfsm.debug: the session gives the run one, a prompt or the page continues it).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from ..props.automaton import Verdict3
 from ..props.file import PropertySource
 from ..props.kinds import AT_THE_END, EVERY_BOUNDARY, KINDS, OBLIGATIONS, THREE_VALUED
 from ..props.parse import Property, parse_property
-from ..runtime.scheduler import GO, STOP
+from ..runtime.scheduler import GO, PAUSE, STOP
 
 #: What `--on-violation` may say.
 ON_VIOLATION = ("log", "pause", "stop")
@@ -63,13 +64,8 @@ class Monitor:
         on_violation: str = "log",
         say: Callable[[str], None] | None = None,
     ) -> None:
-        if on_violation == "pause":
-            raise MonitorError(
-                "--on-violation pause pauses the run as the debugger does, which llfsm does not have yet "
-                "(issue 30): use log or stop"
-            )
         if on_violation not in ON_VIOLATION:
-            raise MonitorError(f"--on-violation {on_violation}: one of log, stop")
+            raise MonitorError(f"--on-violation {on_violation}: one of {', '.join(ON_VIOLATION)}")
         self.on_violation = on_violation
         self.say = say if say is not None else print
         infos = infos_of(classes)
@@ -116,12 +112,14 @@ class Monitor:
         arr.watcher = self.after
         self._judge(None)  # the boundary before the first ringlet
 
-    def after(self, m: Any) -> int:
+    def after(self, m: Any, state: int | None = None, fired: int | None = None) -> int:
         """The watcher: judge at the boundary after m's ringlet."""
         self.ringlets += 1
-        stop = self._judge(m)
+        violated = self._judge(m)
         self.published.clear()
-        return STOP if stop and self.on_violation == "stop" else GO
+        if not violated or self.on_violation == "log":
+            return GO
+        return STOP if self.on_violation == "stop" else PAUSE
 
     def _judge(self, m: Any) -> bool:
         machines, published = self.machines, self.published

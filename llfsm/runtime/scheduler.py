@@ -27,6 +27,8 @@ if TYPE_CHECKING:
     from typing import Final
 
     SignalHandler = Callable[[int, FrameType | None], None]
+    #: Arrangement.watcher: (machine, state its ringlet ran in, transition fired) -> GO | STOP | PAUSE.
+    Watcher = Callable[[Machine, int | None, int | None], int]
 
     from .watchdog import Watchdog
 
@@ -117,14 +119,19 @@ class Arrangement:
         #: Keep running rounds with no machine left (nodes on their own, docs/turtlesim.md): the run then
         #: ends by an interrupt or --duration only.
         self.serve_forever = False
-        #: Called after every ringlet (and a release that ended one) with the machine, when set
-        #: (a run's monitor, llfsm.monitor; the debugger's breakpoints): it returns GO, or STOP
-        #: to end the run at this ringlet boundary (status `stop_status`), or PAUSE (the
-        #: debugger's, issue 30; `on_pause` is called).  A run without one pays nothing: the
+        #: Called after every ringlet boundary when set (a run's monitor, llfsm.monitor; the
+        #: debugger, llfsm.debug) with the machine whose turn it was, the state its ringlet ran in
+        #: and the transition that fired (None and None for a turn with no ringlet: suspended,
+        #: or a suspend applied; the state and None when nothing fired): it returns GO, or STOP
+        #: to end the run at this boundary (status `stop_status`), or PAUSE (`on_pause(m)` is
+        #: called, and the run stands until it returns).  A run without one pays nothing: the
         #: plain round loops never look at it.
-        self.watcher: Callable[[Machine], int] | None = None
+        self.watcher: Watcher | None = None
         self.stop_status = EXIT_MONITOR
-        self.on_pause: Callable[[Machine], None] | None = None
+        self.on_pause: Callable[[Machine | None], None] | None = None
+        #: Pause at the next round boundary (`on_pause(None)`), asked from anywhere (another
+        #: thread too: `ask_pause`); the round loops see it through the attention they raise.
+        self.pause_asked = False
         self._stopped: int | None = None
         names = [c.NAME for c in classes]
         for n in names:
@@ -194,6 +201,12 @@ class Arrangement:
         m = self.machine(name)
         self._variables.setdefault(m._id, {}).update(values)
         _hold(m)  # the gate sets them; a machine setting its own may still fire: _rehold fixes that
+        self._attention = True
+
+    def ask_pause(self) -> None:
+        """Pause at the next round boundary (the debugger's; a watcher pauses sooner, at the next
+        ringlet boundary).  Two plain stores: safe from any thread."""
+        self.pause_asked = True
         self._attention = True
 
     def suspend_now(self, m: Machine, remember: int | None) -> None:
@@ -313,12 +326,13 @@ class Arrangement:
         self._attention = True
 
     # -- rounds ----------------------------------------------------------------------------
-    def _watched_round(self, live: list[Machine], tr: Tracer | None, watch: Callable[[Machine], int]) -> bool:
+    def _watched_round(self, live: list[Machine], tr: Tracer | None, watch: Watcher) -> bool:
         """A round with the watcher told of each ringlet boundary (and the tracer, if any)."""
         fired = False
+        values = tr is not None and tr.records_values
         for m in live:
             if m._run is m._held and not self._release(m):
-                asked = watch(m)  # a suspend applied: the boundary is still one
+                s = r = None  # no ringlet (suspended, or a suspend applied): the boundary is still one
             else:
                 s = m._state
                 if tr is not None and m._entered:
@@ -328,7 +342,9 @@ class Arrangement:
                     fired = True
                     if tr is not None:
                         tr.transition(m, s, m._state, r)
-                asked = watch(m)
+            if values:
+                tr.values(m)  # type: ignore[union-attr]
+            asked = watch(m, s, r)
             if asked == STOP:
                 self._stopped = self.stop_status
                 self._attention = True
@@ -339,8 +355,11 @@ class Arrangement:
 
     def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
         fired = False
+        values = tr.records_values
         for m in live:
             if m._run is m._held and not self._release(m):
+                if values:
+                    tr.values(m)
                 continue
             s = m._state
             if m._entered:
@@ -349,11 +368,17 @@ class Arrangement:
             if r is not None:
                 fired = True
                 tr.transition(m, s, m._state, r)
+            if values:
+                tr.values(m)
         return fired
 
     def _attend(self, now: int, grace: int) -> RunResult | None:
         """Whatever changed since the last round: unloads, suspensions, interrupts."""
         self._attention = False
+        if self.pause_asked and self.on_pause is not None and not self._interrupts:
+            self.pause_asked = False
+            self.on_pause(None)  # between rounds: the run stands until it returns
+            self._rehold()  # what was asked for while it stood (commands, variables)
         if self._stopped is not None:
             return self._result("stopped", self._stopped)
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
@@ -383,6 +408,8 @@ class Arrangement:
         self.ctx.deadline = duration_ns
         self._grace_ns = grace_ns
         self.running = True
+        if self.tracer is not None:
+            self.tracer.begin(self.machines)
         try:
             result = self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
             result.rounds = self.rounds  # the loop keeps its count in a local until it ends
