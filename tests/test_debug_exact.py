@@ -10,11 +10,10 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from helpers import MACHINES, Run
 
 from llfsm.cli import cli
-from tests.helpers import Run
 
-MACHINES = Path(__file__).resolve().parent.parent / "machines"
 BOT = "ros2_blind_turtle_bot"
 BOSS = "ros2_turtle_suspend_resume"
 

@@ -78,6 +78,7 @@ class Debugger:
         #: Told of every change of the debugger's state (paused or running, breakpoints): the
         #: page pushes it, the services publish it, the prompt wakes.  Called on the scheduler's thread.
         self.listeners: list[Callable[[Debugger], None]] = []
+        self._notifying = self._again = False
         #: Topics published since the last boundary (a tap on the bus, when something reads them).
         self.published: list[str] = []
         self._tapped = False
@@ -168,9 +169,9 @@ class Debugger:
         self.pauses += 1
         self.reason, self._pause_reason = self._pause_reason or "pause asked", ""
         self._resume = None
-        self._notify()
         clock = arr.clock
         started = time.monotonic_ns()
+        self._notify()
         try:
             while self._resume is None and not arr._interrupts:
                 self._serve_once(TICK)
@@ -224,11 +225,23 @@ class Debugger:
         return done
 
     def _notify(self) -> None:
-        for fn in list(self.listeners):
-            try:
-                fn(self)
-            except Exception as e:  # a listener (a page gone away) never stops the run
-                self.say(f"llfsm: debugger: {type(e).__name__}: {e}")
+        """Tell the listeners; a change a listener makes is told after it, not inside it."""
+        if self._notifying:
+            self._again = True
+            return
+        self._notifying = True
+        try:
+            while True:
+                self._again = False
+                for fn in list(self.listeners):
+                    try:
+                        fn(self)
+                    except Exception as e:  # a listener (a page gone away) never stops the run
+                        self.say(f"llfsm: debugger: {type(e).__name__}: {e}")
+                if not self._again:
+                    return
+        finally:
+            self._notifying = False
 
     # -- commands (scheduler's thread) ----------------------------------------------------------------
     def resume(self, mode: str = CONTINUE) -> str:

@@ -152,9 +152,10 @@ class Executor:
         debugger's) and run what other threads handed in (`call_soon_threadsafe`: the page's
         work, which runs no machine code); everything else (callbacks of machine code and of
         nodes, requests to their services) stays queued, in order, for when the run goes on.
-        No timer fires: the run clock stands."""
+        No timer fires: the run clock stands (so the transport is asked to look whatever the
+        time says: `poll(True)`)."""
         if self._poll is not None:
-            self._poll(False)
+            self._poll(True)
         ready = self.ready
         if not ready:
             return
