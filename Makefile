@@ -52,11 +52,13 @@ demo: $(VENV)/.installed
 		--duration 30s --image demo-output/turtle_follower.png
 	@echo "pictures: demo-output/wall_turtle_bot.png demo-output/turtle_follower.png"
 
-# lint-imports: the layers and contracts of [tool.importlinter] (docs/architecture.md)
+# lint-imports: the layers and contracts of [tool.importlinter] (docs/architecture.md); the test
+# after it fails when a contract's list leaves out a module of the package it governs.
 lint: $(VENV)/.installed-dev
 	$(VENV)/bin/ruff check llfsm tests bench
 	$(VENV)/bin/mypy
 	$(VENV)/bin/lint-imports --no-logo
+	$(PY) -m pytest -q --no-header -p no:cacheprovider tests/test_architecture.py::test_every_contract_names_every_module_of_its_package
 
 # The web view's browser tests drive Debian's Chromium (Playwright never downloads a browser):
 # installed here where we can (root with apt-get); elsewhere those tests skip and say why.

@@ -77,8 +77,8 @@ def mutex_property(n: int) -> str:
 
 def explore(paths: list[Path], prop: str, hash_compact: bool, graph: bool = False) -> tuple[object, float]:
     """(the verification, CPU seconds of the exploration)."""
-    from llfsm.verify.check import verify
     from llfsm.verify.explorer import Options
+    from llfsm.verify.judge import verify
     from llfsm.verify.load import PropertySource, load_arrangement
 
     kind, _, text = prop.partition(":")

@@ -16,9 +16,8 @@ helpers (bench/run.py's contestants, bench/dds.py's roles), so what differs is t
 - startup: wall time of `llfsm run --clock sim hello.machine` with a warm cache, and of a
   built module.
 - build: CPU time (user + system) of a cold `llfsm build` of 10 and 100 generated machines.
-- verify: configurations per second of `llfsm verify` (from its JSON report: configurations over
-  the check's seconds) on bench/verify.py's counter of 10^5 configurations and its 5 mutex
-  machines, exact storage and hash compaction.
+- verify: `llfsm verify`'s exploration speed (configurations per CPU second, exact storage) on
+  bench/verify.py's counter and mutex arrangements, each side with its own bench/verify.py.
 - dds: Twist round trip p50 and an idle machine's rounds per second on the DDS transport,
   inside a private network namespace.
 """
@@ -77,14 +76,38 @@ DDS_PROBE = textwrap.dedent(
 )
 
 
+#: The verify section's probe: one exploration with the side's own bench/verify.py, answering
+#: "configurations cpu_seconds".
+VERIFY_PROBE = textwrap.dedent(
+    """
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, sys.argv[1] + "/bench")
+    import verify as bench
+    root = Path(sys.argv[3])
+    if sys.argv[2] == "counter":
+        paths, prop = [bench.write_counter(root, int(sys.argv[4]))], "always: counter.count >= 0"
+    else:
+        n = int(sys.argv[4])
+        paths, prop = bench.write_mutex(root, n), bench.mutex_property(n)
+    v, t = bench.explore(paths, prop, False)
+    print(v.configurations, t)
+    """
+)
+
+
 def python_of(checkout: Path) -> str:
     py = checkout / ".venv" / "bin" / "python"
     return str(py) if py.exists() else sys.executable
 
 
 def env_of(checkout: Path, cache: Path) -> dict[str, str]:
+    """The side's environment: its llfsm first on the path.  PYTHONSAFEPATH: `python -c` and
+    `python -m` would otherwise put the working directory first, and run from this checkout's
+    root (as the docstring says) the other side imported this checkout's llfsm too."""
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONDONTWRITEBYTECODE")}
     env["PYTHONPATH"] = str(checkout)
+    env["PYTHONSAFEPATH"] = "1"
     env["LLFSM_CACHE_DIR"] = str(cache)
     return env
 
@@ -197,31 +220,20 @@ def section_build(other: Path, quick: bool, tmp: Path) -> list[Row]:
 
 
 def section_verify(other: Path, quick: bool, tmp: Path) -> list[Row]:
-    from verify import mutex_property, write_counter, write_mutex
-
-    counter = write_counter(tmp / "counter", 20_000 if quick else 100_000)
-    mutex = write_mutex(tmp / "mutex", 4 if quick else 5)
-    cases = [
-        ("counter", [counter], "always: counter.count >= 0"),
-        ("mutex", mutex, mutex_property(len(mutex))),
-    ]
     rows = []
-    for label, paths, prop in cases:
-        for extra in ((), ("--hash-compact",)):
+    for kind, size in (("counter", 20_000 if quick else 100_000), ("mutex", 4 if quick else 5)):
 
-            def once(side: Path, paths: list[Path] = paths, prop: str = prop, extra: tuple[str, ...] = extra) -> float:
-                cmd = [python_of(side), "-m", "llfsm", "verify", *map(str, paths), "--property", prop]
-                cmd += [*extra, "--format", "json", "-q"]
-                env = env_of(side, tmp / f"cache-{side.name}")
-                out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False).stdout
-                doc = json.loads(out)
-                return doc["configurations"] / doc["seconds"]
+        def once(side: Path, kind: str = kind, size: int = size) -> float:
+            folder = tmp / f"{kind}-{side.name}"
+            cmd = [python_of(side), "-c", VERIFY_PROBE, str(side), kind, str(folder), str(size)]
+            r = subprocess.run(cmd, capture_output=True, text=True, env=env_of(side, tmp / f"cache-{side.name}"),
+                               timeout=600, check=True)  # fmt: skip
+            configurations, seconds = r.stdout.split()
+            return int(configurations) / float(seconds)
 
-            for side in (THIS, other):
-                once(side)  # the machines built into each side's cache outside the timed runs
-            mine, theirs = alternate(3 if quick else 7, (THIS, other), once)
-            name = f"verify: {label}{' ' + extra[0] if extra else ''} (configurations/s)"
-            rows.append(row(name, mine, theirs, lambda x: f"{x:,.0f}/s"))
+        mine, theirs = alternate(3 if quick else 7, (THIS, other), once)
+        label = f"verify: {kind} {size:,}" if kind == "counter" else f"verify: {size} mutex machines"
+        rows.append(row(f"{label} (configurations per CPU s)", mine, theirs, lambda x: f"{x:,.0f}/s"))
     return rows
 
 

@@ -39,8 +39,8 @@ def _compiler_files() -> list[str]:
 
 
 def _list_compiler_files() -> list[str]:
-    """The machine template, the compiler, and the front end (lang/) whose reading of a machine
-    the compiler generates from."""
+    """The machine template, the compiler, the front end (lang/) whose reading of a machine the
+    compiler generates from, and the generated module's contract (runtime/generated.py)."""
     templates = os.path.join(_PKG, "templates")
     out = sorted(
         os.path.join(templates, n) for n in os.listdir(templates) if n.startswith("machine") and n.endswith(".j2")
@@ -48,6 +48,7 @@ def _list_compiler_files() -> list[str]:
     for folder in ("compiler", "lang", os.path.join("lang", "check")):
         d = os.path.join(_PKG, folder)
         out += sorted(os.path.join(d, n) for n in os.listdir(d) if n.endswith(".py") and not n.startswith("."))
+    out.append(os.path.join(_PKG, "runtime", "generated.py"))
     return out
 
 

@@ -58,38 +58,3 @@ def machine_dir_of(ref: str, module_file: str) -> str:
     """The machine folder a module names with `ref` (`source_ref`), from the module's own path.
     Lexical, as `source_ref` is: the module found by the path it was built under."""
     return os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(module_file)), ref))
-
-
-_SOURCE_LINE = "# Source: "
-
-
-def machine_dir_of_module(module_file: str) -> str | None:
-    """The machine folder a generated module names in its header (`# Source:`, within its first
-    lines), or None for a module without one.  A module installed by a colcon package
-    (share/PKG/llfsm/NAME.py) has its machine installed beside it (share/PKG/machine/NAME.machine),
-    where the relative path from the build folder no longer leads: that folder is taken when it
-    is there and the other is not (as llfsm.runtime.errors.source_dir_of, which reports errors).
-
-    Light, for `llfsm run`'s start-up: five lines read, json only for a name it escaped."""
-    try:
-        with open(module_file, encoding="ascii", errors="replace") as f:
-            lines = [f.readline() for _ in range(5)]
-    except OSError:
-        return None
-    for line in lines:
-        if line.startswith(_SOURCE_LINE):
-            ref = line[len(_SOURCE_LINE) :].rstrip("\r\n")
-            if "\\" in ref:
-                import json  # deferred: start-up (only a folder name with escapes needs it)
-
-                try:
-                    ref = str(json.loads(f'"{ref}"'))
-                except ValueError:
-                    pass
-            folder = machine_dir_of(ref, module_file)
-            if not os.path.isdir(folder):
-                installed = machine_dir_of(os.path.join(os.pardir, "machine", os.path.basename(folder)), module_file)
-                if os.path.isdir(installed):
-                    return installed
-            return folder
-    return None

@@ -3,9 +3,13 @@ played, a verb waiting for a topic (docs/cli.md, "Progress on a terminal").
 
 Only on a terminal: when stderr is not a TTY (a pipe, a file, a CI log) nothing is written at
 all, so logs and the output tests compare stay as they were.  The line is rewritten in place
-(`\\r`, then the text cut to the terminal's width, then "clear to the end of the line"), at most
-a few times a second, and cleared when the work ends, so what follows starts on a clean line.
-Lines the command prints meanwhile (`Status.print`) go above it.
+(`\\r`, then "clear to the end of the line", then the text cut to the terminal's width), at
+most a few times a second, and cleared when the work ends, so what follows starts on a clean
+line.  Lines the command prints meanwhile (`Status.print`) go above it.
+
+Work that may run for minutes in CI (`llfsm verify`) asks for a log too (`log_after`,
+`log_every`): off a terminal its line is written as a plain line once the work has run
+`log_after` seconds, then every `log_every` seconds, so a long job shows it is alive.
 
 Stdlib only, and light: commands import it when they start long work.
 """
@@ -37,12 +41,32 @@ def on_terminal(stream: TextIO) -> bool:
 class Status:
     """One status line on `stream` (stderr by default), drawn only on a terminal."""
 
-    def __init__(self, stream: TextIO | None = None) -> None:
+    def __init__(
+        self, stream: TextIO | None = None, *, log_after: float | None = None, log_every: float = 10.0
+    ) -> None:
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = on_terminal(self.stream)
         self._lock = threading.Lock()
         self._shown = ""  # what the line holds now ("" when cleared)
         self._last = 0.0
+        #: Off a terminal, `progress` writes a plain line from this many seconds of work on (None:
+        #: never), then every `log_every` seconds.
+        self.log_after = log_after
+        self.log_every = log_every
+        self._logged: float | None = None  # the work's seconds at the last plain line
+
+    def progress(self, text: str, elapsed: float) -> None:
+        """How far long work has got after `elapsed` seconds: the status line on a terminal, a
+        plain line now and then in a log (see `log_after`)."""
+        if self.enabled:
+            self.show(text, now=True)
+            return
+        if self.log_after is None or elapsed < self.log_after:
+            return
+        if self._logged is not None and elapsed - self._logged < self.log_every:
+            return
+        self._logged = elapsed
+        self._write(text + "\n")
 
     def show(self, text: str, *, now: bool = False) -> None:
         """Put `text` on the line (at most every INTERVAL seconds, unless `now`)."""
@@ -89,8 +113,11 @@ class Status:
         try:
             self.stream.write(text)
             self.stream.flush()
-        except (OSError, ValueError):  # the terminal went away: the work goes on without it
+        except (OSError, ValueError) as e:  # the terminal or the log went away: the work goes on
             self.enabled = False
+            self.log_after = None
+            if isinstance(e, BrokenPipeError):
+                abandon(self.stream)
 
     @contextmanager
     def ticking(self, text: Callable[[float], str], every: float = 0.5) -> Iterator[Status]:
@@ -140,6 +167,23 @@ class Status:
         limit = f" of {timeout:g} s" if timeout is not None else ""
         with self.ticking(lambda t: f"waiting for {what}... {seconds(t)}{limit}" if t >= 0.5 else "") as status:
             yield status
+
+
+def abandon(stream: TextIO) -> None:
+    """The reader of `stream` has gone (`llfsm build 2>&1 | head -1`): its file descriptor is
+    pointed at /dev/null, so that later lines go nowhere and the work goes on to its end, its
+    exit status still saying whether it succeeded."""
+    try:
+        fd = stream.fileno()
+    except (AttributeError, ValueError, OSError, io.UnsupportedOperation):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, fd)
+    except (OSError, ValueError):
+        pass
+    finally:
+        os.close(devnull)
 
 
 def seconds(elapsed: float) -> str:

@@ -21,8 +21,9 @@ from importlib.machinery import ModuleSpec, SourceFileLoader
 from . import fingerprint
 from .cachedir import cache_dir, preferred_root
 from .cachedir import problem as cache_problem
-from .machinedir import MACHINE_SUFFIX, machine_dir_of_module
-from .runtime.errors import ErrorReport, passes_through, report_for, source_dir_of
+from .machinedir import MACHINE_SUFFIX
+from .runtime.errors import ErrorReport, passes_through, report_for
+from .runtime.generated import source_dir_of
 from .runtime.machine import Machine
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
@@ -344,7 +345,7 @@ def helper_folders(target: str, module: str) -> list[str]:
     if first is not None:
         folders.append(first)
     if not os.path.isdir(_path_str(target)):  # a built module, or PKG/NAME: not compiled from a folder here
-        machine = machine_dir_of_module(module)
+        machine = source_dir_of(module)
         if machine is not None and os.path.isdir(machine):
             beside = os.path.dirname(os.path.realpath(machine))
             if beside not in folders:

@@ -3,12 +3,15 @@ helper modules it names); nothing is imported from here.
 
 The markers (declared in pyproject.toml, strict): `dds` (Cyclone DDS participants, in a private
 network namespace where they talk across processes), `browser` (Chromium, headless), `interop`
-(real ROS 2 from .venv-ros), `slow` (left out unless asked for: `-m slow`).  A test that uses
-the `netns` fixture talks DDS, so it must carry `dds`: collection stops saying which do not.
+(real ROS 2 from .venv-ros), `slow` (left out unless the `-m` expression names it: `-m slow`,
+`-m "slow or not slow"`; any other `-m`, such as the quick run's `-m "not dds and not browser"`,
+still leaves it out).  A test that uses the `netns` fixture talks DDS, so it must carry `dds`:
+collection stops saying which do not.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 
 import pytest
@@ -40,7 +43,14 @@ def bus() -> Iterator[Bus]:
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """`-m "not dds"` must leave out every test that talks DDS across processes."""
+    """`slow` tests are left out unless `-m` names them (a `-m` on the command line replaces the
+    one of addopts, so addopts cannot do it); `-m "not dds"` must leave out every test that
+    talks DDS across processes."""
+    if not re.search(r"\bslow\b", config.option.markexpr or ""):
+        slow = [item for item in items if item.get_closest_marker("slow")]
+        if slow:
+            config.hook.pytest_deselected(items=slow)
+            items[:] = [item for item in items if not item.get_closest_marker("slow")]
     unmarked = [
         item.nodeid
         for item in items

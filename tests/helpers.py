@@ -3,7 +3,8 @@ command in-process or as a process, the C parts' skip rules, and the checks of g
 that more than one test module makes.  Test modules import from here (`from helpers import ...`),
 never from conftest.py (which holds only fixtures and hooks) nor from one another; other helper
 modules beside this one: strategies.py (hypothesis), samples.py (shipped message classes and
-samples of them), dds_netns.py (the private network namespace of the DDS tests).
+samples of them), dds_netns.py (the private network namespace of the DDS tests), clfsm_writer.py
+(clfsm machine directories, for the tests of `llfsm import`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import pytest
 from click.testing import CliRunner
 
 from llfsm.cli import cli
+from llfsm.runtime.generated import SOURCE_MAP
 from llfsm.templating import CODING_LINE
 
 REPO = Path(__file__).resolve().parent.parent
@@ -220,7 +222,7 @@ def only_expected_statements(tree: ast.Module) -> None:
             continue
         if isinstance(stmt, ast.FunctionDef | ast.ClassDef):
             continue
-        if isinstance(stmt, ast.Assign) and [getattr(t, "id", "") for t in stmt.targets] == ["_LLFSM_SOURCE_MAP"]:
+        if isinstance(stmt, ast.Assign) and [getattr(t, "id", "") for t in stmt.targets] == [SOURCE_MAP]:
             continue
         raise AssertionError(f"unexpected statement at line {stmt.lineno}: {ast.unparse(stmt)[:80]}")
     assert isinstance(tree.body[-1], ast.Assign)

@@ -525,3 +525,31 @@ def test_the_front_end_imports_neither_the_compiler_nor_the_bus() -> None:
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.stdout.strip() == "[]", proc.stderr
+
+
+def test_lf080_lines_left_by_llfsm_import_are_errors_at_their_line(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "imported",
+        {
+            "INITIAL": [("END", "# UNTRANSLATED (why): control_machine_at_index(1, CLStatus) == CLSuspend\nFalse")],
+            "END": None,
+        },
+        {
+            "INITIAL_OnEntry": (
+                "n = 1\nif n:\n    # UNTRANSLATED (unlink): unlink(f);\n    # UNTRANSLATED: g();\n    pass\n"
+            )
+        },
+        variables="n: int = 0\n# UNTRANSLATED (the type T): T t;\nt: object  # a placeholder\n",
+        includes="# a comment that says UNTRANSLATED is fine\n",
+    )
+    assert codes(m) == [
+        ("LF080", "State_INITIAL_OnEntry.py", 3, 5),
+        ("LF080", "State_INITIAL_OnEntry.py", 4, 5),
+        ("LF080", "State_INITIAL_Transition_0.expr", 1, 1),  # and no LF103 for its stand-in `False`
+        ("LF080", "Variables.py", 2, 1),
+    ]
+    d = next(d for d in check_machine(m).diagnostics if d.line == 3)
+    assert d.message == "clfsm code left untranslated (unlink): write `unlink(f);` in Python, then delete this line"
+    r = llfsm("build", m, "-o", tmp_path / "out")
+    assert r.status == 1

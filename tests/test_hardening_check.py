@@ -67,7 +67,7 @@ class TestHeadersCarryNoCode:
         header_ok(source)
         only_expected_statements(ast.parse(source))
         # the path is still there, escaped, and the run-time can read it back
-        from llfsm.runtime.errors import source_dir_of
+        from llfsm.runtime.generated import source_dir_of
 
         mod = out.module
         assert source_dir_of(str(mod)) == os.path.abspath(m)

@@ -12,7 +12,7 @@ from helpers import llfsm
 
 from llfsm.msgs import _dds
 from llfsm.ros2cli import CliError
-from llfsm.ros2cli.interface import message_class, service_class
+from llfsm.ros2cli.lookup import message_class, service_class
 
 
 @pytest.mark.parametrize(

@@ -8,6 +8,7 @@ Each test has a private network namespace (tests/dds_netns.py); every process ha
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -39,7 +40,7 @@ def wait_for_node(ns: NetNamespace, node: str, timeout: float = 40) -> None:
 def test_param_verbs_against_llfsm_turtlesim_and_the_picture_changes(netns: NetNamespace, tmp_path: Path) -> None:
     png = tmp_path / "bg.png"
     run = netns.popen(
-        [sys.executable, "-m", "llfsm", "run", "--transport", "dds", "--node", "turtlesim", "--duration", "12s",
+        [sys.executable, "-m", "llfsm", "run", "--transport", "dds", "--node", "turtlesim", "--duration", "120s",
          "--image", png],
         cwd=REPO,
     )  # fmt: skip
@@ -73,7 +74,8 @@ def test_param_verbs_against_llfsm_turtlesim_and_the_picture_changes(netns: NetN
     assert missing.status == 1 and missing.stderr.startswith("llfsm: Node not found: /nobody")
     bad = llfsm(netns, "param", "load", "/turtlesim", REPO / "README.md")
     assert bad.status == 2 and "README.md" in bad.stderr and "Traceback" not in bad.stderr
-    assert finish(run, 30)[0] == 0
+    run.send_signal(signal.SIGINT)  # done with it: on a loaded machine the verbs above can take a minute
+    assert finish(run, 30)[0] in (0, 130)  # an interrupted run of nodes alone: 130 (issue 27 makes it 0)
     from PIL import Image
 
     assert Image.open(png).convert("RGB").getpixel((2, 2)) == (10, 201, 30)  # the window's background

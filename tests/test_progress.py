@@ -100,5 +100,27 @@ def test_a_dumb_terminal_or_a_file_gets_nothing(monkeypatch) -> None:
     assert term.getvalue() == "a line of the command's own\n"
 
 
+def test_long_work_that_asks_for_a_log_writes_its_line_there_now_and_then(monkeypatch) -> None:
+    """`llfsm verify` in CI: off a terminal, a plain line once the work has run 2 s, then every
+    10 s; on a terminal the same calls draw the status line each time."""
+    monkeypatch.setenv("COLUMNS", "80")
+    monkeypatch.delenv("TERM", raising=False)
+    log = io.StringIO()
+    s = Status(log, log_after=2.0, log_every=10.0)
+    for t in (0.5, 1.9, 2.0, 3.0, 11.9, 12.0, 13.0, 22.5):
+        s.progress(f"at {t}", t)
+    s.clear()
+    assert log.getvalue() == "at 2.0\nat 12.0\nat 22.5\n"
+    quiet = io.StringIO()
+    Status(quiet).progress("work that asked for no log", 60.0)
+    assert quiet.getvalue() == ""
+    term = FakeTerminal()
+    s = Status(term, log_after=2.0)
+    s.progress("at 0.5", 0.5)
+    s.progress("at 1.5", 1.5)
+    s.clear()
+    assert term.getvalue() == "\r\x1b[Kat 0.5\r\x1b[Kat 1.5\r\x1b[K"
+
+
 def test_seconds() -> None:
     assert [seconds(x) for x in (0.4, 7.9, 125)] == ["0 s", "7 s", "2 min 05 s"]

@@ -19,7 +19,8 @@ from llfsm.msgs.geometry_msgs.msg import PoseStamped, Twist
 from llfsm.msgs.std_msgs.msg import Float64MultiArray, String
 from llfsm.msgs.turtlesim.srv import Spawn
 from llfsm.ros2cli import CliError
-from llfsm.ros2cli.interface import known_types, message_class, service_class, show
+from llfsm.ros2cli.interface import known_types, show
+from llfsm.ros2cli.lookup import message_class, service_class
 from llfsm.ros2cli.topic.echo import format_message
 from llfsm.ros2cli.topic.hz import RateMeter, rate_table
 

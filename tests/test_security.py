@@ -85,6 +85,9 @@ HOSTILE_NAMES = [
     "",
     "x" * 10_000,
 ]
+#: Not a hostile name but one no file can carry (a file name is at most 255 bytes): refused because
+#: its transition's guard file cannot exist.
+TOO_LONG = HOSTILE_NAMES[-1]
 
 
 @pytest.mark.parametrize("name", HOSTILE_NAMES)
@@ -93,7 +96,7 @@ def test_hostile_state_names_are_refused(tmp_path: Path, name: str) -> None:
     (m / "machine.yaml").write_text(
         f"states:\n  - name: {_yaml_string(name)}\n    transitions: [A]\n  - name: A\n", encoding="utf-8"
     )
-    refused(m)
+    refused(m, "LF023" if name == TOO_LONG else "LF011")  # missing-guard; invalid-state-name
 
 
 @pytest.mark.parametrize("name", HOSTILE_NAMES)
@@ -108,7 +111,7 @@ def test_hostile_names_in_initial_suspended_and_targets_are_refused(tmp_path: Pa
     else:
         text = f"{key}: {_yaml_string(name)}\n{text}"
     (m / "machine.yaml").write_text(text, encoding="utf-8")
-    refused(m)
+    refused(m, {"initial": "LF021", "suspended": "LF022", "target": "LF020"}[key])  # unknown-initial|suspended|target
 
 
 @pytest.mark.parametrize("dirname", ['m"""x', "m'x", "m x", "m\nx", "m\\x", "m;x", "ｍ", "class"])
@@ -175,41 +178,45 @@ def test_descriptions_never_escape_their_docstrings(description: str) -> None:
         assert " ".join(type(machine).DESCRIPTION.split()) == want
 
 
-VARIABLE_FILES = [
-    'x: int = 1  # """ ) ; import os\n',
-    'x: "str\\"\\"\\"" = \'"""\'\n',
-    'x: str = """\nclass Evil:\n    pass\n"""\n',
-    "x: str = '''\n    def ringlet_A(self):\n        PAYLOAD'''\n",
-    "x: int = (1 +\n2)\n",
-    "x: int = 1 \\\n    + 2\n",
-    "x: dict[\n    str, int\n] = {}\n",
-    'x: str = "\\\n"\n',
-    "x: (lambda: PAYLOAD) = 1\n",
-    "x: PAYLOAD = 2\n",
-    "x: int = 1 if True else \\\n  2\n",
-    'x: str = f"""{1}\n"""\n',
-    "x: object = lambda: PAYLOAD\n",
-    "x: int = 1; PAYLOAD\n",
-    "x: int = (\n\f1)\n",
-    "x: int = 1\rPAYLOAD\n",
-    "x: int = 1\u2028PAYLOAD\n",
-    "x: int = 1\n\fPAYLOAD\n",
-    "x: int\nPAYLOAD\n",
-    "x: int = (yield)\n",
-    "x: int = (self := 1)\n",
+#: Variables.py files, each with the code `check` refuses it with (None: it is accepted).
+VARIABLE_FILES: list[tuple[str, str | None]] = [
+    ('x: int = 1  # """ ) ; import os\n', None),
+    ('x: "str\\"\\"\\"" = \'"""\'\n', None),
+    ('x: str = """\nclass Evil:\n    pass\n"""\n', None),
+    ("x: str = '''\n    def ringlet_A(self):\n        PAYLOAD'''\n", None),
+    ("x: int = (1 +\n2)\n", None),
+    ("x: int = 1 \\\n    + 2\n", None),
+    ("x: dict[\n    str, int\n] = {}\n", None),
+    ('x: str = "\\\n"\n', None),
+    ("x: (lambda: PAYLOAD) = 1\n", None),
+    ("x: PAYLOAD = 2\n", None),
+    ("x: int = 1 if True else \\\n  2\n", None),
+    ('x: str = f"""{1}\n"""\n', None),
+    ("x: object = lambda: PAYLOAD\n", None),
+    ("x: int = 1; PAYLOAD\n", "LF032"),
+    ("x: int = (\n\f1)\n", "LF030"),
+    ("x: int = 1\rPAYLOAD\n", "LF032"),
+    ("x: int = 1\u2028PAYLOAD\n", "LF030"),
+    ("x: int = 1\n\fPAYLOAD\n", "LF030"),
+    ("x: int\nPAYLOAD\n", "LF032"),
+    ("x: int = (yield)\n", "LF036"),
+    ("x: int = (self := 1)\n", "LF013"),
 ]
 
 
-@pytest.mark.parametrize("text", VARIABLE_FILES)
-def test_annotations_and_initialisers_cannot_break_out(tmp_path: Path, text: str) -> None:
-    """Either `check` refuses the file, or loading the machine sets exactly the values Python
-    gives the initialisers, and nothing else runs (annotations are never evaluated)."""
+@pytest.mark.parametrize(("text", "refused_with"), VARIABLE_FILES)
+def test_annotations_and_initialisers_cannot_break_out(tmp_path: Path, text: str, refused_with: str | None) -> None:
+    """Either `check` refuses the file (with the rule that says why), or loading the machine sets
+    exactly the values Python gives the initialisers, and nothing else runs (annotations are
+    never evaluated)."""
     marker = tmp_path / "ran"
     text = text.replace("PAYLOAD", payload(marker))
     m = write_machine(tmp_path, "m", {"A": None}, variables=text)
-    if not check_machine(m).ok:
-        refused(m)
+    if refused_with is not None:
+        refused(m, refused_with)
+        assert not marker.exists()
         return
+    assert check_machine(m).ok
     machine, result = build_load_run(m, tmp_path / "out")
     assert result.reason == "finished"
     assert not marker.exists()
@@ -245,13 +252,12 @@ def test_annotations_and_initialisers_cannot_break_out(tmp_path: Path, text: str
 )
 def test_guards_mean_what_python_says(tmp_path: Path, guard: str) -> None:
     """A guard is wrapped into `if (...):` in the module; it must keep the truth value Python
-    gives the expression (or be refused)."""
+    gives the expression.  Every guard here is one `check` accepts: the wrapping, not `check`,
+    is what is tried."""
     m = write_machine(tmp_path, "m", {"A": [("YES", guard), ("NO", "True")], "YES": None, "NO": None})
     (m / "Variables.py").write_text("x: int = 3\n")
     (m / "State_A_Transition_0.expr").write_text(guard)
-    if not check_machine(m).ok:
-        refused(m)
-        return
+    assert check_machine(m).ok, [d.message for d in check_machine(m).errors]
     machine, result = build_load_run(m, tmp_path / "out")
     expected = "YES" if eval(guard.strip(), {"x": 3}) else "NO"
     assert result.reason == "finished" and machine.STATES[machine._state] == expected

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
-from helpers import write_machine
+from helpers import REPO, write_machine
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc to find the watchdog")
 
@@ -22,13 +22,13 @@ STUCK_LINE = "sum(range(10**14))"  # hours of work inside one C call that never 
 SIGNALS = {"SIGINT": signal.SIGINT, "SIGTERM": signal.SIGTERM}
 
 
-def _spawn(args: list[str], cwd: Path) -> subprocess.Popen[str]:
+def _spawn(args: list[str], cwd: Path, **env: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
         [PY, "-m", "llfsm", *args],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env=dict(os.environ, PYTHONUNBUFFERED="1"),
+        env=dict(os.environ, PYTHONUNBUFFERED="1", **env),
         cwd=cwd,
     )
 
@@ -155,7 +155,9 @@ def test_a_single_signal_ends_a_section_stuck_in_c_soon_after_the_grace(tmp_path
     assert watchdog and _gone_soon(watchdog), "the watchdog outlived the run"
 
 
-def test_a_normal_run_has_a_silent_watchdog_that_ends_with_it(tmp_path: Path) -> None:
+def _run_waiter(tmp_path: Path, **env: str) -> tuple[int | None, str, str, list[int]]:
+    """A run of a machine that waits for a file `stop`, with its watchdog found while it runs,
+    then stopped: (exit status, stdout, stderr, the watchdog's process)."""
     m = write_machine(
         tmp_path,
         "waiter",
@@ -163,7 +165,7 @@ def test_a_normal_run_has_a_silent_watchdog_that_ends_with_it(tmp_path: Path) ->
         {"A_OnEntry": "print('go', flush=True)", "END_OnEntry": "print('done')"},
         includes="import os\n",
     )
-    p = _spawn(["run", str(m)], cwd=tmp_path)
+    p = _spawn(["run", str(m)], cwd=tmp_path, **env)
     try:
         _wait_for_go(p)
         watchdog = _watchdog_of(p)
@@ -172,7 +174,12 @@ def test_a_normal_run_has_a_silent_watchdog_that_ends_with_it(tmp_path: Path) ->
         out, err = _finish(p, timeout=20)
     finally:
         _kill_tree(p.pid)
-    assert p.returncode == 0, err
+    return p.returncode, out, err, watchdog
+
+
+def test_a_normal_run_has_a_silent_watchdog_that_ends_with_it(tmp_path: Path) -> None:
+    status, out, err, watchdog = _run_waiter(tmp_path)
+    assert status == 0, err
     assert (out, err) == ("done\n", "")
     assert _gone_soon(watchdog), "the watchdog outlived the run"
 
@@ -222,3 +229,19 @@ def test_a_second_ctrl_c_in_python_code_is_still_handled_by_the_run_itself(tmp_p
         "    while True:",
     ], err
     assert _gone_soon(watchdog), "the watchdog outlived the run"
+
+
+def test_a_run_and_its_watchdog_write_nothing_into_the_installed_package(tmp_path: Path) -> None:
+    """With PYTHONDONTWRITEBYTECODE=1 (or a read-only install), `llfsm run` leaves the package as
+    it found it: so does its watchdog, whose interpreter (`python -I`) does not read that
+    variable and would otherwise cache its bytecode beside the installed runtime."""
+    import shutil
+
+    root = tmp_path / "site"
+    shutil.copytree(REPO / "llfsm", root / "llfsm", ignore=shutil.ignore_patterns("__pycache__"))
+    before = set((root / "llfsm").rglob("*"))
+    status, _out, err, watchdog = _run_waiter(tmp_path, PYTHONDONTWRITEBYTECODE="1", PYTHONPATH=str(root))
+    assert status == 0, err
+    assert _gone_soon(watchdog), "the watchdog outlived the run"
+    new = sorted(str(p.relative_to(root)) for p in set((root / "llfsm").rglob("*")) - before)
+    assert not new, f"written into the package: {new}"

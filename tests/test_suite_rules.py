@@ -58,3 +58,33 @@ def test_a_c_part_that_is_not_built_skips_unless_it_is_required(
     reason = mark.kwargs["reason"]
     assert "llfsm/bag/_tap.c" in reason
     assert ("off on purpose" in reason) == off
+
+
+@pytest.mark.parametrize(
+    ("marks", "slow_ones"),
+    [
+        (["-m", "not dds and not browser"], False),  # the quick run of docs/architecture.md
+        (["-m", "slow"], True),  # make fuzz
+    ],
+)
+def test_slow_tests_run_only_when_the_mark_expression_names_them(marks: list[str], slow_ones: bool) -> None:
+    """A `-m` on the command line replaces the one of pyproject.toml's addopts: the quick run
+    must still leave the slow tests out (tests/test_fuzz.py has both kinds)."""
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider", *marks, "test_fuzz.py"]
+    r = subprocess.run(cmd, cwd=TESTS, capture_output=True, text=True, timeout=300, check=False)
+    collected = [line for line in r.stdout.splitlines() if "::" in line]
+    assert r.returncode == 0 and collected, r.stdout + r.stderr
+    slow = [line for line in collected if line.split("::")[1].split("[")[0] in _SLOW_FUZZ]
+    assert bool(slow) == slow_ones and (slow_ones or len(collected) > 5), collected
+
+
+#: The slow tests of tests/test_fuzz.py, read from its source (not by importing it).
+_SLOW_FUZZ = {
+    node.name
+    for node in ast.parse((TESTS / "test_fuzz.py").read_text(encoding="utf-8")).body
+    if isinstance(node, ast.FunctionDef)
+    and any(ast.unparse(d).startswith("pytest.mark.slow") for d in node.decorator_list)
+}

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 from helpers import MACHINES, llfsm, write_machine
 
-from llfsm.verify.check import verify
 from llfsm.verify.explorer import Options
+from llfsm.verify.judge import verify
 from llfsm.verify.load import PropertySource, VerifyError, load_arrangement
 
 

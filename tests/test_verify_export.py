@@ -15,9 +15,9 @@ from helpers import MACHINES, llfsm, write_machine
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from llfsm.verify.check import verify
 from llfsm.verify.explorer import Options
 from llfsm.verify.export import promela, smv
+from llfsm.verify.judge import verify
 from llfsm.verify.load import PropertySource, load_arrangement
 
 SPIN = shutil.which("spin")

@@ -7,7 +7,6 @@ machine, and the processes find each other as ROS 2 nodes on one host do.
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import pytest
@@ -170,7 +169,15 @@ def test_llfsm_view_shows_two_runs_their_own_times_the_graph_and_parameters_over
         "run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--node", "turtlesim", "--duration", "60"
     )
     two = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "60")
-    time.sleep(4)  # across processes: the runs' clocks are 4 s ahead of the view's
+    # The runs' clocks must be seconds ahead of the view's: wait until each has run 4 s by its own
+    # clock (its fifth count), however long a loaded machine took to start it.
+    for run in (one, two):
+        assert run.stderr is not None
+        for line in run.stderr:
+            if "'The count is 4'" in line:
+                break
+        else:
+            raise AssertionError(f"a run ended before its fifth count: {finish(run, 5)}")
     view = netns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "60")
     assert view.stderr is not None
     url = ""

@@ -35,9 +35,9 @@ def main() -> None:
         options = _fast_run_options(args)
         # deferred: start-up (a run on the fast path never imports click; other verbs never the run)
         if options is None:
-            from ._click import main as click_main
+            from ._commands import main as click_main
         else:
-            from ._base import run_guarded
+            from ._exits import run_guarded
             from ._run import run
     except KeyboardInterrupt:  # while importing: as llfsm.__main__ does
         sys.exit(130)
@@ -58,7 +58,7 @@ def _fast_run_options(args: list[str]) -> RunOptions | None:
 
 def __getattr__(name: str) -> Any:
     if name == "cli":
-        from ._click import cli  # deferred: start-up (click on first use)
+        from ._commands import cli  # deferred: start-up (click on first use)
 
         return cli
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -10,7 +10,7 @@ from typing import ParamSpec, TypeVar
 import click
 
 from ..ros2cli import SPIN_TIME, TIMEOUT, CliError
-from ._common import fail
+from ._group import fail
 
 P = ParamSpec("P")
 R = TypeVar("R")

@@ -12,7 +12,7 @@ import os
 import sys
 
 from ..session import RunOutcome, Session, SessionError
-from ._base import echo, fail
+from ._exits import echo, fail
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:

@@ -9,7 +9,7 @@ asked for (it is optional: `pip install 'llfsm[web]'`).
 from __future__ import annotations
 
 from ..session import UsageError
-from ._base import echo
+from ._exits import echo
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:

@@ -8,7 +8,7 @@ import time
 import click
 
 from ..bag.errors import BagError
-from ._common import EXIT_ERRORS, cli, fail
+from ._group import EXIT_ERRORS, cli, fail
 
 
 @cli.group()

@@ -13,7 +13,7 @@ import click
 if TYPE_CHECKING:
     from ..compiler.build import BuildOutcome
 
-from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail, progress
+from ._group import EXIT_ERRORS, EXIT_OK, _existing, cli, fail, progress
 
 # -- build -------------------------------------------------------------------------------------
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from .. import __version__
-from ._common import EXIT_ERRORS, EXIT_OK, _existing, cli, fail, write_output
+from ._group import EXIT_ERRORS, EXIT_OK, _existing, cli, fail, write_output
 
 # -- check -------------------------------------------------------------------------------------
 

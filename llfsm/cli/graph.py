@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_ERRORS, cli, fail, write_output
+from ._group import EXIT_ERRORS, cli, fail, write_output
 
 # -- graph, schema -------------------------------------------------------------------------------
 

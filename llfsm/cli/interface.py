@@ -8,7 +8,7 @@ import sys
 import click
 
 from ..ros2cli import CliError
-from ._common import cli
+from ._group import cli
 from ._ros2 import verb
 
 
@@ -27,7 +27,7 @@ def show(type_name: str, all_comments: bool, no_comments: bool) -> None:
     reads TYPE from standard input."""
     # deferred: start-up (the verb loads the messages)
     from ..ros2cli.interface import show as show_text
-    from ..ros2cli.interface import use_working_directory
+    from ..ros2cli.lookup import use_working_directory
 
     if all_comments and no_comments:
         raise CliError("--all-comments and --no-comments exclude each other")
@@ -58,7 +58,7 @@ def list_(only_msgs: bool, only_srvs: bool, only_actions: bool) -> None:
     """List all interface types available."""
     # deferred: start-up (the verb lists the packages)
     from ..ros2cli.interface import list_ as list_text
-    from ..ros2cli.interface import use_working_directory
+    from ..ros2cli.lookup import use_working_directory
 
     use_working_directory()
     click.echo(list_text(kinds=_kinds(only_msgs, only_srvs, only_actions)), nl=False)
@@ -74,7 +74,7 @@ def package(package_name: str, only_msgs: bool, only_srvs: bool, only_actions: b
     """Output a list of available interface types within one package."""
     # deferred: start-up (the verb lists the packages)
     from ..ros2cli.interface import package as package_text
-    from ..ros2cli.interface import use_working_directory
+    from ..ros2cli.lookup import use_working_directory
 
     use_working_directory()
     click.echo(package_text(package_name, kinds=_kinds(only_msgs, only_srvs, only_actions)), nl=False)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_ERRORS, cli, fail
+from ._group import EXIT_ERRORS, cli, fail
 
 # -- new ---------------------------------------------------------------------------------------
 

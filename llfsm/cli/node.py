@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import cli
+from ._group import cli
 from ._ros2 import spin_time_option, timeout_option, verb
 
 

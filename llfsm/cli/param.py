@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import cli
+from ._group import cli
 from ._ros2 import positive, spin_time_option, verb
 
 #: ros2param waits 1 s for the node to show up; llfsm waits as its other verbs do.

@@ -9,7 +9,7 @@ from typing import Any
 
 import click
 
-from ._common import DURATION, cli
+from ._group import DURATION, cli
 from .run_args import CHOICE, COUNT, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
 from .run_args import DURATION as DURATION_KIND
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 import stat
 
-from ._base import duration_ns
+from ._exits import duration_ns
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:

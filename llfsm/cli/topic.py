@@ -6,7 +6,7 @@ from __future__ import annotations
 import click
 
 from ..ros2cli import CliError
-from ._common import cli
+from ._group import cli
 from ._ros2 import positive, spin_time_option, timeout_option, verb
 
 

@@ -7,7 +7,7 @@ import sys
 import click
 
 from .. import __version__
-from ._common import DURATION, cli, fail, progress, write_output
+from ._group import DURATION, cli, fail, write_output
 
 
 @cli.command()
@@ -86,8 +86,8 @@ def verify(
     from ..lang.diagnostics import render as render_diagnostics
     from ..props.kinds import KINDS
     from ..runtime.clock import parse_duration
-    from ..verify.check import verify as run_verification
     from ..verify.explorer import Options
+    from ..verify.judge import verify as run_verification
     from ..verify.load import VERIFY_SUFFIX, PropertySource, VerifyError, load_arrangement, read_verify_file
     from ..verify.memory import parse_size
     from ..verify.report import render
@@ -195,22 +195,20 @@ def verify(
 
 
 class _progress:
-    """A progress line on stderr for explorations that take more than a second."""
+    """The exploration's progress (the explorer reports about every second) on the status line
+    of llfsm.progress: rewritten each second on a terminal; in a log, a line after 2 s, then
+    every 10 s."""
 
     def __init__(self) -> None:
-        self.shown = False
-        self.tty = sys.stderr.isatty()
-        self.last = 0.0
+        # deferred: start-up (every command module is imported when `llfsm` starts)
+        from ..progress import Status
+
+        self.status = Status(log_after=2.0, log_every=10.0)
 
     def __call__(self, explored: int, queue: int, seconds: float) -> None:
-        # on a terminal the line is rewritten each second; in a log, a line after 2 s, then every 10 s
-        if not self.tty and (seconds < 2 or (self.shown and seconds - self.last < 10)):
-            return
-        self.last = seconds
         rate = explored / seconds if seconds else 0
         line = f"llfsm verify: {explored:,} configurations ({rate:,.0f}/s), queue {queue:,}, {seconds:.0f} s"
-        progress(("\r" + line + "\x1b[K") if self.tty else line + "\n")
-        self.shown = True
+        self.status.progress(line, seconds)
 
     def judging(self, name: str, nodes: int, states: int, seconds: float) -> None:
         """An `ltl:` property judged on the explored structure: its product with the automaton."""
@@ -222,5 +220,4 @@ class _progress:
         self.shown = True
 
     def done(self) -> None:
-        if self.shown and self.tty:
-            progress("\r\x1b[K")
+        self.status.clear()

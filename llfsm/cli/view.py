@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import click
 
-from ._base import echo
-from ._common import DURATION, cli
+from ._exits import echo
+from ._group import DURATION, cli
 
 
 @cli.command()

@@ -5,7 +5,8 @@ parsed code, and which names are the machine's; it never reads a machine any oth
 
 - rewrite.py   applies the front end's name edits to user code (`count` -> `self.count`)
 - literals.py  the literals and docstrings the module writes of its own, within 120 columns
-- generate.py  the module source for one checked machine (templates/machine.py.j2)
+- generate.py  the module source for one checked machine (templates/machine.py.j2), in named steps
+- views.py     what the template renders: user code ready to go in, guards, states
 - build.py     incremental, atomic builds into an output folder
 - native.py    `--native`: modules and the runtime compiled with mypyc (docs/native.md)
 

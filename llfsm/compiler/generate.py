@@ -1,8 +1,10 @@
 """Code generation: a checked machine becomes the source of one readable Python module.
 
 The template is templates/machine.py.j2; this module prepares what it renders (user code with
-bare names rewritten, guards, pointers back to the user's files) and verifies the result
-compiles, so that a mistake surfaces at build time rather than at run time.
+bare names rewritten, guards, pointers back to the user's files: llfsm.compiler.views), in
+steps that `compile_machine` names, and verifies the result compiles, so that a mistake
+surfaces at build time rather than at run time.  What the module must hold for the rest of
+llfsm to read it (its header, pointers, source map, ringlet names) is llfsm.runtime.generated.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import re
 import textwrap
 import tokenize
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cache
 
 import jinja2
@@ -25,11 +27,24 @@ from ..lang.diagnostics import Diagnostic, diag
 from ..lang.model import INPUT_TYPES, Code, Machine, State
 from ..lang.parameter_types import parameter_type
 from ..lang.scopes import child_nodes
-from ..runtime.errors import map_line
+from ..runtime.generated import (
+    GENERATED_MARK,
+    POINTER_END,
+    SOURCE_LINE,
+    SOURCE_MAP,
+    enter_ringlet,
+    hook_function,
+    map_line,
+    pointed,
+    source_map_in,
+    source_map_text,
+    steady_ringlet,
+)
 from ..runtime.machine import MACROS
 from ..templating import environment
 from .literals import WIDTH, doc_lines, names_block, py, py_block
-from .rewrite import ALIAS_LINE, apply
+from .rewrite import apply
+from .views import Block, GuardView, StateView, indent_code, lead
 
 #: How a rewritten name that reaches the machine through its alias starts.
 _ALIASED = MACHINE_ALIAS + "."
@@ -37,32 +52,20 @@ _ALIASED = MACHINE_ALIAS + "."
 # -- text helpers ------------------------------------------------------------------------------
 
 
-def _string_continuation_lines(text: str) -> set[int]:
-    """Lines (1-based) that start inside a multi-line string: indenting them would change it."""
-    out: set[int] = set()
-    if '"""' not in text and "'''" not in text and "\\\n" not in text and "\\\r" not in text:
-        return out  # only a triple-quoted string or a backslash-continued one spans lines
-    try:
-        for tok in tokenize.generate_tokens(io.StringIO(text).readline):
-            if (tok.type == tokenize.STRING and tok.end[0] > tok.start[0]) or (
-                tok.type == getattr(tokenize, "FSTRING_MIDDLE", -1) and tok.end[0] > tok.start[0]
-            ):
-                out.update(range(tok.start[0] + 1, tok.end[0] + 1))
-    except (tokenize.TokenError, SyntaxError):
-        pass
-    return out
-
-
-def indent_code(text: str, width: int) -> str:
-    prefix = " " * width
-    keep = _string_continuation_lines(text)
-    lines = text.split("\n")
-    return "\n".join(line if (i + 1 in keep or not line.strip()) else prefix + line for i, line in enumerate(lines))
-
-
 @cache
 def _env() -> jinja2.Environment:
-    return environment(py=py, pyblock=py_block, names=names_block, code=indent_code, pointer=_pointer, lead=_lead)
+    env = environment(
+        py=py,
+        pyblock=py_block,
+        names=names_block,
+        code=indent_code,
+        lead=lead,
+        steady=steady_ringlet,
+        hook=hook_function,
+    )
+    # what the rest of llfsm reads back out of the module (llfsm.runtime.generated)
+    env.globals.update(generated_mark=GENERATED_MARK, source_line=SOURCE_LINE, source_map=SOURCE_MAP)
+    return env
 
 
 def _def_line(name: str, cls: str) -> str:
@@ -110,123 +113,6 @@ def _after_use(tree: ast.AST) -> tuple[bool, bool]:
             if id(node) not in calls:
                 escaped = True
     return used, escaped
-
-
-# -- the view the template renders -------------------------------------------------------------
-
-
-@dataclass
-class Block:
-    """User code ready for the template: rewritten, trimmed, with the pointer to its first line."""
-
-    pointer: str
-    text: str
-    #: The code reaches the machine through `MACHINE_ALIAS` (a method or function of the user's
-    #: binds `self`): the alias is bound on the line before the block's pointer.
-    alias: bool = False
-
-
-@dataclass
-class GuardView:
-    index: int
-    target: int
-    target_name: str
-    pointer: str
-    text: str
-    multiline: bool
-    to_suspend: bool
-    alias: bool = False
-    #: A guard that is a constant: True (truthy) fires at once, False never; None for the rest.
-    #: A constant is written as what it does, not as a dead `if True:` or `if False:` block.
-    constant: bool | None = None
-    file: str = ""
-    #: The state has an OnExit, which the transition runs first.
-    exits: bool = False
-    state: str = ""
-
-    def code(self) -> str:
-        """The guard's lines in a ringlet: its pointer, the test, and the lines that take the
-        transition; a constant as what it does.  Made here, once for both ringlets, rather than
-        by the template: a template macro per guard cost a tenth of a build's time."""
-        if self.constant is None:
-            test = (
-                f"    if ({self.first_line}\n{self.other_lines}\n    ):\n"
-                if self.multiline
-                else f"    if {self.text}:\n"
-            )
-            return f"{_lead(self, 4)}\n{test}{self.fire(8)}"
-        if self.constant:
-            return f"    # {self.file} is always true: the transition fires at once\n{self.fire(4)}"
-        return f"    # {self.file} is always false: the transition never fires\n"
-
-    def fire(self, width: int) -> str:
-        """The lines that take the transition, at `width`."""
-        pad = " " * width
-        lines = [f"self.on_exit_{self.state}()"] if self.exits else []
-        if self.to_suspend:
-            lines.append("self._enter_suspend_state()")
-        else:
-            lines.append(f"self._state = {self.target}  # {self.target_name}")
-            lines.append(f"self._run = _llfsm_enter_{self.target_name}")
-        lines.append(f"return {self.index}")
-        return "".join(f"{pad}{line}\n" for line in lines)
-
-    @property
-    def first_line(self) -> str:
-        return self.text.split("\n", 1)[0]
-
-    @property
-    def other_lines(self) -> str:
-        """Lines after the first, indented under `if (`: kept line for line so run-time errors map
-        to the right line, and indented knowing the whole guard, so a string that spans lines
-        keeps its value."""
-        return indent_code(self.text, 8).split("\n", 1)[1] if "\n" in self.text else ""
-
-
-@dataclass
-class StateView:
-    name: str
-    accepting: bool
-    is_suspend: bool
-    doc: str | None
-    entry: Block | None
-    internal: Block | None
-    exit: Block | None
-    #: The guards the steady ringlet tests, in order, up to a constant true one (what follows
-    #: it never runs, and is not written).
-    guards: list[GuardView] = field(default_factory=list)
-    #: Their lines, as both ringlets write them (made once, here rather than by the template).
-    guards_code: str = ""
-    hooks: list[tuple[str, Block]] = field(default_factory=list)
-    #: OnSuspend / OnResume: functions beside the ringlets, which the ON_SUSPEND / ON_RESUME
-    #: tables name (a class body cannot name its own methods once mypyc compiles it).
-    command_hooks: list[tuple[str, Block]] = field(default_factory=list)
-    #: OnEntry / Internal are inlined into their ringlet unless one binds a local that another
-    #: part of the state (the other section, a guard) also uses; then it gets a method of its
-    #: own, so that the reader sees at once that its locals are its own, as the locals of a
-    #: clfsm section are.
-    entry_method: bool = False
-    internal_method: bool = False
-    #: The entry ringlet records the entry time: only states whose code uses after* need it.
-    stamp: bool = False
-    #: The `def` lines of the two ringlets (spread over lines when a long name needs it), and
-    #: the entry ringlet's docstring.
-    enter_def: str = ""
-    steady_def: str = ""
-    enter_doc: str = ""
-
-    @property
-    def falls_through(self) -> bool:
-        """No guard is constant true: Internal (and an accepting state's finish) can run."""
-        return not any(g.constant for g in self.guards)
-
-    @property
-    def has_on_suspend(self) -> bool:
-        return any(h == "on_suspend" for h, _ in self.command_hooks)
-
-    @property
-    def has_on_resume(self) -> bool:
-        return any(h == "on_resume" for h, _ in self.command_hooks)
 
 
 #: Nodes that give names a scope or bind them otherwise than as a plain `Name` (or, for an
@@ -332,7 +218,7 @@ def _block(
         first += 1
     body = "\n".join(lines[first:]).rstrip()
     alias = any(e.text.startswith(_ALIASED) for e in edits)
-    return Block(pointer=f"{code.file}:{first + 1}", text=body, alias=alias)
+    return Block(code.file, first + 1, body, alias)
 
 
 def _guard_view(
@@ -354,7 +240,7 @@ def _guard_view(
     expr = tree.body[0]
     constant = bool(expr.value.value) if isinstance(expr, ast.Expr) and isinstance(expr.value, ast.Constant) else None
     return GuardView(
-        index, target, target_name, block.pointer, block.text, multiline, to_suspend, block.alias, constant, code.file
+        index, target, target_name, code.file, block.line, block.text, multiline, to_suspend, block.alias, constant
     )
 
 
@@ -396,12 +282,19 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
     (llfsm.machinedir.source_ref), so that the module holds no absolute path."""
     m = checked.machine
     assert m is not None and checked.ok, "compile only machines that check clean"
-    trees = checked.read.trees
-    mvars = [v.name for v in m.variables] + [i.name for i in m.inputs]  # inputs read as variables are
-    names = [s.name for s in m.states]
-    index = {n: i for i, n in enumerate(names)}
-    susp = index[m.suspended]
-    base = name_map(mvars, None, [], MACROS)  # once: per state it would cost states x variables
+    states = _States(m, checked.read.trees)
+    views = [states.view(s) for s in m.states]
+    blocks = _machine_blocks(m, checked.read.trees, states.base)
+    context = _template_context(m, states, views, blocks, fingerprint, source)
+    text = _with_source_map(_env().get_template("machine.py.j2").render(context))
+    if not _pieces_are_safe([blocks.includes, blocks.variables, *blocks.state_variables], views):
+        _verify(text, m)
+    return text
+
+
+def _entry_times(m: Machine, trees: Mapping[str, ast.Module]) -> tuple[bool, set[str]]:
+    """Which states record their entry time: (all of them, because an after* macro may run in
+    any state; else those whose own code uses one)."""
     stamp_all = False
     after_states: set[str] = set()
     for s in m.states:
@@ -417,61 +310,46 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
         tree = trees.get(loaded.file) if loaded is not None else None
         if tree is not None and loaded is not None and "after" in loaded.text and any(_after_use(tree)):
             stamp_all = True
-    walks = _Trees()  # each tree walked once for the rewrite, its names and its locals
-    cls = class_name(m.name)
+    return stamp_all, after_states
 
-    def view(s: State) -> StateView:
-        mapping = state_map(base, s.name, [v.name for v in s.variables])
 
-        def sec(name: str) -> Block | None:
-            code = s.sections.get(name)
-            return _block(code, trees[code.file], mapping, walks=walks) if code is not None else None
+class _States:
+    """What every state's view needs to know of the machine, and the view of each state."""
 
+    def __init__(self, m: Machine, trees: Mapping[str, ast.Module]) -> None:
+        self.trees = trees
+        self.names = [s.name for s in m.states]
+        self.index = {n: i for i, n in enumerate(self.names)}
+        self.suspended = self.index[m.suspended]
+        mvars = [v.name for v in m.variables] + [i.name for i in m.inputs]  # inputs read as variables are
+        self.base = name_map(mvars, None, [], MACROS)  # once: per state it would cost states x variables
+        self.stamp_all, self.after_states = _entry_times(m, trees)
+        self.walks = _Trees()  # each tree walked once for the rewrite, its names and its locals
+        self.cls = class_name(m.name)
+
+    def view(self, s: State) -> StateView:
+        mapping = state_map(self.base, s.name, [v.name for v in s.variables])
         sv = StateView(
             name=s.name,
             accepting=s.accepting,
-            is_suspend=index[s.name] == susp,
+            is_suspend=self.index[s.name] == self.suspended,
             doc=None,
-            entry=sec("OnEntry"),
-            internal=sec("Internal"),
-            exit=sec("OnExit"),
-            stamp=stamp_all or s.name in after_states,
+            entry=self._section(s, "OnEntry", mapping),
+            internal=self._section(s, "Internal", mapping),
+            exit=self._section(s, "OnExit", mapping),
+            stamp=self.stamp_all or s.name in self.after_states,
         )
-        sv.enter_def = _def_line(f"_llfsm_enter_{s.name}", cls)
-        sv.steady_def = _def_line(f"_llfsm_steady_{s.name}", cls)
+        sv.enter_def = _def_line(enter_ringlet(s.name), self.cls)
+        sv.steady_def = _def_line(steady_ringlet(s.name), self.cls)
         if not sv.is_suspend:
             targets = ", ".join(t.target for t in s.transitions) or "none: accepting"
             sv.doc = _wrap_doc(f"Ringlet of {s.name} (transitions to {targets}).", 4)
-            sv.enter_doc = _wrap_doc(f"{s.name} was just entered: OnEntry, then as _llfsm_steady_{s.name}.", 4)
-            for t in s.transitions:
-                assert t.guard is not None
-                g = _guard_view(
-                    t.guard,
-                    trees[t.guard.file],
-                    mapping,
-                    t.index,
-                    index[t.target],
-                    t.target,
-                    index[t.target] == susp,
-                    walks,
-                )
-                g.exits, g.state = sv.exit is not None, s.name
-                sv.guards.append(g)
-                if g.constant:
-                    break  # the transition always fires here: the rest is never evaluated
+            sv.enter_doc = _wrap_doc(f"{s.name} was just entered: OnEntry, then as {steady_ringlet(s.name)}.", 4)
+            self._guards(sv, s, mapping)
         sv.guards_code = "".join(g.code() for g in sv.guards)
         if not sv.falls_through:
             sv.internal = None  # never runs: a guard before it always fires
-        parts = {sec: trees[c.file] for sec, c in s.sections.items() if sec in ("OnEntry", "Internal")}
-        parts.update({f"guard{t.index}": trees[t.guard.file] for t in s.transitions if t.guard is not None})
-        for part in ("OnEntry", "Internal"):
-            if part in parts and not sv.is_suspend:
-                mine = {n for n in walks.own_locals(parts[part]) if n not in mapping}
-                if mine and mine & set().union(*(walks.used(tr) for k, tr in parts.items() if k != part)):
-                    if part == "OnEntry":
-                        sv.entry_method = sv.entry is not None
-                    else:
-                        sv.internal_method = sv.internal is not None
+        self._own_methods(sv, s, mapping)
         if sv.entry_method and sv.entry is not None:
             sv.hooks.append(("on_entry", sv.entry))
         if sv.internal_method and sv.internal is not None:
@@ -479,11 +357,57 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
         if sv.exit is not None:
             sv.hooks.append(("on_exit", sv.exit))
         for hook, secname in (("on_suspend", "OnSuspend"), ("on_resume", "OnResume")):
-            b = sec(secname)
+            b = self._section(s, secname, mapping)
             if b is not None:
                 sv.command_hooks.append((hook, b))
         return sv
 
+    def _section(self, s: State, name: str, mapping: Mapping[str, str]) -> Block | None:
+        code = s.sections.get(name)
+        return _block(code, self.trees[code.file], mapping, walks=self.walks) if code is not None else None
+
+    def _guards(self, sv: StateView, s: State, mapping: Mapping[str, str]) -> None:
+        """The state's guards in priority order, up to the first that is constant true."""
+        for t in s.transitions:
+            assert t.guard is not None
+            target = self.index[t.target]
+            to_suspend = target == self.suspended
+            g = _guard_view(
+                t.guard, self.trees[t.guard.file], mapping, t.index, target, t.target, to_suspend, self.walks
+            )
+            g.exits, g.state = sv.exit is not None, s.name
+            sv.guards.append(g)
+            if g.constant:
+                break  # the transition always fires here: the rest is never evaluated
+
+    def _own_methods(self, sv: StateView, s: State, mapping: Mapping[str, str]) -> None:
+        """Whether OnEntry and Internal get methods of their own: when one binds a local that
+        another part of the state also uses (see StateView.entry_method)."""
+        if sv.is_suspend:
+            return
+        trees, walks = self.trees, self.walks
+        parts = {sec: trees[c.file] for sec, c in s.sections.items() if sec in ("OnEntry", "Internal")}
+        parts.update({f"guard{t.index}": trees[t.guard.file] for t in s.transitions if t.guard is not None})
+        for part in ("OnEntry", "Internal"):
+            if part in parts:
+                mine = {n for n in walks.own_locals(parts[part]) if n not in mapping}
+                if mine and mine & set().union(*(walks.used(tr) for k, tr in parts.items() if k != part)):
+                    if part == "OnEntry":
+                        sv.entry_method = sv.entry is not None
+                    else:
+                        sv.internal_method = sv.internal is not None
+
+
+@dataclass
+class _MachineBlocks:
+    """The machine's own user code: Includes.py, Variables.py and the states' Variables.py."""
+
+    includes: Block | None
+    variables: Block | None
+    state_variables: list[Block]
+
+
+def _machine_blocks(m: Machine, trees: Mapping[str, ast.Module], base: Mapping[str, str]) -> _MachineBlocks:
     includes = None
     if m.includes is not None and trees.get("Includes.py") is not None:
         includes = _block(m.includes, trees["Includes.py"], {})
@@ -498,15 +422,21 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
             b = _variables_block(declared, trees[declared.file], state_map(base, s.name, svars))
             if b is not None:
                 state_variables.append(b)
+    return _MachineBlocks(includes, variables, state_variables)
 
-    views = [view(s) for s in m.states]
+
+def _template_context(
+    m: Machine, states: _States, views: list[StateView], blocks: _MachineBlocks, fingerprint: str, source: str
+) -> dict[str, object]:
+    """What templates/machine.py.j2 is rendered with."""
+    names, index, susp = states.names, states.index, states.suspended
     accepting = tuple(i for i, s in enumerate(m.states) if s.accepting and i != susp)
-    ctx = {
+    return {
         "version": __version__,
         "fingerprint": fingerprint,
         "m": {
             "name": m.name,
-            "class_name": cls,
+            "class_name": states.cls,
             "docstring": doc_lines(f"{m.name}: {m.description}" if m.description else f"The machine {m.name}.", 0),
             "class_doc": doc_lines(m.description or f"The machine {m.name}.", 4),
             "state_names": tuple(names),
@@ -525,11 +455,11 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
             # machine.yaml's `parameters:`: (variable, rclpy type name) for llfsm.ros.control
             "parameters": _parameters(m),
             "variable_types": tuple((v.name, " ".join(v.annotation.split())) for v in m.variables),
-            "enter": [f"_llfsm_enter_{v.name}" for v in views],
-            "steady": [f"_llfsm_steady_{v.name}" for v in views],
-            "includes": includes,
-            "variables": variables,
-            "state_variables": state_variables,
+            "enter": [enter_ringlet(v.name) for v in views],
+            "steady": [steady_ringlet(v.name) for v in views],
+            "includes": blocks.includes,
+            "variables": blocks.variables,
+            "state_variables": blocks.state_variables,
             "states": views,
             "slots": tuple(
                 [v.name for v in m.variables]
@@ -537,14 +467,10 @@ def compile_machine(checked: MachineCheck, fingerprint: str, source: str) -> str
                 + [i.name for i in m.inputs]
             ),
             "inputs": input_entries(m),
-            "on_suspend": [f"_llfsm_on_suspend_{v.name}" if v.has_on_suspend else "None" for v in views],
-            "on_resume": [f"_llfsm_on_resume_{v.name}" if v.has_on_resume else "None" for v in views],
+            "on_suspend": [hook_function("on_suspend", v.name) if v.has_on_suspend else "None" for v in views],
+            "on_resume": [hook_function("on_resume", v.name) if v.has_on_resume else "None" for v in views],
         },
     }
-    source = _with_source_map(_env().get_template("machine.py.j2").render(ctx))
-    if not _pieces_are_safe([includes, variables, *state_variables], views):
-        _verify(source, m)
-    return source
 
 
 def _parameters(m: Machine) -> tuple[tuple[str, str], ...]:
@@ -590,35 +516,16 @@ def _pieces_are_safe(blocks: list[Block | None], views: list[StateView]) -> bool
     return not any(risk in t for t in texts for risk in _ASSEMBLY_RISKS) and not any(_FSTRING.search(t) for t in texts)
 
 
-POINTER_MARK = "\0"  # ends a pointer line while rendering; the reader refuses NUL in user files
-
-
-def _pointer(where: str) -> str:
-    return f"# {where}{POINTER_MARK}"
-
-
-def _lead(block: Block | GuardView, width: int) -> str:
-    """The lines before a block of user code, at its indentation: its pointer, and first the
-    alias of the machine when the block needs it.  The alias line comes before the pointer so
-    that the code still follows its pointer line for line; it is written only for a block in
-    which the user's own `self` hides the machine's, so other modules do not change at all."""
-    pad = " " * width
-    alias = f"{pad}{ALIAS_LINE}\n" if block.alias else ""
-    return f"{alias}{pad}{_pointer(block.pointer)}"
-
-
 def _with_source_map(rendered: str) -> str:
     """Replace the pointer marks with the module's source map: only lines the template wrote
     count as pointers, never a user's comment that happens to look like one."""
     lines = rendered.split("\n")
     entries = []
     for i, line in enumerate(lines):
-        if line.endswith(POINTER_MARK):
-            lines[i] = line[: -len(POINTER_MARK)]
-            file, _, src = line.strip()[2:-1].rpartition(":")
-            entries.append((i + 1, file, int(src)))
-    body = "".join(f"\n    {e!r}," for e in entries)
-    return "\n".join(lines).replace("__SOURCE_MAP__", f"({body}\n)" if entries else "()")
+        if line.endswith(POINTER_END):
+            lines[i] = line[: -len(POINTER_END)]
+            entries.append((i + 1, *pointed(lines[i])))
+    return "\n".join(lines).replace("__SOURCE_MAP__", source_map_text(tuple(entries)))
 
 
 def _verify(source: str, m: Machine) -> None:
@@ -626,7 +533,6 @@ def _verify(source: str, m: Machine) -> None:
     try:
         compile(source, f"<{m.name}>", "exec", dont_inherit=True)
     except SyntaxError as e:
-        source_map = ast.literal_eval(source[source.index("_LLFSM_SOURCE_MAP = ") :].split("=", 1)[1])
-        mapped = map_line("", e.lineno or 1, source_map)
+        mapped = map_line("", e.lineno or 1, source_map_in(source))
         file, line = mapped if mapped else ("machine.yaml", 1)
         raise CompileError([diag("LF030", m.path / file, line, 1, f"cannot be compiled: {e.msg}")]) from None

@@ -19,7 +19,6 @@ the run in a fresh process.
 
 from __future__ import annotations
 
-import ast
 import contextlib
 import fcntl
 import hashlib
@@ -35,7 +34,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..machinedir import source_ref
-from ..runtime.errors import _display, map_line, source_dir_of
+from ..runtime.errors import _display
+from ..runtime.generated import HEADER_LINES, SOURCE_LINE, map_line, source_dir_of, source_map_in
 from ..templating import comment_text
 
 #: The runtime modules a native build compiles: everything a round touches.
@@ -43,8 +43,8 @@ RUNTIME_MODULES = ("machine", "scheduler", "clock", "context")
 #: Environment variable naming the native build a process runs with.
 ENV = "LLFSM_NATIVE"
 MANIFEST = "manifest.json"
-#: How a generated module's header names its machine folder (runtime.errors.SOURCE_PATTERN).
-SOURCE_KEY = b"# Source: "
+#: How a generated module's header names its machine folder.
+SOURCE_KEY = SOURCE_LINE.encode("ascii")
 
 _ERROR = re.compile(r"^(?P<file>[^:\n]+):(?P<line>\d+):(?:\d+:)? error: (?P<msg>.*)$", re.M)
 
@@ -218,7 +218,7 @@ def _rebased(module: Path, folder: Path) -> bytes:
     if machine is None:
         return data
     lines = data.split(b"\n")
-    for i, line in enumerate(lines[:5]):
+    for i, line in enumerate(lines[:HEADER_LINES]):
         if line.startswith(SOURCE_KEY):
             lines[i] = SOURCE_KEY + comment_text(source_ref(machine, folder)).encode("ascii")
             break
@@ -237,12 +237,7 @@ def _run_mypyc(files: list[Path], folder: Path, mypy_cache: Path) -> subprocess.
 def _user_location(module: Path, line: int) -> str:
     """`file:line` in the user's machine for a line of a generated module (the module's own
     line when it is not user code)."""
-    text = module.read_text(encoding="utf-8")
-    try:
-        source_map = ast.literal_eval(text[text.index("_LLFSM_SOURCE_MAP = ") :].split("=", 1)[1])
-    except (ValueError, SyntaxError):
-        source_map = ()
-    mapped = map_line(str(module), line, source_map)
+    mapped = map_line(str(module), line, source_map_in(module.read_text(encoding="utf-8")))
     src = source_dir_of(str(module))
     if mapped is None or src is None:
         return f"{module}:{line}"

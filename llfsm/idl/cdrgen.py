@@ -16,7 +16,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable
 
-from .layout import Call, indented, layout
+from .codeformat import Call, indented, layout
 from .spec import FieldType, MessageSpec
 
 Lookup = Callable[[str], MessageSpec]

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from .cdrgen import Alignment, Lookup, Module, Reader, Writer
-from .layout import Call, indented, layout, str_literal
+from .codeformat import Call, indented, layout, str_literal
 from .spec import FieldType, MessageSpec, PackageSpec, ServiceSpec
 from .typehash import EMPTY_MEMBER, action_spec, service_specs, type_hash
 

@@ -16,7 +16,7 @@ import jinja2
 
 from ..templating import environment
 from . import ddsgen, pygen
-from .layout import literal
+from .codeformat import literal
 from .spec import MessageSpec, PackageSpec
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"

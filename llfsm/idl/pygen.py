@@ -5,7 +5,7 @@ docs/actions.md).
 Each field is a property whose setter takes a fast path inline (`value if value.__class__ is
 float else _m.check_float64(...)`) and calls the checks of llfsm.msgs._message only for values
 to convert or refuse; `_copy()` is a field-by-field deep copy the bus takes at publish time.
-The module is laid out by llfsm.idl.layout and written through the template msgs.py.j2.
+The module is laid out by llfsm.idl.codeformat and written through the template msgs.py.j2.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ..msgs._message import INT_RANGES
-from .layout import Call, assign, bracketed, conditional, literal, str_literal
+from .codeformat import Call, assign, bracketed, conditional, literal, str_literal
 from .spec import FLOATS, STRINGS, FieldSpec, FieldType, MessageSpec, PackageSpec
 
 if TYPE_CHECKING:

@@ -57,8 +57,9 @@ C_FUNCTIONS = {
     "RCLCPP_ERROR": "`node.get_logger().error(...)`",
 }
 
-#: C++ type names and the Python annotation a variables file takes for them.
-_TYPES = {
+#: C++ type names and the Python annotation a variables file takes for them (also what
+#: `llfsm import` declares them as: llfsm.importer.kinds).
+C_TYPES = {
     "int": "int",
     "long": "int",
     "short": "int",
@@ -148,7 +149,7 @@ def _declaration(line: str, code: str, file: str) -> str | None:
     m = _DECLARATION.match(code)
     if m is not None:
         ctype = m["type"]
-        annotation = "int" if re.fullmatch(r"u?int(?:8|16|32|64)_t", ctype) else _TYPES[ctype]
+        annotation = "int" if re.fullmatch(r"u?int(?:8|16|32|64)_t", ctype) else C_TYPES[ctype]
         value = _python_value(line[m.start("value") : m.end("value")]) if m["value"] is not None else None
     else:
         m = _UNSIGNED_ALONE.match(code)

@@ -33,7 +33,8 @@ def _r(code: str, sev: Severity, name: str, summary: str) -> Rule:
 
 E, W = Severity.ERROR, Severity.WARNING
 
-#: Every rule llfsm checks.  docs/rules.md is generated from (and tested against) this table.
+#: Every rule llfsm checks.  docs/rules.md is written by hand, a section per rule of this table
+#: (`### LFnnn name`); tests/test_check.py fails on a rule it does not document.
 RULES: dict[str, Rule] = {
     r.code: r
     for r in [
@@ -94,6 +95,12 @@ RULES: dict[str, Rule] = {
             "A variable in `parameters:` is not annotated bool, int, float, str or list[...] of one of them.",
         ),
         _r("LF062", E, "duplicate-parameter", "`parameters:` names a variable twice."),
+        _r(
+            "LF080",
+            E,
+            "untranslated-code",
+            "A line of clfsm C++ that `llfsm import` left for a person to write in Python.",
+        ),
         _r("LF101", W, "orphan-file", "A code file belongs to a state or transition that does not exist."),
         _r("LF102", W, "unreachable-state", "No path of transitions leads from the initial state to this state."),
         _r("LF103", W, "guard-always-false", "A guard is the constant False: the transition never fires."),

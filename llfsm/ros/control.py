@@ -56,7 +56,7 @@ def enable(ctx: RunContext) -> None:
     """Put the run's machines on the graph as soon as its bus is initialised (now, if it is).
 
     Call once the Arrangement exists (it registers itself in `ctx.arrangement`)."""
-    arr = ctx.arrangement
+    arr = cast("Arrangement | None", ctx.arrangement)  # held by its port, below the scheduler
     if arr is None or ctx.machine_graph is not None:
         return
     bus = ctx.bus

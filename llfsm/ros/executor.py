@@ -84,6 +84,9 @@ class Executor:
         self.shut = False
         self.timers: list[tuple[int, int, TimerEntry]] = []  # heap of (due ns, sequence, timer)
         self.ready: deque[Work] = deque()  # work items with a _run() method
+        #: Work that runs once the turn's other work is done (queue_last): what many items of one
+        #: turn change, said once (an action server's status array after a cancel of all goals).
+        self.last: list[Work] = []
         self._seq = itertools.count()
 
     def call_soon_threadsafe(self, fn: Callable[[], object]) -> None:
@@ -110,12 +113,33 @@ class Executor:
         self.ready.append(work)
         self.ctx.wake = 0  # attention: the scheduler spins the executor after this round
 
+    def queue_last(self, work: Work) -> None:
+        """Run `work` at the end of the executor's turn, after the work queued before it and
+        the work that work queues for this turn: the caller queues it once per change it
+        coalesces (a flag of its own says whether it is queued already)."""
+        self.last.append(work)
+        self.ctx.wake = 0
+
+    def _run_last(self) -> None:
+        while self.last:
+            last, self.last = self.last, []
+            for work in last:
+                work._run()
+
+    def _run_ready(self) -> None:
+        """The oldest queued item, then what it left for the end of the turn."""
+        self.ready.popleft()._run()
+        if self.last:
+            self._run_last()
+
     def next_timer_due(self) -> int | None:
         while self.timers and self.timers[0][2]._cancelled:
             heapq.heappop(self.timers)
         return self.timers[0][0] if self.timers else None
 
-    def _fire_due_timers(self, now: int) -> bool:
+    def _fire_due_timers(self, now: int, *, in_turn: bool = False) -> bool:
+        """Call the timers due at `now`; then, unless a turn of spin_some goes on after them,
+        what they left for the end of the turn."""
         timers = self.timers
         fired = False
         sim = self.clock.kind == "sim"
@@ -131,19 +155,23 @@ class Executor:
             self.ctx.wake_at(nxt)
             fired = True
             timer._call()
+        if self.last and not in_turn:
+            self._run_last()
         return fired
 
     # -- spinning ------------------------------------------------------------------------------
     def spin_some(self) -> None:
         """Between rounds: what arrived from other processes, due timers, then the work queued
-        before this call (first in, first out)."""
+        before this call (first in, first out), then what all of it left for the turn's end."""
         if self._poll is not None:
             self._poll(False)
         if self.timers and self.timers[0][0] <= self.clock.now:
-            self._fire_due_timers(self.clock.now)
+            self._fire_due_timers(self.clock.now, in_turn=True)
         ready = self.ready
         for _ in range(len(ready)):
             ready.popleft()._run()
+        if self.last:
+            self._run_last()
         self._rearm()
 
     def spin_control(self, answers: Callable[[ServiceView], bool]) -> None:
@@ -192,7 +220,7 @@ class Executor:
         if self.timers and self.timers[0][0] <= now:
             return self._fire_due_timers(now)
         if self.ready:
-            self.ready.popleft()._run()
+            self._run_ready()
             return True
         if timeout_ns <= 0 or came:
             return came  # something came in (a PULL message, a match): the caller looks first
@@ -204,7 +232,7 @@ class Executor:
             if self.timers and self.timers[0][0] <= self.clock.now:
                 return self._fire_due_timers(self.clock.now)
             if self.ready:
-                self.ready.popleft()._run()
+                self._run_ready()
                 return True
             return False
         if due is None or due > deadline:
@@ -235,7 +263,7 @@ class Executor:
                 self._fire_due_timers(self.clock.now)
                 continue
             if self.ready:
-                self.ready.popleft()._run()
+                self._run_ready()
                 continue
             due = self.next_timer_due()
             if remote is not None:

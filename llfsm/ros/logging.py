@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..msgs.builtin_interfaces.msg import Time
 from ..msgs.rcl_interfaces.msg import Log
+from ..runtime.generated import FUNCTION_PREFIX, map_line, source_map_of
 
 if TYPE_CHECKING:
     from types import FrameType
@@ -129,15 +130,13 @@ def _caller(frame: FrameType | None) -> tuple[str, str, int]:
     if frame is None:
         return "", "", 0
     code = frame.f_code
-    source_map = frame.f_globals.get("_LLFSM_SOURCE_MAP")
+    source_map = source_map_of(frame.f_globals)
     if source_map:
-        from ..runtime.errors import map_line  # deferred: only a machine's log maps its line
-
         mapped = map_line(code.co_filename, frame.f_lineno, source_map)
         if mapped is not None:
             # a ringlet's own function (_llfsm_enter_S) means nothing to the user: the section does
             function = code.co_name
-            if function.startswith("_llfsm") and mapped[0].startswith("State_"):
+            if function.startswith(FUNCTION_PREFIX) and mapped[0].startswith("State_"):
                 function = mapped[0].removeprefix("State_").rsplit(".", 1)[0]
             return mapped[0], function, mapped[1]
     return code.co_filename, code.co_name, frame.f_lineno

@@ -15,6 +15,20 @@ from ..msgs.rcl_interfaces.msg import ParameterType, ParameterValue
 PARAMETER_SEPARATOR_STRING = "."
 #: `ListParameters.Request.DEPTH_RECURSIVE`.
 DEPTH_RECURSIVE = 0
+#: ros2param's names of the types: what `ros2 param describe` prints, what `--param-type` takes
+#: (`llfsm param`, the web view's parameters).
+TYPE_NAMES = {
+    ParameterType.PARAMETER_BOOL: "boolean",
+    ParameterType.PARAMETER_INTEGER: "integer",
+    ParameterType.PARAMETER_DOUBLE: "double",
+    ParameterType.PARAMETER_STRING: "string",
+    ParameterType.PARAMETER_BYTE_ARRAY: "byte array",
+    ParameterType.PARAMETER_BOOL_ARRAY: "boolean array",
+    ParameterType.PARAMETER_INTEGER_ARRAY: "integer array",
+    ParameterType.PARAMETER_DOUBLE_ARRAY: "double array",
+    ParameterType.PARAMETER_STRING_ARRAY: "string array",
+    ParameterType.PARAMETER_NOT_SET: "not set",
+}
 
 
 # -- exceptions, with rclpy's classes and texts ---------------------------------------------------

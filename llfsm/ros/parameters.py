@@ -1,5 +1,5 @@
-"""Node parameters, as `rclpy.parameter`, `rclpy.exceptions` and the parameter half of
-`rclpy.node.Node`: what a node declares, how a set is checked, and the events it publishes.
+"""A node's parameters, as the parameter half of `rclpy.node.Node`: what a node declares, how a
+set is checked, and the events it publishes.
 
     node.declare_parameter("gain", 1.5, ParameterDescriptor(description="P gain"))
     node.get_parameter("gain").value                      # 1.5, or what -p / --params-file said
@@ -14,10 +14,11 @@ reads in `llfsm param set` is what `ros2 param set` prints for an rclpy node.  T
 the run (`llfsm run -p`, `--params-file`; llfsm/ros/parameter_files.py) are read at declare
 time, as rclpy reads its overrides.
 
-`Parameter` and the exceptions are llfsm/ros/parameter.py (rclpy.parameter), named here too.
-`ParameterHost` holds a node's parameters and is a base of `llfsm.ros.node.Node`, so this module
-keeps the whole behaviour in one place; the services that serve it to other processes (`ros2
-param`, `llfsm param`) are llfsm/ros/parameter_service.py.  See docs/parameters.md.
+`Parameter` and the exceptions are llfsm/ros/parameter.py (rclpy.parameter, rclpy.exceptions),
+also importable from here, where they were first.  `ParameterHost` holds a node's parameters and
+is a base of `llfsm.ros.node.Node`, so this module keeps the whole behaviour in one place; the
+services that serve it to other processes (`ros2 param`, `llfsm param`) are
+llfsm/ros/parameter_service.py.  See docs/parameters.md.
 """
 
 from __future__ import annotations

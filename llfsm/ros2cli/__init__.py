@@ -9,9 +9,7 @@ name):
 - `node`: `list`, `info`.
 - `service`: `list`, `type`, `find`, `call`.
 - `action`: `list`, `info`, `send_goal` (docs/actions.md).
-- `interface`: `show`, `list`, `package`, and TYPE strings (`pkg/msg/Name`, `pkg/Name`) to
-  llfsm's classes, with a "did you mean" for near misses (llfsm/msgs/_lookup.py, which the web
-  view reads TYPEs through too), as the verbs' usage errors.  Offline.
+- `interface`: `show`, `list`, `package`.  Offline.
 
 What the groups share:
 
@@ -21,6 +19,11 @@ What the groups share:
   a hidden node of llfsm's bus for the verbs that talk.  cyclonedds is optional and heavy:
   only here and in the verbs it is imported, inside functions (`llfsm --help` never loads it).
 - `arguments`: topic and service names, VALUES (YAML as `ros2 topic pub` takes it).
+- `lookup`: TYPE strings (`pkg/msg/Name`, `pkg/Name`) to llfsm's classes, as the verbs' usage
+  errors, and the working directory on the interface search path.
+
+The groups never import each other (the `verb-groups` contract of pyproject.toml): what two of
+them need is one of these.
 
 The close names the graph has, for the lines that say something was not found, are
 llfsm.suggest's.
@@ -30,7 +33,7 @@ Adding a verb (as `service type` was): write `def type_(service: str, *, timeout
 and returning the text `ros2` prints (or, for a verb that streams, writing to `out`); check
 the user's input (names, TYPE, VALUES) before the domain is joined.  Then add its click
 command to llfsm/cli/service.py (a new group: a new llfsm/cli/ module, registered in
-llfsm/cli/_click.py), calling the function and echoing its text; docs/cli.md lists the verbs.
+llfsm/cli/_commands.py), calling the function and echoing its text; docs/cli.md lists the verbs.
 
 Errors the user causes are `CliError(message, status)`: the command prints the one line and
 exits with the status (2 for bad input, NOT_FOUND (1) for nothing found).

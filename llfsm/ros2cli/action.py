@@ -23,7 +23,7 @@ from . import NOT_FOUND, SPIN_TIME, TIMEOUT, CliError
 from .arguments import full_name, parse_values
 from .discovery import discovered, where
 from .endpoints import hidden_node
-from .interface import action_class, use_working_directory
+from .lookup import action_class, use_working_directory
 
 #: How long `send_goal` waits for the server to answer a cancel request after Ctrl-C.
 CANCEL_TIMEOUT = 5.0

@@ -1,82 +1,26 @@
-"""`interface show`, and interface types by name for the verbs: `pkg/msg/Name` (or `pkg/Name`,
-as `ros2` accepts) to llfsm's message, service and action classes, a mistake being the verbs' one-line
-usage error.  The lookup itself is llfsm/msgs/_lookup.py, which the web view reads TYPEs
-through too (a layer below both).
+"""`interface show`, `list` and `package`: the definitions of the interface types llfsm can
+import.  A TYPE string to its class, for every verb group, is llfsm.ros2cli.lookup.
 
 Built-in packages are the generated modules under llfsm/msgs/; their definitions are the files
 in llfsm/msgs/_interfaces/ they are generated from (ROS 2's own, with their comments).  A user's
 packages are found as `llfsm run` finds them: the interface search path of llfsm.msgs, to which
-the commands add the working directory and its parents (where a machine's packages sit).
+the commands add the working directory and its parents (where a machine's packages sit:
+`lookup.use_working_directory`).
 """
 
 from __future__ import annotations
 
 import difflib
-import os
-from collections.abc import Callable
 from pathlib import Path
-from typing import TypeVar
 
 from ..interface_path import INTERFACE_KINDS
-from ..msgs import Message, Service, _lookup, add_search_path, find_package
-from ..msgs._lookup import CLOSE, KINDS, TypeNameError, builtin_packages, known_types, packages, types_of
+from ..msgs import _lookup, find_package
+from ..msgs._lookup import CLOSE, KINDS, builtin_packages, known_types, packages, types_of
 from ..msgs._lookup import DEFINITIONS as _DEFINITIONS
-from ..msgs._message import Action
 from . import NOT_FOUND, CliError
+from .lookup import split_type
 
-__all__ = [
-    "KINDS",
-    "action_class",
-    "definition_file",
-    "known_types",
-    "list_",
-    "message_class",
-    "package",
-    "service_class",
-    "show",
-    "split_type",
-    "use_working_directory",
-]
-
-_T = TypeVar("_T")
-
-
-def use_working_directory(cwd: str | os.PathLike[str] | None = None) -> None:
-    """Search the working directory and its three parents for interface packages, as `llfsm
-    run` searches the folders above its machines."""
-    here = Path(os.path.realpath(cwd or os.getcwd()))
-    for folder in [here, *list(here.parents)[:3]]:
-        add_search_path(folder)
-
-
-def _as_usage_error(lookup: Callable[..., _T], *args: str) -> _T:
-    """The lookup's answer, or its one-line TypeNameError as the verbs' usage error (status 2)."""
-    try:
-        return lookup(*args)
-    except TypeNameError as e:
-        raise CliError(str(e)) from None
-
-
-def split_type(text: str, kind: str) -> tuple[str, str, str]:
-    """("turtlesim", "srv", "Spawn") from "turtlesim/srv/Spawn" or "turtlesim/Spawn"; `kind`
-    is what a two-part name means.  Anything else is a usage error."""
-    return _as_usage_error(_lookup.split_type, text, kind)
-
-
-def message_class(text: str) -> type[Message]:
-    """The message class that TYPE names (`std_msgs/msg/String`, `std_msgs/String`)."""
-    return _as_usage_error(_lookup.message_class, text)
-
-
-def service_class(text: str) -> type[Service]:
-    """The service class that TYPE names (`turtlesim/srv/Spawn`, `turtlesim/Spawn`)."""
-    return _as_usage_error(_lookup.service_class, text)
-
-
-def action_class(text: str) -> type[Action]:
-    """The action class that TYPE names (`turtlesim/action/RotateAbsolute`)."""
-    return _as_usage_error(_lookup.action_class, text)
-
+__all__ = ["KINDS", "definition_file", "known_types", "list_", "package", "show"]
 
 # -- ros2 interface list, package -----------------------------------------------------------------
 

@@ -22,6 +22,7 @@ from ..msgs.rcl_interfaces.srv import DescribeParameters, GetParameters, ListPar
 from ..ros import FutureReturnCode, spin_until_future_complete
 from ..ros.names import InvalidNameError, normalise_namespace, validate_node_name
 from ..ros.node import Node
+from ..ros.parameter import TYPE_NAMES
 from ..ros.parameter_files import ParameterTextError, guess_value, node_pattern, read_params_file
 from ..ros.parameter_files import dump as dump_yaml
 from ..ros.parameters import Parameter, parameter_value_to_python
@@ -30,19 +31,6 @@ from . import NOT_FOUND, SPIN_TIME, TIMEOUT, CliError
 from .discovery import where
 from .endpoints import hidden_node
 
-#: ros2param's names of the types (`--param-type`, `describe`).
-TYPE_NAMES = {
-    ParameterType.PARAMETER_BOOL: "boolean",
-    ParameterType.PARAMETER_INTEGER: "integer",
-    ParameterType.PARAMETER_DOUBLE: "double",
-    ParameterType.PARAMETER_STRING: "string",
-    ParameterType.PARAMETER_BYTE_ARRAY: "byte array",
-    ParameterType.PARAMETER_BOOL_ARRAY: "boolean array",
-    ParameterType.PARAMETER_INTEGER_ARRAY: "integer array",
-    ParameterType.PARAMETER_DOUBLE_ARRAY: "double array",
-    ParameterType.PARAMETER_STRING_ARRAY: "string array",
-    ParameterType.PARAMETER_NOT_SET: "not set",
-}
 #: `ros2 param get`'s words before a value of each type.
 LABELS = {
     ParameterType.PARAMETER_BOOL: "Boolean value is:",

@@ -19,7 +19,7 @@ from . import NOT_FOUND, SPIN_TIME, TIMEOUT, CliError
 from .arguments import full_name, parse_values, stamp
 from .discovery import discovered, open_graph, where
 from .endpoints import hidden_node
-from .interface import service_class, split_type, use_working_directory
+from .lookup import service_class, split_type, use_working_directory
 
 
 def list_(

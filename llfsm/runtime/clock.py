@@ -1,5 +1,8 @@
 """Run clocks.  Time is integer nanoseconds since the start of the run, so that timer
-comparisons are exact and a simulated run is reproducible byte for byte."""
+comparisons are exact and a simulated run is reproducible byte for byte.
+
+The bottom of the runtime: it imports nothing of it (docs/architecture.md, "runtime/").
+"""
 
 from __future__ import annotations
 
@@ -8,8 +11,6 @@ import time
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from collections.abc import Callable
-
-    from .context import RunContext
 
 
 def parse_duration(text: str) -> int:
@@ -54,8 +55,10 @@ class SimClock(Clock):
             raise ValueError("the sim clock needs a period > 0")
         self.now = 0
         self.period = period_ns
-        #: The run context using this clock (RunContext sets it): told when the time jumps.
-        self.context: RunContext | None = None
+        #: Called when a wait moves the time forward (`sleep_until`): the run context using this
+        #: clock sets it, to raise the scheduler's attention (the scheduler keeps the time in a
+        #: local during rounds).
+        self.on_jump: Callable[[], None] | None = None
 
     def advance(self, fired: bool) -> None:
         self.now += self.period
@@ -63,8 +66,8 @@ class SimClock(Clock):
     def sleep_until(self, t: int) -> None:
         if t > self.now:
             self.now = t
-            if self.context is not None:
-                self.context.wake = 0  # the scheduler keeps the time in a local during rounds
+            if self.on_jump is not None:
+                self.on_jump()
 
 
 class WallClock(Clock):

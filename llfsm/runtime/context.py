@@ -18,8 +18,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from typing import Any
 
-    from .protocols import RunBus, RunTransport
-    from .scheduler import Arrangement
+    from .protocols import ArrangementPort, RunBus, RunTransport
     from .trace import Tracer
 
 
@@ -31,7 +30,7 @@ class RunContext:
     def __init__(self, clock: Clock | None = None) -> None:
         self.clock: Clock = clock if clock is not None else WallClock()
         if isinstance(self.clock, SimClock):
-            self.clock.context = self  # a jump of the sim clock (a spin call) raises attention
+            self.clock.on_jump = self._time_jumped  # a jump of the sim clock (a spin call) raises attention
         #: Set on the first SIGINT/SIGTERM: `ros.ok()` is false from then on.
         self.interrupted = False
         #: Called between rounds, in order, once the run time reaches `wake`: the bus executor
@@ -51,8 +50,9 @@ class RunContext:
         #: Called once when the run ends (nodes write their pictures, close windows).
         self.at_end: list[Callable[[], None]] = []
         #: The run's arrangement (set by the Arrangement itself): nodes that end the run (teleop's
-        #: `q`) and the machines' topics on the bus (llfsm.ros.control) find it here.
-        self.arrangement: Arrangement | None = None
+        #: `q`) and the machines' topics on the bus (llfsm.ros.control) find it here.  Typed by its
+        #: port: the scheduler, above this module, is what sets it.
+        self.arrangement: ArrangementPort[Any] | None = None
         #: The transport for the bus to use when it is made; None: the in-process one.
         self.transport: RunTransport | None = None
         #: The run's bus, made on first use (llfsm.ros.bus.bus_of); None until then.
@@ -70,6 +70,9 @@ class RunContext:
         #: Run time at which the run will end (--duration), if any: blocking waits inside
         #: machine code (spin calls) never wait past it.
         self.deadline: int | None = None
+
+    def _time_jumped(self) -> None:
+        self.wake = 0
 
     def wake_at(self, t: int) -> None:
         """Make the scheduler call the between-round hooks once the run time reaches t."""

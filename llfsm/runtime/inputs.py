@@ -15,7 +15,7 @@ from __future__ import annotations
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
-    from .machine import Machine
+    from .protocols import MachinePort
 
 #: The positions in each entry of a generated class's INPUTS (see templates/machine.py.j2).
 NAME, TYPE, DEFAULT, DOMAIN, TOPIC, MSG, FIELD = range(7)
@@ -26,7 +26,7 @@ class Inputs:
 
     __slots__ = ("fresh", "machine", "names", "values")
 
-    def __init__(self, machine: Machine) -> None:
+    def __init__(self, machine: MachinePort) -> None:
         spec = machine.INPUTS
         self.machine = machine
         self.names: tuple[str, ...] = tuple(i[NAME] for i in spec)

@@ -20,7 +20,8 @@ if TYPE_CHECKING:
 
     from _typeshed import IdentityFunction
 
-    from .scheduler import Arrangement
+    from .clock import Clock
+    from .protocols import ArrangementPort
 
 if __file__.endswith((".so", ".pyd")):  # compiled by mypyc (`--native`), which reads this decorator
     from mypy_extensions import mypyc_attr
@@ -102,9 +103,11 @@ class Machine:
     # add their variables to them.
     __slots__ = _SLOTS
 
-    def __init__(self, arrangement: Arrangement, machine_id: int = 0) -> None:
+    def __init__(self, arrangement: ArrangementPort[Machine], machine_id: int = 0) -> None:
+        #: The arrangement that runs the machine (llfsm.runtime.scheduler.Arrangement, typed by
+        #: its port: the scheduler imports this module, not the reverse).
         self._arr = arrangement
-        self._clock = arrangement.clock
+        self._clock: Clock = arrangement.clock
         self._id = machine_id
         self._state: int = self.INITIAL
         self._t0: int = 0  # run-clock time (ns) the current state was entered (states using after*)

@@ -15,7 +15,8 @@ import time
 
 from .clock import Clock, SimClock, WallClock
 from .context import FOREVER, RunContext, activate
-from .errors import ErrorReport, RunStopped, is_generated, passes_through, report_for, signal_name
+from .errors import ErrorReport, RunStopped, passes_through, report_for, signal_name
+from .generated import is_generated
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
 
@@ -251,7 +252,7 @@ class Arrangement:
                 hook(m)
             target = m.INITIAL if m._resume_to is None else m._resume_to
             m._state, m._suspended, m._resume_to = target, False, None
-            _regate(m)
+            _regate(m, self._variables)
             hook = m.ON_RESUME[target]
             if hook is not None:
                 hook(m)
@@ -262,7 +263,7 @@ class Arrangement:
         # RESTART (which also brings a finished machine back)
         m._state, m._suspended, m._resume_to, m._entered = m.INITIAL, False, None, True
         m._finished = False
-        _regate(m)
+        _regate(m, self._variables)
         if tr is not None:
             tr.command("restart", m, m.INITIAL)
         return True
@@ -284,7 +285,7 @@ class Arrangement:
                 return False  # the command (suspend) ended the ringlet
         elif m._suspended:
             return False  # suspended: no ringlet
-        _regate(m)
+        _regate(m, self._variables)
         return True
 
     def _gate(self, m: Machine) -> int | None:
@@ -299,7 +300,7 @@ class Arrangement:
             self.tracer.finish(m)
         m._finished = True
         m._suspended = False
-        _regate(m)
+        _regate(m, self._variables)
         self._attention = True
         self.ctx.references_dropped = True  # what it held is released between rounds
         self.ctx.wake = 0
@@ -603,9 +604,10 @@ def _hold(m: Machine) -> None:
         m._next, m._run = m._run, m._held
 
 
-def _regate(m: Machine) -> None:
-    """Point the machine's `_run` at the gate while it is held, at its next ringlet otherwise."""
-    if m._pending is not None or m._suspended or m._id in m._arr._variables:
+def _regate(m: Machine, variables: dict[int, dict[str, object]]) -> None:
+    """Point the machine's `_run` at the gate while it is held (a command, suspended, new values
+    for its variables waiting: `variables`, the arrangement's), at its next ringlet otherwise."""
+    if m._pending is not None or m._suspended or m._id in variables:
         _hold(m)
     elif m._run is m._held:
         m._run = m._next

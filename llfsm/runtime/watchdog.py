@@ -78,6 +78,9 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: What the watchdog's interpreter runs: this module, imported from its own folder (so that its
 #: cached bytecode is used: running the file as a script would compile it, 3 ms each run), then
 #: that folder off the path again (its modules' names are not to shadow the standard library's).
+#: The interpreter runs with -B: it reads the bytecode the run's own imports cached, and writes
+#: none into the installed package itself (-I ignores PYTHONDONTWRITEBYTECODE; a package may be
+#: read-only, or its owner may want it left as installed).
 _ENTRY = "import sys; sys.path.insert(0, sys.argv[1]); import watchdog; del sys.path[0]; watchdog._main(sys.argv[2:])"
 
 
@@ -117,7 +120,7 @@ class Watchdog:
         os.set_blocking(answers[1], False)
         here = os.path.dirname(os.path.abspath(__file__))
         package_root = os.path.dirname(os.path.dirname(here))
-        args = [exe, "-I", "-S", "-c", _ENTRY, here, str(os.getpid()), str(_thread.get_ident())]
+        args = [exe, "-I", "-S", "-B", "-c", _ENTRY, here, str(os.getpid()), str(_thread.get_ident())]
         args += [str(grace_ns), str(wake[0]), str(answers[0]), str(dump[0]), package_root]
         for m in machines:
             args += [m.NAME, getattr(sys.modules.get(m.__module__), "__file__", None) or ""]

@@ -171,6 +171,7 @@ class Explorer(Stepper):
         snaps = [c.snapshot for c in codecs]
         restores = [c.restore for c in codecs]
         gates = [c.gate_index for c in codecs]
+        entries = [c.entries for c in codecs]
         part_tabs, part_lists = self.parts, self.part_list
         cur = self.cur
         configs, index, frontier = self.configs, self.index, self.frontier
@@ -351,7 +352,7 @@ class Explorer(Stepper):
                         e = 0
                     else:
                         run = part[1] if part[0] == gates[turn] else part[0]
-                        if run == 2 * part[STATE]:
+                        if run == entries[turn][part[STATE]]:
                             e = 0
                         else:
                             e = now - m._t0

@@ -31,8 +31,8 @@ from typing import Any
 
 from ..props.formula import has
 from ..props.kinds import CTL, ON_THE_FLY
-from .check import Verification
 from .explorer import Explorer
+from .judge import Verification
 
 Formula = tuple[Any, ...]
 

@@ -55,7 +55,7 @@ def machine_dir(target: str) -> Path | None:
     if p.is_dir():
         return p
     if p.is_file() and p.suffix == ".py":
-        from ..runtime.errors import source_dir_of  # deferred: start-up (only a built module needs it)
+        from ..runtime.generated import source_dir_of  # deferred: start-up (only a built module needs it)
 
         src = source_dir_of(str(p))
         return Path(src) if src is not None and os.path.isdir(src) else None

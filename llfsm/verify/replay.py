@@ -23,7 +23,7 @@ from typing import Any
 
 from ..props.parse import duration_text
 from ..runtime.inputs import DEFAULT, FIELD, MSG, NAME, TOPIC
-from .check import Trace, Verification
+from .judge import Trace, Verification
 
 
 class ReplayError(Exception):

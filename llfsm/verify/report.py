@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from ..lang.diagnostics import file_uri, shown
-from .check import Outcome, Trace, Verification
 from .explorer import TURN, Explorer, Step
+from .judge import Outcome, Trace, Verification
 from .memory import size_text
 from .values import shown as value_text
 

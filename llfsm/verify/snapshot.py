@@ -7,8 +7,8 @@ the class's tables and the machine's variables, names only: no user text), so th
 a few attribute reads and writes rather than a loop over names.
 
 The part, a tuple: the ringlet the scheduler calls next and, while the machine is held at the
-scheduler's gate, the ringlet behind the gate (each as its place in `Codec.ringlets`: a state's
-entry ringlet, its steady ringlet, or the gate); the current state, the pending command,
+scheduler's gate, the ringlet behind the gate (each as its number, llfsm.runtime.generated: a
+state's entry ringlet, its steady ringlet, or the gate); the current state, the pending command,
 suspended, the state to resume, finished; then the inputs as last read; then the variables,
 frozen by value (llfsm.verify.values).  The entry time (`_t0`) is not part of it: the explorer
 keeps each machine's time in its own abstraction (llfsm.verify.explorer).
@@ -21,6 +21,7 @@ from typing import Any
 
 from ..lang.bindings import attribute_of
 from ..lang.model import Machine as MachineModel
+from ..runtime.generated import entry_number, gate_number, numbered_ringlets
 from ..runtime.machine import Machine
 from .values import SCALARS, Frozen, Handles, Unfreezable, freeze, thaw
 
@@ -48,10 +49,11 @@ class Codec:
     def __init__(self, cls: type[Machine], model: MachineModel, gate: Callable[..., Any], handles: Handles) -> None:
         self.cls = cls
         n = len(cls.STATES)
-        #: entry and steady ringlet of each state, then the gate: a part names them by position
-        self.ringlets: list[Callable[..., Any]] = [f for i in range(n) for f in (cls.ENTER[i], cls.STEADY[i])]
-        self.ringlets.append(gate)
-        self.gate_index = 2 * n
+        #: entry and steady ringlet of each state, then the gate: a part names them by number
+        self.ringlets: list[Callable[..., Any]] = numbered_ringlets(cls.ENTER, cls.STEADY, gate)
+        self.gate_index = gate_number(n)
+        #: each state's entry ringlet's number, by state
+        self.entries: tuple[int, ...] = tuple(entry_number(s) for s in range(n))
         self.inputs: list[str] = [entry[0] for entry in cls.INPUTS]
         self.variables: list[str] = [v.name for v in model.variables] + [
             attribute_of(s.name, v.name) for s in model.states for v in s.variables
@@ -115,4 +117,4 @@ class Codec:
     def entered(self, part: tuple[Any, ...]) -> bool:
         """Whether the machine's next ringlet enters its state (runs OnEntry first)."""
         run = part[NEXT] if part[RUN] == self.gate_index else part[RUN]
-        return run == 2 * part[STATE]
+        return run == self.entries[part[STATE]]

@@ -22,26 +22,13 @@ from typing import Any
 from ..msgs.rcl_interfaces.msg import Parameter as ParameterMsg
 from ..msgs.rcl_interfaces.msg import ParameterType
 from ..ros.names import InvalidNameError, normalise_namespace, validate_node_name
+from ..ros.parameter import TYPE_NAMES
 from ..ros.parameter_files import guess_value
 from ..ros.parameters import Parameter, parameter_value_to_python
 
 #: Parameters of one node shown at most, and characters of a value's text.
 MAX_PARAMETERS = 500
 MAX_TEXT = 4000
-
-#: ros2param's names of the types (what `ros2 param describe` prints).
-TYPE_NAMES = {
-    ParameterType.PARAMETER_BOOL: "boolean",
-    ParameterType.PARAMETER_INTEGER: "integer",
-    ParameterType.PARAMETER_DOUBLE: "double",
-    ParameterType.PARAMETER_STRING: "string",
-    ParameterType.PARAMETER_BYTE_ARRAY: "byte array",
-    ParameterType.PARAMETER_BOOL_ARRAY: "boolean array",
-    ParameterType.PARAMETER_INTEGER_ARRAY: "integer array",
-    ParameterType.PARAMETER_DOUBLE_ARRAY: "double array",
-    ParameterType.PARAMETER_STRING_ARRAY: "string array",
-    ParameterType.PARAMETER_NOT_SET: "not set",
-}
 
 
 class ParameterInputError(ValueError):

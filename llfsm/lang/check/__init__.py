@@ -14,6 +14,7 @@ what they look at, each a function over one `Checking` (llfsm.lang.check.checkin
 - ros_habits: rclpy spellings (LF041)
 - parameters: machine.yaml's `parameters:` (LF060-LF062)
 - packages:   message packages package.xml does not declare (LF106)
+- untranslated: clfsm code `llfsm import` left for a person (LF080)
 
 This module runs them in order for one machine (`check_machine`), and for many, over worker
 processes when there are many (`diagnose`).
@@ -38,7 +39,7 @@ from ..diagnostics import Diagnostic, Severity
 from ..discover import find_machines
 from ..model import Machine
 from ..reader import ReadResult, read_machine
-from . import code, includes, inputs, parameters, structure, variables
+from . import code, includes, inputs, parameters, structure, untranslated, variables
 from .checking import Checking
 from .packages import undeclared_dependencies
 
@@ -93,6 +94,7 @@ def run_rules(c: Checking) -> None:
     for s in m.states:
         code.state_code(c, m, s)
     inputs.assignments(c, m)
+    untranslated.untranslated(c, m)
     structure.orphans(c)
     structure.reachability(c, m)
     structure.suspend_state(c, m)

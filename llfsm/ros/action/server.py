@@ -56,6 +56,11 @@ MAX_FINISHED = 1000
 #: the last result_timeout (15 min) and costs every publish and every client that much; a
 #: client needs a goal's terminal status once, and asks for an older one's with get_result.
 STATUS_FINISHED = 64
+#: Unfinished goals (accepted, executing or being canceled) a server holds at most; a goal
+#: request past it is rejected, with one warning.  A server that executes one goal at a time
+#: (a machine in the PULL form) would otherwise let any client pile goals up without bound, and
+#: each status array, cancel request and result lookup costs in proportion to them.
+MAX_GOALS = 1000
 
 
 class GoalResponse(Enum):
@@ -132,7 +137,7 @@ class ServerGoalHandle:
             self._event("execute")
         callback = execute_callback if execute_callback is not None else self._server._execute_callback
         if callback is not None:
-            self._server._run(self, callback)
+            self._server._start(self, callback)
 
     def publish_feedback(self, feedback: Message) -> None:
         server = self._server
@@ -210,6 +215,7 @@ class ActionServer:
         handle_accepted_callback: Callable[[Any], Any] | None = None,
         cancel_callback: Callable[[Any], Any] | None = None,
         result_timeout: float = RESULT_TIMEOUT,
+        max_goals: int = MAX_GOALS,
         **_ignored: Any,
     ) -> None:
         node._check()
@@ -227,6 +233,8 @@ class ActionServer:
                 raise TypeError(f"ActionServer(): {what} must be callable (or None), not {fn!r}")
         if isinstance(result_timeout, bool) or not isinstance(result_timeout, int | float) or result_timeout < 0:
             raise ValueError(f"ActionServer(): result_timeout must be a number of seconds >= 0, not {result_timeout!r}")
+        if isinstance(max_goals, bool) or not isinstance(max_goals, int) or max_goals < 1:
+            raise ValueError(f"ActionServer(): max_goals must be an integer >= 1, not {max_goals!r}")
         bus: Bus = node._bus
         name = node.resolve_topic_name(action_name)
         for suffix in (SEND_GOAL, CANCEL_GOAL, GET_RESULT):
@@ -241,6 +249,9 @@ class ActionServer:
         self._handle_accepted_callback = handle_accepted_callback
         self._cancel_callback = cancel_callback or default_cancel_callback
         self._result_timeout_ns = round(result_timeout * 1e9)
+        self._max_goals = max_goals
+        self._full_warned = False
+        self._status_due = False  # a status array is queued for the end of the executor's turn
         self._goals: dict[bytes, ServerGoalHandle] = {}  # every goal not yet forgotten, oldest first
         self._unfinished: dict[bytes, ServerGoalHandle] = {}  # goals whose result is still to come
         self._results: dict[bytes, Future] = {}  # each goal's GetResult response, once finished
@@ -303,7 +314,9 @@ class ActionServer:
         self._expire()
         goal_id = bytes(request.goal_id.uuid)
         accepted = False
-        if goal_id not in self._goals:
+        if len(self._unfinished) >= self._max_goals:
+            self._full()
+        elif goal_id not in self._goals:
             answer = self._goal_callback(request.goal)
             if isinstance(answer, GoalResponse):
                 accepted = answer is GoalResponse.ACCEPT
@@ -372,8 +385,18 @@ class ActionServer:
             return response
         return future  # answered when the goal finishes (now, if it has)
 
+    def _full(self) -> None:
+        """A goal request past max_goals: rejected (rclpy's answer to a refused goal), said once."""
+        if not self._full_warned:
+            self._full_warned = True
+            self._logger.warning(
+                f"action {self._name} holds {len(self._unfinished)} unfinished goals, the most it keeps "
+                f"(ActionServer(max_goals={self._max_goals})): further goals are rejected until some finish "
+                "(said once)"
+            )
+
     # -- goals ---------------------------------------------------------------------------------------
-    def _run(self, handle: ServerGoalHandle, callback: Callable[[Any], Any]) -> None:
+    def _start(self, handle: ServerGoalHandle, callback: Callable[[Any], Any]) -> None:
         if handle._id in self._running:
             raise RuntimeError(f"goal {status.text(handle._id)} of action {self._name} is executing already")
         execution = Execution(
@@ -439,6 +462,19 @@ class ActionServer:
             self._publish_status()
 
     def _publish_status(self) -> None:
+        """The status array changed: publish it at the end of the executor's turn, once however
+        many goals the turn moved (a cancel of a thousand goals is one message, not a thousand
+        growing ones; a status published per goal cost a run seconds of its rounds)."""
+        if not self._status_due and not self._destroyed:
+            self._status_due = True
+            self._bus.queue_last(self)
+
+    def _run(self) -> None:
+        """Executor work (queued by _publish_status): the status array as it is now."""
+        self._status_due = False
+        self._send_status()
+
+    def _send_status(self) -> None:
         if self._destroyed:
             return
         goals = self._goals
@@ -467,7 +503,7 @@ class ActionServer:
                 self._finish(handle, handle._result)
                 ended = True
         if ended:
-            self._publish_status()
+            self._send_status()  # now: the endpoints go next
         self._destroyed = True
         for part in self._parts:
             part.destroy()

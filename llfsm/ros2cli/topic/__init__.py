@@ -10,7 +10,7 @@ from __future__ import annotations
 from ...msgs import Message
 from ...ros.transports.dds_graph import Endpoint, message_type
 from .. import NOT_FOUND, CliError
-from ..interface import message_class
+from ..lookup import message_class
 
 
 def class_of_topic(name: str, types: list[str]) -> type[Message]:

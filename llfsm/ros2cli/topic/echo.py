@@ -20,7 +20,7 @@ from .. import NOT_FOUND, TIMEOUT, CliError
 from ..arguments import full_name
 from ..discovery import open_graph, wait_for_topic_types, where
 from ..endpoints import Waiter, samples, topic_reader
-from ..interface import message_class, use_working_directory
+from ..lookup import message_class, use_working_directory
 from . import check_types, class_of_topic
 
 #: How long echo looks for the topic's publishers (to match their QoS) when TYPE is given.

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from .. import NOT_FOUND, SPIN_TIME, CliError
 from ..discovery import discovered, where
-from ..interface import split_type
+from ..lookup import split_type
 
 
 def find(type_text: str, *, count: bool = False, include_hidden: bool = False, spin_time: float = SPIN_TIME) -> str:

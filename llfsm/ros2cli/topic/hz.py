@@ -16,7 +16,7 @@ from .. import NOT_FOUND, TIMEOUT, CliError
 from ..arguments import full_name
 from ..discovery import open_graph, wait_for_topic_types, where
 from ..endpoints import Waiter, samples, topic_reader
-from ..interface import use_working_directory
+from ..lookup import use_working_directory
 from . import class_of_topic
 
 

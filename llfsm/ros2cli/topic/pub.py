@@ -18,7 +18,7 @@ from .. import NOT_FOUND, TIMEOUT, CliError
 from ..arguments import full_name, parse_values, stamp
 from ..discovery import where
 from ..endpoints import hidden_node
-from ..interface import message_class, use_working_directory
+from ..lookup import message_class, use_working_directory
 from . import check_types
 
 #: rclpy's default QoS depth ("default" profile), which `ros2 topic pub` publishes with.

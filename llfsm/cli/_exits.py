@@ -1,5 +1,6 @@
-"""What every command shares that does not need click: exit statuses, `fail`, durations, and
-what becomes of an exception that escapes a command.
+"""How a command ends, without click: exit statuses, `fail`, `echo`, what becomes of an exception
+that escapes a command (a closed pipe, a full disk, an llfsm bug); and `duration_ns`, which both
+parsers of `llfsm run`'s options use.
 
 Kept free of click (and of everything else heavy) because `llfsm run`'s fast path
 (llfsm.cli.main) runs a machine without importing click at all; the click commands use the
@@ -99,7 +100,7 @@ def internal_error(exc: Exception) -> NoReturn:
 
 def run_guarded(command: Callable[[], object]) -> None:
     """Run a command so that whatever escapes it ends in a message and an exit status, never a
-    traceback: the fast path of `llfsm run`, and every click command (llfsm.cli._click.main),
+    traceback: the fast path of `llfsm run`, and every click command (llfsm.cli._commands.main),
     so that both say the same."""
     try:
         try:

@@ -290,17 +290,124 @@ def test_no_import_cycle_hidden_behind_a_deferred_import() -> None:
     )
 
 
-def test_the_transports_contract_names_every_other_module_of_ros() -> None:
-    """Transports see the bus only through transports/base.py's protocols: the forbidden contract
-    in pyproject.toml must name every module and package of llfsm.ros besides the transports, so
-    that a new entity module (actions, say) is forbidden to them as soon as it exists."""
+def test_the_runtime_reads_bottom_up_even_for_type_checkers() -> None:
+    """runtime/ is what every generated module imports: its modules import one another in one
+    direction only, counting every import (those under TYPE_CHECKING, for annotations, and those
+    deferred into functions too).  What a lower module knows of a higher one it knows through
+    runtime/protocols.py (the arrangement's port, the machine's port)."""
+    paths = {module_name(p): p for p in modules() if module_name(p).startswith("llfsm.runtime.")}
+    known = set(paths)
+    graph = {
+        name: {
+            m
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+            if isinstance(node, ast.Import | ast.ImportFrom)
+            for m in _resolve(name, path.name == "__init__.py", node, known)
+        }
+        - {name}
+        for name, path in paths.items()
+    }
+    # trace.py imports machine.py for its annotations only: the walk must see such imports
+    assert "llfsm.runtime.machine" in graph["llfsm.runtime.trace"]
+    found = cycles(graph)
+    assert not found, "runtime modules that import each other, annotations counted:\n" + "\n".join(
+        " <-> ".join(c) for c in found
+    )
+
+
+#: What each contract of [tool.importlinter] governs: the package (or container) whose every module
+#: and subpackage the contract names (`layers`, `modules`, `forbidden_modules`), but for those
+#: it leaves out on purpose, each with why.  A new contract needs its entry here.
+GOVERNED: dict[str, tuple[str, dict[str, str]]] = {
+    "layers": ("llfsm", {}),
+    "transports": ("llfsm.ros", {"llfsm.ros.transports": "the transports themselves, the contract's source"}),
+    "transport-kinds": (
+        "llfsm.ros.transports",
+        {
+            "llfsm.ros.transports.base": "what every transport implements and sees of the bus",
+            "llfsm.ros.transports.dds_config": "a part of the dds transport",
+            "llfsm.ros.transports.dds_graph": "a part of the dds transport",
+            "llfsm.ros.transports.dds_read": "a part of the dds transport",
+        },
+    ),
+    "verb-groups": (
+        "llfsm.ros2cli",
+        {
+            "llfsm.ros2cli.arguments": "shared by the verb groups: names and VALUES",
+            "llfsm.ros2cli.discovery": "shared by the verb groups: the DDS graph",
+            "llfsm.ros2cli.endpoints": "shared by the verb groups: their own readers and nodes",
+            "llfsm.ros2cli.lookup": "shared by the verb groups: TYPE strings to classes",
+        },
+    ),
+    "cli-verbs": (
+        "llfsm.cli",
+        {
+            "llfsm.cli._commands": "registers every command on the group",
+            "llfsm.cli._exits": "shared: how a command ends, without click",
+            "llfsm.cli._group": "shared: the click group and what commands share on click's side",
+            "llfsm.cli._ros2": "shared by the ros2-style verb groups",
+            "llfsm.cli._run": "shared by `llfsm run`'s click command and its fast path",
+            "llfsm.cli._web": "shared by `llfsm run --web` and `llfsm view`",
+            "llfsm.cli.run_args": "`llfsm run`'s fast path, shared with its click command",
+        },
+    ),
+    "renderers": (
+        "llfsm.diagram",
+        {
+            "llfsm.diagram.description": "what a published description must be before it is drawn",
+            "llfsm.diagram.layout": "where svg places what it draws (and the web's graph)",
+            "llfsm.diagram.text": "labels shared by mermaid and dot: not a drawing",
+        },
+    ),
+}
+
+
+def children(package: str) -> set[str]:
+    """The modules and subpackages directly in `package` (not __init__)."""
+    folder = REPO.joinpath(*package.split("."))
+    out = {f"{package}.{p.stem}" for p in folder.glob("*.py") if p.name != "__init__.py"}
+    out |= {f"{package}.{d.name}" for d in folder.iterdir() if d.is_dir() and any(d.glob("*.py"))}
+    return out
+
+
+def named_by(contract: dict[str, object]) -> set[str]:
+    """The modules a contract names in its list: a layers contract's layers (in its container),
+    an independence contract's modules, a forbidden contract's forbidden modules."""
+    if contract["type"] == "layers":
+        (container,) = contract["containers"]  # type: ignore[misc]
+        layers: list[str] = contract["layers"]  # type: ignore[assignment]
+        return {f"{container}.{m.strip()}" for layer in layers for m in re.split(r"[|:]", layer)}
+    key = "modules" if contract["type"] == "independence" else "forbidden_modules"
+    return set(contract[key])  # type: ignore[call-overload]
+
+
+def test_every_contract_names_every_module_of_its_package() -> None:
+    """A contract whose list leaves a module out does not hold it: a new verb module that nothing
+    forbids to import another verb, a new package in no layer.  Every contract of pyproject.toml
+    names every module and subpackage of the package it governs (GOVERNED), or GOVERNED says why
+    not.  Also run by `make lint`."""
     config = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))
-    contract = next(c for c in config["tool"]["importlinter"]["contracts"] if c["id"] == "transports")
-    ros = PACKAGE / "ros"
-    present = {f"llfsm.ros.{p.stem}" for p in ros.glob("*.py") if p.name != "__init__.py"}
-    present |= {f"llfsm.ros.{d.name}" for d in ros.iterdir() if (d / "__init__.py").is_file()}
-    missing = sorted(present - {"llfsm.ros.transports"} - set(contract["forbidden_modules"]))
-    assert not missing, f"add to the transports contract's forbidden_modules in pyproject.toml: {missing}"
+    contracts = config["tool"]["importlinter"]["contracts"]
+    problems = []
+    for contract in contracts:
+        cid = contract["id"]
+        if cid not in GOVERNED:
+            problems.append(f"contract {cid!r}: say in GOVERNED of tests/test_architecture.py which package it governs")
+            continue
+        package, left_out = GOVERNED[cid]
+        present = children(package)
+        named = named_by(contract)
+        key = {"layers": "layers", "independence": "modules"}.get(contract["type"], "forbidden_modules")
+        for module in sorted(present - named - set(left_out)):
+            problems.append(
+                f"{module} is in no list of contract {cid!r}: add it to the contract's `{key}` in pyproject.toml "
+                f"([tool.importlinter]), or, if the contract leaves it out on purpose (a module the others share), "
+                f"to GOVERNED[{cid!r}] in tests/test_architecture.py, saying why"
+            )
+        for module in sorted((named | set(left_out)) - present):
+            problems.append(f"contract {cid!r} names {module}, which is not a module of {package}")
+    assert set(GOVERNED) <= {c["id"] for c in contracts}, "GOVERNED names a contract pyproject.toml does not have"
+    assert not problems, "\n".join(problems)
 
 
 # -- README's layout block ------------------------------------------------------------------------

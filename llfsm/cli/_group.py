@@ -1,4 +1,6 @@
-"""What every command shares: the group, `fail`, durations, a closed pipe.
+"""The `llfsm` click group, and what its commands share on click's side: the DURATION parameter
+type, `write_output`, `progress`, and the names of llfsm.cli._exits (exit statuses, `fail`) that
+the click-free fast path of `llfsm run` shares with them.
 
 Each command imports what it needs when it runs: `llfsm run` must start fast and never load
 the compiler's libraries when its cached modules are fresh.  Every failure the user can cause
@@ -7,14 +9,13 @@ ends in a one-line-per-problem message and an exit status (1 or 2), never a trac
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
 import click
 
 from .. import __version__
-from ._base import (  # noqa: F401  (shared with the click-free fast path of `llfsm run`)
+from ._exits import (  # noqa: F401  (shared with the click-free fast path of `llfsm run`)
     EXIT_ERRORS,
     EXIT_OK,
     EXIT_USAGE,
@@ -63,13 +64,9 @@ def progress(text: str) -> None:
     try:
         click.echo(text, nl=False, err=True)
     except (BrokenPipeError, ValueError):
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        try:
-            os.dup2(devnull, sys.stderr.fileno())
-        except (OSError, ValueError):
-            pass
-        finally:
-            os.close(devnull)
+        from ..progress import abandon  # deferred: start-up (only once stderr's reader has gone)
+
+        abandon(sys.stderr)
 
 
 def _existing(paths: tuple[str, ...]) -> list[Path]:
@@ -90,7 +87,7 @@ class _Group(click.Group):
     def invoke(self, ctx: click.Context) -> object:
         try:
             return super().invoke(ctx)
-        except OSError as e:  # a closed pipe, a full disk under stdout (as the fast path: _base)
+        except OSError as e:  # a closed pipe, a full disk under stdout (as the fast path: _exits)
             output_errors(e)
             raise
 

@@ -1,5 +1,6 @@
-"""The click side of the `llfsm` command: every verb registered on the group, and the entry
-point that turns what escapes the commands into a message and a status, not a traceback."""
+"""Every command of `llfsm` registered on the click group (llfsm.cli._group), and click's entry
+point, which turns what escapes the commands into a message and a status, not a traceback.
+A new verb group is imported here."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from . import (  # noqa: F401  (each registers its commands)
     build,
     check,
     graph,
+    import_,
     interface,
     new,
     node,
@@ -23,8 +25,8 @@ from . import (  # noqa: F401  (each registers its commands)
     verify,
     view,
 )
-from ._base import EXIT_USAGE, run_guarded
-from ._common import cli
+from ._exits import EXIT_USAGE, run_guarded
+from ._group import cli
 
 __all__ = ["cli", "main"]
 
