@@ -212,12 +212,8 @@ class _progress:
 
     def judging(self, name: str, nodes: int, states: int, seconds: float) -> None:
         """An `ltl:` property judged on the explored structure: its product with the automaton."""
-        if not self.tty and (seconds < 2 or (self.shown and seconds - self.last < 10)):
-            return
-        self.last = seconds
         line = f"llfsm verify: judging {name}: {nodes:,} product states ({states:,} automaton states), {seconds:.0f} s"
-        progress(("\r" + line + "\x1b[K") if self.tty else line + "\n")
-        self.shown = True
+        self.status.progress(line, seconds)
 
     def done(self) -> None:
         self.status.clear()

@@ -30,6 +30,7 @@ from concurrent.futures import Future
 from typing import Any
 
 from ..runtime.clock import WallClock
+from ..runtime.generated import pending_of, state_of
 from ..runtime.machine import Machine
 from ..runtime.scheduler import GO, PAUSE, STOP, Arrangement
 from .breakpoints import Breakpoint, Breakpoints
@@ -318,9 +319,10 @@ class Debugger:
         out = []
         for m in self.arr.machines:
             status = " (finished)" if m._finished else " (suspended)" if m._suspended else ""
-            pending = f", {m._pending} pending" if m._pending else ""
+            command = pending_of(m)
+            pending = f", {command} pending" if command else ""
             mark = "> " if m is self.at else "  "
-            out.append(f"{mark}{m.NAME}: {m.STATES[m._state]}{status}{pending}")
+            out.append(f"{mark}{m.NAME}: {state_of(m)}{status}{pending}")
         return out
 
     def status(self) -> dict[str, Any]:

@@ -28,7 +28,8 @@ from functools import partial
 from typing import IO, Any
 
 from ..props.atoms import PropertyError, compile_atom, infos_of
-from ..runtime.readout import plain
+from ..runtime.generated import inputs_of
+from ..runtime.readout import plain, variable_names
 from .debugger import CONTINUE, ROUND, STEP, DebugError, Debugger
 from .variables import as_yaml
 
@@ -108,7 +109,8 @@ class Prompt:
         words = sorted(set(_NAMES))
         for m in self.debugger.arr.machines:
             words.append(m.NAME)
-            words += [f"{m.NAME}.{v}" for v, _ in type(m).VARIABLES] + [f"{m.NAME}.{e[0]}" for e in type(m).INPUTS]
+            names = variable_names(type(m)) + inputs_of(type(m))
+            words += [f"{m.NAME}.{v}" for v in names]
         hits = [w for w in words if w.startswith(text)]
         return hits[state] if state < len(hits) else None
 

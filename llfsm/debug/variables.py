@@ -22,9 +22,10 @@ import yaml
 
 from ..msgs._message import is_message_class
 from ..msgs._yaml import ValuesError, set_fields
+from ..runtime.generated import inputs_of, pending_of, state_of, time_in_state, variables_of
 from ..runtime.inputs import TOPIC, TYPE
 from ..runtime.machine import Machine
-from ..runtime.readout import input_names, plain, time_in_state, values_of, variable_names
+from ..runtime.readout import plain, values_of, variable_names
 
 
 class SetError(ValueError):
@@ -39,12 +40,12 @@ def read(m: Machine, now: int, entered: int | None = None) -> dict[str, Any]:
     if since is None and entered is not None:
         since = max(0, now - entered)
     return {
-        "state": m.STATES[m._state],
+        "state": state_of(m),
         "status": "finished" if m._finished else "suspended" if m._suspended else "running",
-        "pending": m._pending,
+        "pending": pending_of(m),
         "time_in_state": None if since is None else round(since / 1e9, 9),
         "variables": values_of(m, variable_names(cls)),
-        "inputs": values_of(m, input_names(cls)),
+        "inputs": values_of(m, inputs_of(cls)),
     }
 
 
@@ -82,7 +83,7 @@ def assign(m: Machine, name: str, text: str) -> Any:
             m._inputs.values[k] = typed
         setattr(m, name, typed)
         return typed
-    annotations = dict(cls.VARIABLES)
+    annotations = dict(variables_of(cls))
     if name not in annotations:
         known = list(variable_names(cls)) + list(inputs)
         close = difflib.get_close_matches(name, known, n=1)

@@ -22,7 +22,13 @@ verify (llfsm.verify) read it.  They agree on:
 - **ringlet numbers**, for whoever stores which ringlet a machine runs next as a number (verify's
   configurations): state s's entry ringlet is `entry_number(s)` = 2s, its steady ringlet 2s + 1,
   and the scheduler's gate `gate_number(n)` = 2n for n states (`numbered_ringlets` lists them
-  in that order).
+  in that order);
+- **what a machine holds**, for whoever shows it (the trace, the debugger, llfsm.runtime.readout):
+  the class's VARIABLES names Variables.py's variables with their annotations, in order
+  (`variables_of`; a state's variables are attributes `STATE__name`, never shown); INPUTS its
+  inputs (`inputs_of`); the transitions write the current state's number into `_state`
+  (`state_of`; a command pending for the next ringlet: `pending_of`); an enter ringlet of a
+  state whose guards use after*() records the entry time in `_t0` (`time_in_state`).
 
 docs/architecture.md ("The generated module") says how to change any of it.  Light, as the
 rest of the runtime: what it reads is read only when an error or a log is reported.
@@ -223,3 +229,43 @@ def numbered_ringlets(
     out = [f for pair in zip(enter, steady, strict=True) for f in pair]
     out.append(gate)
     return out
+
+
+# -- what a machine holds ----------------------------------------------------------------------
+
+
+def variables_of(cls: type[Any]) -> tuple[tuple[str, str], ...]:
+    """Variables.py's variables of a compiled class, each (name, annotation as written), in order.
+    A module built before VARIABLES existed: the class's slots that are neither the runtime's,
+    a state variable's (`STATE__name`) nor an input's, annotated "" (unknown)."""
+    declared: tuple[tuple[str, str], ...] = cls.VARIABLES
+    if declared:
+        return declared
+    inputs = {entry[0] for entry in cls.INPUTS}
+    slots = [s for c in type.mro(cls) for s in vars(c).get("__slots__", ())]
+    return tuple((s, "") for s in slots if not s.startswith("_") and "__" not in s and s not in inputs)
+
+
+def inputs_of(cls: type[Any]) -> tuple[str, ...]:
+    """The names of machine.yaml's inputs of a compiled class, in order."""
+    return tuple(entry[0] for entry in cls.INPUTS)
+
+
+def state_of(m: Any) -> str:
+    """The name of machine `m`'s current state."""
+    return str(m.STATES[m._state])
+
+
+def pending_of(m: Any) -> str | None:
+    """The control command pending for `m`'s next ringlet (suspend, resume, restart), if any."""
+    pending: str | None = m._pending
+    return pending
+
+
+def time_in_state(m: Any, now: int) -> int | None:
+    """Run time (ns) since machine `m` entered its current state, when the state keeps it (its
+    enter ringlet records `_t0`, as a state whose guards use after*() does); None otherwise."""
+    enter = m.ENTER[m._state]
+    if "_t0" not in getattr(getattr(enter, "__code__", None), "co_names", ("_t0",)):
+        return None
+    return max(0, now - int(m._t0))

@@ -16,6 +16,8 @@ calls into it.
 
 from __future__ import annotations
 
+from .generated import inputs_of, variables_of
+
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from typing import Any
@@ -31,18 +33,8 @@ CUT = "truncated"
 
 
 def variable_names(cls: type[Machine]) -> tuple[str, ...]:
-    """The machine variables of `cls`, in the order Variables.py declares them (its VARIABLES;
-    a module built before VARIABLES existed: its slots that are neither llfsm's nor a state
-    variable's nor an input's)."""
-    if cls.VARIABLES:
-        return tuple(name for name, _annotation in cls.VARIABLES)
-    inputs = {entry[0] for entry in cls.INPUTS}
-    slots = [s for c in type.mro(cls) for s in vars(c).get("__slots__", ())]
-    return tuple(s for s in slots if not s.startswith("_") and "__" not in s and s not in inputs)
-
-
-def input_names(cls: type[Machine]) -> tuple[str, ...]:
-    return tuple(entry[0] for entry in cls.INPUTS)
+    """The machine variables of `cls`, in the order Variables.py declares them."""
+    return tuple(name for name, _annotation in variables_of(cls))
 
 
 def plain(value: object, depth: int = 0) -> Any:
@@ -92,15 +84,6 @@ def values_of(m: Machine, names: tuple[str, ...]) -> dict[str, Any]:
     return out
 
 
-def time_in_state(m: Machine, now: int) -> int | None:
-    """Run time (ns) since `m` entered its current state, when the machine keeps it: a state
-    whose guards use after*() records its entry time; another does not (None)."""
-    enter = m.ENTER[m._state]
-    if "_t0" not in getattr(getattr(enter, "__code__", None), "co_names", ("_t0",)):
-        return None
-    return max(0, now - m._t0)
-
-
 class Changes:
     """What changed in machines' variables and inputs since each one was last looked at: the
     plain values of the last look are kept, one dict per machine, and compared with the new
@@ -117,7 +100,7 @@ class Changes:
         """Start following `m`: its values now."""
         cls = type(m)
         own = variable_names(cls)
-        names = self.names[m._id] = own + tuple(n for n in input_names(cls) if n not in own)
+        names = self.names[m._id] = own + tuple(n for n in inputs_of(cls) if n not in own)
         now = self.last[m._id] = values_of(m, names)
         return dict(now)
 
