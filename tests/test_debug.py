@@ -75,7 +75,7 @@ def test_a_pause_before_the_first_round_then_steps_of_a_ringlet_and_of_a_round(t
         "paused round 0, after a's ringlet (0.000 s): step",
         "paused round 0, after b's ringlet (0.000 s): step",
         "paused round 1, after a's ringlet (0.001 s): step",
-        "paused round 1, after b's ringlet (0.001 s): step round",  # the rest of round 1
+        "paused before round 2 (0.002 s): step round",  # the rest of round 1, and the bus after it
     ]
     assert states == [("A", "S"), ("B", "S"), ("B", "S"), ("A", "S"), ("A", "S")]
     assert arr.watcher is None  # continued with nothing to watch: the plain loops again
@@ -261,3 +261,62 @@ def test_while_paused_the_bus_answers_control_services_and_keeps_callbacks_queue
     assert results["control_done"] and not results["other_done"]
     assert results["heard"] == []  # the callback waited for the run to go on
     assert heard == ["while paused"] and results["other"].done()
+
+
+def _three(tmp_path: Path) -> list[type]:
+    """x and z toggle; y goes A -> B -> C -> A, one state a ringlet."""
+    x = write_machine(tmp_path, "x", {"P": [("Q", "True")], "Q": [("P", "True")]})
+    y = write_machine(tmp_path, "y", {"A": [("B", "True")], "B": [("C", "True")], "C": [("A", "True")]})
+    z = write_machine(tmp_path, "z", {"P": [("Q", "True")], "Q": [("P", "True")]})
+    return [load(str(p)) for p in (x, y, z)]
+
+
+def _positions(tmp_path: Path, history: int | None) -> list[tuple[str, tuple[str, ...]]]:
+    """Where a state breakpoint and the steps after it pause, and every machine's state there."""
+    arr = Arrangement(_three(tmp_path), context=RunContext(SimClock(1_000_000)))
+    d = Debugger(arr, history=history)
+    d.add_break('state(y) == "C"')
+    out: list[tuple[str, tuple[str, ...]]] = []
+
+    def at(dbg: Debugger, mode: str) -> None:
+        out.append((dbg.reason, tuple(m.STATES[m._state] for m in arr.machines)))
+        dbg.resume(mode)
+
+    _script(d, [lambda x: at(x, STEP), lambda x: at(x, STEP), lambda x: at(x, STEP), lambda x: at(x, ROUND)])
+    arr.run(duration_ns=8_000_000)
+    return out
+
+
+def test_a_breakpoint_on_a_state_pauses_and_steps_where_the_watcher_would(tmp_path: Path) -> None:
+    marked = _positions(tmp_path / "a", None)  # no history: the transition into C is marked
+    watched = _positions(tmp_path / "b", 100)  # history: every boundary is watched
+    assert marked == watched
+    assert marked[0] == ('break 1: state(y) == "C"', ("P", "C", "Q"))  # round 1: after y's ringlet, before z's
+    assert [r for r, _ in marked] == ['break 1: state(y) == "C"', "step", "step", "step"]
+
+
+def test_marked_ringlets_cost_nothing_elsewhere_and_go_when_the_breakpoint_goes(tmp_path: Path) -> None:
+    classes = _three(tmp_path)
+    arr = Arrangement(classes, context=RunContext(SimClock(1_000_000)))
+    d = Debugger(arr)
+    bp = d.add_break('state(y) == "C"')
+    assert arr.watcher is None  # a breakpoint on a state needs no watcher
+    y = arr.machines[1]
+    assert type(y) is not classes[1] and isinstance(y, classes[1])  # its ringlets are marked
+    assert type(arr.machines[0]) is classes[0]
+    d.remove_break(bp.number)
+    assert type(y) is classes[1] and arr.on_release is None
+    d.add_break('state(y) == "C" and state(x) == "P"')  # two machines: judged at every boundary
+    assert arr.watcher is not None
+
+
+def test_a_breakpoint_on_a_state_a_command_reaches_pauses_as_it_takes_effect(tmp_path: Path) -> None:
+    boss = write_machine(tmp_path, "boss", {"A": [("B", "after_ms(3)")], "B": [("B", "False")]},
+                         {"A_OnEntry": 'suspend("w")', "B_OnEntry": 'resume("w")'})  # fmt: skip
+    w = write_machine(tmp_path, "w", {"S": [("T", "after_ms(10)")], "T": None})
+    arr = Arrangement([load(str(boss)), load(str(w))], context=RunContext(SimClock(1_000_000)))
+    d = Debugger(arr)
+    d.add_break('state(w) == "S"')
+    seen = _script(d, [])
+    arr.run(duration_ns=20_000_000)
+    assert seen == ['paused as w\'s command took effect (its ringlet is next) (0.005 s): break 1: state(w) == "S"']

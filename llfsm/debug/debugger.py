@@ -35,12 +35,17 @@ from ..runtime.machine import Machine
 from ..runtime.scheduler import GO, PAUSE, STOP, Arrangement
 from .breakpoints import Breakpoint, Breakpoints
 from .history import History
+from .traps import Traps, true_states
 from .variables import SetError, assign, read
 
 #: How often (seconds of real time) a pause looks at the bus when no command comes.
 TICK = 0.01
 #: What a resume asks for: run on, stop after one ringlet, stop at the end of the round.
 CONTINUE, STEP, ROUND = "continue", "step", "round"
+#: Where a pause stands: after a ringlet in a watched round, between rounds, at a marked
+#: transition (the end of a ringlet in a plain round), as a command took effect (a turn has
+#: begun, its ringlet is next), before a turn (after the previous machine's ringlet).
+RINGLET, ROUND_END, TRAP, TURN, GATE = "ringlet", "round", "trap", "turn", "gate"
 
 
 class DebugError(ValueError):
@@ -87,7 +92,15 @@ class Debugger:
         #: session when the run has a bus: Executor.spin_control with services.answers).
         self.serve: Callable[[], None] | None = None
         self.bus: Any = None
-        arr.on_pause = self._stand
+        #: Breakpoints on states, marked on the machines' transitions (traps.py): no watcher.
+        self.traps = Traps(self._trapped)
+        self._trapped_breaks: dict[int, tuple[int, frozenset[int]]] = {}  # breakpoint -> (machine, states)
+        #: A pause before this machine's next turn (a step where the round is not watched),
+        #: which follows the ringlet of `_gate_after`.
+        self._gate_for: Machine | None = None
+        self._gate_after: Machine | None = None
+        self._origin = ROUND_END  # where the current pause stands (ORIGINS)
+        arr.on_pause = self._on_pause
         arr.ctx.between_rounds.append(self._drain)
         self._update_watcher()
 
@@ -117,10 +130,68 @@ class Debugger:
     def _update_watcher(self) -> None:
         """Install the watcher while anything needs every boundary, and take it away otherwise,
         so that the scheduler runs its plain loops again.  (A monitor's watcher is always
-        wrapped: its round is watched anyway, and a step must see every boundary of it.)"""
-        want = bool(self.breaks.items) or self.history is not None or self._stop_after is not None
-        want = want or self.inner is not None
+        wrapped: its round is watched anyway, and a step must see every boundary of it.)
+        Breakpoints on states are marked on transitions instead (traps.py), and the scheduler's
+        rare path tells of commands and of the turn a step waits for (`on_release`)."""
+        self._mark_states()
+        judged = any(b.number not in self._trapped_breaks for b in self.breaks.items)
+        want = judged or self.history is not None or self._stop_after is not None or self.inner is not None
         self.arr.watcher = self.after if want else self.inner
+        rare = bool(self._trapped_breaks) or self._gate_for is not None
+        self.arr.on_release = self._released if rare else None
+
+    def _mark_states(self) -> None:
+        """Which breakpoints read one machine's state alone, and the transitions that make each
+        become true, marked on the machines (those whose module can be marked)."""
+        classes = [self.traps.own.get(m._id, type(m)) for m in self.arr.machines]
+        found: dict[int, tuple[int, frozenset[int]]] = {}
+        edges: dict[int, set[tuple[int, int]]] = {}
+        for b in self.breaks.items:
+            states = true_states(b.atom, classes)
+            if states is None:
+                continue
+            i, holds = states
+            found[b.number] = states
+            for x, transitions in enumerate(classes[i].TRANSITIONS):
+                if x not in holds:
+                    edges.setdefault(i, set()).update((x, t) for t, _guard in transitions if t in holds)
+        for m in self.arr.machines:
+            if not self.traps.mark(m, edges.get(m._id, set())):
+                found = {n: s for n, s in found.items() if s[0] != m._id}  # native: the watcher judges them
+        self._trapped_breaks = found
+
+    def _trapped(self, m: Machine, source: int, target: int) -> None:
+        """A marked transition of `m` (from `source` into `target`) has just been taken: the
+        breakpoints it makes true pause the run here, at the end of m's ringlet."""
+        if self.arr.watcher == self.after:
+            return  # the watcher judges every breakpoint at this boundary anyway
+        hit = self._state_break(m, source, target)
+        if hit is not None:
+            self._pause_reason = hit
+            self._stand(m, TRAP)
+
+    def _state_break(self, m: Machine, source: int, target: int) -> str | None:
+        for b in self.breaks.items:
+            found = self._trapped_breaks.get(b.number)
+            if found is not None and found[0] == m._id and source not in found[1] and target in found[1]:
+                return f"break {b.number}: {b.text}"
+        return None
+
+    def _released(self, m: Machine, before: int | None) -> None:
+        """Arrangement.on_release: a held machine's turn begins (None: a step may wait for it) or
+        a command moved it from `before` (a breakpoint on a state it reached)."""
+        if before is None:
+            if m is self._gate_for:
+                self._gate_for = None
+                self._pause_reason = self._pause_reason or "step"
+                self._stand(self._gate_after, GATE)
+            return
+        if self.arr.watcher == self.after:
+            return
+        hit = self._state_break(m, before, m._state)
+        if hit is not None:
+            self._pause_reason = hit
+            self._stand(m, TURN)
 
     # -- the watcher -------------------------------------------------------------------------------
     def after(self, m: Machine, ran: int | None, fired: int | None) -> int:
@@ -134,9 +205,11 @@ class Debugger:
             ctx = self.arr.ctx
             self.history.record(m, ran, fired, self.boundaries, ctx.round, self.arr.clock.now, published)
         if self.breaks.items:
-            events: set[Any] = set(published)
-            if fired is not None:
-                events.add(("fired", m._id, ran, fired))
+            events: Any = ()
+            if self.breaks.reads_published:
+                events = set(published)
+                if fired is not None:
+                    events.add(("fired", m._id, ran, fired))
             hit = self.breaks.hit(m._id, self.arr.machines, events)
             if hit is not None:
                 asked = asked if asked == STOP else PAUSE
@@ -144,9 +217,11 @@ class Debugger:
         if published:
             published.clear()
         stop = self._stop_after
-        if stop is not None and (stop == STEP or m is self.arr._live[-1]):
+        if stop == STEP:
             asked = asked if asked == STOP else PAUSE
-            self._pause_reason = self._pause_reason or ("step" if stop == STEP else "step round")
+            self._pause_reason = self._pause_reason or "step"
+        elif stop == ROUND and m is self.arr._live[-1]:
+            self._round_end("step round")
         if self._pause_soon:
             asked = asked if asked == STOP else PAUSE
         return asked
@@ -160,12 +235,24 @@ class Debugger:
         self._pause_soon = True
         self.arr.ask_pause()
 
-    def _stand(self, m: Machine | None) -> None:
-        """Arrangement.on_pause: the run stands here until a command resumes it."""
+    def _round_end(self, reason: str) -> None:
+        """Pause between this round and the next (after the bus's work between them)."""
+        self._stop_after = None
+        self._pause_reason = self._pause_reason or reason
+        self.arr.ask_pause()
+
+    def _on_pause(self, m: Machine | None) -> None:
+        """Arrangement.on_pause: after m's ringlet in a watched round, or between rounds (None)."""
+        self._stand(m, RINGLET if m is not None else ROUND_END)
+
+    def _stand(self, m: Machine | None, origin: str) -> None:
+        """The run stands here until a command resumes it.  `origin`: where (ORIGINS)."""
         arr = self.arr
         arr.pause_asked = False
         self._pause_soon = False
         self._stop_after = None
+        self._gate_for = None
+        self._origin = origin
         self.paused, self.at = True, m
         self.pauses += 1
         self.reason, self._pause_reason = self._pause_reason or "pause asked", ""
@@ -181,11 +268,37 @@ class Debugger:
                 clock.exclude(time.monotonic_ns() - started)  # paused time is no run time
             self.paused = False
             mode, self._resume = self._resume, None
-            self._stop_after = mode if mode in (STEP, ROUND) else None
+            if mode is not None and mode != CONTINUE and not arr._interrupts:
+                self._step_from(origin, m, mode)
             if self.breaks.items:
                 self.breaks.refresh(arr.machines)  # a value set while paused starts a new edge
             self._update_watcher()
             self._notify()
+
+    def _step_from(self, origin: str, m: Machine | None, mode: str) -> None:
+        """Where the step just asked for ends.  In a watched round, or between rounds (the next
+        round is watched), the watcher counts the boundaries.  Inside a plain round (a pause at a
+        marked transition, at a command, before a turn), the scheduler's rare path does: the
+        machine whose turn follows the next ringlet is held, and its turn pauses before it
+        begins; a step to the end of the round, or past the round's last ringlet, pauses
+        between rounds."""
+        if origin in (RINGLET, ROUND_END):
+            self._stop_after = mode
+            return
+        if mode == ROUND:
+            self._round_end("step round")
+            return
+        live = self.arr._live
+        j = live.index(m) if m in live else -1
+        following = j if origin == TURN else j + 1  # the machine whose ringlet the step runs
+        if following + 1 < len(live):
+            self._gate_after, self._gate_for = live[following], live[following + 1]
+            self.arr.hold(self._gate_for)
+        elif following + 1 == len(live):
+            self._round_end("step")  # the round's last ringlet, then between rounds
+        else:
+            self._stop_after = STEP  # the next round's first ringlet: watched
+            self.arr.ctx.wake = 0  # the plain loop ends with this round
 
     def _serve_once(self, timeout: float) -> None:
         try:
@@ -307,11 +420,15 @@ class Debugger:
         t = f"{arr.clock.now / 1e9:.3f} s"
         if not self.paused:
             return f"running (round {arr.ctx.round}, {t})"
-        m = self.at
+        m, origin = self.at, self._origin
         if m is None:
-            place = f"before round {arr.rounds}" if arr.rounds else "before the first round"
-        else:
+            place = f"before round {arr.ctx.round}" if arr.ctx.round or arr.clock.now else "before the first round"
+        elif origin == TURN:
+            place = f"as {m.NAME}'s command took effect (its ringlet is next)"
+        elif origin == RINGLET:
             place = f"round {arr.ctx.round}, after {m.NAME}'s ringlet"
+        else:  # inside a plain round, which counts no rounds: the time says when
+            place = f"after {m.NAME}'s ringlet"
         return f"paused {place} ({t}): {self.reason}"
 
     def states(self) -> list[str]:

@@ -133,6 +133,10 @@ class Arrangement:
         #: Pause at the next round boundary (`on_pause(None)`), asked from anywhere (another
         #: thread too: `ask_pause`); the round loops see it through the attention they raise.
         self.pause_asked = False
+        #: Told at a held machine's turn (the rare path, never a plain ringlet): (m, None) as the
+        #: turn begins, (m, state before) after a command moved it (the debugger: a pause before
+        #: a turn, breakpoints on states reached by commands).
+        self.on_release: Callable[[Machine, int | None], None] | None = None
         self._stopped: int | None = None
         names = [c.NAME for c in classes]
         for n in names:
@@ -204,6 +208,11 @@ class Arrangement:
         _hold(m)  # the gate sets them; a machine setting its own may still fire: _rehold fixes that
         self._attention = True
 
+    def hold(self, m: Machine) -> None:
+        """Send m's next turn through the gate (`_release`, and `on_release` if set): the
+        debugger's pause before a turn.  The gate lets it go on as before once passed."""
+        _hold(m)
+
     def ask_pause(self) -> None:
         """Pause at the next round boundary (the debugger's; a watcher pauses sooner, at the next
         ringlet boundary).  Two plain stores: safe from any thread."""
@@ -271,7 +280,13 @@ class Arrangement:
     def _release(self, m: Machine) -> bool:
         """The turn of a held machine (a new input value to take, new variable values, a command
         pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
-        True if the ringlet goes on."""
+        True if the ringlet goes on.  With `on_release` set (the debugger), it is told first (the
+        turn begins: it may pause before it) and again when a command moved the machine to
+        another state (its breakpoints on states)."""
+        hook = self.on_release
+        if hook is not None:
+            hook(m, None)
+            before = m._state
         inputs = m._inputs
         if inputs is not None and inputs.fresh:
             inputs.snapshot()
@@ -280,13 +295,16 @@ class Arrangement:
             if values is not None:
                 for name, value in values.items():
                     setattr(m, name, value)
+        go = True
         if m._pending is not None:
-            if not self._apply(m):
-                return False  # the command (suspend) ended the ringlet
+            go = self._apply(m)  # False: the command (suspend) ended the ringlet
         elif m._suspended:
-            return False  # suspended: no ringlet
-        _regate(m, self._variables)
-        return True
+            go = False  # suspended: no ringlet
+        if go:
+            _regate(m, self._variables)
+        if hook is not None and m._state != before:
+            hook(m, before)
+        return go
 
     def _gate(self, m: Machine) -> int | None:
         """Stands in for the ringlet of a held machine: release it, then run the real ringlet
@@ -540,7 +558,7 @@ class Arrangement:
         round.  So the run clock lags only during a stretch of firing rounds, by at most
         BATCH - 1 rounds, and a round in which nothing fires always reads it."""
         ctx = self.ctx
-        read, start = time.monotonic_ns, clock._start
+        read = time.monotonic_ns
         idle = clock.idle / 1e9
         idle_ns = clock.idle
         waiter = clock.waiter if idle_ns else None
@@ -566,7 +584,7 @@ class Arrangement:
                 left = 1
             left -= 1
             if not left:
-                t = read() - start
+                t = read() - clock._start  # read each time: a pause of the debugger moves the start
                 if t - now >= FAST:
                     every = 1
                 elif every < BATCH:
