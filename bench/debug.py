@@ -3,7 +3,8 @@
     .venv/bin/python bench/debug.py [--quick]
 
 Each workload of bench/run.py's speed section (a toggle, 10 and 100 of them firing every
-ringlet, 10 and 100 idle machines) runs under the sim clock in five ways: plain (no debugger),
+ringlet, 10 and 100 idle machines), and the how-to's suspend/resume pair driving turtlesim,
+runs under the sim clock in five ways: plain (no debugger),
 with a debugger attached and nothing asked of it (what every `--transport dds` run has), with
 `--break` on a state that is never reached, with `--history 10000`, and with both.  The ways
 alternate inside each round, and a ratio is the median over the rounds of (way / plain in the
@@ -29,6 +30,8 @@ from gen import write_idle  # noqa: E402
 from run import cpu, llfsm_cmd  # noqa: E402
 
 WAYS = ("plain", "debugger", "break on a state", "history 10000", "break + history")
+#: The how-to's suspend/resume pair with turtlesim on the bus: machines that do a robot's work.
+HOW_TO = "how-to pair + turtlesim"
 
 
 def write_exit_toggle(root: Path, name: str) -> Path:
@@ -61,12 +64,26 @@ def build(tmp: Path) -> tuple[list[type], list[type]]:
     ]
 
 
-def timed(classes: list[type], way: str, n: int) -> float:
-    """Ringlets per CPU second of `classes` run for about n ringlets, debugged `way`."""
+def timed(classes: list[type], way: str, n: int, turtlesim: bool = False) -> float:
+    """Ringlets per CPU second of `classes` run for about n ringlets, debugged `way` (with
+    turtlesim on the bus: rounds of 1 ms, as `llfsm run --clock sim --node turtlesim`)."""
     from llfsm.debug.debugger import Debugger
     from llfsm.runtime import Arrangement, RunContext, SimClock
 
-    arr = Arrangement(classes, context=RunContext(SimClock(1_000)))
+    period = 1_000_000 if turtlesim else 1_000
+    ctx = RunContext(SimClock(period))
+    if turtlesim:
+        from llfsm.nodes import NodeOptions, start
+        from llfsm.ros.bus import bus_of
+        from llfsm.runtime.context import activate
+
+        prev = activate(ctx)
+        try:
+            bus_of(ctx).init()
+            start("turtlesim", ctx, NodeOptions())
+        finally:
+            activate(prev)
+    arr = Arrangement(classes, context=ctx)
     if way != "plain":
         history = 10_000 if "history" in way else None
         d = Debugger(arr, history=history)
@@ -75,7 +92,7 @@ def timed(classes: list[type], way: str, n: int) -> float:
             unreached = "C" if "C" in first.STATES else "END"
             d.add_break(f'state({first.NAME}) == "{unreached}"')
     rounds = max(1, n // len(classes))
-    t = cpu(lambda: arr.run(duration_ns=rounds * 1_000))
+    t = cpu(lambda: arr.run(duration_ns=rounds * period))
     return arr.rounds * len(classes) / t
 
 
@@ -85,12 +102,17 @@ def main() -> None:
     args = ap.parse_args()
     tmp = Path(tempfile.mkdtemp(prefix="llfsm-bench-debug-"))
     toggles, idles = build(tmp)
+    from llfsm.targets import load
+
+    machines = HERE.parent / "machines"
+    pair = [load(str(machines / f"{name}.machine")) for name in ("ros2_turtle_suspend_resume", "ros2_blind_turtle_bot")]
     workloads: dict[str, list[type]] = {
         "toggle": toggles[:1],
         "fired 10": toggles[:10],
         "fired 100": toggles[:100],
         "idle 10": idles[:10],
         "idle 100": idles[:100],
+        HOW_TO: pair,
     }
     n = 100_000 if args.quick else 400_000
     rounds = 3 if args.quick else 9
@@ -99,7 +121,8 @@ def main() -> None:
         for w, classes in workloads.items():
             order = WAYS if r % 2 == 0 else WAYS[::-1]
             for way in order:
-                rates[(w, way)].append(timed(classes, way, n))
+                size = n // 20 if w == HOW_TO else n  # 1 ms rounds, turtlesim's timer in most of them
+                rates[(w, way)].append(timed(classes, way, size, turtlesim=w == HOW_TO))
     print("Ringlets per CPU second, and each way's ratio to plain (median over rounds, min-max):\n")
     head = "| workload | plain | " + " | ".join(WAYS[1:]) + " |"
     print(head)

@@ -135,8 +135,8 @@ class Debugger:
         rare path tells of commands and of the turn a step waits for (`on_release`)."""
         self._mark_states()
         judged = any(b.number not in self._trapped_breaks for b in self.breaks.items)
-        want = judged or self.history is not None or self._stop_after is not None or self.inner is not None
-        self.arr.watcher = self.after if want else self.inner
+        want = judged or self._stop_after is not None or self.inner is not None
+        self.arr.watcher = self.after if want else self._record if self.history is not None else self.inner
         rare = bool(self._trapped_breaks) or self._gate_for is not None
         self.arr.on_release = self._released if rare else None
 
@@ -194,6 +194,15 @@ class Debugger:
             self._stand(m, TURN)
 
     # -- the watcher -------------------------------------------------------------------------------
+    def _record(self, m: Machine, ran: int | None, fired: int | None) -> int:
+        """The watcher when only the history needs every boundary: `after`, without the rest."""
+        self.boundaries += 1
+        published = self.published
+        self.history.record(m, ran, fired, self.boundaries, self.arr.ctx.round, self.arr.clock.now, published)  # type: ignore[union-attr]
+        if published:
+            published.clear()
+        return PAUSE if self._pause_soon else GO
+
     def after(self, m: Machine, ran: int | None, fired: int | None) -> int:
         """Arrangement.watcher: called at every ringlet boundary while installed."""
         asked = GO if self.inner is None else self.inner(m, ran, fired)
@@ -316,6 +325,8 @@ class Debugger:
 
     def _drain(self) -> None:
         """Between rounds while running: what other threads handed in (`submit`)."""
+        if self.inbox.empty():
+            return  # the common case, without raising queue.Empty
         while True:
             try:
                 fn = self.inbox.get_nowait()
