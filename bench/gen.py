@@ -17,6 +17,29 @@ def write_toggle(root: Path, name: str = "toggle") -> Path:
     return d
 
 
+def write_bus_toggle(root: Path, name: str = "bus_toggle") -> Path:
+    """The toggle, from a machine that uses the bus: its INITIAL makes a node with a 10 ms timer,
+    a publisher and a callback subscriber, as every ROS run has, and keeps them in its variables
+    (so the bus's lifetimes walk looks at them), then it toggles as `write_toggle` does."""
+    d = write_toggle(root, name)
+    (d / "machine.yaml").write_text(
+        "states:\n  - name: INITIAL\n    transitions: [A]\n"
+        "  - name: A\n    transitions: [B]\n  - name: B\n    transitions: [A]\n"
+    )
+    (d / "State_INITIAL_Transition_0.expr").write_text("True\n")
+    (d / "State_INITIAL_OnEntry.py").write_text(
+        "ros.init()\nnode = ros.Node('bench')\ntimer = node.create_timer(0.01, lambda: None)\n"
+        "pub = node.create_publisher(String, '/chatter', 10)\n"
+        "sub = node.create_subscription(String, '/chatter', lambda m: None, 10)\n"
+    )
+    (d / "Includes.py").write_text("from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import String\n")
+    (d / "Variables.py").write_text(
+        "count: int = 0\nnode: ros.Node = None\ntimer: ros.Timer = None\npub: ros.Publisher = None\n"
+        "sub: ros.Subscription = None\n"
+    )
+    return d
+
+
 def write_idle(root: Path, name: str = "idle") -> Path:
     """One state whose only guard is false: every ringlet is idle (guard evaluated, nothing fires)."""
     d = root / f"{name}.machine"

@@ -35,7 +35,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from gen import write_big, write_idle, write_toggle  # noqa: E402
+from gen import write_big, write_bus_toggle, write_idle, write_toggle  # noqa: E402
 
 Table = tuple[str, list[str], list[list[str]]]
 QUICK = False
@@ -134,28 +134,13 @@ def plain_arrangement(machines: int, fired: bool) -> Timed:
     return timed
 
 
-def llfsm_timed(classes: list[type], clock: str = "sim", bus: bool = False) -> Timed:
-    """n ringlets of an arrangement of `classes`: the sim clock (1 us rounds), the wall clock
-    (rounds back to back: every machine here fires), or the sim clock with a live bus (a node
-    with a 10 ms timer, a publisher and a callback subscriber, as every ROS run has)."""
+def llfsm_timed(classes: list[type], clock: str = "sim") -> Timed:
+    """n ringlets of an arrangement of `classes`: the sim clock (1 us rounds), or the wall clock
+    (rounds back to back: every machine here fires)."""
     from llfsm.runtime import Arrangement, RunContext, SimClock, WallClock
 
     def timed(n: int) -> tuple[int, float]:
         ctx = RunContext(SimClock(1_000) if clock == "sim" else WallClock(idle_ns=0))
-        if bus:
-            from llfsm import ros
-            from llfsm.msgs.std_msgs.msg import String
-            from llfsm.runtime.context import activate
-
-            prev = activate(ctx)
-            try:
-                ros.init()
-                node = ros.Node("bench")
-                node.create_timer(0.01, lambda: None)
-                node.create_publisher(String, "/chatter", 10)
-                node.create_subscription(String, "/chatter", lambda m: None, 10)
-            finally:
-                activate(prev)
         arr = Arrangement(classes, context=ctx)
         rounds = n // len(classes)
         if clock == "sim":
@@ -253,28 +238,43 @@ def sismic_toggle(n: int) -> tuple[int, float]:
     return n, cpu(run)
 
 
-def machine_paths(tmp: Path) -> tuple[list[Path], list[Path]]:
-    """100 toggles and 100 idle machines, each its own module, built into tmp/out."""
-    for i in range(100):
+def arrangement_sizes() -> tuple[int, int]:
+    """How many machines the arrangements of the ringlet table hold.  --quick stops at 30: the
+    native build compiles every machine module in one mypyc run, about 2 s a module here (200
+    modules took 451 s on the shared 2-core machine)."""
+    return (10, 30) if QUICK else (10, 100)
+
+
+def machine_paths(tmp: Path) -> list[Path]:
+    """The toggle that uses the bus, then as many toggles and idle machines as the largest
+    arrangement, each its own module, built into tmp/out."""
+    count = max(arrangement_sizes())
+    write_bus_toggle(tmp / "src")
+    for i in range(count):
         write_toggle(tmp / "src", f"toggle_{i}")
         write_idle(tmp / "src", f"idle_{i}")
     out = tmp / "out"
     subprocess.run([*llfsm_cmd(), "build", "-q", str(tmp / "src"), "-o", str(out)], check=True)
-    return [out / f"toggle_{i}.py" for i in range(100)], [out / f"idle_{i}.py" for i in range(100)]
+    return [
+        out / "bus_toggle.py",
+        *(out / f"toggle_{i}.py" for i in range(count)),
+        *(out / f"idle_{i}.py" for i in range(count)),
+    ]
 
 
-def contestants(toggles: list[Path], idles: list[Path], prefix: str = "") -> dict[str, Timed]:
-    """llfsm's contestants, by name; `prefix` tells the pure ones from the native ones."""
+def contestants(paths: list[Path], prefix: str = "") -> dict[str, Timed]:
+    """llfsm's contestants, by name, from `machine_paths`; `prefix` tells the pure ones from the
+    native ones."""
     from llfsm.targets import load
 
-    tog = [load(str(p)) for p in toggles]
-    idl = [load(str(p)) for p in idles]
+    bus_toggle, rest = load(str(paths[0])), [load(str(p)) for p in paths[1:]]
+    tog, idl = rest[: len(rest) // 2], rest[len(rest) // 2 :]
     out: dict[str, Timed] = {
         f"{prefix}toggle sim": llfsm_timed(tog[:1]),
         f"{prefix}toggle wall": llfsm_timed(tog[:1], "wall"),
-        f"{prefix}toggle bus": llfsm_timed(tog[:1], bus=True),
+        f"{prefix}toggle bus": llfsm_timed([bus_toggle]),
     }
-    for k in (10, 100):
+    for k in arrangement_sizes():
         out[f"{prefix}fired {k}"] = llfsm_timed(tog[:k])
         out[f"{prefix}idle {k}"] = llfsm_timed(idl[:k])
     return out
@@ -282,19 +282,17 @@ def contestants(toggles: list[Path], idles: list[Path], prefix: str = "") -> dic
 
 def bounds() -> dict[str, Timed]:
     out: dict[str, Timed] = {"plain toggle": plain_toggle}
-    for k in (10, 100):
+    for k in arrangement_sizes():
         out[f"plain fired {k}"] = plain_arrangement(k, True)
         out[f"plain idle {k}"] = plain_arrangement(k, False)
     return out
 
 
 def worker() -> None:
-    """`run.py --worker` in a process with LLFSM_NATIVE set: reads the module paths (toggles,
-    then as many idle machines) on its first line, then times the native contestants it is
+    """`run.py --worker` in a process with LLFSM_NATIVE set: reads the module paths (as
+    `machine_paths` gives them) on its first line, then times the native contestants it is
     asked for ("name n"), one line back each ("work seconds")."""
-    paths = [Path(p) for p in sys.stdin.readline().split()]
-    half = len(paths) // 2
-    mine = contestants(paths[:half], paths[half:], "native ")
+    mine = contestants([Path(p) for p in sys.stdin.readline().split()], "native ")
     import llfsm.runtime.scheduler as sched
 
     print("compiled" if (sched.__file__ or "").endswith(".so") else "plain", flush=True)
@@ -307,7 +305,7 @@ def worker() -> None:
 class Native:
     """The native contestants, timed by a worker process that runs the compiled runtime."""
 
-    def __init__(self, toggles: list[Path], idles: list[Path]) -> None:
+    def __init__(self, paths: list[Path]) -> None:
         from llfsm.cachedir import cache_root
 
         self.proc: subprocess.Popen[str] | None = None
@@ -321,19 +319,19 @@ class Native:
         if self.why is not None:
             return
         t = time.perf_counter()
-        nb = native_build([p.resolve() for p in toggles + idles], cache_root())
+        nb = native_build([p.resolve() for p in paths], cache_root())
         self.build_seconds = time.perf_counter() - t
         self.cached = nb.cached
         env = dict(os.environ, **{ENV: str(nb.folder)})
         self.proc = subprocess.Popen(
-            [sys.executable, __file__, "--worker"],
+            [sys.executable, __file__, "--worker", *(["--quick"] if QUICK else [])],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
             env=env,
         )
         assert self.proc.stdin is not None and self.proc.stdout is not None
-        self.proc.stdin.write(" ".join(str(p) for p in toggles + idles) + "\n")
+        self.proc.stdin.write(" ".join(str(p) for p in paths) + "\n")
         self.proc.stdin.flush()
         kind = self.proc.stdout.readline().strip()
         if kind != "compiled":
@@ -381,11 +379,11 @@ def fmt_ratio(r: tuple[float, float, float], digits: int = 2) -> str:
 
 
 def section_speed(tmp: Path) -> list[Table]:
-    toggles, idles = machine_paths(tmp)
+    paths = machine_paths(tmp)
     n = 200_000 if QUICK else 1_000_000
     rounds = 7 if QUICK else 9
-    named: dict[str, Timed] = {**bounds(), **contestants(toggles, idles)}
-    native = Native(toggles, idles)
+    named: dict[str, Timed] = {**bounds(), **contestants(paths)}
+    native = Native(paths)
     if native.proc is not None:
         for name in list(named):  # the same workloads, compiled
             if not name.startswith("plain"):
@@ -418,10 +416,10 @@ def section_speed(tmp: Path) -> list[Table]:
         ["plain Python (the bound)", fmt_rate(med["plain toggle"]), "1.00", ""],
         row("llfsm, sim clock", "toggle sim", "plain toggle", "≥ 0.5"),
         row("llfsm, wall clock", "toggle wall", "plain toggle", "≥ 0.4"),
-        row("llfsm, sim clock, a bus live", "toggle bus", "plain toggle", "≥ 0.45"),
+        row("llfsm, sim clock, a machine using a live bus", "toggle bus", "plain toggle", "≥ 0.45"),
         row("llfsm --native, sim clock", "native toggle sim", "plain toggle", "≥ 1.0"),
         row("llfsm --native, wall clock", "native toggle wall", "plain toggle", "≥ 1.0"),
-        row("llfsm --native, sim clock, a bus live", "native toggle bus", "plain toggle", "≥ 1.0"),
+        row("llfsm --native, sim clock, a machine using a live bus", "native toggle bus", "plain toggle", "≥ 1.0"),
     ]
     for name in others:
         if name in missing:
@@ -432,7 +430,7 @@ def section_speed(tmp: Path) -> list[Table]:
                 [name, fmt_rate(med[name]), fmt_ratio(r, 4), f"llfsm is {med['toggle sim'] / med[name]:,.0f}x"]
             )
     ring_rows = []
-    for k in (10, 100):
+    for k in arrangement_sizes():
         for kind, target in (("fired", "≥ 1/3"), ("idle", "≥ 0.6")):
             bound = f"plain {kind} {k}"
             ring_rows.append(
@@ -790,6 +788,7 @@ def machine_description() -> str:
 def main() -> None:
     global QUICK
     if sys.argv[1:2] == ["--worker"]:
+        QUICK = "--quick" in sys.argv[2:]  # the same arrangement sizes as the process that started it
         worker()
         return
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)

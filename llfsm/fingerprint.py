@@ -14,7 +14,7 @@ import stat
 import time
 
 from . import __version__
-from .machinedir import refused_link, source_ref
+from .machinedir import LAYOUT_FILE, refused_link, source_ref
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
@@ -83,7 +83,8 @@ def machine_fingerprint(path: str | Path, module_dir: str | Path, known: dict[st
     h = hashlib.sha256(compiler_id().encode())
     h.update(os.fsencode(source_ref(path, module_dir)))
     with os.scandir(path) as it:  # file types from the listing: no stat per file
-        entries = sorted((e for e in it if not e.name.startswith(".")), key=lambda e: e.name)
+        # layout.yaml is where the editor drew the states: it changes nothing a build makes
+        entries = sorted((e for e in it if not e.name.startswith(".") and e.name != LAYOUT_FILE), key=lambda e: e.name)
     for e in entries:
         name = e.name
         try:
@@ -129,7 +130,7 @@ def stat_signature(machine_dir: str) -> tuple[str, int] | None:
     newest = 0
     try:
         with os.scandir(machine_dir) as it:
-            entries = sorted((e.name, e.path) for e in it if not e.name.startswith("."))
+            entries = sorted((e.name, e.path) for e in it if not e.name.startswith(".") and e.name != LAYOUT_FILE)
         files = entries + [(p, p) for p in _compiler_files()]
     except OSError:
         return None

@@ -16,6 +16,9 @@ if TYPE_CHECKING:
     from pathlib import Path  # not at run time: pathlib costs `llfsm run` a tenth of its start-up
 
 MACHINE_SUFFIX = ".machine"
+#: Where the editor placed the states (llfsm.lang.layout_file): no part of what a machine does,
+#: so no part of its fingerprint (a machine builds to the same bytes whatever its layout).
+LAYOUT_FILE = "layout.yaml"
 
 
 def machine_name_of(path: Path) -> str:

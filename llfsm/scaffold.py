@@ -12,13 +12,14 @@ import os
 import re
 import secrets
 import shutil
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import jinja2
 
-from .lang.model import is_valid_name
+from .lang.files import MAX_STATE_NAME
+from .lang.model import MAX_MACHINE_NAME, is_valid_name
 from .templating import environment
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -83,26 +84,61 @@ def _write_tree(target: Path, files: dict[str, str]) -> None:
         raise
 
 
-def _machine_files(name: str, description: str | None) -> dict[str, str]:
-    if not is_valid_name(name):
+#: The states of a new machine when none are named: INITIAL -> END.
+DEFAULT_STATES = ("INITIAL", "END")
+#: Most states `--states` takes (a skeleton, not a generator).
+MAX_STATES = 1000
+
+
+def machine_files(name: str, description: str | None, states: Sequence[str] | None = None) -> dict[str, str]:
+    """The files of a new machine NAME (relative name -> text): `states` in a chain, each to the
+    next after 100 ms (the first says hello in its OnEntry), the last accepting; every guard file
+    starts with `# -> TARGET` (docs/machine-format.md).  ScaffoldError for a bad name."""
+    if not is_valid_name(name) or len(name) > MAX_MACHINE_NAME:
         raise ScaffoldError(
-            f"{name!r} is not a valid machine name: use letters, digits and _, not starting "
-            "with a digit, and not a Python keyword"
+            f"{_shown(name)} is not a valid machine name: use letters, digits and _, not starting "
+            f"with a digit, not a Python keyword, at most {MAX_MACHINE_NAME} characters"
         )
+    chain = list(DEFAULT_STATES if states is None else states)
+    if not chain or len(chain) > MAX_STATES:
+        raise ScaffoldError(f"a machine needs 1 to {MAX_STATES} states, not {len(chain)}")
+    for s in chain:
+        if not isinstance(s, str) or not is_valid_name(s) or len(s) > MAX_STATE_NAME:
+            raise ScaffoldError(
+                f"{_shown(s)} is not a valid state name: use letters, digits and _, not starting with a digit, "
+                f"not a Python keyword, at most {MAX_STATE_NAME} characters"
+            )
+    twice = sorted({s for s in chain if chain.count(s) > 1})
+    if twice:
+        raise ScaffoldError(f"state {twice[0]} is named twice")
     env = _env("skeleton")
-    return {
-        tpl.removesuffix(".j2"): env.get_template(tpl).render(
-            name=name, description=_yaml_text(description or f"The machine {name}.")
-        )
-        for tpl in env.list_templates()
+    links = list(zip(chain, [*chain[1:], None], strict=True))
+    files = {
+        "machine.yaml": env.get_template("machine.yaml.j2").render(
+            description=_yaml_text(description or f"The machine {name}."), chain=links
+        ),
+        "Includes.py": env.get_template("Includes.py.j2").render(),
+        "Variables.py": env.get_template("Variables.py.j2").render(),
+        f"State_{chain[0]}_OnEntry.py": env.get_template("OnEntry.py.j2").render(state=chain[0]),
     }
+    for s, t in links:
+        if t is not None:
+            files[f"State_{s}_Transition_0.expr"] = env.get_template("guard.expr.j2").render(target=t)
+    return files
 
 
-def create_machine(directory: Path, name: str, description: str | None = None) -> Path:
-    """Write NAME.machine with a valid INITIAL -> END skeleton; never overwrites anything."""
-    files = _machine_files(name, description)
+def _shown(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:59] + "…"
+
+
+def create_machine(
+    directory: Path, name: str, description: str | None = None, states: Sequence[str] | None = None
+) -> Path:
+    """Write NAME.machine (`machine_files`); never overwrites anything."""
+    files = machine_files(name, description, states)
     target = directory / f"{name}.machine"
-    if target.exists():
+    if target.exists() or target.is_symlink():
         raise ScaffoldError(f"{target} already exists; nothing was written")
     directory.mkdir(parents=True, exist_ok=True)
     _write_tree(target, files)
@@ -180,10 +216,10 @@ def create_package(
     if "llfsm" not in deps:
         deps.append("llfsm")  # setup.py compiles with it, and `llfsm run` runs the machines
     names = split_names(machines) or [name]
-    machine_files: dict[str, str] = {}
+    in_machines: dict[str, str] = {}
     for m in names:
-        for fname, text in _machine_files(m, None).items():
-            machine_files[f"machine/{m}.machine/{fname}"] = text
+        for fname, text in machine_files(m, None).items():
+            in_machines[f"machine/{m}.machine/{fname}"] = text
     license = " ".join(license.split())
     if not license:
         raise ScaffoldError("--license must not be empty")
@@ -211,7 +247,7 @@ def create_package(
         "setup.cfg": env.get_template("setup.cfg.j2").render(values),
         f"resource/{name}": "",  # the ament index marker: colcon-ros installs it as the package's entry
         "test/test_llfsm_check.py": env.get_template("test/test_llfsm_check.py.j2").render(values),
-        **machine_files,
+        **in_machines,
     }
     warnings = _validate_manifest(files["package.xml"], name, deps, license)
     if license not in AMENT_LICENSES:

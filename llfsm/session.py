@@ -44,7 +44,7 @@ from .runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer
 from .runtime.context import activate
 from .runtime.errors import passes_through, report_for
 from .runtime.inputs import TOPIC
-from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE
+from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE, check_names
 from .runtime.watchdog import Watchdog
 from .targets import InvalidMachine, MachineLoadError, TargetError, load
 
@@ -58,6 +58,7 @@ if TYPE_CHECKING:
     from .debug.prompt import Prompt
     from .outputs import StreamedOutput
     from .ros.bus import Bus
+    from .ros.logging import LogSettings
     from .ros.transports.base import Transport
     from .runtime.errors import ErrorReport
     from .runtime.machine import Machine
@@ -101,6 +102,8 @@ FIELDS = (
     "remaps",
     "params",
     "params_files",
+    "log_levels",
+    "log_file",
     "echoes",
     "image",
     "view",
@@ -144,6 +147,8 @@ class RunOptions:
     remaps: tuple[str, ...]
     params: tuple[str, ...]
     params_files: tuple[str, ...]
+    log_levels: tuple[str, ...]
+    log_file: bool
     echoes: tuple[str, ...]
     image: str | None
     view: bool
@@ -182,6 +187,8 @@ class RunOptions:
         remaps: tuple[str, ...] = (),
         params: tuple[str, ...] = (),
         params_files: tuple[str, ...] = (),
+        log_levels: tuple[str, ...] = (),
+        log_file: bool = False,
         echoes: tuple[str, ...] = (),
         image: str | None = None,
         view: bool = False,
@@ -340,6 +347,8 @@ class Session:
         #: The run's debugger (llfsm.debug), when it has one (`debugs`).
         self.debugger: Debugger | None = None
         self.prompt: Prompt | None = None
+        #: `--log-level` and `--log-file`, read by _check_options (None without them).
+        self.log_settings: LogSettings | None = None
         self._check_options()
 
     # -- checks before anything opens ---------------------------------------------------------------
@@ -351,6 +360,13 @@ class Session:
             raise UsageError(
                 "nothing to run: give a machine (TARGET), or --node NAME / --echo TOPIC to run on their own"
             )
+        if o.log_levels or o.log_file:
+            from .ros.logging import LogSettings  # deferred: start-up (only a run given them reads them)
+
+            try:
+                self.log_settings = LogSettings(o.log_levels, o.log_file)
+            except ValueError as e:
+                raise UsageError(str(e)) from None
         if o.transport == "dds" and o.clock == "sim":
             raise UsageError(
                 "--clock sim cannot be used with --transport dds: DDS peers live on the wall clock (their messages "
@@ -381,6 +397,10 @@ class Session:
                 ) from None
             except MachineLoadError as e:
                 raise MachineFailed(e.report) from None
+        try:  # before any node or transport starts: nothing else is said or opened for nothing
+            check_names(self.classes, self.options.suspended)
+        except ArrangementError as e:
+            raise UsageError(str(e)) from None
 
     def _check_outputs(self) -> None:
         o = self.options
@@ -416,6 +436,9 @@ class Session:
         ran = False
         failed_outputs: list[str] = []
         bag_error: str | None = None
+        if self.log_settings is not None:  # before any node: the bus takes them when it is initialised
+            settings = self.log_settings
+            ctx.on_init.append(lambda bus: settings.apply(bus, self.say, o.verbose))
         try:
             if o.transport != "inproc":
                 self.transport = self._open_transport()
@@ -455,6 +478,8 @@ class Session:
                 with signals_handled(arr):
                     ran = True  # from here the run's end hooks (ctx.at_end) close what the nodes and bus opened
                     result = arr.run(o.duration, grace)
+                if result.reason == "interrupted" and (left := _unfinished(arr)):
+                    self.say(f"llfsm: the grace time ({grace / 1e9:g} s) ran out before {left} finished")
             finally:
                 if self.web_server is not None:
                     self.web_server.stop()
@@ -526,9 +551,10 @@ class Session:
                     echo_topic(bus, topic)
             except (InvalidNameError, ValueError) as e:
                 raise UsageError(str(e)) from None
-            if o.nodes or o.params or o.params_files or self.binds_inputs:
+            if o.nodes or o.params or o.params_files or self.binds_inputs or self.has_parameters:
                 # the nodes (and the input readers) are up (ros.ok() is true from the first round),
-                # and the machines' nodes will be too: their parameters are set before their first ringlet
+                # and the machines' nodes will be too: their parameters are set before their first
+                # ringlet, and a machine that declares parameters is on the graph without a ros.init()
                 bus.init()
             options = NodeOptions(image=Path(o.image) if o.image else None, view=o.view)
             for name in dict.fromkeys(o.nodes):
@@ -744,6 +770,7 @@ class Session:
             or o.record
             or o.play
             or self.binds_inputs
+            or self.has_parameters
         )
 
     @property
@@ -752,9 +779,24 @@ class Session:
         return any(entry[TOPIC] is not None for cls in self.classes for entry in cls.INPUTS)
 
     @property
+    def has_parameters(self) -> bool:
+        """Whether a machine declares `parameters:` (SPEC 12): they are parameters of its node
+        /llfsm/M, so the run opens the bus, whether or not the machine's code calls ros.init()."""
+        return any(cls.PARAMETERS for cls in self.classes)
+
+    @property
     def world(self) -> TurtleWorld | None:
         """The turtle simulator's world (`--node turtlesim`), for the web view to draw live."""
         return getattr(self.nodes.get("turtlesim"), "world", None)
+
+
+def _unfinished(arr: Arrangement) -> str:
+    """The machines of a run that did not finish, each with where it stands: `bot (in TURN)`."""
+    return ", ".join(
+        f"{m.NAME} ({'suspended in' if m._suspended else 'in'} {m.STATES[m._state]})"
+        for m in arr.machines
+        if not m._finished
+    )
 
 
 def _machine_yaml_of(m: Machine, targets: tuple[str, ...]) -> str:

@@ -344,6 +344,7 @@ GOVERNED: dict[str, tuple[str, dict[str, str]]] = {
         {
             "llfsm.cli._commands": "registers every command on the group",
             "llfsm.cli._exits": "shared: how a command ends, without click",
+            "llfsm.cli._launch": "shared by `llfsm launch`'s click command and its fast path",
             "llfsm.cli._group": "shared: the click group and what commands share on click's side",
             "llfsm.cli._ros2": "shared by the ros2-style verb groups",
             "llfsm.cli._run": "shared by `llfsm run`'s click command and its fast path",

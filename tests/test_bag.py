@@ -264,10 +264,23 @@ def test_record_topic_selects_topics(tmp_path: Path) -> None:
 
 def test_wall_clock_timestamps_are_epoch_times(tmp_path: Path) -> None:
     bag = tmp_path / "wall"
+    # Three messages 100 ms apart, then the machine ends the run itself: a fixed duration of wall
+    # time saw no message at all on a machine loaded to 100 (the recorder's start took it all).
+    m = write_machine(
+        tmp_path,
+        "three",
+        {"INITIAL": [("SAY", "True")], "SAY": [("END", "n >= 3"), ("SAY", "after_ms(100)")], "END": None},
+        {
+            "INITIAL_OnEntry": (
+                "ros.init()\nnode = ros.Node('three')\nchat = node.create_publisher(String, '/chat', 10)\n"
+            ),
+            "SAY_OnEntry": "n += 1\nchat.publish(String(data=f'step {n}'))\n",
+        },
+        variables="n: int = 0\nchat: ros.Publisher\nnode: ros.Node\n",
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import String\n",
+    )
     before = time.time_ns()
-    # 2 s of wall-clock run time: on a loaded machine the first rounds of a recording run (its
-    # writer process starting, the first definitions) have been seen to take half a second
-    assert llfsm("run", driver(tmp_path), "--duration", "2s", "--record", bag).status == 0
+    assert llfsm("run", m, "--duration", "120s", "--record", bag).status == 0
     after = time.time_ns()
     times = [t for t, _ in rosbags_messages(bag)["/chat"]]
     assert len(times) >= 2 and before <= times[0] < times[-1] <= after

@@ -8,12 +8,14 @@ import os
 import shutil
 import subprocess
 import sys
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
 from helpers import MACHINES, REPO, llfsm, run_sim, write_machine
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from PIL import Image
 
 from llfsm.compiler import build as build_mod
 from llfsm.compiler.build import build_machine
@@ -214,12 +216,53 @@ def test_graph_mermaid_and_dot_show_guards(tmp_path: Path) -> None:
     assert '"COUNT" -> "COUNT" [label="1. after_ms(200)"];' in r.stdout
 
 
-def test_graph_images_need_graphviz(tmp_path: Path) -> None:
-    r = llfsm("graph", MACHINES / "counter.machine", "--format", "svg", "-o", tmp_path / "g.svg")
-    if shutil.which("dot"):
-        assert r.status == 0 and (tmp_path / "g.svg").read_text().lstrip().startswith("<")
-    else:
-        assert r.status == 1 and "Graphviz" in r.stderr and not (tmp_path / "g.svg").exists()
+def test_graph_draws_svg_and_png_itself(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("PATH", str(tmp_path))  # no Graphviz, whatever the machine has
+    m = MACHINES / "counter.machine"
+    assert llfsm("graph", m, "--format", "svg", "-o", tmp_path / "g.svg").status == 0
+    root = ET.parse(tmp_path / "g.svg").getroot()
+    ns = {"s": "http://www.w3.org/2000/svg"}
+    states = {g.get("data-state") for g in root.iterfind(".//s:g[@data-state]", ns)}
+    assert states == {"INITIAL", "COUNT", "END", "SUSPENDED"}
+    arrows = {(p.get("data-source"), p.get("data-index"), p.get("data-target")) for p in root.iterfind(".//s:path", ns)}
+    assert {("INITIAL", "0", "COUNT"), ("COUNT", "0", "END"), ("COUNT", "1", "COUNT")} <= arrows
+    labels = ["".join(t.itertext()) for t in root.iterfind(".//s:g[@class='guard']/s:text", ns)]
+    assert "0: count >= limit" in labels and "1: after_ms(200)" in labels
+    assert root.find("s:style", ns) is not None  # it carries its look: it is a file of its own
+    assert llfsm("graph", m, "--format", "png", "-o", tmp_path / "g.png").status == 0
+    with Image.open(tmp_path / "g.png") as img:
+        assert img.format == "PNG"
+        assert img.size == (round(float(root.get("width")) * 2), round(float(root.get("height")) * 2))
+        pixels = img.convert("RGB")
+        colours = {c for _, c in pixels.getcolors(maxcolors=1 << 24) or []}
+    assert (255, 255, 255) in colours and (227, 242, 253) in colours  # the page, the states' fill
+    assert any(r < 100 and g < 120 and b < 130 for r, g, b in colours)  # edges and names in ink
+
+
+def test_graph_places_states_where_layout_yaml_says(tmp_path: Path) -> None:
+    m = write_machine(tmp_path, "p", {"A": [("B", "True")], "B": [("A", "after(1)")]})
+    layout = "states:\n  A: {x: 100, y: 100}\n  B: {x: 400, y: 100}\n"
+    (m / "layout.yaml").write_text(layout)
+
+    def centres() -> dict[str, tuple[float, float]]:
+        root = ET.fromstring(llfsm("graph", m, "--format", "svg").stdout.split("\n", 1)[1])
+        out = {}
+        for g in root.iter("{http://www.w3.org/2000/svg}g"):
+            if g.get("data-state"):
+                r = g.find("{http://www.w3.org/2000/svg}rect")
+                assert r is not None
+                out[g.get("data-state")] = (
+                    float(r.get("x")) + float(r.get("width")) / 2,
+                    float(r.get("y")) + float(r.get("height")) / 2,
+                )
+        return out
+
+    c = centres()
+    assert c["B"][0] - c["A"][0] == 300 and c["B"][1] == c["A"][1]  # side by side, 300 apart
+    assert llfsm("graph", m, "--format", "png", "-o", m.parent / "p.png").status == 0
+    (m / "layout.yaml").write_text(layout.replace("x: 400, y: 100", "x: 100, y: 400"))
+    c = centres()
+    assert c["B"][1] - c["A"][1] == 300 and c["B"][0] == c["A"][0]  # one under the other
 
 
 def test_schema_is_json_schema_of_machine_yaml() -> None:
@@ -412,3 +455,26 @@ def test_literals_and_docstrings_keep_their_values_within_120_columns(value: obj
         want = " ".join(text.split()) or "A machine."
         assert ast.get_docstring(tree.body[0] if indent else tree, clean=False) == want
         assert all(len(line) <= WIDTH for line in doc.split("\n"))
+
+
+def test_a_300_state_machine_is_laid_out_within_the_dummy_budget() -> None:
+    # every state also goes to END, as the how-to writes `not ros.ok()`: 90,000 dummies unbounded
+    from llfsm.diagram import layout as layout_mod
+    from llfsm.diagram.svg import layout
+
+    names = [f"S{i}" for i in range(299)] + ["END"]
+    states = [
+        {
+            "name": s,
+            "transitions": [{"index": 0, "target": "END", "guard": "not ros.ok()"}]
+            + ([{"index": 1, "target": names[i + 1], "guard": "True"}] if i < 298 else []),
+            "accepting": False,
+        }
+        for i, s in enumerate(names[:-1])
+    ] + [{"name": "END", "transitions": [], "accepting": True}]
+    placed = layout({"name": "big", "states": states, "initial": "S0", "suspend": None})
+    assert set(placed.centres) == set(names)
+    assert len(placed.routes) == 597 and all(len(r.points) >= 2 and r.label is not None for r in placed.routes)
+    straight = [r for r in placed.routes if len(r.points) == 2]  # beyond the budget: one curve each
+    long = sum((len(r.points) - 2) // 2 for r in placed.routes if len(r.points) > 2)  # two points per dummy
+    assert straight and long <= layout_mod.MAX_DUMMIES

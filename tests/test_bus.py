@@ -515,3 +515,41 @@ def test_a_spin_returns_as_soon_as_a_poll_brings_the_reply_in() -> None:
             assert transport.waits - before == 1  # the one wait the reply came in after, no more
     finally:
         activate(prev)
+
+
+# -- two nodes of one name ---------------------------------------------------------------------------
+
+_NODE = "from llfsm import ros\n"
+
+
+def _noder(root: Path, name: str, node: str, states: dict | None = None) -> Path:  # type: ignore[type-arg]
+    return write_machine(
+        root,
+        name,
+        states or {"A": [("A", "after_ms(2)")]},
+        {"A_OnEntry": f"ros.init()\nnode = ros.Node({node!r})\n"},
+        variables="node: ros.Node = None\n",
+        includes=_NODE,
+    )
+
+
+WARNING = (
+    "llfsm: warning: 2 nodes of this run are named {}: ROS 2 tools cannot tell them apart and their parameter "
+    "services clash; give one of them another name or namespace"
+)
+
+
+def test_two_nodes_of_one_name_are_said_once(tmp_path: Path) -> None:
+    """Issue 27, item 8: two machines making ros.Node("x") were silent, as was a machine's node
+    named like a --node."""
+    r = run_sim(_noder(tmp_path, "one", "x"), _noder(tmp_path, "two", "x"), "--duration", "20ms")
+    assert r.status == 0, r.stderr
+    assert r.stderr.splitlines().count(WARNING.format("/x")) == 1  # once, though both make it again and again
+    r = run_sim(_noder(tmp_path, "sim", "turtlesim"), "--node", "turtlesim", "--duration", "5ms")
+    assert WARNING.format("/turtlesim") in r.stderr.splitlines()
+
+
+def test_a_node_made_anew_is_no_twin_of_the_one_it_replaces(tmp_path: Path) -> None:
+    # each entry of A makes its node again; the variable drops the old one
+    r = run_sim(_noder(tmp_path, "again", "x"), "--duration", "20ms")
+    assert r.status == 0 and "warning" not in r.stderr, r.stderr

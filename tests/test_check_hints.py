@@ -137,6 +137,43 @@ class TestCFunctions:
         assert len(diags) == 1 and "`total: int = 0`" in diags[0].message
 
 
+class TestInterfaceTypesWithoutTheirImport:
+    """Issue 27, item 7: a message class used without its import was told to be declared as
+    `TurtlePosition: int = 0` in Variables.py; its hint is the import line."""
+
+    @pytest.mark.parametrize(
+        ("code", "variables"),
+        [
+            ("req = TurtlePosition.Request()\nprint(req)\n", None),
+            ("msg.linear.x = 2.0\n", "msg: Twist = Twist()\n"),
+            ("print(Twist)\n", None),  # read, not called
+        ],
+    )
+    def test_the_hint_is_the_import_line_and_following_it_checks_clean(
+        self, tmp_path: Path, code: str, variables: str | None
+    ) -> None:
+        m = _machine(tmp_path, A_OnEntry=code, variables=variables)
+        diags = [d for d in _diags(m) if d.code == "LF040"]
+        assert len(diags) == 1, diags
+        assert "Variables.py" not in diags[0].message and "it is an interface type" in diags[0].message
+        [line] = [s for s in _suggested(diags[0].message) if s.startswith("from llfsm.msgs.")]
+        (m / "Includes.py").write_text(line + "\n")
+        assert _diags(m) == []
+
+    def test_a_name_two_packages_define_gets_both_lines(self, tmp_path: Path) -> None:
+        diags = _diags(_machine(tmp_path, A_OnEntry="p = Pose()\nprint(p)\n"))
+        assert _suggested(diags[0].message)[-2:] == [
+            "from llfsm.msgs.geometry_msgs.msg import Pose",
+            "from llfsm.msgs.turtlesim.msg import Pose",
+        ]
+
+    def test_a_type_of_a_users_package_beside_the_machine(self, tmp_path: Path) -> None:
+        (tmp_path / "my_msgs" / "srv").mkdir(parents=True)
+        (tmp_path / "my_msgs" / "srv" / "Ping.srv").write_text("---\nbool ok\n")
+        diags = _diags(_machine(tmp_path, A_OnEntry="req = Ping.Request()\nprint(req)\n"))
+        assert _suggested(diags[0].message)[-1] == "from llfsm.msgs.my_msgs.srv import Ping"
+
+
 class TestMessageImports:
     """An import of a name the message module lacks fails at run time: it is an error of check."""
 

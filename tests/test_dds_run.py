@@ -121,7 +121,7 @@ def test_a_service_call_across_processes(netns: NetNamespace, tmp_path: Path) ->
     assert c_status == 0, c_err
     assert "ready=True code=SUCCESS name=visitor" in c_err
     assert "Spawning turtle [visitor] at x=[2.000000], y=[3.000000], theta=[0.500000]" in s_err
-    assert s_status == 130 and "Traceback" not in s_err  # turtlesim on its own ends at Ctrl-C
+    assert s_status == 0 and "Traceback" not in s_err  # turtlesim on its own ends at Ctrl-C, as ros2 run's does
 
 
 DOOMED_SERVER = """\
@@ -212,7 +212,7 @@ def test_a_machine_publishing_while_the_transport_shuts_down_ends_cleanly(netns:
     l_status, _, l_err = finish(listener, 30)
     assert status == 130, err  # the machine never reaches END; after the grace the run stops
     assert "Traceback" not in err and "Error" not in err, err
-    assert l_status == 130 and "Traceback" not in l_err
+    assert l_status == 0 and "Traceback" not in l_err  # nodes on their own: an interrupt is their end
 
 
 @pytest.mark.dds
@@ -223,7 +223,7 @@ def test_a_node_on_its_own_runs_until_interrupted(netns: NetNamespace, node: str
     assert p.poll() is None, f"--node {node} on its own ended by itself"
     p.send_signal(signal.SIGTERM)
     status, _, err = finish(p, 15)
-    assert status == 143, err
+    assert status == 0, err  # as `ros2 run turtlesim turtlesim_node` and machine runs end (issue 27, item 10)
     assert "Traceback" not in err
 
 

@@ -482,3 +482,41 @@ def test_helper_modules_beside_a_machine_import_without_pythonpath(tmp_path: Pat
     (build / "greeting_helpers.py").write_text((src / "greeting_helpers.py").read_text())
     r = llfsm_process("run", "--clock", "sim", build / "greeter.py", cwd=elsewhere, env=env)
     assert (r.status, r.stdout) == (0, "hello, turtle\n"), r.stderr
+
+
+# -- issue 27, item 10: how a run ends, said -------------------------------------------------------
+
+
+def test_a_run_ended_by_the_grace_time_says_which_machines_did_not_finish(tmp_path: Path) -> None:
+    stubborn = write_machine(tmp_path, "stubborn", {"A": [("B", "after_ms(20)")], "B": [("A", "after_ms(20)")]},
+                             {"A_OnEntry": "if not started:\n    print('go', flush=True)\nstarted = True"},
+                             variables="started: bool = False\n")  # fmt: skip
+    asleep = write_machine(tmp_path, "asleep", {"A": [("A", "False")]}, yaml_extra="suspended: A")
+    polite = write_machine(tmp_path, "polite", {"A": [("END", "not ros.ok()")], "END": None},
+                           {"A_OnEntry": "ros.init()"}, includes="from llfsm import ros\n")  # fmt: skip
+    p = _spawn(["run", str(stubborn), str(asleep), str(polite), "--suspended", "asleep", "--grace", "300ms"],
+               cwd=tmp_path)  # fmt: skip
+    _wait_for_go(p)
+    p.send_signal(signal.SIGINT)
+    _out, err = _finish(p)
+    assert p.returncode == 130, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("llfsm: the grace time (0.3 s) ran out before stubborn (in ")
+    assert last.endswith("), asleep (suspended in A) finished"), last  # polite reached END: not named
+
+
+def test_nodes_on_their_own_end_with_status_0_on_ctrl_c(tmp_path: Path) -> None:
+    """As `ros2 run turtlesim turtlesim_node` and as machine runs do (issue 27, item 10)."""
+    p = _spawn(["run", "--node", "turtlesim", "--echo", "/turtle1/pose"], cwd=tmp_path)
+    assert p.stdout is not None and p.stdout.readline().startswith("x: "), "turtlesim did not start"
+    p.send_signal(signal.SIGINT)
+    _out, err = _finish(p)
+    assert p.returncode == 0, err
+    assert "Traceback" not in err
+
+
+def test_a_machine_loaded_twice_is_said_before_any_node_starts(tmp_path: Path) -> None:
+    m = write_machine(tmp_path, "twice", {"A": [("A", "False")]})
+    r = llfsm("run", "--clock", "sim", "--node", "turtlesim", m, m)
+    assert r.status == 2
+    assert r.stderr == "llfsm: machine twice is loaded twice; an arrangement addresses machines by name\n"

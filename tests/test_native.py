@@ -4,21 +4,23 @@ warning.
 
 Native compiles are slow (tens of seconds), so one session fixture builds every machine these
 tests use in ONE `llfsm build --native`; each test then runs `llfsm run --native` on them, which
-finds that build in the cache.  The whole semantics suite under --native is the slow test at
-the end.
+finds that build in the cache.  That build holds one shipped machine that uses the bus
+(ros2_ping_pong: a node, a publisher, the lifetimes walk over compiled variables); every
+shipped machine under --native, and the whole semantics suite, are the slow tests at the end.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from helpers import REPO, Run, write_machine
+from helpers import MACHINES, REPO, Run, write_machine
 
 from llfsm.compiler.native import available
 
@@ -124,6 +126,21 @@ def _corpus_machines(root: Path) -> None:
         {"A": [("END", "True")], "END": None},
         {"A_OnEntry": "print('compiled:', __file__.endswith('.so'))"},
     )
+    # the lifetimes walk over a compiled machine's variables: the node it drops leaves the graph
+    write_machine(
+        root,
+        "dropper",
+        {"A": [("B", "after_ms(2)")], "B": [("B", "False")]},
+        {
+            "A_OnEntry": "ros.init()\nkept = ros.Node('kept')\ngone = ros.Node('gone')",
+            # making something has the bus look at what the variables hold
+            "B_OnEntry": "gone = None\nkept.create_timer(1.0, lambda: None)\nprint('let go')",
+        },
+        variables="kept: ros.Node = None\ngone: ros.Node = None\n",
+        includes="from llfsm import ros\n",
+    )
+    # a machine that uses the bus (issue 27, item 0: every one of them crashed under --native)
+    shutil.copytree(MACHINES / "ros2_ping_pong.machine", root / "ros2_ping_pong.machine")
 
 
 @pytest.fixture(scope="session")
@@ -188,6 +205,8 @@ ARRANGEMENTS = {
     ),
     "an exception in machine code": (["faulty.py", "--duration", "50ms"], []),
     "a machine mypyc refused beside compiled ones": (["untyped.py", "internal.py"], []),
+    "a node dropped by a compiled machine leaves the graph": (["dropper.py", "--duration", "10ms", "--introspect"], []),
+    "a machine that uses the bus": (["ros2_ping_pong.py", "--duration", "3.5s", "--echo", "/pingpong"], []),
 }
 
 
@@ -234,9 +253,55 @@ def test_native_runs_keep_the_semantics(corpus: Corpus) -> None:
     assert faulty.status == 1
     assert "faulty.machine/State_A_OnEntry.py:4: error: ZeroDivisionError" in faulty.stderr
     assert "(machine faulty, state A, OnEntry)" in faulty.stderr
+    dropper = run(corpus, "dropper.py", "--duration", "10ms", "--introspect", native=True)
+    assert dropper.status == 0 and "/kept" in dropper.stderr and "/gone" not in dropper.stderr, dropper.stderr
     untyped = run(corpus, "untyped.py", native=True)
     assert untyped.stdout.splitlines() == ["untyped runs 0", "now text"]
     assert untyped.stderr.count("warning: mypyc cannot compile this machine") == 1
+
+
+#: How each shipped machine runs (its nodes, as the demos and docs/tutorial.md run it), for
+#: the comparison of every shipped machine under --native.
+SHIPPED = {
+    "counter": [],
+    "ros2_ping_pong": ["--duration", "3.5s", "--echo", "/pingpong"],
+    "ros2_blind_turtle_bot": ["--node", "turtlesim", "--duration", "3s", "--echo", "/turtle1/pose"],
+    "ros2_turtle_suspend_resume": ["ros2_blind_turtle_bot", "--node", "turtlesim", "--duration", "8s"],
+    "ros2_wall_turtle_bot": ["--node", "turtlesim", "--node", "turtle_sensor_poster", "--duration", "8s"],
+    "turtle_follower": ["--node", "turtlesim", "--duration", "4s", "--echo", "/turtle2/cmd_vel"],
+    "turtle_rotator": ["--node", "turtlesim", "--duration", "6s"],
+    "wall_follower": ["--node", "turtlesim", "--node", "wall_sensor", "--duration", "4s"],
+}
+
+
+@pytest.fixture(scope="session")
+def shipped(corpus: Corpus) -> Path:
+    """Every shipped machine in one native build (the corpus's cache: mypy's cache is shared)."""
+    out = corpus.out.parent / "shipped"
+    env = dict(os.environ, LLFSM_CACHE_DIR=str(corpus.cache))
+    env.pop("LLFSM_NATIVE", None)
+    proc = subprocess.run(
+        [sys.executable, "-m", "llfsm", "build", "--native", str(MACHINES), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("machine", sorted(SHIPPED))
+def test_every_shipped_machine_runs_the_same_under_native(corpus: Corpus, shipped: Path, machine: str) -> None:
+    """Issue 27, item 0: the machines that use the bus crashed under --native."""
+    assert sorted(SHIPPED) == sorted(p.stem for p in MACHINES.glob("*.machine"))  # none left out
+    args = [f"{a}.py" if a in SHIPPED else a for a in SHIPPED[machine]]
+    pure = run(corpus, f"{machine}.py", *args, "-v", native=False, cwd=shipped)
+    native = run(corpus, f"{machine}.py", *args, "-v", native=True, cwd=shipped)
+    assert pure.status == 0 and pure.stderr, pure.stderr
+    # every shipped machine compiles (an input is declared for mypyc), and runs as the pure one does
+    assert (native.status, native.stdout, native.stderr) == (pure.status, pure.stdout, pure.stderr)
 
 
 @pytest.mark.slow

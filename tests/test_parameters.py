@@ -382,6 +382,23 @@ def test_machine_parameters_are_typed_by_their_annotations(tmp_path: Path, bus: 
     assert node.get_parameter("gain").value == 7.0
 
 
+def test_a_machine_that_declares_parameters_is_on_the_graph_without_calling_ros_init(tmp_path: Path) -> None:
+    """Issue 27, item 1: its variables are parameters of /llfsm/M (SPEC 12) even when its code never
+    touches the bus."""
+    m = write_machine(
+        tmp_path,
+        "tuned",
+        {"RUN": [("RUN", "after_ms(100)")]},
+        {"RUN_OnEntry": "print('gain', gain)"},
+        variables="gain: float = 1.0\n",
+        yaml_extra="parameters: [gain]\n",
+    )
+    r = run_sim(m, "--introspect", "--duration", "150ms")
+    assert r.status == 0, r.stderr
+    assert "nodes:\n  /llfsm/tuned\n" in r.stderr
+    assert "  /llfsm/tuned/set_parameters [rcl_interfaces/srv/SetParameters]" in r.stderr
+
+
 def test_check_validates_the_parameters_list(tmp_path: Path) -> None:
     m = write_machine(
         tmp_path,

@@ -114,6 +114,26 @@ def test_a_machine_tuned_live_over_dds(netns: NetNamespace, tmp_path: Path) -> N
     assert gains[0] == 1.0 and gains[-1] == 2.5 and sorted(set(gains)) == [1.0, 2.5]
 
 
+def test_a_machine_with_parameters_and_no_bus_code_is_a_node_on_dds(netns: NetNamespace, tmp_path: Path) -> None:
+    """Issue 27, item 1: `parameters:` puts /llfsm/M on the graph without a ros.init() in its code."""
+    m = write_machine(
+        tmp_path,
+        "tuned",
+        {"RUN": [("RUN", "after_ms(200)")]},
+        {"RUN_OnEntry": "print('gain', gain, flush=True)"},
+        variables="gain: float = 1.0\n",
+        yaml_extra="parameters: [gain]\n",
+    )
+    run = netns.popen([sys.executable, "-m", "llfsm", "run", "--transport", "dds", m, "--duration", "8s"], cwd=REPO)
+    wait_for_node(netns, "/llfsm/tuned")
+    assert llfsm(netns, "param", "get", "/llfsm/tuned", "gain").stdout == "Double value is: 1.0\n"
+    r = llfsm(netns, "param", "set", "/llfsm/tuned", "gain", "2.5")
+    assert r.stdout == "Set parameter successful\n", r.stderr
+    status, out, err = finish(run, 30)
+    assert status == 0, err
+    assert out.splitlines()[0] == "gain 1.0" and out.splitlines()[-1] == "gain 2.5"
+
+
 _RCLPY_NODE = r"""
 import rclpy
 from rclpy.node import Node

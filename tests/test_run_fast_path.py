@@ -55,6 +55,28 @@ ACCEPTED = [
     ["--trace=", "x"],
     ["--duration", "100ms", "x"],
     ["PKG/NAME", "--clock", "wall"],
+    # ROS arguments, as `ros2 run` takes them (issue 27, item 9)
+    [
+        "x",
+        "--ros-args",
+        "-r",
+        "a:=b",
+        "--remap",
+        "c:=d",
+        "-p",
+        "n:=1",
+        "--params-file",
+        "f.yaml",
+        "--log-level",
+        "debug",
+        "--log-level",
+        "talker:=warn",
+        "--",
+        "--clock",
+        "sim",
+    ],
+    ["--ros-args", "--enable-external-lib-logs", "--disable-external-lib-logs", "--", "x", "--log-file"],
+    ["--log-level", "info", "-r", "a:=b", "x", "--ros-args", "-p", "n:=1"],
 ]
 
 
@@ -93,6 +115,7 @@ DELEGATED = [
     ["--play-rate", "-1", "x"],
     ["--trace", "--verbose", "x"],
     ["--verbose=yes", "x"],
+    ["x", "--ros-args", "--enclave", "/e"],  # a ROS argument llfsm does not take: click says so
 ]
 
 

@@ -460,6 +460,23 @@ def test_a_path_that_does_not_replay_alike_is_said(tmp_path: Path) -> None:
     assert "warning: never: h.x == 3: its path, run again, did not give the configurations explored" in r.stdout
 
 
+def test_a_wait_while_inputs_stay_the_same_is_folded_too() -> None:
+    """Issue 27, item 10: a machine with inputs reads them in every ringlet, so its waits were
+    never folded (a 154-step path printed 174 lines)."""
+    r = llfsm(
+        "verify", MACHINES / "wall_follower.machine", "--period", "10ms", "-v",
+        "--property", 'reachable: state(wall_follower) == "FORWARD" and wall_follower.msg.angular.z == 1.5',
+    )  # fmt: skip
+    lines = r.stdout.splitlines()
+    assert "  witness, 34 steps:" in lines and len(lines) < 25, r.stdout
+    assert (
+        "    ... 26 more ringlets in which nothing fired, changed or was published, the inputs as before "
+        "(rounds 5-30; --format json lists each) ..." in lines
+    )
+    # a ringlet that reads other inputs is shown: the sensor turning clear in round 2
+    assert "    [round 2] wall_follower: no transition (inputs wall_close=False)" in lines
+
+
 def test_a_long_wait_in_a_counterexample_is_folded_in_text_and_whole_in_json() -> None:
     """In exact time the seed's bot waits a thousand 1 ms rounds for each `after_ms(1000)`: the
     text shows the ringlets in which something happened and folds the quiet ones between them

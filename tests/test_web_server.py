@@ -6,13 +6,14 @@ from __future__ import annotations
 import base64
 import http.client
 import json
+import logging
 import os
 import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from helpers import MACHINES, llfsm
+from helpers import MACHINES, llfsm, llfsm_process
 
 pytest.importorskip("aiohttp")
 
@@ -242,6 +243,41 @@ def test_the_run_is_sampled_only_while_a_page_is_connected(server: WebServer) ->
     time.sleep(0.6)  # a dozen push periods
     assert calls["n"] == after_close
     assert not server.clients
+
+
+def test_a_page_that_leaves_right_after_the_handshake_costs_no_traceback(
+    server: WebServer, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Issue 27, item 4: a tab closed (or a headless browser exiting) just after the WebSocket
+    handshake printed aiohttp's 25-line "Cannot write to closing transport" traceback."""
+    import socket
+    import struct
+    import time
+
+    for _ in range(10):
+        with socket.create_connection(("127.0.0.1", server.port), timeout=10) as s:
+            key = base64.b64encode(os.urandom(16)).decode()
+            s.sendall(
+                f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\nUpgrade: websocket\r\n"
+                f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n".encode()
+            )
+            assert s.recv(12) == b"HTTP/1.1 101"
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))  # close with a reset
+    time.sleep(0.5)  # the server's thread handles the resets
+    assert [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING] == []
+    assert not server.clients
+    assert _upgrade(server) == 101  # and it still serves
+
+
+def test_each_pages_node_has_a_name_of_its_own() -> None:
+    """Issue 27, item 8: two `--web` runs on one domain were both /llfsm_web, and `node list`
+    warned about llfsm's own nodes."""
+    names = []
+    for _ in range(2):
+        r = llfsm_process("run", "--clock", "sim", PING_PONG, "--web", "0", "--duration", "5ms", "--introspect")
+        assert r.status == 0, r.stderr
+        names += [line.strip() for line in r.stderr.split("topics:")[0].splitlines() if "/llfsm_web" in line]
+    assert len(names) == 2 and names[0] != names[1], names
 
 
 def test_the_page_tells_running_suspended_and_finished_machines_apart(tmp_path: Path) -> None:

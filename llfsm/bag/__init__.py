@@ -16,10 +16,12 @@ if TYPE_CHECKING:
     from .player import Player
     from .recorder import Recorder
 
-__all__ = ["BagError", "RunBags"]
+__all__ = ["BagError", "RunBags", "need_libraries"]
 
 
-def _need_libraries() -> None:
+def need_libraries() -> None:
+    """BagError naming what is missing when the bag extra is not installed: said before a run or
+    an exploration starts, not when its bag is written."""
     # deferred: optional dependency (the bag extra), checked only by a run that has bags
     try:
         import mcap  # noqa: F401
@@ -41,7 +43,7 @@ class RunBags:
         play_rate: float = 1.0,
         report: Callable[[str], None] | None = None,
     ) -> None:
-        _need_libraries()
+        need_libraries()
         self.player: Player | None = None
         self.recorder: Recorder | None = None
         if play is not None and not play_rate > 0:

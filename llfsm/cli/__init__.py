@@ -33,18 +33,25 @@ def main() -> None:
     args = sys.argv[1:]
     try:
         options = _fast_run_options(args)
-        # deferred: start-up (a run on the fast path never imports click; other verbs never the run)
-        if options is None:
-            from ._commands import main as click_main
-        else:
+        launching = _fast_launch(args) if options is None else None
+        # deferred: start-up (a run or a launch on the fast path never imports click; other verbs
+        # never the run)
+        if options is not None:
             from ._exits import run_guarded
             from ._run import run
+        elif launching is not None:
+            from ._exits import run_guarded
+            from ._launch import launch
+        else:
+            from ._commands import main as click_main
     except KeyboardInterrupt:  # while importing: as llfsm.__main__ does
         sys.exit(130)
-    if options is None:
-        click_main()
-    else:
+    if options is not None:
         run_guarded(lambda: run(options))
+    elif launching is not None:
+        run_guarded(lambda: launch(*launching))
+    else:
+        click_main()
 
 
 def _fast_run_options(args: list[str]) -> RunOptions | None:
@@ -54,6 +61,15 @@ def _fast_run_options(args: list[str]) -> RunOptions | None:
     from .run_args import run_options  # deferred: start-up (only `llfsm run` reads the table of options)
 
     return run_options(args[1:])
+
+
+def _fast_launch(args: list[str]) -> tuple[str, list[str]] | None:
+    """(FILE, NAME:=VALUE words) when `args` is `launch FILE [NAME:=VALUE]...` with no option."""
+    if not args or args[0] != "launch":
+        return None
+    from ._launch import fast_launch_arguments  # deferred: start-up (only `llfsm launch` reads launch files)
+
+    return fast_launch_arguments(args)
 
 
 def __getattr__(name: str) -> Any:

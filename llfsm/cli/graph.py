@@ -19,9 +19,10 @@ from ._group import EXIT_ERRORS, cli, fail, write_output
 )
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write to FILE (needed for png).")
 def graph(path: str, fmt: str, output: str | None) -> None:
-    """The machine's diagram, guards on the arrows."""
+    """The machine's diagram, guards on the arrows: Mermaid or Graphviz text, or SVG and PNG
+    drawn by llfsm itself (the web view's drawing; the states where layout.yaml places them)."""
     # deferred: start-up (every command module is imported when `llfsm` starts)
-    from ..diagram.dot import DiagramError, dot, render_image
+    from ..diagram.dot import dot
     from ..diagram.mermaid import mermaid
     from ..lang.check import check_machine
     from ..lang.diagnostics import Severity, format_text
@@ -41,12 +42,25 @@ def graph(path: str, fmt: str, output: str | None) -> None:
         click.echo(format_text(result.diagnostics), nl=False, err=True)
         sys.exit(EXIT_ERRORS)
     m = result.machine
-    try:
-        data: bytes = (
-            mermaid(m).encode() if fmt == "mermaid" else dot(m).encode() if fmt == "dot" else render_image(m, fmt)
-        )
-    except DiagramError as e:
-        fail(str(e), EXIT_ERRORS)
+    if fmt in ("svg", "png"):
+        # deferred: start-up (pydantic, Pillow)
+        from ..diagram.description import of_machine
+        from ..diagram.svg import standalone, svg
+        from ..lang.layout_file import placement
+
+        placed = placement(result.read)[0]
+        if placed is None:
+            drawn = svg(of_machine(m))
+        else:
+            drawn = svg(of_machine(m), positions=placed.states, labels=placed.labels)
+        if fmt == "png":
+            from ..diagram.png import render  # deferred: start-up (Pillow)
+
+            data = render(drawn)
+        else:
+            data = standalone(drawn).encode()
+    else:
+        data = (mermaid(m) if fmt == "mermaid" else dot(m)).encode()
     if output:
         write_output(output, data, "-o")
     else:

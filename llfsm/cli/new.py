@@ -28,12 +28,20 @@ def new() -> None:
     help="Folder to create NAME.machine in.",
 )
 @click.option("--description", default=None, help="One line saying what the machine does.")
-def new_machine(name: str, directory: str, description: str | None) -> None:
-    """A valid machine skeleton: INITIAL -> END."""
+@click.option(
+    "--states",
+    default=None,
+    metavar="A,B,C",
+    help="The states, in a chain: each goes to the next after 100 ms, the first is initial, the last "
+    "accepting (default: INITIAL,END).",
+)
+def new_machine(name: str, directory: str, description: str | None, states: str | None) -> None:
+    """A valid machine skeleton: INITIAL -> END, or the chain of --states."""
     from ..scaffold import ScaffoldError, create_machine  # deferred: start-up (jinja2)
 
     try:
-        path = create_machine(Path(directory), name, description)
+        chain = [s for s in states.replace(",", " ").split()] if states is not None else None
+        path = create_machine(Path(directory), name, description, chain)
     except ScaffoldError as e:
         fail(str(e))
     except OSError as e:  # a full disk, a read-only folder: nothing was written (_write_tree)

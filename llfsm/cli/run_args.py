@@ -105,7 +105,14 @@ RUN_OPTIONS: tuple[RunOption, ...] = (
         multiple=True,
         metavar="NAME",
     ),
-    _O(("--remap",), "remaps", TEXT, "Remap a topic or service name.", multiple=True, metavar="[NODE:]FROM:=TO"),
+    _O(
+        ("-r", "--remap"),
+        "remaps",
+        TEXT,
+        "Remap a topic or service name, as ros2's -r.",
+        multiple=True,
+        metavar="[NODE:]FROM:=TO",
+    ),
     _O(
         ("-p", "--param"),
         "params",
@@ -121,6 +128,20 @@ RUN_OPTIONS: tuple[RunOption, ...] = (
         "Set parameters from a ROS 2 params file (node: {ros__parameters: {...}}, /** wildcards).",
         multiple=True,
         metavar="FILE",
+    ),
+    _O(
+        ("--log-level",),
+        "log_levels",
+        TEXT,
+        "Log level of every logger, or of logger NAME: debug, info, warn, error, fatal (as ros2's --log-level).",
+        multiple=True,
+        metavar="[NAME:=]LEVEL",
+    ),
+    _O(
+        ("--log-file",),
+        "log_file",
+        FLAG,
+        "Also write the log lines to a file in ~/.ros/log (ROS_LOG_DIR, ROS_HOME), as ROS 2 nodes do.",
     ),
     _O(("--echo",), "echoes", TEXT, "Print the topic's messages as YAML.", multiple=True, metavar="TOPIC"),
     _O(("--image",), "image", FILE, "turtlesim: write the picture (.png or .svg) at the end."),
@@ -223,6 +244,49 @@ class _Delegate(Exception):
     """Something `parse` leaves to click (which then reports it, or does it)."""
 
 
+#: What starts ROS arguments on a command line (`ros2 run PKG EXE --ros-args -r a:=b -p x:=1`);
+#: `--` ends them.  llfsm takes ROS's spellings as its own options (-r, -p, --params-file,
+#: --log-level), so the markers only need to go.
+ROS_ARGS = "--ros-args"
+#: ROS arguments with a spelling of llfsm's own.
+_ROS_SPELLINGS = {"--enable-external-lib-logs": "--log-file", "--disable-external-lib-logs": None}
+#: ROS arguments llfsm does not take (rcl's), named in the message that refuses them.
+_ROS_ONLY = frozenset(
+    {"-e", "--enclave", "--log-config-file", "--enable-rosout-logs", "--disable-rosout-logs"}
+    | {"--enable-stdout-logs", "--disable-stdout-logs"}
+)
+
+
+class RosArgsError(ValueError):
+    """A ROS argument `llfsm run` does not take (the message says which it takes)."""
+
+
+def without_ros_args(args: Sequence[str]) -> list[str]:
+    """`args` with the `--ros-args` markers (and the `--` that closes their block) taken out
+    and rcl's spellings of llfsm's options put in: what click and `parse` then read."""
+    if ROS_ARGS not in args:
+        return list(args)
+    out: list[str] = []
+    inside = False
+    for arg in args:
+        if arg == ROS_ARGS:
+            inside = True
+        elif inside and arg == "--":
+            inside = False
+        elif inside and arg in _ROS_SPELLINGS:
+            spelling = _ROS_SPELLINGS[arg]
+            if spelling is not None:
+                out.append(spelling)
+        elif inside and arg.partition("=")[0] in _ROS_ONLY:
+            raise RosArgsError(
+                f"--ros-args {arg}: llfsm run takes -r/--remap, -p/--param, --params-file, --log-level and "
+                "--enable-external-lib-logs"
+            )
+        else:
+            out.append(arg)
+    return out
+
+
 def _convert(opt: RunOption, text: str) -> Any:
     """The value click would give `opt` for `text`, or _Delegate where click would complain."""
     if opt.kind == TEXT:
@@ -281,6 +345,10 @@ def parse(args: Sequence[str], environ: Mapping[str, str] | None = None) -> dict
 
 
 def _parse(args: Sequence[str], environ: Mapping[str, str]) -> dict[str, Any]:
+    try:
+        args = without_ros_args(args)
+    except RosArgsError:
+        raise _Delegate from None  # click says it
     given: dict[str, Any] = {}
     targets: list[str] = []
     i = 0

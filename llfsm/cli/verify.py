@@ -137,8 +137,15 @@ def verify(
                 memory = parse_size(str(size))
             except ValueError as e:
                 fail(f"--max-memory: {e}" if max_memory is not None else f"max_memory in the verification file: {e}")
-        if counterexample_dir is not None and period is None:
-            fail("--counterexample writes a bag replayed with `llfsm run --clock sim --period P`: give --period P")
+        if counterexample_dir is not None:
+            if period is None:
+                fail("--counterexample writes a bag replayed with `llfsm run --clock sim --period P`: give --period P")
+            from ..verify.replay import ReplayError, check_folder  # deferred: start-up (only with the option)
+
+            try:
+                check_folder(counterexample_dir)
+            except ReplayError as e:
+                fail(f"--counterexample {counterexample_dir}: {e}")
         loaded = load_arrangement(machines, environment, bounds)
         options = Options(period=period, interrupt=bool(interrupt), max_states=max_states, hash_compact=hash_compact)
         options.max_memory = memory
@@ -163,6 +170,12 @@ def verify(
         except ValueError as e:
             fail(str(e))
         write_output(path, data.encode("utf-8"), f"--export {kind}")
+    report = render(result, fmt, __version__, witnesses)
+    if output:
+        write_output(output, report.encode("utf-8"), "-o")
+    else:
+        click.echo(report, nl=False)
+    sys.stdout.flush()  # the report first, whatever happens to the bag, and before the summary
     if counterexample_dir is not None:
         from ..verify.replay import ReplayError, write_counterexample  # deferred: start-up (only with the option)
 
@@ -173,13 +186,7 @@ def verify(
             said = None
         if said and not quiet:
             click.echo(f"llfsm: {said}", err=True)
-    report = render(result, fmt, __version__, witnesses)
-    if output:
-        write_output(output, report.encode("utf-8"), "-o")
-    else:
-        click.echo(report, nl=False)
     if not quiet:
-        sys.stdout.flush()  # the report before the summary, when both go to one terminal
         extra = ""
         if hash_compact and result.configurations:
             n = result.configurations

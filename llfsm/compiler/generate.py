@@ -24,6 +24,7 @@ from .. import __version__
 from ..lang.bindings import MACHINE_ALIAS, Edit, attribute_of, find, name_map, own_locals, state_map, used_names
 from ..lang.check import MachineCheck
 from ..lang.diagnostics import Diagnostic, diag
+from ..lang.files import expression
 from ..lang.model import INPUT_TYPES, Code, Machine, State
 from ..lang.parameter_types import parameter_type
 from ..lang.scopes import child_nodes
@@ -218,6 +219,8 @@ def _block(
         first += 1
     body = "\n".join(lines[first:]).rstrip()
     alias = any(e.text.startswith(_ALIASED) for e in edits)
+    if code.origin is not None:  # an inline guard: its line of machine.yaml (a block's lines follow one for one)
+        return Block(code.origin.file, code.origin.line + first, body, alias)
     return Block(code.file, first + 1, body, alias)
 
 
@@ -240,7 +243,7 @@ def _guard_view(
     expr = tree.body[0]
     constant = bool(expr.value.value) if isinstance(expr, ast.Expr) and isinstance(expr.value, ast.Constant) else None
     return GuardView(
-        index, target, target_name, code.file, block.line, block.text, multiline, to_suspend, block.alias, constant
+        index, target, target_name, block.file, block.line, block.text, multiline, to_suspend, block.alias, constant
     )
 
 
@@ -449,7 +452,7 @@ def _template_context(
             # per state, (target index, guard as written) in priority order: for the description
             # a run publishes on /llfsm/NAME/description and the web view draws
             "transitions": tuple(
-                tuple((index[t.target], t.guard.text.strip() if t.guard is not None else "") for t in s.transitions)
+                tuple((index[t.target], expression(t.guard.text) if t.guard is not None else "") for t in s.transitions)
                 for s in m.states
             ),
             # machine.yaml's `parameters:`: (variable, rclpy type name) for llfsm.ros.control
@@ -467,6 +470,8 @@ def _template_context(
                 + [i.name for i in m.inputs]
             ),
             "inputs": input_entries(m),
+            # declared for type checkers and mypyc (--native), which otherwise know no such attribute
+            "input_annotations": tuple((i.name, i.type) for i in m.inputs),
             "on_suspend": [hook_function("on_suspend", v.name) if v.has_on_suspend else "None" for v in views],
             "on_resume": [hook_function("on_resume", v.name) if v.has_on_resume else "None" for v in views],
         },

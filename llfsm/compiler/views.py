@@ -96,8 +96,13 @@ class GuardView:
             )
             return f"{lead(self, 4)}\n{test}{self.fire(8)}"
         if self.constant:
-            return f"    # {self.file} is always true: the transition fires at once\n{self.fire(4)}"
-        return f"    # {self.file} is always false: the transition never fires\n"
+            return f"    # {self.where} is always true: the transition fires at once\n{self.fire(4)}"
+        return f"    # {self.where} is always false: the transition never fires\n"
+
+    @property
+    def where(self) -> str:
+        """The guard's file, or its line of machine.yaml when it is written inline there."""
+        return f"{self.file}:{self.line}" if self.file == "machine.yaml" else self.file
 
     def fire(self, width: int) -> str:
         """The lines that take the transition, at `width`."""

@@ -16,9 +16,14 @@ one DescriptionError whose message names the field, short enough for a warning l
 from __future__ import annotations
 
 import json
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from ..lang.files import expression
+
+if TYPE_CHECKING:
+    from ..lang.model import Machine
 
 #: Characters of JSON accepted at all (a run's description of a few dozen states is a few KiB).
 MAX_TEXT = 4 << 20
@@ -112,6 +117,55 @@ class Description(_Strict):
         if self.suspend is not None and self.suspend not in names:
             raise ValueError(f"suspend: {_quote(self.suspend)} names no state")
         return self
+
+
+def of_machine(m: Machine) -> dict[str, Any]:
+    """The description of a machine directory as read (no build, no run): the shape a run
+    publishes (llfsm.ros.control.description), guards as written (inline or in their files,
+    without their `# -> TARGET` comment).  What a broken machine cannot describe is left out: a
+    transition to no state, a second state of a name.  (layout.yaml's places are svg()'s own
+    arguments: llfsm.lang.layout_file.)"""
+    names: dict[str, None] = {}
+    for s in m.states:
+        names.setdefault(s.name, None)
+    states = []
+    for s in m.states:
+        if s.name not in names:
+            continue
+        del names[s.name]
+        states.append(
+            {
+                "name": s.name,
+                "transitions": [
+                    {"index": t.index, "target": t.target, "guard": expression(t.guard.text) if t.guard else ""}
+                    for t in s.transitions
+                    if any(t.target == o.name for o in m.states)
+                ],
+                "accepting": s.accepting and s.name != m.suspended,
+            }
+        )
+    known = {s["name"] for s in states}
+    out: dict[str, Any] = {
+        "name": m.name,
+        "description": m.description or "",
+        "states": states,
+        "initial": m.initial if m.initial in known else states[0]["name"],
+        "suspend": m.suspended if m.suspended in known else None,
+        "inputs": [
+            {
+                "name": i.name,
+                "type": i.type,
+                "default": i.default,
+                "domain": i.values(),
+                "topic": i.topic,
+                "msg": i.msg,
+                "field": i.field,
+            }
+            for i in m.inputs
+            if i.type in ("bool", "int", "float", "str")
+        ],
+    }
+    return out
 
 
 def validate(desc: Any, machine: str | None = None) -> dict[str, Any]:

@@ -1,21 +1,15 @@
-"""`llfsm graph --format dot|svg|png`: a machine's diagram as Graphviz text, guards on the arrows,
-and as an image through Graphviz's `dot` program when it is installed.  Built from the text alone."""
+"""`llfsm graph --format dot`: a machine's diagram in Graphviz's language, guards on the arrows,
+built from the text alone (SVG and PNG are drawn by llfsm itself: llfsm.diagram.svg, .png)."""
 
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
 from typing import TYPE_CHECKING
 
 from .text import guard_label, input_label
 
 if TYPE_CHECKING:
     from ..lang.model import Machine
-
-
-class DiagramError(Exception):
-    """An image could not be made (no Graphviz, or `dot` failed)."""
 
 
 def _dot_str(text: str) -> str:
@@ -46,17 +40,3 @@ def dot(m: Machine) -> str:
             out.append(f"    {_dot_str(s.name)} -> {_dot_str(t.target)} [label={_dot_str(label)}];")
     out.append("}")
     return "\n".join(out) + "\n"
-
-
-def render_image(m: Machine, fmt: str) -> bytes:
-    """SVG or PNG through Graphviz's `dot`, when it is installed."""
-    exe = shutil.which("dot")
-    if exe is None:
-        raise DiagramError(
-            f"--format {fmt} needs Graphviz's `dot` program, which is not installed "
-            "(e.g. `apt install graphviz`); --format mermaid and --format dot work without it"
-        )
-    proc = subprocess.run([exe, f"-T{fmt}"], input=dot(m).encode(), capture_output=True, timeout=60)
-    if proc.returncode != 0:
-        raise DiagramError(f"dot failed: {proc.stderr.decode(errors='replace').strip()}")
-    return proc.stdout

@@ -139,9 +139,13 @@ def layered(
         breadth, depth = (n.h, n.w) if lr else (n.w, n.h)
         vs.append(_V(i, rank[i], breadth, depth, "node", breadth / 2, breadth / 2 + n.after, spec=n.id))
     chains: list[tuple[int, list[int], bool]] = []
+    direct = _direct(oriented, rank)
     for k, a, b, flipped in oriented:
         chain = [a]
         label = edges[k].label
+        if k in direct:  # beyond the budget: one curve, no room kept along the way (see _direct)
+            chains.append((k, [a, b], flipped))
+            continue
         middle = rank[a] + (rank[b] - rank[a]) // 2
         for r in range(rank[a] + 1, rank[b]):
             if label is not None and r == middle:
@@ -158,8 +162,29 @@ def layered(
         chains.append((k, chain, flipped))
     layers = _order(vs, max(rank, default=0) + 1, sweeps)
     crossings = _total_crossings(vs, layers)
-    _place(vs, layers, [chain for _, chain, _ in chains])
-    return _routes(vs, layers, chains, nodes, direction, crossings)
+    _place(vs, layers, [chain for k, chain, _ in chains if k not in direct])
+    return _routes(vs, layers, chains, nodes, direction, crossings, direct, [e.label is not None for e in edges])
+
+
+#: Most dummies the proper graph gets.  A long edge costs one per rank it crosses, and every
+#: step of the layout visits each: a 300-state machine whose states all lead to END (the how-to's
+#: `not ros.ok()` everywhere) would make 90,000 of them and take half a minute.  Beyond the budget
+#: the longest edges are drawn as one curve from their source to their target, keeping no room
+#: along the way (they may pass behind a state); the shorter ones are laid out as before.
+MAX_DUMMIES = 6000
+
+
+def _direct(oriented: list[tuple[int, int, int, bool]], rank: list[int]) -> set[int]:
+    """The edges (by index) that get no dummies: the longest, until the rest fit the budget."""
+    spans = sorted(((rank[b] - rank[a] - 1, k) for k, a, b, _ in oriented), reverse=True)
+    total = sum(span for span, _ in spans)
+    out: set[int] = set()
+    for span, k in spans:
+        if total <= MAX_DUMMIES or span <= 1:
+            break
+        out.add(k)
+        total -= span
+    return out
 
 
 # -- 1. cycles -------------------------------------------------------------------------------------
@@ -544,6 +569,8 @@ def _routes(
     nodes: Sequence[NodeSpec],
     direction: str,
     crossings: int,
+    direct: set[int] | frozenset[int] = frozenset(),
+    labelled: Sequence[bool] = (),
 ) -> Layout:
     lo = min((v.x - v.before for v in vs), default=0.0)
     hi = max((v.x + v.after for v in vs), default=0.0)
@@ -590,6 +617,12 @@ def _routes(
     routes = []
     for k, chain, flipped in chains:
         a, b = vs[chain[0]], vs[chain[-1]]
+        if k in direct:  # one curve between the middles of the two sides, its label beside its middle
+            p0, p1 = at(a.x, centre_d(a) + a.depth / 2), at(b.x, centre_d(b) - b.depth / 2)
+            points = [p1, p0] if flipped else [p0, p1]
+            mid = ((p0[0] + p1[0]) / 2 + LABEL_OFFSET, (p0[1] + p1[1]) / 2)
+            routes.append(Route(k, points, mid if labelled[k] else None, flipped))
+            continue
         i = used_out.get(a.key, 0)
         used_out[a.key] = i + 1
         j = used_in.get(b.key, 0)

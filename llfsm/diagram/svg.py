@@ -30,10 +30,11 @@ import json
 import re
 import threading
 from collections import OrderedDict
+from collections.abc import Mapping
 from html import escape
 from typing import Any
 
-from .layout import EdgeSpec, Layout, NodeSpec, layered, path
+from .layout import MARGIN, EdgeSpec, Layout, NodeSpec, Route, layered, path
 
 #: Advance of one character of the page's monospace fonts (DejaVu Sans Mono: 0.602 em) at the
 #: 11 px of guard labels and the 13 px of state names (style.css sets both).
@@ -55,6 +56,8 @@ MAX_DRAWN_TRANSITIONS = 160
 CACHE_SIZE = 32
 TITLE_MAX = 400  # characters of guard text in a transition's tooltip
 
+Point = tuple[float, float]
+
 #: What XML 1.0 cannot carry (control characters, lone surrogates): the page's parser would
 #: refuse the whole diagram.
 _NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
@@ -74,11 +77,20 @@ def _label(index: int, guard: str) -> str:
     return f"{index}: {text}"
 
 
-def svg(desc: dict[str, Any], current: str | None = None) -> str:
+def svg(
+    desc: dict[str, Any],
+    current: str | None = None,
+    *,
+    positions: Mapping[str, Point] | None = None,
+    labels: Mapping[tuple[str, int], Point] | None = None,
+) -> str:
     """The diagram of one machine (the `description` structure of llfsm.ros.control), its
     `current` state marked.  A description that does not fit llfsm.diagram.description raises
-    its DescriptionError before anything is drawn."""
-    key = _key(desc)
+    its DescriptionError before anything is drawn.  `positions` (state centres) and `labels`
+    (the top-left corners of transition labels, by source state and index) are layout.yaml's
+    (llfsm.lang.layout_file.Placement): what they place is drawn there, the rest is laid out."""
+    placing = (dict(positions or {}), {f"{k[0]}#{k[1]}": v for k, v in (labels or {}).items()})
+    key = _key([desc, placing] if positions or labels else desc)
     with _cache_lock:
         drawn = None
         if key is not None:
@@ -89,7 +101,7 @@ def svg(desc: dict[str, Any], current: str | None = None) -> str:
         # deferred: pydantic is imported when a diagram is first drawn (on the drawing thread), not with --web
         from .description import validate
 
-        drawn = _render(validate(desc))
+        drawn = _render(validate(desc), positions or {}, labels or {})
         if key is not None:
             with _cache_lock:
                 _cache[key] = drawn
@@ -207,11 +219,13 @@ def _label_text(t: dict[str, Any]) -> str:
     return _label(int(t["index"]), t["guard"]) if t["guard"] else str(int(t["index"]))
 
 
-def _render(full: dict[str, Any]) -> str:
+def _render(full: dict[str, Any], positions: Mapping[str, Point], corners: Mapping[tuple[str, int], Point]) -> str:
     """The SVG of a checked description, no state marked current."""
     desc, left_states, left_transitions = _select(full)
     machine = desc["name"]
     placed = layout(desc)
+    if positions or corners:
+        placed = _placed(desc, placed, positions, corners)
     mid = _esc(machine)
     marker = "arrow-" + hashlib.sha256(machine.encode("utf-8", "surrogatepass")).hexdigest()[:12]
     edges: list[str] = []
@@ -330,6 +344,7 @@ def _render(full: dict[str, Any]) -> str:
         )
     height = placed.height
     width = max(right, placed.width)
+    low_x, low_y = _low(placed) if positions or corners else (0.0, 0.0)
     note = ""
     if left_states or left_transitions:
         what = [f"{left_states:,} more states"] if left_states else []
@@ -347,13 +362,124 @@ def _render(full: dict[str, Any]) -> str:
     total = TOP + height
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" class="diagram" data-machine="{mid}" '
-        f'viewBox="0 0 {width:.0f} {total:.0f}" width="{width:.0f}" height="{total:.0f}" role="list" '
+        f'viewBox="{low_x:.0f} {low_y:.0f} {width - low_x:.0f} {total - low_y:.0f}" '
+        f'width="{width - low_x:.0f}" height="{total - low_y:.0f}" role="list" '
         f'aria-label="states of {mid}">'
         f'<defs><marker id="{marker}" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" markerHeight="7" '
         f'orient="auto-start-reverse"><path d="M0 0 L10 5 L0 10 z" class="arrowhead"/></marker></defs>'
         f'<g transform="translate(0 {TOP:.0f})"><g class="edges">{"".join(edges)}</g>'
         f'<g class="states">{"".join(parts)}</g><g class="labels">{"".join(labels)}</g></g>{note}</svg>'
     )
+
+
+def _placed(
+    desc: dict[str, Any], placed: Layout, positions: Mapping[str, Point], labels: Mapping[tuple[str, int], Point]
+) -> Layout:
+    """The layered layout with layout.yaml's places: a placed state's centre moves there, and
+    every edge that touches a moved state runs straight between the two boxes' borders (two
+    edges between one pair of states side by side), its label beside its middle; a placed
+    label goes where it was put."""
+    centres = dict(placed.centres)
+    moved = {name for name, xy in positions.items() if name in centres and centres[name] != tuple(xy)}
+    for name in moved:
+        centres[name] = (float(positions[name][0]), float(positions[name][1]))
+    listed = [(s["name"], t) for s in desc["states"] for t in s["transitions"] if t["target"] != s["name"]]
+    ends: list[tuple[Any, Any]] = [(src, t["target"]) for src, t in listed]
+    if desc.get("suspend") is not None:
+        ends += [(ANY, desc["suspend"]), (desc["suspend"], ANY)]
+    size = {s["name"]: (_state_w(s["name"]), STATE_H) for s in desc["states"]}
+    size[ANY] = (_state_w("any state"), STATE_H - 6)
+    pairs: dict[frozenset[Any], int] = {}
+    routes = []
+    for route in placed.routes:
+        src, dst = ends[route.edge]
+        label = route.label
+        if src in moved or dst in moved:
+            pair = frozenset((repr(src), repr(dst)))
+            k = pairs[pair] = pairs.get(pair, -1) + 1
+            a, b = centres[src], centres[dst]
+            length = max(1e-6, ((b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2) ** 0.5)
+            nx, ny = -(b[1] - a[1]) / length, (b[0] - a[0]) / length  # the normal, to the left
+            off = 9.0 * k if repr(src) < repr(dst) else -9.0 * k
+            a2, b2 = (a[0] + nx * off, a[1] + ny * off), (b[0] + nx * off, b[1] + ny * off)
+            start, end = _border(a2, b2, size[src]), _border(b2, a2, size[dst])
+            mx, my = (start[0] + end[0]) / 2, (start[1] + end[1]) / 2
+            points = [start, end]
+            if label is not None:
+                label = (mx + 6.0, my - LABEL_H / 2)
+            route = Route(route.edge, points, label, route.reversed)
+        if route.edge < len(listed):
+            src_name, t = listed[route.edge]
+            corner = labels.get((src_name, int(t["index"])))
+            if corner is not None and route.label is not None:
+                route = Route(route.edge, route.points, (float(corner[0]), float(corner[1])), route.reversed)
+        routes.append(route)
+    xs = [c[0] + sign * size[n][0] / 2 for n, c in centres.items() for sign in (-1, 1)]
+    ys = [c[1] + sign * size[n][1] / 2 for n, c in centres.items() for sign in (-1, 1)]
+    for r in routes:
+        xs += [p[0] for p in r.points]
+        ys += [p[1] for p in r.points]
+        if r.label is not None:
+            xs += [r.label[0], r.label[0] + 120.0]
+            ys += [r.label[1], r.label[1] + LABEL_H]
+    return Layout(
+        centres,
+        routes,
+        max(placed.width, max(xs) + MARGIN),
+        max(placed.height, max(ys) + MARGIN),
+        placed.direction,
+        placed.ranks,
+        placed.crossings,
+    )
+
+
+def _border(a: Point, b: Point, size: Point) -> Point:
+    """Where the segment from a box's centre `a` towards `b` leaves the box (of `size`)."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    w, h = size[0] / 2, size[1] / 2
+    scale = min(w / abs(dx) if dx else float("inf"), h / abs(dy) if dy else float("inf"), 1.0)
+    return (a[0] + dx * scale, a[1] + dy * scale)
+
+
+def _low(placed: Layout) -> Point:
+    """The drawing's top-left corner: (0, 0) unless a placed state or edge reaches beyond it
+    (the viewBox then starts there, so layout.yaml's coordinates are the drawing's own)."""
+    xs, ys = [0.0], [0.0]
+    for r in placed.routes:
+        xs += [p[0] for p in r.points]
+        ys += [p[1] for p in r.points]
+    for name, c in placed.centres.items():
+        xs.append(c[0] - _state_w(name if isinstance(name, str) else "any state") / 2)
+        ys.append(c[1] - STATE_H / 2)
+    low_x, low_y = min(xs), min(ys)
+    return (min(0.0, low_x - MARGIN) if low_x < 0 else 0.0, min(0.0, low_y - MARGIN + TOP) if low_y < 0 else 0.0)
+
+
+#: The look of the web view's diagrams (llfsm/web/static/style.css), for a drawing on its own.
+STANDALONE_STYLE = """
+svg.diagram { font-size: 13px; background: #fff; }
+svg.diagram text { font-family: "DejaVu Sans Mono", ui-monospace, monospace; }
+svg.diagram .state rect { fill: #e3f2fd; stroke: #1e3a5f; stroke-width: 1.4; }
+svg.diagram .state rect.inner { fill: none; }
+svg.diagram .state text { text-anchor: middle; fill: #1a1a1a; font-weight: 600; font-size: 13px; }
+svg.diagram .suspend-state rect { stroke-dasharray: 5 3; fill: #f3e5f5; }
+svg.diagram text.omitted { fill: #8d6e63; font-size: 12px; font-style: italic; }
+svg.diagram .transition { fill: none; stroke: #455a64; stroke-width: 1.3; }
+svg.diagram .arrowhead, svg.diagram .initial-dot { fill: #455a64; }
+svg.diagram .guard rect { fill: #fff; fill-opacity: .9; stroke: none; }
+svg.diagram .guard text { font-size: 11px; text-anchor: start; fill: #37474f; }
+svg.diagram .suspend-edge { fill: none; stroke: #8e24aa; stroke-width: 1.2; stroke-dasharray: 5 3; }
+svg.diagram .any-state rect { fill: #fff; stroke: #8e24aa; stroke-dasharray: 4 3; }
+svg.diagram .any-state text { text-anchor: middle; fill: #8e24aa; font-style: italic; font-size: 12px; }
+svg.diagram .guard[data-command] text { fill: #8e24aa; }
+"""
+
+
+def standalone(drawn: str) -> str:
+    """A diagram of `svg` as a file of its own (`llfsm graph --format svg`): an XML declaration,
+    and the page's look in a <style> element."""
+    head, sep, rest = drawn.partition(">")
+    return f'<?xml version="1.0" encoding="UTF-8"?>\n{head}{sep}<style>{STANDALONE_STYLE}</style>{rest}\n'
 
 
 def _title(source: str, target: str, index: int, guard: str) -> str:

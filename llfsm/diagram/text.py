@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ..lang.files import expression
+
 if TYPE_CHECKING:
     from ..lang.model import Input, Machine
 
@@ -15,7 +17,7 @@ def guard_label(m: Machine, state: str, index: int) -> str:
     """The guard of transition `index` of `state`, whitespace folded, at most GUARD_MAX long."""
     st = m.state(state)
     g = st.transitions[index].guard
-    text = " ".join(g.text.split()) if g is not None else "?"
+    text = " ".join(expression(g.text).split()) if g is not None else "?"
     return text if len(text) <= GUARD_MAX else text[: GUARD_MAX - 3] + "..."
 
 

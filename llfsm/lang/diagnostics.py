@@ -57,7 +57,7 @@ RULES: dict[str, Rule] = {
         _r("LF020", E, "unknown-target", "A transition names a state that does not exist."),
         _r("LF021", E, "unknown-initial", "`initial` names a state that does not exist."),
         _r("LF022", E, "unknown-suspended", "`suspended` names a state that does not exist."),
-        _r("LF023", E, "missing-guard", "A transition has no State_S_Transition_N.expr file."),
+        _r("LF023", E, "missing-guard", "A transition has no guard: no State_S_Transition_N.expr file, none inline."),
         _r("LF024", E, "guard-not-expression", "A guard file is not exactly one Python expression."),
         _r("LF030", E, "syntax-error", "A code file is not valid Python."),
         _r("LF031", E, "includes-not-imports", "Includes.py holds something other than imports."),
@@ -87,6 +87,13 @@ RULES: dict[str, Rule] = {
         _r("LF047", E, "input-name", "An input's name is not usable or clashes with a variable."),
         _r("LF048", E, "input-value", "An input's type is unknown, or its default or domain holds a wrong value."),
         _r("LF049", E, "input-binding", "An input's topic, msg and field are incomplete, unknown or do not fit."),
+        _r(
+            "LF050",
+            W,
+            "unknown-machine",
+            'suspend("M") and its family name a machine none of the machines checked (or beside them) is.',
+        ),
+        _r("LF051", E, "unknown-message-field", "Code uses a field that the message type of a variable does not have."),
         _r("LF060", E, "unknown-parameter", "`parameters:` names something that is not a machine variable."),
         _r(
             "LF061",
@@ -95,6 +102,10 @@ RULES: dict[str, Rule] = {
             "A variable in `parameters:` is not annotated bool, int, float, str or list[...] of one of them.",
         ),
         _r("LF062", E, "duplicate-parameter", "`parameters:` names a variable twice."),
+        _r("LF070", E, "guard-twice", "A guard is written inline in machine.yaml and in its .expr file too."),
+        _r("LF071", W, "guard-comment", "A guard file's `# -> TARGET` names another target than its transition."),
+        _r("LF072", W, "layout-unknown", "layout.yaml places a state or transition the machine does not have."),
+        _r("LF073", E, "layout-invalid", "layout.yaml is not YAML of the documented form."),
         _r(
             "LF080",
             E,

@@ -88,22 +88,53 @@ class Input(BaseModel):
 
 
 class Code(BaseModel):
-    """One code file: a section of a state, Includes.py, or a guard expression."""
+    """One code file: a section of a state, Includes.py, or a guard expression.
+
+    A guard written inline in machine.yaml (`{to: T, guard: EXPR}`) is a Code too, under the
+    name its file would have (State_S_Transition_N.expr), so that every stage keys it as any
+    other guard; `origin` says where its text really is, and `place` turns a position in the
+    text into one in machine.yaml for whoever reports it."""
 
     file: str  # the file name inside the machine directory, e.g. State_PUBLISH_OnEntry.py
     text: str
     loc: Loc
+    #: An inline guard: where its text's first character is in machine.yaml.
+    origin: Loc | None = None
+    #: An inline guard written as a block (`guard: |`): the column of its lines after the first.
+    #: None when positions past its first line cannot be told (a folded or escaped scalar).
+    block_column: int | None = None
+    #: An inline guard whose text is exactly what machine.yaml holds from `origin` (a plain or
+    #: quoted scalar without escapes, on one line): columns map one to one.
+    exact: bool = False
 
     @property
     def is_empty(self) -> bool:
         return not self.text.strip()
 
+    @property
+    def inline(self) -> bool:
+        return self.origin is not None
+
+    def place(self, line: int, column: int) -> Loc:
+        """Where a (1-based) position in the text is in the machine directory."""
+        o = self.origin
+        if o is None:
+            return Loc(file=self.file, line=line, column=column)
+        if self.block_column is not None:
+            col = (o.column if line == 1 else self.block_column) + column - 1
+            return Loc(file=o.file, line=o.line + line - 1, column=col)
+        if self.exact and line == 1:
+            return Loc(file=o.file, line=o.line, column=o.column + column - 1)
+        return o
+
 
 class Transition(BaseModel):
     index: int
     target: str
-    guard: Code | None = None  # None when the .expr file is missing (a check error)
+    guard: Code | None = None  # None when it is neither inline nor in its .expr file (a check error)
     loc: Loc  # where the target is named in machine.yaml
+    #: An inline guard whose State_S_Transition_N.expr exists as well (a check error, LF070).
+    file_too: bool = False
 
 
 class State(BaseModel):
@@ -190,14 +221,27 @@ class MachineYaml(BaseModel):
     )
 
 
+class YamlTransition(BaseModel):
+    model_config = ConfigDict(extra="forbid", title="transition")
+
+    to: str = Field(..., pattern="^" + NAME_RE.pattern[:-2] + "$", description="The target state.")
+    guard: str | None = Field(
+        None,
+        min_length=1,
+        description="The guard, one Python expression, written here instead of in "
+        "State_<state>_Transition_N.expr (not both).  Left out: the guard is in that file.",
+    )
+
+
 class YamlState(BaseModel):
     model_config = ConfigDict(extra="forbid", title="state")
 
     name: str = Field(..., pattern="^" + NAME_RE.pattern[:-2] + "$", description="State name.")
-    transitions: list[str] = Field(
+    transitions: list[str | YamlTransition] = Field(
         default_factory=list,
-        description="Target states in priority order; position N is guarded by "
-        "State_<name>_Transition_N.expr.  No transitions: an accepting state.",
+        description="The transitions in priority order: a target state's name (position N is guarded by "
+        "State_<name>_Transition_N.expr), or `{to: TARGET, guard: EXPR}` with the guard inline.  "
+        "No transitions: an accepting state.",
     )
 
 

@@ -18,9 +18,10 @@ from pathlib import Path
 
 import yaml
 
-from ..machinedir import machine_name_of, refused_link
+from ..machinedir import LAYOUT_FILE, machine_name_of, refused_link
 from .cpp import syntax_hint
 from .diagnostics import Diagnostic, diag
+from .files import GUARD_RE, SECTION_RE, guard_file
 from .model import (
     IMPLICIT_SUSPENDED,
     SECTIONS,
@@ -53,9 +54,6 @@ _FORM_FEED_INDENT = re.compile(r"^[ \t]*\f[ \t\f]*[^\s#]", re.MULTILINE)
 #: libyaml's C parser when PyYAML has it (about ten times faster), else the pure-Python one.
 YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
-SECTION_RE = re.compile(r"State_(?P<state>.+)_(?P<kind>" + "|".join(SECTIONS) + r"|Variables)\.py\Z")
-GUARD_RE = re.compile(r"State_(?P<state>.+)_Transition_(?P<n>[0-9]+)\.expr\Z")
-
 
 @dataclass
 class ReadResult:
@@ -68,6 +66,10 @@ class ReadResult:
     orphans: list[str] = field(default_factory=list)  # state code files matching no state
     #: file name -> the bytes read (a build fingerprints them without reading them again)
     raw: dict[str, bytes] = field(default_factory=dict)
+    #: the inline guards, by the name their file would have (the key of their tree in `trees`)
+    inline: dict[str, Code] = field(default_factory=dict)
+    #: layout.yaml's text, if the directory has one (llfsm.lang.layout_file reads it; a build never)
+    layout_text: str | None = None
 
 
 class _Reader:
@@ -79,6 +81,8 @@ class _Reader:
         self.trees: dict[str, ast.Module] = {}
         self.raw: dict[str, bytes] = {}
         self.links: set[str] | frozenset[str] | None = None  # names that are symlinks, once listed
+        self.inline: dict[str, Code] = {}  # inline guards by the name their file would have
+        self.yaml_lines: list[str] = []
         self.nofollow = getattr(os, "O_NOFOLLOW", 0)
 
     # -- files ---------------------------------------------------------------------------
@@ -86,6 +90,10 @@ class _Reader:
         return str(self.path / name)
 
     def report(self, code: str, name: str, line: int, col: int, msg: str) -> None:
+        inline = self.inline.get(name)
+        if inline is not None:  # an inline guard's problem is at its place in machine.yaml
+            loc = inline.place(line, col)
+            name, line, col = loc.file, loc.line, loc.column
         self.diags.append(diag(code, self.where(name), line, col, msg))
 
     def read(self, name: str) -> str | None:
@@ -231,23 +239,9 @@ class _Reader:
 
     # -- yaml ----------------------------------------------------------------------------
     def yaml_tree(self, text: str) -> yaml.Node | None:
-        name = "machine.yaml"
-        try:
-            refusal = _structure_refusal(text, YAML_LOADER)
-            node = yaml.compose(text, Loader=YAML_LOADER) if refusal is None else None
-        except yaml.MarkedYAMLError as e:
-            refusal = _library_limit(text, e)
-            if refusal is None:
-                m = e.problem_mark or e.context_mark
-                line, col = (m.line + 1, m.column + 1) if m else (1, 1)
-                self.report("LF003", name, line, col, f"invalid YAML: {e.problem or e.context}")
-                return None
-        except (yaml.YAMLError, RecursionError) as e:
-            self.report("LF003", name, 1, 1, f"invalid YAML: {type(e).__name__}")
-            return None
+        node, refusal = compose(text)
         if refusal is not None:
-            self.report(refusal[0], name, refusal[1], refusal[2], refusal[3])
-            return None
+            self.report(refusal[0], "machine.yaml", refusal[1], refusal[2], refusal[3])
         return node
 
     def structure_error(self, node: yaml.Node | None, msg: str) -> None:
@@ -286,7 +280,7 @@ class _Reader:
     # -- the whole directory ---------------------------------------------------------------
     def run(self) -> ReadResult:
         name = machine_name_of(self.path)
-        result = ReadResult(self.path, None, self.diags, self.trees, raw=self.raw)
+        result = ReadResult(self.path, None, self.diags, self.trees, raw=self.raw, inline=self.inline)
         refused = refused_link(self.path)
         if refused is not None:  # the directory itself: nothing in it is read
             self.diags.append(diag("LF037", self.path, 1, 1, refused))
@@ -303,6 +297,7 @@ class _Reader:
         root = self.yaml_tree(text)
         if root is None:
             return result
+        self.yaml_lines = text.split("\n")
         top = self.mapping(
             root, "machine.yaml", ("description", "initial", "suspended", "states", "inputs", "parameters")
         )
@@ -337,20 +332,16 @@ class _Reader:
                     self.structure_error(fields["name"], "a state name cannot be empty")
                 continue
             sloc = _mark_loc(fields["name"])
-            targets: list[tuple[str, Loc]] = []
+            targets: list[_Target] = []
             tnode = fields.get("transitions")
             if tnode is not None and not (isinstance(tnode, yaml.ScalarNode) and tnode.tag.endswith("null")):
                 if not isinstance(tnode, yaml.SequenceNode):
                     self.structure_error(tnode, f"`transitions` of {sname} must be a list of state names")
                 else:
                     for position, t in enumerate(tnode.value):
-                        tname = self.scalar(t, "a transition target")
-                        if tname is not None:
-                            targets.append((tname, _mark_loc(t)))
-                        elif isinstance(t, yaml.ScalarNode):  # `[~, END]`: never dropped in silence
-                            self.structure_error(
-                                t, f"transition {position} of {sname} has no target (`~` or empty); name a state"
-                            )
+                        target = self.transition(sname, position, t)
+                        if target is not None:
+                            targets.append(target)
             states.append(self.state(sname, sloc, targets, entry_set))
 
         if not states:
@@ -372,6 +363,9 @@ class _Reader:
                 self.structure_error(d, "`description` must be text")
 
         inputs = self.inputs(top["inputs"]) if "inputs" in top else []
+        if LAYOUT_FILE in entry_set:
+            result.layout_text = self.read(LAYOUT_FILE)
+            self.raw.pop(LAYOUT_FILE, None)  # no part of the build's fingerprint
         includes = self.code_file("Includes.py", entry_set)
         variables, variables_file = self.variables("Variables.py") if "Variables.py" in entry_set else ([], None)
 
@@ -405,6 +399,63 @@ class _Reader:
             parameters=self.parameters(top.get("parameters")),
         )
         return result
+
+    def transition(self, state: str, position: int, node: yaml.Node) -> _Target | None:
+        """An entry of `transitions:`: a target's name, or `{to: TARGET, guard: EXPR}`."""
+        guard = None
+        if isinstance(node, yaml.MappingNode):
+            keys = self.mapping(node, f"transition {position} of {state}", ("to", "guard"))
+            if keys is None:
+                return None
+            if "to" not in keys:
+                self.structure_error(node, f"transition {position} of {state} needs `to:`, the state it goes to")
+                return None
+            guard = keys.get("guard")
+            if guard is not None and not isinstance(guard, yaml.ScalarNode):
+                self.structure_error(guard, f"the guard of transition {position} of {state} must be text")
+                return None
+            if guard is not None and not guard.value.strip():
+                self.structure_error(
+                    guard,
+                    f"the guard of transition {position} of {state} is empty: write an expression, or leave "
+                    f"`guard` out and write it in {guard_file(state, position)}",
+                )
+                return None
+            node = keys["to"]
+        tname = self.scalar(node, "a transition target")
+        if tname is None:
+            if isinstance(node, yaml.ScalarNode):  # `[~, END]`: never dropped in silence
+                self.structure_error(
+                    node, f"transition {position} of {state} has no target (`~` or empty); name a state"
+                )
+            return None
+        return tname, _mark_loc(node), guard
+
+    def inline_guard(self, state: str, index: int, node: yaml.ScalarNode) -> Code:
+        """An inline guard as a Code under its file's name, with where its text is in machine.yaml."""
+        name = guard_file(state, index)
+        start, end = node.start_mark, node.end_mark
+        origin = Loc(file="machine.yaml", line=start.line + 1, column=start.column + 1)
+        block_column = None
+        exact = False
+        if node.style in ("|", ">"):
+            # the text starts on the line after the indicator, at the block's indentation
+            below = self.yaml_lines[start.line + 1] if start.line + 1 < len(self.yaml_lines) else ""
+            column = len(below) - len(below.lstrip(" ")) + 1
+            origin = Loc(file="machine.yaml", line=start.line + 2, column=column)
+            block_column = column if node.style == "|" else None  # `>` folds lines: only the start is sure
+        elif start.line == end.line:
+            quoted = node.style in ("'", '"')
+            raw = self.yaml_lines[start.line][start.column : end.column] if start.line < len(self.yaml_lines) else ""
+            inner = raw[1:-1] if quoted else raw
+            exact = inner == node.value
+            if quoted:
+                origin = Loc(file="machine.yaml", line=origin.line, column=origin.column + 1)
+        code = Code(
+            file=name, text=node.value, loc=Loc(file=name), origin=origin, block_column=block_column, exact=exact
+        )
+        self.inline[name] = code
+        return code
 
     def inputs(self, node: yaml.Node) -> list[Input]:
         """`inputs:`, a mapping of input name to its keys.  What the keys say (types, values,
@@ -488,7 +539,7 @@ class _Reader:
                 self.structure_error(item, "an entry of `parameters` is empty; name a machine variable")
         return out
 
-    def state(self, name: str, loc: Loc, targets: list[tuple[str, Loc]], entries: set[str]) -> State:
+    def state(self, name: str, loc: Loc, targets: list[_Target], entries: set[str]) -> State:
         sections: dict[str, Code] = {}
         for sec in SECTIONS:
             code = self.code_file(f"State_{name}_{sec}.py", entries)
@@ -500,9 +551,15 @@ class _Reader:
         if vname in entries:
             variables, variables_file = self.variables(vname)
         transitions = []
-        for i, (target, tloc) in enumerate(targets):
-            guard = self.code_file(f"State_{name}_Transition_{i}.expr", entries)
-            transitions.append(Transition(index=i, target=target, guard=guard, loc=tloc))
+        for i, (target, tloc, inline) in enumerate(targets):
+            fname = guard_file(name, i)
+            if inline is None:
+                guard = self.code_file(fname, entries)
+            else:
+                guard = self.inline_guard(name, i, inline)
+                self.parse(fname, guard.text)
+            file_too = inline is not None and fname in entries
+            transitions.append(Transition(index=i, target=target, guard=guard, loc=tloc, file_too=file_too))
         return State(
             name=name,
             transitions=transitions,
@@ -512,6 +569,9 @@ class _Reader:
             loc=loc,
         )
 
+
+#: A transition as machine.yaml names it: its target, where, and its inline guard's node if any.
+_Target = tuple[str, Loc, yaml.ScalarNode | None]
 
 #: The keys of an input under `inputs:` (SPEC 11, docs/machine-format.md).
 INPUT_KEYS = ("type", "default", "domain", "topic", "msg", "field")
@@ -577,7 +637,26 @@ def _describe(stmt: ast.stmt) -> str:
 _Refusal = tuple[str, int, int, str]
 
 
-def _structure_refusal(text: str, loader: type) -> _Refusal | None:
+def compose(text: str, loader: type | None = None) -> tuple[yaml.Node | None, _Refusal | None]:
+    """The YAML tree of `text` (machine.yaml, layout.yaml), or None and why: anchors, aliases and
+    deep nesting refused before a tree is built, the library's own limits, or LF003 where the
+    text stops being YAML.  `loader`: YAML_LOADER, as it is when called."""
+    loader = loader or YAML_LOADER
+    try:
+        refusal = structure_refusal(text, loader)
+        return (yaml.compose(text, Loader=loader), None) if refusal is None else (None, refusal)
+    except yaml.MarkedYAMLError as e:
+        refusal = library_limit(text, e)
+        if refusal is not None:
+            return None, refusal
+        m = e.problem_mark or e.context_mark
+        line, col = (m.line + 1, m.column + 1) if m else (1, 1)
+        return None, ("LF003", line, col, f"invalid YAML: {e.problem or e.context}")
+    except (yaml.YAMLError, RecursionError) as e:
+        return None, ("LF003", 1, 1, f"invalid YAML: {type(e).__name__}")
+
+
+def structure_refusal(text: str, loader: type) -> _Refusal | None:
     """(code, line, column, message) when machine.yaml uses anchors or nests too deep, found on
     the event stream, before any tree is built: composing a 5,000-deep document would recurse."""
     depth = 0
@@ -595,7 +674,7 @@ def _structure_refusal(text: str, loader: type) -> _Refusal | None:
     return None
 
 
-def _library_limit(text: str, error: yaml.MarkedYAMLError) -> _Refusal | None:
+def library_limit(text: str, error: yaml.MarkedYAMLError) -> _Refusal | None:
     """Our own refusal when the YAML library refused the text first for one of its own limits;
     None when the text is simply not YAML.
 
@@ -607,7 +686,7 @@ def _library_limit(text: str, error: yaml.MarkedYAMLError) -> _Refusal | None:
     """
     if YAML_LOADER is not yaml.SafeLoader:
         try:
-            refusal = _structure_refusal(text, yaml.SafeLoader)
+            refusal = structure_refusal(text, yaml.SafeLoader)
         except (yaml.YAMLError, RecursionError):
             refusal = None
         if refusal is not None:

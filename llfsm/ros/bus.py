@@ -116,11 +116,16 @@ class Bus(Executor):
         #: None: whatever sys.stderr (or sys.stdout) is when a line is logged, so that a
         #: redirection made after the bus started is honoured.
         self.log_stream: IO[str] | None = None
+        #: `--log-level`: logger name ("" for every logger) -> level (logging.level_for).
+        self.log_levels: dict[str, Any] = {}
+        #: `--log-file`: where the log lines also go, as ROS 2's ~/.ros/log files (None: nowhere).
+        self.log_file: IO[str] | None = None
         self.transport: Transport = cast("Transport | None", ctx.transport) or InProcess()
         #: The transport's poll when it can bring anything in (never for the in-process one).
         self._poll = self.transport.poll if self.transport.remote else None
         self.transport.start(self)
         self._told: set[str] = set()  # what nobody_here said already
+        self._told_names: set[str] = set()  # the node names same_names said two nodes share
         if not self.transport.remote:
             ctx.at_end.append(self._unheard)
         ctx.between_rounds.append(self.spin_some)
@@ -206,6 +211,26 @@ class Bus(Executor):
             "To join nodes in other processes, run every side with --transport dds (or LLFSM_TRANSPORT=dds).",
             file=self.log_output(),
         )
+
+    def same_names(self) -> None:
+        """Say once of each name that two live nodes of this run share (two machines making
+        `ros.Node("x")`, a machine's node named as a `--node`): ROS 2 tools cannot tell them
+        apart (`ros2 node list` warns, `ros2 param` and `node info` reach one of them), and their
+        parameter services share names.  Asked between rounds, after the lifetimes look, so
+        that a node a restart makes anew, whose old one is dropped, is not taken for a twin."""
+        names = [n.get_fully_qualified_name() for n in self.nodes if not n._destroyed]
+        if len(names) == len(set(names)):
+            return
+        seen: set[str] = set()
+        for name in names:
+            if name in seen and name not in self._told_names:
+                self._told_names.add(name)
+                print(
+                    f"llfsm: warning: {names.count(name)} nodes of this run are named {name}: ROS 2 tools cannot tell "
+                    "them apart and their parameter services clash; give one of them another name or namespace",
+                    file=self.log_output(),
+                )
+            seen.add(name)
 
     # -- logging -------------------------------------------------------------------------------
     def log_output(self) -> IO[str]:

@@ -15,8 +15,8 @@ For each loaded machine M, a node `/llfsm/M` offers
   changes made by M's own code included (docs/parameters.md).
 
 Everything goes through the public `ros` API, so it works on any transport.  It joins the
-graph with the bus (the first `ros.init()` or a `--node`): a run that never uses the bus
-never pays for one.
+graph with the bus (the first `ros.init()`, a `--node`, or a machine declaring `parameters:`):
+a run that never uses the bus never pays for one.
 
 Cost: states are published from scheduler events (a tracer), and that tracer is installed
 only while some state topic has a reader; otherwise the scheduler runs its plain loop and a

@@ -64,11 +64,16 @@ class Lifetimes:
         self.bus.ctx.wake = 0
 
     def collect(self) -> None:
-        """Between rounds: destroy what was held and is held no more."""
+        """Between rounds: destroy what was held and is held no more; then, with what is left,
+        say once of each node name that two nodes of the run share (Bus.same_names)."""
         ctx = self.bus.ctx
         if not (self.dirty or ctx.references_dropped):
             return
         self.dirty = ctx.references_dropped = False
+        self._collect(ctx)
+        self.bus.same_names()
+
+    def _collect(self, ctx: Any) -> None:
         arr = ctx.arrangement
         if arr is None:
             return
@@ -97,13 +102,21 @@ class Lifetimes:
                 parent._destroy_entity(obj)  # type: ignore[attr-defined]  # llfsm.ros.node.Node
 
 
+def _attributes(cls: type) -> tuple[str, ...]:
+    """The instance attributes a class declares: its `__slots__`, or, for a class compiled by
+    mypyc (`--native`), which keeps no `__slots__`, the `__mypyc_attrs__` mypyc lists instead."""
+    d = cls.__dict__
+    names = d.get("__slots__") or d.get("__mypyc_attrs__") or ()
+    return (names,) if isinstance(names, str) else tuple(names)
+
+
 def _variables(m: object) -> list[object]:
-    """The values of a machine's own variables (its class's slots below the base class's, and a
-    __dict__ if it has one)."""
-    base = set(Machine.__slots__)
+    """The values of a machine's own variables (its class's attributes beyond the base class's,
+    and a __dict__ if it has one)."""
+    base = set(_attributes(Machine))
     out: list[object] = []
     for cls in type(m).__mro__:
-        for name in cls.__dict__.get("__slots__", ()):
+        for name in _attributes(cls):
             if name not in base and hasattr(m, name):
                 out.append(getattr(m, name))
     d = getattr(m, "__dict__", None)
@@ -141,7 +154,7 @@ def _reach(roots: list[object], nodes: dict[int, Any], owner: dict[int, Any]) ->
             if isinstance(d, dict):
                 todo.extend(d.values())
             for cls in type(o).__mro__:
-                for name in cls.__dict__.get("__slots__", ()):
+                for name in _attributes(cls):
                     if isinstance(name, str) and hasattr(o, name):
                         todo.append(getattr(o, name))
     return held

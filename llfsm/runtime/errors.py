@@ -227,6 +227,8 @@ def locate(rep: ErrorReport, fname: str, lineno: int, source_map: SourceMap | No
     if fm:
         rep.state = fm["state"]
         rep.section = fm["section"].replace("_", " ")
+    elif user_file == "machine.yaml":
+        rep.section = "guard"  # an inline guard (docs/machine-format.md): of the state the machine is in
     else:
         rep.section = user_file.removesuffix(".py")
         rep.state = None  # Variables.py / Includes.py belong to the machine, not to a state

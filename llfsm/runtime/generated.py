@@ -11,7 +11,8 @@ verify (llfsm.verify) read it.  They agree on:
   that any name fits on one comment line (`source_dir_of` reads it back);
 - **pointers**: the line before each block of user code is a comment `# FILE:LINE` (`pointer`,
   `POINTER_PATTERN`), and the block follows it line for line; FILE is one of the machine's
-  files (`FILE_PATTERN` splits a state's into state and section);
+  files (`FILE_PATTERN` splits a state's into state and section), or machine.yaml for a guard
+  written inline there (docs/machine-format.md);
 - **the source map**: the module's last statement binds `SOURCE_MAP` to a tuple of (line of a
   pointer in the module, FILE, LINE), one per pointer the compiler wrote, in order of lines.
   It is the truth (a user's comment may look like a pointer); a module that failed half-way
@@ -55,7 +56,7 @@ SOURCE_LINE = "# Source: "
 HEADER_LINES = 5
 #: A pointer comment: the file and line where the user code below it starts.
 POINTER_PATTERN = (
-    r"^\s*# (?P<file>Includes\.py|Variables\.py|State_\w+?_(?:OnEntry|OnExit|Internal|OnSuspend|"
+    r"^\s*# (?P<file>machine\.yaml|Includes\.py|Variables\.py|State_\w+?_(?:OnEntry|OnExit|Internal|OnSuspend|"
     r"OnResume|Variables)\.py|State_\w+?_Transition_\d+\.expr):(?P<line>\d+)\s*$"
 )
 #: A state's file, as a pointer names it: its state and its section.

@@ -75,6 +75,18 @@ class ArrangementError(ValueError):
     is not loaded): a usage error, unlike an exception raised by machine code."""
 
 
+def check_names(classes: Sequence[type[Machine]], suspended: Sequence[str] = ()) -> None:
+    """ArrangementError for a machine loaded twice or a --suspended machine not loaded: asked
+    by a run before anything beside its machines starts (a node, a transport), and again here."""
+    names = [c.NAME for c in classes]
+    for n in names:
+        if names.count(n) > 1:
+            raise ArrangementError(f"machine {n} is loaded twice; an arrangement addresses machines by name")
+    for n in suspended:
+        if n not in names:
+            raise ArrangementError(f"--suspended {n}: no machine named {n} is loaded")
+
+
 class Arrangement:
     """Machines in load order, the clock they share, and the round-robin that runs them."""
 
@@ -138,13 +150,7 @@ class Arrangement:
         #: a turn, breakpoints on states reached by commands).
         self.on_release: Callable[[Machine, int | None], None] | None = None
         self._stopped: int | None = None
-        names = [c.NAME for c in classes]
-        for n in names:
-            if names.count(n) > 1:
-                raise ArrangementError(f"machine {n} is loaded twice; an arrangement addresses machines by name")
-        for n in suspended:
-            if n not in names:
-                raise ArrangementError(f"--suspended {n}: no machine named {n} is loaded")
+        check_names(classes, suspended)
         for i, cls in enumerate(classes):
             m = cls(self, i)
             self.machines.append(m)
@@ -411,6 +417,8 @@ class Arrangement:
             status = EXIT_SIGNAL.get(self._signal, EXIT_OK)  # signal 0: a stop asked for from inside
             if self._interrupts > 1:
                 return self._result("killed", status)
+            if not self.machines:  # nodes on their own: an interrupt is how they end, as `ros2 run`'s
+                return self._result("interrupted", EXIT_OK)
             if self._grace_end is None:
                 self._grace_end = now + grace
                 if self.on_interrupt is not None:

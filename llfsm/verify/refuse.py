@@ -147,9 +147,14 @@ def refusals(m: Machine, trees: dict[str, ast.Module], path: Path, environment: 
     allowed = _allowed(environment)
 
     def report(code: str, file: str, node: ast.AST, message: str) -> None:
-        text = next((c.text for c in _codes(m) if c.file == file), "")
+        where = next((c for c in _codes(m) if c.file == file), None)
+        text = where.text if where is not None else ""
         col = node_col(text, node) if text and isinstance(node, ast.expr | ast.stmt) else 1
-        out.diagnostics.append(diag(code, path / file, getattr(node, "lineno", 1), col, message))
+        line = getattr(node, "lineno", 1)
+        loc = where.place(line, col) if where is not None else None  # an inline guard is in machine.yaml
+        if loc is not None:
+            file, line, col = loc.file, loc.line, loc.column
+        out.diagnostics.append(diag(code, path / file, line, col, message))
 
     # names an import binds to what reads the world, wherever they are used (SPEC 16)
     imported: dict[str, tuple[str, str]] = {}

@@ -20,11 +20,17 @@ each machine's description and first values, then per step the states entered, t
 the transition, the variables that changed, and a `step` event with the inputs, the topics
 published and the environment's choices; `llfsm replay DIR` steps through it on the diagrams
 (docs/debug.md, "Replay").
+
+The suggested `--duration` covers one round more than the path when its last step fired a
+transition: `-v` prints a state's line before the ringlet that enters it, so only then does the
+replayed trace show the state the counterexample ends in.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +40,7 @@ from ..runtime.readout import description, plain
 from .explorer import Explorer
 from .judge import Trace, Verification
 from .snapshot import STATE
-from .values import shown
+from .values import shown as value_text
 
 #: The file of the path's steps beside the bag.
 STEPS = "steps.jsonl"
@@ -42,6 +48,19 @@ STEPS = "steps.jsonl"
 
 class ReplayError(Exception):
     """The counterexample cannot be written as a bag (the message says why)."""
+
+
+def check_folder(folder: str) -> None:
+    """Before exploring: ReplayError when no bag could be written in `folder` (the bag extra is
+    missing, or the folder exists), so the user hears it before waiting for the verdict."""
+    from ..bag import BagError, need_libraries  # deferred: start-up (bags are an optional extra)
+
+    try:
+        need_libraries()
+    except BagError as e:
+        raise ReplayError(str(e)) from None
+    if os.path.lexists(folder):
+        raise ReplayError(f"output folder '{folder}' already exists")
 
 
 def _chosen(v: Verification) -> tuple[str, Trace]:
@@ -121,6 +140,7 @@ def write_counterexample(v: Verification, folder: str) -> str:
         raise ReplayError("needs --period: only then does the explorer follow a run's timing exactly")
     name, trace = _chosen(v)
     msgs, rounds = messages(v, trace)
+    created = not os.path.lexists(folder)
     try:
         writer = BagWriter(folder)
         writer.custom[SIM_CLOCK_KEY] = "sim"
@@ -131,24 +151,29 @@ def write_counterexample(v: Verification, folder: str) -> str:
             conn = writer.connection(topic, cls._TYPE, definition, type_hash, [qos_profile()])
             writer.write(conn, t, types.serializer(cls)(msg))
         writer.close()
-    except BagError as e2:
-        raise ReplayError(str(e2)) from None
+    except (BagError, ImportError) as e2:  # ImportError: a broken bag extra (check_folder saw it installed)
+        if created:
+            shutil.rmtree(folder, ignore_errors=True)  # never a half-written bag
+        why = f"{e2.name} cannot be imported: pip install 'llfsm[bag]'" if isinstance(e2, ImportError) else str(e2)
+        raise ReplayError(why) from None
     try:
         (Path(folder) / STEPS).write_text("".join(json.dumps(ev) + "\n" for ev in steps_events(e, trace)))
     except OSError as e3:
         raise ReplayError(f"{folder}: {STEPS} could not be written: {e3.strerror}") from None
     period = e.period
+    last = next((step for _config, step in reversed(trace.steps) if step is not None), None)
+    shown = rounds + 1 if last is not None and last.transition is not None else rounds
     targets = " ".join(str(Path(p)) for p in v.loaded.paths)
     return (
         f"wrote the counterexample of {name!r} to {folder} ({len(msgs)} message{'s' if len(msgs) != 1 else ''}, "
         f"{rounds} round{'s' if rounds != 1 else ''}); replay it with: llfsm run --clock sim --period "
-        f"{duration_text(period)} --play {folder} --duration {duration_text(rounds * period)} {targets}"
+        f"{duration_text(period)} --play {folder} --duration {duration_text(shown * period)} {targets}"
     )
 
 
 def _value(x: Any) -> Any:
     """A configuration's value as plain data (a message or a frozen value as verify shows it)."""
-    return x if isinstance(x, bool | int | float | str) or x is None else shown(x)
+    return x if isinstance(x, bool | int | float | str) or x is None else value_text(x)
 
 
 def steps_events(e: Explorer, trace: Trace) -> list[dict[str, Any]]:

@@ -71,14 +71,25 @@ def step_lines(e: Explorer, step: Step | None, config: tuple[Any, ...]) -> list[
 FOLD = 6
 
 
-def _quiet(step: Step | None) -> bool:
-    """A ringlet that fired nothing, entered nothing, changed and published nothing."""
-    return (
-        step is not None
-        and step.transition is None
-        and not (step.finished or step.commands or step.entered or step.inputs or step.changed)
-        and not (step.published or step.interrupted)
-    )
+def _quiet(steps: list[tuple[tuple[Any, ...], Step | None]]) -> list[bool]:
+    """Per step: a ringlet that fired nothing, entered nothing, changed and published nothing,
+    and read the inputs its machine read in its ringlet before (a machine with inputs reads
+    them in every ringlet: waiting for `after_ms(300)` with the sensor clear is idle too)."""
+    out = []
+    last: dict[int, dict[str, Any]] = {}  # machine -> the inputs of its latest ringlet
+    for _config, step in steps:
+        if step is None:
+            out.append(False)
+            continue
+        same_inputs = not step.inputs or last.get(step.machine) == step.inputs
+        last[step.machine] = step.inputs
+        out.append(
+            same_inputs
+            and step.transition is None
+            and not (step.finished or step.commands or step.entered or step.changed)
+            and not (step.published or step.interrupted)
+        )
+    return out
 
 
 def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list[str]:
@@ -96,12 +107,13 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
         config, step = steps[k]
         out.extend("  " + line for line in step_lines(e, step, config))
 
+    quiet = _quiet(steps)
     pos = 0
     while pos < len(steps):
         if pos == loop_start:
             out.append("  -- the loop starts here --")
         end = pos  # the last of a run of quiet ringlets starting here (never across the loop's start)
-        while _quiet(steps[pos][1]) and end + 1 < len(steps) and end + 1 != loop_start and _quiet(steps[end + 1][1]):
+        while quiet[pos] and end + 1 < len(steps) and end + 1 != loop_start and quiet[end + 1]:
             end += 1
         if end - pos + 1 <= FOLD:
             show(pos)
@@ -112,7 +124,8 @@ def trace_lines(e: Explorer, trace: Trace, what: str = "counterexample") -> list
         show(pos)
         show(pos + 1)
         out.append(
-            f"  ... {end - pos - 3:,} more ringlets in which nothing fired, changed or was published "
+            f"  ... {end - pos - 3:,} more ringlets in which nothing fired, changed or was published"
+            f"{', the inputs as before' if folded_from.inputs else ''} "
             f"(rounds {folded_from.round}-{folded_to.round}; --format json lists each) ..."
         )
         show(end - 1)

@@ -333,6 +333,22 @@ class WebServer:
 
     async def _ws(self, request: web.Request) -> web.WebSocketResponse:
         ws = web.WebSocketResponse(heartbeat=20, max_msg_size=64 * 1024)
+        try:
+            if not await self._greet(ws, request):
+                return ws
+        except ConnectionError:  # the page left right after the handshake (a tab closed, a browser exiting)
+            return ws
+        try:
+            async for msg in ws:  # the page only listens here; commands come as POSTs
+                if msg.type == WSMsgType.ERROR:
+                    break
+        finally:
+            self.clients.discard(ws)
+        return ws
+
+    async def _greet(self, ws: web.WebSocketResponse, request: web.Request) -> bool:
+        """The handshake and the hello; then the page is one of the clients the push loop feeds.
+        False when there was nothing to greet it with (the WebSocket is closed)."""
         await ws.prepare(request)
         for _ in range(max(1, int(5 * self.rate))):  # five seconds of tries (a bench sets a float rate)
             try:
@@ -342,18 +358,12 @@ class WebServer:
                 await asyncio.sleep(1 / self.rate)
         else:  # said already (once); the page shows itself closed, and may reconnect
             await ws.close()
-            return ws
+            return False
         await ws.send_str(dumps(hello))
         self.clients.add(ws)
         if self._wake is not None:
             self._wake.set()
-        try:
-            async for msg in ws:  # the page only listens here; commands come as POSTs
-                if msg.type == WSMsgType.ERROR:
-                    break
-        finally:
-            self.clients.discard(ws)
-        return ws
+        return True
 
     async def _push(self) -> None:
         """Sample and push at most RATE times a second, only while a page is connected.  When

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import time
 from collections import deque
 from collections.abc import Callable
@@ -107,7 +108,9 @@ class Source:
         self.bus = bus
         self.ctx = bus.ctx
         self.clock = bus.clock
-        self.node: Node = Node(node_name)  # on the scheduler's thread, before the run
+        # on the scheduler's thread, before the run; each page's node its own name (as rqt's
+        # rqt_gui_py_node_<pid>), so that two views on one graph are not two nodes of one name
+        self.node: Node = Node(f"{node_name}_{os.getpid()}")
         self._readers: dict[str, Any] = {}
         self._asked: set[str] = set()
         self._stats: dict[str, _TopicStats] = {}
@@ -211,7 +214,7 @@ class Source:
 
     async def publish(self, topic: str, type_name: str, text: str) -> dict[str, Any]:
         try:
-            name = expand(topic.strip(), "llfsm_web", "/")
+            name = expand(topic.strip(), self.node.get_name(), "/")
         except Exception as e:  # InvalidNameError and friends: one line
             raise CommandError(str(e)) from None
         existing = self.topic_types().get(name)
@@ -243,7 +246,7 @@ class Source:
 
     async def _call(self, service: str, type_name: str, text: str) -> Any:
         try:
-            name = expand(service, "llfsm_web", "/")
+            name = expand(service, self.node.get_name(), "/")
         except Exception as e:
             raise CommandError(str(e)) from None
         known = self.service_types().get(name)

@@ -14,6 +14,8 @@ what they look at, each a function over one `Checking` (llfsm.lang.check.checkin
 - ros_habits: rclpy spellings (LF041)
 - parameters: machine.yaml's `parameters:` (LF060-LF062)
 - packages:   message packages package.xml does not declare (LF106)
+- fields:     fields a message type does not have (LF051), read from definitions (definitions)
+- arrangement: machines named by suspend("M") and family that none checked together is (LF050)
 - untranslated: clfsm code `llfsm import` left for a person (LF080)
 
 This module runs them in order for one machine (`check_machine`), and for many, over worker
@@ -40,6 +42,7 @@ from ..discover import find_machines
 from ..model import Machine
 from ..reader import ReadResult, read_machine
 from . import code, includes, inputs, parameters, structure, untranslated, variables
+from .arrangement import unknown_machines
 from .checking import Checking
 from .packages import undeclared_dependencies
 
@@ -51,6 +54,8 @@ class MachineCheck:
     path: Path
     read: ReadResult
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    #: (file, line, column, machine) of each machine its code names by a literal (LF050)
+    references: list[tuple[str, int, int, str]] = field(default_factory=list)
 
     @property
     def machine(self) -> Machine | None:
@@ -75,7 +80,7 @@ def check_machine(path: str | Path, within: Path | None = None) -> MachineCheck:
     c = Checking.of(path, read)
     run_rules(c)
     diagnostics = sorted(set(_without_cascade(c.diagnostics)), key=Diagnostic.sort_key)
-    return MachineCheck(path, read, diagnostics)
+    return MachineCheck(path, read, diagnostics, c.references)
 
 
 def run_rules(c: Checking) -> None:
@@ -96,6 +101,7 @@ def run_rules(c: Checking) -> None:
     inputs.assignments(c, m)
     untranslated.untranslated(c, m)
     structure.orphans(c)
+    structure.layout(c, m)
     structure.reachability(c, m)
     structure.suspend_state(c, m)
     c.diagnostics.extend(undeclared_dependencies(c.path, c.read.trees))
@@ -128,26 +134,59 @@ def check_paths(paths: Iterable[Path]) -> list[MachineCheck]:
 PARALLEL_FROM = 48
 
 
-def _diagnostics_of(path: Path, within: Path | None = None) -> list[Diagnostic]:
-    return check_machine(path, within).diagnostics
+#: What one machine's check hands back to `diagnose`: its diagnostics and the machines it names.
+_Outcome = tuple[list[Diagnostic], list[tuple[str, int, int, str]]]
+
+
+def _outcome_of(path: Path, within: Path | None = None) -> _Outcome:
+    checked = check_machine(path, within)
+    return checked.diagnostics, checked.references
 
 
 def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[Diagnostic]]:
     """(number of machines, their diagnostics in a stable order) for `llfsm check`.
 
     Large trees (a monorepo of machines in CI) are checked by worker processes, one per core;
-    workers send back only diagnostics, so memory stays flat however many machines there are.
-    The order of the output never depends on the number of workers.
+    workers send back only diagnostics (and the machine names each machine's code gives, for
+    LF050), so memory stays flat however many machines there are.  The order of the output
+    never depends on the number of workers.
     """
     found = [(m, p) for p in paths for m in find_machines(p)]
     machines, roots = [m for m, _ in found], [p for _, p in found]
+    return len(machines), _across(machines, _outcomes(machines, roots, jobs))
+
+
+def _across(machines: list[Path], outcomes: Iterable[_Outcome]) -> list[Diagnostic]:
+    """Each machine's diagnostics, with LF050 among them when several machines are checked."""
+    names = _names_around(machines) if len(machines) > 1 else None
+    out: list[Diagnostic] = []
+    for diags, refs in outcomes:
+        extra = unknown_machines(names, refs) if names is not None and refs else []
+        out.extend(sorted(diags + extra, key=Diagnostic.sort_key) if extra else diags)
+    return out
+
+
+def _names_around(machines: list[Path]) -> set[str]:
+    """The machines checked, and those beside them (pre-commit passes only the machines a
+    commit changed, not the ones beside them that they suspend)."""
+    names = {m.name.removesuffix(".machine") for m in machines}
+    for folder in {m.parent for m in machines}:
+        try:
+            with os.scandir(folder) as entries:
+                names.update(e.name.removesuffix(".machine") for e in entries if e.name.endswith(".machine"))
+        except OSError:
+            continue
+    return names
+
+
+def _outcomes(machines: list[Path], roots: list[Path], jobs: int | None) -> Iterable[_Outcome]:
     cores = usable_cores()
     if jobs is None:
         jobs = cores if len(machines) >= PARALLEL_FROM else 1
     # more workers than cores only add memory and switching: `-j 10000` must not fork 10,000
     jobs = min(jobs, cores, len(machines))
     if jobs <= 1 or len(machines) < 2:
-        return len(machines), [d for m, p in found for d in check_machine(m, p).diagnostics]
+        return [_outcome_of(m, p) for m, p in zip(machines, roots, strict=True)]
     # deferred: start-up (a check of a few machines never starts worker processes)
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
@@ -158,7 +197,6 @@ def diagnose(paths: Iterable[Path], jobs: int | None = None) -> tuple[int, list[
         with ProcessPoolExecutor(
             max_workers=jobs, mp_context=ctx, initializer=die_with_parent, initargs=(os.getpid(),)
         ) as pool:
-            chunks = pool.map(_diagnostics_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8)))
-            return len(machines), [d for chunk in chunks for d in chunk]
+            return list(pool.map(_outcome_of, machines, roots, chunksize=max(1, len(machines) // (jobs * 8))))
     finally:
         gc.unfreeze()  # every worker is forked by now; a caller that goes on collects as before

@@ -13,7 +13,9 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
+from ...suggest import close_names
 from ..diagnostics import Diagnostic, diag
 from ..model import Loc
 from ..reader import ReadResult
@@ -45,6 +47,16 @@ class Suggester:
             return ""
         return f" (did you mean {' or '.join(repr(c) for c in close)}?)"
 
+    def alike(self, name: str, names: Iterable[str]) -> str:
+        """As `did_you_mean`, through llfsm.suggest, which ignores case (`X` for the field `x`,
+        `WallBot` for the machine `wall_bot`): for names a user spells from memory."""
+        names = names if isinstance(names, list | set | frozenset | dict) else list(names)
+        if self.left <= 0 or len(names) > SUGGEST_AMONG or len(name) > 200:
+            return ""
+        self.left -= 1
+        close = close_names(name, [n for n in names if len(n) <= 200])
+        return f" (did you mean {' or '.join(repr(c) for c in close)}?)" if close else ""
+
 
 @dataclass
 class Checking:
@@ -70,6 +82,14 @@ class Checking:
     called: dict[str, set[int]] = field(default_factory=dict)
     #: the folders around the machine where `llfsm run` looks for interface packages (first import)
     interface_roots: list[str] | None = None
+    #: what Includes.py imports (name -> dotted path), and the machine variables of a message
+    #: type (name -> `pkg/msg/Name`): made by the first section that LF051 looks at
+    message_paths: dict[str, str] | None = None
+    message_variables: dict[str, str] | None = None
+    #: the definitions LF051 has looked up (`pkg/msg/Name` -> its spec, or None), once each
+    message_specs: dict[str, Any] = field(default_factory=dict)
+    #: (file, line, column, machine) of each `suspend("M")` and family: LF050 across machines
+    references: list[tuple[str, int, int, str]] = field(default_factory=list)
 
     @classmethod
     def of(cls, path: Path, read: ReadResult) -> Checking:
@@ -81,6 +101,10 @@ class Checking:
         )
 
     def add(self, code: str, file: str, line: int, col: int, msg: str) -> None:
+        inline = self.read.inline.get(file)
+        if inline is not None:  # an inline guard: the rules name it by its file's name; it is in machine.yaml
+            loc = inline.place(line, col)
+            file, line, col = loc.file, loc.line, loc.column
         self.diagnostics.append(diag(code, self.path / file, line, col, msg))
 
     def at(self, code: str, loc: Loc, msg: str) -> None:

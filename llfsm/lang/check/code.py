@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import ast
 import builtins
+import os
 from collections.abc import Mapping
 
+from ...interface_path import folders_around
 from ...runtime.machine import MACROS
 from ..bindings import BadBinding, find, name_map, state_map
 from ..cpp import C_FUNCTIONS, CPP_NAMES
@@ -21,7 +23,10 @@ from ..model import Code, Machine, State
 from ..positions import char_col, node_col
 from ..reader import MAX_CODE_DEPTH
 from ..scopes import Unresolved, section_bindings, unresolved
+from .arrangement import references
 from .checking import SUGGEST_AMONG, Checking
+from .definitions import interface_imports
+from .fields import message_fields
 from .imports import imports
 from .includes import imported_names
 from .ros_habits import ROS_NAMES, ROS_QOS_NAMES, ros_habits
@@ -48,7 +53,7 @@ class _Known:
 
 def initialisers(c: Checking, m: Machine) -> None:
     """The code of Variables.py and of each state's variables file: it runs as the machine loads."""
-    for code in [m.variables_file] + [s.variables_file for s in m.states]:
+    for state, code in [(None, m.variables_file)] + [(s, s.variables_file) for s in m.states]:
         if code is not None and code.file in c.read.trees:
             tree = c.read.trees[code.file]
             scan = scan_code(tree, {})
@@ -68,15 +73,38 @@ def initialisers(c: Checking, m: Machine) -> None:
                         machine_self(c, code, b)
             if not scan.escapes:
                 compiles(c, code, tree)
+                initialiser_names(c, m, state, code, tree)
+
+
+def _base(c: Checking, m: Machine) -> Mapping[str, str]:
+    """The machine-level name map (inputs are read by their bare names as variables are), and
+    what Includes.py imports: once per machine, since per state it would cost states x variables."""
+    if c.base is None:
+        c.base = name_map([v.name for v in m.variables] + [i.name for i in m.inputs], None, [], MACROS)
+        c.imported = imported_names(c)
+    return c.base
+
+
+def initialiser_names(c: Checking, m: Machine, s: State | None, code: Code, tree: ast.Module) -> None:
+    """LF040 for a name an initialiser's value reads that nothing provides (`msg: Twist =
+    Twist()` without the import): the machine would not load.  Annotations are left alone: the
+    generated module never evaluates them."""
+    values = [st.value for st in tree.body if isinstance(st, ast.AnnAssign) and st.value is not None]
+    if not values:
+        return
+    base = _base(c, m)
+    mapping = state_map(base, s.name, [v.name for v in s.variables]) if s is not None else base
+    imported = c.imported
+    names = {n.id for v in values for n in ast.walk(v) if isinstance(n, ast.Name)}
+    if all(n in mapping or n in BUILTINS or (imported is not None and n in imported) for n in names):
+        return
+    for u in unresolved(ast.Module(body=[ast.Expr(v) for v in values], type_ignores=[]), _Known(mapping, imported)):
+        undefined(c, m, s, code, u, star=imported is None)
 
 
 def state_code(c: Checking, m: Machine, s: State) -> None:
     """Every section and guard of state `s`."""
-    if c.base is None:  # once per machine: per state it would cost states x variables
-        # inputs are read by their bare names as variables are (check.inputs refuses writes)
-        c.base = name_map([v.name for v in m.variables] + [i.name for i in m.inputs], None, [], MACROS)
-        c.imported = imported_names(c)
-    mapping = state_map(c.base, s.name, [v.name for v in s.variables])
+    mapping = state_map(_base(c, m), s.name, [v.name for v in s.variables])
     imported = c.imported
     files = list(s.sections.values()) + [t.guard for t in s.transitions if t.guard is not None]
     for code in files:
@@ -100,6 +128,8 @@ def state_code(c: Checking, m: Machine, s: State) -> None:
         for n in scan.reserved:
             reserved_use(c, code, n)
         ros_habits(c, code, scan)
+        message_fields(c, m, s, code, tree)
+        references(c, code, tree)
         if scan.imports:
             imports(c, code, scan.imports)
         if not is_guard and ";" in code.text:
@@ -122,10 +152,11 @@ def state_code(c: Checking, m: Machine, s: State) -> None:
                 undefined(c, m, s, code, u, star=imported is None)
 
 
-def undefined(c: Checking, m: Machine, s: State, code: Code, u: Unresolved, star: bool) -> None:
+def undefined(c: Checking, m: Machine, s: State | None, code: Code, u: Unresolved, star: bool) -> None:
     """LF040 for a name nothing provides (LF105, a warning, when Includes.py star-imports,
     since the star may provide it), with the likeliest cause and its fix."""
     name, n = u.name, u.node
+    state_vars = s.variables if s is not None else []
     called = id(n) in _called(c, code.file)
     if called:  # a function: a variable to declare would be the wrong advice
         declare = "import it in Includes.py (from a library, or a helper module beside the machine folder)"
@@ -144,12 +175,16 @@ def undefined(c: Checking, m: Machine, s: State, code: Code, u: Unresolved, star
         msg = f"name {name!r} is not defined: llfsm spells it {ROS_NAMES[name]}"
     elif name in ROS_QOS_NAMES:
         msg = f"name {name!r} is not defined: llfsm spells it `ros.{name}` (after `from llfsm import ros`)"
+    elif name[:1].isupper() and (lines := interface_imports(name, _roots(c))):
+        msg = f"name {name!r} is not defined: it is an interface type; import it in Includes.py: " + " or ".join(
+            f"`{line}`" for line in lines
+        )
     elif other is not None and other != code.file:
         msg = f"name {name!r} is a local of {other}: a section's locals last one section, as in clfsm; {declare}"
-    elif c.suggest.left <= 0 or len(m.variables) + len(s.variables) > SUGGEST_AMONG:
+    elif c.suggest.left <= 0 or len(m.variables) + len(state_vars) > SUGGEST_AMONG:
         msg = f"name {name!r} is not defined: not a variable, an import, a builtin or a macro; {declare}"
     else:
-        candidates = [k for k in c.base or {} if k not in MACROS] + [v.name for v in s.variables]
+        candidates = [k for k in c.base or {} if k not in MACROS] + [v.name for v in state_vars]
         candidates += sorted(c.imported or ()) + sorted(MACROS)
         close = c.suggest.close(name, candidates)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
@@ -157,6 +192,13 @@ def undefined(c: Checking, m: Machine, s: State, code: Code, u: Unresolved, star
     if star:
         msg = f"{msg} (unless the star import of Includes.py provides it)"
     c.add("LF105" if star else "LF040", code.file, n.lineno, node_col(code.text, n), msg)
+
+
+def _roots(c: Checking) -> list[str]:
+    """The folders around the machine where `llfsm run` finds a user's interface packages."""
+    if c.interface_roots is None:
+        c.interface_roots = folders_around(os.fspath(c.path))
+    return c.interface_roots
 
 
 def _called(c: Checking, file: str) -> set[int]:

@@ -3,29 +3,23 @@ a usable name of a known type with values of that type (LF047, LF048), a binding
 message type and a field that exist and fit the input's type (LF049), and no code assigns an
 input (LF046): an input is a snapshot of the world, read-only for the machine.
 
-Message definitions are read as text (llfsm.idl's parser): the shipped ones from the folder
-they are generated from, a user's from the interface search path.  Nothing is imported.
+Message definitions are read as text (llfsm.lang.check.definitions): the shipped ones from the
+folder they are generated from, a user's from the interface search path.  Nothing is imported.
 """
 
 from __future__ import annotations
 
 import ast
 import math
-import os
 from collections.abc import Iterator
-from pathlib import Path
 
-from ...interface_path import package_dir
 from ...runtime.machine import MACROS, RESERVED
 from ..bindings import find
 from ..model import INPUT_TYPES, Code, Input, Loc, Machine, is_valid_name
 from ..positions import char_col
 from .checking import Checking
+from .definitions import message_spec
 from .variables import GENERATED_PREFIXES
-
-#: The shipped interface definitions (llfsm/msgs/_interfaces/PKG/msg/NAME.msg), found without
-#: importing llfsm.msgs.
-SHIPPED_INTERFACES = Path(__file__).resolve().parents[2] / "msgs" / "_interfaces"
 
 #: The ROS field types each input type can take its value from.
 _INTS = ("int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64", "byte", "char")
@@ -145,22 +139,6 @@ def _topic_ok(topic: str) -> bool:
     return bool(body) and all(p and (p[0].isalpha() or p[0] == "_") and p.replace("_", "").isalnum() for p in parts)
 
 
-def _definition(type_name: str) -> tuple[str, str] | None:
-    """(text, path) of the .msg file of `pkg/msg/Name`: shipped first, then the search path."""
-    pkg, kind, name = type_name.split("/")
-    candidates = [SHIPPED_INTERFACES / pkg / kind / f"{name}.msg"]
-    user = package_dir(pkg)
-    if user is not None:
-        candidates.append(Path(user) / kind / f"{name}.msg")
-    for p in candidates:
-        try:
-            if p.is_file() and p.stat().st_size <= 1 << 20:
-                return p.read_text(encoding="utf-8"), os.fspath(p)
-        except (OSError, UnicodeDecodeError):
-            continue
-    return None
-
-
 def field_type(msg: str, field: str) -> str:
     """The ROS type of `field` (dotted for a nested one) of message `msg` ("pkg/msg/Name"), from
     the definitions' text; LookupError says what is missing ("msg: ..." or "field: ...")."""
@@ -174,7 +152,7 @@ def field_type(msg: str, field: str) -> str:
     path = field.split(".")
     for n, name in enumerate(path):
         try:
-            spec = _spec(current)
+            spec = message_spec(current)
         except InterfaceError as e:
             raise LookupError(f"msg: the definition of {current} cannot be read: {e.message}") from None
         if spec is None:
@@ -191,18 +169,6 @@ def field_type(msg: str, field: str) -> str:
             raise LookupError(f"field: {'.'.join(path[: n + 1])} of {msg} is a {found.type.base}, not a message")
         current = found.type.base
     raise AssertionError("unreachable")  # pragma: no cover
-
-
-def _spec(type_name: str):  # type: ignore[no-untyped-def]  # an llfsm.idl MessageSpec, or None
-    from ...idl.parser import parse_message  # deferred: start-up (see field_type)
-
-    found = _definition(type_name)
-    if found is None:
-        return None
-    text, path = found
-    folder = Path(path).parent
-    local = [p.stem for p in folder.glob("*.msg")] if folder.is_dir() else []
-    return parse_message(text, type_name, path, local=local)
 
 
 def assignments(c: Checking, m: Machine) -> None:

@@ -8,6 +8,8 @@ from __future__ import annotations
 import ast
 
 from ...machinedir import MACHINE_SUFFIX, machine_name_of
+from ..files import guard_file, header_target
+from ..layout_file import placement
 from ..model import MAX_MACHINE_NAME, Code, Machine, State, is_valid_name
 from ..positions import node_col
 from .checking import Checking
@@ -77,18 +79,41 @@ def states(c: Checking, m: Machine) -> None:
 
 
 def guard(c: Checking, s: State, index: int, code: Code | None) -> None:
-    """LF023, LF024: a guard file exists and is one expression; LF103, LF104: constant guards."""
-    fname = f"State_{s.name}_Transition_{index}.expr"
+    """LF023, LF024: a guard exists (in its file or inline) and is one expression; LF070: not
+    in both places; LF071: its file's `# -> TARGET` names its target; LF103, LF104: constant
+    guards."""
+    t = s.transitions[index]
+    fname = guard_file(s.name, index)
     if code is None:
         if fname not in c.read.trees and fname not in c.unreadable:
-            c.add(
+            c.at(
                 "LF023",
-                "machine.yaml",
-                s.transitions[index].loc.line,
-                s.transitions[index].loc.column,
-                f"transition {index} of {s.name} has no guard file {fname}",
+                t.loc,
+                f"transition {index} of {s.name} has no guard: write it in {fname}, "
+                f"or inline in machine.yaml (`{{to: {t.target}, guard: EXPR}}`)",
             )
         return
+    if t.file_too:
+        c.at(
+            "LF070",
+            code.origin or t.loc,
+            f"the guard of transition {index} of {s.name} is written twice, here and in {fname}; keep one "
+            "(delete the file, or the inline `guard:`)",
+        )
+    if not code.inline:
+        named = header_target(code.text)
+        if named is not None and named != t.target:
+            col = code.text.index(named) + 1
+            c.add(
+                "LF071",
+                fname,
+                1,
+                col,
+                f"{fname} says `# -> {named}` but transition {index} of {s.name} goes to {t.target}: was "
+                "`transitions:` reordered by hand? Each guard file stays at its position; move it with its "
+                "transition (`llfsm transition move`), or correct the comment",
+            )
+    what_guard = f"the guard of transition {index} of {s.name}" if code.inline else f"guard {fname}"
     tree = c.read.trees.get(fname)
     if tree is None:
         return  # a syntax error, already reported
@@ -96,7 +121,7 @@ def guard(c: Checking, s: State, index: int, code: Code | None) -> None:
         where = tree.body[1] if len(tree.body) > 1 else (tree.body[0] if tree.body else None)
         line, col = (where.lineno, node_col(code.text, where)) if where is not None else (1, 1)
         what = "is empty" if not tree.body else "must be exactly one Python expression"
-        c.add("LF024", fname, line, col, f"guard {fname} {what}, such as `after_ms(500)`")
+        c.add("LF024", fname, line, col, f"{what_guard} {what}, such as `after_ms(500)`")
         return
     expr = tree.body[0].value
     if isinstance(expr, ast.Tuple):
@@ -106,17 +131,17 @@ def guard(c: Checking, s: State, index: int, code: Code | None) -> None:
             fname,
             expr.lineno,
             node_col(code.text, expr),
-            f"guard {fname} is a tuple, which is always true; join conditions with `and` or `or`",
+            f"{what_guard} is a tuple, which is always true; join conditions with `and` or `or`",
         )
         return
     semicolon = guard_semicolon(code.text)
     if semicolon is not None:
-        c.add("LF024", fname, *semicolon, f"guard {fname} must be one expression, without `;`")
+        c.add("LF024", fname, *semicolon, f"{what_guard} must be one expression, without `;`")
         return
     if isinstance(expr, ast.Constant):
         if not expr.value:
             if "# UNTRANSLATED" not in code.text:  # `llfsm import`'s stand-in: LF080 says it once
-                c.add("LF103", fname, 1, 1, f"guard {fname} is always false: transition {index} never fires")
+                c.add("LF103", fname, 1, 1, f"{what_guard} is always false: transition {index} never fires")
         elif s.name not in c.always_true:  # the first true guard silences all later ones
             c.always_true.add(s.name)
             for later in s.transitions[index + 1 :]:
@@ -128,6 +153,27 @@ def guard(c: Checking, s: State, index: int, code: Code | None) -> None:
                     f"transition {later.index} of {s.name} is never evaluated: "
                     f"transition {index} before it is always true",
                 )
+
+
+def layout(c: Checking, m: Machine) -> None:
+    """LF073: layout.yaml is not of its form (at its line); LF072: it places a state or a
+    transition label the machine does not have (left from a rename or a removal by hand)."""
+    placed, problems = placement(c.read)
+    c.diagnostics.extend(problems)
+    if placed is None:
+        return
+    states = {s.name: s for s in m.states if not s.implicit}
+    for name, loc in placed.state_locs.items():
+        if name not in states:
+            c.at("LF072", loc, f"layout.yaml places state {name}, which the machine does not have; it is ignored")
+    for (name, index), loc in placed.label_locs.items():
+        if name not in states or index >= len(states[name].transitions):
+            c.at(
+                "LF072",
+                loc,
+                f"layout.yaml places the label of transition {index} of {name}, which the machine does not have; "
+                "it is ignored",
+            )
 
 
 def orphans(c: Checking) -> None:
