@@ -10,6 +10,8 @@
   a native build can be made;
 - side by side with SPIN on the Promela export of the same structure: SPIN's own time to
   compile and search, the same verdict, and the ratio;
+- verify with an environment (a service of three responses) against the same machine with an
+  input of three values instead: configurations per CPU second, interleaved;
 - the cost of inputs at run time: the toggle of bench/run.py without an input, with one bound
   input and no message, and with one bound input and a message every round, interleaved,
   medians of CPU time.
@@ -301,6 +303,92 @@ def inputs_table(tmp: Path, n: int, rounds: int) -> Table:
     )
 
 
+# -- the environment against inputs -----------------------------------------------------------------
+
+ASK_STATES = "states:\n  - name: INIT\n    transitions: [ASK]\n  - name: ASK\n    transitions: [ASK]\n"
+
+
+def write_asker(root: Path, modulo: int, environment: bool) -> Path:
+    """One machine asking for a value at every ringlet and counting modulo `modulo`: from a
+    service of the environment (three responses: call_async, spin_until_future_complete,
+    result()), or from an input of three values: 3 x `modulo` configurations either way."""
+    d = root / ("asker.machine" if environment else "reader.machine")
+    d.mkdir(parents=True, exist_ok=True)
+    if environment:
+        (d / "machine.yaml").write_text(ASK_STATES)
+        (d / "Includes.py").write_text(
+            "from llfsm import ros\nfrom llfsm.msgs.turtle_sensor_interface.srv import TurtlePosition\n"
+        )
+        (d / "State_INIT_OnEntry.py").write_text(
+            'ros.init()\nnode = ros.Node("asker")\nclient = node.create_client(TurtlePosition, "/where")\n'
+        )
+        (d / "State_ASK_OnEntry.py").write_text(
+            "future = client.call_async(TurtlePosition.Request())\n"
+            "ros.spin_until_future_complete(node, future)\n"
+            f"value = future.result().x\ncount = (count + 1) % {modulo}\n"
+        )
+        (d / "Variables.py").write_text(
+            "node: object = None\nclient: object = None\nvalue: float = 0.0\ncount: int = 0\n"
+        )
+    else:
+        (d / "machine.yaml").write_text(
+            "inputs:\n  x:\n    type: float\n    default: 1.0\n    domain: [1.0, 2.0, 3.0]\n" + ASK_STATES
+        )
+        (d / "State_ASK_OnEntry.py").write_text(f"value = x\ncount = (count + 1) % {modulo}\n")
+        (d / "Variables.py").write_text("value: float = 0.0\ncount: int = 0\n")
+    for s in ("INIT", "ASK"):
+        (d / f"State_{s}_Transition_0.expr").write_text("True\n")
+    return d
+
+
+def environment_table(tmp: Path, modulo: int, rounds: int) -> Table:
+    """Configurations/s with an environment of three responses against the same machine with an
+    input of three values instead, interleaved."""
+    from llfsm.props.file import Environment, ServiceDecl
+    from llfsm.verify.explorer import Options
+    from llfsm.verify.judge import verify
+    from llfsm.verify.load import PropertySource, load_arrangement
+
+    env = Environment(
+        services={
+            "/where": ServiceDecl(
+                "turtle_sensor_interface/srv/TurtlePosition", [{"x": 1.0}, {"x": 2.0}, {"x": 3.0}], False
+            )
+        }
+    )
+    asker, reader = write_asker(tmp, modulo, True), write_asker(tmp, modulo, False)
+    cases = {
+        "an environment of 3 responses": (asker, env, "asker"),
+        "an input of 3 values instead": (reader, None, "reader"),
+    }
+    rates: dict[str, list[float]] = {k: [] for k in cases}
+    sizes: dict[str, int] = {}
+    names = list(cases)
+    for r in range(rounds):
+        for name in names[r % 2 :] + names[: r % 2]:
+            path, environment, machine = cases[name]
+            loaded = load_arrangement([str(path)], environment)
+            t = time.process_time()
+            v = verify(loaded, [PropertySource("always", f"{machine}.count < {modulo}")], Options())
+            rates[name].append(v.configurations / (time.process_time() - t))  # type: ignore[attr-defined]
+            sizes[name] = v.configurations  # type: ignore[attr-defined]
+    base = names[1]
+    rows = []
+    for name in names:
+        ratio = [a / b for a, b in zip(rates[name], rates[base], strict=True)]
+        rows.append(
+            [name, f"{sizes[name]:,}", f"{statistics.median(rates[name]):,.0f}",
+             f"{statistics.median(ratio):.2f} ({min(ratio):.2f}-{max(ratio):.2f})", "≥ 0.80" if name != base else ""]
+        )  # fmt: skip
+    return (
+        f"verify with an environment against inputs: one machine asking for a value every ringlet (a service "
+        f"call answered with each of 3 responses, or an input of 3 values), counting modulo {modulo:,}; "
+        f"configurations per CPU second, median of {rounds} interleaved runs, ratio to inputs (min-max)",
+        ["the values come from", "configurations", "configurations/s", "ratio to inputs", "target (issue 32)"],
+        rows,
+    )
+
+
 def render(tables: list[Table]) -> str:
     out = []
     for title, header, rows in tables:
@@ -317,10 +405,13 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run")
     ap.add_argument("--no-native", action="store_true", help="skip the --native rows (a native build takes minutes)")
     ap.add_argument(
-        "--only", choices=("explore", "spin", "inputs"), action="append", help="only these tables (repeatable)"
+        "--only",
+        choices=("explore", "spin", "inputs", "environment"),
+        action="append",
+        help="only these tables (repeatable)",
     )
     args = ap.parse_args()
-    only = set(args.only or ("explore", "spin", "inputs"))
+    only = set(args.only or ("explore", "spin", "inputs", "environment"))
     quick = args.quick
     rounds = 3 if quick else 5
     with tempfile.TemporaryDirectory(prefix="llfsm-bench-verify-") as tmp_s:
@@ -333,6 +424,9 @@ def main() -> None:
             spin_table(tmp, quick, tables)
         if "inputs" in only:
             tables.append(inputs_table(tmp, 200_000 if quick else 1_000_000, rounds + 2))
+            print(render(tables[-1:]), flush=True)
+        if "environment" in only:
+            tables.append(environment_table(tmp, 2_000 if quick else 20_000, rounds + 2))
             print(render(tables[-1:]), flush=True)
 
 

@@ -470,8 +470,11 @@ class Session:
             if o.transport != "inproc":  # other processes can resume machines (docs/view.md): all suspended is no end
                 arr.end_when_suspended = False
             monitor = self._open_monitor(arr) if o.monitor or o.monitor_properties else None
+            # the monitor says its verdicts as the run goes, the last ones as it ends
             if self.debugs:
                 self.debugger = self._open_debugger(arr, pause_on_violation=monitor is not None)
+                if monitor is not None and o.on_violation == "pause":
+                    monitor.pause = self.debugger.monitor_paused
             if self.web is not None and self.bus is not None:
                 self.web_server = self._open_web(self.web, ctx, self.bus, arr)
             try:
@@ -485,9 +488,6 @@ class Session:
                     self.web_server.stop()
                 if self.prompt is not None:
                     self.prompt.close()
-            if monitor is not None:
-                for line in monitor.at_end():
-                    self.say(line)
         finally:
             # a named output that could not be written whole is an error, never a silent success
             failed_outputs += ctx.output_errors
@@ -645,8 +645,9 @@ class Session:
             activate(prev)
 
     def _open_monitor(self, arr: Arrangement) -> Any:
-        """--monitor, --monitor-property (docs/monitor.md): the properties judged at each
-        ringlet boundary through the scheduler's watcher; a bad one is a usage error."""
+        """--monitor, --monitor-property (docs/monitor.md): the properties judged at the ringlet
+        boundaries where they can change, said on stderr and /llfsm/monitor as the run goes and
+        as it ends; a bad one is a usage error."""
         # deferred: start-up (a run without a monitor never imports the property language)
         from pathlib import Path
 

@@ -310,7 +310,7 @@ def test_marked_ringlets_cost_nothing_elsewhere_and_go_when_the_breakpoint_goes(
     assert arr.watcher is not None
 
 
-def test_a_breakpoint_on_a_state_a_command_reaches_pauses_as_it_takes_effect(tmp_path: Path) -> None:
+def test_a_breakpoint_on_a_state_a_command_reaches_pauses_before_it_takes_effect(tmp_path: Path) -> None:
     boss = write_machine(tmp_path, "boss", {"A": [("B", "after_ms(3)")], "B": [("B", "False")]},
                          {"A_OnEntry": 'suspend("w")', "B_OnEntry": 'resume("w")'})  # fmt: skip
     w = write_machine(tmp_path, "w", {"S": [("T", "after_ms(10)")], "T": None})
@@ -319,4 +319,6 @@ def test_a_breakpoint_on_a_state_a_command_reaches_pauses_as_it_takes_effect(tmp
     d.add_break('state(w) == "S"')
     seen = _script(d, [])
     arr.run(duration_ns=20_000_000)
-    assert seen == ['paused as w\'s command took effect (its ringlet is next) (0.005 s): break 1: state(w) == "S"']
+    assert seen == [
+        'paused at w\'s turn, before its command (0.005 s): break 1: state(w) == "S" (the resume of w takes it to S)'
+    ]

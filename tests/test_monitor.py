@@ -51,7 +51,8 @@ def test_pause_pauses_the_run_where_the_property_is_violated() -> None:
     res = CliRunner().invoke(cli, [*args, "--on-violation", "pause"], input="p ros2_ping_pong.count\nc\n")
     assert res.exit_code == 0
     assert (
-        "paused round 2508, after ros2_ping_pong's ringlet (2.508 s): a monitored property was violated" in res.stderr
+        "paused after ros2_ping_pong's ringlet (2.508 s): monitor: never: ros2_ping_pong.count >= 2 violated"
+        in res.stderr
     )
     assert "(llfsm) 2\n" in res.stderr  # read at the prompt, where it was violated
     assert "The count is 2" in res.stderr  # then it went on

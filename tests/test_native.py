@@ -119,6 +119,16 @@ def _corpus_machines(root: Path) -> None:
         {"A_OnEntry": "print('untyped runs', x)\nx = 'text'\nprint('now', x)"},
         variables="x: int = 0\n",
     )
+    # a node held in a variable, dropped when the machine finishes (llfsm.ros.lifetimes reads the
+    # variables of a native class, which has no __slots__)
+    write_machine(
+        root,
+        "talker",
+        {"A": [("END", "after_ms(3)")], "END": None},
+        {"A_OnEntry": 'ros.init()\nnode = ros.Node("talker")\ncount = 1', "END_OnEntry": "print('talked', count)"},
+        variables="node: ros.Node | None = None\ncount: int = 0\n",
+        includes="from llfsm import ros\n",
+    )
     # tells whether its module is the compiled one
     write_machine(
         root,
@@ -225,6 +235,19 @@ def test_pure_and_native_runs_give_the_same_output_verbose_trace_and_trace_file(
     assert [ln for ln in native.stderr.splitlines() if warning not in ln] == pure.stderr.splitlines()
     assert native.status == pure.status
     assert [json.loads(x) for x in native_trace] == [json.loads(x) for x in pure_trace]
+
+
+def test_a_monitor_and_the_bus_under_native_say_what_they_say_in_pure_python(corpus: Corpus) -> None:
+    # a native class's ringlets cannot be rewritten: the monitor judges every boundary, with the
+    # same verdicts; its variables are found all the same
+    args = ["worker.py", "boss.py", "talker.py", "--duration", "40ms"]
+    args += ["--monitor-property", "never: worker.n >= 5", "--monitor-property", "reachable: suspended(worker)"]
+    args += ["--monitor-property", "always: talker.count < 1"]
+    pure, native = run(corpus, *args, native=False), run(corpus, *args, native=True)
+    assert pure.status == 0 and "talked 1" in pure.stdout, pure.stderr
+    lines = [x for x in pure.stderr.splitlines() if x.startswith("llfsm: monitor:")]
+    assert len(lines) == 3 and "worker.n=5" in lines[0] + lines[1] + lines[2]
+    assert (native.status, native.stdout, native.stderr) == (pure.status, pure.stdout, pure.stderr)
 
 
 def test_native_runs_keep_the_semantics(corpus: Corpus) -> None:

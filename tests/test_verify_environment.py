@@ -68,16 +68,24 @@ def test_a_declaration_that_names_an_unknown_field_is_one_line(tmp_path: Path) -
     assert f"{f}:4: service /turtle_pose_service" in r.stderr and "no field 'z'" in r.stderr
 
 
-def _reader(tmp_path: Path) -> Path:
+def _reader(tmp_path: Path, push: bool = False) -> Path:
+    """A machine reading /bump: PULL (a guard on `sub.latest`), or PUSH (a callback keeping the
+    values in `hits`, a guard on them)."""
+    name = "pusher" if push else "reader"
+    callback, guard = (
+        ("lambda msg: hits.add(msg.data)", "True in hits")
+        if push
+        else ("None", "sub.latest is not None and sub.latest.data")
+    )
     return write_machine(
         tmp_path,
-        "reader",
-        {"WAIT": [("HIT", "sub.latest is not None and sub.latest.data")], "HIT": None},
+        name,
+        {"WAIT": [("HIT", guard)], "HIT": None},
         {
-            "WAIT_OnEntry": 'ros.init()\nnode = ros.Node("reader")\n'
-            'sub = node.create_subscription(Bool, "/bump", None, 10)\n'
+            "WAIT_OnEntry": f'ros.init()\nnode = ros.Node("{name}")\n'
+            f'sub = node.create_subscription(Bool, "/bump", {callback}, 10)\n'
         },
-        variables="node: ros.Node\nsub: ros.Subscription\n",
+        variables="node: ros.Node\nsub: ros.Subscription\nhits: set = set()\n",
         includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n",
     )
 
@@ -107,3 +115,52 @@ def test_a_bound_stops_a_growing_counter(tmp_path: Path) -> None:
     f.write_text(f"machines: [{MACHINES / 'ros2_ping_pong.machine'}]\nbounds:\n  ros2_ping_pong.counter: 2\n")
     r = llfsm("verify", f)
     assert r.status == 2 and "bounds: ros2_ping_pong.counter" in r.stderr
+
+
+def test_a_push_callback_runs_with_the_topics_values(tmp_path: Path) -> None:
+    m = _reader(tmp_path, push=True)
+    f = tmp_path / "p.verify.yaml"
+    f.write_text(
+        f"machines: [{m}]\nenvironment:\n  topics:\n    /bump:\n      type: std_msgs/msg/Bool\n"
+        "      values: [{data: false}, {data: true}]\n"
+        'properties:\n  - never: state(pusher) == "HIT"\n  - reachable: False in pusher.hits\n'
+    )
+    r = llfsm("verify", f)
+    assert r.status == 1, r.stdout + r.stderr
+    out = r.stdout
+    assert 'never: state(pusher) == "HIT": fails (' in out and "reachable: False in pusher.hits: holds (" in out
+    # the callback ran with the value chosen before the ringlet that then took the transition
+    assert "environment: /bump: a message {data: True}" in out
+    assert "pusher.hits: {} -> {True}" in out
+    # without the environment the subscription is refused where it is made
+    r = llfsm("verify", m)
+    assert r.status == 2 and "State_WAIT_OnEntry.py:3" in r.stdout
+
+
+@pytest.mark.parametrize("case", ["services", "push topic"])
+def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_alike(case: str, tmp_path: Path) -> None:
+    from llfsm.props.file import read_verify_file
+    from llfsm.verify.explorer import Options
+    from llfsm.verify.judge import verify
+    from llfsm.verify.load import load_arrangement
+
+    if case == "services":
+        vf = read_verify_file(_wall_file(tmp_path, True, '  - never: state(ros2_wall_turtle_bot) == "BACK"\n'))
+    else:
+        m = _reader(tmp_path, push=True)
+        f = tmp_path / "p.verify.yaml"
+        f.write_text(
+            f"machines: [{m}]\nenvironment:\n  topics:\n    /bump:\n      type: std_msgs/msg/Bool\n"
+            "      values: [{data: false}, {data: true}]\n"
+            'properties:\n  - eventually: state(pusher) == "HIT"\n'
+        )
+        vf = read_verify_file(f)
+    loaded = load_arrangement(vf.machines, vf.environment)
+    shapes = []
+    for hash_compact, generic in ((False, False), (False, True), (True, False)):
+        r = verify(loaded, vf.properties, Options(hash_compact=hash_compact, generic=generic), keep_graph=True)
+        e = r.explorer
+        assert r.error is None and r.partial is None
+        shapes.append((r.configurations, r.steps, list(e.edges), list(e.edge_choice), list(e.labels), list(e.choice)))
+    assert shapes[0] == shapes[1] == shapes[2]
+    assert shapes[0][0] > 4 and shapes[0][3]

@@ -725,3 +725,22 @@ def test_llfsm_view_in_chromium_draws_another_processs_graph_and_sets_its_parame
     assert got["abc"].startswith("Setting parameter failed: Wrong parameter type"), got
     assert got["255"] == "Set parameter successful" and got["shown"] == "255", got
     assert shot.stat().st_size > 10_000
+
+
+def test_a_monitored_violation_marks_the_machine_and_is_listed(browser: Any, tmp_path: Path) -> None:
+    run = LiveRun(tmp_path, "--monitor-property", f"never: {MACHINE}.count >= 1")
+    p = browser.new_page(viewport={"width": 1280, "height": 860})
+    p.set_default_timeout(TIMEOUT_MS)
+    try:
+        p.goto(run.url)
+        card = p.wait_for_selector(f'article.machine[data-machine="{MACHINE}"][data-violated="true"]')
+        assert card is not None
+        badge = p.locator(f'article[data-machine="{MACHINE}"] .badge.violation').inner_text()
+        assert badge == f"violated: never: {MACHINE}.count >= 1"
+        item = p.locator('#verdicts li[data-verdict="violated"]').inner_text()
+        assert re.match(rf"never: {MACHINE}\.count >= 1 at \d+\.\d{{3}} s, ringlet \d+: {MACHINE} \w+; ", item), item
+        assert f"{MACHINE}.count=1" in item
+        assert "1 verdict on /llfsm/monitor" in p.locator("#monitor-count").inner_text()
+    finally:
+        p.close()
+        run.stop()

@@ -114,3 +114,37 @@ def play(bag_path: str, rate: float, loop: bool, topics: tuple[str, ...], delay:
     except BagError as e:
         status.clear()
         fail(f"bag play: {e}")
+
+
+@bag.command()
+@click.argument("bag_path", metavar="BAG")
+@click.argument("verify_file", metavar="[FILE.verify.yaml]", required=False)
+@click.option(
+    "--property",
+    "properties",
+    multiple=True,
+    metavar="KIND:TEXT",
+    help="A property over state(m) and published(topic), e.g. 'never: state(p) == \"CRIT\"' (repeatable).",
+)
+def check(bag_path: str, verify_file: str | None, properties: tuple[str, ...]) -> None:
+    """Judge properties over a recorded bag: each machine's state from /llfsm/M/state, and what was
+    published.  Exit status 1 when a property is violated or what it waits for is not seen."""
+    # deferred: start-up (the property language, only for bag check)
+    from pathlib import Path
+
+    from ..monitor import MonitorError, property_source
+    from ..monitor.bag import check_bag
+    from ..props.file import FileError, read_verify_file
+
+    try:
+        sources = read_verify_file(Path(verify_file)).properties if verify_file else []
+        sources += [property_source(t, "--property") for t in properties]
+        found = check_bag(bag_path, sources, lambda line: click.echo(line, err=True))
+    except (BagError, MonitorError, FileError) as e:
+        fail(f"bag check: {e}")
+    for line in found.notes:
+        click.echo(f"llfsm: bag check: {line}", err=True)
+    for line in found.lines():
+        click.echo(line)
+    if found.failed:
+        sys.exit(1)

@@ -24,6 +24,7 @@ may be called from anywhere: it only sets flags.
 from __future__ import annotations
 
 import queue
+import sys
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future
@@ -31,7 +32,7 @@ from typing import Any
 
 from ..runtime.clock import WallClock
 from ..runtime.generated import pending_of, state_of
-from ..runtime.machine import Machine
+from ..runtime.machine import RESTART, RESUME, Machine
 from ..runtime.scheduler import GO, PAUSE, STOP, Arrangement
 from .breakpoints import Breakpoint, Breakpoints
 from .history import History
@@ -66,8 +67,14 @@ class Debugger:
         self.say: Callable[[str], None] = say if say is not None else print
         self.breaks = Breakpoints([type(m) for m in arr.machines], self.say)
         self.history: History | None = History(arr.machines, history) if history else None
-        #: The watcher the run had before (the monitor's), asked first at every boundary.
-        self.inner: Callable[[Machine, int | None, int | None], int] | None = arr.watcher
+        #: The watcher that was there when the debugger set its own (the monitor's), asked first
+        #: at every boundary, and put back when the debugger needs none; the same for on_release.
+        self.inner: Callable[[Machine], int] | None = None
+        self._inner_release: Callable[[Machine], None] | None = None
+        #: bound once, so that they can be compared with `is`: what the debugger puts into the
+        #: arrangement's watcher and on_release
+        self._after, self._recorder, self._on_release = self.after, self._record, self._released
+        self._watchers = (self._after, self._recorder)
         #: Paused now; the machine whose ringlet the pause follows (None: between rounds).
         self.paused = False
         #: Pauses so far (a reader of `paused` on another thread tells one pause from the next).
@@ -134,16 +141,31 @@ class Debugger:
         Breakpoints on states are marked on transitions instead (traps.py), and the scheduler's
         rare path tells of commands and of the turn a step waits for (`on_release`)."""
         self._mark_states()
+        arr = self.arr
         judged = any(b.number not in self._trapped_breaks for b in self.breaks.items)
-        want = judged or self._stop_after is not None or self.inner is not None
-        self.arr.watcher = self.after if want else self._record if self.history is not None else self.inner
+        want = judged or self._stop_after is not None
+        mine = self._after if want else self._recorder if self.history is not None else None
+        if not any(arr.watcher is w for w in self._watchers):
+            self.inner = arr.watcher  # another's (the monitor's): called first by ours, or left as it is
+        if mine is not None:
+            arr.watcher = mine if self.inner is None else self._after  # only `after` calls the other's
+        elif any(arr.watcher is w for w in self._watchers):
+            arr.watcher, self.inner = self.inner, None
         rare = bool(self._trapped_breaks) or self._gate_for is not None
-        self.arr.on_release = self._released if rare else None
+        if arr.on_release is not self._on_release:
+            self._inner_release = arr.on_release
+        if rare:
+            arr.on_release = self._on_release
+        elif arr.on_release is self._on_release:
+            arr.on_release, self._inner_release = self._inner_release, None
+        if mine is not None or rare:
+            arr.ctx.wake = 0  # a plain loop in progress ends with its round: the next one is watched
 
     def _mark_states(self) -> None:
         """Which breakpoints read one machine's state alone, and the transitions that make each
         become true, marked on the machines (those whose module can be marked)."""
         classes = [self.traps.own.get(m._id, type(m)) for m in self.arr.machines]
+        markable = [m._id in self.traps.own or _own_class(m) for m in self.arr.machines]
         found: dict[int, tuple[int, frozenset[int]]] = {}
         edges: dict[int, set[tuple[int, int]]] = {}
         for b in self.breaks.items:
@@ -156,19 +178,38 @@ class Debugger:
                 if x not in holds:
                     edges.setdefault(i, set()).update((x, t) for t, _guard in transitions if t in holds)
         for m in self.arr.machines:
-            if not self.traps.mark(m, edges.get(m._id, set())):
-                found = {n: s for n, s in found.items() if s[0] != m._id}  # native: the watcher judges them
+            # a machine another has given ringlets of its own (the monitor's checks), or one built
+            # native, cannot be marked: the watcher judges its breakpoints
+            if not markable[m._id] or not self.traps.mark(m, edges.get(m._id, set())):
+                found = {n: s for n, s in found.items() if s[0] != m._id}
         self._trapped_breaks = found
 
     def _trapped(self, m: Machine, source: int, target: int) -> None:
         """A marked transition of `m` (from `source` into `target`) has just been taken: the
         breakpoints it makes true pause the run here, at the end of m's ringlet."""
-        if self.arr.watcher == self.after:
+        if self.arr.watcher is self._after:
             return  # the watcher judges every breakpoint at this boundary anyway
         hit = self._state_break(m, source, target)
         if hit is not None:
             self._pause_reason = hit
             self._stand(m, TRAP)
+
+    def monitor_paused(self, verdict: Any) -> None:
+        """`--on-violation pause`: the monitor (llfsm.monitor) reached a violation at a boundary:
+        after a machine's ringlet (inside it, or in the scheduler's gate or watcher), before one
+        (in the gate), or between rounds; the run stands there."""
+        self._pause_reason = f"monitor: {verdict.judged.prop.name} violated"
+        where = verdict.where
+        if not self.arr.running:
+            self.pause(self._pause_reason)  # the boundary before the first ringlet: at the run's start
+        elif where.machine is None:
+            self._stand(None, ROUND_END)
+        elif where.offset:
+            self._stand(where.machine, TRAP)
+        else:  # before where.machine's ringlet: after the ringlet of the one before it, if any
+            live = self.arr._live
+            j = live.index(where.machine) if where.machine in live else 0
+            self._stand(live[j - 1] if j > 0 else None, GATE)
 
     def _state_break(self, m: Machine, source: int, target: int) -> str | None:
         for b in self.breaks.items:
@@ -177,35 +218,42 @@ class Debugger:
                 return f"break {b.number}: {b.text}"
         return None
 
-    def _released(self, m: Machine, before: int | None) -> None:
-        """Arrangement.on_release: a held machine's turn begins (None: a step may wait for it) or
-        a command moved it from `before` (a breakpoint on a state it reached)."""
-        if before is None:
-            if m is self._gate_for:
-                self._gate_for = None
-                self._pause_reason = self._pause_reason or "step"
-                self._stand(self._gate_after, GATE)
+    def _released(self, m: Machine) -> None:
+        """Arrangement.on_release: a held machine's turn begins.  A step may wait for it; a
+        command about to take it into a state a breakpoint wants pauses first."""
+        if self._inner_release is not None:
+            self._inner_release(m)
+        if m is self._gate_for:
+            self._gate_for = None
+            self._pause_reason = self._pause_reason or "step"
+            self._stand(self._gate_after, GATE)
             return
-        if self.arr.watcher == self.after:
+        command = pending_of(m)
+        if command not in (RESUME, RESTART) or self.arr.watcher is self._after:
+            return  # nothing moves it, or the watcher judges the boundary after this turn
+        if command == RESUME and not m._suspended:
             return
-        hit = self._state_break(m, before, m._state)
+        target = m.INITIAL if command == RESTART or m._resume_to is None else m._resume_to
+        hit = self._state_break(m, m._state, target)
         if hit is not None:
-            self._pause_reason = hit
+            self._pause_reason = f"{hit} (the {command} of {m.NAME} takes it to {m.STATES[target]})"
             self._stand(m, TURN)
 
     # -- the watcher -------------------------------------------------------------------------------
-    def _record(self, m: Machine, ran: int | None, fired: int | None) -> int:
+    def _record(self, m: Machine) -> int:
         """The watcher when only the history needs every boundary: `after`, without the rest."""
+        arr = self.arr
         self.boundaries += 1
         published = self.published
-        self.history.record(m, ran, fired, self.boundaries, self.arr.ctx.round, self.arr.clock.now, published)  # type: ignore[union-attr]
+        self.history.record(m, arr.ran, arr.fired, self.boundaries, arr.ctx.round, arr.clock.now, published)  # type: ignore[union-attr]
         if published:
             published.clear()
         return PAUSE if self._pause_soon else GO
 
-    def after(self, m: Machine, ran: int | None, fired: int | None) -> int:
+    def after(self, m: Machine) -> int:
         """Arrangement.watcher: called at every ringlet boundary while installed."""
-        asked = GO if self.inner is None else self.inner(m, ran, fired)
+        ran, fired = self.arr.ran, self.arr.fired
+        asked = GO if self.inner is None else self.inner(m)
         if asked == PAUSE:
             self._pause_reason = "a monitored property was violated"
         self.boundaries += 1
@@ -435,7 +483,7 @@ class Debugger:
         if m is None:
             place = f"before round {arr.ctx.round}" if arr.ctx.round or arr.clock.now else "before the first round"
         elif origin == TURN:
-            place = f"as {m.NAME}'s command took effect (its ringlet is next)"
+            place = f"at {m.NAME}'s turn, before its command"
         elif origin == RINGLET:
             place = f"round {arr.ctx.round}, after {m.NAME}'s ringlet"
         else:  # inside a plain round, which counts no rounds: the time says when
@@ -468,3 +516,9 @@ class Debugger:
 
     def machines(self) -> Sequence[Machine]:
         return self.arr.machines
+
+
+def _own_class(m: Machine) -> bool:
+    """Whether `m` is of the class its generated module made (not a variant another gave it)."""
+    cls = type(m)
+    return getattr(sys.modules.get(cls.__module__), cls.__name__, None) is cls

@@ -79,7 +79,8 @@ PURE: dict[str, Any] = {
 }
 #: The functions of the property language.
 FUNCTIONS = ("state", "suspended", "finished", "published")
-_HELPERS = {"_repeat": _repeat, "_format": _format}
+#: The bounded `*` and `%` an atom's tree calls by these names (whoever compiles the tree again needs them).
+HELPERS = {"_repeat": _repeat, "_format": _format}
 
 
 @dataclass
@@ -90,6 +91,9 @@ class MachineInfo:
     name: str
     states: tuple[str, ...]
     variables: tuple[str, ...]  # machine variables, then inputs
+    #: `states` are all of them (a state compared with `state(m)` is checked against them); False
+    #: where only some are known (a bag without the machine's description)
+    known_states: bool = True
     #: how many transitions each state has (empty: unknown, `fired` then checks no index)
     transitions: tuple[int, ...] = ()
 
@@ -111,20 +115,20 @@ class Atom:
 
 def infos_of(classes: Iterable[Any], variables: Callable[[Any], Iterable[str]] | None = None) -> dict[str, MachineInfo]:
     """What atoms may name of each machine class of an arrangement (a live run's): its states,
-    and its variables (by default the class's slots that are neither llfsm's nor a state
-    variable's, which hold `STATE__name`) then its inputs."""
+    and its variables (by default the class's slots, or a native build's attributes, that are
+    neither llfsm's nor a state variable's, which hold `STATE__name`) then its inputs."""
     out = {}
     for k, cls in enumerate(classes):
         if variables is not None:
             names = tuple(variables(cls))
         else:
             slots = [s for c in type.mro(cls) for s in vars(c).get("__slots__", ())]
-            names = tuple(s for s in slots if not s.startswith("_") and "__" not in s)
+            slots += getattr(cls, "__mypyc_attrs__", ())  # a class built native (--native) has these instead
+            names = tuple(dict.fromkeys(s for s in slots if not s.startswith("_") and "__" not in s))
         inputs = tuple(entry[0] for entry in getattr(cls, "INPUTS", ()))
         counts = tuple(len(ts) for ts in getattr(cls, "TRANSITIONS", ()) or ())
-        out[cls.NAME] = MachineInfo(
-            k, cls.NAME, tuple(cls.STATES), names + tuple(i for i in inputs if i not in names), counts
-        )
+        readable = names + tuple(i for i in inputs if i not in names)
+        out[cls.NAME] = MachineInfo(k, cls.NAME, tuple(cls.STATES), readable, transitions=counts)
     return out
 
 
@@ -180,7 +184,7 @@ class _Compiler:
         ast.fix_missing_locations(fn_tree)
         code = compile(fn_tree, f"<property {src[:40]}>", "eval", dont_inherit=True)
         # the checked and rewritten tree, with only the pure builtins (and the bounded * and %) in reach
-        fn = eval(code, {"__builtins__": dict(PURE), **_HELPERS})
+        fn = eval(code, {"__builtins__": dict(PURE), **HELPERS})
         return Atom(src, fn, self.where, frozenset(self.read), self.published, body)
 
     def _machine(self, node: ast.AST, text: str) -> MachineInfo:
@@ -327,6 +331,8 @@ class _Compiler:
             if len(op.args) != 1:
                 continue
             info = self._machine(op.args[0], text)
+            if not info.known_states:
+                continue
             for other in operands[:k] + operands[k + 1 :]:
                 values = other.elts if isinstance(other, ast.Tuple | ast.List | ast.Set) else [other]
                 for v in values:

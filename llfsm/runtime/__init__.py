@@ -17,7 +17,8 @@ from .clock import Clock, SimClock, WallClock, parse_duration
 from .context import RunContext, current
 from .errors import ErrorReport, report_for
 from .machine import FINISHED, MACROS, RESERVED, Machine, UnknownMachineError
-from .scheduler import Arrangement, ArrangementError, RunResult, signals_handled
+from .scheduler import Arrangement, ArrangementError, RunResult
+from .signals import signals_handled
 from .trace import Tracer
 
 __all__ = [

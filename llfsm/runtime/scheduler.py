@@ -4,8 +4,9 @@ The untraced loops (`_sim_rounds`, `_wall_rounds`, `_rounds`) are the fast path:
 plain call per live machine, `m._run(m)`, and nothing else runs between rounds unless something
 asked for it: `_attention` (a command, an unload, a signal) or the run context's `wake` time
 (the bus: a message queued for a callback, a timer falling due; see RunContext).
-`_traced_round` also reports entries and transitions for `-v` and `--trace`.  Keeping them
-apart means an untraced run pays nothing for tracing.
+`_watched_round` also reports entries and transitions for `-v` and `--trace`, and calls the
+watcher (a monitor's, a debugger's) after each ringlet while one is set.  Keeping them apart
+means an untraced, unwatched run pays nothing for either.
 """
 
 from __future__ import annotations
@@ -15,21 +16,14 @@ import time
 
 from .clock import Clock, SimClock, WallClock
 from .context import FOREVER, RunContext, activate
-from .errors import ErrorReport, RunStopped, passes_through, report_for, signal_name
-from .generated import is_generated
+from .errors import ErrorReport, RunStopped, passes_through, report_for
 from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
 from .trace import Tracer
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
-    from _signal import _Handler
     from collections.abc import Callable, Sequence
-    from types import FrameType, TracebackType
     from typing import Final
-
-    SignalHandler = Callable[[int, FrameType | None], None]
-    #: Arrangement.watcher: (machine, state its ringlet ran in, transition fired) -> GO | STOP | PAUSE.
-    Watcher = Callable[[Machine, int | None, int | None], int]
 
     from .watchdog import Watchdog
 
@@ -40,11 +34,6 @@ EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_MONITOR = 0, 1, 2, 4
 GO, STOP, PAUSE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
-#: Signals that interrupt a run: Ctrl-C, `kill`, and a closed terminal (SIGHUP).
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-#: After a first interrupt, machine code that still holds the run this long (seconds of real
-#: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
-STUCK_SLACK_S = 0.5
 
 
 #: Back-to-back firing rounds read the wall clock every BATCH rounds at most, while BATCH
@@ -132,24 +121,38 @@ class Arrangement:
         #: Keep running rounds with no machine left (nodes on their own, docs/turtlesim.md): the run then
         #: ends by an interrupt or --duration only.
         self.serve_forever = False
-        #: Called after every ringlet boundary when set (a run's monitor, llfsm.monitor; the
-        #: debugger, llfsm.debug) with the machine whose turn it was, the state its ringlet ran in
-        #: and the transition that fired (None and None for a turn with no ringlet: suspended,
-        #: or a suspend applied; the state and None when nothing fired): it returns GO, or STOP
-        #: to end the run at this boundary (status `stop_status`), or PAUSE (`on_pause(m)` is
-        #: called, and the run stands until it returns).  A run without one pays nothing: the
-        #: plain round loops never look at it.
-        self.watcher: Watcher | None = None
+        #: Called after every ringlet (and a release that ended one) with the machine, when set
+        #: (a run's monitor, llfsm.monitor; the debugger's breakpoints): it returns GO, or STOP
+        #: to end the run at this ringlet boundary (status `stop_status`), or PAUSE (the
+        #: debugger's, issue 30; `on_pause` is called).  It may be set or cleared at any time,
+        #: from a ringlet or between rounds: a round in progress reads it after each ringlet, and
+        #: a plain loop in progress stops after its round when the setter also asks for
+        #: attention (`ctx.wake = 0`).  A run without one pays nothing: the plain round loops
+        #: never look at it.
+        self.watcher: Callable[[Machine], int] | None = None
         self.stop_status = EXIT_MONITOR
+        #: What the watcher may read of the boundary it is told of: the state the machine's
+        #: ringlet ran in and the transition that fired (None and None: no ringlet ran, the
+        #: machine was suspended or a suspend was applied; the state and None: nothing fired).
+        #: Stored by the watched round only (the debugger's history and `fired()`).
+        self.ran: int | None = None
+        self.fired: int | None = None
+        #: Called where the run stands for the debugger (llfsm.debug): after m's ringlet (a
+        #: watcher's PAUSE, or the debugger's own marks and gate), or between rounds (None, when
+        #: `pause_asked`); the run goes on when it returns.
         self.on_pause: Callable[[Machine | None], None] | None = None
         #: Pause at the next round boundary (`on_pause(None)`), asked from anywhere (another
         #: thread too: `ask_pause`); the round loops see it through the attention they raise.
         self.pause_asked = False
-        #: Told at a held machine's turn (the rare path, never a plain ringlet): (m, None) as the
-        #: turn begins, (m, state before) after a command moved it (the debugger: a pause before
-        #: a turn, breakpoints on states reached by commands).
-        self.on_release: Callable[[Machine, int | None], None] | None = None
+        #: Told of each machine the gate is about to release (a command, parameters or an input
+        #: to apply, before they are applied), when set: what changes a machine outside its
+        #: ringlets, for a monitor.  The gate is a rare path; a run without it pays nothing.
+        self.on_release: Callable[[Machine], None] | None = None
         self._stopped: int | None = None
+        #: Ringlets run before the current round loop (its rounds times its live machines),
+        #: counted once per loop, never per ringlet: with the loop's live list, what numbers a
+        #: ringlet boundary for a watcher (the monitor's violation lines).
+        self.ringlets = 0
         check_names(classes, suspended)
         for i, cls in enumerate(classes):
             m = cls(self, i)
@@ -214,17 +217,6 @@ class Arrangement:
         _hold(m)  # the gate sets them; a machine setting its own may still fire: _rehold fixes that
         self._attention = True
 
-    def hold(self, m: Machine) -> None:
-        """Send m's next turn through the gate (`_release`, and `on_release` if set): the
-        debugger's pause before a turn.  The gate lets it go on as before once passed."""
-        _hold(m)
-
-    def ask_pause(self) -> None:
-        """Pause at the next round boundary (the debugger's; a watcher pauses sooner, at the next
-        ringlet boundary).  Two plain stores: safe from any thread."""
-        self.pause_asked = True
-        self._attention = True
-
     def suspend_now(self, m: Machine, remember: int | None) -> None:
         """Move `m` to its suspend state and run that state's OnEntry (no OnExit anywhere)."""
         m._resume_to = remember
@@ -286,13 +278,11 @@ class Arrangement:
     def _release(self, m: Machine) -> bool:
         """The turn of a held machine (a new input value to take, new variable values, a command
         pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
-        True if the ringlet goes on.  With `on_release` set (the debugger), it is told first (the
-        turn begins: it may pause before it) and again when a command moved the machine to
-        another state (its breakpoints on states)."""
-        hook = self.on_release
-        if hook is not None:
-            hook(m, None)
-            before = m._state
+        True if the ringlet goes on."""
+        if self._stopped is not None:
+            return False  # the run ends at this boundary (stop_at_boundary)
+        if self.on_release is not None:
+            self.on_release(m)
         inputs = m._inputs
         if inputs is not None and inputs.fresh:
             inputs.snapshot()
@@ -301,16 +291,13 @@ class Arrangement:
             if values is not None:
                 for name, value in values.items():
                     setattr(m, name, value)
-        go = True
         if m._pending is not None:
-            go = self._apply(m)  # False: the command (suspend) ended the ringlet
+            if not self._apply(m):
+                return False  # the command (suspend) ended the ringlet
         elif m._suspended:
-            go = False  # suspended: no ringlet
-        if go:
-            _regate(m, self._variables)
-        if hook is not None and m._state != before:
-            hook(m, before)
-        return go
+            return False  # suspended: no ringlet
+        _regate(m, self._variables)
+        return True
 
     def _gate(self, m: Machine) -> int | None:
         """Stands in for the ringlet of a held machine: release it, then run the real ringlet
@@ -350,15 +337,44 @@ class Arrangement:
         self.ctx.interrupted = True
         self._attention = True
 
+    def stop_at_boundary(self, status: int | None = None) -> None:
+        """End the run at the ringlet boundary where this is called (from a ringlet, a watcher
+        or between rounds): no further ringlet runs, the rest of the round included, and the
+        run ends with `status` (by default `stop_status`)."""
+        self._stopped = self.stop_status if status is None else status
+        for m in self.machines:
+            _hold(m)  # the rest of the round meets the gate, which lets nothing through now
+        self._attention = True
+
+    def hold(self, m: Machine) -> None:
+        """Send m's next turn through the gate (and `on_release`): the debugger's pause before
+        a turn.  The gate lets it go on as before once passed."""
+        _hold(m)
+
+    def ask_pause(self) -> None:
+        """Pause at the next round boundary (the debugger's; a watcher pauses sooner, at the next
+        ringlet boundary).  Two plain stores: safe from any thread."""
+        self.pause_asked = True
+        self._attention = True
+
+    def hold_all(self) -> None:
+        """Put the gate in front of every machine's next ringlet, so that whoever wraps the gate
+        (`_gate_fn`: a monitor) is called at the next boundary, even inside a plain loop.  The
+        gate lets a machine held for nothing else through at once."""
+        for m in self.machines:
+            _hold(m)
+
     # -- rounds ----------------------------------------------------------------------------
-    def _watched_round(self, live: list[Machine], tr: Tracer | None, watch: Watcher) -> bool:
-        """A round with the watcher told of each ringlet boundary (and the tracer, if any)."""
+    def _watched_round(self, live: list[Machine], tr: Tracer | None) -> bool:
+        """A round with the tracer, if any, told of entries and transitions, and the watcher,
+        while one is set (read after each ringlet: set during the round, it is called at once),
+        told of each ringlet boundary."""
         fired = False
         values = tr is not None and tr.records_values
         for m in live:
-            if m._run is m._held and not self._release(m):
-                s = r = None  # no ringlet (suspended, or a suspend applied): the boundary is still one
-            else:
+            s: int | None = None
+            r: int | None = None
+            if m._run is not m._held or self._release(m):
                 s = m._state
                 if tr is not None and m._entered:
                     tr.entry(m, s)
@@ -367,40 +383,24 @@ class Arrangement:
                     fired = True
                     if tr is not None:
                         tr.transition(m, s, m._state, r)
+            # else a suspend applied, or the run stopped: for a watcher the boundary is still one
             if values:
-                tr.values(m)  # type: ignore[union-attr]
-            asked = watch(m, s, r)
-            if asked == STOP:
-                self._stopped = self.stop_status
-                self._attention = True
-                break
-            if asked == PAUSE and self.on_pause is not None:
-                self.on_pause(m)
-        return fired
-
-    def _traced_round(self, live: list[Machine], tr: Tracer) -> bool:
-        fired = False
-        values = tr.records_values
-        for m in live:
-            if m._run is m._held and not self._release(m):
-                if values:
-                    tr.values(m)
-                continue
-            s = m._state
-            if m._entered:
-                tr.entry(m, s)
-            r = m._run(m)
-            if r is not None:
-                fired = True
-                tr.transition(m, s, m._state, r)
-            if values:
-                tr.values(m)
+                tr.values(m)  # type: ignore[union-attr]  # values is true only with a tracer
+            watch = self.watcher
+            if watch is not None:
+                self.ran, self.fired = s, r
+                asked = watch(m)
+                if asked == STOP:
+                    self.stop_at_boundary()
+                    break
+                if asked == PAUSE and self.on_pause is not None:
+                    self.on_pause(m)
         return fired
 
     def _attend(self, now: int, grace: int) -> RunResult | None:
         """Whatever changed since the last round: unloads, suspensions, interrupts."""
         self._attention = False
-        if self.pause_asked and self.on_pause is not None and not self._interrupts:
+        if self.pause_asked and self.on_pause is not None and not self._interrupts and self._stopped is None:
             self.pause_asked = False
             self.on_pause(None)  # between rounds: the run stands until it returns
             self._rehold()  # what was asked for while it stood (commands, variables)
@@ -497,23 +497,24 @@ class Arrangement:
                 if end < ctx.wake:
                     ctx.wake = end  # one test a round covers the end of the run as well
                 live = self._live
-                watch = self.watcher
-                if tr is not None or watch is not None:
+                if tr is not None or self.watcher is not None:
                     if tr is not None:
                         tr.round, tr.now = rounds, now
                     ctx.round = rounds
-                    fired = self._watched_round(live, tr, watch) if watch is not None else self._traced_round(live, tr)  # type: ignore[arg-type]
-                    rounds += 1
+                    fired = self._watched_round(live, tr)
+                    n = 1
                     if sim is not None:
                         sim.now += sim.period
                     else:
                         clock.advance(fired)
                 elif sim is not None:
-                    rounds += self._sim_rounds(live, sim)
+                    n = self._sim_rounds(live, sim)
                 elif wall is not None:
-                    rounds += self._wall_rounds(live, wall)
+                    n = self._wall_rounds(live, wall)
                 else:
-                    rounds += self._rounds(live)
+                    n = self._rounds(live)
+                rounds += n
+                self.ringlets += n * len(live)
                 if clock.now >= ctx.wake:
                     ctx.wake = FOREVER  # the hooks arm it again for whatever they still hold
                     ctx.round = rounds
@@ -637,73 +638,3 @@ def _regate(m: Machine, variables: dict[int, dict[str, object]]) -> None:
         _hold(m)
     elif m._run is m._held:
         m._run = m._next
-
-
-def _in_machine_code(frame: FrameType | None) -> bool:
-    """Whether a generated module's code is on the stack (a signal handler's view of it)."""
-    while frame is not None:
-        if is_generated(frame.f_code.co_filename):
-            return True
-        frame = frame.f_back
-    return False
-
-
-def signals_handled(arr: Arrangement) -> _SignalsHandled:
-    """Route SIGINT/SIGTERM/SIGHUP to the arrangement for the duration of a run (a `with`).
-
-    The first one asks the machines to finish (the scheduler sees it between rounds).  A second
-    one, or the grace time passing in real time while machine code still loops or blocks (a real
-    timer, SIGALRM, catches that), raises RunStopped from the handler: Python delivers it inside
-    whatever code is running, machine code included, and a blocking `time.sleep` ends with it,
-    so nothing a section does can keep the run from stopping."""
-
-    def stop(frame: FrameType | None, text: str) -> None:
-        if arr.running:
-            # outside machine code (the scheduler sleeping between rounds, the bus) there is no
-            # place of the user's to name: the run ends as the grace time's end would end it
-            raise RunStopped(arr._signal or signal.SIGINT, text, in_machine_code=_in_machine_code(frame))
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        if arr.watchdog is not None:
-            arr.watchdog.answer()  # this handler could run: the run is not stuck in a C call
-        first = not arr._interrupts
-        arr.interrupt(signum)
-        if first:
-            signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
-        else:
-            stop(frame, f"stopped by a second {signal_name(signum)}")
-
-    def alarm(_signum: int, frame: FrameType | None) -> None:
-        if arr.watchdog is not None:
-            arr.watchdog.answer()
-        if arr._interrupts:
-            grace = arr._grace_ns / 1e9
-            sig = signal_name(arr._signal or 0)
-            held = grace + STUCK_SLACK_S
-            stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
-
-    return _SignalsHandled(handler, alarm, arr.watchdog)
-
-
-class _SignalsHandled:
-    """The handlers of signals_handled, installed on entry and the old ones put back on exit.
-    (Not contextlib.contextmanager: contextlib is a tenth of a run's start-up.)"""
-
-    def __init__(self, handler: SignalHandler, alarm: SignalHandler, watchdog: Watchdog | None) -> None:
-        self.handler = handler
-        self.alarm = alarm
-        self.watchdog = watchdog
-        self.old: dict[int, _Handler] = {}
-
-    def __enter__(self) -> None:
-        self.old = {s: signal.signal(s, self.handler) for s in STOP_SIGNALS}
-        self.old[signal.SIGALRM] = signal.signal(signal.SIGALRM, self.alarm)
-        if self.watchdog is not None:  # after the handlers: every signal it sees is one they answer
-            self.watchdog.arm()
-
-    def __exit__(self, t: type[BaseException] | None, e: BaseException | None, tb: TracebackType | None) -> None:
-        if self.watchdog is not None:
-            self.watchdog.disarm()
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        for s, h in self.old.items():
-            signal.signal(s, h)

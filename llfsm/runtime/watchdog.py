@@ -1,6 +1,6 @@
 """The run's watchdog: ends a run whose machine code is stuck in a C call that holds the GIL.
 
-`signals_handled` (llfsm.runtime.scheduler) stops machine code from a Python signal handler.
+`signals_handled` (llfsm.runtime.signals) stops machine code from a Python signal handler.
 Python runs such a handler only between bytecodes, in the main thread, with the GIL: a section
 inside one long C call that keeps the GIL (`sum(range(10**14))`, a C extension that never
 releases it) runs no handler, so no number of SIGINTs or SIGTERMs stops it, and no Python
@@ -65,7 +65,7 @@ if TYPE_CHECKING:
 #: handler that can run at all runs within milliseconds, even on a loaded machine.
 ANSWER_S = 0.5
 #: A run with a single interrupt is stuck once it still runs this long after its grace time, as
-#: in signals_handled (llfsm.runtime.scheduler.STUCK_SLACK_S).
+#: in signals_handled (llfsm.runtime.signals.STUCK_SLACK_S).
 SLACK_S = 0.5
 #: Seconds to wait for the run's stacks once asked for (they come from a C signal handler, at
 #: once unless the machine is very loaded); the report is printed without a place after that.

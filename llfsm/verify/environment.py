@@ -119,7 +119,7 @@ class EnvService:
         d = self.oracle.decide(n, self._said)
         if d == len(self.responses):
             return Future(self.srv_name)  # never done: the call gets no answer
-        return self.responses[d]._copy()
+        return self.responses[d]  # the bus hands the caller a copy (bus._Request)
 
     def _said(self, d: int) -> str:
         if d == len(self.responses):

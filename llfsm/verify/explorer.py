@@ -193,6 +193,11 @@ class Explorer(Stepper):
         probe, insert = self._probe, self._insert
         check_memory = self.check_memory
         bounded = bool(self.bounds)
+        world = self.world
+        oracle = world.oracle if world is not None else None
+        variables = [c.variables for c in codecs]
+        drain = self._drain
+        edge_choice = self.edge_choice
         choice_cache: dict[tuple[Any, ...], Sequence[tuple[tuple[Any, ...], int, bool]]] = {}
         fair_cache: dict[tuple[int, Any, int], int] = {}
         full = (1 << n) - 1
@@ -288,128 +293,149 @@ class Explorer(Stepper):
                     choices = choice_cache[key] = list(made) if len(made) <= Valuations.KEEP else made
                 m = machines[turn]
                 names = input_names[turn]
-                for c, (values, tm, intr) in enumerate(choices):
-                    # the configuration into the objects (what the previous choice changed)
-                    for k in range(n):
-                        p = config[PARTS + k]
-                        if hc:
-                            if cur[k] is not p:
-                                restores[k](machines[k], p)
+                for base, (values, tm, intr) in enumerate(choices):
+                    if oracle is not None:
+                        oracle.start(())
+                    while True:  # each sequence of the environment's choices (one without an environment)
+                        c = base
+                        # the configuration into the objects (what the previous choice changed)
+                        for k in range(n):
+                            p = config[PARTS + k]
+                            if hc:
+                                if cur[k] is not p:
+                                    restores[k](machines[k], p)
+                                    cur[k] = p
+                            elif cur[k] != p:
+                                restores[k](machines[k], part_lists[k][p])
                                 cur[k] = p
-                        elif cur[k] != p:
-                            restores[k](machines[k], part_lists[k][p])
-                            cur[k] = p
-                    if self.cur_g != g0:
-                        self._set_globals(glist[g0])
-                        self.cur_g = g0
-                    if names:
-                        for name, v in zip(names, values, strict=True):
-                            setattr(m, name, v)
-                    now = reps[turn][m._state][tm] if period is None else tm
-                    m._t0 = 0
-                    clock.now = now
-                    if intr:
-                        ctx.interrupted = True
-                    # what a command changes of another machine: its pending command, the gate
-                    before = [(mk._pending, mk._run) for mk in machines] if n > 1 else None
-                    published.clear()
-                    initialised, shut = bus.initialised, bus.shut
-                    try:
-                        m._run(m)
-                    except BaseException as exc:  # machine code may raise anything
-                        if isinstance(exc, KeyboardInterrupt | MemoryError | VariableValueError):
-                            raise
-                        raise MachineError(exc, idx, c) from exc
-                    steps += 1
-                    # the machine's new part (and those its commands touched)
-                    part = snaps[turn](m)
-                    if hc:
-                        pid: Any = part
-                    else:
-                        tab = part_tabs[turn]
-                        pid = tab.get(part)
-                        if pid is None:
-                            pid = tab[part] = len(part_lists[turn])
-                            part_lists[turn].append(part)
-                    cur[turn] = pid
-                    if before is not None:
-                        parts = list(config[PARTS:])
-                        parts[turn] = pid
-                        for k, (pending, run) in enumerate(before):
-                            mk = machines[k]
-                            if k != turn and (mk._pending != pending or mk._run is not run):
-                                other = snaps[k](mk)
-                                parts[k] = cur[k] = other if hc else self._part_id(k, other)
-                    else:
-                        parts = [pid]
-                    # globals
-                    gv = glist[g0]
-                    if intr or bus.initialised != initialised or bus.shut != shut or len(bus.nodes) != self.nodes_count:
-                        nodes = self._nodes_made() if len(bus.nodes) != self.nodes_count else gv[NODES]
-                        gv = (bus.initialised, bus.shut, ctx.interrupted, gv[FIRST_ROUND], nodes)
-                    # the machine's time in its state
-                    if part[SUSPENDED] or part[FINISHED]:
-                        e = 0
-                    else:
-                        run = part[1] if part[0] == gates[turn] else part[0]
-                        if run == entries[turn][part[STATE]]:
+                        if self.cur_g != g0:
+                            self._set_globals(glist[g0])
+                            self.cur_g = g0
+                        if names:
+                            for name, v in zip(names, values, strict=True):
+                                setattr(m, name, v)
+                        if world is not None:  # the environment's messages, before the ringlet
+                            world.before_ringlet(m, variables[turn])
+                            if bus.ready:
+                                drain()
+                        now = reps[turn][m._state][tm] if period is None else tm
+                        m._t0 = 0
+                        clock.now = now
+                        if intr:
+                            ctx.interrupted = True
+                        # what a command changes of another machine: its pending command, the gate
+                        before = [(mk._pending, mk._run) for mk in machines] if n > 1 else None
+                        published.clear()
+                        initialised, shut = bus.initialised, bus.shut
+                        try:
+                            m._run(m)
+                        except BaseException as exc:  # machine code may raise anything
+                            if isinstance(exc, KeyboardInterrupt | MemoryError | VariableValueError):
+                                raise
+                            raise MachineError(exc, idx, c) from exc
+                        if oracle is not None:
+                            if bus.ready:  # the answers and callbacks it left, as between rounds
+                                drain()
+                            c += len(choices) * oracle.number()
+                        steps += 1
+                        # the machine's new part (and those its commands touched)
+                        part = snaps[turn](m)
+                        if hc:
+                            pid: Any = part
+                        else:
+                            tab = part_tabs[turn]
+                            pid = tab.get(part)
+                            if pid is None:
+                                pid = tab[part] = len(part_lists[turn])
+                                part_lists[turn].append(part)
+                        cur[turn] = pid
+                        if before is not None:
+                            parts = list(config[PARTS:])
+                            parts[turn] = pid
+                            for k, (pending, run) in enumerate(before):
+                                mk = machines[k]
+                                if k != turn and (mk._pending != pending or mk._run is not run):
+                                    other = snaps[k](mk)
+                                    parts[k] = cur[k] = other if hc else self._part_id(k, other)
+                        else:
+                            parts = [pid]
+                        # globals
+                        gv = glist[g0]
+                        flags_moved = bus.initialised != initialised or bus.shut != shut
+                        if intr or flags_moved or len(bus.nodes) != self.nodes_count:
+                            nodes = self._nodes_made() if len(bus.nodes) != self.nodes_count else gv[NODES]
+                            gv = (bus.initialised, bus.shut, ctx.interrupted, gv[FIRST_ROUND], nodes)
+                        # the machine's time in its state
+                        if part[SUSPENDED] or part[FINISHED]:
                             e = 0
                         else:
-                            e = now - m._t0
-                            cs = cuts[turn][part[STATE]]
-                            if period is None:
-                                e = bisect.bisect_left(cs, e) if cs else 0
+                            run = part[1] if part[0] == gates[turn] else part[0]
+                            if run == entries[turn][part[STATE]]:
+                                e = 0
                             else:
-                                cap = caps[turn][part[STATE]]  # type: ignore[index]
-                                e = e if e < cap else cap
-                    times = tlist[t0]
-                    if times[turn] != e:
-                        times = (*times[:turn], e, *times[turn + 1 :])
-                    # whose turn, or the round's end
-                    nxt = -1
-                    for k in range(turn + 1, n):
-                        if live >> k & 1:
-                            mk = machines[k]
-                            if mk._pending is not None or not mk._suspended:
-                                nxt = k
-                                break
-                    new_live = live
-                    if nxt < 0:  # the round ends (as `_round_end`, written out for the usual case)
-                        slow = False
-                        new_live = 0
-                        for k in range(n):
-                            mk = machines[k]
-                            commanded = mk._pending is not None
-                            if mk._finished and not commanded:
-                                continue  # unloaded
-                            new_live |= 1 << k
-                            if (commanded or mk._suspended) and mk._run is not mk._held:
-                                slow = True  # the gate goes back in front: its part changes
-                            if nxt < 0 and (commanded or not mk._suspended):
-                                nxt = k
-                        if slow or period is not None or (n > 1 and new_live != live):
-                            tl = list(times)
-                            nxt, new_live, gv = self._round_end(parts, tl, gv)
-                            times = tuple(tl)
-                    g = gtab.get(gv)
-                    if g is None:
-                        g = self._intern(gtab, glist, gv)
-                    self.cur_g = g
-                    ev = empty if not published else self._intern(etab, elist, frozenset(published))
-                    t = ttab.get(times)
-                    if t is None:
-                        t = self._intern(ttab, tlist, times)
-                    j = added((nxt, new_live, g, ev, t, *parts), idx, c, ev)
-                    if j < 0:
-                        j = -1 - j
-                        if on_new is not None and not on_new(j):
-                            return
-                        if j >= limit:
-                            raise StateLimit()
-                        if not j & 0xFF:
-                            check_memory()
-                    if graph:
-                        edges.append(j)
+                                e = now - m._t0
+                                cs = cuts[turn][part[STATE]]
+                                if period is None:
+                                    e = bisect.bisect_left(cs, e) if cs else 0
+                                else:
+                                    cap = caps[turn][part[STATE]]  # type: ignore[index]
+                                    e = e if e < cap else cap
+                        times = tlist[t0]
+                        if times[turn] != e:
+                            times = (*times[:turn], e, *times[turn + 1 :])
+                        # whose turn, or the round's end
+                        nxt = -1
+                        for k in range(turn + 1, n):
+                            if live >> k & 1:
+                                mk = machines[k]
+                                if mk._pending is not None or not mk._suspended:
+                                    nxt = k
+                                    break
+                        new_live = live
+                        if nxt < 0:  # the round ends (as `_round_end`, written out for the usual case)
+                            slow = False
+                            new_live = 0
+                            for k in range(n):
+                                mk = machines[k]
+                                commanded = mk._pending is not None
+                                if mk._finished and not commanded:
+                                    continue  # unloaded
+                                new_live |= 1 << k
+                                if (commanded or mk._suspended) and mk._run is not mk._held:
+                                    slow = True  # the gate goes back in front: its part changes
+                                if nxt < 0 and (commanded or not mk._suspended):
+                                    nxt = k
+                            if slow or period is not None or (n > 1 and new_live != live):
+                                tl = list(times)
+                                nxt, new_live, gv = self._round_end(parts, tl, gv)
+                                times = tuple(tl)
+                        g = gtab.get(gv)
+                        if g is None:
+                            g = self._intern(gtab, glist, gv)
+                        self.cur_g = g
+                        ev = empty if not published else self._intern(etab, elist, frozenset(published))
+                        t = ttab.get(times)
+                        if t is None:
+                            t = self._intern(ttab, tlist, times)
+                        j = added((nxt, new_live, g, ev, t, *parts), idx, c, ev)
+                        if j < 0:
+                            j = -1 - j
+                            if on_new is not None and not on_new(j):
+                                return
+                            if j >= limit:
+                                raise StateLimit()
+                            if not j & 0xFF:
+                                check_memory()
+                        if graph:
+                            edges.append(j)
+                            if oracle is not None:
+                                edge_choice.append(c)
+                        if oracle is None:
+                            break
+                        forced = oracle.next_forced()
+                        if forced is None:
+                            break
+                        oracle.start(forced)
                 if progress is not None and not idx & 0x3FF:
                     now_s = time.monotonic()
                     if now_s - last >= 1.0:

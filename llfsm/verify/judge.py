@@ -141,8 +141,6 @@ def verify(
     if refusal is not None:
         raise VerifyError(refusal)
     needs_graph = keep_graph or any(p.spec.verify != ON_THE_FLY for p in props)
-    if loaded.environment:
-        options.generic = True  # the environment's choices are made inside a step: the generic loop tries each
     options.graph = needs_graph
     try:
         explorer = Explorer(loaded, options, [a.fn for a in atoms])

@@ -37,8 +37,14 @@ class Handles:
     def __init__(self) -> None:
         self.objects: list[Any] = []
         self.tokens: dict[tuple[str, ...], int] = {}
+        #: each object's token by its id, with the object (kept alive, so the id is its own):
+        #: what a handle is never changes, and a configuration is frozen at every step
+        self.known: dict[int, tuple[Any, Frozen]] = {}
 
     def token(self, obj: Any) -> Frozen | None:
+        hit = self.known.get(id(obj))
+        if hit is not None and hit[0] is obj:
+            return hit[1]
         key = _handle_key(obj)
         if key is None:
             return None
@@ -46,7 +52,9 @@ class Handles:
         if index is None:
             index = self.tokens[key] = len(self.objects)
             self.objects.append(obj)
-        return Frozen(("handle", index, *key))
+        token = Frozen(("handle", index, *key))
+        self.known[id(obj)] = (obj, token)
+        return token
 
 
 def _handle_key(obj: Any) -> tuple[str, ...] | None:

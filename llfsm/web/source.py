@@ -35,6 +35,7 @@ from ..ros.node import Node
 from ..ros.transports.dds_graph import is_hidden
 from . import parameters as params
 from .rosgraph import RosGraph, from_bus, from_dds, robust_graph
+from .verdicts import Verdicts
 
 if TYPE_CHECKING:
     from ..ros.bus import Bus
@@ -122,6 +123,8 @@ class Source:
         #: its count moves (a set from the page, `param set` or the node itself).
         self.param_events: dict[str, int] = {}
         self.node.create_subscription(ParameterEvent, "/parameter_events", self._on_parameter_event, 100)
+        #: What monitors said on /llfsm/monitor (this run's, or any run's on the domain).
+        self.verdicts = Verdicts(self.node)
         self._graph = RosGraph()
         self._graph_at = -GRAPH_PERIOD
         #: The DDS graph beyond this process, read on the scheduler's thread (None in process).
@@ -185,6 +188,7 @@ class Source:
             "services": [{"name": n, "type": t._TYPE if t is not None else ""} for n, t in sorted(services.items())],
             "param_events": dict(self.param_events),
             "world": self.world(),
+            "monitor": self.verdicts.sample(),
         }
 
     def graph(self) -> RosGraph:

@@ -164,6 +164,45 @@ function runLabel(m) {
   return "run " + (at >= 0 ? m.name.slice(at + 1) : m.participant.slice(8, 16));
 }
 
+// -- the monitor's verdicts (snapshot.monitor, docs/view.md) ----------------------------------------
+
+function verdictText(v) {
+  const states = Object.entries(v.states).map(([m, st]) => `${m} ${st}`).join(", ");
+  if (v.verdict !== "violated") return `${v.property}` + (v.detail ? ` (${v.detail})` : "");
+  return `${v.property} at ${v.time.toFixed(3)} s, ringlet ${v.ringlet}` + (v.detail ? ` (${v.detail})` : "") +
+    `: ${states}` + (v.variables ? `; ${v.variables}` : "");
+}
+
+function updateMonitor(mon) {
+  if (!mon || !mon.count) return;
+  document.getElementById("monitor-panel").hidden = false;
+  const shown = mon.verdicts.length;
+  document.getElementById("monitor-count").textContent =
+    `${mon.count} verdict${mon.count === 1 ? "" : "s"} on /llfsm/monitor` + (mon.count > shown ? ` (the newest ${shown})` : "");
+  const key = JSON.stringify(mon.verdicts);
+  const list = document.getElementById("verdicts");
+  if (list.dataset.key === key) return;
+  list.dataset.key = key;
+  list.replaceChildren(...mon.verdicts.map((v) => {
+    const li = el("li", verdictText(v));
+    li.dataset.verdict = v.verdict.replace("_", " ");
+    return li;
+  }));
+  // a machine a violated property reads is marked, with the property's name
+  const marked = new Map();
+  for (const v of mon.verdicts) {
+    if (v.verdict !== "violated") continue;
+    for (const m of v.reads) marked.set(m, [...(marked.get(m) || []), v.property]);
+  }
+  for (const [name, card] of cards) {
+    const names = marked.get(card.el.querySelector(".machine-name").textContent) || marked.get(name);
+    const badge = card.el.querySelector(".badge.violation");
+    card.el.dataset.violated = String(!!names);
+    badge.hidden = !names;
+    badge.textContent = names ? `violated: ${names.join("; ")}` : "";
+  }
+}
+
 // -- topics, services ------------------------------------------------------------------------------
 
 function updateTopics(topics) {
@@ -329,6 +368,7 @@ function snapshot(s) {
   updateTopics(s.topics);
   fillList("service-names", s.services.map((x) => x.name));
   parameterEvents(s.param_events);
+  updateMonitor(s.monitor);
   const panel = document.getElementById("world-panel");
   if (s.world) {
     panel.hidden = false;

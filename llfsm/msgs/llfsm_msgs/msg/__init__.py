@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import llfsm.msgs.builtin_interfaces.msg as _builtin_interfaces
 from llfsm.msgs import _message as _m
 
 _DEFAULT = _m.DEFAULT
@@ -115,4 +116,179 @@ class DebugState(_m.Message):
         new._round = self._round
         new._time = self._time
         new._breakpoints = self._breakpoints.copy()
+        return new
+
+
+class MonitorEvent(_m.Message):
+    """llfsm_msgs/msg/MonitorEvent"""
+
+    VIOLATED = "violated"
+    SATISFIED = "satisfied"
+    PENDING = "pending"
+    HELD = "held"
+    NOT_SEEN = "not_seen"
+    _TYPE = "llfsm_msgs/msg/MonitorEvent"
+    _FIELDS = (
+        ("stamp", "builtin_interfaces/msg/Time"),
+        ("name", "string"),
+        ("kind", "string"),
+        ("text", "string"),
+        ("verdict", "string"),
+        ("ringlet", "uint64"),
+        ("machines", "string[]"),
+        ("states", "string[]"),
+        ("reads", "string[]"),
+        ("variables", "string"),
+        ("detail", "string"),
+    )
+    __slots__ = (
+        "_detail",
+        "_kind",
+        "_machines",
+        "_name",
+        "_reads",
+        "_ringlet",
+        "_stamp",
+        "_states",
+        "_text",
+        "_variables",
+        "_verdict",
+    )
+
+    def __init__(
+        self,
+        *,
+        stamp: _builtin_interfaces.Time = _DEFAULT,
+        name: str = "",
+        kind: str = "",
+        text: str = "",
+        verdict: str = "",
+        ringlet: int = 0,
+        machines: list[str] = _DEFAULT,
+        states: list[str] = _DEFAULT,
+        reads: list[str] = _DEFAULT,
+        variables: str = "",
+        detail: str = "",
+    ) -> None:
+        self.stamp = _builtin_interfaces.Time() if stamp is _DEFAULT else stamp
+        self.name = name
+        self.kind = kind
+        self.text = text
+        self.verdict = verdict
+        self.ringlet = ringlet
+        self._machines = [] if machines is _DEFAULT else _m.check_array(machines, self, "machines", "string")
+        self._states = [] if states is _DEFAULT else _m.check_array(states, self, "states", "string")
+        self._reads = [] if reads is _DEFAULT else _m.check_array(reads, self, "reads", "string")
+        self.variables = variables
+        self.detail = detail
+
+    @property
+    def stamp(self) -> _builtin_interfaces.Time:
+        return self._stamp
+
+    @stamp.setter
+    def stamp(self, value: _builtin_interfaces.Time) -> None:
+        self._stamp = (
+            value
+            if value.__class__ is _builtin_interfaces.Time
+            else _m.check_message(value, self, "stamp", _builtin_interfaces.Time)
+        )
+
+    @property
+    def name(self) -> str:
+        return self._name
+
+    @name.setter
+    def name(self, value: str) -> None:
+        self._name = value if value.__class__ is str else _m.check_string(value, self, "name")
+
+    @property
+    def kind(self) -> str:
+        return self._kind
+
+    @kind.setter
+    def kind(self, value: str) -> None:
+        self._kind = value if value.__class__ is str else _m.check_string(value, self, "kind")
+
+    @property
+    def text(self) -> str:
+        return self._text
+
+    @text.setter
+    def text(self, value: str) -> None:
+        self._text = value if value.__class__ is str else _m.check_string(value, self, "text")
+
+    @property
+    def verdict(self) -> str:
+        return self._verdict
+
+    @verdict.setter
+    def verdict(self, value: str) -> None:
+        self._verdict = value if value.__class__ is str else _m.check_string(value, self, "verdict")
+
+    @property
+    def ringlet(self) -> int:
+        return self._ringlet
+
+    @ringlet.setter
+    def ringlet(self, value: int) -> None:
+        self._ringlet = (
+            value
+            if value.__class__ is int and 0 <= value <= 18446744073709551615
+            else _m.check_int(value, self, "ringlet", "uint64")
+        )
+
+    @property
+    def machines(self) -> list[str]:
+        return self._machines
+
+    @machines.setter
+    def machines(self, value: list[str]) -> None:
+        self._machines = _m.check_array(value, self, "machines", "string")
+
+    @property
+    def states(self) -> list[str]:
+        return self._states
+
+    @states.setter
+    def states(self, value: list[str]) -> None:
+        self._states = _m.check_array(value, self, "states", "string")
+
+    @property
+    def reads(self) -> list[str]:
+        return self._reads
+
+    @reads.setter
+    def reads(self, value: list[str]) -> None:
+        self._reads = _m.check_array(value, self, "reads", "string")
+
+    @property
+    def variables(self) -> str:
+        return self._variables
+
+    @variables.setter
+    def variables(self, value: str) -> None:
+        self._variables = value if value.__class__ is str else _m.check_string(value, self, "variables")
+
+    @property
+    def detail(self) -> str:
+        return self._detail
+
+    @detail.setter
+    def detail(self, value: str) -> None:
+        self._detail = value if value.__class__ is str else _m.check_string(value, self, "detail")
+
+    def _copy(self) -> MonitorEvent:
+        new = _new(MonitorEvent)
+        new._stamp = self._stamp._copy()
+        new._name = self._name
+        new._kind = self._kind
+        new._text = self._text
+        new._verdict = self._verdict
+        new._ringlet = self._ringlet
+        new._machines = self._machines.copy()
+        new._states = self._states.copy()
+        new._reads = self._reads.copy()
+        new._variables = self._variables
+        new._detail = self._detail
         return new

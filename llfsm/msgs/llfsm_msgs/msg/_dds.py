@@ -10,6 +10,7 @@ from struct import Struct as _Struct
 import cyclonedds.idl.types as _t
 from cyclonedds.idl import IdlStruct as _IdlStruct
 
+import llfsm.msgs.builtin_interfaces.msg._dds as _builtin_interfaces
 import llfsm.msgs.llfsm_msgs.msg as _classes
 
 _new = object.__new__
@@ -18,6 +19,8 @@ _Z = tuple(bytes(n) for n in range(8))
 _S0 = _Struct("<?3xI")
 _S1 = _Struct("<I")
 _S2 = _Struct("<QdI")
+_S3 = _Struct("<iII")
+_S4 = _Struct("<QI")
 
 
 # -- llfsm_msgs/msg/DebugState
@@ -139,12 +142,241 @@ def _from_DebugState(s):
     return m
 
 
+# -- llfsm_msgs/msg/MonitorEvent
+
+_c_MonitorEvent = _classes.MonitorEvent
+
+
+@_dataclass
+class MonitorEvent_(_IdlStruct, typename="llfsm_msgs::msg::dds_::MonitorEvent_"):
+    stamp: _builtin_interfaces.Time_
+    name: str
+    kind: str
+    text: str
+    verdict: str
+    ringlet: _t.uint64
+    machines: _t.sequence[str]
+    states: _t.sequence[str]
+    reads: _t.sequence[str]
+    variables: str
+    detail: str
+
+
+def _mk_MonitorEvent(a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
+    m = _new(_c_MonitorEvent)
+    m._stamp = a0
+    m._name = a1
+    m._kind = a2
+    m._text = a3
+    m._verdict = a4
+    m._ringlet = a5
+    m._machines = a6
+    m._states = a7
+    m._reads = a8
+    m._variables = a9
+    m._detail = a10
+    return m
+
+
+def _cdr_MonitorEvent(m):
+    b = bytearray(_HDR)
+    s1 = m._name.encode()
+    b += _S3.pack(m._stamp._sec, m._stamp._nanosec, len(s1) + 1)
+    b += s1
+    b.append(0)
+    s2 = m._kind.encode()
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(s2) + 1)
+    b += s2
+    b.append(0)
+    s3 = m._text.encode()
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(s3) + 1)
+    b += s3
+    b.append(0)
+    s4 = m._verdict.encode()
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(s4) + 1)
+    b += s4
+    b.append(0)
+    b += _Z[(4 - len(b)) & 7]
+    v5 = m._machines
+    b += _S4.pack(m._ringlet, len(v5))
+    for e6 in v5:
+        s7 = e6.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S1.pack(len(s7) + 1)
+        b += s7
+        b.append(0)
+    v8 = m._states
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(v8))
+    for e9 in v8:
+        s10 = e9.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S1.pack(len(s10) + 1)
+        b += s10
+        b.append(0)
+    v11 = m._reads
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(v11))
+    for e12 in v11:
+        s13 = e12.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S1.pack(len(s13) + 1)
+        b += s13
+        b.append(0)
+    s14 = m._variables.encode()
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(s14) + 1)
+    b += s14
+    b.append(0)
+    s15 = m._detail.encode()
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(s15) + 1)
+    b += s15
+    b.append(0)
+    return bytes(b)
+
+
+def _msg_MonitorEvent(d):
+    o = 4
+    t1 = _S3.unpack_from(d, o)
+    o += 12
+    n2 = t1[2]
+    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
+    o += n2
+    o += (4 - o) & 3
+    t4 = _S1.unpack_from(d, o)
+    o += 4
+    n5 = t4[0]
+    s6 = str(d[o : o + n5 - 1], "utf-8") if n5 else ""
+    o += n5
+    o += (4 - o) & 3
+    t7 = _S1.unpack_from(d, o)
+    o += 4
+    n8 = t7[0]
+    s9 = str(d[o : o + n8 - 1], "utf-8") if n8 else ""
+    o += n8
+    o += (4 - o) & 3
+    t10 = _S1.unpack_from(d, o)
+    o += 4
+    n11 = t10[0]
+    s12 = str(d[o : o + n11 - 1], "utf-8") if n11 else ""
+    o += n11
+    o += (4 - o) & 7
+    t13 = _S4.unpack_from(d, o)
+    o += 12
+    n14 = t13[1]
+    if n14 > len(d) - o:
+        raise ValueError(f"{n14} elements announced, {len(d) - o} bytes left")
+    v15 = []
+    for _ in range(n14):
+        o += (4 - o) & 3
+        t17 = _S1.unpack_from(d, o)
+        o += 4
+        n18 = t17[0]
+        s19 = str(d[o : o + n18 - 1], "utf-8") if n18 else ""
+        o += n18
+        e16 = s19
+        v15.append(e16)
+    o += (4 - o) & 3
+    t20 = _S1.unpack_from(d, o)
+    o += 4
+    n21 = t20[0]
+    if n21 > len(d) - o:
+        raise ValueError(f"{n21} elements announced, {len(d) - o} bytes left")
+    v22 = []
+    for _ in range(n21):
+        o += (4 - o) & 3
+        t24 = _S1.unpack_from(d, o)
+        o += 4
+        n25 = t24[0]
+        s26 = str(d[o : o + n25 - 1], "utf-8") if n25 else ""
+        o += n25
+        e23 = s26
+        v22.append(e23)
+    o += (4 - o) & 3
+    t27 = _S1.unpack_from(d, o)
+    o += 4
+    n28 = t27[0]
+    if n28 > len(d) - o:
+        raise ValueError(f"{n28} elements announced, {len(d) - o} bytes left")
+    v29 = []
+    for _ in range(n28):
+        o += (4 - o) & 3
+        t31 = _S1.unpack_from(d, o)
+        o += 4
+        n32 = t31[0]
+        s33 = str(d[o : o + n32 - 1], "utf-8") if n32 else ""
+        o += n32
+        e30 = s33
+        v29.append(e30)
+    o += (4 - o) & 3
+    t34 = _S1.unpack_from(d, o)
+    o += 4
+    n35 = t34[0]
+    s36 = str(d[o : o + n35 - 1], "utf-8") if n35 else ""
+    o += n35
+    o += (4 - o) & 3
+    t37 = _S1.unpack_from(d, o)
+    o += 4
+    n38 = t37[0]
+    s39 = str(d[o : o + n38 - 1], "utf-8") if n38 else ""
+    o += n38
+    m = _mk_MonitorEvent(_builtin_interfaces._mk_Time(t1[0], t1[1]), s3, s6, s9, s12, t13[0], v15, v22, v29, s36, s39)
+    return m, o
+
+
+def _to_MonitorEvent(m):
+    return MonitorEvent_(
+        stamp=_builtin_interfaces._to_Time(m._stamp),
+        name=m._name,
+        kind=m._kind,
+        text=m._text,
+        verdict=m._verdict,
+        ringlet=m._ringlet,
+        machines=list(m._machines),
+        states=list(m._states),
+        reads=list(m._reads),
+        variables=m._variables,
+        detail=m._detail,
+    )
+
+
+def _from_MonitorEvent(s):
+    m = _new(_c_MonitorEvent)
+    m._stamp = _builtin_interfaces._from_Time(s.stamp)
+    m._name = s.name
+    m._kind = s.kind
+    m._text = s.text
+    m._verdict = s.verdict
+    m._ringlet = s.ringlet
+    m._machines = list(s.machines)
+    m._states = list(s.states)
+    m._reads = list(s.reads)
+    m._variables = s.variables
+    m._detail = s.detail
+    return m
+
+
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
 #          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
     "DebugState": (DebugState_, _cdr_DebugState, _msg_DebugState, _to_DebugState, _from_DebugState, None, None, None),
+    "MonitorEvent": (
+        MonitorEvent_,
+        _cdr_MonitorEvent,
+        _msg_MonitorEvent,
+        _to_MonitorEvent,
+        _from_MonitorEvent,
+        None,
+        None,
+        None,
+    ),
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {
     "DebugState": "RIHS01_2de0b23e0deaecc18cca30aba89ccfd18916f1f4114b94e933730db8b0a306d8",
+    "MonitorEvent": "RIHS01_e05793e89d3835296a8509b8e0d9786f943601492e0fcd4c32da3783f3445a0c",
 }

@@ -1,0 +1,274 @@
+"""What each ringlet of a compiled machine can change, read from its generated module's text
+(`ast` only, nothing run), so that the monitor judges a property only at the ringlet boundaries
+where its value can change (docs/monitor.md, "Cost").
+
+A property reads states, variables, inputs, `suspended`/`finished` and `published` topics.
+What changes them, and where llfsm.monitor.run looks:
+
+- a machine's state, `suspended`, `finished`: a ringlet that fires a transition
+  (`self._state = K`), enters the suspend state or finishes (what the compiler writes for an
+  accepting state); a command, applied by the scheduler's gate;
+- a variable: the ringlets whose code can change its value, below; a parameter set from
+  outside (the gate);
+- an input: the gate (its snapshot), or the bus between rounds;
+- `published`: a publish, seen by a tap on the topic.
+
+**A variable's value.**  A ringlet changes `x` when it assigns it (`x = ...`, `x += 1`, `x[0] =
+...`, `x.field = ...`, `del x[...]`) or calls a method on it (`x.append(1)`), and it may change
+it by way of another name for the same object: `y = x` makes a later `y.append(1)` change `x`.
+So every variable a ringlet assigns or mentions other than as a plain value (in a comparison,
+an f-string, `len(...)`, a test) is put into one group with the others it touches
+so, and a ringlet changes the whole group of anything it changes.  A value handed to a function
+or class of the user's own (a helper module beside the machine, imported in Includes.py), or
+mixed with a module-level object that can be changed (a list, a dict...), may be kept there and
+changed from anywhere; so may anything a callback (a function or lambda defined in machine code,
+run by the bus) touches.  (Functions of Python's library, installed packages and llfsm, and
+methods, are taken to keep no reference to what they are handed beyond the object they are
+called on, which joins the group.)
+Such a variable is *escaped*: a property reading it is judged at every boundary.
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import os
+import sys
+import sysconfig
+import types
+from dataclasses import dataclass, field
+from typing import Any
+
+#: Builtins that read a value and keep no reference to it: an argument to them is a plain read.
+_VALUE_BUILTINS = frozenset(
+    {
+        "abs", "bool", "chr", "float", "format", "hash", "hex", "id", "int", "isinstance", "len",
+        "oct", "ord", "print", "repr", "round", "str", "type", "bin", "callable", "issubclass",
+    }
+)  # fmt: skip
+_IMMUTABLE = (int, float, complex, str, bytes, bool, type(None), tuple, frozenset, range)
+#: sysconfig's paths of Python's library and installed packages.
+_LIBRARY_PATHS = ("stdlib", "platstdlib", "purelib", "platlib")
+
+
+@dataclass
+class Ringlet:
+    """What one ringlet function can change."""
+
+    name: str
+    #: variables it may change (before grouping)
+    touches: set[str] = field(default_factory=set)
+    #: it may change the machine's state (fires a transition, enters the suspend state)
+    moves: bool = False
+    #: it may finish the machine (an accepting state's ringlet)
+    finishes: bool = False
+
+
+@dataclass
+class ClassReads:
+    """What the ringlets of one machine class can change (see the module's docstring)."""
+
+    ringlets: dict[str, Ringlet]
+    variables: tuple[str, ...]
+    #: group of each variable (a representative name)
+    group: dict[str, str]
+    #: the groups whose values may change outside any ringlet of this machine
+    escaped: set[str]
+    #: the function definitions of the ringlets, by name (what the variant rewrites)
+    trees: dict[str, ast.FunctionDef]
+    filename: str
+    namespace: dict[str, Any]
+
+    def changers(self, variable: str) -> set[str]:
+        """The ringlets that may change `variable`'s value; None-like empty set if none."""
+        g = self.group.get(variable, variable)
+        return {r.name for r in self.ringlets.values() if any(self.group.get(t, t) == g for t in r.touches)}
+
+    def is_escaped(self, variable: str) -> bool:
+        return self.group.get(variable, variable) in self.escaped
+
+
+def class_reads(cls: type[Any]) -> ClassReads | None:
+    """The analysis of a machine class's ringlets, or None when its module's text cannot be
+    read as the code that runs (a native build, a module changed on disk since it was loaded):
+    then the monitor judges every boundary."""
+    module = sys.modules.get(cls.__module__)
+    filename = getattr(module, "__file__", None)
+    funcs = [f for f in (*cls.ENTER, *cls.STEADY) if f is not None]
+    if module is None or not filename or not filename.endswith(".py") or not all(hasattr(f, "__code__") for f in funcs):
+        return None
+    try:
+        with open(filename, encoding="utf-8") as fh:
+            tree = ast.parse(fh.read(), filename)
+    except (OSError, SyntaxError, ValueError, UnicodeDecodeError):
+        return None
+    defs = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef)}
+    namespace = vars(module)
+    for f in funcs:
+        d = defs.get(f.__name__)
+        if d is None or d.lineno != f.__code__.co_firstlineno or f.__code__.co_filename != filename:
+            return None  # the text on disk is not what was compiled
+    slots = [s for c in type.mro(cls) for s in vars(c).get("__slots__", ())]
+    variables = tuple(s for s in slots if not s.startswith("_") and "__" not in s)
+    inputs = tuple(i[0] for i in getattr(cls, "INPUTS", ()))
+    names = set(variables) | set(inputs)
+    own = _own_definitions(namespace)
+    parent: dict[str, str] = {v: v for v in names}
+
+    def find(v: str) -> str:
+        while parent[v] != v:
+            parent[v] = parent[parent[v]]
+            v = parent[v]
+        return v
+
+    ringlets: dict[str, Ringlet] = {}
+    escaped_vars: set[str] = set()
+    for f in funcs:
+        if f.__name__ in ringlets:
+            continue
+        scan = _Scan(names, own, namespace)
+        scan.visit(defs[f.__name__])
+        r = Ringlet(f.__name__, scan.touched, scan.moves, scan.finishes)
+        ringlets[f.__name__] = r
+        touched = sorted(scan.touched)
+        for a in touched[1:]:
+            parent[find(a)] = find(touched[0])
+        if scan.escapes:
+            escaped_vars |= scan.touched
+        escaped_vars |= scan.in_callbacks
+    group = {v: find(v) for v in names}
+    escaped = {group[v] for v in escaped_vars if v in group}
+    return ClassReads(ringlets, variables, group, escaped, {n: defs[n] for n in ringlets}, filename, namespace)
+
+
+def _own_definitions(namespace: dict[str, Any]) -> set[str]:
+    """Names of the module bound to a function, class or module of the user's own: a helper
+    module beside the machine (docs/machine-format.md, "Helper modules"), anything not from
+    Python's library, an installed package or llfsm.  A value handed to one may be kept there."""
+    library = {os.path.realpath(p) for k, p in sysconfig.get_paths().items() if k in _LIBRARY_PATHS}
+    library.add(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))  # llfsm itself
+    out: set[str] = set()
+    for name, value in namespace.items():
+        if name.startswith("_llfsm_") or not isinstance(value, type | types.FunctionType | types.ModuleType):
+            continue
+        module = value if isinstance(value, types.ModuleType) else sys.modules.get(getattr(value, "__module__", ""))
+        file = getattr(module, "__file__", None)
+        if file is None:
+            continue  # built in
+        real = os.path.realpath(file)
+        if not any(real.startswith(root + os.sep) for root in library):
+            out.add(name)
+    return out
+
+
+class _Scan(ast.NodeVisitor):
+    """One ringlet's function: what it assigns or may change (`touched`), whether it fires a
+    transition or finishes, whether anything it touches may escape."""
+
+    def __init__(self, names: set[str], own: set[str], namespace: dict[str, Any]) -> None:
+        self.names = names
+        self.own = own
+        self.namespace = namespace
+        self.touched: set[str] = set()
+        self.in_callbacks: set[str] = set()
+        self.moves = False
+        self.finishes = False
+        self.escapes = False
+        self.depth = 0  # inside a nested function or lambda (a callback)
+        self.parents: list[ast.AST] = []
+
+    def generic_visit(self, node: ast.AST) -> None:
+        self.parents.append(node)
+        super().generic_visit(node)
+        self.parents.pop()
+
+    def visit_FunctionDef(self, node: ast.FunctionDef) -> None:
+        nested = bool(self.parents)
+        self.depth += nested
+        self.generic_visit(node)
+        self.depth -= nested
+
+    visit_AsyncFunctionDef = visit_FunctionDef  # type: ignore[assignment]
+
+    def visit_Lambda(self, node: ast.Lambda) -> None:
+        self.depth += 1
+        self.generic_visit(node)
+        self.depth -= 1
+
+    def visit_Assign(self, node: ast.Assign) -> None:
+        for t in node.targets:
+            if _is_self_attr(t, "_state"):
+                self.moves = True
+        self.generic_visit(node)
+
+    def visit_Call(self, node: ast.Call) -> None:
+        f = node.func
+        if _is_self_attr(f, "_enter_suspend_state"):
+            self.moves = True
+        elif isinstance(f, ast.Attribute) and f.attr == "finish" and _is_self_attr(f.value, "_arr"):
+            self.finishes = True
+        elif _root_name(f) in self.own and node.args + [k.value for k in node.keywords]:
+            self.escapes = True  # a value handed to a function of the user's own may be kept there
+        self.generic_visit(node)
+
+    def visit_Name(self, node: ast.Name) -> None:
+        if isinstance(node.ctx, ast.Load) and node.id in self.namespace and node.id not in self.own:
+            value = self.namespace[node.id]
+            if not isinstance(value, (*_IMMUTABLE, type, type(sys))) and not callable(value):
+                self.escapes = True  # a module-level object that can be changed (a list...)
+        self.generic_visit(node)
+
+    def visit_Attribute(self, node: ast.Attribute) -> None:
+        if isinstance(node.value, ast.Name) and node.value.id == "self" and node.attr in self.names:
+            if self.depth:
+                self.in_callbacks.add(node.attr)
+                self.touched.add(node.attr)
+            elif not self._plain_read(node):
+                self.touched.add(node.attr)
+        self.generic_visit(node)
+
+    def _plain_read(self, node: ast.AST) -> bool:
+        """Whether this mention of a variable only reads its value: the chain it heads
+        (`x.a[0]`) is loaded and used in a comparison, a test, an f-string,
+        or a value builtin's argument, never stored, called, or handed on as an object."""
+        chain = node
+        k = len(self.parents) - 1
+        while k >= 0:
+            up = self.parents[k]
+            if isinstance(up, ast.Attribute | ast.Subscript) and up.value is chain:
+                if not isinstance(up.ctx, ast.Load):
+                    return False
+                chain, k = up, k - 1
+                continue
+            break
+        if k < 0 or isinstance(getattr(chain, "ctx", None), ast.Store | ast.Del):
+            return False
+        up = self.parents[k]
+        if isinstance(up, ast.Compare | ast.UnaryOp | ast.FormattedValue):
+            return True
+        if isinstance(up, ast.Subscript) and up.slice is chain:
+            return True
+        if isinstance(up, ast.If | ast.While | ast.IfExp | ast.Assert) and up.test is chain:
+            return True
+        if isinstance(up, ast.BoolOp):
+            return k > 0 and isinstance(self.parents[k - 1], ast.If | ast.While | ast.Assert)
+        if isinstance(up, ast.Call) and chain is not up.func:
+            name = up.func.id if isinstance(up.func, ast.Name) else ""
+            return name in _VALUE_BUILTINS and name in vars(builtins) and name not in self.namespace
+        return False
+
+
+def _root_name(node: ast.AST) -> str | None:
+    """`f` of `f(...)`, `helpers.f(...)`, `helpers.Box.make(...)`."""
+    while isinstance(node, ast.Attribute):
+        node = node.value
+    return node.id if isinstance(node, ast.Name) else None
+
+
+def _is_self_attr(node: ast.AST, attr: str) -> bool:
+    return (
+        isinstance(node, ast.Attribute)
+        and node.attr == attr
+        and isinstance(node.value, ast.Name)
+        and node.value.id == "self"
+    )

@@ -1,0 +1,369 @@
+"""A monitored variant of a compiled machine class: the same ringlets, with a property's check
+compiled in before each `return` of the ringlets that can change what the property reads
+(llfsm.monitor.reads), and nothing added anywhere else (docs/monitor.md, "Cost").
+
+The variant is made from the generated module's own text and compiled under its file name, so
+tracebacks, the source map and the watchdog read it as the original.  Its ringlets run in a
+copy of the module's namespace, where each ringlet's name is bound to its variant, so that
+`self._run = _llfsm_enter_B` in any of them reaches the variant: the module and its class stay
+as they are for every other run of the process.  The variant class is a subclass with the
+variant ringlets in ENTER and STEADY and no slot of its own, so a live machine becomes one by
+having its class changed (`m.__class__ = variant`), keeping its variables.
+
+A safety property's check is its atom inlined, `self` for its own machine, `_llfsm_mon_M[k]` for
+another's; at a `return` where the ringlet's target state is written just before it (every
+`return` the compiler writes: `self._state = K ... return i`, or no transition at all), the
+machine's own `state(m)` is that state's name as a constant, and the comparisons it takes part
+in are folded: a check that cannot fail there is left out.  Other kinds call the monitor with
+the properties to judge.  Names start with `_llfsm_mon_`, which machine code cannot use (LF013).
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+import types
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from ..props.atoms import HELPERS, PURE
+from .reads import ClassReads
+
+PREFIX = "_llfsm_mon_"
+#: The names a variant's namespace gets from the monitor.
+VIOLATED, FAILED, JUDGE = PREFIX + "v", PREFIX + "x", PREFIX + "j"
+#: ...and the arrangement's machines and the topics published since the last boundary.
+MACHINES, PUBLISHED = PREFIX + "M", PREFIX + "E"
+
+
+@dataclass
+class Check:
+    """What to judge at a ringlet's boundary: a safety property inline (`index`, its atom's
+    rewritten tree, whether the atom true means violated), or properties through the monitor."""
+
+    index: int
+    tree: ast.expr | None = None  # None: judged by a call (JUDGE)
+    violated_when: bool = False
+
+
+def make_variant(
+    cls: type[Any],
+    reads: ClassReads,
+    own: int,
+    checks: dict[str, list[Check]],
+    helpers: dict[str, Callable[..., Any]],
+) -> type[Any]:
+    """The monitored variant of `cls` (the machine at load index `own`): `checks` by ringlet
+    function name."""
+    namespace = dict(reads.namespace)
+    namespace.update(helpers)
+    namespace.update({PREFIX + k: v for k, v in PURE.items()})
+    namespace.update({PREFIX + k: v for k, v in HELPERS.items()})
+    made: dict[str, Any] = {}
+    for fn in (*cls.ENTER, *cls.STEADY):
+        name = fn.__name__
+        if name in made:
+            continue
+        wanted = checks.get(name)
+        if wanted:
+            state = _state_of(cls, fn)
+            tree = copy.deepcopy(reads.trees[name])
+            tree.body = _rewrite_block(tree.body, state, own, cls, wanted)[0]
+            module = ast.Module(body=[tree], type_ignores=[])
+            ast.fix_missing_locations(module)
+            exec(compile(module, reads.filename, "exec", dont_inherit=True), namespace)
+            made[name] = namespace[name]
+        else:
+            made[name] = types.FunctionType(fn.__code__, namespace, name, fn.__defaults__, fn.__closure__)
+        namespace[name] = made[name]
+    attrs = {
+        "__slots__": (),
+        "__module__": cls.__module__,
+        "__qualname__": cls.__qualname__,
+        "__doc__": cls.__doc__,
+        "ENTER": tuple(made[f.__name__] for f in cls.ENTER),
+        "STEADY": tuple(made[f.__name__] for f in cls.STEADY),
+    }
+    return type(cls.__name__, (cls,), attrs)
+
+
+def _state_of(cls: type[Any], fn: Any) -> int | None:
+    """The state whose ringlet `fn` is."""
+    for s, (e, st) in enumerate(zip(cls.ENTER, cls.STEADY, strict=True)):
+        if fn is e or fn is st:
+            return s
+    return None
+
+
+def _sets_state(node: ast.stmt) -> int | bool | None:
+    """`self._state = K` (K), `self._enter_suspend_state()` (True), or False."""
+    if isinstance(node, ast.Assign) and len(node.targets) == 1:
+        t = node.targets[0]
+        if _self_attr(t, "_state"):
+            v = node.value
+            return v.value if isinstance(v, ast.Constant) and isinstance(v.value, int) else None
+    return (
+        isinstance(node, ast.Expr)
+        and isinstance(node.value, ast.Call)
+        and _self_attr(node.value.func, "_enter_suspend_state")
+    )
+
+
+def _self_attr(node: ast.AST, attr: str) -> bool:
+    return (
+        isinstance(node, ast.Attribute)
+        and node.attr == attr
+        and isinstance(node.value, ast.Name)
+        and node.value.id == "self"
+    )
+
+
+def _changes_state(stmts: list[ast.stmt]) -> bool:
+    for st in stmts:
+        for node in ast.walk(st):
+            if isinstance(node, ast.stmt) and _sets_state(node) is not False:
+                return True
+    return False
+
+
+def _rewrite_block(
+    stmts: list[ast.stmt], known: int | None, own: int, cls: type[Any], checks: list[Check]
+) -> tuple[list[ast.stmt], int | None]:
+    """The block with the checks before each of its returns (nested blocks too, never inside a
+    nested function), and the state known after it (None: unknown)."""
+    out: list[ast.stmt] = []
+    for st in stmts:
+        if isinstance(st, ast.Return):
+            out.extend(_returning(st, known, own, cls, checks))
+            return out, known
+        sets = _sets_state(st)
+        if sets is True:
+            known = cls.SUSPENDED
+        elif sets is not False:
+            known = sets
+        elif isinstance(st, ast.If | ast.For | ast.AsyncFor | ast.While | ast.With | ast.AsyncWith | ast.Try):
+            st = copy.copy(st)
+            changed = False
+            for attr in ("body", "orelse", "finalbody"):
+                block = getattr(st, attr, None)
+                if block:
+                    setattr(st, attr, _rewrite_block(block, known, own, cls, checks)[0])
+                    changed = changed or _changes_state(block)
+            if isinstance(st, ast.Try):
+                handlers = []
+                for h in st.handlers:
+                    h = copy.copy(h)
+                    changed = changed or _changes_state(h.body)
+                    h.body = _rewrite_block(h.body, known, own, cls, checks)[0]
+                    handlers.append(h)
+                st.handlers = handlers
+            if changed:
+                known = None
+        out.append(st)
+    # a block that ends without a return: the function's end is one more boundary
+    return out, known
+
+
+def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], checks: list[Check]) -> list[ast.stmt]:
+    """The checks, then the return (its value kept first when it is not a constant).  A
+    constant return after a last inline check returns from inside it when the property holds
+    (`if holds: return 0`): the common case then costs the test alone."""
+    state = cls.STATES[known] if known is not None else None
+    body: list[ast.stmt] = []
+    ids: list[int] = []
+    last: tuple[ast.Try, ast.expr, int] | None = None
+    holding: list[ast.expr] = []  # what each inline check's holding is, for the fast path below
+    for c in checks:
+        if c.tree is None:
+            ids.append(c.index)
+            continue
+        cond = _fold(_Inline(own, state).visit(copy.deepcopy(c.tree)))
+        if not c.violated_when:
+            cond = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+        if isinstance(cond, ast.Constant):
+            if cond.value:
+                body.append(_call(VIOLATED, c.index))  # violated whenever it returns here
+                last = None
+            continue
+        test = ast.If(test=cond, body=[_call(VIOLATED, c.index)], orelse=[])
+        handler = ast.ExceptHandler(
+            type=ast.Name(id="Exception", ctx=ast.Load()),
+            name=PREFIX + "e",
+            body=[_call(FAILED, c.index, ast.Name(id=PREFIX + "e", ctx=ast.Load()))],
+        )
+        guarded = ast.Try(body=[test], handlers=[handler], orelse=[], finalbody=[])
+        body.append(guarded)
+        last = guarded, cond, c.index
+        holding.append(_fold(ast.UnaryOp(op=ast.Not(), operand=copy.deepcopy(cond))))
+    if ids:
+        body.append(_call(JUDGE, ast.Tuple(elts=[ast.Constant(i) for i in ids], ctx=ast.Load())))
+        last = None
+    if not body:
+        return [ret]
+    constant = ret.value is None or isinstance(ret.value, ast.Constant)
+    if last is not None and constant and len(holding) > 1 and not ids and len(body) == len(holding):
+        # several checks: one test of them all returns at once when all hold (atoms are pure, so
+        # the checks one by one below, which say which failed, may evaluate them again)
+        all_hold = _Shared().share(ast.BoolOp(op=ast.And(), values=holding))
+        fast = ast.If(test=all_hold, body=[copy.deepcopy(ret)], orelse=[])
+        quiet = ast.ExceptHandler(type=ast.Name(id="Exception", ctx=ast.Load()), name=None, body=[ast.Pass()])
+        body.insert(0, ast.Try(body=[fast], handlers=[quiet], orelse=[], finalbody=[]))
+    elif last is not None and constant:
+        guarded, cond, index = last
+        holds = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+        guarded.body = [ast.If(test=holds, body=[copy.deepcopy(ret)], orelse=[]), _call(VIOLATED, index)]
+    for node in body:
+        _locate(node, ret)
+    if ret.value is None or isinstance(ret.value, ast.Constant):
+        return [*body, ret]
+    keep = ast.Assign(targets=[ast.Name(id=PREFIX + "r", ctx=ast.Store())], value=ret.value)
+    new_ret = ast.Return(value=ast.Name(id=PREFIX + "r", ctx=ast.Load()))
+    return [_locate(keep, ret), *body, _locate(new_ret, ret)]
+
+
+class _Shared(ast.NodeTransformer):
+    """`self.x` read more than once in a test: read once into a local (`(_llfsm_mon_x := self.x)`
+    where it is first evaluated, the local after).  Used in the fast path only, under a `try`
+    that falls back to the checks one by one, so a first read a branch skipped costs nothing
+    but the fallback."""
+
+    def share(self, node: ast.expr) -> ast.expr:
+        counts: dict[str, int] = {}
+        for n in ast.walk(node):
+            if _self_attr_load(n):
+                counts[n.attr] = counts.get(n.attr, 0) + 1  # type: ignore[attr-defined]
+        self.shared = {a for a, c in counts.items() if c > 1}
+        self.seen: set[str] = set()
+        out = self.visit(node)
+        assert isinstance(out, ast.expr)
+        return out
+
+    def visit_Attribute(self, node: ast.Attribute) -> ast.AST:
+        if not _self_attr_load(node) or node.attr not in self.shared:
+            return self.generic_visit(node)
+        local = PREFIX + "a_" + node.attr
+        if node.attr in self.seen:
+            return ast.Name(id=local, ctx=ast.Load())
+        self.seen.add(node.attr)
+        return ast.NamedExpr(target=ast.Name(id=local, ctx=ast.Store()), value=node)
+
+
+def _self_attr_load(node: ast.AST) -> bool:
+    return (
+        isinstance(node, ast.Attribute)
+        and isinstance(node.ctx, ast.Load)
+        and isinstance(node.value, ast.Name)
+        and node.value.id == "self"
+    )
+
+
+def _locate(node: ast.AST, at: ast.AST) -> Any:
+    """`node` and everything in it at the line of `at` (a check reads as the return it precedes)."""
+    for n in ast.walk(node):
+        for attr in ("lineno", "col_offset", "end_lineno", "end_col_offset"):
+            if attr in n._attributes:
+                setattr(n, attr, getattr(at, attr, 0))
+    return node
+
+
+def _call(fn: str, *args: Any) -> ast.stmt:
+    call = ast.Call(
+        func=ast.Name(id=fn, ctx=ast.Load()),
+        args=[ast.Name(id="self", ctx=ast.Load()), *(a if isinstance(a, ast.expr) else ast.Constant(a) for a in args)],
+        keywords=[],
+    )
+    return ast.Expr(value=call)
+
+
+class _Inline(ast.NodeTransformer):
+    """An atom's tree (over `M` and `E`) as code of a ringlet of machine `own`."""
+
+    def __init__(self, own: int, state: str | None) -> None:
+        self.own = own
+        self.state = state
+
+    def visit_Subscript(self, node: ast.Subscript) -> ast.AST:
+        if self.state is not None and node.value is not None and _is_own(node.value, "STATES", self.own):
+            sl = node.slice
+            if _is_own(sl, "_state", self.own):
+                return ast.Constant(self.state)
+        if isinstance(node.value, ast.Name) and node.value.id == "M" and isinstance(node.slice, ast.Constant):
+            if node.slice.value == self.own:
+                return ast.Name(id="self", ctx=ast.Load())
+            return ast.Subscript(value=ast.Name(id=MACHINES, ctx=ast.Load()), slice=node.slice, ctx=ast.Load())
+        return self.generic_visit(node)
+
+    def visit_Name(self, node: ast.Name) -> ast.AST:
+        if node.id in PURE or node.id in HELPERS:
+            return ast.Name(id=PREFIX + node.id, ctx=ast.Load())
+        if node.id == "E":
+            return ast.Name(id=PUBLISHED, ctx=ast.Load())
+        return node
+
+
+def _is_own(node: ast.AST, attr: str, own: int) -> bool:
+    """`M[own].attr`."""
+    return (
+        isinstance(node, ast.Attribute)
+        and node.attr == attr
+        and isinstance(node.value, ast.Subscript)
+        and isinstance(node.value.value, ast.Name)
+        and node.value.value.id == "M"
+        and isinstance(node.value.slice, ast.Constant)
+        and node.value.slice.value == own
+    )
+
+
+_COMPARE: dict[type[ast.cmpop], Callable[[Any, Any], bool]] = {
+    ast.Eq: lambda a, b: a == b,
+    ast.NotEq: lambda a, b: a != b,
+    ast.In: lambda a, b: a in b,
+    ast.NotIn: lambda a, b: a not in b,
+}
+
+
+def _fold(node: ast.expr) -> ast.expr:
+    """Comparisons of constants (a state's name with the names it is compared with), `not` and
+    `and`/`or` over them, folded to constants; anything else as it is."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not):
+        inner = _fold(node.operand)
+        if isinstance(inner, ast.Constant):
+            return ast.Constant(not inner.value)
+        if isinstance(inner, ast.UnaryOp) and isinstance(inner.op, ast.Not):
+            return inner.operand  # in a test, `not not x` is x
+        return ast.UnaryOp(op=node.op, operand=inner)
+    if isinstance(node, ast.BoolOp):
+        is_and = isinstance(node.op, ast.And)
+        kept = []
+        for v in (_fold(x) for x in node.values):
+            if isinstance(v, ast.Constant):
+                if bool(v.value) != is_and:
+                    return ast.Constant(not is_and)  # a false term of `and`, a true one of `or`
+                continue  # a true term of `and` (a false one of `or`) says nothing
+            kept.append(v)
+        if not kept:
+            return ast.Constant(is_and)
+        # a lone term keeps its truth, not its value: the check only tests it
+        return kept[0] if len(kept) == 1 else ast.BoolOp(op=node.op, values=kept)
+    if isinstance(node, ast.Compare) and len(node.ops) == 1 and type(node.ops[0]) in _COMPARE:
+        left, right = node.left, node.comparators[0]
+        values = _literal(left), _literal(right)
+        if values[0] is not _NO and values[1] is not _NO:
+            try:
+                return ast.Constant(bool(_COMPARE[type(node.ops[0])](*values)))
+            except TypeError:
+                return node
+    return node
+
+
+_NO = object()
+
+
+def _literal(node: ast.expr) -> Any:
+    """A constant's value, or a tuple/set of constants, else _NO."""
+    if isinstance(node, ast.Constant):
+        return node.value
+    if isinstance(node, ast.Tuple | ast.Set) and all(isinstance(e, ast.Constant) for e in node.elts):
+        return tuple(e.value for e in node.elts)  # type: ignore[attr-defined]
+    return _NO
