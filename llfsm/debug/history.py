@@ -9,8 +9,8 @@ topics it published.  A value set from the debugger while paused is a record too
 Recording is on the hot path of a debugged run, so it does as little as it can: a machine's
 values are taken as one tuple, `Values.take`; those annotated bool, int or float (and inputs of
 those types) and handles (a node, a publisher: shown as `<Type>`, so only a new object is a
-change) by one C call (operator.attrgetter), messages as their CDR bytes (one generated call,
-exact), the others as bounded plain values (llfsm.runtime.readout: a long string or a large
+change) by one C call (operator.attrgetter), messages as their generated copies, the others as
+bounded plain values (llfsm.runtime.readout: a long string or a large
 list is cut, and says so).  A record
 holds the tuple before and the tuple after, shared with the records around it, and nothing at
 all when nothing changed; what changed, name by name, is worked out when a record is read.
@@ -28,7 +28,6 @@ from collections.abc import Sequence
 from operator import attrgetter
 from typing import Any
 
-from ..msgs._dds import cdr, from_cdr
 from ..msgs._message import is_message_class
 from ..runtime.generated import variables_of
 from ..runtime.machine import Machine
@@ -57,16 +56,8 @@ def _named(annotation: str, namespace: dict[str, Any]) -> Any:
     return obj if isinstance(obj, type) else None
 
 
-class _Cdr(tuple):
-    """A message as it was: (its class, its CDR bytes); compared as a tuple is, in C."""
-
-    __slots__ = ()
-
-
 def shown(value: Any) -> Any:
     """A taken value as a person reads it (plain data)."""
-    if type(value) is _Cdr:
-        return plain(from_cdr(value[1], value[0]))
     return plain(value)
 
 
@@ -84,7 +75,7 @@ class Values:
         for name, annotation in variables:
             named = None if annotation.strip() in _SCALARS else _named(annotation.strip(), namespace)
             if named is not None and is_message_class(named):
-                messages.append((name, named))  # its CDR: exact, compact, one generated call
+                messages.append((name, named))  # a copy (generated), compared field by field
             elif annotation.strip() in _SCALARS or (named is not None and named.__module__ != "builtins"):
                 fast.append(name)  # a scalar, or a handle (a node, a publisher) shown as <Type>
             else:
@@ -108,7 +99,8 @@ class Values:
 
 
 def _encode(value: Any, cls: type[Any]) -> Any:
-    return _Cdr((cls, cdr(value))) if type(value) is cls else plain(value)
+    """A message as it was (its generated copy, compared field by field); else plain data."""
+    return value._copy() if type(value) is cls else plain(value)
 
 
 class History:
