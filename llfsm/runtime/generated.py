@@ -266,6 +266,8 @@ def pending_of(m: Any) -> str | None:
 def time_in_state(m: Any, now: int) -> int | None:
     """Run time (ns) since machine `m` entered its current state, when the state keeps it (its
     enter ringlet records `_t0`, as a state whose guards use after*() does); None otherwise."""
+    if m._entered:
+        return 0  # entered, its entry ringlet still to run (which records the time)
     enter = m.ENTER[m._state]
     if "_t0" not in getattr(getattr(enter, "__code__", None), "co_names", ("_t0",)):
         return None
