@@ -53,8 +53,9 @@ SPEED_WORKER = textwrap.dedent(
     sys.path.insert(0, sys.argv[1] + "/bench")
     import run
     tmp = Path(tempfile.mkdtemp(prefix="llfsm-versus-"))
-    toggles, idles = run.machine_paths(tmp)
-    named = {**run.bounds(), **run.contestants(toggles, idles)}
+    paths = run.machine_paths(tmp)  # one list; (toggles, idles) in a bench/run.py before issue 27's
+    mine = run.contestants(*paths) if isinstance(paths, tuple) else run.contestants(paths)
+    named = {**run.bounds(), **mine}
     print(" ".join(n.replace(" ", "_") for n in named), flush=True)
     for line in sys.stdin:
         name, _, n = line.strip().rpartition(" ")

@@ -22,7 +22,7 @@ from ..props.automaton import Verdict3
 from ..props.file import PropertySource
 from ..props.formula import has
 from ..props.kinds import AT_THE_END, EVERY_BOUNDARY, KINDS, OBLIGATIONS, THREE_VALUED
-from ..props.parse import Property, parse_property
+from ..props.parse import Property, parse_property, shared_atoms
 
 #: The verdicts an event carries (llfsm_msgs/msg/MonitorEvent's constants).
 VIOLATED, SATISFIED, PENDING, HELD, NOT_SEEN = "violated", "satisfied", "pending", "held", "not_seen"
@@ -193,12 +193,7 @@ class Judge:
                 raise MonitorError(str(e)) from None
             if prop.spec.monitor is None:
                 raise MonitorError(f"{src.where}: {prop.kind}: not judged on a run: {prop.spec.monitor_refusal}")
-            ids = []
-            for a in local:
-                k = by_text.setdefault(a.text, len(self.atoms))
-                if k == len(self.atoms):
-                    self.atoms.append(a)
-                ids.append(k)
+            ids = shared_atoms(local, self.atoms, by_text)
             try:
                 self.judged.append(Judged(len(self.judged), prop, ids))
             except PropertyError as e:

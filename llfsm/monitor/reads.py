@@ -197,15 +197,15 @@ class _Scan(ast.NodeVisitor):
 
     def visit_Assign(self, node: ast.Assign) -> None:
         for t in node.targets:
-            if _is_self_attr(t, "_state"):
+            if is_self_attr(t, "_state"):
                 self.moves = True
         self.generic_visit(node)
 
     def visit_Call(self, node: ast.Call) -> None:
         f = node.func
-        if _is_self_attr(f, "_enter_suspend_state"):
+        if is_self_attr(f, "_enter_suspend_state"):
             self.moves = True
-        elif isinstance(f, ast.Attribute) and f.attr == "finish" and _is_self_attr(f.value, "_arr"):
+        elif isinstance(f, ast.Attribute) and f.attr == "finish" and is_self_attr(f.value, "_arr"):
             self.finishes = True
         elif _root_name(f) in self.own and node.args + [k.value for k in node.keywords]:
             self.escapes = True  # a value handed to a function of the user's own may be kept there
@@ -265,7 +265,8 @@ def _root_name(node: ast.AST) -> str | None:
     return node.id if isinstance(node, ast.Name) else None
 
 
-def _is_self_attr(node: ast.AST, attr: str) -> bool:
+def is_self_attr(node: ast.AST, attr: str) -> bool:
+    """`self.attr` in generated code."""
     return (
         isinstance(node, ast.Attribute)
         and node.attr == attr

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..props.atoms import HELPERS, PURE
-from .reads import ClassReads
+from .reads import ClassReads, is_self_attr
 
 PREFIX = "_llfsm_mon_"
 #: The names a variant's namespace gets from the monitor.
@@ -100,22 +100,13 @@ def _sets_state(node: ast.stmt) -> int | bool | None:
     """`self._state = K` (K), `self._enter_suspend_state()` (True), or False."""
     if isinstance(node, ast.Assign) and len(node.targets) == 1:
         t = node.targets[0]
-        if _self_attr(t, "_state"):
+        if is_self_attr(t, "_state"):
             v = node.value
             return v.value if isinstance(v, ast.Constant) and isinstance(v.value, int) else None
     return (
         isinstance(node, ast.Expr)
         and isinstance(node.value, ast.Call)
-        and _self_attr(node.value.func, "_enter_suspend_state")
-    )
-
-
-def _self_attr(node: ast.AST, attr: str) -> bool:
-    return (
-        isinstance(node, ast.Attribute)
-        and node.attr == attr
-        and isinstance(node.value, ast.Name)
-        and node.value.id == "self"
+        and is_self_attr(node.value.func, "_enter_suspend_state")
     )
 
 

@@ -82,6 +82,19 @@ def parse_property(
     return prop, atoms
 
 
+def shared_atoms(local: list[Atom], atoms: list[Atom], by_text: dict[str, int]) -> list[int]:
+    """The number in `atoms` of each of a property's atoms: properties that name the same
+    condition share one atom, evaluated once (a new one is added, `by_text` keeping the index)."""
+    ids = []
+    for a in local:
+        k = by_text.get(a.text)
+        if k is None:
+            k = by_text[a.text] = len(atoms)
+            atoms.append(a)
+        ids.append(k)
+    return ids
+
+
 def _split_pair(text: str, where: str, kind: str) -> list[str]:
     """`A, B` or `[A, B]` of a pair given as one text: the two conditions' texts."""
     try:

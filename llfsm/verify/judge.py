@@ -21,7 +21,7 @@ from ..props.automaton import Automaton
 from ..props.formula import core, neg
 from ..props.kinds import CTL as BY_CTL
 from ..props.kinds import ON_THE_FLY
-from ..props.parse import Property, duration_text, parse_property
+from ..props.parse import Property, duration_text, parse_property, shared_atoms
 from ..runtime.errors import report_for
 from .ctl import CTL
 from .environment import EnvironmentError_
@@ -107,15 +107,8 @@ def verify(
             prop, local = parse_property(src.kind, src.text, infos, src.name, src.where, src.within)
         except PropertyError as e:
             raise VerifyError(str(e)) from None
-        ids = []
-        for a in local:
-            k = by_text.get(a.text)
-            if k is None:
-                k = by_text[a.text] = len(atoms)
-                atoms.append(a)
-            ids.append(k)
         props.append(prop)
-        atom_ids.append(ids)
+        atom_ids.append(shared_atoms(local, atoms, by_text))
     if len(atoms) > 64:
         raise VerifyError(f"the properties name {len(atoms)} different conditions; at most 64 in one verification")
     automata: dict[int, Automaton] = {}
