@@ -7,7 +7,8 @@ judging it after every ringlet (the watcher, which costs the run several times i
 speed), the debugger marks those transitions: the machine's ringlets are compiled again from
 its generated module with a call after each marked transition (`_llfsm_trap(self, X, S)`,
 where the generated code has just made S current: runtime/generated.py's contract), and the
-machine is given a subclass whose ENTER and STEADY are the new ringlets.  Every other
+machine becomes a variant of its class with them (`variant_class`, `become`, as the monitor's
+checks are compiled in).  Every other
 transition, and every ringlet of every other machine, runs the code it always ran.  Commands
 are seen on the scheduler's rare path (`Arrangement.on_release`).
 
@@ -23,7 +24,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from ..props.atoms import Atom
-from ..runtime.generated import FUNCTION_PREFIX, enter_ringlet, steady_ringlet
+from ..runtime.generated import become, enter_ringlet, steady_ringlet, variant_class
 from ..runtime.machine import Machine
 
 #: The name of the call added after a marked transition.
@@ -139,47 +140,27 @@ class Traps:
         if tree is None:
             return False
         states = cls.STATES
-        sources = {x for x, _ in edges}
-        functions = []
+        wanted = {}  # ringlet name -> its source state
+        for x, _ in edges:
+            wanted[enter_ringlet(states[x])] = wanted[steady_ringlet(states[x])] = x
+        marked = []
         for node in tree.body:
-            if not (isinstance(node, ast.FunctionDef) and node.name.startswith(FUNCTION_PREFIX)):
-                continue
-            for x in sources:
-                if node.name in (enter_ringlet(states[x]), steady_ringlet(states[x])):
-                    targets = {enter_ringlet(states[s]): s for src, s in edges if src == x}
-                    node = _Mark(x, targets).visit(node)
-            functions.append(node)
+            if isinstance(node, ast.FunctionDef) and node.name in wanted:
+                x = wanted[node.name]
+                targets = {enter_ringlet(states[s]): s for src, s in edges if src == x}
+                marked.append(_Mark(x, targets).visit(node))
         namespace = dict(vars(sys.modules[cls.__module__]))
         namespace[TRAP] = self.hit
-        module = ast.fix_missing_locations(ast.Module(body=functions, type_ignores=[]))
-        exec(compile(module, tree_file(cls), "exec"), namespace)  # the module's own ringlets, marked
-        marked = type(
-            cls.__name__,
-            (cls,),
-            {
-                "__slots__": (),
-                "__module__": cls.__module__,
-                "ENTER": tuple(namespace[enter_ringlet(s)] for s in states),
-                "STEADY": tuple(namespace[steady_ringlet(s)] for s in states),
-            },
-        )
-        self._move(m, marked)
+        module = ast.fix_missing_locations(ast.Module(body=marked, type_ignores=[]))
+        exec(compile(module, tree_file(cls), "exec", dont_inherit=True), namespace)  # the marked ringlets
+        become(m, variant_class(cls, namespace, {node.name: namespace[node.name] for node in marked}))
         self.own[m._id] = cls
         return True
 
     def unmark(self, m: Machine) -> None:
         cls = self.own.pop(m._id, None)
         if cls is not None:
-            self._move(m, cls)
-
-    @staticmethod
-    def _move(m: Machine, cls: type[Machine]) -> None:
-        """`m` becomes a `cls` (the same slots), its next ringlets the class's of the same states."""
-        old = type(m)
-        swap = {f: g for pair in ((old.ENTER, cls.ENTER), (old.STEADY, cls.STEADY)) for f, g in zip(*pair, strict=True)}
-        m.__class__ = cls
-        m._run = swap.get(m._run, m._run)
-        m._next = swap.get(m._next, m._next)
+            become(m, cls)
 
 
 def tree_file(cls: type[Machine]) -> str:

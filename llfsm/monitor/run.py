@@ -37,6 +37,7 @@ from typing import Any
 
 from ..props.atoms import infos_of
 from ..props.file import PropertySource
+from ..runtime.generated import become
 from ..runtime.scheduler import GO, Arrangement
 from .judge import VIOLATED, Boundary, Judge, Judged, MonitorError, Verdict, atom_reads
 from .reads import ClassReads, class_reads
@@ -187,11 +188,7 @@ class Monitor:
             m = arr.machines[index]
             cr = reads[index]
             assert cr is not None
-            variant = make_variant(type(m), cr, index, by_ringlet, helpers)
-            swap = {id(f): g for f, g in zip((*m.ENTER, *m.STEADY), (*variant.ENTER, *variant.STEADY), strict=True)}
-            m.__class__ = variant
-            m._run = swap.get(id(m._run), m._run)
-            m._next = swap.get(id(m._next), m._next)
+            become(m, make_variant(type(m), cr, index, by_ringlet, helpers))
         return True
 
     # -- judging ---------------------------------------------------------------------------------
