@@ -69,7 +69,12 @@ class RunPage(_Page):
         from ..web.source import RunSource  # deferred: optional dependency
 
         assert session.arrangement is not None and session.bus is not None
-        return RunSource(session.arrangement, session.bus, world=session.world)
+        source = RunSource(session.arrangement, session.bus, world=session.world)
+        if session.debugger is not None:
+            from ..web.debugging import RunDebug  # deferred: optional dependency, as above
+
+            source.debug = RunDebug(session.debugger)
+        return source
 
 
 class GraphPage(_Page):

@@ -38,7 +38,7 @@ from typing import Any
 from aiohttp import WSMsgType, web
 
 from ..diagram import svg as diagram
-from . import rosgraph
+from . import debugging, rosgraph
 from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
@@ -182,6 +182,7 @@ class WebServer:
         app.router.add_post("/api/call", self._call)
         app.router.add_post("/api/parameters", self._parameters)
         app.router.add_post("/api/parameter", self._set_parameter)
+        debugging.routes(app, lambda: getattr(self.source, "debug", None), self._answer)
         self._runner = web.AppRunner(app, access_log=None, handle_signals=False, shutdown_timeout=1.0)
         await self._runner.setup()
         await web.SockSite(self._runner, sock).start()

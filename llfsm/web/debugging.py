@@ -1,0 +1,178 @@
+"""The debugger in the page (docs/debug.md, "The page"): what the page shows of it (a part of every
+snapshot) and the requests its controls send (`/api/debug/...`).
+
+Three sources answer the same requests:
+
+- `RunDebug`: the run in this process (`llfsm run --web`, `llfsm edit`'s Run): its Debugger
+  (llfsm.debug), always with a history.  Everything that reads or changes the run is handed to
+  the scheduler's thread (`Debugger.submit`) and awaited here; the snapshot's part reads only
+  what the scheduler's thread wrote (the history's latest values, the debugger's status).
+- `GraphDebug`: `llfsm view`, runs in other processes: the debug services of each machine's node
+  (llfsm.debug.services) and the `/llfsm/M/debug` topics; no history crosses the graph.
+- `ReplayDebug`: `llfsm replay`: a recorded run's records and frames (llfsm.web.replay); nothing
+  to pause or set.
+
+Requests (POST, JSON): `pause`, `continue`, `step`, `step_round` ({machine} for the graph: the
+run it belongs to), `set` ({machine, name, value}), `breakpoint` ({expression, enable}),
+`frame` ({back}: the arrangement that many records ago; {at} in a replay), `history` ({n}).
+Each answers {success, message, ...}; a refusal is one line, status 400.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Awaitable, Callable
+from typing import Any, Protocol
+
+from ..debug.debugger import CONTINUE, ROUND, STEP, DebugError, Debugger
+from ..debug.history import shown
+from .replay import Replay
+from .source import CommandError
+
+#: The requests, and the resume each of the first ones asks for.
+RESUMES = {"continue": CONTINUE, "step": STEP, "step_round": ROUND}
+#: How long a request waits for the run to take it (a long ringlet keeps it waiting).
+WAIT_S = 5.0
+
+
+class DebugRefused(CommandError):
+    """A request the debugger cannot carry out: one line for the page."""
+
+
+class PageDebug(Protocol):
+    """What the server asks of a debug source."""
+
+    def state(self) -> dict[str, Any]:
+        """The snapshot's part: status, breakpoints, the variables of each machine."""
+
+    async def request(self, what: str, data: dict[str, Any]) -> dict[str, Any]:
+        """Carry out request `what` (one of the module docstring's); DebugRefused if it cannot."""
+
+
+def _text(data: dict[str, Any], key: str) -> str:
+    value = data.get(key, "")
+    if not isinstance(value, str):
+        raise DebugRefused(f"{key} must be a string")
+    return value
+
+
+def _count(data: dict[str, Any], key: str, default: int = 0) -> int:
+    value = data.get(key, default)
+    if type(value) is not int or value < 0:
+        raise DebugRefused(f"{key} must be a whole number >= 0")
+    return value
+
+
+class RunDebug:
+    """The run in this process (see the module's docstring)."""
+
+    def __init__(self, debugger: Debugger) -> None:
+        self.debugger = debugger
+
+    def state(self) -> dict[str, Any]:
+        d = self.debugger
+        status = d.status()
+        h = d.history
+        if h is not None:  # the values the scheduler's thread took at each machine's last boundary
+            variables = {
+                m.NAME: {n: shown(v) for n, v in zip(h.values[m._id].names, h.current[m._id], strict=True)}
+                for m in d.arr.machines
+            }
+            status["records"] = len(h.records)
+        else:
+            variables = {}
+        return {**status, "variables": variables}
+
+    async def _on_run(self, fn: Callable[[], Any]) -> Any:
+        try:
+            return await asyncio.wait_for(asyncio.wrap_future(self.debugger.submit(fn)), WAIT_S)
+        except TimeoutError:
+            raise DebugRefused("the run did not answer in time (is it busy in a long ringlet?)") from None
+        except (DebugError, IndexError, ValueError) as e:
+            raise DebugRefused(str(e)) from None
+
+    async def request(self, what: str, data: dict[str, Any]) -> dict[str, Any]:
+        d = self.debugger
+        if what == "pause":
+            d.pause("Pause on the page")  # flags only: safe from this thread
+            return {"success": True, "message": "pausing at the next ringlet boundary"}
+        if what in RESUMES:
+            return {"success": True, "message": await self._on_run(lambda: d.resume(RESUMES[what]))}
+        if what == "set":
+            machine, name, value = _text(data, "machine"), _text(data, "name"), _text(data, "value")
+            return {"success": True, "message": await self._on_run(lambda: d.set_value(machine, name, value))}
+        if what == "breakpoint":
+            expression, enable = _text(data, "expression"), data.get("enable", True) is not False
+
+            def toggle() -> str:
+                if enable:
+                    bp = d.add_break(expression, where="breakpoint")
+                    return f"breakpoint {bp.number}: {bp.text}"
+                gone = d.remove_break(text=expression)
+                return f"removed breakpoint {', '.join(str(b.number) for b in gone)}"
+
+            return {"success": True, "message": await self._on_run(toggle)}
+        h = d.history
+        if h is None:
+            raise DebugRefused("this run keeps no history")
+        if what == "frame":
+            back = _count(data, "back")
+            return {"success": True, "message": "", **await self._on_run(lambda: h.frame(back))}
+        if what == "history":
+            n = _count(data, "n", 100)
+            return {"success": True, "message": "", "records": await self._on_run(lambda: h.last(n))}
+        raise DebugRefused(f"unknown request {what!r}")
+
+
+class ReplayDebug:
+    """A recorded run (`llfsm replay`): its records, and the arrangement after any of them."""
+
+    def __init__(self, replay: Replay) -> None:
+        self.replay = replay
+
+    def state(self) -> dict[str, Any]:
+        r = self.replay
+        return {
+            "paused": True,
+            "replay": r.kind,
+            "where": r.summary(),
+            "reason": "",
+            "breaks": [],
+            "records": len(r.records),
+            "loop": r.loop,
+            "variables": {},
+        }
+
+    async def request(self, what: str, data: dict[str, Any]) -> dict[str, Any]:
+        r = self.replay
+        if what == "frame":
+            at = _count(data, "at", len(r.records))
+            try:
+                return {"success": True, "message": "", **r.frame(at)}
+            except IndexError as e:
+                raise DebugRefused(str(e)) from None
+        if what == "history":
+            n = _count(data, "n", 100)
+            return {"success": True, "message": "", "records": r.records[-n:] if n else []}
+        raise DebugRefused(f"a replay cannot {what.replace('_', ' ')}: it is a recorded run")
+
+
+def routes(app: Any, debug: Callable[[], PageDebug | None], answer: Callable[..., Awaitable[Any]]) -> None:
+    """The `/api/debug/...` routes on the page server's app; `debug()` the source's debug part
+    (None: this page has no debugger), `answer` the server's JSON request wrapper."""
+    names = ("pause", *RESUMES, "set", "breakpoint", "frame", "history")
+
+    def handler(what: str) -> Callable[[Any], Awaitable[Any]]:
+        async def handle(request: Any) -> Any:
+            async def act(data: dict[str, Any]) -> dict[str, Any]:
+                source = debug()
+                if source is None:
+                    raise DebugRefused("this page has no debugger")
+                return await source.request(what, data)
+
+            return await answer(request, act)
+
+        return handle
+
+    for what in names:
+        app.router.add_post(f"/api/debug/{what}", handler(what))
