@@ -80,3 +80,64 @@ def test_a_dds_run_is_paused_read_set_and_continued_from_another_process(netns: 
     assert run_status == 0, run_err
     published = run_out + run_err
     assert "The count is 42'" in published and "The count is 43'" in published and "The count is 4'" not in published
+
+
+#: What the page's controls send to `llfsm view`, from inside the namespace: the view's answers.
+VIEW_CLIENT = textwrap.dedent(
+    """
+    import http.client, json, sys, time
+    port = int(sys.argv[1])
+
+    def post(what, **data):
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=15)
+        conn.request("POST", "/api/debug/" + what, json.dumps(data), {"Content-Type": "application/json"})
+        r = conn.getresponse()
+        return r.status, json.loads(r.read())
+
+    seen = {}
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:  # until the view has found the machine and its services answer
+        status, answer = post("variables", machine="ros2_ping_pong")
+        if status == 200:
+            break
+        time.sleep(0.3)
+    seen["pause"] = post("pause", machine="ros2_ping_pong")
+    first = post("variables", machine="ros2_ping_pong")[1]
+    time.sleep(1.5)
+    second = post("variables", machine="ros2_ping_pong")[1]
+    seen["paused"] = [first["paused"], first["machine"], second["machine"]]
+    seen["set"] = post("set", machine="ros2_ping_pong", name="count", value="41")
+    seen["frame"] = post("frame", machine="ros2_ping_pong", back=0)
+    seen["continue"] = post("continue", machine="ros2_ping_pong")
+    time.sleep(2.5)
+    seen["after"] = post("variables", machine="ros2_ping_pong")[1]
+    print(json.dumps(seen))
+    """
+)
+
+
+def test_llfsm_view_pauses_reads_sets_and_continues_a_run_of_another_process(netns: NetNamespace) -> None:
+    run = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "40")
+    view = netns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "40")
+    assert view.stderr is not None
+    port = ""
+    for line in view.stderr:
+        if "web view at " in line:
+            port = line.split("web view at ", 1)[1].strip().rstrip("/").rsplit(":", 1)[1]
+            break
+    assert port, "llfsm view printed no address"
+    client = netns.python(VIEW_CLIENT.replace("sys.argv[1]", repr(port)))
+    status, out, err = finish(client, 90)
+    view.terminate()
+    run.terminate()
+    finish(view, 20)
+    finish(run, 20)
+    assert status == 0, err
+    seen = json.loads(out)
+    assert seen["pause"] == [200, {"success": True, "message": "pausing at the next ringlet boundary"}]
+    paused, first, second = seen["paused"]
+    assert paused and first == second and "count" in first["variables"]  # nothing ran while paused
+    assert seen["set"] == [200, {"success": True, "message": "ros2_ping_pong.count = 41"}]
+    assert seen["frame"][0] == 400 and "no history crosses the graph" in seen["frame"][1]["message"]
+    assert seen["continue"][1]["message"] == "continuing"
+    assert seen["after"]["machine"]["variables"]["count"] > 41 and not seen["after"]["paused"]

@@ -83,7 +83,10 @@ class GraphPage(_Page):
     runs_alone = True
 
     def source(self, session: Session) -> object:
-        from ..web.machines import GraphSource  # deferred: optional dependency
+        from ..web.debugging import GraphDebug  # deferred: optional dependency
+        from ..web.machines import GraphSource
 
         assert session.bus is not None
-        return GraphSource(session.bus)
+        source = GraphSource(session.bus)
+        source.debug = GraphDebug(source)
+        return source

@@ -285,9 +285,7 @@ def time_in_state(m: Any, now: int) -> int | None:
 # -- variants ----------------------------------------------------------------------------------
 
 
-def variant_class(
-    cls: type[Any], namespace: dict[str, Any], replaced: Mapping[str, Callable[..., Any]]
-) -> type[Any]:
+def variant_class(cls: type[Any], namespace: dict[str, Any], replaced: Mapping[str, Callable[..., Any]]) -> type[Any]:
     """A subclass of `cls` whose ringlets are the `replaced` functions (by name) and, for the
     others, `cls`'s own code rebound to `namespace` (a copy of the module's, which gets every
     ringlet under its name).  No slot of its own: a live machine can become one (`become`)."""

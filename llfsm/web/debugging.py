@@ -14,7 +14,8 @@ Three sources answer the same requests:
 
 Requests (POST, JSON): `pause`, `continue`, `step`, `step_round` ({machine} for the graph: the
 run it belongs to), `set` ({machine, name, value}), `breakpoint` ({expression, enable}),
-`frame` ({back}: the arrangement that many records ago; {at} in a replay), `history` ({n}).
+`variables` ({machine}: as `p M` reads it), `frame` ({back}: the arrangement that many records
+ago; {at} in a replay), `history` ({n}).
 Each answers {success, message, ...}; a refusal is one line, status 400.
 """
 
@@ -121,6 +122,9 @@ class RunDebug:
         if what == "history":
             n = _count(data, "n", 100)
             return {"success": True, "message": "", "records": await self._on_run(lambda: h.last(n))}
+        if what == "variables":
+            machine = _text(data, "machine")
+            return {"success": True, "message": "", "machine": await self._on_run(lambda: d.read(machine)[machine])}
         raise DebugRefused(f"unknown request {what!r}")
 
 
@@ -157,10 +161,94 @@ class ReplayDebug:
         raise DebugRefused(f"a replay cannot {what.replace('_', ' ')}: it is a recorded run")
 
 
+class GraphDebug:
+    """`llfsm view`: each machine's run through its debug services and its `/llfsm/M/debug`
+    topic (llfsm.debug.services).  What a peer sends is untrusted: a state is kept only as the
+    strict message type carries it, a machine's YAML only as a mapping of at most MAX_YAML
+    characters."""
+
+    #: The longest YAML answer of a peer read.
+    MAX_YAML = 1 << 20
+
+    def __init__(self, source: Any) -> None:
+        self.source = source
+        self.runs: dict[str, dict[str, Any]] = {}  # machine -> its run's debug state, as last published
+        self.variables: dict[str, Any] = {}  # machine -> its variables, as last read
+        for name in sorted(getattr(source, "_followed", ())):  # the machines the view found already
+            self.follow(name)
+
+    def follow(self, name: str) -> None:
+        """Read machine `name`'s /llfsm/M/debug (scheduler's thread, when the view finds it)."""
+        from ..msgs.llfsm_msgs.msg import DebugState  # deferred: the view's debug part only
+        from ..ros.control import LATCHED, NAMESPACE
+
+        def on_state(msg: DebugState) -> None:
+            self.runs[name] = {
+                "paused": bool(msg.paused),
+                "where": msg.where[:512],
+                "reason": msg.reason[:512],
+                "machine": msg.machine[:256],
+                "breaks": [b[:512] for b in msg.breakpoints[:100]],
+            }
+
+        self.source.node.create_subscription(DebugState, f"{NAMESPACE}/{name}/debug", on_state, LATCHED)
+
+    def state(self) -> dict[str, Any]:
+        runs = dict(self.runs)
+        return {
+            "paused": any(r["paused"] for r in runs.values()),
+            "runs": runs,
+            "variables": dict(self.variables),
+            "records": 0,
+            "breaks": sorted({b for r in runs.values() for b in r["breaks"]}),
+        }
+
+    async def request(self, what: str, data: dict[str, Any]) -> dict[str, Any]:
+        from ..msgs.llfsm_msgs.srv import GetVariables, SetBreakpoint, SetVariable  # deferred: as above
+        from ..msgs.std_srvs.srv import Trigger
+        from ..ros.control import NAMESPACE
+
+        machine = _text(data, "machine")
+        if not self.source.has_machine(machine):
+            raise DebugRefused(f"no machine named {machine!r} on the graph")
+        name = self.source.machine_name(machine)
+        base = f"{NAMESPACE}/{name}"
+        if what == "pause" or what in RESUMES:
+            r = await self.source._request(f"{base}/{what}", Trigger, Trigger.Request())
+        elif what == "set":
+            setting = SetVariable.Request(name=_text(data, "name"), value=_text(data, "value"))
+            r = await self.source._request(f"{base}/set_variable", SetVariable, setting)
+        elif what == "breakpoint":
+            enable = data.get("enable", True) is not False
+            toggle = SetBreakpoint.Request(expression=_text(data, "expression"), enable=enable)
+            r = await self.source._request(f"{base}/breakpoint", SetBreakpoint, toggle)
+        elif what == "variables":
+            r = await self.source._request(f"{base}/variables", GetVariables, GetVariables.Request())
+            self.variables[machine] = _peer_yaml(r.yaml[: self.MAX_YAML])
+            return {"success": True, "message": "", "paused": bool(r.paused), "machine": self.variables[machine]}
+        else:
+            raise DebugRefused(f"a view cannot {what.replace('_', ' ')}: no history crosses the graph")
+        if not r.success:
+            raise DebugRefused(r.message)
+        return {"success": True, "message": r.message}
+
+
+def _peer_yaml(text: str) -> Any:
+    import yaml  # deferred: the view's debug part only
+
+    try:
+        data = yaml.safe_load(text)
+    except (yaml.YAMLError, RecursionError):
+        raise DebugRefused("the run answered with YAML that does not read") from None
+    if not isinstance(data, dict):
+        raise DebugRefused("the run answered with something else than a machine's mapping")
+    return data
+
+
 def routes(app: Any, debug: Callable[[], PageDebug | None], answer: Callable[..., Awaitable[Any]]) -> None:
     """The `/api/debug/...` routes on the page server's app; `debug()` the source's debug part
     (None: this page has no debugger), `answer` the server's JSON request wrapper."""
-    names = ("pause", *RESUMES, "set", "breakpoint", "frame", "history")
+    names = ("pause", *RESUMES, "set", "breakpoint", "frame", "history", "variables")
 
     def handler(what: str) -> Callable[[Any], Awaitable[Any]]:
         async def handle(request: Any) -> Any:
