@@ -4,7 +4,10 @@ refused in one line."""
 
 from __future__ import annotations
 
+import http.client
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -103,3 +106,37 @@ def test_a_trace_naming_a_state_its_machine_lacks_is_refused(tmp_path: Path) -> 
         read(tmp_path)
     with pytest.raises(ReplayError, match="no such file or folder"):
         read(tmp_path / "nope.jsonl")
+
+
+def test_llfsm_replay_serves_the_page_of_a_trace_and_refuses_what_is_not_one(tmp_path: Path) -> None:
+    pytest.importorskip("aiohttp")
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text("not json\n")
+    r = llfsm("replay", bad, "--web", "127.0.0.1:0")
+    assert (
+        r.status == 2
+        and r.stderr == f"llfsm: {bad}:1: not JSON (Expecting value): a --trace file has one JSON object a line\n"
+    )
+    trace = tmp_path / "t.jsonl"
+    assert llfsm("run", "--clock", "sim", MACHINES / "counter.machine", "--trace", trace).status == 0
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "llfsm", "replay", str(trace), "--web", "127.0.0.1:0", "--duration", "20s"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert proc.stderr is not None
+        url = next(line.split("web view at ", 1)[1].strip() for line in proc.stderr if "web view at " in line)
+        port = int(url.rstrip("/").rsplit(":", 1)[1])
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+        conn.request("GET", "/")
+        assert conn.getresponse().status == 200
+        conn.close()
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+        conn.request("POST", "/api/debug/frame", body='{"at": 2}', headers={"Content-Type": "application/json"})
+        frame = json.loads(conn.getresponse().read())
+        conn.close()
+        assert frame["record"]["ringlet"] == 2 and frame["machines"][0]["state"] == "COUNT"
+        assert frame["machines"][0]["values"] == {"count": 1, "limit": 5}
+    finally:
+        proc.terminate()
+        proc.wait(10)

@@ -133,6 +133,8 @@ class ReplayDebug:
 
     def __init__(self, replay: Replay) -> None:
         self.replay = replay
+        #: The record the page shows (the last `frame` asked for): the snapshot's states.
+        self.at = len(replay.records)
 
     def state(self) -> dict[str, Any]:
         r = self.replay
@@ -143,6 +145,7 @@ class ReplayDebug:
             "reason": "",
             "breaks": [],
             "records": len(r.records),
+            "at": self.at,
             "loop": r.loop,
             "variables": {},
         }
@@ -152,13 +155,55 @@ class ReplayDebug:
         if what == "frame":
             at = _count(data, "at", len(r.records))
             try:
-                return {"success": True, "message": "", **r.frame(at)}
+                frame = r.frame(at)
             except IndexError as e:
                 raise DebugRefused(str(e)) from None
+            self.at = at
+            return {"success": True, "message": "", **frame}
         if what == "history":
             n = _count(data, "n", 100)
             return {"success": True, "message": "", "records": r.records[-n:] if n else []}
         raise DebugRefused(f"a replay cannot {what.replace('_', ' ')}: it is a recorded run")
+
+
+class ReplaySource:
+    """What `llfsm replay` serves: the page's source (as llfsm.web.source's are) over a replay:
+    the recorded machines' diagrams, their states and values at the record the page shows."""
+
+    kind = "replay"
+
+    def __init__(self, replay: Replay) -> None:
+        self.replay = replay
+        self.debug = ReplayDebug(replay)
+        self.ended = False
+
+    def machines(self) -> list[dict[str, Any]]:
+        return self.replay.descriptions
+
+    def has_machine(self, name: str) -> bool:
+        return name in self.replay.names
+
+    def sample(self) -> dict[str, Any]:
+        frame = self.replay.frame(self.debug.at)
+        record = frame["record"]
+        rows = [
+            {"name": m["machine"], "machine": m["machine"], "participant": "", "runs": 1, "ended": False,
+             "state": m["state"], "status": "running", "pending": None, "since": 0, "transitions": []}
+            for m in frame["machines"]
+        ]  # fmt: skip
+        return {
+            "t": record["t"] if record is not None else 0,
+            "clock": "replay",
+            "source": self.kind,
+            "ended": self.ended,
+            "machines": rows,
+            "topics": [],
+            "services": [],
+            "param_events": {},
+            "world": None,
+            "monitor": [],
+            "debug": {**self.debug.state(), "variables": {m["machine"]: m["values"] for m in frame["machines"]}},
+        }
 
 
 class GraphDebug:

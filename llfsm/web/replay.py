@@ -115,7 +115,8 @@ class Replay:
     def summary(self) -> str:
         n = len(self.records)
         what = "trace" if self.kind == "trace" else "counterexample"
-        return f"{what} {self.source}: {len(self.names)} machines, {n:,} ringlet{'s' if n != 1 else ''}"
+        k = len(self.names)
+        return f"{what} {self.source}: {k} machine{'s' if k != 1 else ''}, {n:,} ringlet{'s' if n != 1 else ''}"
 
 
 def read(path: str | Path) -> Replay:
