@@ -726,19 +726,19 @@ class Session:
         return debugger
 
     def _debug_on_graph(self, debugger: Debugger, bus: Bus) -> None:
-        """The debugger answers the bus's control services while paused and, on ROS 2's wire,
-        offers its own next to them as soon as the machines are on the graph.  (In one process
-        the prompt and the page drive it directly: its topic would only add to a recorded bag.)"""
+        """The debugger answers the bus's control services while paused, and offers its own
+        next to them as soon as the machines are on the graph, on either transport; its state
+        topic only on ROS 2's wire (in one process, a pause publishes nothing on the run's own
+        bus, so that a recorded bag stays the same)."""
         from .debug.services import answers, offer  # deferred: start-up (with the debugger only)
 
         debugger.attach_bus(bus, lambda: bus.spin_control(answers))
-        if not bus.transport.remote:
-            return
+        remote = bus.transport.remote
         ctx = debugger.arr.ctx
         if ctx.machine_graph is not None:
-            offer(debugger, ctx.machine_graph)
+            offer(debugger, ctx.machine_graph, topic=remote)
         else:
-            ctx.on_init.append(lambda _bus: offer(debugger, ctx.machine_graph))
+            ctx.on_init.append(lambda _bus: offer(debugger, ctx.machine_graph, topic=remote))
 
     def _open_web(self, web: WebPage, ctx: RunContext, bus: Bus, arr: Arrangement) -> Stoppable:
         """--web: the page's server on its own thread, the bus up (so the machines' control

@@ -322,3 +322,55 @@ def test_a_breakpoint_on_a_state_a_command_reaches_pauses_before_it_takes_effect
     assert seen == [
         'paused at w\'s turn, before its command (0.005 s): break 1: state(w) == "S" (the resume of w takes it to S)'
     ]
+
+
+def test_the_debug_services_answer_on_the_in_process_bus_too(tmp_path: Path) -> None:
+    from llfsm import ros
+    from llfsm.debug.services import answers, offer
+    from llfsm.msgs.llfsm_msgs.srv import GetVariables
+    from llfsm.msgs.std_srvs.srv import Trigger
+    from llfsm.ros.bus import bus_of
+    from llfsm.ros.control import enable
+    from llfsm.runtime.context import activate
+
+    ctx = RunContext(SimClock(1_000_000))
+    arr = Arrangement(_machines(tmp_path)[:1], context=ctx)
+    prev = activate(ctx)
+    try:
+        bus = bus_of(ctx)
+        ros.init()
+        enable(ctx)
+        d = Debugger(arr)
+        d.attach_bus(bus, lambda: bus.spin_control(answers))
+        offer(d, ctx.machine_graph, topic=False)
+        probe = ros.Node("probe")
+        pause = probe.create_client(Trigger, "/llfsm/a/pause")
+        read = probe.create_client(GetVariables, "/llfsm/a/variables")
+        go = probe.create_client(Trigger, "/llfsm/a/continue")
+        once: list[Any] = []
+
+        def ask() -> None:  # once, at 5 ms of run time
+            once[0].cancel()
+            pause.call_async(Trigger.Request())
+
+        once.append(probe.create_timer(0.005, ask))
+    finally:
+        activate(prev)
+    answers_seen: list[Any] = []
+
+    def on(dbg: Debugger) -> None:
+        if dbg.paused and not answers_seen:
+            answers_seen.append(dbg.where())
+            f = read.call_async(GetVariables.Request())
+            dbg._serve_once(0)  # the pause loop answers it
+            answers_seen.append(f.result())
+            g = go.call_async(Trigger.Request())
+            dbg._serve_once(0)
+            answers_seen.append(g.result().message)
+
+    d.listeners.append(on)
+    arr.run(duration_ns=10_000_000)
+    where, variables, resumed = answers_seen
+    assert where == "paused before round 5 (0.005 s): /llfsm/a/pause called"
+    assert variables.paused and "state: " in variables.yaml and "n: " in variables.yaml
+    assert resumed == "continuing"

@@ -8,7 +8,7 @@ On each machine's node `/llfsm/M` (llfsm.ros.control), beside suspend/resume/res
     /llfsm/M/variables                               llfsm_msgs/srv/GetVariables (M as YAML)
     /llfsm/M/set_variable                            llfsm_msgs/srv/SetVariable (paused only)
     /llfsm/M/breakpoint                              llfsm_msgs/srv/SetBreakpoint
-    /llfsm/M/debug                                   llfsm_msgs/msg/DebugState (latched)
+    /llfsm/M/debug                                   llfsm_msgs/msg/DebugState (latched; on DDS)
 
 Every machine of a run offers the run's control: a client that knows one machine of a run can
 pause the run.  The callbacks run on the scheduler's thread, between rounds while the run runs
@@ -35,9 +35,9 @@ def answers(server: ServiceView) -> bool:
     return server.srv_name.startswith(NAMESPACE + "/") or server.type._TYPE.startswith("rcl_interfaces/srv/")
 
 
-def offer(debugger: Debugger, graph: Any) -> None:
-    """The debug services and the state topic on each machine's node of `graph` (a
-    llfsm.ros.control.MachineGraph; None: the run has no machines on the graph)."""
+def offer(debugger: Debugger, graph: Any, topic: bool = True) -> None:
+    """The debug services and (with `topic`) the state topic on each machine's node of `graph`
+    (a llfsm.ros.control.MachineGraph; None: the run has no machines on the graph)."""
     if graph is None:
         return
     pubs = []
@@ -49,7 +49,10 @@ def offer(debugger: Debugger, graph: Any) -> None:
         node.create_service(GetVariables, "~/variables", _variables(debugger, name))
         node.create_service(SetVariable, "~/set_variable", _set_variable(debugger, name))
         node.create_service(SetBreakpoint, "~/breakpoint", _breakpoint(debugger))
-        pubs.append(node.create_publisher(DebugState, "~/debug", LATCHED))
+        if topic:
+            pubs.append(node.create_publisher(DebugState, "~/debug", LATCHED))
+    if not pubs:
+        return
 
     def publish(d: Debugger) -> None:
         s = d.status()
