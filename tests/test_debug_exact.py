@@ -167,3 +167,40 @@ def test_the_trace_records_what_changed_and_the_diagrams(tmp_path: Path) -> None
     assert [s["name"] for s in first["description"]["states"]][:3] == ["INITIAL", "COUNT", "END"]
     changes = [e["changed"] for e in events if e["event"] == "variables"]
     assert changes == [{"count": [n, n + 1]} for n in range(5)]
+
+
+def test_on_a_terminal_the_prompt_completes_names_with_readline() -> None:
+    import os
+    import pty
+    import select
+    import sys
+    import time
+
+    pid, fd = pty.fork()
+    if pid == 0:  # the child: a run on the terminal
+        os.execv(
+            sys.executable,
+            [sys.executable, "-m", "llfsm", "run", "--clock", "sim", str(MACHINES / "counter.machine"), "--paused"],
+        )
+    out = b""
+
+    def read(until: bytes, timeout: float = 20) -> None:
+        nonlocal out
+        end = time.monotonic() + timeout
+        while until not in out and time.monotonic() < end:
+            if select.select([fd], [], [], 0.1)[0]:
+                try:
+                    out += os.read(fd, 4096)
+                except OSError:
+                    return
+
+    try:
+        read(b"(llfsm) ")
+        os.write(fd, b"p coun\t.co\t\n")  # tab: counter, then counter.count
+        read(b"ter.count\r\n0\r\n")
+        os.write(fd, b"c\n")
+        read(b"done")
+    finally:
+        os.waitpid(pid, 0)
+    # typed `coun`, `.co` and tabs: readline completed the rest, and `p` printed the count
+    assert b"ter.count\r\n0\r\n(llfsm) " in out and b"done" in out

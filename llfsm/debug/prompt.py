@@ -85,6 +85,16 @@ class Prompt:
         self._last = ""
         self.closed = False
         self._readline = self._use_readline()
+        #: The terminal's settings before readline changed them: put back if the run ends while
+        #: the prompt waits in the middle of a line (the reader thread never returns to do it).
+        self._tty: Any = None
+        if self._readline:
+            try:
+                import termios  # deferred: a terminal only
+
+                self._tty = termios.tcgetattr(sys.stdin.fileno())
+            except (ImportError, OSError, ValueError):
+                self._tty = None
         debugger.listeners.append(self._changed)
         self._thread = threading.Thread(target=self._loop, name="llfsm-debug-prompt", daemon=True)
         self._thread.start()
@@ -124,10 +134,18 @@ class Prompt:
         return self.closed or (d.paused and d.pauses > self._served)
 
     def close(self) -> None:
-        """The run ended: the reader stops waiting for another pause."""
+        """The run ended: the reader stops waiting for another pause (and the terminal gets its
+        settings back, should it be in the middle of reading a line)."""
         with self._cond:
             self.closed = True
             self._cond.notify_all()
+        if self._tty is not None and self._thread.is_alive():
+            try:
+                import termios  # deferred: a terminal only
+
+                termios.tcsetattr(sys.stdin.fileno(), termios.TCSADRAIN, self._tty)
+            except (ImportError, OSError, ValueError):
+                pass
 
     # -- the reader's side --------------------------------------------------------------------------
     def _write(self, text: str) -> None:
