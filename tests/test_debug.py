@@ -6,16 +6,25 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 import pytest
 from helpers import write_machine
 
+from llfsm import ros
 from llfsm.debug.debugger import CONTINUE, ROUND, STEP, DebugError, Debugger
+from llfsm.debug.services import answers, offer
 from llfsm.debug.variables import typed
+from llfsm.msgs.llfsm_msgs.srv import GetVariables
+from llfsm.msgs.std_msgs.msg import String
+from llfsm.msgs.std_srvs.srv import Trigger
+from llfsm.ros.bus import bus_of
+from llfsm.ros.control import enable
 from llfsm.runtime import Arrangement, RunContext, SimClock, WallClock
+from llfsm.runtime.context import activate
 from llfsm.targets import load
 
 
@@ -215,20 +224,26 @@ def test_a_message_variable_takes_a_mapping_of_its_fields() -> None:
         typed("Twist", 3, {"Twist": Twist})
 
 
-def test_while_paused_the_bus_answers_control_services_and_keeps_callbacks_queued(tmp_path: Path) -> None:
-    from llfsm import ros
-    from llfsm.debug.services import answers
-    from llfsm.msgs.std_msgs.msg import String
-    from llfsm.msgs.std_srvs.srv import Trigger
-    from llfsm.ros.bus import bus_of
-    from llfsm.runtime.context import activate
-
+@contextmanager
+def _on_a_bus(tmp_path: Path) -> Iterator[tuple[Arrangement, Debugger]]:
+    """Machine a on a bus with its control services, and its debugger answering them while
+    paused; the run's context active meanwhile (for the test's own nodes)."""
     ctx = RunContext(SimClock(1_000_000))
     arr = Arrangement(_machines(tmp_path)[:1], context=ctx)
     prev = activate(ctx)
     try:
         bus = bus_of(ctx)
         ros.init()
+        enable(ctx)
+        d = Debugger(arr)
+        d.attach_bus(bus, lambda: bus.spin_control(answers))
+        yield arr, d
+    finally:
+        activate(prev)
+
+
+def test_while_paused_the_bus_answers_control_services_and_keeps_callbacks_queued(tmp_path: Path) -> None:
+    with _on_a_bus(tmp_path) as (arr, d):
         node = ros.Node("probe")
         heard: list[str] = []
         node.create_subscription(String, "/chat", lambda m: heard.append(m.data), 10)
@@ -237,10 +252,6 @@ def test_while_paused_the_bus_answers_control_services_and_keeps_callbacks_queue
         node.create_service(Trigger, "/other", lambda req, res: res)
         control_client = node.create_client(Trigger, "/llfsm/a/probe")
         other_client = node.create_client(Trigger, "/other")
-    finally:
-        activate(prev)
-    d = Debugger(arr)
-    d.attach_bus(bus, lambda: bus.spin_control(answers))
     d.pause()
     results: dict[str, Any] = {}
 
@@ -325,24 +336,8 @@ def test_a_breakpoint_on_a_state_a_command_reaches_pauses_before_it_takes_effect
 
 
 def test_the_debug_services_answer_on_the_in_process_bus_too(tmp_path: Path) -> None:
-    from llfsm import ros
-    from llfsm.debug.services import answers, offer
-    from llfsm.msgs.llfsm_msgs.srv import GetVariables
-    from llfsm.msgs.std_srvs.srv import Trigger
-    from llfsm.ros.bus import bus_of
-    from llfsm.ros.control import enable
-    from llfsm.runtime.context import activate
-
-    ctx = RunContext(SimClock(1_000_000))
-    arr = Arrangement(_machines(tmp_path)[:1], context=ctx)
-    prev = activate(ctx)
-    try:
-        bus = bus_of(ctx)
-        ros.init()
-        enable(ctx)
-        d = Debugger(arr)
-        d.attach_bus(bus, lambda: bus.spin_control(answers))
-        offer(d, ctx.machine_graph, topic=False)
+    with _on_a_bus(tmp_path) as (arr, d):
+        offer(d, arr.ctx.machine_graph, topic=False)
         probe = ros.Node("probe")
         pause = probe.create_client(Trigger, "/llfsm/a/pause")
         read = probe.create_client(GetVariables, "/llfsm/a/variables")
@@ -354,8 +349,6 @@ def test_the_debug_services_answer_on_the_in_process_bus_too(tmp_path: Path) -> 
             pause.call_async(Trigger.Request())
 
         once.append(probe.create_timer(0.005, ask))
-    finally:
-        activate(prev)
     answers_seen: list[Any] = []
 
     def on(dbg: Debugger) -> None:

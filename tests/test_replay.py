@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from helpers import MACHINES, llfsm, write_machine
+from helpers import MACHINES, llfsm, turning_machine, write_machine
 
 from llfsm.web.replay import CHECKPOINT, ReplayError, read
 
@@ -46,19 +46,7 @@ def test_frames_far_from_a_checkpoint_are_the_same_as_stepping_there(tmp_path: P
 
 
 def test_a_counterexample_replays_its_steps_with_their_inputs(tmp_path: Path) -> None:
-    m = write_machine(
-        tmp_path,
-        "w",
-        {
-            "INITIAL": [("FORWARD", "True")],
-            "FORWARD": [("TURN", "wall_close")],
-            "TURN": [("FORWARD", "not wall_close and after_ms(150)")],
-        },
-        {"TURN_OnEntry": "turns += 1"},
-        variables="turns: int = 0\n",
-        yaml_extra="inputs:\n  wall_close:\n    type: bool\n    topic: /wall\n"
-        "    msg: std_msgs/msg/Bool\n    field: data\n",
-    )
+    m = turning_machine(tmp_path)
     cx = tmp_path / "cx"
     v = llfsm(
         "verify", m, "--period", "100ms", "--property", 'never: w.turns == 2 and state(w) == "TURN"',
