@@ -2,10 +2,13 @@
 (docs/debug.md).  The terminal prompt (prompt.py), the page (llfsm.web) and the services over
 the graph (services.py) all drive this one object.
 
-**Where it pauses.**  Between two ringlets, never inside one.  With a watcher installed
-(`Arrangement.watcher`: breakpoints, history, a step in progress, or the monitor's pause), at the
-next ringlet boundary; otherwise at the next round boundary (`Arrangement.ask_pause`), so a run
-with nothing to watch runs the scheduler's plain loops and pays nothing.  A pause is a loop on
+**Where it pauses.**  Between two ringlets, never inside one: after a ringlet of a watched round
+(`Arrangement.watcher`: breakpoints, history, a step in progress), at the end of a ringlet that
+took a marked transition (a breakpoint on a state: traps.py), before a held machine's turn
+(`Arrangement.on_release`: a step inside a plain round, a command reaching a breakpoint's
+state), where the monitor reached a violation (`--on-violation pause`), or between rounds
+(`Arrangement.ask_pause`); a run with nothing to watch runs the scheduler's plain loops and pays
+nothing.  A pause is a loop on
 the scheduler's thread (`_stand`) that waits for commands and keeps the bus answering the
 control, parameter and debug services (`Executor.spin_control`); no ringlet runs, no timer
 fires and no callback of machine code runs, so messages for machine code wait in their queues
@@ -106,7 +109,8 @@ class Debugger:
         #: which follows the ringlet of `_gate_after`.
         self._gate_for: Machine | None = None
         self._gate_after: Machine | None = None
-        self._origin = ROUND_END  # where the current pause stands (ORIGINS)
+        self._origin = ROUND_END  # where the current pause stands: RINGLET, ROUND_END, TRAP, TURN, GATE
+        self._marked_for: tuple[str, ...] | None = None  # the breakpoints the marks were made for
         arr.on_pause = self._on_pause
         arr.ctx.between_rounds.append(self._drain)
         self._update_watcher()
@@ -135,12 +139,16 @@ class Debugger:
         self.bus.add_tap(tap)
 
     def _update_watcher(self) -> None:
-        """Install the watcher while anything needs every boundary, and take it away otherwise,
-        so that the scheduler runs its plain loops again.  (A monitor's watcher is always
-        wrapped: its round is watched anyway, and a step must see every boundary of it.)
-        Breakpoints on states are marked on transitions instead (traps.py), and the scheduler's
-        rare path tells of commands and of the turn a step waits for (`on_release`)."""
-        self._mark_states()
+        """Install the watcher while anything needs every boundary (`after`; `_record` when only
+        the history does), and take it away otherwise, so that the scheduler runs its plain
+        loops again.  A watcher found there (the monitor's) is called first by `after`, and put
+        back when the debugger needs none.  Breakpoints on states are marked on transitions
+        instead (traps.py), and the scheduler's rare path tells of commands and of the turn a
+        step waits for (`on_release`)."""
+        texts = tuple(b.text for b in self.breaks.items)
+        if texts != self._marked_for:  # marking compiles ringlets again: only when breakpoints change
+            self._marked_for = texts
+            self._mark_states()
         arr = self.arr
         judged = any(b.number not in self._trapped_breaks for b in self.breaks.items)
         want = judged or self._stop_after is not None
@@ -303,7 +311,8 @@ class Debugger:
         self._stand(m, RINGLET if m is not None else ROUND_END)
 
     def _stand(self, m: Machine | None, origin: str) -> None:
-        """The run stands here until a command resumes it.  `origin`: where (ORIGINS)."""
+        """The run stands here until a command resumes it.  `origin`: where (RINGLET, ROUND_END,
+        TRAP, TURN, GATE)."""
         arr = self.arr
         arr.pause_asked = False
         self._pause_soon = False
