@@ -110,6 +110,9 @@ class Debugger:
         self._gate_for: Machine | None = None
         self._gate_after: Machine | None = None
         self._origin = ROUND_END  # where the current pause stands: RINGLET, ROUND_END, TRAP, TURN, GATE
+        #: A pause inside a ringlet of a watched round: the watcher is still to be told of that
+        #: same boundary once the ringlet returns (no step may end there).
+        self._same_boundary = False
         self._marked_for: tuple[str, ...] | None = None  # the breakpoints the marks were made for
         arr.on_pause = self._on_pause
         arr.ctx.between_rounds.append(self._drain)
@@ -256,6 +259,9 @@ class Debugger:
         self.history.record(m, arr.ran, arr.fired, self.boundaries, arr.ctx.round, arr.clock.now, published)  # type: ignore[union-attr]
         if published:
             published.clear()
+        if self._same_boundary:
+            self._same_boundary = False
+            return GO
         return PAUSE if self._pause_soon else GO
 
     def after(self, m: Machine) -> int:
@@ -281,6 +287,9 @@ class Debugger:
                 self._pause_reason = f"break {hit.number}: {hit.text}"
         if published:
             published.clear()
+        if self._same_boundary:  # the boundary the run paused at, from inside its ringlet
+            self._same_boundary = False
+            return asked
         stop = self._stop_after
         if stop == STEP:
             asked = asked if asked == STOP else PAUSE
@@ -319,6 +328,7 @@ class Debugger:
         self._stop_after = None
         self._gate_for = None
         self._origin = origin
+        self._same_boundary = origin == TRAP and arr.watcher is not None
         self.paused, self.at = True, m
         self.pauses += 1
         self.reason, self._pause_reason = self._pause_reason or "pause asked", ""

@@ -146,7 +146,10 @@ class History:
         old, new = self.current[i], self.values[i].take(m)
         self.current[i] = new
         self.count += 1
-        self.records.append((number, round_, now, i, m._state, None, m._state, None, old, new, _NONE, "set"))
+        # its state as the history last saw it (a set during a pause inside a ringlet comes
+        # before that ringlet's own record), so that undoing records stays consistent
+        state = self.states[i]
+        self.records.append((number, round_, now, i, state, None, state, None, old, new, _NONE, "set"))
         return self.changes(i, old, new)
 
     # -- reading -------------------------------------------------------------------------------

@@ -171,6 +171,8 @@ class ReplaySource:
     the recorded machines' diagrams, their states and values at the record the page shows."""
 
     kind = "replay"
+    #: The page the server serves at / (the debugger's: its History slider is the replay).
+    page = "debug.html"
 
     def __init__(self, replay: Replay) -> None:
         self.replay = replay

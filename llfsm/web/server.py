@@ -51,6 +51,8 @@ LOOPBACK_NAMES = {"localhost", "127.0.0.1", "::1", "[::1]"}
 _STATIC = {"app.js": "text/javascript", "style.css": "text/css"}
 #: What the front end's build (frontend/, `make`) writes into static/app/.
 _APP = {"app.js": "text/javascript", "app.css": "text/css"}
+#: The debugger's page (the application, at /debug: llfsm.web.debugging).
+DEBUG_PAGE = "debug.html"
 APP_MISSING = "llfsm/web/static/app/app.js is missing"
 
 
@@ -184,6 +186,7 @@ class WebServer:
     async def _start(self, sock: socket.socket) -> None:
         app = web.Application(middlewares=[self._guard], client_max_size=self.MAX_BODY)
         app.router.add_get("/", self._index)
+        app.router.add_get("/debug", self._debug_page)
         app.router.add_get("/static/app/{name}", self._app_asset)
         app.router.add_get("/static/{name}", self._static)
         app.router.add_get("/ws", self._ws)
@@ -260,7 +263,17 @@ class WebServer:
 
     # -- the page --------------------------------------------------------------------------------------------
     async def _index(self, request: web.Request) -> web.Response:
-        text = (resources.files(__package__) / "static" / self.PAGE).read_text(encoding="utf-8")
+        # a source may have a page of its own (`llfsm replay`: the debugger's page)
+        return self._page(request, getattr(self.source, "page", None) or self.PAGE)
+
+    async def _debug_page(self, request: web.Request) -> web.Response:
+        """The debugger's page (docs/debug.md), beside the live view of a run or of the graph."""
+        if getattr(self.source, "debug", None) is None:
+            raise web.HTTPNotFound()
+        return self._page(request, DEBUG_PAGE)
+
+    def _page(self, request: web.Request, name: str) -> web.Response:
+        text = (resources.files(__package__) / "static" / name).read_text(encoding="utf-8")
         if "{{nonce}}" in text:  # a page that adds style sheets from script: a fresh nonce each time
             request["csp_nonce"] = nonce = secrets.token_urlsafe(16)
             text = text.replace("{{nonce}}", nonce)
