@@ -69,6 +69,9 @@ class RunDebug:
 
     def __init__(self, debugger: Debugger) -> None:
         self.debugger = debugger
+        #: Told when the debugger pauses or goes on (the page's server pushes a snapshot at once).
+        self.on_change: Callable[[], None] | None = None
+        debugger.listeners.append(lambda _d: self.on_change() if self.on_change is not None else None)
 
     def state(self) -> dict[str, Any]:
         d = self.debugger

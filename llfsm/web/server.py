@@ -25,6 +25,7 @@ description itself.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import hmac
 import ipaddress
 import secrets
@@ -111,6 +112,7 @@ class WebServer:
         self._ready = threading.Event()
         self._error: BaseException | None = None
         self._wake: asyncio.Event | None = None
+        self._nudged: asyncio.Event | None = None
         self._pusher: asyncio.Task[None] | None = None
         #: Lays diagrams out off the event loop (one at a time: they share a cache).
         self._drawer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="llfsm-web-draw")
@@ -197,6 +199,9 @@ class WebServer:
         await web.SockSite(self._runner, sock).start()
         self._wake = asyncio.Event()
         self._pusher = asyncio.get_running_loop().create_task(self._push())
+        debug = getattr(self.source, "debug", None)
+        if debug is not None and hasattr(debug, "on_change"):
+            debug.on_change = self.nudge
 
     def _routes(self, app: web.Application) -> None:
         """The view's requests (the editor's server has its own)."""
@@ -432,8 +437,13 @@ class WebServer:
         graph = self._graph()
         graph_task: asyncio.Task[None] | None = None
         graph_at = -HELLO_PERIOD
+        nudged = self._nudged = asyncio.Event()
         while True:
-            await asyncio.sleep(1 / self.rate)
+            # at most `rate` times a second, or at once when the run says something changed
+            # (the debugger paused or went on: a step shows without waiting for the next sample)
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(nudged.wait(), 1 / self.rate)
+            nudged.clear()
             if not self.clients:
                 self._wake.clear()
                 await self._wake.wait()
@@ -463,6 +473,13 @@ class WebServer:
                 continue
             except Exception as e:  # said once; the next round goes on
                 self._warn(f"the page's update failed: {type(e).__name__}: {e}", "push")
+
+    def nudge(self) -> None:
+        """Push a snapshot now, not at the next sample (any thread: the run's debugger calls it
+        when it pauses or goes on)."""
+        loop, nudged = self._loop, self._nudged
+        if loop is not None and nudged is not None:
+            loop.call_soon_threadsafe(nudged.set)
 
     async def _send_hello(self) -> None:
         try:
