@@ -7,20 +7,13 @@ import time
 import click
 
 from ._exits import echo, fail
-from ._group import DURATION, cli
+from ._group import cli, duration_option, web_option
 
 
 @cli.command()
 @click.argument("file", metavar="FILE")
-@click.option(
-    "--web",
-    "web",
-    default="8080",
-    show_default=True,
-    metavar="[HOST:]PORT",
-    help="Where to serve the page (127.0.0.1 unless HOST is given; 0: a free port).",
-)
-@click.option("--duration", type=DURATION, help="Stop serving after this much time (default: until Ctrl-C).")
+@web_option("the page")
+@duration_option
 def replay(file: str, web: str, duration: int | None) -> None:
     """Step through a recorded run on its machines' diagrams, in a web page.
 
