@@ -10,12 +10,14 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
 from clfsm_writer import HOW_TO, ClfsmState, write_clfsm
 from helpers import MACHINES, llfsm, run_sim
 
+from llfsm.edit import change as change_module
 from llfsm.importer import cxx
 
 pytest.importorskip("tree_sitter_cpp")
@@ -345,24 +347,26 @@ def test_a_failure_midway_leaves_no_half_written_machine_and_keeps_the_old_one(
 ) -> None:
     src = write_clfsm(tmp_path / "src", "M", [ClfsmState("A", [("B", "true")], {"OnEntry": "x = 1;"}), ClfsmState("B")])
     out = tmp_path / "out"
-    real = os.fdopen
+    real = change_module._stage  # llfsm.edit writes the machine (SPEC 13): each file staged, then all renamed
     written = []
 
-    def full_disk(fd: int, *args: object, **kw: object) -> object:
-        written.append(fd)
+    def full_disk(*args: Any) -> str:
+        written.append(args)
         if len(written) == 3:
             raise OSError(28, "No space left on device")
-        return real(fd, *args, **kw)  # type: ignore[call-overload]
+        return real(*args)
 
-    monkeypatch.setattr(os, "fdopen", full_disk)
+    monkeypatch.setattr(change_module, "_stage", full_disk)
     status, text, _ = import_(src, "-o", out)
-    assert status == 1 and "M.machine: not written (No space left on device)" in text
+    assert status == 1 and "M.machine/" in text and ": cannot write: No space left on device; nothing was changed" in text
     assert list(out.iterdir()) == []  # neither a machine nor a temporary folder
-    monkeypatch.setattr(os, "fdopen", real)
+    monkeypatch.setattr(change_module, "_stage", real)
     assert import_(src, "-o", out)[0] == 0
     before = {p.name: p.read_bytes() for p in (out / "M.machine").iterdir()}
+    more = [ClfsmState("A", [("B", "true")], {"OnEntry": "x = 2;"}), ClfsmState("B", [("C", "true")]), ClfsmState("C")]
+    write_clfsm(tmp_path / "src", "M", more)  # files to write again: an unchanged file is not written
     written.clear()
-    monkeypatch.setattr(os, "fdopen", full_disk)
+    monkeypatch.setattr(change_module, "_stage", full_disk)
     status, text, _ = import_(src, "-o", out, "--force")
     assert status == 1
     assert {p.name: p.read_bytes() for p in (out / "M.machine").iterdir()} == before

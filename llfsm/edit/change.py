@@ -120,17 +120,19 @@ def apply(change: Change) -> None:
     staged: dict[str, str] = {}
     backups: dict[str, str] = {}
     done: list[str] = []
+    current = root  # the file being written, named if that fails (an OSError of os.write names none)
     try:
         for rel, data in items:
             if data is None:
                 continue
-            folder = (root / rel).parent
+            current = root / rel
+            folder = current.parent
             if not folder.exists():
                 folder.mkdir()  # a new machine's directory (check_relpath allows one level)
                 made_dirs.append(folder)
             staged[rel] = _stage(folder, data, root / rel)
         for rel, data in items:
-            path = root / rel
+            path = current = root / rel
             if change.before.get(rel) is not None:
                 backups[rel] = _backup(path)
             if data is None:
@@ -148,8 +150,7 @@ def apply(change: Change) -> None:
             with contextlib.suppress(OSError):
                 folder.rmdir()
         if isinstance(e, OSError):
-            where = getattr(e, "filename", None) or root
-            raise EditError(f"{where}: cannot write: {e.strerror or e}; nothing was changed") from None
+            raise EditError(f"{current}: cannot write: {e.strerror or e}; nothing was changed") from None
         raise
     finally:
         for b in backups.values():
