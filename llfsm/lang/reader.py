@@ -11,14 +11,21 @@ import ast
 import io
 import os
 import re
-import stat
 import tokenize
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 
-from ..machinedir import LAYOUT_FILE, machine_name_of, refused_link
+from ..machinedir import (
+    LAYOUT_FILE,
+    NOFOLLOW,
+    FileTooLarge,
+    NotRegularFile,
+    machine_name_of,
+    read_regular,
+    refused_link,
+)
 from .cpp import syntax_hint
 from .diagnostics import Diagnostic, diag
 from .files import GUARD_RE, SECTION_RE, guard_file
@@ -45,8 +52,6 @@ MAX_CODE_DEPTH = 200
 #: in its fields (80,000 take seconds, a 1 MiB one minutes), so a bigger one is refused (LF039)
 #: before `ast.parse` sees it; hand-written code has a handful.
 MAX_FSTRING_FIELDS = 1000
-#: Open without blocking on a FIFO and without taking a terminal as controlling tty.
-_OPEN_FLAGS = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
 #: A form feed in the indentation resets CPython's column count: re-indented into a method,
 #: such a line would land at another nesting level than the one it was checked at.  (A form
 #: feed alone on its line, or before a comment, is harmless: such lines have no indentation.)
@@ -83,7 +88,7 @@ class _Reader:
         self.links: set[str] | frozenset[str] | None = None  # names that are symlinks, once listed
         self.inline: dict[str, Code] = {}  # inline guards by the name their file would have
         self.yaml_lines: list[str] = []
-        self.nofollow = getattr(os, "O_NOFOLLOW", 0)
+        self.nofollow = bool(NOFOLLOW)  # without O_NOFOLLOW, every file the careful way
 
     # -- files ---------------------------------------------------------------------------
     def where(self, name: str) -> str:
@@ -100,8 +105,13 @@ class _Reader:
         """The text of a file of the machine directory, or None (with a diagnostic) if unusable."""
         p = os.path.join(self.path, name)  # plain strings: this runs for every file of every machine
         try:
-            fd = self._open_plain(name, p)
-            if fd is None:  # a symlink (or not known not to be one): where does it lead?
+            data = None
+            if self._listed_plain(name):
+                try:
+                    data = read_regular(p, MAX_FILE_BYTES)  # O_NOFOLLOW: still no symlink
+                except OSError:
+                    pass  # a symlink by now, or unreadable: the careful way reports it as before
+            if data is None:  # a symlink (or not known not to be one): where does it lead?
                 if os.path.islink(p):
                     target = Path(os.path.realpath(p))
                     if not target.is_relative_to(self.real):
@@ -109,25 +119,17 @@ class _Reader:
                             "LF037", name, 1, 1, f"{name} is a symlink leading out of the machine directory; refused"
                         )
                         return None
-                # never block: a FIFO (or a device) where a file is expected would hang `llfsm check`
-                fd = os.open(p, _OPEN_FLAGS)
-            try:
-                st = os.fstat(fd)
-                if not stat.S_ISREG(st.st_mode):
-                    self.report("LF002", name, 1, 1, f"{name} is not a regular file")
-                    return None
-                # ask for what the file holds (plus one byte, to see one that grew past the limit):
-                # read(MAX) would allocate a megabyte for every three-line section
-                data = _read_fd(fd, min(st.st_size, MAX_FILE_BYTES) + 1)
-            finally:
-                os.close(fd)
+                data = read_regular(p, MAX_FILE_BYTES, follow=True)
+        except NotRegularFile:
+            self.report("LF002", name, 1, 1, f"{name} is not a regular file")
+            return None
+        except FileTooLarge:
+            self.report("LF002", name, 1, 1, f"{name} is larger than {MAX_FILE_BYTES // 1024} KiB; refused")
+            return None
         except OSError as e:
             self.report("LF002", name, 1, 1, f"cannot read {name}: {e.strerror or e}")
             return None
         self.raw[name] = data
-        if len(data) > MAX_FILE_BYTES:
-            self.report("LF002", name, 1, 1, f"{name} is larger than {MAX_FILE_BYTES // 1024} KiB; refused")
-            return None
         if b"\0" in data:
             self.report("LF002", name, 1, 1, f"{name} is a binary file (it contains NUL bytes)")
             return None
@@ -140,23 +142,18 @@ class _Reader:
         # one line ending: CPython counts \r and \r\n as line ends, and so must every later step
         return text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n")
 
-    def _open_plain(self, name: str, p: str) -> int | None:
-        """`name` opened, if the directory listed it as no symlink and it still is none
-        (O_NOFOLLOW); else None, and `read` takes the careful way.  One listing (file types
-        from the directory itself) saves a `lstat` per file of every machine."""
+    def _listed_plain(self, name: str) -> bool:
+        """Whether the directory listed `name` as no symlink (so it may be opened O_NOFOLLOW,
+        without a `lstat` first).  One listing (file types from the directory itself) saves a
+        `lstat` per file of every machine."""
         if self.links is None:
             try:
                 with os.scandir(self.path) as it:
                     self.links = {e.name for e in it if e.is_symlink()}
             except OSError:
                 self.links = frozenset({name})  # unknown: the careful way for every file
-                self.nofollow = 0
-        if not self.nofollow or name in self.links:
-            return None
-        try:
-            return os.open(p, _OPEN_FLAGS | self.nofollow)
-        except OSError:
-            return None  # a symlink by now, or unreadable: the careful way reports it as before
+                self.nofollow = False
+        return self.nofollow and name not in self.links
 
     # -- python --------------------------------------------------------------------------
     def parse(self, name: str, text: str) -> ast.Module | None:
@@ -600,20 +597,6 @@ def _huge_fstring(text: str) -> tuple[int, int] | None:
     except (tokenize.TokenError, SyntaxError):
         return None  # the parser reports it, in linear time: a broken token ends the string early
     return None
-
-
-def _read_fd(fd: int, n: int) -> bytes:
-    """Up to `n` bytes of an open file (fewer only at its end): no buffered file object, which
-    costs more than the read for a three-line section."""
-    chunks: list[bytes] = []
-    got = 0
-    while got < n:
-        more = os.read(fd, n - got)
-        if not more:
-            break
-        chunks.append(more)
-        got += len(more)
-    return chunks[0] if len(chunks) == 1 else b"".join(chunks)
 
 
 def _mark_loc(node: yaml.Node) -> Loc:
