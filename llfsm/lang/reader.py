@@ -17,6 +17,7 @@ from pathlib import Path
 
 import yaml
 
+from .. import yamlfile
 from ..machinedir import (
     LAYOUT_FILE,
     NOFOLLOW,
@@ -57,7 +58,7 @@ MAX_FSTRING_FIELDS = 1000
 #: feed alone on its line, or before a comment, is harmless: such lines have no indentation.)
 _FORM_FEED_INDENT = re.compile(r"^[ \t]*\f[ \t\f]*[^\s#]", re.MULTILINE)
 #: libyaml's C parser when PyYAML has it (about ten times faster), else the pure-Python one.
-YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+YAML_LOADER = yamlfile.LOADER
 
 
 @dataclass
@@ -620,63 +621,31 @@ def _describe(stmt: ast.stmt) -> str:
 _Refusal = tuple[str, int, int, str]
 
 
+#: machine.yaml's words for what llfsm.yamlfile refuses: (rule, message).
+_YAML_WORDS = {
+    "alias": ("LF005", "anchors and aliases are not allowed in machine.yaml"),
+    "depth": ("LF004", f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels"),
+    "syntax": ("LF003", "invalid YAML: {detail}"),
+}
+
+
 def compose(text: str, loader: type | None = None) -> tuple[yaml.Node | None, _Refusal | None]:
-    """The YAML tree of `text` (machine.yaml, layout.yaml), or None and why: anchors, aliases and
-    deep nesting refused before a tree is built, the library's own limits, or LF003 where the
-    text stops being YAML.  `loader`: YAML_LOADER, as it is when called."""
-    loader = loader or YAML_LOADER
+    """The YAML tree of `text` (machine.yaml, layout.yaml), or None and why (llfsm.yamlfile:
+    anchors, aliases and deep nesting refused before a tree is built, the library's own limits,
+    LF003 where the text stops being YAML).  `loader`: YAML_LOADER, as it is when called."""
     try:
-        refusal = structure_refusal(text, loader)
-        return (yaml.compose(text, Loader=loader), None) if refusal is None else (None, refusal)
-    except yaml.MarkedYAMLError as e:
-        refusal = library_limit(text, e)
-        if refusal is not None:
-            return None, refusal
-        m = e.problem_mark or e.context_mark
-        line, col = (m.line + 1, m.column + 1) if m else (1, 1)
-        return None, ("LF003", line, col, f"invalid YAML: {e.problem or e.context}")
-    except (yaml.YAMLError, RecursionError) as e:
-        return None, ("LF003", 1, 1, f"invalid YAML: {type(e).__name__}")
+        return yamlfile.compose(text, MAX_YAML_DEPTH, loader or YAML_LOADER), None
+    except yamlfile.Refused as e:
+        return None, _refusal(e)
 
 
 def structure_refusal(text: str, loader: type) -> _Refusal | None:
     """(code, line, column, message) when machine.yaml uses anchors or nests too deep, found on
-    the event stream, before any tree is built: composing a 5,000-deep document would recurse."""
-    depth = 0
-    for ev in yaml.parse(text, Loader=loader):
-        if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
-            m = ev.start_mark
-            return "LF005", m.line + 1, m.column + 1, "anchors and aliases are not allowed in machine.yaml"
-        if isinstance(ev, yaml.CollectionStartEvent):
-            depth += 1
-            if depth > MAX_YAML_DEPTH:
-                m = ev.start_mark
-                return "LF004", m.line + 1, m.column + 1, f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels"
-        elif isinstance(ev, yaml.CollectionEndEvent):
-            depth -= 1
-    return None
+    the event stream, before any tree is built; yaml.YAMLError where it is not YAML."""
+    found = yamlfile.scan(text, MAX_YAML_DEPTH, loader)
+    return None if found is None else _refusal(found)
 
 
-def library_limit(text: str, error: yaml.MarkedYAMLError) -> _Refusal | None:
-    """Our own refusal when the YAML library refused the text first for one of its own limits;
-    None when the text is simply not YAML.
-
-    libyaml 0.2.6 (in PyYAML 6.0.4) caps nesting at 1,000 levels in its scanner, whose look-ahead
-    reads up to 1,024 characters ahead of our event count: `[[[[...` is refused there, with the
-    library's wording, before our count reaches MAX_YAML_DEPTH.  The pure-Python scanner has no
-    such cap, so it decides (only on this error path, and it stops at our limit); a library
-    whose own scanner also names a nesting or depth limit is taken at its word.
-    """
-    if YAML_LOADER is not yaml.SafeLoader:
-        try:
-            refusal = structure_refusal(text, yaml.SafeLoader)
-        except (yaml.YAMLError, RecursionError):
-            refusal = None
-        if refusal is not None:
-            return refusal
-    problem = f"{error.problem or ''} {error.context or ''}".lower()
-    if "nesting" in problem or "depth" in problem:
-        m = error.problem_mark or error.context_mark
-        line, col = (m.line + 1, m.column + 1) if m else (1, 1)
-        return "LF004", line, col, f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels"
-    return None
+def _refusal(e: yamlfile.Refused) -> _Refusal:
+    code, message = _YAML_WORDS[e.kind]
+    return code, e.line, e.column, message.format(detail=e.detail)
