@@ -326,7 +326,10 @@ def test_write_machine_writes_or_replaces_a_whole_machine_all_or_nothing(
     }
     start = tree_hash(tmp_path)
     c = edit.write_machine(tmp_path, "pp", smaller, replace=True)
-    assert c.writes["pp.machine/State_PING_OnExit.py"] is None and c.summary == f"replaced machine pp ({len(smaller)} files)"
+    assert (
+        c.writes["pp.machine/State_PING_OnExit.py"] is None
+        and c.summary == f"replaced machine pp ({len(smaller)} files)"
+    )
     real, calls = change_module._stage, []
 
     def full_disk(*args: Any) -> str:
@@ -356,9 +359,7 @@ def test_write_machine_writes_or_replaces_a_whole_machine_all_or_nothing(
         (lambda m: (m / "link.py").symlink_to("/etc/hostname"), "link.py: not a plain file"),
     ],
 )
-def test_write_machine_replaces_only_an_llfsm_machine_of_plain_files(
-    tmp_path: Path, make: Any, message: str
-) -> None:
+def test_write_machine_replaces_only_an_llfsm_machine_of_plain_files(tmp_path: Path, make: Any, message: str) -> None:
     m = write_machine(tmp_path, "m", {"A": None})
     make(m)
     start = tree_hash(tmp_path)

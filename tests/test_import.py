@@ -358,7 +358,9 @@ def test_a_failure_midway_leaves_no_half_written_machine_and_keeps_the_old_one(
 
     monkeypatch.setattr(change_module, "_stage", full_disk)
     status, text, _ = import_(src, "-o", out)
-    assert status == 1 and "M.machine/" in text and ": cannot write: No space left on device; nothing was changed" in text
+    assert (
+        status == 1 and "M.machine/" in text and ": cannot write: No space left on device; nothing was changed" in text
+    )
     assert list(out.iterdir()) == []  # neither a machine nor a temporary folder
     monkeypatch.setattr(change_module, "_stage", real)
     assert import_(src, "-o", out)[0] == 0
