@@ -13,6 +13,7 @@ from . import (  # noqa: F401  (each registers its commands)
     bag,
     build,
     check,
+    edit,
     graph,
     import_,
     interface,

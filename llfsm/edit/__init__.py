@@ -20,6 +20,7 @@ from .change import Change, EditError, apply, invert
 from .files import MachineExists, new_machine, set_layout, write_file, write_machine
 from .structure import (
     DEFAULT_GUARD,
+    set_description,
     set_guard,
     set_initial,
     set_suspend,
@@ -40,6 +41,7 @@ __all__ = [
     "apply",
     "invert",
     "new_machine",
+    "set_description",
     "set_guard",
     "set_initial",
     "set_layout",
