@@ -316,7 +316,7 @@ def test_write_machine_writes_or_replaces_a_whole_machine_all_or_nothing(
     edit.apply(c)
     m = tmp_path / "pp.machine"
     assert clean(m) == [] and {f.name for f in m.iterdir()} == set(files)
-    with pytest.raises(edit.MachineExists, match="pp.machine exists"):
+    with pytest.raises(edit.MachineExists, match=r"pp\.machine exists"):
         edit.write_machine(tmp_path, "pp", files)
     (m / "State_PING_OnExit.py").write_text("print('mine')\n")  # a file the new machine does not have
     smaller = {n: t for n, t in files.items() if n != "Includes.py"} | {

@@ -649,7 +649,8 @@ def test_ros_arguments_go_to_llfsm_run_as_written_and_are_checked_first(tmp_path
   <node pkg="turtlesim" exec="turtlesim_node" name="sim" ros_args="--log-level $(var log_level) --log-level sim:=debug">
     <remap from="a" to="b"/>
   </node>
-  <node pkg="llfsm" exec="run" args="$(dirname)/m.machine --ros-args --log-level warn --params-file $(dirname)/p.yaml --"
+  <node pkg="llfsm" exec="run"
+        args="$(dirname)/m.machine --ros-args --log-level warn --params-file $(dirname)/p.yaml --"
         ros_args="--enable-external-lib-logs -p gain:=2.0"/>
   <node exec="echo" name="talker" args="hello" ros_args="--log-level debug"/>
 </launch>
@@ -663,7 +664,8 @@ def test_ros_arguments_go_to_llfsm_run_as_written_and_are_checked_first(tmp_path
         "--remap", "__node:=sim", "--remap", "a:=b",
     ]  # fmt: skip
     assert run.argv[6:] == [
-        str(tmp_path / "m.machine"), "--ros-args", "--log-level", "warn", "--params-file", str(tmp_path / "p.yaml"), "--",
+        str(tmp_path / "m.machine"),
+        "--ros-args", "--log-level", "warn", "--params-file", str(tmp_path / "p.yaml"), "--",
         "--ros-args", "--enable-external-lib-logs", "-p", "gain:=2.0", "--",
     ]  # fmt: skip
     assert echo.argv == ["echo", "hello", "--ros-args", "--log-level", "debug", "--ros-args", "-r", "__node:=talker"]

@@ -136,10 +136,10 @@ def _plain_files(machine: Path) -> list[str]:
             entries = list(it)
     except OSError as e:
         raise EditError(f"{machine}: cannot be listed: {e.strerror or e}") from None
-    for e in entries:
-        if e.is_symlink() or not e.is_file(follow_symlinks=False):
-            raise EditError(f"{machine / e.name}: not a plain file; {machine} not replaced")
-    return sorted(e.name for e in entries)
+    for entry in entries:
+        if entry.is_symlink() or not entry.is_file(follow_symlinks=False):
+            raise EditError(f"{machine / entry.name}: not a plain file; {machine} not replaced")
+    return sorted(entry.name for entry in entries)
 
 
 def set_layout(
