@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 import yaml
-from helpers import MACHINES, llfsm, write_machine
+from helpers import MACHINES, disk_full_at, llfsm, write_machine
 
 from llfsm import edit
 from llfsm.edit import change as change_module
@@ -306,9 +306,7 @@ def test_new_machine_layout_and_write_file(tmp_path: Path) -> None:
     assert edit.write_file(m, "State_PONG_OnEntry.py", "print('pong')\n").writes == {}
 
 
-def test_write_machine_writes_or_replaces_a_whole_machine_all_or_nothing(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_write_machine_writes_or_replaces_a_whole_machine_all_or_nothing(tmp_path: Path) -> None:
     """What `llfsm import` writes through: a machine directory whole (SPEC 13, issue 31)."""
     files = {f.name: f.read_text() for f in (MACHINES / "ros2_ping_pong.machine").iterdir() if f.is_file()}
     c = edit.write_machine(tmp_path, "pp", files)
@@ -330,19 +328,12 @@ def test_write_machine_writes_or_replaces_a_whole_machine_all_or_nothing(
         c.writes["pp.machine/State_PING_OnExit.py"] is None
         and c.summary == f"replaced machine pp ({len(smaller)} files)"
     )
-    real, calls = change_module._stage, []
-
-    def full_disk(*args: Any) -> str:
-        calls.append(args)
-        if len(calls) == 2:
-            raise OSError(28, "No space left on device")
-        return real(*args)
-
-    monkeypatch.setattr(change_module, "_stage", full_disk)
-    with pytest.raises(edit.EditError, match=r"pp\.machine/\S+: cannot write: No space left on device; nothing was"):
+    with (
+        disk_full_at(2),
+        pytest.raises(edit.EditError, match=r"pp\.machine/\S+: cannot write: No space left on device; nothing was"),
+    ):
         edit.apply(c)
     assert tree_hash(tmp_path) == start  # the old machine, byte for byte, and nothing beside it
-    monkeypatch.setattr(change_module, "_stage", real)
     edit.apply(c)
     assert {f.name for f in m.iterdir()} == set(smaller) and (m / "Variables.py").read_text() == "count: int = 0\n"
     edit.apply(edit.invert(c))
