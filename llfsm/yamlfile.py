@@ -33,12 +33,13 @@ LOADER: type = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 #: What each kind of refusal says unless a reader words it otherwise.  Fields: `where` (the file
 #: as the reader shows it), `line`, `column`, `detail` (the library's or the system's words),
-#: `limit` (the bound that was passed), `what` (the kind of file: "a launch file").
+#: `limit` (the bound passed: bytes or levels), `mib` (a size bound in MiB), `what` (the kind
+#: of file: "a launch file").
 WORDS: Mapping[str, str] = {
     "folder": "{where}: is a folder, not {what}",
     "not_file": "{where}: not a regular file",
     "unreadable": "{where}: cannot be read: {detail}",
-    "large": "{where}: larger than {limit}",
+    "large": "{where}: larger than {mib} MiB",
     "encoding": "{where}:{line}: not UTF-8 text",
     "alias": "{where}:{line}: anchors and aliases are not allowed in {what}",
     "depth": "{where}:{line}: nested deeper than {limit} levels",
@@ -50,16 +51,17 @@ class Refused(ValueError):
     """Why a YAML file or text was not read: `kind` is a key of WORDS; `line` and `column` count
     from 1 (1, 1 where there is no better place); `detail` is the library's or the system's words."""
 
-    def __init__(self, kind: str, line: int = 1, column: int = 1, detail: str = "") -> None:
+    def __init__(self, kind: str, line: int = 1, column: int = 1, detail: str = "", limit: int = 0) -> None:
         super().__init__(f"{line}:{column}: {kind}{': ' + detail if detail else ''}")
-        self.kind, self.line, self.column, self.detail = kind, line, column, detail
+        self.kind, self.line, self.column, self.detail, self.limit = kind, line, column, detail, limit
 
-    def say(self, where: str, what: str = "this file", limit: object = "", words: Mapping[str, str] = WORDS) -> str:
+    def say(self, where: str, what: str = "this file", words: Mapping[str, str] = WORDS) -> str:
         """The one line a user sees, in `words` (a reader's own table; WORDS for what it leaves out)."""
         template = words.get(self.kind) or WORDS[self.kind]
         return template.format(
-            where=where, line=self.line, column=self.column, detail=self.detail, limit=limit, what=what
-        )
+            where=where, what=what, line=self.line, column=self.column, detail=self.detail, limit=self.limit,
+            mib=self.limit >> 20,
+        )  # fmt: skip
 
 
 def read_text(path: str | os.PathLike[str], max_bytes: int) -> str:
@@ -70,7 +72,7 @@ def read_text(path: str | os.PathLike[str], max_bytes: int) -> str:
     except NotRegularFile as e:
         raise Refused("folder" if e.folder else "not_file") from None
     except FileTooLarge:
-        raise Refused("large") from None
+        raise Refused("large", limit=max_bytes) from None
     except OSError as e:
         raise Refused("unreadable", detail=str(e.strerror or e)) from None
     try:
@@ -109,7 +111,7 @@ def scan(text: str, max_depth: int, loader: type | None = None) -> Refused | Non
         if isinstance(ev, yaml.CollectionStartEvent):
             depth += 1
             if depth > max_depth:
-                return Refused("depth", ev.start_mark.line + 1, ev.start_mark.column + 1)
+                return Refused("depth", ev.start_mark.line + 1, ev.start_mark.column + 1, limit=max_depth)
         elif isinstance(ev, yaml.CollectionEndEvent):
             depth -= 1
     return None
@@ -135,7 +137,8 @@ def _library_limit(text: str, max_depth: int, loader: type, error: yaml.MarkedYA
     problem = f"{error.problem or ''} {error.context or ''}".lower()
     if "nesting" in problem or "depth" in problem:
         m = error.problem_mark or error.context_mark
-        return Refused("depth", *((m.line + 1, m.column + 1) if m else (1, 1)))
+        line, column = (m.line + 1, m.column + 1) if m else (1, 1)
+        return Refused("depth", line, column, limit=max_depth)
     return None
 
 

@@ -64,7 +64,11 @@ def test_every_yaml_reader_refuses_what_cannot_be_read_safely_at_its_line(which:
     deep = "ok: 1\nx: " + "[" * 100 + "]" * 100 + "\n"
     assert refusal(which, tmp_path / "b", deep) == "FILE:2: nested deeper than 64 levels"
     assert refusal(which, tmp_path / "c", b"ok: 1\nx: \xff\n").endswith("FILE:2: not UTF-8 text")
-    assert refusal(which, tmp_path / "d", "x" * (17 << 20)).startswith("FILE: larger than ")
+    assert refusal(which, tmp_path / "d", "x" * (17 << 20)) == {
+        "launch": "FILE: larger than 1 MiB: not a launch file",
+        "verify": "FILE: larger than 1 MiB",
+        "params": "FILE: larger than 16 MB: not a params file",
+    }[which]
     assert refusal(which, tmp_path / "e", None) == "FILE: not a regular file"
 
 

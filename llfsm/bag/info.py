@@ -158,10 +158,10 @@ _WORDS = {
     "unreadable": "cannot read it: {detail}",
     "folder": "not a regular file",
     "not_file": "not a regular file",
-    "large": f"larger than {MAX_METADATA_BYTES // 2**20} MiB: not rosbag2 metadata",
+    "large": "larger than {mib} MiB: not rosbag2 metadata",
     "encoding": "not rosbag2 metadata (not UTF-8 text)",
     "alias": "not rosbag2 metadata (a YAML anchor or alias; rosbag2 writes none)",
-    "depth": f"not rosbag2 metadata (nested deeper than {MAX_DEPTH})",
+    "depth": "not rosbag2 metadata (nested deeper than {limit})",
     "syntax": "not rosbag2 metadata (YAML: {detail})",
 }
 _AT_A_LINE = frozenset({"encoding", "alias", "depth", "syntax"})

@@ -28,7 +28,7 @@ from .. import yamlfile
 MAX_FILE_BYTES = 1 << 20
 MAX_DEPTH = 64
 #: What a launch file says of what llfsm.yamlfile refuses (the rest in its default words).
-_WORDS = {"large": "{where}: larger than {limit}: not a launch file"}
+_WORDS = {"large": "{where}: larger than {mib} MiB: not a launch file"}
 
 
 class FrontEndError(ValueError):
@@ -70,7 +70,7 @@ def read(path: str) -> Element:
     try:
         text = yamlfile.read_text(path, MAX_FILE_BYTES)
     except yamlfile.Refused as e:
-        raise FrontEndError(e.say(where, "a launch file", f"{MAX_FILE_BYTES >> 20} MiB", _WORDS)) from None
+        raise FrontEndError(e.say(where, "a launch file", _WORDS)) from None
     name = path.lower()
     if name.endswith(".xml"):
         return _xml(text, path)
@@ -133,7 +133,7 @@ def _yaml(text: str, path: str) -> Element:
     try:
         root = yamlfile.compose(text, MAX_DEPTH)
     except yamlfile.Refused as e:
-        raise FrontEndError(e.say(where, "a launch file", MAX_DEPTH, _WORDS)) from None
+        raise FrontEndError(e.say(where, "a launch file", _WORDS)) from None
     if not isinstance(root, yaml.MappingNode) or len(root.value) != 1:
         line = root.start_mark.line + 1 if root is not None else 1
         raise FrontEndError(f"{where}:{line}: a YAML launch file is one mapping, `launch:`, holding a list")

@@ -47,11 +47,8 @@ MAX_VALUES = 1_000
 #: Largest verification file read, and deepest nesting (a verification file nests five deep).
 MAX_FILE_BYTES = 1 << 20
 MAX_DEPTH = 64
-_LIMITS = {"large": "1 MiB", "depth": MAX_DEPTH}
 #: A verification file's words for what llfsm.yamlfile refuses (the rest in its default words).
-_WORDS = {
-    "syntax": "{where}:{line}: invalid YAML: {detail}",
-}
+_WORDS = {"syntax": "{where}:{line}: invalid YAML: {detail}"}
 
 
 class FileError(ValueError):
@@ -122,7 +119,7 @@ def read_verify_file(path: Path) -> VerifyFile:
     try:
         root = yamlfile.load(path, MAX_FILE_BYTES, MAX_DEPTH)
     except yamlfile.Refused as e:
-        raise FileError(e.say(str(path), "a verification file", _LIMITS.get(e.kind, ""), _WORDS)) from None
+        raise FileError(e.say(str(path), "a verification file", _WORDS)) from None
     if not isinstance(root, yaml.MappingNode):
         raise fail(root, "a verification file is a mapping with `machines:` and `properties:`")
     keys = ("machines", "properties", "bounds", "environment", *FILE_OPTIONS)

@@ -54,7 +54,7 @@ MAX_DEPTH = 64
 #: and aliases are refused as rcl_yaml_param_parser refuses them).
 _WORDS = {
     "unreadable": "--params-file {where}: cannot read: {detail}",
-    "large": "{where}: larger than {limit}: not a params file",
+    "large": "{where}: larger than {mib} MB: not a params file",
 }
 
 #: An override: the value, and where it was written (`params.yaml:3`, `-p gain:=2`).
@@ -193,8 +193,7 @@ def read_params_file(path: str | Path) -> list[tuple[str, dict[str, Override]]]:
     try:
         root = yamlfile.load(path, MAX_FILE_BYTES, MAX_DEPTH)
     except yamlfile.Refused as e:
-        limit = f"{MAX_FILE_BYTES // (1024 * 1024)} MB" if e.kind == "large" else MAX_DEPTH
-        raise ParameterTextError(e.say(shown, "a params file", limit, _WORDS)) from None
+        raise ParameterTextError(e.say(shown, "a params file", _WORDS)) from None
     if root is None:
         raise ParameterTextError(f"{shown}:1: the file holds no parameters")
     entries: list[tuple[str, dict[str, Override]]] = []
