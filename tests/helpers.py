@@ -10,6 +10,8 @@ samples of them), dds_netns.py (the private network namespace of the DDS tests),
 from __future__ import annotations
 
 import ast
+import contextlib
+import errno
 import functools
 import io
 import json
@@ -18,8 +20,10 @@ import subprocess
 import sys
 import sysconfig
 import tokenize
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
 from click.testing import CliRunner
@@ -32,6 +36,28 @@ REPO = Path(__file__).resolve().parent.parent
 MACHINES = REPO / "machines"
 
 # -- machines and runs ----------------------------------------------------------------------------
+
+
+@contextlib.contextmanager
+def disk_full_at(nth: int) -> Iterator[None]:
+    """Inside it, the disk fills up as llfsm.edit writes the `nth` file of a change (counted
+    from 1; those before it are written): how every writer of machine directories is tested
+    against a full disk (llfsm.edit stages each file beside its place, then renames them all)."""
+    from llfsm.edit import change
+
+    real, calls = change._stage, []
+
+    def staged(*args: Any) -> str:
+        calls.append(args)
+        if len(calls) == nth:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(*args)
+
+    change._stage = staged  # restored below, whatever happens
+    try:
+        yield
+    finally:
+        change._stage = real
 
 
 def write_machine(

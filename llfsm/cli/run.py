@@ -9,19 +9,9 @@ from typing import Any
 
 import click
 
+from ..rosargs import RosArgsError, without_ros_args
 from ._group import DURATION, cli
-from .run_args import (
-    CHOICE,
-    COUNT,
-    FILE,
-    FLAG,
-    FLOAT,
-    RUN_OPTIONS,
-    TARGETS,
-    RosArgsError,
-    RunOption,
-    without_ros_args,
-)
+from .run_args import CHOICE, COUNT, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
 from .run_args import DURATION as DURATION_KIND
 
 _TYPES: dict[str, Callable[[RunOption], Any]] = {

@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 import stat
 
+from ..rosargs import RosArgsError, without_ros_args
 from ._exits import duration_ns
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
@@ -242,49 +243,6 @@ _BY_FLAG = {flag: opt for opt in RUN_OPTIONS for flag in opt.flags}
 
 class _Delegate(Exception):
     """Something `parse` leaves to click (which then reports it, or does it)."""
-
-
-#: What starts ROS arguments on a command line (`ros2 run PKG EXE --ros-args -r a:=b -p x:=1`);
-#: `--` ends them.  llfsm takes ROS's spellings as its own options (-r, -p, --params-file,
-#: --log-level), so the markers only need to go.
-ROS_ARGS = "--ros-args"
-#: ROS arguments with a spelling of llfsm's own.
-_ROS_SPELLINGS = {"--enable-external-lib-logs": "--log-file", "--disable-external-lib-logs": None}
-#: ROS arguments llfsm does not take (rcl's), named in the message that refuses them.
-_ROS_ONLY = frozenset(
-    {"-e", "--enclave", "--log-config-file", "--enable-rosout-logs", "--disable-rosout-logs"}
-    | {"--enable-stdout-logs", "--disable-stdout-logs"}
-)
-
-
-class RosArgsError(ValueError):
-    """A ROS argument `llfsm run` does not take (the message says which it takes)."""
-
-
-def without_ros_args(args: Sequence[str]) -> list[str]:
-    """`args` with the `--ros-args` markers (and the `--` that closes their block) taken out
-    and rcl's spellings of llfsm's options put in: what click and `parse` then read."""
-    if ROS_ARGS not in args:
-        return list(args)
-    out: list[str] = []
-    inside = False
-    for arg in args:
-        if arg == ROS_ARGS:
-            inside = True
-        elif inside and arg == "--":
-            inside = False
-        elif inside and arg in _ROS_SPELLINGS:
-            spelling = _ROS_SPELLINGS[arg]
-            if spelling is not None:
-                out.append(spelling)
-        elif inside and arg.partition("=")[0] in _ROS_ONLY:
-            raise RosArgsError(
-                f"--ros-args {arg}: llfsm run takes -r/--remap, -p/--param, --params-file, --log-level and "
-                "--enable-external-lib-logs"
-            )
-        else:
-            out.append(arg)
-    return out
 
 
 def _convert(opt: RunOption, text: str) -> Any:
