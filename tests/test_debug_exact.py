@@ -197,7 +197,7 @@ def test_on_a_terminal_the_prompt_completes_names_with_readline() -> None:
     try:
         read(b"(llfsm) ")
         os.write(fd, b"p coun\t.co\t\n")  # tab: counter, then counter.count
-        read(b"ter.count\r\n0\r\n")
+        read(b"ter.count\r\n0\r\n(llfsm) ")  # the next prompt: typed before it, the terminal echoes
         os.write(fd, b"c\n")
         read(b"done")
     finally:
