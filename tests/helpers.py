@@ -92,6 +92,27 @@ def write_machine(
     return d
 
 
+def turning_machine(root: Path) -> Path:
+    """`w`: FORWARD until its input wall_close (bound to /turtle1/wall_close) holds, then TURN,
+    counting its turns, back to FORWARD once clear and 150 ms have passed: the machine of the
+    counterexample tests (a counterexample of `never: w.turns == 2 and state(w) == "TURN"`)."""
+    return write_machine(
+        root,
+        "w",
+        {
+            "INITIAL": [("FORWARD", "True")],
+            "FORWARD": [("TURN", "wall_close")],
+            "TURN": [("FORWARD", "not wall_close and after_ms(150)")],
+        },
+        {"TURN_OnEntry": "turns += 1"},
+        variables="turns: int = 0\n",
+        yaml_extra=(
+            "inputs:\n  wall_close:\n    type: bool\n    topic: /turtle1/wall_close\n"
+            "    msg: std_msgs/msg/Bool\n    field: data\n"
+        ),
+    )
+
+
 def driver(root: Path) -> Path:
     """A machine that publishes a Twist on /turtle1/cmd_vel and a String on /chat every 100 ms
     of run time (more than 100 ms after entering DRIVE: entries at 1 ms, 103 ms, 205 ms...):

@@ -11,7 +11,7 @@ import click
 
 from ..rosargs import RosArgsError, without_ros_args
 from ._group import DURATION, cli
-from .run_args import CHOICE, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
+from .run_args import CHOICE, COUNT, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
 from .run_args import DURATION as DURATION_KIND
 
 _TYPES: dict[str, Callable[[RunOption], Any]] = {
@@ -19,6 +19,7 @@ _TYPES: dict[str, Callable[[RunOption], Any]] = {
     CHOICE: lambda o: click.Choice(list(o.choices)),
     DURATION_KIND: lambda o: DURATION,
     FLOAT: lambda o: float,
+    COUNT: lambda o: click.IntRange(min=1),
 }
 
 

@@ -27,8 +27,8 @@ if TYPE_CHECKING:
     from ..session import RunOptions
 
 #: Kinds of option: how the value is converted (click: is_flag, str, click.Path(dir_okay=False),
-#: click.Choice, Duration, float).
-FLAG, TEXT, FILE, CHOICE, DURATION, FLOAT = "flag", "text", "file", "choice", "duration", "float"
+#: click.Choice, Duration, float, click.IntRange(min=1)).
+FLAG, TEXT, FILE, CHOICE, DURATION, FLOAT, COUNT = "flag", "text", "file", "choice", "duration", "float", "count"
 
 
 class RunOption:
@@ -202,10 +202,33 @@ RUN_OPTIONS: tuple[RunOption, ...] = (
         ("--on-violation",),
         "on_violation",
         CHOICE,
-        "What a violated property does: log it, or stop the run (exit status 4); pause needs the debugger.",
+        "What a violated property does: log it, pause the run (the debugger), or stop it (exit status 4).",
         choices=("log", "pause", "stop"),
         default="log",
         show_default=True,
+    ),
+    # -- the debugger (llfsm.debug, docs/debug.md) --
+    _O(("--paused",), "paused", FLAG, "Start paused (the debugger: a prompt on the terminal, or the page)."),
+    _O(
+        ("--break",),
+        "breaks",
+        TEXT,
+        'Pause where EXPR becomes true: state(m) == "S", m.count > 3, fired(m, "S", 0)... (repeatable).',
+        multiple=True,
+        metavar="EXPR",
+    ),
+    _O(
+        ("--history",),
+        "history",
+        COUNT,
+        "Keep the last N ringlets for the debugger (the page keeps 1000).",
+        metavar="N",
+    ),
+    _O(
+        ("--debug-prompt",),
+        "debug_prompt",
+        FLAG,
+        "The debugger's (llfsm) prompt on standard input, with --web too (scripts drive it through a pipe).",
     ),
 )
 del _O
@@ -240,6 +263,10 @@ def _convert(opt: RunOption, text: str) -> Any:
             return duration_ns(text)
         except ValueError:
             raise _Delegate from None
+    if opt.kind == COUNT:  # click.IntRange(min=1)
+        if not text.strip().lstrip("+").isdigit() or int(text) < 1:
+            raise _Delegate
+        return int(text)
     if opt.kind == FILE:  # click.Path(dir_okay=False): an existing path must be a readable non-directory
         try:
             st = os.stat(text)
