@@ -4,6 +4,7 @@
 
 import { render } from "preact";
 import { connect } from "./api";
+import { DebugPage, start as startDebug } from "./debug/Page";
 import { App } from "./edit/App";
 import { connection, receive } from "./edit/store";
 import "./style.css";
@@ -17,4 +18,8 @@ if (root && document.body.dataset.page === "edit") {
     () => (connection.value = "live"),
     () => (connection.value = "closed"),
   );
+} else if (root && document.body.dataset.page === "debug") {
+  root.replaceChildren();
+  render(<DebugPage />, root);
+  startDebug();
 }

@@ -21,6 +21,7 @@ from . import (  # noqa: F401  (each registers its commands)
     new,
     node,
     param,
+    replay,
     run,
     service,
     structure,

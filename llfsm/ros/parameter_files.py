@@ -43,6 +43,8 @@ from typing import Any
 
 import yaml
 
+from .. import yamlfile
+
 #: The key under a node that holds its parameters.
 PARAMS_KEY = "ros__parameters"
 #: rcl_yaml_param_parser's words for true and false.
@@ -63,8 +65,12 @@ INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 #: (and Python would refuse to convert one of more than 4300 digits).
 _DECIMAL = re.compile(r"[-+]?[0-9][0-9_]*")
 _MAX_DECIMAL = 24
-#: YAML's loader, libyaml's C one when PyYAML has it.
-_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+#: A params file's words for what llfsm.yamlfile refuses (the rest in its default words; anchors
+#: and aliases are refused as rcl_yaml_param_parser refuses them).
+_WORDS = {
+    "unreadable": "--params-file {where}: cannot read: {detail}",
+    "large": "{where}: larger than {mib} MB: not a params file",
+}
 
 #: An override: the value, and where it was written (`params.yaml:3`, `-p gain:=2`).
 Override = tuple[Any, str]
@@ -173,7 +179,7 @@ def guess_value(text: str) -> Any:
     if _DECIMAL.fullmatch(text.strip()):
         return int64(text.strip())
     try:
-        value = yaml.load(text, Loader=_LOADER)
+        value = yaml.load(text, Loader=yamlfile.LOADER)
     except yaml.YAMLError:
         return text
     except ValueError:  # an integer of more than 4300 digits, a date that is none
@@ -285,26 +291,9 @@ def read_params_file(path: str | Path) -> list[tuple[str, dict[str, Override]]]:
     """The entries of a params file in file order: (node key, {name: (value, "FILE:LINE")})."""
     shown = str(path)
     try:
-        with open(path, "rb") as f:
-            data = f.read(MAX_FILE_BYTES + 1)
-    except OSError as e:
-        raise ParameterTextError(f"--params-file {shown}: cannot read: {e.strerror or e}") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise ParameterTextError(f"{shown}: larger than {MAX_FILE_BYTES // (1024 * 1024)} MB: not a params file")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as e:
-        line = data[: e.start].count(b"\n") + 1
-        raise ParameterTextError(f"{shown}:{line}: not UTF-8 text") from None
-    try:
-        _refuse_structure(text, shown)
-        root = yaml.compose(text, Loader=_LOADER)
-    except yaml.MarkedYAMLError as e:
-        mark = e.problem_mark or e.context_mark
-        line = mark.line + 1 if mark is not None else 1
-        raise ParameterTextError(f"{shown}:{line}: not YAML: {e.problem or e.context}") from None
-    except (yaml.YAMLError, RecursionError) as e:
-        raise ParameterTextError(f"{shown}:1: not YAML: {type(e).__name__}") from None
+        root = yamlfile.load(path, MAX_FILE_BYTES, MAX_DEPTH)
+    except yamlfile.Refused as e:
+        raise ParameterTextError(e.say(shown, "a params file", _WORDS)) from None
     if root is None:
         raise ParameterTextError(f"{shown}:1: the file holds no parameters")
     entries: list[tuple[str, dict[str, Override]]] = []
@@ -312,23 +301,6 @@ def read_params_file(path: str | Path) -> list[tuple[str, dict[str, Override]]]:
     if not entries:
         raise ParameterTextError(f"{shown}:1: the file holds no node with `{PARAMS_KEY}`")
     return entries
-
-
-def _refuse_structure(text: str, shown: str) -> None:
-    """Refuse, on the event stream and before any tree is built, what would cost a reader far
-    more than the file's size: anchors and aliases (a few of them can stand for gigabytes; a
-    params file needs none) and nesting deeper than MAX_DEPTH."""
-    depth = 0
-    for event in yaml.parse(text, Loader=_LOADER):
-        line = event.start_mark.line + 1
-        if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
-            raise ParameterTextError(f"{shown}:{line}: anchors and aliases are not allowed in a params file")
-        if isinstance(event, yaml.CollectionStartEvent):
-            depth += 1
-            if depth > MAX_DEPTH:
-                raise ParameterTextError(f"{shown}:{line}: nested deeper than {MAX_DEPTH} levels: not a params file")
-        elif isinstance(event, yaml.CollectionEndEvent):
-            depth -= 1
 
 
 def _line(node: yaml.Node) -> int:

@@ -8,7 +8,8 @@ A page is sent the whole of what it shows once, then only what changed:
 - `delta`: `{"type": "delta", "seq": n, ...}` holding only the parts that changed since the
   message before: `header` (run time, clock, source, ended), each collection (`machines`,
   `topics`, `services`) as `{"upsert": [rows], "remove": [keys], "total": n}`, `param_events`
-  (node -> count, the changed ones), `world` (the turtle world's SVG), `monitor` (verdicts);
+  (node -> count, the changed ones), `world` (the turtle world's SVG), `monitor` (verdicts),
+  `debug` (the debugger's status and variables, docs/debug.md);
 - `graph`: the drawing of nodes and topics and the lists beside it, when they change.
 
 Every collection is bounded before it is sent (the source bounds its rows; `total` counts what
@@ -30,8 +31,9 @@ PROTOCOL = 1
 #: The keyed collections of a state, and the field that keys their rows.
 COLLECTIONS = {"machines": "name", "topics": "name", "services": "name"}
 #: The parts of a state sent whole when they change: the turtle world's SVG, the monitor's
-#: verdicts (llfsm.web.verdicts: a count and the newest 20).
-WHOLE = ("world", "monitor")
+#: verdicts (llfsm.web.verdicts: a count and the newest 20), the debugger's part
+#: (llfsm.web.debugging: status, breakpoints, the variables of each machine; None without one).
+WHOLE = ("world", "monitor", "debug")
 #: What a page is sent at most (docs/view.md, "The page's channel"): rows of the topics table,
 #: services named in the call form, characters of a topic's last message.  The rest is counted.
 #: (Machines are bounded by their sources, the graph's lists by llfsm.web.rosgraph.)
@@ -114,6 +116,7 @@ def state_of(
     param_events: dict[str, int] | None = None,
     world: str | None = None,
     monitor: dict[str, Any] | None = None,
+    debug: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """A state as a source hands it to the channel: rows keyed by name (machines keep their
     order in `order`), totals counting what the rows leave out."""
@@ -128,6 +131,7 @@ def state_of(
         "param_events": dict(param_events or {}),
         "world": world,
         "monitor": monitor,
+        "debug": debug,
     }
 
 
@@ -147,7 +151,7 @@ class Mirror:
     """What a page holds after the messages it received (protocol 1): `apply(message)` returns
     the state as one dict, `{"t", "clock", "source", "ended", "machines": [rows], "topics":
     [rows], "topics_total", "services": [rows], "services_total", "param_events", "world",
-    "monitor"}`,
+    "monitor", "debug"}`,
     after a hello or a delta, and None after any other message."""
 
     def __init__(self) -> None:

@@ -20,6 +20,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
+import aiohttp
 from aiohttp import WSMsgType, web
 
 from .run_relay import RunError, RunRelay
@@ -77,6 +78,7 @@ class EditServer(WebServer):
             "command": self._command,
         }.items():
             app.router.add_post(f"/api/{name}", handler)
+        app.router.add_post("/api/debug/{what}", self._debug)
 
     async def _farewell(self) -> None:
         await self._broadcast({"type": "bye"})
@@ -245,6 +247,19 @@ class EditServer(WebServer):
     async def _stop_run(self, request: web.Request) -> web.Response:
         await self.run.stop()
         return web.json_response({"success": True, "message": "stopped", "run": self.run.status()})
+
+    async def _debug(self, request: web.Request) -> web.Response:
+        """The debugger's controls of the run Run started (relayed as they are: the child's
+        page server checks them)."""
+        what = request.match_info["what"]
+        try:
+            d = await self._json(request)
+            result = await self.run.debug(what, d)
+        except (CommandError, RunError) as e:
+            return web.json_response({"success": False, "message": str(e)}, status=400)
+        except aiohttp.ContentTypeError:  # the child knows no such request
+            return web.json_response({"success": False, "message": f"unknown request {what!r}"}, status=404)
+        return web.json_response(result)
 
     async def _command(self, request: web.Request) -> web.Response:
         try:

@@ -5,8 +5,8 @@ Machine code runs in the child, never in the editor's process, and Stop ends it 
 code does.  The child's own page server speaks the live view's protocol (docs/view.md); each
 of its messages reaches the editor's pages as `{"type": "live", "data": MESSAGE}`, so the
 editor's diagrams become the live view, and the page's commands (Suspend, Resume, Restart)
-go back to the child's `/api/command`.  The child binds loopback with no token, as any run
-does; only this process talks to it.
+go back to the child's `/api/command`, its debugger's controls to `/api/debug/...`.  The child
+binds loopback with no token, as any run does; only this process talks to it.
 """
 
 from __future__ import annotations
@@ -147,12 +147,20 @@ class RunRelay:
 
     async def command(self, data: dict[str, Any]) -> dict[str, Any]:
         """A page's Suspend / Resume / Restart, to the running child's page server."""
+        body = {"machine": str(data.get("machine", "")), "command": str(data.get("command", ""))}
+        return await self._forward("/api/command", body)
+
+    async def debug(self, what: str, data: dict[str, Any]) -> dict[str, Any]:
+        """A page's debugger control (Pause, Step ringlet, a breakpoint, a value set, the History
+        slider: docs/debug.md), to the running child's `/api/debug/WHAT`."""
+        return await self._forward(f"/api/debug/{what}", data)
+
+    async def _forward(self, path: str, body: dict[str, Any]) -> dict[str, Any]:
         if self.state != "running" or not self.url:
             raise RunError("nothing is running: press Run first")
-        body = {"machine": str(data.get("machine", "")), "command": str(data.get("command", ""))}
         async with (
             aiohttp.ClientSession() as s,
-            s.post(self.url.split("?", 1)[0].rstrip("/") + "/api/command", json=body) as r,
+            s.post(self.url.split("?", 1)[0].rstrip("/") + path, json=body) as r,
         ):
             result: dict[str, Any] = await r.json()
             return result

@@ -26,6 +26,7 @@ description itself.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import hmac
 import ipaddress
 import secrets
@@ -39,7 +40,7 @@ from typing import Any
 from aiohttp import WSMsgType, web
 
 from ..diagram import svg as diagram
-from . import rosgraph
+from . import debugging, rosgraph
 from .channel import PROTOCOL, Channel, full
 from .source import CommandError, dumps
 
@@ -53,6 +54,8 @@ LOOPBACK_NAMES = {"localhost", "127.0.0.1", "::1", "[::1]"}
 _STATIC = {"app.js": "text/javascript", "style.css": "text/css"}
 #: What the front end's build (frontend/, `make`) writes into static/app/.
 _APP = {"app.js": "text/javascript", "app.css": "text/css"}
+#: The debugger's page (the application, at /debug: llfsm.web.debugging).
+DEBUG_PAGE = "debug.html"
 APP_MISSING = "llfsm/web/static/app/app.js is missing"
 
 
@@ -111,6 +114,7 @@ class WebServer:
         self._ready = threading.Event()
         self._error: BaseException | None = None
         self._wake: asyncio.Event | None = None
+        self._nudged: asyncio.Event | None = None
         self._pusher: asyncio.Task[None] | None = None
         #: Lays diagrams out off the event loop (one at a time: they share a cache).
         self._drawer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="llfsm-web-draw")
@@ -189,6 +193,7 @@ class WebServer:
     async def _start(self, sock: socket.socket) -> None:
         app = web.Application(middlewares=[self._guard], client_max_size=self.MAX_BODY)
         app.router.add_get("/", self._index)
+        app.router.add_get("/debug", self._debug_page)
         app.router.add_get("/static/app/{name}", self._app_asset)
         app.router.add_get("/static/{name}", self._static)
         app.router.add_get("/ws", self._ws)
@@ -199,6 +204,9 @@ class WebServer:
         await web.SockSite(self._runner, sock).start()
         self._wake = asyncio.Event()
         self._pusher = asyncio.get_running_loop().create_task(self._push())
+        debug = getattr(self.source, "debug", None)
+        if debug is not None and hasattr(debug, "on_change"):
+            debug.on_change = self.nudge
 
     def _routes(self, app: web.Application) -> None:
         """The view's requests (the editor's server has its own)."""
@@ -207,6 +215,7 @@ class WebServer:
         app.router.add_post("/api/call", self._call)
         app.router.add_post("/api/parameters", self._parameters)
         app.router.add_post("/api/parameter", self._set_parameter)
+        debugging.routes(app, lambda: getattr(self.source, "debug", None), self._answer)
 
     async def _farewell(self) -> None:
         """The last message to the pages as the server stops (the view's: the run ended)."""
@@ -266,7 +275,17 @@ class WebServer:
 
     # -- the page --------------------------------------------------------------------------------------------
     async def _index(self, request: web.Request) -> web.Response:
-        text = (resources.files(__package__) / "static" / self.PAGE).read_text(encoding="utf-8")
+        # a source may have a page of its own (`llfsm replay`: the debugger's page)
+        return self._page(request, getattr(self.source, "page", None) or self.PAGE)
+
+    async def _debug_page(self, request: web.Request) -> web.Response:
+        """The debugger's page (docs/debug.md), beside the live view of a run or of the graph."""
+        if getattr(self.source, "debug", None) is None:
+            raise web.HTTPNotFound()
+        return self._page(request, DEBUG_PAGE)
+
+    def _page(self, request: web.Request, name: str) -> web.Response:
+        text = (resources.files(__package__) / "static" / name).read_text(encoding="utf-8")
         if "{{nonce}}" in text:  # a page that adds style sheets from script: a fresh nonce each time
             request["csp_nonce"] = nonce = secrets.token_urlsafe(16)
             text = text.replace("{{nonce}}", nonce)
@@ -435,8 +454,13 @@ class WebServer:
         graph = self._graph()
         graph_task: asyncio.Task[None] | None = None
         graph_at = -HELLO_PERIOD
+        nudged = self._nudged = asyncio.Event()
         while True:
-            await asyncio.sleep(1 / self.rate)
+            # at most `rate` times a second, or at once when the run says something changed
+            # (the debugger paused or went on: a step shows without waiting for the next sample)
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(nudged.wait(), 1 / self.rate)
+            nudged.clear()
             if not self.clients:
                 self._wake.clear()
                 await self._wake.wait()
@@ -464,6 +488,13 @@ class WebServer:
                 continue
             except Exception as e:  # said once; the next round goes on
                 self._warn(f"the page's update failed: {type(e).__name__}: {e}", "push")
+
+    def nudge(self) -> None:
+        """Push a snapshot now, not at the next sample (any thread: the run's debugger calls it
+        when it pauses or goes on)."""
+        loop, nudged = self._loop, self._nudged
+        if loop is not None and nudged is not None:
+            loop.call_soon_threadsafe(nudged.set)
 
     async def _send_hello(self) -> None:
         try:

@@ -29,6 +29,8 @@ export interface DiagramProps {
   /** A transition's label dragged (the editor): its new top-left corner. */
   onMoveLabel?: (transition: { source: string; index: number }, corner: [number, number]) => void;
   onSelect?: (sel: Selection) => void;
+  /** The debugger: a breakpoint toggled on a state or a transition (Alt+click, or B on it). */
+  onToggleBreakpoint?: (sel: Selection) => void;
   label?: string;
 }
 
@@ -135,10 +137,17 @@ function attach(host: HTMLElement, latest: { current: DiagramProps }): () => voi
       edge: el?.closest?.(".transition[data-index], .guard[data-index]") as SVGElement | null,
     };
   };
-  const select = (state: SVGGElement | null, edge: SVGElement | null) => {
+  const picked = (state: SVGGElement | null, edge: SVGElement | null): Selection | null => {
+    if (state?.dataset.state) return { state: state.dataset.state };
+    if (edge?.dataset.source) return { transition: { source: edge.dataset.source, index: Number(edge.dataset.index) } };
+    return null;
+  };
+  const select = (state: SVGGElement | null, edge: SVGElement | null, toggle = false) => {
     const p = latest.current;
-    if (state?.dataset.state) p.onSelect?.({ state: state.dataset.state });
-    else if (edge?.dataset.source) p.onSelect?.({ transition: { source: edge.dataset.source, index: Number(edge.dataset.index) } });
+    const sel = picked(state, edge);
+    if (!sel) return;
+    if (toggle && p.onToggleBreakpoint) p.onToggleBreakpoint(sel);
+    else p.onSelect?.(sel);
   };
 
   const down = (e: PointerEvent) => {
@@ -195,7 +204,7 @@ function attach(host: HTMLElement, latest: { current: DiagramProps }): () => voi
         }
         dragged = true;
       } else {
-        select(isState ? g : null, isState ? null : g);
+        select(isState ? g : null, isState ? null : g, e.altKey);
         dragged = true;
       }
       drag = null;
@@ -209,14 +218,17 @@ function attach(host: HTMLElement, latest: { current: DiagramProps }): () => voi
       return;
     }
     const { state, edge } = target(e);
-    if (!state && edge) select(null, edge);
-    else if (state && !latest.current.onMove) select(state, null);
+    if (!state && edge) select(null, edge, e.altKey);
+    else if (state && !latest.current.onMove) select(state, null, e.altKey);
   };
   const key = (e: KeyboardEvent) => {
     const { state, edge } = target(e);
     if ((e.key === "Enter" || e.key === " ") && (state || edge)) {
       e.preventDefault();
       select(state, edge);
+    } else if ((e.key === "b" || e.key === "B") && (state || edge) && latest.current.onToggleBreakpoint) {
+      e.preventDefault();
+      select(state, edge, true);
     }
     // Alt+arrows move the focused state (Shift: further): a layout without a pointer
     const step = ARROWS[e.key];

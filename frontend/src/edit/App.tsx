@@ -1,6 +1,9 @@
 // `llfsm edit`'s page: the toolbar, the machines, the diagram, the inspector, the problems.
 
 import { useEffect, useState } from "preact/hooks";
+import { Controls } from "../debug/Controls";
+import { debug, marksOf, shownMachine, toggleBreakpoint } from "../debug/store";
+import { Variables } from "../debug/Variables";
 import { Diagram, zoomDiagram } from "../diagram/Diagram";
 import { dialog, Dialogs } from "./Dialogs";
 import { ownerOf, problemStates, stateLines } from "./files";
@@ -80,7 +83,7 @@ function RunBar() {
       </button>
       <button type="button" disabled={!running} onClick={() => void stopRun()}>Stop</button>
       <span class="badge" data-status={r.state} role="status" aria-label="run status">{r.state === "idle" ? "not running" : r.state}</span>
-      {/* the debugger's controls (issue 30) go here: Pause, Continue, Step ringlet, Step round */}
+      {running && <Controls disabled={r.state !== "running"} />}
     </div>
   );
 }
@@ -160,6 +163,8 @@ function Canvas() {
   const l = live.value.machines[m.name];
   const r = run.value;
   const inRun = r.machines.includes(m.name) && (r.state === "running" || r.state === "ended");
+  const debugging = inRun && r.state === "running";
+  const shownState = inRun ? shownMachine(m.name, l?.state ?? null).state : null;
   return (
     <section class="canvas" aria-label={`diagram of ${m.name}`}>
       <div class="canvas-bar">
@@ -183,8 +188,10 @@ function Canvas() {
           machine={m.name}
           svg={m.svg}
           selected={selection.value}
-          current={inRun ? l?.state ?? null : null}
+          current={shownState}
           marks={marks}
+          breakpoints={debugging ? marksOf(m.name, debug.value.breaks) : undefined}
+          onToggleBreakpoint={debugging ? (sel) => void toggleBreakpoint(m.name, sel) : undefined}
           onSelect={(s) => (selection.value = s)}
           onMove={(positions) => void operate("set_layout", { positions })}
           onMoveLabel={(t, corner) => void operate("set_layout", { positions: {}, labels: [{ ...t, x: corner[0], y: corner[1] }] })}
@@ -192,6 +199,7 @@ function Canvas() {
       ) : (
         <p class="hint">machine.yaml does not read yet: see Problems.</p>
       )}
+      {debugging && <Variables machine={m.name} liveState={l?.state ?? null} />}
       <Problems />
       {r.output.length > 0 && (
         <details class="output">

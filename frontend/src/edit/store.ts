@@ -6,6 +6,7 @@
 import { batch, computed, signal } from "@preact/signals";
 import { type Answer, type Message, post } from "../api";
 import type { Selection } from "../diagram/Diagram";
+import { reduceDebug, reset as resetDebug } from "../debug/store";
 import { type Live, NO_RUN, reduce } from "../live/live";
 import type { Diagnostic } from "./files";
 
@@ -301,13 +302,17 @@ export function receive(m: Message): void {
     }
     case "run":
       run.value = { ...(m as unknown as RunStatus) };
-      if (m.state === "running") live.value = NO_RUN;
+      if (m.state === "running") {
+        live.value = NO_RUN;
+        resetDebug();
+      }
       break;
     case "output":
       run.value = { ...run.value, output: [...run.value.output.slice(-199), String(m.line)] };
       break;
     case "live":
       live.value = reduce(live.value, m.data as Record<string, unknown>);
+      reduceDebug(m.data as Record<string, unknown>);
       break;
     case "bye":
       connection.value = "closed";

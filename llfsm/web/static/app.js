@@ -435,6 +435,12 @@ function applyDelta(d) {
   }
   if (d.param_events) parameterEvents({ ...lastEvents, ...d.param_events });
   if ("monitor" in d) updateMonitor(d.monitor);
+  // the debugger's page (docs/debug.md): pause, step, breakpoints, variables, history
+  const debugLink = document.getElementById("debug-link");
+  if (d.debug && debugLink.hidden) {
+    debugLink.href = "/debug" + location.search; // the token, if the page has one
+    debugLink.hidden = false;
+  }
   if ("world" in d && d.world) {
     document.getElementById("world-panel").hidden = false;
     document.getElementById("world").replaceChildren(svgNode(d.world));

@@ -1,0 +1,33 @@
+import { describe, expect, it } from "vitest";
+import { breakExpression, debug, marksOf, reduceDebug, shownMachine } from "./store";
+
+describe("breakpoints on the diagram", () => {
+  it("are the expressions of a state and of a transition, and back", () => {
+    const s = breakExpression("ping", { state: "PUBLISH" });
+    const t = breakExpression("ping", { transition: { source: "WAIT", index: 1 } });
+    expect(s).toBe('state(ping) == "PUBLISH"');
+    expect(t).toBe('fired(ping, "WAIT", 1)');
+    const marks = marksOf("ping", [s!, t!, 'state(other) == "A"', "ping.count > 3"]);
+    expect([...marks].sort()).toEqual(["PUBLISH", "WAIT#1"]);
+  });
+});
+
+describe("the debugger's part of the channel", () => {
+  it("is read from a hello's snapshot and from deltas (protocol 1), and gives each machine's values", () => {
+    reduceDebug({
+      type: "hello",
+      protocol: 1,
+      snapshot: { debug: { paused: true, where: "paused before the first round", breaks: ['state(ping) == "END"'], variables: { ping: { count: 2 } }, records: 5 } },
+    });
+    expect(debug.value.paused).toBe(true);
+    expect(debug.value.records).toBe(5);
+    expect(shownMachine("ping", "PUBLISH")).toEqual({ state: "PUBLISH", values: { count: 2 } });
+    reduceDebug({ type: "delta", seq: 1, header: { t: 0.2 } });
+    expect(debug.value.paused).toBe(true); // a delta without the part: the debugger did not change
+    reduceDebug({ type: "delta", seq: 2, debug: { paused: false, where: "", breaks: [], variables: { ping: { count: 3 } }, records: 6 } });
+    expect(debug.value.paused).toBe(false);
+    expect(shownMachine("ping", "WAIT")).toEqual({ state: "WAIT", values: { count: 3 } });
+    reduceDebug({ type: "delta", seq: 3, debug: null });
+    expect(debug.value.records).toBe(6); // a run without a debugger changes nothing
+  });
+});
