@@ -7,6 +7,7 @@ neither held without bound nor sent.  In process, under the sim clock."""
 from __future__ import annotations
 
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -17,10 +18,12 @@ from llfsm import ros
 from llfsm.msgs.rcl_interfaces.msg import ParameterEvent
 from llfsm.msgs.std_msgs.msg import String
 from llfsm.ros.bus import Bus
-from llfsm.runtime import Arrangement
+from llfsm.runtime import Arrangement, RunContext, SimClock
+from llfsm.runtime.context import activate
+from llfsm.targets import load
 from llfsm.web.channel import MAX_TOPIC_ROWS, PROTOCOL, Channel, Mirror, state_of
 from llfsm.web.parameters import MAX_EVENT_NAME
-from llfsm.web.source import MAX_EVENT_NODES, RunSource
+from llfsm.web.source import MAX_EVENT_NODES, RunSource, dumps
 
 # -- the channel --------------------------------------------------------------------------------------
 
@@ -147,3 +150,35 @@ def test_a_flood_of_parameter_events_is_held_bounded_and_sent_only_for_listed_no
     source.graph()  # the nodes the page lists: this process's
     state = source.state()
     assert set(state["param_events"]) <= {"/flooder", "/many"}  # not the ten thousand others
+
+
+def test_two_hundred_machines_in_one_run_send_only_the_machine_that_moved(tmp_path: Path) -> None:
+    """Issue 28 item 10: 200 machines in one process were sent whole 13 times a second (245-290
+    KB each).  Now, after the hello, each sample's delta carries the one machine that changed
+    state: a row of a few hundred bytes, however many idle machines stand beside it."""
+    from helpers import write_machine
+
+    idle = load(str(write_machine(tmp_path, "idle", {"A": [("B", "False")], "B": None})))
+    blink = load(str(write_machine(tmp_path, "blink", {"A": [("B", "after_ms(1)")], "B": [("A", "after_ms(1)")]})))
+    classes = [blink, *(type(idle)(f"idle{i:03d}", (idle,), {"NAME": f"idle{i:03d}"}) for i in range(199))]
+    ctx = RunContext(SimClock())
+    prev = activate(ctx)
+    try:
+        arr = Arrangement(classes, context=ctx)
+        ros.init()
+        source = RunSource(arr, ros.bus_of())
+        ch, page = Channel(), Mirror()
+        hello = ch.reset(source.state())
+        page.apply({"type": "hello", "protocol": PROTOCOL, "snapshot": hello})
+        deltas = []
+        for k in range(1, 6):
+            arr.run(duration_ns=7_000_000 * k)  # an odd number of toggles: blink's state changes
+            deltas.append(ch.delta(source.state()))
+            assert deltas[-1] is not None
+            held = page.apply(deltas[-1])
+            assert held is not None and held["machines"][0]["state"] == blink.STATES[arr.machines[0]._state]
+    finally:
+        activate(prev)
+    assert len(hello["machines"]["upsert"]) == 200 and len(dumps(hello)) > 20_000
+    assert [[row["name"] for row in d["machines"]["upsert"]] for d in deltas] == [["blink"]] * 5
+    assert max(len(dumps(d)) for d in deltas) < 2_000, [len(dumps(d)) for d in deltas]
