@@ -55,19 +55,31 @@ def test_a_delta_carries_what_changed_and_nothing_when_nothing_did() -> None:
 
 
 _row = st.fixed_dictionaries({"name": st.sampled_from(["/a", "/b", "/c", "/d"]), "count": st.integers(0, 3)})
+_debug = st.one_of(
+    st.none(),
+    st.builds(
+        lambda paused, variables: {"paused": paused, "variables": variables},
+        st.booleans(),
+        st.dictionaries(
+            st.sampled_from(["m1", "m2", "m3"]), st.dictionaries(st.sampled_from(["x", "y"]), st.integers(0, 2))
+        ),
+    ),
+)
 _state = st.builds(
-    lambda t, topics, machines, events, world: state_of(
+    lambda t, topics, machines, events, world, debug: state_of(
         t=t,
         topics=topics,
         machines=[{"name": n, "state": s} for n, s in machines.items()],
         param_events=events,
         world=world,
+        debug=debug,
     ),
     st.sampled_from([0.0, 1.0]),
     st.lists(_row, max_size=4, unique_by=lambda r: r["name"]),
     st.dictionaries(st.sampled_from(["m1", "m2"]), st.sampled_from(["A", "B"])),
     st.dictionaries(st.sampled_from(["/n1", "/n2"]), st.integers(0, 2)),
     st.sampled_from([None, "<svg/>"]),
+    _debug,
 )
 
 
@@ -88,7 +100,20 @@ def test_a_page_that_applies_the_messages_holds_the_last_state(states: list[dict
     assert {r["name"]: r for r in held["topics"]} == last["topics"]
     assert {r["name"]: r for r in held["machines"]} == last["machines"]
     assert held["world"] == last["world"]
+    assert held["debug"] == last["debug"]  # the variables of machines that changed, merged
     assert {k: v for k, v in held["param_events"].items() if k in last["param_events"]} == last["param_events"]
+
+
+def test_the_debuggers_part_carries_the_variables_of_the_machines_that_changed() -> None:
+    ch = Channel()
+    many = {f"m{i:03d}": {"count": 0} for i in range(200)}
+    hello = ch.reset(state_of(debug={"paused": True, "variables": many}))
+    assert hello["debug"]["variables"] == many
+    d = ch.delta(state_of(debug={"paused": False, "variables": {**many, "m007": {"count": 1}}}))
+    assert d is not None and d["debug"] == {"paused": False, "variables": {"m007": {"count": 1}}}
+    gone = {k: v for k, v in many.items() if k != "m001"} | {"m007": {"count": 1}}
+    d = ch.delta(state_of(debug={"paused": False, "variables": gone}))
+    assert d is not None and d["debug"]["variables"] == {"m001": None}
 
 
 def test_a_page_of_another_protocol_is_told_so() -> None:

@@ -9,7 +9,7 @@ A page is sent the whole of what it shows once, then only what changed:
   message before: `header` (run time, clock, source, ended), each collection (`machines`,
   `topics`, `services`) as `{"upsert": [rows], "remove": [keys], "total": n}`, `param_events`
   (node -> count, the changed ones), `world` (the turtle world's SVG), `monitor` (verdicts),
-  `debug` (the debugger's status and variables, docs/debug.md);
+  `debug` (the debugger's status, and the variables of the machines whose values changed);
 - `graph`: the drawing of nodes and topics and the lists beside it, when they change.
 
 Every collection is bounded before it is sent (the source bounds its rows; `total` counts what
@@ -95,11 +95,25 @@ class Channel:
         for part in WHOLE:
             if state.get(part) != last.get(part):
                 out[part] = state.get(part)
+        if "debug" in out:
+            out["debug"] = _debug_delta(state.get("debug"), last.get("debug"))
         self._last = state
         if not out:
             return None
         self.seq += 1
         return {"type": "delta", "seq": self.seq, **out}
+
+
+def _debug_delta(now: dict[str, Any] | None, before: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The debugger's part as a delta sends it: whole, but for `variables`, which holds only the
+    machines whose values changed (None for a machine no longer there): a step of one machine
+    among two hundred sends one machine's values."""
+    if now is None or before is None:
+        return now
+    was, values = before.get("variables") or {}, now.get("variables") or {}
+    changed: dict[str, Any] = {m: v for m, v in values.items() if was.get(m) != v}
+    changed.update((m, None) for m in was if m not in values)
+    return {**now, "variables": changed}
 
 
 def state_of(
@@ -189,9 +203,14 @@ class Mirror:
                 rows[row[key]] = row
             self.totals[name] = change.get("total", len(rows))
         self.param_events.update(d.get("param_events") or {})
+        debug_before = self.whole["debug"]
         for part in WHOLE:
             if part in d:
                 self.whole[part] = d[part]
+        debug = self.whole["debug"]
+        if "debug" in d and debug is not None and debug_before is not None:  # the machines that changed
+            variables = {**(debug_before.get("variables") or {}), **(debug.get("variables") or {})}
+            self.whole["debug"] = {**debug, "variables": {m: v for m, v in variables.items() if v is not None}}
 
     def state(self) -> dict[str, Any]:
         out = dict(self.header)
