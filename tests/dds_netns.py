@@ -9,11 +9,13 @@ machine does not allow unshare (no root, no user namespaces) the fixture skips w
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -128,6 +130,26 @@ def finish(p: subprocess.Popen[str], timeout: float) -> tuple[int, str, str]:
         out, err = p.communicate(timeout=10)
         err += f"\n[killed after {timeout} s]"
     return p.returncode, out, err
+
+
+def start_view(ns: NetNamespace, *args: str) -> tuple[subprocess.Popen[str], str, list[str]]:
+    """`llfsm view` in the namespace (`args` after `--web 127.0.0.1:0`): the process, its page's
+    URL, and its stderr as it comes (read on, and stdout drained, by threads)."""
+    view = ns.llfsm("view", "--web", "127.0.0.1:0", *args, env={"PYTHONUNBUFFERED": "1"})
+    assert view.stderr is not None
+    err: list[str] = []
+    url = ""
+    for line in view.stderr:
+        err.append(line)
+        m = re.search(r"http://\S+", line)
+        if m:
+            url = m.group(0)
+            break
+    assert url, "llfsm view printed no address: " + "".join(err)
+    threading.Thread(target=lambda: err.extend(view.stderr or []), daemon=True).start()
+    if view.stdout is not None:
+        threading.Thread(target=lambda: [None for _ in view.stdout or []], daemon=True).start()
+    return view, url, err
 
 
 def interrupt(p: subprocess.Popen[str], after: float, sig: int = signal.SIGINT) -> None:

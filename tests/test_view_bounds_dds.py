@@ -9,19 +9,15 @@ in a private network namespace."""
 from __future__ import annotations
 
 import json
-import os
 import re
-import shutil
 import signal
 import sys
 import textwrap
-import threading
 import time
-from pathlib import Path
-from typing import Any
 
 import pytest
-from dds_netns import RAW_PEER, NetNamespace, finish
+from browser import ARGS, CHROMIUM, playwright_or_skip
+from dds_netns import RAW_PEER, NetNamespace, finish, start_view
 from helpers import REPO
 
 pytestmark = pytest.mark.dds
@@ -91,23 +87,6 @@ CLIENT = textwrap.dedent(
 )
 
 
-def start_view(ns: NetNamespace) -> tuple[Any, str, list[str]]:
-    view = ns.popen([sys.executable, "-m", "llfsm", "view", "--web", "127.0.0.1:0"], cwd=REPO)
-    err: list[str] = []
-    url = ""
-    assert view.stderr is not None
-    for line in view.stderr:
-        err.append(line)
-        m = re.search(r"http://\S+", line)
-        if m:
-            url = m.group(0)
-            break
-    assert url, "llfsm view printed no address: " + "".join(err)
-    threading.Thread(target=lambda: err.extend(view.stderr or []), daemon=True).start()
-    threading.Thread(target=lambda: [None for _ in view.stdout or []], daemon=True).start()
-    return view, url, err
-
-
 def topic_list(ns: NetNamespace) -> list[str]:
     _status, out, _err = finish(ns.popen([sys.executable, "-m", "llfsm", "topic", "list"], cwd=REPO), 60)
     return out.split()
@@ -171,15 +150,11 @@ WATCH = textwrap.dedent(
 
 @pytest.mark.browser
 def test_the_page_in_chromium_shows_the_bounded_table_and_follows_the_topics_going(netns: NetNamespace) -> None:
-    pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
-    chromium = os.environ.get("LLFSM_CHROMIUM", "/usr/bin/chromium")
-    if not (Path(chromium).exists() or shutil.which(chromium)):
-        pytest.skip(f"no Chromium at {chromium}: `apt-get install chromium`")
-    args = "--headless --no-sandbox --disable-gpu --no-first-run --disable-background-networking"
+    playwright_or_skip()
     view, url, err = start_view(netns)
     peer = netns.popen([sys.executable, "-c", PEER, str(TOPICS)], cwd=REPO, stdin=-1)
     assert peer.stdout is not None and peer.stdout.readline() == "up\n"
-    watcher = netns.popen([sys.executable, "-c", WATCH, url, chromium, args], cwd=REPO, stdin=-1)
+    watcher = netns.popen([sys.executable, "-c", WATCH, url, CHROMIUM, " ".join(ARGS)], cwd=REPO, stdin=-1)
     assert watcher.stdout is not None and watcher.stdin is not None and peer.stdin is not None
     seen = watcher.stdout.readline()
     assert seen == "seen\n", seen + (watcher.stderr.read() if watcher.stderr else "")

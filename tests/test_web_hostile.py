@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from dds_netns import NetNamespace, finish
+from dds_netns import NetNamespace, finish, start_view
 from helpers import MACHINES, REPO
 
 pytest.importorskip("aiohttp")
@@ -397,25 +397,6 @@ def start_peer(ns: NetNamespace) -> subprocess.Popen[str]:
     return p
 
 
-def start_view(ns: NetNamespace) -> tuple[subprocess.Popen[str], str, list[str]]:
-    """`llfsm view` in the namespace: the process, its page's URL, and its stderr as it comes."""
-    view = ns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "120", env={"PYTHONUNBUFFERED": "1"})
-    assert view.stderr is not None
-    err: list[str] = []
-    url = ""
-    for line in view.stderr:
-        err.append(line)
-        m = re.search(r"http://\S+", line)
-        if m:
-            url = m.group(0)
-            break
-    assert url, "llfsm view printed no address: " + "".join(err)
-    threading.Thread(target=lambda: err.extend(view.stderr or []), daemon=True).start()
-    if view.stdout is not None:
-        threading.Thread(target=lambda: [None for _ in view.stdout or []], daemon=True).start()
-    return view, url, err
-
-
 #: A page's WebSocket in the namespace: it waits for the machines, and checks what it is sent
 #: while the ping-pong goes on (each run of it is a new page: the first hello of every one).
 CLIENT = r"""
@@ -465,7 +446,7 @@ def page_client(ns: NetNamespace, url: str, want: list[str], seconds: float = 40
 @pytest.mark.dds
 def test_llfsm_view_keeps_serving_and_following_a_real_run_beside_a_hostile_peer(netns: NetNamespace) -> None:
     run = netns.llfsm("run", "--transport", "dds", MACHINES / f"{MACHINE}.machine", "--duration", "120")
-    view, url, err = start_view(netns)
+    view, url, err = start_view(netns, "--duration", "120")
     peer = start_peer(netns)
     try:
         got = page_client(netns, url, [MACHINE, "evil_text", "huge"], err=err)
@@ -550,7 +531,7 @@ def test_the_page_in_chromium_follows_a_real_run_while_hostile_peers_publish(
         pytest.skip(f"no Chromium at {CHROMIUM}: `apt-get install chromium`")
     shot = tmp_path / "hostile.png"
     run = netns.llfsm("run", "--transport", "dds", MACHINES / f"{MACHINE}.machine", "--duration", "150")
-    view, url, err = start_view(netns)
+    view, url, err = start_view(netns, "--duration", "120")
     watcher = netns.popen([sys.executable, "-c", WATCH, url, CHROMIUM, ARGS, MACHINE, str(shot)], stdin=subprocess.PIPE)
     peer = None
     try:
