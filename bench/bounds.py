@@ -2,6 +2,7 @@
 
     .venv/bin/python bench/bounds.py actions [--against DIR] [--quick]
     .venv/bin/python bench/bounds.py view [--quick]
+    .venv/bin/python bench/bounds.py verify [--quick]
 
 `actions`: an action server in process (the PULL form) holding n unfinished goals, with a
 subscriber of its status array (as a client of the same run is), and one cancel of every goal:
@@ -14,6 +15,12 @@ publishing on a topic of its own, a tenth of them every second), then beside a p
 10,000 topics and dropped them: the page's first message (the hello), what it is sent per second
 afterwards, and, in Chromium when it is installed, how long the page takes to apply a message
 (the page's own `window.llfsmStats`).
+
+`verify`: `llfsm verify` of a machine whose variable grows at every step (bytes by 200 kB a
+step; a list by one item a step, as in the issue), each with `--max-memory` from 50 MB to
+800 MB, and once without it under a 1 GiB address-space limit (the default bound: half of what
+the process may use): the exit status, the memory verify said it was using when it stopped, the
+process's peak resident set (the kernel's, `wait4`), and the configurations explored.
 """
 
 from __future__ import annotations
@@ -21,6 +28,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -288,15 +297,111 @@ def view_inside(quick: bool) -> None:
         )
 
 
+# -- verify's memory ---------------------------------------------------------------------------------
+
+#: The machines whose values grow at every step: (its variable, its state's OnEntry).
+GROWING = {
+    "bytes": ('blob: bytes = b""\n', 'blob = blob + b"x" * 200_000'),
+    "list": ("items: list = []\n", "items.append(len(items))"),
+}
+#: (machine, --max-memory or None for the default under an address-space limit of 1 GiB).
+VERIFY_CASES = [("bytes", "100MB"), ("bytes", "200MB"), ("bytes", "400MB"), ("bytes", "800MB"), ("bytes", None),
+                ("list", "50MB"), ("list", "100MB")]  # fmt: skip
+
+
+def _growing_machine(root: Path, kind: str) -> Path:
+    variables, entry = GROWING[kind]
+    d = root / f"grow_{kind}.machine"
+    d.mkdir(parents=True, exist_ok=True)
+    (d / "machine.yaml").write_text("states:\n  - name: A\n    transitions: [A]\n")
+    (d / "State_A_Transition_0.expr").write_text("True\n")
+    (d / "State_A_OnEntry.py").write_text(entry + "\n")
+    (d / "Variables.py").write_text(variables)
+    return d
+
+
+def _limit_address_space() -> None:
+    resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+
+
+def _verify_case(machine: Path, max_memory: str | None) -> dict[str, Any]:
+    """One `llfsm verify` in a fresh process: status, what it said, its peak resident set."""
+    cmd = [sys.executable, "-m", "llfsm", "verify", str(machine)] + (["--max-memory", max_memory] if max_memory else [])
+    started = time.monotonic()
+    with tempfile.TemporaryFile("w+") as out:
+        p = subprocess.Popen(
+            cmd, cwd=REPO, stdout=out, stderr=subprocess.DEVNULL, text=True,
+            preexec_fn=None if max_memory else _limit_address_space,
+        )  # fmt: skip
+        _pid, status, usage = os.wait4(p.pid, 0)
+        p.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        text = out.read()
+    said = re.search(
+        r"stopped at the memory bound \(([\d,]+) MB in use, --max-memory ([\d,]+) MB; ([\d,]+) configurations", text
+    )
+    return {
+        "status": p.returncode,
+        "in_use": int(said.group(1).replace(",", "")) if said else None,
+        "bound": int(said.group(2).replace(",", "")) if said else None,
+        "configurations": int(said.group(3).replace(",", "")) if said else None,
+        "peak_mb": usage.ru_maxrss / 1024,  # KiB on Linux
+        "seconds": time.monotonic() - started,
+    }
+
+
+def verify_memory(quick: bool) -> None:
+    reps = 1 if quick else 3
+    cases = [c for c in VERIFY_CASES if not quick or c[0] == "bytes"]
+    got: dict[tuple[str, str | None], list[dict[str, Any]]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        machines = {kind: _growing_machine(Path(tmp), kind) for kind in GROWING}
+        for rep in range(reps):  # interleaved; the slow list cases once
+            for kind, bound in cases:
+                if kind == "list" and rep > 0:
+                    continue
+                got.setdefault((kind, bound), []).append(_verify_case(machines[kind], bound))
+    print(
+        f"### llfsm verify of a value growing at every step: peak memory against --max-memory; median of "
+        f"{reps} interleaved fresh processes (the list cases once: minutes each); Python "
+        f"{sys.version.split()[0]}, {os.cpu_count()} CPUs\n"
+    )
+    print(
+        "| value growing | --max-memory | exit | in use when stopped (MB) | peak resident (MB) | peak / bound |", end=""
+    )
+    print(" configurations | wall s |")
+    print("|---|---|---|---|---|---|---|---|")
+    for (kind, bound), runs in got.items():
+        exits = "/".join(str(s) for s in sorted({r["status"] for r in runs}))
+        peak = statistics.median(r["peak_mb"] for r in runs)
+        wall = statistics.median(r["seconds"] for r in runs)
+        said = [r for r in runs if r["in_use"] is not None]
+        what = "200 kB of bytes a step" if kind == "bytes" else "a list, one item a step"
+        if not said:  # it did not stop at the memory bound: the row says so
+            print(f"| {what} | {bound or 'default'} | {exits} | - | {peak:,.0f} | - | - | {wall:,.1f} |")
+            continue
+        limit = said[0]["bound"]
+        in_use = statistics.median(r["in_use"] for r in said)
+        configs = statistics.median(r["configurations"] for r in said)
+        shown = bound or f"default: {limit} MB under a 1 GiB limit"
+        print(
+            f"| {what} | {shown} | {exits} | {in_use:,.0f} | {peak:,.0f} | {peak / limit:.2f} | {configs:,.0f} | "
+            f"{wall:,.1f} |"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("what", choices=("actions", "view"))
+    ap.add_argument("what", choices=("actions", "view", "verify"))
     ap.add_argument("--against", type=Path, help="another checkout to measure beside this one (actions)")
     ap.add_argument("--quick", action="store_true", help="smaller cases, one repetition")
     ap.add_argument("--inside", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.what == "actions":
         actions(args.against.resolve() if args.against else None, args.quick)
+        return
+    if args.what == "verify":
+        verify_memory(args.quick)
         return
     if args.inside:
         with tempfile.TemporaryDirectory() as tmp:
