@@ -1,6 +1,6 @@
 """A monitored variant of a compiled machine class: the same ringlets, with a property's check
 compiled in before each `return` of the ringlets that can change what the property reads
-(llfsm.monitor.reads), and nothing added anywhere else (docs/monitor.md, "Cost").
+(llfsm.runtime.reads), and nothing added anywhere else (docs/monitor.md, "Cost").
 
 The variant is made from the generated module's own text and compiled under its file name, so
 tracebacks, the source map and the watchdog read it as the original.  Its ringlets run in a
@@ -28,7 +28,7 @@ from typing import Any
 
 from ..props.atoms import HELPERS, PURE
 from ..runtime.generated import variant_class
-from .reads import ClassReads, is_self_attr
+from ..runtime.reads import ClassReads, is_self_attr
 
 PREFIX = "_llfsm_mon_"
 #: The names a variant's namespace gets from the monitor.
