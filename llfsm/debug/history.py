@@ -33,7 +33,6 @@ import ast
 import sys
 from collections import deque
 from collections.abc import Callable, Sequence
-from itertools import count
 from operator import attrgetter
 from typing import Any
 
@@ -42,10 +41,12 @@ from ..runtime.generated import variables_of
 from ..runtime.machine import Machine
 from ..runtime.readout import plain
 from ..runtime.reads import ClassReads
-from .recording import COPIED, DIRECT, MESSAGE, namespace_of, record_ringlet, taken_by
+from ..runtime.clock import SimClock
+from .recording import AFTER_AT_END, COPIED, DIRECT, FIRED_AT_END, MESSAGE, namespace_of, record_ringlet, taken_by
 from .traps import TRAP
 
-#: One record: (number, run time ns, machine, code, values...).  The code says what the values are:
+#: One record: (run time ns, machine, code, values...); its number is its place (a boundary's) or
+#: kept beside it (a set's).  The code says what the values are:
 #: - a ringlet's own record (recording.py): (state it ran in, state after, transition fired,
 #:   indices of the values taken, flags); the values are old and new pairs of those, then the
 #:   state after and the transition where the flags say they are not in the code;
@@ -55,6 +56,8 @@ from .traps import TRAP
 #: - (SET, state, round): a value set while paused; every value before and after.
 Record = tuple[Any, ...]
 FULL, SET = "full", "set"
+#: The least time (ns) a ringlet takes on the wall clock, for how often the ring is cut back.
+_FASTEST_RINGLET = 30
 
 #: What `--history` keeps when the page asks for history and the command line did not say.
 PAGE_DEFAULT = 1000
@@ -131,7 +134,13 @@ class History:
             raise ValueError("--history must keep at least 1 ringlet")
         self.machines = list(machines)
         self.size = size
-        self.records: deque[Record] = deque(maxlen=size)
+        #: The boundaries' records, oldest first: a list the compiled ringlets append to, cut
+        #: back to the newest `size` when the history looks (`trim`: between rounds at least
+        #: every `size` ringlets, and when read), so that a record's number is its place.
+        self.ring: list[Record] = []
+        self.dropped = 0  # records cut from the ring's front so far
+        #: Values set while paused: (number of the boundary they follow, record).
+        self.set_records: deque[tuple[int, Record]] = deque(maxlen=size)
         self.values = [Values(type(m)) for m in machines]
         #: Each machine's values as the history last took them: what the page shows (taken
         #: again on the scheduler's thread when it asks, `refresh`), and, watched, what the next
@@ -141,9 +150,6 @@ class History:
         #: (or outside its ringlets) is compared with, updated by each record that takes it.
         self.cache: list[list[Any]] = [list(c) for c in self.current]
         self.states = [m._state for m in machines]  # watched: each machine's state at its last boundary
-        self._numbers = count(1)
-        #: The number of the next boundary's record (a C call: what compiled ringlets call).
-        self.number: Callable[[], int] = self._numbers.__next__
         self.sets = 0
         #: Whether the ringlets record themselves (set by the debugger once they are compiled).
         self.compiled = False
@@ -160,18 +166,17 @@ class History:
 
     # -- made on the scheduler's thread ------------------------------------------------------------
     def _next_number(self) -> int:
-        """The number the next boundary's record will have (the counter's own, without taking it)."""
-        return int(repr(self._numbers)[6:-1])  # count(N)
+        """The number the next boundary's record will have."""
+        return self.dropped + len(self.ring) + 1
 
     @property
     def count(self) -> int:
         """Records made since the start (numbers of the dropped ones are below the first kept)."""
-        return self._next_number() - 1 + self.sets
+        return self.dropped + len(self.ring) + self.sets
 
     def record(self, m: Machine, ran: int | None, fired: int | None, round_: int, now: int, published: list[str]) -> None:
         """Watched: after m's turn (the debugger's watcher calls this at every boundary)."""
         i = m._id
-        number = self.number()
         before = self.states[i]
         after = self.states[i] = m._state
         old: tuple[Any, ...] | None = self.current[i]
@@ -181,8 +186,10 @@ class History:
         else:
             self.current[i] = new  # type: ignore[assignment]  # a take, never None here
         if published:
-            self.published.append((number, list(published)))
-        self.records.append((number, now, m, (FULL, before, ran, after, fired, round_), old, new))
+            self.published.append((self._next_number(), list(published)))
+        self.ring.append((now, m, (FULL, before, ran, after, fired, round_), old, new))
+        if len(self.ring) >= 2 * self.size:
+            self.trim()
 
     def tap(self, topic: str) -> None:
         """A topic published (compiled): it belongs to the next boundary's record."""
@@ -202,7 +209,7 @@ class History:
         inputs = m._inputs
         if m._suspended and m._pending is None and i not in m._arr._variables and (inputs is None or not inputs.fresh):
             let_go(m)  # nothing to apply: it stays suspended, and nothing of it changes
-            self.records.append((self.number(), m._clock.now, m, (FULL, before, None, before, None, None), None, None))
+            self.ring.append((m._clock.now, m, (FULL, before, None, before, None, None), None, None))
             return False
         take = self.values[i].take
         old = take(m)
@@ -212,10 +219,9 @@ class History:
         if goes:
             if new != old or m._state != before:
                 self._gated[self._next_number()] = (before, old, new)
-                self._trim()
         else:
             changed = (old, new) if new != old else (None, None)
-            self.records.append((self.number(), m._clock.now, m, (FULL, before, None, m._state, None, None), *changed))
+            self.ring.append((m._clock.now, m, (FULL, before, None, m._state, None, None), *changed))
         return goes
 
     def on_live(self, rounds: int, live: list[Machine]) -> None:
@@ -226,7 +232,21 @@ class History:
             self._rounds[-1] = (first, rounds, n)
         elif last[2] != n or self.round_of(first) != rounds:
             self._rounds.append((first, rounds, n))
-        self._trim()
+        self.trim()
+
+    def between(self) -> None:
+        """Between rounds (compiled): the ring cut back, and this asked for again before `size`
+        more ringlets can have run (a period a round under the sim clock; on the wall clock, the
+        time `size` ringlets take at the least, or 0.1 ms)."""
+        self.trim()
+        arr = self.machines[0]._arr if self.machines else None
+        if arr is None:
+            return
+        clock = arr.clock
+        period = getattr(clock, "period", 0) if type(clock) is SimClock else 0
+        live = max(1, self._rounds[-1][2])
+        step = period * max(1, self.size // live) if period else max(self.size * _FASTEST_RINGLET, 100_000)
+        arr.ctx.wake_at(clock.now + step)
 
     def record_set(self, m: Machine, old: tuple[Any, ...], round_: int, now: int) -> dict[str, list[Any]]:
         """A value set from the debugger (paused; `old`: the values before): a record of its
@@ -236,7 +256,7 @@ class History:
         self.current[i] = new
         self.cache[i][:] = new
         self.sets += 1
-        self.records.append((self._next_number() - 1, now, m, (SET, m._state, round_), old, new))
+        self.set_records.append((self._next_number() - 1, (now, m, (SET, m._state, round_), old, new)))
         return self._named(i, _diff(old, new))
 
     def refresh(self) -> None:
@@ -245,11 +265,15 @@ class History:
         self.wanted = False
         self.current = [v.take(m) for v, m in zip(self.values, self.machines, strict=True)]
 
-    def _trim(self) -> None:
-        """Forget what belongs to records no longer kept."""
-        if len(self.records) < self.size:
+    def trim(self) -> None:
+        """Cut the ring back to `size` records, and forget what belongs to records cut."""
+        ring = self.ring
+        cut = len(ring) - self.size
+        if cut <= 0:
             return
-        oldest = self.records[0][0]
+        del ring[:cut]
+        self.dropped += cut
+        oldest = self.dropped + 1
         gated = self._gated
         while gated:
             first = next(iter(gated))
@@ -260,7 +284,22 @@ class History:
         while len(rounds) > 1 and rounds[1][0] <= oldest:
             del rounds[0]
 
-    # -- reading -------------------------------------------------------------------------------
+    # -- reading (on the scheduler's thread) ------------------------------------------------------
+    @property
+    def records(self) -> list[tuple[int, Record]]:
+        """The kept records, oldest first, with their numbers: the newest `size` of the
+        boundaries' and the sets' (a set after the boundary it follows)."""
+        ring = self.ring[-self.size :]
+        first = self.dropped + len(self.ring) - len(ring) + 1
+        kept = [(first + k, r) for k, r in enumerate(ring)]
+        if not self.set_records:
+            return kept
+        merged = [(n, 0, k, r) for k, (n, r) in enumerate(kept)] + [
+            (n, 1, k, r) for k, (n, r) in enumerate(self.set_records)
+        ]
+        merged.sort(key=lambda e: (e[0], e[1], e[2]))
+        return [(n, r) for n, _set, _k, r in merged[-self.size :]]
+
     def round_of(self, number: int) -> int:
         rounds = self._rounds
         k = len(rounds) - 1
@@ -269,51 +308,51 @@ class History:
         first, r, n = rounds[k]
         return r + (number - first) // n if n else r
 
-    def _parts(self, rec: Record) -> tuple[int, int, int | None, int, int | None, int | None, list[tuple[int, Any, Any]]]:
+    def _parts(
+        self, number: int, rec: Record
+    ) -> tuple[int, int, int | None, int, int | None, int | None, list[tuple[int, Any, Any]]]:
         """(machine index, state before, state it ran in, state after, transition, round (None:
         from the table), [(value index, old, new) of each value that changed])."""
-        code = rec[3]
-        i = rec[2]._id
+        code = rec[2]
+        i = rec[1]._id
         kind = code[0]
         if kind == FULL:
             _, before, ran, after, fired, round_ = code
-            return i, before, ran, after, fired, round_, _diff(rec[4], rec[5])
+            return i, before, ran, after, fired, round_, _diff(rec[3], rec[4])
         if kind == SET:
-            return i, code[1], None, code[1], None, code[2], _diff(rec[4], rec[5])
+            return i, code[1], None, code[1], None, code[2], _diff(rec[3], rec[4])
         ran, after, fired, taken, flags = code
-        end = 4 + 2 * len(taken)
         if flags:
-            extra = list(rec[end:])
-            if flags & 1:
+            extra = list(rec[3 + 2 * len(taken) :])
+            if flags & AFTER_AT_END:
                 after = extra.pop(0)
-            if flags & 2:
+            if flags & FIRED_AT_END:
                 fired = extra.pop(0)
-        gated = self._gated.get(rec[0]) if self._gated else None
+        gated = self._gated.get(number) if self._gated else None
         if gated is None:
-            changed = [(k, rec[4 + 2 * t], rec[5 + 2 * t]) for t, k in enumerate(taken) if rec[4 + 2 * t] != rec[5 + 2 * t]]
+            changed = [(k, rec[3 + 2 * t], rec[4 + 2 * t]) for t, k in enumerate(taken) if rec[3 + 2 * t] != rec[4 + 2 * t]]
             return i, ran, ran, after, fired, None, changed
         before, old, mid = gated
         new = list(mid)
         for t, k in enumerate(taken):
-            new[k] = rec[5 + 2 * t]
+            new[k] = rec[4 + 2 * t]
         return i, before, ran, after, fired, None, _diff(old, new)
 
     def _named(self, i: int, changed: list[tuple[int, Any, Any]]) -> dict[str, list[Any]]:
         names = self.values[i].names
         return {names[k]: [shown(a), shown(b)] for k, a, b in changed}
 
-    def as_dict(self, rec: Record, published: dict[int, list[str]] | None = None) -> dict[str, Any]:
-        i, before, ran, after, fired, round_, changed = self._parts(rec)
-        number = rec[0]
+    def as_dict(self, number: int, rec: Record, published: dict[int, list[str]] | None = None) -> dict[str, Any]:
+        i, before, ran, after, fired, round_, changed = self._parts(number, rec)
         m = self.machines[i]
         states = m.STATES
-        set_ = rec[3][0] == SET
+        set_ = rec[2][0] == SET
         if published is None:
             published = dict(self.published)
         return {
             "ringlet": number,
             "round": self.round_of(number) if round_ is None else round_,
-            "t": round(rec[1] / 1e9, 9),
+            "t": round(rec[0] / 1e9, 9),
             "machine": m.NAME,
             "kind": "set" if set_ else "ringlet",
             "before": states[before],
@@ -326,24 +365,23 @@ class History:
 
     def last(self, n: int | None = None) -> list[dict[str, Any]]:
         """The newest n records (all kept ones when n is None), oldest first."""
-        recs = list(self.records)
+        recs = self.records
         if n is not None:
             recs = recs[-n:] if n > 0 else []
         published = dict(self.published)
-        return [self.as_dict(r, published) for r in recs]
+        return [self.as_dict(number, r, published) for number, r in recs]
 
     def entered(self, i: int) -> int:
         """The run time machine i entered its current state, as far as the kept records tell (the
         oldest kept record's time when they do not)."""
         recs = self.records
-        for k in range(len(recs) - 1, -1, -1):
-            rec = recs[k]
-            if rec[2]._id != i or rec[3][0] == SET:
+        for number, rec in reversed(recs):
+            if rec[1]._id != i or rec[2][0] == SET:
                 continue
-            _, before, _ran, after, fired, _round, _changed = self._parts(rec)
+            _, before, _ran, after, fired, _round, _changed = self._parts(number, rec)
             if after != before or fired is not None:
-                return int(rec[1])
-        return int(recs[0][1]) if recs and self.count > self.size else 0
+                return int(rec[0])
+        return int(recs[0][1][0]) if recs and self.count > self.size else 0
 
     def snapshot(self) -> dict[str, dict[str, Any]]:
         """Each machine's values as the history last took them, as plain data (any thread)."""
@@ -367,13 +405,13 @@ class History:
             states = list(self.states)
             values = [list(c) for c in self.current]
         for k in range(len(recs) - 1, len(recs) - 1 - back, -1):
-            i, before, _ran, _after, _fired, _round, changed = self._parts(recs[k])
+            i, before, _ran, _after, _fired, _round, changed = self._parts(*recs[k])
             states[i] = before
             for j, old, _new in changed:
                 values[i][j] = old
         at = recs[len(recs) - 1 - back] if back < len(recs) else None
         return {
-            "record": None if at is None else self.as_dict(at),
+            "record": None if at is None else self.as_dict(*at),
             "machines": [
                 {
                     "machine": m.NAME,
@@ -406,4 +444,4 @@ def recorder(
 
     first = len(v.names) - len(v.slow) - len(v.messages)
     messages = {first + j: c for j, (_name, c) in enumerate(v.messages)}
-    return record, namespace_of(h.records.append, h.number, h.cache[m._id], _encode, plain, messages)
+    return record, namespace_of(h.ring.append, h.cache[m._id], _encode, plain, messages)

@@ -5,9 +5,9 @@ alone is three times a toggle's ringlet).  So, as the debugger's marks on transi
 (traps.py), the history is compiled in: each ringlet of the machine is compiled again from its
 generated module with, before each `return`, one append of a small tuple to the history's ring:
 
-    _llfsm_h_append((_llfsm_h_number(), self._clock.now, self, (S, K, i, taken, 0), old, new, ...))
+    _llfsm_h_append((self._clock.now, self, (S, K, i, taken, 0), old, new, ...))
 
-where the code `(S, K, i, taken, 0)` is a constant: the state the ringlet ran in, the state it
+(its number is its place in the ring: no counter), where the code `(S, K, i, taken, 0)` is a constant: the state the ringlet ran in, the state it
 leaves the machine in (the compiler writes `self._state = K` just before), the transition it
 fired, and which values follow.  Only the values the ringlet can change are taken
 (llfsm.runtime.reads, the monitor's analysis: what it assigns, mutates or hands on), as old and
@@ -32,7 +32,7 @@ from typing import Any
 from ..runtime.reads import ClassReads, is_self_attr
 
 #: Names in a recording variant's namespace (machine code cannot use `_llfsm_` names: LF013).
-APPEND, NUMBER, CACHE, ENCODE, PLAIN = (f"_llfsm_h_{n}" for n in ("append", "number", "cache", "encode", "plain"))
+APPEND, CACHE, ENCODE, PLAIN = (f"_llfsm_h_{n}" for n in ("append", "cache", "encode", "plain"))
 _LOCAL = "_llfsm_h_"
 #: Flags of a record's code: the state after, or the transition, is not a constant where the
 #: ringlet returns, and ends the record instead.
@@ -133,7 +133,6 @@ class _Recorder:
             ret = ast.Return(value=_load(_LOCAL + "r"))
             fired = None
         items: list[ast.expr] = [
-            ast.Call(func=_load(NUMBER), args=[], keywords=[]),
             ast.Attribute(value=_self("_clock"), attr="now", ctx=ast.Load()),
             _load("self"),
             ast.Constant((self.state, known, fired, tuple(k for k, _ in self.taken), flags)),
@@ -199,8 +198,8 @@ def _assign(name: str, value: ast.expr) -> ast.Assign:
     return ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())], value=value)
 
 
-def namespace_of(append: Any, number: Any, cache: list[Any], encode: Any, plain: Any, messages: dict[int, type]) -> dict[str, Any]:
+def namespace_of(append: Any, cache: list[Any], encode: Any, plain: Any, messages: dict[int, type]) -> dict[str, Any]:
     """What a recording variant's ringlets find in their namespace."""
-    ns: dict[str, Any] = {APPEND: append, NUMBER: number, CACHE: cache, ENCODE: encode, PLAIN: plain}
+    ns: dict[str, Any] = {APPEND: append, CACHE: cache, ENCODE: encode, PLAIN: plain}
     ns.update({message_name(k): cls for k, cls in messages.items()})
     return ns
