@@ -45,7 +45,7 @@ from ..runtime.clock import SimClock
 from .recording import AFTER_AT_END, COPIED, DIRECT, FIRED_AT_END, MESSAGE, namespace_of, record_ringlet, taken_by
 from .traps import TRAP
 
-#: One record: (run time ns, machine, code, values...); its number is its place (a boundary's) or
+#: One record: (run time ns, machine index, code, values...); its number is its place (a boundary's) or
 #: kept beside it (a set's).  The code says what the values are:
 #: - a ringlet's own record (recording.py): (state it ran in, state after, transition fired,
 #:   indices of the values taken, flags); the values are old and new pairs of those, then the
@@ -187,7 +187,7 @@ class History:
             self.current[i] = new  # type: ignore[assignment]  # a take, never None here
         if published:
             self.published.append((self._next_number(), list(published)))
-        self.ring.append((now, m, (FULL, before, ran, after, fired, round_), old, new))
+        self.ring.append((now, i, (FULL, before, ran, after, fired, round_), old, new))
         if len(self.ring) >= 2 * self.size:
             self.trim()
 
@@ -209,7 +209,7 @@ class History:
         inputs = m._inputs
         if m._suspended and m._pending is None and i not in m._arr._variables and (inputs is None or not inputs.fresh):
             let_go(m)  # nothing to apply: it stays suspended, and nothing of it changes
-            self.ring.append((m._clock.now, m, (FULL, before, None, before, None, None), None, None))
+            self.ring.append((m._clock.now, i, (FULL, before, None, before, None, None), None, None))
             return False
         take = self.values[i].take
         old = take(m)
@@ -221,7 +221,7 @@ class History:
                 self._gated[self._next_number()] = (before, old, new)
         else:
             changed = (old, new) if new != old else (None, None)
-            self.ring.append((m._clock.now, m, (FULL, before, None, m._state, None, None), *changed))
+            self.ring.append((m._clock.now, i, (FULL, before, None, m._state, None, None), *changed))
         return goes
 
     def on_live(self, rounds: int, live: list[Machine]) -> None:
@@ -256,7 +256,7 @@ class History:
         self.current[i] = new
         self.cache[i][:] = new
         self.sets += 1
-        self.set_records.append((self._next_number() - 1, (now, m, (SET, m._state, round_), old, new)))
+        self.set_records.append((self._next_number() - 1, (now, i, (SET, m._state, round_), old, new)))
         return self._named(i, _diff(old, new))
 
     def refresh(self) -> None:
@@ -314,7 +314,7 @@ class History:
         """(machine index, state before, state it ran in, state after, transition, round (None:
         from the table), [(value index, old, new) of each value that changed])."""
         code = rec[2]
-        i = rec[1]._id
+        i = rec[1]
         kind = code[0]
         if kind == FULL:
             _, before, ran, after, fired, round_ = code
@@ -376,7 +376,7 @@ class History:
         oldest kept record's time when they do not)."""
         recs = self.records
         for number, rec in reversed(recs):
-            if rec[1]._id != i or rec[2][0] == SET:
+            if rec[1] != i or rec[2][0] == SET:
                 continue
             _, before, _ran, after, fired, _round, _changed = self._parts(number, rec)
             if after != before or fired is not None:

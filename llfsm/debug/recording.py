@@ -5,7 +5,7 @@ alone is three times a toggle's ringlet).  So, as the debugger's marks on transi
 (traps.py), the history is compiled in: each ringlet of the machine is compiled again from its
 generated module with, before each `return`, one append of a small tuple to the history's ring:
 
-    _llfsm_h_append((self._clock.now, self, (S, K, i, taken, 0), old, new, ...))
+    _llfsm_h_append((self._clock.now, self._id, (S, K, i, taken, 0), old, new, ...))
 
 (its number is its place in the ring: no counter), where the code `(S, K, i, taken, 0)` is a constant: the state the ringlet ran in, the state it
 leaves the machine in (the compiler writes `self._state = K` just before), the transition it
@@ -134,7 +134,7 @@ class _Recorder:
             fired = None
         items: list[ast.expr] = [
             ast.Attribute(value=_self("_clock"), attr="now", ctx=ast.Load()),
-            _load("self"),
+            _self("_id"),  # not the machine: a tuple of numbers leaves the garbage collector's lists
             ast.Constant((self.state, known, fired, tuple(k for k, _ in self.taken), flags)),
         ]
         after: list[ast.stmt] = []
