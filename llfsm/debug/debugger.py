@@ -132,8 +132,6 @@ class Debugger:
         self.traps.recorder = lambda m: recorder(h, m, reads[m._id])
         self.arr.around_release = h.around_release
         self.arr.on_live = h.on_live
-        self.arr.ctx.between_rounds.append(h.between)
-        h.between()  # the first cut asked for
 
     # -- what the session sets up -----------------------------------------------------------------
     def attach_bus(self, bus: Any, serve: Callable[[], None]) -> None:
@@ -513,7 +511,7 @@ class Debugger:
             return self.arr.ctx.round  # watched rounds keep it
         if self._origin == ROUND_END or not h.ring:
             return self.arr.rounds  # between rounds: before the next one
-        return h.round_of(h.dropped + len(h.ring))  # after a ringlet: its round
+        return h.round_of(h.count - h.sets)  # after a ringlet: its round
 
     def add_break(self, text: str, where: str = "break") -> Breakpoint:
         try:

@@ -33,6 +33,7 @@ import ast
 import sys
 from collections import deque
 from collections.abc import Callable, Sequence
+from itertools import count
 from operator import attrgetter
 from typing import Any
 
@@ -41,23 +42,22 @@ from ..runtime.generated import variables_of
 from ..runtime.machine import Machine
 from ..runtime.readout import plain
 from ..runtime.reads import ClassReads
-from ..runtime.clock import SimClock
 from .recording import AFTER_AT_END, COPIED, DIRECT, FIRED_AT_END, MESSAGE, namespace_of, record_ringlet, taken_by
 from .traps import TRAP
 
-#: One record: (run time ns, machine index, code, values...); its number is its place (a boundary's) or
-#: kept beside it (a set's).  The code says what the values are:
-#: - a ringlet's own record (recording.py): (state it ran in, state after, transition fired,
-#:   indices of the values taken, flags); the values are old and new pairs of those, then the
-#:   state after and the transition where the flags say they are not in the code;
-#: - (FULL, state before, state its ringlet ran in (None: none ran), state after, transition,
-#:   round (None: from the rounds' table)); then every value before and after, or None and None
-#:   when nothing changed;
-#: - (SET, state, round): a value set while paused; every value before and after.
+#: One record: (number, run time ns, code, values...); a set's number is the one of the boundary
+#: it follows.  (Read back without its number: `records`.)  The code says what the values are:
+#: - a ringlet's own record (recording.py), a constant: (machine index, state it ran in, state
+#:   after, transition fired, indices of the values taken, flags); the values are old and new
+#:   pairs of those, then the state after and the transition where the flags say they are not
+#:   in the code;
+#: - (FULL, machine index, state before, state its ringlet ran in (None: none ran), state after,
+#:   transition, round (None: from the rounds' table)); then every value before and after, or
+#:   None and None when nothing changed;
+#: - (SET, machine index, state, round): a value set while paused; every value before and after.
 Record = tuple[Any, ...]
 FULL, SET = "full", "set"
-#: The least time (ns) a ringlet takes on the wall clock, for how often the ring is cut back.
-_FASTEST_RINGLET = 30
+
 
 #: What `--history` keeps when the page asks for history and the command line did not say.
 PAGE_DEFAULT = 1000
@@ -134,13 +134,11 @@ class History:
             raise ValueError("--history must keep at least 1 ringlet")
         self.machines = list(machines)
         self.size = size
-        #: The boundaries' records, oldest first: a list the compiled ringlets append to, cut
-        #: back to the newest `size` when the history looks (`trim`: between rounds at least
-        #: every `size` ringlets, and when read), so that a record's number is its place.
-        self.ring: list[Record] = []
-        self.dropped = 0  # records cut from the ring's front so far
-        #: Values set while paused: (number of the boundary they follow, record).
-        self.set_records: deque[tuple[int, Record]] = deque(maxlen=size)
+        #: The records, oldest first, the newest `size` kept: a deque, which frees the oldest
+        #: record as it takes a new one (so a long run makes no work for the garbage collector).
+        self.ring: deque[Record] = deque(maxlen=size)
+        #: What numbers the boundaries' records (a C call in each compiled ringlet: `next`).
+        self.counter = count(1)
         self.values = [Values(type(m)) for m in machines]
         #: Each machine's values as the history last took them: what the page shows (taken
         #: again on the scheduler's thread when it asks, `refresh`), and, watched, what the next
@@ -166,13 +164,13 @@ class History:
 
     # -- made on the scheduler's thread ------------------------------------------------------------
     def _next_number(self) -> int:
-        """The number the next boundary's record will have."""
-        return self.dropped + len(self.ring) + 1
+        """The number the next boundary's record will have (without taking it)."""
+        return int(repr(self.counter)[6:-1])  # count(N)
 
     @property
     def count(self) -> int:
         """Records made since the start (numbers of the dropped ones are below the first kept)."""
-        return self.dropped + len(self.ring) + self.sets
+        return self._next_number() - 1 + self.sets
 
     def record(self, m: Machine, ran: int | None, fired: int | None, round_: int, now: int, published: list[str]) -> None:
         """Watched: after m's turn (the debugger's watcher calls this at every boundary)."""
@@ -185,11 +183,10 @@ class History:
             old = new = None
         else:
             self.current[i] = new  # type: ignore[assignment]  # a take, never None here
+        number = next(self.counter)
         if published:
-            self.published.append((self._next_number(), list(published)))
-        self.ring.append((now, i, (FULL, before, ran, after, fired, round_), old, new))
-        if len(self.ring) >= 2 * self.size:
-            self.trim()
+            self.published.append((number, list(published)))
+        self.ring.append((number, now, (FULL, i, before, ran, after, fired, round_), old, new))
 
     def tap(self, topic: str) -> None:
         """A topic published (compiled): it belongs to the next boundary's record."""
@@ -209,7 +206,7 @@ class History:
         inputs = m._inputs
         if m._suspended and m._pending is None and i not in m._arr._variables and (inputs is None or not inputs.fresh):
             let_go(m)  # nothing to apply: it stays suspended, and nothing of it changes
-            self.ring.append((m._clock.now, i, (FULL, before, None, before, None, None), None, None))
+            self.ring.append((next(self.counter), m._clock.now, (FULL, i, before, None, before, None, None), None, None))
             return False
         take = self.values[i].take
         old = take(m)
@@ -219,9 +216,10 @@ class History:
         if goes:
             if new != old or m._state != before:
                 self._gated[self._next_number()] = (before, old, new)
+                self.trim()
         else:
             changed = (old, new) if new != old else (None, None)
-            self.ring.append((m._clock.now, i, (FULL, before, None, m._state, None, None), *changed))
+            self.ring.append((next(self.counter), m._clock.now, (FULL, i, before, None, m._state, None, None), *changed))
         return goes
 
     def on_live(self, rounds: int, live: list[Machine]) -> None:
@@ -234,20 +232,6 @@ class History:
             self._rounds.append((first, rounds, n))
         self.trim()
 
-    def between(self) -> None:
-        """Between rounds (compiled): the ring cut back, and this asked for again before `size`
-        more ringlets can have run (a period a round under the sim clock; on the wall clock, the
-        time `size` ringlets take at the least, or 0.1 ms)."""
-        self.trim()
-        arr = self.machines[0]._arr if self.machines else None
-        if arr is None:
-            return
-        clock = arr.clock
-        period = getattr(clock, "period", 0) if type(clock) is SimClock else 0
-        live = max(1, self._rounds[-1][2])
-        step = period * max(1, self.size // live) if period else max(self.size * _FASTEST_RINGLET, 100_000)
-        arr.ctx.wake_at(clock.now + step)
-
     def record_set(self, m: Machine, old: tuple[Any, ...], round_: int, now: int) -> dict[str, list[Any]]:
         """A value set from the debugger (paused; `old`: the values before): a record of its
         own; returns the change."""
@@ -256,7 +240,7 @@ class History:
         self.current[i] = new
         self.cache[i][:] = new
         self.sets += 1
-        self.set_records.append((self._next_number() - 1, (now, i, (SET, m._state, round_), old, new)))
+        self.ring.append((self._next_number() - 1, now, (SET, i, m._state, round_), old, new))
         return self._named(i, _diff(old, new))
 
     def refresh(self) -> None:
@@ -266,14 +250,11 @@ class History:
         self.current = [v.take(m) for v, m in zip(self.values, self.machines, strict=True)]
 
     def trim(self) -> None:
-        """Cut the ring back to `size` records, and forget what belongs to records cut."""
+        """Forget what belongs to records no longer kept."""
         ring = self.ring
-        cut = len(ring) - self.size
-        if cut <= 0:
+        if len(ring) < self.size:
             return
-        del ring[:cut]
-        self.dropped += cut
-        oldest = self.dropped + 1
+        oldest = ring[0][0]
         gated = self._gated
         while gated:
             first = next(iter(gated))
@@ -287,18 +268,8 @@ class History:
     # -- reading (on the scheduler's thread) ------------------------------------------------------
     @property
     def records(self) -> list[tuple[int, Record]]:
-        """The kept records, oldest first, with their numbers: the newest `size` of the
-        boundaries' and the sets' (a set after the boundary it follows)."""
-        ring = self.ring[-self.size :]
-        first = self.dropped + len(self.ring) - len(ring) + 1
-        kept = [(first + k, r) for k, r in enumerate(ring)]
-        if not self.set_records:
-            return kept
-        merged = [(n, 0, k, r) for k, (n, r) in enumerate(kept)] + [
-            (n, 1, k, r) for k, (n, r) in enumerate(self.set_records)
-        ]
-        merged.sort(key=lambda e: (e[0], e[1], e[2]))
-        return [(n, r) for n, _set, _k, r in merged[-self.size :]]
+        """The kept records, oldest first: (number, the record after its number)."""
+        return [(r[0], r[1:]) for r in list(self.ring)]
 
     def round_of(self, number: int) -> int:
         rounds = self._rounds
@@ -313,29 +284,28 @@ class History:
     ) -> tuple[int, int, int | None, int, int | None, int | None, list[tuple[int, Any, Any]]]:
         """(machine index, state before, state it ran in, state after, transition, round (None:
         from the table), [(value index, old, new) of each value that changed])."""
-        code = rec[2]
-        i = rec[1]
+        code = rec[1]
         kind = code[0]
         if kind == FULL:
-            _, before, ran, after, fired, round_ = code
-            return i, before, ran, after, fired, round_, _diff(rec[3], rec[4])
+            _, i, before, ran, after, fired, round_ = code
+            return i, before, ran, after, fired, round_, _diff(rec[2], rec[3])
         if kind == SET:
-            return i, code[1], None, code[1], None, code[2], _diff(rec[3], rec[4])
-        ran, after, fired, taken, flags = code
+            return code[1], code[2], None, code[2], None, code[3], _diff(rec[2], rec[3])
+        i, ran, after, fired, taken, flags = code
         if flags:
-            extra = list(rec[3 + 2 * len(taken) :])
+            extra = list(rec[2 + 2 * len(taken) :])
             if flags & AFTER_AT_END:
                 after = extra.pop(0)
             if flags & FIRED_AT_END:
                 fired = extra.pop(0)
         gated = self._gated.get(number) if self._gated else None
         if gated is None:
-            changed = [(k, rec[3 + 2 * t], rec[4 + 2 * t]) for t, k in enumerate(taken) if rec[3 + 2 * t] != rec[4 + 2 * t]]
+            changed = [(k, rec[2 + 2 * t], rec[3 + 2 * t]) for t, k in enumerate(taken) if rec[2 + 2 * t] != rec[3 + 2 * t]]
             return i, ran, ran, after, fired, None, changed
         before, old, mid = gated
         new = list(mid)
         for t, k in enumerate(taken):
-            new[k] = rec[4 + 2 * t]
+            new[k] = rec[3 + 2 * t]
         return i, before, ran, after, fired, None, _diff(old, new)
 
     def _named(self, i: int, changed: list[tuple[int, Any, Any]]) -> dict[str, list[Any]]:
@@ -346,7 +316,7 @@ class History:
         i, before, ran, after, fired, round_, changed = self._parts(number, rec)
         m = self.machines[i]
         states = m.STATES
-        set_ = rec[2][0] == SET
+        set_ = rec[1][0] == SET
         if published is None:
             published = dict(self.published)
         return {
@@ -376,9 +346,11 @@ class History:
         oldest kept record's time when they do not)."""
         recs = self.records
         for number, rec in reversed(recs):
-            if rec[1] != i or rec[2][0] == SET:
+            if rec[1][0] == SET:
                 continue
-            _, before, _ran, after, fired, _round, _changed = self._parts(number, rec)
+            j, before, _ran, after, fired, _round, _changed = self._parts(number, rec)
+            if j != i:
+                continue
             if after != before or fired is not None:
                 return int(rec[0])
         return int(recs[0][1][0]) if recs and self.count > self.size else 0
@@ -440,8 +412,8 @@ def recorder(
     taken = taken_by(reads, v.names, v.kinds, {e[0] for e in cls.INPUTS})
 
     def record(node: ast.FunctionDef, state: int) -> ast.FunctionDef:
-        return record_ringlet(node, state, cls.SUSPENDED, taken.get(node.name, ()), v.names, TRAP)
+        return record_ringlet(node, m._id, state, cls.SUSPENDED, taken.get(node.name, ()), v.names, TRAP)
 
     first = len(v.names) - len(v.slow) - len(v.messages)
     messages = {first + j: c for j, (_name, c) in enumerate(v.messages)}
-    return record, namespace_of(h.ring.append, h.cache[m._id], _encode, plain, messages)
+    return record, namespace_of(h.ring.append, h.counter, h.cache[m._id], _encode, plain, messages)

@@ -5,9 +5,11 @@ alone is three times a toggle's ringlet).  So, as the debugger's marks on transi
 (traps.py), the history is compiled in: each ringlet of the machine is compiled again from its
 generated module with, before each `return`, one append of a small tuple to the history's ring:
 
-    _llfsm_h_append((self._clock.now, self._id, (S, K, i, taken, 0), old, new, ...))
+    _llfsm_h_append((_llfsm_h_next(_llfsm_h_count), self._clock.now, (M, S, K, i, taken, 0), old, new, ...))
 
-(its number is its place in the ring: no counter), where the code `(S, K, i, taken, 0)` is a constant: the state the ringlet ran in, the state it
+(numbered by a counter, a C call; a tuple of numbers, which the garbage collector soon stops
+following), where the code `(M, S, K, i, taken, 0)` is a constant: the machine (each machine of a run has
+ringlets of its own), the state the ringlet ran in, the state it
 leaves the machine in (the compiler writes `self._state = K` just before), the transition it
 fired, and which values follow.  Only the values the ringlet can change are taken
 (llfsm.runtime.reads, the monitor's analysis: what it assigns, mutates or hands on), as old and
@@ -32,7 +34,9 @@ from typing import Any
 from ..runtime.reads import ClassReads, is_self_attr
 
 #: Names in a recording variant's namespace (machine code cannot use `_llfsm_` names: LF013).
-APPEND, CACHE, ENCODE, PLAIN = (f"_llfsm_h_{n}" for n in ("append", "cache", "encode", "plain"))
+APPEND, NEXT, COUNT, CACHE, ENCODE, PLAIN = (
+    f"_llfsm_h_{n}" for n in ("append", "next", "count", "cache", "encode", "plain")
+)
 _LOCAL = "_llfsm_h_"
 #: Flags of a record's code: the state after, or the transition, is not a constant where the
 #: ringlet returns, and ends the record instead.
@@ -63,16 +67,22 @@ def taken_by(reads: ClassReads, names: tuple[str, ...], kinds: tuple[int, ...], 
 
 
 def record_ringlet(
-    node: ast.FunctionDef, state: int, suspended: int, taken: tuple[tuple[int, int], ...], names: tuple[str, ...], trap: str
+    node: ast.FunctionDef,
+    machine: int,
+    state: int,
+    suspended: int,
+    taken: tuple[tuple[int, int], ...],
+    names: tuple[str, ...],
+    trap: str,
 ) -> ast.FunctionDef:
-    """The ringlet `node` (of `state`) with a record appended before each return (and before the
+    """The ringlet `node` (of machine index `machine`'s `state`) with a record appended before each return (and before the
     breakpoints' trap calls just before it, so that a pause there shows this ringlet)."""
     starts = [
         _assign(_LOCAL + f"o{k}", _self(names[k])) for k, how in taken if how == DIRECT
     ]  # the old values of immutables: read before anything runs
     body = list(node.body)
     doc = body[:1] if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) else []
-    rec = _Recorder(state, suspended, taken, names, trap)
+    rec = _Recorder(machine, state, suspended, taken, names, trap)
     new_body, known, ends = rec.block(body[len(doc) :], state)
     if not ends:  # falls off its end: returns None there
         new_body = rec.returning(new_body, ast.Return(value=None), known)
@@ -82,8 +92,9 @@ def record_ringlet(
 
 class _Recorder:
     def __init__(
-        self, state: int, suspended: int, taken: tuple[tuple[int, int], ...], names: tuple[str, ...], trap: str
+        self, machine: int, state: int, suspended: int, taken: tuple[tuple[int, int], ...], names: tuple[str, ...], trap: str
     ) -> None:
+        self.machine = machine
         self.state = state
         self.suspended = suspended
         self.taken = taken
@@ -133,9 +144,9 @@ class _Recorder:
             ret = ast.Return(value=_load(_LOCAL + "r"))
             fired = None
         items: list[ast.expr] = [
+            ast.Call(func=_load(NEXT), args=[_load(COUNT)], keywords=[]),
             ast.Attribute(value=_self("_clock"), attr="now", ctx=ast.Load()),
-            _self("_id"),  # not the machine: a tuple of numbers leaves the garbage collector's lists
-            ast.Constant((self.state, known, fired, tuple(k for k, _ in self.taken), flags)),
+            ast.Constant((self.machine, self.state, known, fired, tuple(k for k, _ in self.taken), flags)),
         ]
         after: list[ast.stmt] = []
         for k, how in self.taken:
@@ -198,8 +209,10 @@ def _assign(name: str, value: ast.expr) -> ast.Assign:
     return ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())], value=value)
 
 
-def namespace_of(append: Any, cache: list[Any], encode: Any, plain: Any, messages: dict[int, type]) -> dict[str, Any]:
+def namespace_of(
+    append: Any, counter: Any, cache: list[Any], encode: Any, plain: Any, messages: dict[int, type]
+) -> dict[str, Any]:
     """What a recording variant's ringlets find in their namespace."""
-    ns: dict[str, Any] = {APPEND: append, CACHE: cache, ENCODE: encode, PLAIN: plain}
+    ns: dict[str, Any] = {APPEND: append, NEXT: next, COUNT: counter, CACHE: cache, ENCODE: encode, PLAIN: plain}
     ns.update({message_name(k): cls for k, cls in messages.items()})
     return ns
