@@ -88,7 +88,8 @@ def _lists(tmp_path: Path) -> list[type]:
             "A_OnEntry": "xs.append(len(xs))\nlabel += 'abc'\n",
             "B_OnEntry": "seen[str(len(xs))] = len(xs) * 2\npair = (len(xs), -len(xs))\n",
         },
-        variables="xs: list[int] = []\nlabel: str = ''\nseen: dict[str, int] = {}\npair: tuple = (0, 0)\nquiet: int = 7\n",
+        variables="xs: list[int] = []\nlabel: str = ''\nseen: dict[str, int] = {}\n"
+        "pair: tuple = (0, 0)\nquiet: int = 7\n",
     )
     boss = write_machine(
         tmp_path,

@@ -3,7 +3,8 @@
 the graph (services.py) all drive this one object.
 
 **Where it pauses.**  Between two ringlets, never inside one: after a ringlet of a watched round
-(`Arrangement.watcher`: breakpoints, history, a step in progress), at the end of a ringlet that
+(`Arrangement.watcher`: breakpoints, a step in progress, the history where the ringlets cannot
+record themselves: history.py), at the end of a ringlet that
 took a marked transition (a breakpoint on a state: traps.py), before a held machine's turn
 (`Arrangement.on_release`: a step inside a plain round, a command reaching a breakpoint's
 state), where the monitor reached a violation (`--on-violation pause`), or between rounds
@@ -85,7 +86,7 @@ class Debugger:
         self.pauses = 0
         self.at: Machine | None = None
         self.reason = ""
-        #: Counted boundaries, while a watcher is installed (the history numbers its records so).
+        #: Counted boundaries, while a watcher is installed.
         self.boundaries = 0
         self._resume: str | None = None  # what the pause loop was asked to do when it ends
         self._stop_after: str | None = None  # STEP or ROUND while a step is under way

@@ -63,6 +63,8 @@ FULL, SET = "full", "set"
 PAGE_DEFAULT = 1000
 #: Annotations (and input types) whose values are taken as they are: immutable scalars.
 _SCALARS = frozenset({"bool", "int", "float"})
+#: ...and other annotations of values that cannot change in place.
+_IMMUTABLE_TEXT = frozenset({"str", "bytes"})
 _NONE: tuple[str, ...] = ()
 
 
@@ -85,7 +87,7 @@ def shown(value: Any) -> Any:
 class Values:
     """How one machine's variables and inputs are taken (see the module's docstring)."""
 
-    __slots__ = ("fast", "kinds", "messages", "names", "single", "slow")
+    __slots__ = ("fast", "kinds", "messages", "names", "replaced_only", "single", "slow")
 
     def __init__(self, cls: type[Machine]) -> None:
         variables = list(variables_of(cls))
@@ -109,6 +111,9 @@ class Values:
         self.single = len(fast) == 1
         #: how each value is taken, for a ringlet that records it (recording.py)
         self.kinds = (DIRECT,) * len(fast) + (MESSAGE,) * len(messages) + (COPIED,) * len(slow)
+        #: values whose shown value changes only when the variable is assigned: immutable ones,
+        #: and handles (shown by their type)
+        self.replaced_only = frozenset(fast) | {n for n, a in variables if a.strip() in _IMMUTABLE_TEXT}
 
     def take(self, m: Machine) -> tuple[Any, ...]:
         """The machine's values now, in `names` order."""
@@ -164,15 +169,19 @@ class History:
 
     # -- made on the scheduler's thread ------------------------------------------------------------
     def _next_number(self) -> int:
-        """The number the next boundary's record will have (without taking it)."""
-        return int(repr(self.counter)[6:-1])  # count(N)
+        """The number the next boundary's record will have (without taking it from the counter:
+        the newest record's, a boundary's or a set's, is the one before it)."""
+        ring = self.ring
+        return int(ring[-1][0]) + 1 if ring else 1
 
     @property
     def count(self) -> int:
         """Records made since the start (numbers of the dropped ones are below the first kept)."""
         return self._next_number() - 1 + self.sets
 
-    def record(self, m: Machine, ran: int | None, fired: int | None, round_: int, now: int, published: list[str]) -> None:
+    def record(
+        self, m: Machine, ran: int | None, fired: int | None, round_: int, now: int, published: list[str]
+    ) -> None:
         """Watched: after m's turn (the debugger's watcher calls this at every boundary)."""
         i = m._id
         before = self.states[i]
@@ -206,7 +215,9 @@ class History:
         inputs = m._inputs
         if m._suspended and m._pending is None and i not in m._arr._variables and (inputs is None or not inputs.fresh):
             let_go(m)  # nothing to apply: it stays suspended, and nothing of it changes
-            self.ring.append((next(self.counter), m._clock.now, (FULL, i, before, None, before, None, None), None, None))
+            self.ring.append(
+                (next(self.counter), m._clock.now, (FULL, i, before, None, before, None, None), None, None)
+            )
             return False
         take = self.values[i].take
         old = take(m)
@@ -219,7 +230,9 @@ class History:
                 self.trim()
         else:
             changed = (old, new) if new != old else (None, None)
-            self.ring.append((next(self.counter), m._clock.now, (FULL, i, before, None, m._state, None, None), *changed))
+            self.ring.append(
+                (next(self.counter), m._clock.now, (FULL, i, before, None, m._state, None, None), *changed)
+            )
         return goes
 
     def on_live(self, rounds: int, live: list[Machine]) -> None:
@@ -300,7 +313,9 @@ class History:
                 fired = extra.pop(0)
         gated = self._gated.get(number) if self._gated else None
         if gated is None:
-            changed = [(k, rec[2 + 2 * t], rec[3 + 2 * t]) for t, k in enumerate(taken) if rec[2 + 2 * t] != rec[3 + 2 * t]]
+            changed = [
+                (k, rec[2 + 2 * t], rec[3 + 2 * t]) for t, k in enumerate(taken) if rec[2 + 2 * t] != rec[3 + 2 * t]
+            ]
             return i, ran, ran, after, fired, None, changed
         before, old, mid = gated
         new = list(mid)
@@ -409,7 +424,7 @@ def recorder(
     ringlet takes the values `reads` says it can change."""
     cls = type(m)
     v = h.values[m._id]
-    taken = taken_by(reads, v.names, v.kinds, {e[0] for e in cls.INPUTS})
+    taken = taken_by(reads, v.names, v.kinds, {e[0] for e in cls.INPUTS}, v.replaced_only)
 
     def record(node: ast.FunctionDef, state: int) -> ast.FunctionDef:
         return record_ringlet(node, m._id, state, cls.SUSPENDED, taken.get(node.name, ()), v.names, TRAP)

@@ -51,15 +51,20 @@ def message_name(k: int) -> str:
     return f"{_LOCAL}m{k}"
 
 
-def taken_by(reads: ClassReads, names: tuple[str, ...], kinds: tuple[int, ...], inputs: set[str]) -> dict[str, tuple[tuple[int, int], ...]]:
+def taken_by(
+    reads: ClassReads, names: tuple[str, ...], kinds: tuple[int, ...], inputs: set[str], replaced_only: frozenset[str]
+) -> dict[str, tuple[tuple[int, int], ...]]:
     """For each ringlet (by function name): (index into `names`, how it is taken) of each value
     it may change.  `kinds`: each value's kind (DIRECT for an immutable one or a handle, MESSAGE,
-    COPIED), as history.Values sorts them."""
+    COPIED), as history.Values sorts them.  A value in `replaced_only` (a number, a string, a
+    handle shown by its type) changes only where the ringlet assigns the variable, whatever else
+    it does with it (`is_running(bot)` hands `bot` on, and cannot change it)."""
     always = {v for v in names if v in inputs or reads.is_escaped(v)}
     out: dict[str, tuple[tuple[int, int], ...]] = {}
     for fn, ringlet in reads.ringlets.items():
         groups = {reads.group.get(t, t) for t in ringlet.touches}
-        mine = {v for v in names if reads.group.get(v, v) in groups} | always
+        assigned = _assigned(reads.trees[fn])
+        mine = {v for v in names if (v in assigned if v in replaced_only else reads.group.get(v, v) in groups)} | always
         out[fn] = tuple(
             (k, CACHED if kinds[k] == DIRECT and v in always else kinds[k]) for k, v in enumerate(names) if v in mine
         )
@@ -75,8 +80,9 @@ def record_ringlet(
     names: tuple[str, ...],
     trap: str,
 ) -> ast.FunctionDef:
-    """The ringlet `node` (of machine index `machine`'s `state`) with a record appended before each return (and before the
-    breakpoints' trap calls just before it, so that a pause there shows this ringlet)."""
+    """The ringlet `node` (of machine index `machine`'s `state`) with a record appended before
+    each return (and before the breakpoints' trap calls just before it, so that a pause there
+    shows this ringlet)."""
     starts = [
         _assign(_LOCAL + f"o{k}", _self(names[k])) for k, how in taken if how == DIRECT
     ]  # the old values of immutables: read before anything runs
@@ -92,7 +98,13 @@ def record_ringlet(
 
 class _Recorder:
     def __init__(
-        self, machine: int, state: int, suspended: int, taken: tuple[tuple[int, int], ...], names: tuple[str, ...], trap: str
+        self,
+        machine: int,
+        state: int,
+        suspended: int,
+        taken: tuple[tuple[int, int], ...],
+        names: tuple[str, ...],
+        trap: str,
     ) -> None:
         self.machine = machine
         self.state = state
@@ -176,15 +188,30 @@ class _Recorder:
         return [*out, *made]
 
 
+def _assigned(tree: ast.FunctionDef) -> set[str]:
+    """The names `self.NAME` is assigned, augmented or deleted as in a ringlet."""
+    return {
+        n.attr
+        for n in ast.walk(tree)
+        if isinstance(n, ast.Attribute)
+        and isinstance(n.ctx, ast.Store | ast.Del)
+        and isinstance(n.value, ast.Name)
+        and n.value.id == "self"
+    }
+
+
 def _sets_state(node: ast.AST, suspended: int) -> int | None:
     """The state a statement makes current: `self._state = K` (K; -1 when K is not a constant),
     `self._enter_suspend_state()` (the suspend state); None for any other statement."""
     if isinstance(node, ast.Assign) and len(node.targets) == 1 and is_self_attr(node.targets[0], "_state"):
         v = node.value
         return v.value if isinstance(v, ast.Constant) and isinstance(v.value, int) else -1
-    if isinstance(node, ast.Expr) and isinstance(node.value, ast.Call):
-        if is_self_attr(node.value.func, "_enter_suspend_state"):
-            return suspended
+    if (
+        isinstance(node, ast.Expr)
+        and isinstance(node.value, ast.Call)
+        and is_self_attr(node.value.func, "_enter_suspend_state")
+    ):
+        return suspended
     return None
 
 

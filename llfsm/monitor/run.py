@@ -38,9 +38,9 @@ from typing import Any
 from ..props.atoms import infos_of
 from ..props.file import PropertySource
 from ..runtime.generated import become
+from ..runtime.reads import ClassReads, class_reads
 from ..runtime.scheduler import GO, Arrangement
 from .judge import VIOLATED, Boundary, Judge, Judged, MonitorError, Verdict, atom_reads
-from ..runtime.reads import ClassReads, class_reads
 from .topic import MonitorTopic
 from .variant import FAILED, JUDGE, MACHINES, PUBLISHED, Check, make_variant
 from .variant import VIOLATED as VIOLATED_FN

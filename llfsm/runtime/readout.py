@@ -56,7 +56,12 @@ def plain(value: object, depth: int = 0) -> Any:
         out = [plain(v, depth + 1) for v in items[:ITEMS]]
         if len(items) > ITEMS:
             last = items[-1]
-            cut = len(items) == ITEMS + 1 and type(last) is str and last.startswith("… (") and last.endswith(f" items, {CUT})")
+            cut = (
+                len(items) == ITEMS + 1
+                and type(last) is str
+                and last.startswith("… (")
+                and last.endswith(f" items, {CUT})")
+            )
             out.append(last if cut else f"… ({len(items):,} items, {CUT})")  # cut already: as it says
         return out
     if t is dict:
