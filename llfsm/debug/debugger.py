@@ -132,6 +132,7 @@ class Debugger:
         h.compiled = True
         self.traps.recorder = lambda m: recorder(h, m, reads[m._id])
         self.arr.around_release = h.around_release
+        h.waiting = self.arr._variables
         self.arr.on_live = h.on_live
 
     # -- what the session sets up -----------------------------------------------------------------

@@ -166,6 +166,9 @@ class History:
         self._rounds: list[tuple[int, int, int]] = [(1, 0, len(self.machines))]
         #: The page asked for the values (`snapshot`): `refresh` takes them again.
         self.wanted = False
+        #: Values waiting for their machine's next turn (the arrangement's, by machine id: set by
+        #: the debugger when the ringlets record themselves).
+        self.waiting: dict[int, Any] = {}
 
     # -- made on the scheduler's thread ------------------------------------------------------------
     def _next_number(self) -> int:
@@ -213,7 +216,7 @@ class History:
         i = m._id
         before = m._state
         inputs = m._inputs
-        if m._suspended and m._pending is None and i not in m._arr._variables and (inputs is None or not inputs.fresh):
+        if m._suspended and m._pending is None and i not in self.waiting and (inputs is None or not inputs.fresh):
             let_go(m)  # nothing to apply: it stays suspended, and nothing of it changes
             self.ring.append(
                 (next(self.counter), m._clock.now, (FULL, i, before, None, before, None, None), None, None)

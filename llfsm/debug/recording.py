@@ -158,7 +158,8 @@ class _Recorder:
         items: list[ast.expr] = [
             ast.Call(func=_load(NEXT), args=[_load(COUNT)], keywords=[]),
             ast.Attribute(value=_self("_clock"), attr="now", ctx=ast.Load()),
-            ast.Constant((self.machine, self.state, known, fired, tuple(k for k, _ in self.taken), flags)),
+            # a tuple of constants is a constant to the compiler (typeshed's Constant lists scalars only)
+            ast.Constant((self.machine, self.state, known, fired, tuple(k for k, _ in self.taken), flags)),  # type: ignore[arg-type]
         ]
         after: list[ast.stmt] = []
         for k, how in self.taken:
