@@ -336,7 +336,9 @@ class Explorer(Stepper):
                         if oracle is not None:
                             if bus.ready:  # the answers and callbacks it left, as between rounds
                                 drain()
-                            c += len(choices) * oracle.number()
+                            made = oracle.made
+                            if made:
+                                c += len(choices) * (made[0][0] if len(made) == 1 else oracle.number())
                         steps += 1
                         # the machine's new part (and those its commands touched)
                         part = snaps[turn](m)
@@ -430,7 +432,7 @@ class Explorer(Stepper):
                             edges.append(j)
                             if oracle is not None:
                                 edge_choice.append(c)
-                        if oracle is None:
+                        if oracle is None or not oracle.made:
                             break
                         forced = oracle.next_forced()
                         if forced is None:
