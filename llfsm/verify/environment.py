@@ -198,10 +198,11 @@ class World:
     queue.  Otherwise (anything queued ahead, `ros.ok()` false, a request left pending, a call
     to any other service) the bus's own methods run, so what machine code sees (a pending future
     until the executor's turn, INTERRUPTED, TIMEOUT, the order of callbacks and answers, hence
-    the order of the oracle's choices) is unchanged.
+    the order of the oracle's choices) is unchanged.  `direct=False` (verify's generic step,
+    `Options.generic`) leaves the bus as it is: tests/test_verify_environment.py compares the two.
     """
 
-    def __init__(self, declared: Declared, bus: Any) -> None:
+    def __init__(self, declared: Declared, bus: Any, direct: bool = True) -> None:
         self.oracle = Oracle()
         self.services: dict[str, EnvService] = {}
         self.topics: dict[str, EnvTopic] = {}
@@ -221,7 +222,7 @@ class World:
             except (LookupError, ValuesError) as e:
                 raise EnvironmentError_(f"{t.where}: topic {name}: {e}") from None
             self.topics[name] = EnvTopic(name, cls, values, [_shown(v) for v in t.values])
-        if self.services:
+        if self.services and direct:
             self._take_requests(bus)
         from ..ros.subscription import Subscription  # deferred: start-up (the bus exists by now)
 
