@@ -195,6 +195,9 @@ class Explorer(Stepper):
         bounded = bool(self.bounds)
         world = self.world
         oracle = world.oracle if world is not None else None
+        topics = world if world is not None and world.topics else None  # messages before each ringlet
+        if oracle is not None:
+            oracle.start(())  # in the loop below, only its choices and `forced` change
         variables = [c.variables for c in codecs]
         drain = self._drain
         edge_choice = self.edge_choice
@@ -294,7 +297,7 @@ class Explorer(Stepper):
                 m = machines[turn]
                 names = input_names[turn]
                 for base, (values, tm, intr) in enumerate(choices):
-                    if oracle is not None:
+                    if oracle is not None and (oracle.made or oracle.forced):  # else as start() leaves it
                         oracle.start(())
                     while True:  # each sequence of the environment's choices (one without an environment)
                         c = base
@@ -314,8 +317,8 @@ class Explorer(Stepper):
                         if names:
                             for name, v in zip(names, values, strict=True):
                                 setattr(m, name, v)
-                        if world is not None:  # the environment's messages, before the ringlet
-                            world.before_ringlet(m, variables[turn])
+                        if topics is not None:  # the environment's messages, before the ringlet
+                            topics.before_ringlet(m, variables[turn])
                             if bus.ready:
                                 drain()
                         now = reps[turn][m._state][tm] if period is None else tm
