@@ -385,7 +385,8 @@ def environment_table(tmp: Path, modulo: int, rounds: int) -> Table:
         ratio = [a / b for a, b in zip(rates[name], rates[base], strict=True)]
         rows.append(
             [name, f"{sizes[name]:,}", f"{statistics.median(rates[name]):,.0f}",
-             f"{statistics.median(ratio):.2f} ({min(ratio):.2f}-{max(ratio):.2f})", "≥ 0.80" if name == names[0] else ""]
+             f"{statistics.median(ratio):.2f} ({min(ratio):.2f}-{max(ratio):.2f})",
+             "≥ 0.80" if name == names[0] else ""]
         )  # fmt: skip
     return (
         f"verify with an environment against inputs: one machine asking for a value every ringlet (a service "

@@ -161,7 +161,8 @@ def _caller(tmp_path: Path) -> Path:
             "count = (count + 1) % 5\n",
         },
         variables="node: ros.Node\nclient: object = None\npub: object = None\nsub: object = None\n"
-        "heard: list = []\nspun: int = 0\nx: float = 0.0\nearly: bool = False\ncount: int = 0\ncode: str = ''\nf: object = None\n",
+        "heard: list = []\nspun: int = 0\nx: float = 0.0\nearly: bool = False\ncount: int = 0\n"
+        "code: str = ''\nf: object = None\n",
         includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n"
         "from llfsm.msgs.turtle_sensor_interface.srv import TurtlePosition\n",
     )
@@ -209,7 +210,9 @@ def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_a
         assert r.error is None and r.partial is None
         shapes.append((r.configurations, r.steps, list(e.edges), list(e.edge_choice), list(e.labels), list(e.choice)))
         if not hash_compact:  # what each configuration holds: every variable, the bus's flags, the time
-            contents.append([(c[:GLOBALS], e.globals_of(c), e.times_of(c), [e.part(c, k) for k in range(e.n)]) for c in e.configs])
+            contents.append(
+                [(c[:GLOBALS], e.globals_of(c), e.times_of(c), [e.part(c, k) for k in range(e.n)]) for c in e.configs]
+            )
     assert shapes[0] == shapes[1] == shapes[2]
     assert contents[0] == contents[1]
     assert shapes[0][0] > 4 and shapes[0][3]

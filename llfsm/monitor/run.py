@@ -40,7 +40,7 @@ from ..runtime.scheduler import GO, Arrangement
 from .judge import VIOLATED, Boundary, Judge, Judged, MonitorError, Verdict, atom_reads
 from .reads import ClassReads, class_reads
 from .topic import MonitorTopic
-from .variant import FAILED, JUDGE, MACHINES, PUBLISHED, Check, make_variant
+from .variant import FAILED, JUDGE, MACHINES, NUMBERS, NUMERIC, PUBLISHED, Check, make_variant
 from .variant import VIOLATED as VIOLATED_FN
 
 #: What `--on-violation` may say.
@@ -92,6 +92,9 @@ class Monitor:
         self._watcher = self._watch  # one bound method, compared with `is`
         self._inputs: dict[int, list[object]] = {}
         self._reads_inputs = not targeted  # an input a property reads (found by _instrument)
+        #: by machine: the variables its variant relies on holding numbers, and the variant
+        #: that does not (llfsm.monitor.variant, NUMERIC), made if one is set to anything else
+        self._numeric: dict[int, tuple[frozenset[str], Callable[[], type]]] = {}
         self.ended = False
 
     # -- attaching ------------------------------------------------------------------------------
@@ -118,6 +121,11 @@ class Monitor:
             if m._pending is not None or m._id in arr._variables or (inputs is not None and inputs.fresh):
                 self._once = True  # a command, a parameter, an input: judge the boundary after it
                 self._watch_on()
+                if m._id in self._numeric and m._id in arr._variables:
+                    numeric, unstepped = self._numeric[m._id]
+                    if any(k in numeric and type(v) not in NUMBERS for k, v in arr._variables[m._id].items()):
+                        del self._numeric[m._id]
+                        _swap(m, unstepped())  # its checks in full from this ringlet on
 
         arr._gate_fn = gate
         arr.on_release = released
@@ -188,11 +196,18 @@ class Monitor:
             m = arr.machines[index]
             cr = reads[index]
             assert cr is not None
-            variant = make_variant(type(m), cr, index, by_ringlet, helpers)
-            swap = {id(f): g for f, g in zip((*m.ENTER, *m.STEADY), (*variant.ENTER, *variant.STEADY), strict=True)}
-            m.__class__ = variant
-            m._run = swap.get(id(m._run), m._run)
-            m._next = swap.get(id(m._next), m._next)
+            cls = type(m)
+
+            def unstepped(cls: type = cls, cr: ClassReads = cr, index: int = index, by: Any = by_ringlet) -> type:
+                return make_variant(cls, cr, index, by, helpers, steps=False)
+
+            variant = make_variant(cls, cr, index, by_ringlet, helpers)
+            numeric: frozenset[str] = getattr(variant, NUMERIC)
+            if any(type(getattr(m, v, None)) not in NUMBERS for v in numeric):
+                variant = unstepped()  # a stepped variable holds something else already
+            elif numeric:
+                self._numeric[index] = (numeric, unstepped)
+            _swap(m, variant)
         return True
 
     # -- judging ---------------------------------------------------------------------------------
@@ -391,6 +406,15 @@ class Monitor:
         where = Boundary(self.arr.ringlets if self.arr is not None else 0)
         self._unsaid = self.judge.at_end(self._now(), where)
         self._say()
+
+
+def _swap(m: Any, variant: Any) -> None:
+    """Make live machine `m` one of `variant` (a monitored variant of its own class or of the
+    class it was made from), its next ringlets the variant's."""
+    swap = {id(f): g for f, g in zip((*m.ENTER, *m.STEADY), (*variant.ENTER, *variant.STEADY), strict=True)}
+    m.__class__ = variant
+    m._run = swap.get(id(m._run), m._run)
+    m._next = swap.get(id(m._next), m._next)
 
 
 def _check(judge: Judge, j: Judged) -> Check:

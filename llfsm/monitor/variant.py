@@ -14,8 +14,15 @@ A safety property's check is its atom inlined, `self` for its own machine, `_llf
 another's; at a `return` where the ringlet's target state is written just before it (every
 `return` the compiler writes: `self._state = K ... return i`, or no transition at all), the
 machine's own `state(m)` is that state's name as a constant, and the comparisons it takes part
-in are folded: a check that cannot fail there is left out.  Other kinds call the monitor with
-the properties to judge.  Names start with `_llfsm_mon_`, which machine code cannot use (LF013).
+in are folded: a check that cannot fail there is left out.  So is a check that held at the
+boundary before the ringlet and that the ringlet cannot make fail (`_cannot_fail`): everything it
+reads is as it was, but for numbers the ringlet steps one way (llfsm.monitor.reads,
+`ClassReads.step`) that it bounds on the other side (`always: m.count >= 0` in a ringlet whose
+only change is `count += 1`).  That rests on the variable holding a number (an int, a float or a
+bool), which its machine's code keeps (`ClassReads.numeric`) and the monitor checks where
+anything else could set it (llfsm.monitor.run): the variant names those variables in
+`NUMERIC`.  Other kinds call the monitor with the properties to judge.  Names start with
+`_llfsm_mon_`, which machine code cannot use (LF013).
 """
 
 from __future__ import annotations
@@ -35,6 +42,11 @@ PREFIX = "_llfsm_mon_"
 VIOLATED, FAILED, JUDGE = PREFIX + "v", PREFIX + "x", PREFIX + "j"
 #: ...and the arrangement's machines and the topics published since the last boundary.
 MACHINES, PUBLISHED = PREFIX + "M", PREFIX + "E"
+#: The class attribute of a variant naming the variables whose checks it left out because the
+#: ringlets step them as numbers (they must hold numbers for that to stand).
+NUMERIC = PREFIX + "numeric"
+#: The types a stepped variable keeps its order under (`x + 1 >= x`, NaN staying NaN).
+NUMBERS = (int, float, bool)
 
 
 @dataclass
@@ -47,20 +59,38 @@ class Check:
     violated_when: bool = False
 
 
+@dataclass
+class _Ringlet:
+    """What a rewrite knows of the ringlet it rewrites: the machine, the state it runs in
+    (None: more than one), and what it may change (None: no fold by what it steps)."""
+
+    own: int
+    cls: type[Any]
+    checks: list[Check]
+    entered_in: int | None = None
+    reads: ClassReads | None = None
+    name: str = ""
+    #: the variables the checks left out rely on being numbers (filled in as they are left out)
+    numeric: set[str] | None = None
+
+
 def make_variant(
     cls: type[Any],
     reads: ClassReads,
     own: int,
     checks: dict[str, list[Check]],
     helpers: dict[str, Callable[..., Any]],
+    steps: bool = True,
 ) -> type[Any]:
     """The monitored variant of `cls` (the machine at load index `own`): `checks` by ringlet
-    function name."""
+    function name; with `steps`, a check a ringlet cannot make fail by stepping numbers is
+    left out (the variables this relies on are the variant's NUMERIC)."""
     namespace = dict(reads.namespace)
     namespace.update(helpers)
     namespace.update({PREFIX + k: v for k, v in PURE.items()})
     namespace.update({PREFIX + k: v for k, v in HELPERS.items()})
     made: dict[str, Any] = {}
+    numeric: set[str] = set()
     for fn in (*cls.ENTER, *cls.STEADY):
         name = fn.__name__
         if name in made:
@@ -68,8 +98,9 @@ def make_variant(
         wanted = checks.get(name)
         if wanted:
             state = _state_of(cls, fn)
+            ctx = _Ringlet(own, cls, wanted, state, reads if steps else None, name, numeric)
             tree = copy.deepcopy(reads.trees[name])
-            tree.body = _rewrite_block(tree.body, state, own, cls, wanted)[0]
+            tree.body = _rewrite_block(tree.body, state, ctx)[0]
             module = ast.Module(body=[tree], type_ignores=[])
             ast.fix_missing_locations(module)
             exec(compile(module, reads.filename, "exec", dont_inherit=True), namespace)
@@ -84,16 +115,15 @@ def make_variant(
         "__doc__": cls.__doc__,
         "ENTER": tuple(made[f.__name__] for f in cls.ENTER),
         "STEADY": tuple(made[f.__name__] for f in cls.STEADY),
+        NUMERIC: frozenset(numeric),
     }
     return type(cls.__name__, (cls,), attrs)
 
 
 def _state_of(cls: type[Any], fn: Any) -> int | None:
-    """The state whose ringlet `fn` is."""
-    for s, (e, st) in enumerate(zip(cls.ENTER, cls.STEADY, strict=True)):
-        if fn is e or fn is st:
-            return s
-    return None
+    """The state whose ringlet `fn` is (None: it is the ringlet of more than one)."""
+    states = {s for s, (e, st) in enumerate(zip(cls.ENTER, cls.STEADY, strict=True)) if fn is e or fn is st}
+    return states.pop() if len(states) == 1 else None
 
 
 def _sets_state(node: ast.stmt) -> int | bool | None:
@@ -118,19 +148,17 @@ def _changes_state(stmts: list[ast.stmt]) -> bool:
     return False
 
 
-def _rewrite_block(
-    stmts: list[ast.stmt], known: int | None, own: int, cls: type[Any], checks: list[Check]
-) -> tuple[list[ast.stmt], int | None]:
+def _rewrite_block(stmts: list[ast.stmt], known: int | None, ctx: _Ringlet) -> tuple[list[ast.stmt], int | None]:
     """The block with the checks before each of its returns (nested blocks too, never inside a
     nested function), and the state known after it (None: unknown)."""
     out: list[ast.stmt] = []
     for st in stmts:
         if isinstance(st, ast.Return):
-            out.extend(_returning(st, known, own, cls, checks))
+            out.extend(_returning(st, known, ctx))
             return out, known
         sets = _sets_state(st)
         if sets is True:
-            known = cls.SUSPENDED
+            known = ctx.cls.SUSPENDED
         elif sets is not False:
             known = sets
         elif isinstance(st, ast.If | ast.For | ast.AsyncFor | ast.While | ast.With | ast.AsyncWith | ast.Try):
@@ -139,14 +167,14 @@ def _rewrite_block(
             for attr in ("body", "orelse", "finalbody"):
                 block = getattr(st, attr, None)
                 if block:
-                    setattr(st, attr, _rewrite_block(block, known, own, cls, checks)[0])
+                    setattr(st, attr, _rewrite_block(block, known, ctx)[0])
                     changed = changed or _changes_state(block)
             if isinstance(st, ast.Try):
                 handlers = []
                 for h in st.handlers:
                     h = copy.copy(h)
                     changed = changed or _changes_state(h.body)
-                    h.body = _rewrite_block(h.body, known, own, cls, checks)[0]
+                    h.body = _rewrite_block(h.body, known, ctx)[0]
                     handlers.append(h)
                 st.handlers = handlers
             if changed:
@@ -156,22 +184,23 @@ def _rewrite_block(
     return out, known
 
 
-def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], checks: list[Check]) -> list[ast.stmt]:
+def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.stmt]:
     """The checks, then the return (its value kept first when it is not a constant).  A
     constant return after a last inline check returns from inside it when the property holds
     (`if holds: return 0`): the common case then costs the test alone."""
+    own, cls = ctx.own, ctx.cls
     state = cls.STATES[known] if known is not None else None
     body: list[ast.stmt] = []
     ids: list[int] = []
     last: tuple[ast.Try, ast.expr, int] | None = None
     holding: list[ast.expr] = []  # what each inline check's holding is, for the fast path below
-    for c in checks:
+    for c in ctx.checks:
         if c.tree is None:
             ids.append(c.index)
             continue
-        cond = _fold(_Inline(own, state).visit(copy.deepcopy(c.tree)))
-        if not c.violated_when:
-            cond = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+        cond = _violated(c, own, state)
+        if not isinstance(cond, ast.Constant) and _cannot_fail(cond, c, ctx):
+            continue
         if isinstance(cond, ast.Constant):
             if cond.value:
                 body.append(_call(VIOLATED, c.index))  # violated whenever it returns here
@@ -211,6 +240,85 @@ def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], che
     keep = ast.Assign(targets=[ast.Name(id=PREFIX + "r", ctx=ast.Store())], value=ret.value)
     new_ret = ast.Return(value=ast.Name(id=PREFIX + "r", ctx=ast.Load()))
     return [_locate(keep, ret), *body, _locate(new_ret, ret)]
+
+
+def _violated(c: Check, own: int, state: str | None) -> ast.expr:
+    """When check `c` is violated, as code of a ringlet of machine `own` whose own state is
+    `state` (None: unknown), folded."""
+    assert c.tree is not None  # an inline check's
+    cond = _fold(_Inline(own, state).visit(copy.deepcopy(c.tree)))
+    if not c.violated_when:
+        cond = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+    return cond
+
+
+def _cannot_fail(cond: ast.expr, c: Check, ctx: _Ringlet) -> bool:
+    """Whether a safety property's check (`cond`: when it is violated here) cannot fail at this
+    return, given that it held at the boundary before the ringlet: what it reads is as it was,
+    or a number the ringlet only steps one way (`ClassReads.step`) that the property bounds on the
+    other side.  A property violated before is said already; one that raised then counted as
+    violated.  What the gate changes at the start of a ringlet (a command, a parameter, an input)
+    makes the monitor judge the boundary after it in full (llfsm.monitor.run)."""
+    cr = ctx.reads
+    if cr is None or ctx.entered_in is None or ctx.numeric is None:
+        return False
+    before = _violated(c, ctx.own, ctx.cls.STATES[ctx.entered_in])
+    if ast.dump(before) != ast.dump(cond):  # the state it reads moves in this ringlet
+        return False
+    ringlet = cr.ringlets[ctx.name]
+    moved = {"_state", "_suspended"} if ringlet.moves else set()
+    if ringlet.finishes:
+        moved.add("_finished")
+    changed = {cr.group.get(t, t) for t in ringlet.touches}
+    holds = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+    stepped: set[str] = set()
+    for attr in {n.attr for n in ast.walk(holds) if _self_attr_load(n)}:  # type: ignore[attr-defined]
+        if attr in moved:
+            return False
+        if cr.group.get(attr, attr) not in changed or attr not in cr.variables:
+            continue  # as it was before the ringlet
+        step = cr.step(ctx.name, attr)
+        if not step or _polarity(holds, attr) not in (0, step):
+            return False
+        stepped.add(attr)
+    ctx.numeric |= stepped
+    return True
+
+
+#: How a comparison `x OP c` changes as x grows: +1 (false to true at most), -1 (true to false at most).
+_GROWS: dict[type[ast.cmpop], int] = {ast.Gt: 1, ast.GtE: 1, ast.Lt: -1, ast.LtE: -1}
+
+
+def _polarity(e: ast.expr, attr: str) -> int | None:
+    """How the truth of `e` moves as `self.attr` grows, the rest kept: 0 (it does not read it),
+    +1 (it can only turn true), -1 (only false), None (either, or not known): comparisons of
+    `self.attr` itself with what does not read it, under `not`, `and`, `or`."""
+    if not _reads(e, attr):
+        return 0
+    if isinstance(e, ast.UnaryOp) and isinstance(e.op, ast.Not):
+        p = _polarity(e.operand, attr)
+        return None if p is None else -p
+    if isinstance(e, ast.BoolOp):
+        ps = {_polarity(v, attr) for v in e.values} - {0}
+        return ps.pop() if len(ps) == 1 else None
+    if isinstance(e, ast.Compare) and len(e.ops) == 1:
+        grows = _GROWS.get(type(e.ops[0]))
+        left, right = e.left, e.comparators[0]
+        if grows is None:
+            return None
+        if _is_attr(left, attr) and not _reads(right, attr):
+            return grows
+        if _is_attr(right, attr) and not _reads(left, attr):
+            return -grows
+    return None
+
+
+def _is_attr(node: ast.AST, attr: str) -> bool:
+    return _self_attr_load(node) and node.attr == attr  # type: ignore[attr-defined]
+
+
+def _reads(e: ast.AST, attr: str) -> bool:
+    return any(_is_attr(n, attr) for n in ast.walk(e))
 
 
 class _Shared(ast.NodeTransformer):

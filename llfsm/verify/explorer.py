@@ -339,9 +339,9 @@ class Explorer(Stepper):
                         if oracle is not None:
                             if bus.ready:  # the answers and callbacks it left, as between rounds
                                 drain()
-                            made = oracle.made
-                            if made:
-                                c += len(choices) * (made[0][0] if len(made) == 1 else oracle.number())
+                            chosen = oracle.made
+                            if chosen:
+                                c += len(choices) * (chosen[0][0] if len(chosen) == 1 else oracle.number())
                         steps += 1
                         # the machine's new part (and those its commands touched)
                         part = snaps[turn](m)
