@@ -5,6 +5,7 @@ other, publish, take parameters from outside, and finish."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -272,3 +273,25 @@ def test_a_stepped_variable_that_starts_as_something_else_than_a_number_is_check
     targeted, m = _run_set(stepper, src, True, {}, start={"up": Wrap(120)})
     assert targeted == every
     assert type(m)._llfsm_mon_numeric == set()
+
+
+def test_variables_made_one_object_by_their_initial_values(tmp_path: Path) -> None:
+    """`alias: list = items` in Variables.py: a ringlet appending to alias changes items; `box:
+    list = SHARED`: a helper module's function changes box without the ringlet naming it."""
+    d = write_machine(
+        tmp_path,
+        "h",
+        {"A": [("A", "True")]},
+        code={"A_OnEntry": "alias.append(1)\ngrow()\n"},
+        variables="items: list = []\nalias: list = items\nbox: list = SHARED\n",
+        includes="from monitor_shared import SHARED, grow\n",
+    )
+    (tmp_path / "monitor_shared.py").write_text("SHARED = []\ndef grow():\n    SHARED.append(0)\n")
+    cls = load(str(d))
+    shared = sys.modules["monitor_shared"].SHARED
+    for text in ("len(h.items) >= 3", "len(h.box) >= 4"):
+        src = [PropertySource("never", text)]
+        shared.clear()
+        every = _run_set(cls, src, False, {})[0]
+        shared.clear()
+        assert every and _run_set(cls, src, True, {})[0] == every

@@ -173,6 +173,16 @@ def class_reads(cls: type[Any]) -> ClassReads | None:
         if scan.escapes:
             escaped_vars |= scan.touched
         escaped_vars |= scan.in_callbacks
+    # the initial values (Variables.py, run once by `_initialise`): `alias: list = items` makes
+    # one object of two variables, `box: list = SHARED` one a module-level object can change
+    for st in _initialiser(tree, cls.__name__):
+        scan = _Scan(names, own, namespace)
+        scan.visit(st)
+        joined = sorted(v for v in scan.touched if "other" in scan.changes.get(v, {"other"}))
+        for a in joined[1:]:
+            parent[find(a)] = find(joined[0])
+        if scan.escapes:
+            escaped_vars |= scan.touched
     hooked: set[str] = set()
     for f in hooks:
         scan = _Scan(names, own, namespace)
@@ -182,6 +192,16 @@ def class_reads(cls: type[Any]) -> ClassReads | None:
     escaped = {group[v] for v in escaped_vars if v in group}
     trees = {n: defs[n] for n in ringlets}
     return ClassReads(ringlets, variables, group, escaped, trees, filename, namespace, hooked)
+
+
+def _initialiser(tree: ast.Module, name: str) -> list[ast.stmt]:
+    """The statements of class `name`'s `_initialise` in the generated module."""
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef) and node.name == name:
+            for item in node.body:
+                if isinstance(item, ast.FunctionDef) and item.name == "_initialise":
+                    return item.body
+    return []
 
 
 def _own_definitions(namespace: dict[str, Any]) -> set[str]:
