@@ -23,7 +23,9 @@ arrangement and the monitor are made before the timer starts.  Rows:
   where a property's value can change anywhere: a variable handed to a helper module, a native
   build, an `ltl` with X), and a watcher that judges nothing, the scheduler's watched round
   alone (a Python loop over a round with a call after each ringlet, where the plain loop is a
-  bare call).
+  bare call);
+- an `ltl` formula with X, which only a watcher judges (it counts boundaries), alone and with the
+  ten falsifiable properties beside it: those stay compiled into the ringlets.
 """
 
 from __future__ import annotations
@@ -53,6 +55,7 @@ Table = tuple[str, list[str], list[list[str]]]
 TOUCHED = "always: toggle.count >= {k}"
 UNTOUCHED = "always: toggle.limit > {k}"
 FALSIFIABLE = "always: toggle.count < {k}"
+NEXT = "ltl: G (toggle.count >= 0 -> X toggle.count > 0)"
 
 
 def contestant(
@@ -88,6 +91,9 @@ def table(cls: type, n: int, rounds: int) -> Table:
         ),
     ]
     named = {name: contestant(cls, props) for name, props in rows_spec}
+    named["an ltl with X (a watcher judges it at every boundary)"] = contestant(cls, [NEXT])
+    ten = [FALSIFIABLE.format(k=1_000_000_000 + k) for k in range(10)]
+    named["the ltl with X and the 10 properties every ringlet could falsify"] = contestant(cls, [NEXT, *ten])
     watcher = "1 property it touches every ringlet, judged by a watcher at every boundary"
     named[watcher] = contestant(cls, [TOUCHED.format(k=0)], targeted=False)
     idle = "a watcher that judges nothing (the scheduler's watched round alone)"

@@ -86,8 +86,10 @@ class Monitor:
         self._once = False
         #: the last boundary judged in full had something published: the next one has not
         self._fall = False
-        #: every boundary is judged (see the module's docstring)
+        #: every boundary is judged (see the module's docstring)...
         self.always = False
+        #: ...for these properties alone (None: all of them), the others where they can change
+        self._everywhere: list[Judged] | None = None
         self._before: Callable[[Any], int] | None = None  # a watcher that was there first
         self._watcher = self._watch  # one bound method, compared with `is`
         self._inputs: dict[int, list[object]] = {}
@@ -103,7 +105,12 @@ class Monitor:
         verdicts go to /llfsm/monitor too once the run has a bus (llfsm.monitor.topic)."""
         self.arr = arr
         self.machines = arr.machines
-        self.always = not self.targeted or not self._instrument(arr)
+        if self.targeted:
+            everywhere = self._instrument(arr)
+            self.always = bool(everywhere)
+            self._everywhere = everywhere if len(everywhere) < len(self.judge.judged) else None
+        else:
+            self.always = True
         orig_gate = arr._gate_fn
 
         def gate(m: Any) -> int | None:
@@ -149,15 +156,16 @@ class Monitor:
         if self.always:
             self._watch_on()
 
-    def _instrument(self, arr: Arrangement) -> bool:
-        """Compile each property's checks into the ringlets that can change what it reads; False
-        if some property must be judged at every boundary instead."""
+    def _instrument(self, arr: Arrangement) -> list[Judged]:
+        """Compile each property's checks into the ringlets that can change what it reads; the
+        properties that must be judged at every boundary instead (none compiled in)."""
         judge = self.judge
         reads: dict[int, ClassReads | None] = {}
         checks: dict[int, dict[str, list[Check]]] = {}
-        every = False
+        everywhere: list[Judged] = []
         self._reads_inputs = False
         for j in judge.judged:
+            every = False
             places: set[tuple[int, str]] = set()
             for k in j.atoms:
                 for r in atom_reads(judge.atoms[k]):
@@ -180,11 +188,12 @@ class Monitor:
                         self._reads_inputs = True
             if j.counts_steps:
                 every = True
+            if every:
+                everywhere.append(j)
+                continue
             check = _check(judge, j)
             for machine, name in places:
                 checks.setdefault(machine, {}).setdefault(name, []).append(check)
-        if every:
-            return False
         helpers: dict[str, Any] = {
             VIOLATED_FN: self._violated,
             FAILED: self._failed,
@@ -208,7 +217,7 @@ class Monitor:
             elif numeric:
                 self._numeric[index] = (numeric, unstepped)
             _swap(m, variant)
-        return True
+        return everywhere
 
     # -- judging ---------------------------------------------------------------------------------
     def _where(self, m: Any, offset: int) -> Boundary:
@@ -245,13 +254,15 @@ class Monitor:
 
     def _watch(self, m: Any) -> int:
         """The watcher: the boundary after m's ringlet."""
-        if self.always:  # watching for good: the judging alone
+        every = self._everywhere
+        if self.always and (every is None or not self._called_for()):  # watching for good: the judging alone
             self._pending = self._once = False
             arr = self.arr
             assert arr is not None
             if arr._stopped is None:
-                found = self.judge.boundary(self.machines, self.published, arr.clock.now, lambda: self._where(m, 1))
-                if self.published:
+                now = arr.clock.now
+                found = self.judge.boundary(self.machines, self.published, now, lambda: self._where(m, 1), every)
+                if self.published and every is None:
                     self.published.clear()
                 for v in found:
                     self._record(v)
@@ -260,9 +271,13 @@ class Monitor:
         before = self._before
         return before(m) if before is not None else GO
 
+    def _called_for(self) -> bool:
+        """Whether the next boundary is to be judged in full (see the module's docstring)."""
+        return self._fall or self._once or self._pending or bool(self.judge.deadlines_open)
+
     def _update(self) -> None:
         """Keep watching while something calls for it."""
-        if self.always or self._fall or self._once or self._pending or self.judge.deadlines_open:
+        if self.always or self._called_for():
             self._watch_on()
         else:
             self._watch_off()
