@@ -4,7 +4,10 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP := $(PY) -m pip --disable-pip-version-check -q
 
-.PHONY: demo test test-latest lint fuzz bench clean msgs ros-venv chromium spin asan lock
+.PHONY: all web frontend-test demo test test-latest lint fuzz bench clean msgs ros-venv chromium spin asan lock
+
+# `make`: the virtualenv and the page.
+all: $(VENV)/.installed web
 
 # What `make` installs is locked: requirements/lock.txt holds the exact versions of everything
 # .venv gets (llfsm's dependencies, every extra, and the setuptools it is built with), and
@@ -38,9 +41,29 @@ $(VENV)/.installed-bench: $(VENV)/.installed-dev
 	$(PIP) install --no-build-isolation $(call constrain,$(LOCK)) -e '.[dev,bench]'
 	touch $@
 
+# The page (docs/architecture.md, "The front end"): frontend/ (TypeScript, Vite, CodeMirror 6,
+# Preact) built into llfsm/web/static/app/, which the package ships (package-data).  Installed
+# from the committed lockfile only (`npm ci`: the registry, nothing else); the built files are
+# not committed, so `make`, `make demo` and `make test` build them on a fresh clone.
+FRONTEND_SRC := $(shell find frontend/src -type f 2>/dev/null) frontend/vite.config.ts frontend/tsconfig.json
+APP := llfsm/web/static/app/app.js
+
+frontend/node_modules/.installed: frontend/package.json frontend/package-lock.json
+	cd frontend && npm ci --no-audit --no-fund --loglevel=error
+	touch $@
+
+$(APP): frontend/node_modules/.installed $(FRONTEND_SRC)
+	cd frontend && npm run --silent build
+
+web: $(APP)
+
+# The page's unit tests (Vitest, in happy-dom).
+frontend-test: frontend/node_modules/.installed
+	cd frontend && npm test --silent
+
 DEMO_RUN := $(VENV)/bin/llfsm run --clock sim
 
-demo: $(VENV)/.installed
+demo: $(VENV)/.installed web
 	@mkdir -p demo-output
 	@echo "== ros2_ping_pong: /pingpong as ros2 topic echo shows it (3 s of simulated time)"
 	$(DEMO_RUN) machines/ros2_ping_pong.machine --duration 3.5s --echo /pingpong
@@ -90,7 +113,7 @@ ros-venv:
 
 # LLFSM_REQUIRE_C=1: a C part that was not built fails its tests here instead of skipping them,
 # so that `make test` measures what the docs claim (a plain `pytest` skips them, saying why).
-test: $(VENV)/.installed-dev lint ros-venv chromium spin
+test: $(VENV)/.installed-dev web lint frontend-test ros-venv chromium spin
 	LLFSM_REQUIRE_C=1 LLFSM_ROS_VENV=$(abspath $(VENV_ROS)) $(PY) -m pytest -q
 	@echo "== the same recorder and painter tests with the C parts disabled (the pure-Python fallback)"
 	LLFSM_NO_C=1 $(PY) -m pytest -q tests/test_bag.py tests/test_sim.py tests/test_bag_tap.py
@@ -136,5 +159,6 @@ msgs: $(VENV)/.installed-dev
 	$(PY) -m llfsm.idl
 
 clean:
+	rm -rf llfsm/web/static/app frontend/node_modules
 	rm -rf $(VENV) $(VENV_ROS) .venv-latest .venv-ros-latest .venv-lock build demo-output .pytest_cache .ruff_cache .import_linter_cache
 	find llfsm -name '*.so' -delete

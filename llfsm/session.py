@@ -54,6 +54,8 @@ if TYPE_CHECKING:
     from typing import Any, NoReturn, Protocol
 
     from .bag import RunBags
+    from .debug.debugger import Debugger
+    from .debug.prompt import Prompt
     from .outputs import StreamedOutput
     from .ros.bus import Bus
     from .ros.logging import LogSettings
@@ -118,6 +120,10 @@ FIELDS = (
     "monitor",
     "monitor_properties",
     "on_violation",
+    "paused",
+    "breaks",
+    "history",
+    "debug_prompt",
 )
 
 
@@ -159,6 +165,10 @@ class RunOptions:
     monitor: str | None
     monitor_properties: tuple[str, ...]
     on_violation: str  # log | pause | stop
+    paused: bool
+    breaks: tuple[str, ...]
+    history: int | None  # ringlets kept
+    debug_prompt: bool
 
     def __init__(
         self,
@@ -195,8 +205,12 @@ class RunOptions:
         monitor: str | None = None,
         monitor_properties: tuple[str, ...] = (),
         on_violation: str = "log",
+        paused: bool = False,
+        breaks: tuple[str, ...] = (),
+        history: int | None = None,
+        debug_prompt: bool = False,
     ) -> None:
-        given = locals()  # every parameter by name: one loop instead of 26 assignments
+        given = locals()  # every parameter by name: one loop instead of 34 assignments
         for name in FIELDS:
             object.__setattr__(self, name, given[name])
 
@@ -330,6 +344,9 @@ class Session:
         self.tracer: Tracer | None = None
         self.arrangement: Arrangement | None = None
         self.web_server: Stoppable | None = None
+        #: The run's debugger (llfsm.debug), when it has one (`debugs`).
+        self.debugger: Debugger | None = None
+        self.prompt: Prompt | None = None
         #: `--log-level` and `--log-file`, read by _check_options (None without them).
         self.log_settings: LogSettings | None = None
         self._check_options()
@@ -402,6 +419,7 @@ class Session:
         the run ended; raises SessionError when it could not start."""
         o = self.options
         self._load()
+        self._check_breaks()
         self.ctx = RunContext(SimClock(o.period or 1_000_000) if o.clock == "sim" else WallClock(o.idle, o.period))
         self._check_outputs()
         # the watchdog ends a run stuck in a C call (llfsm.runtime.watchdog): started here, with
@@ -451,8 +469,12 @@ class Session:
                 grace = 0
             if o.transport != "inproc":  # other processes can resume machines (docs/view.md): all suspended is no end
                 arr.end_when_suspended = False
-            if o.monitor or o.monitor_properties:
-                self._open_monitor(arr)  # it says its verdicts as the run goes, the last ones as it ends
+            monitor = self._open_monitor(arr) if o.monitor or o.monitor_properties else None
+            # the monitor says its verdicts as the run goes, the last ones as it ends
+            if self.debugs:
+                self.debugger = self._open_debugger(arr, pause_on_violation=monitor is not None)
+                if monitor is not None and o.on_violation == "pause":
+                    monitor.pause = self.debugger.monitor_paused
             if self.web is not None and self.bus is not None:
                 self.web_server = self._open_web(self.web, ctx, self.bus, arr)
             try:
@@ -464,6 +486,8 @@ class Session:
             finally:
                 if self.web_server is not None:
                     self.web_server.stop()
+                if self.prompt is not None:
+                    self.prompt.close()
         finally:
             # a named output that could not be written whole is an error, never a silent success
             failed_outputs += ctx.output_errors
@@ -639,6 +663,82 @@ class Session:
             raise UsageError(str(e)) from None
         monitor.attach(arr, self.bus)
         return monitor
+
+    def _check_breaks(self) -> None:
+        """`--break`: every expression is checked against the loaded machines before anything
+        opens (a typo is a usage error, exit 2, not a breakpoint that never fires)."""
+        if not self.options.breaks:
+            return
+        # deferred: start-up (a run without breakpoints never imports the property language)
+        from .debug.breakpoints import BreakError, compile_break
+        from .props.atoms import infos_of
+
+        infos = infos_of(self.classes)
+        for text in self.options.breaks:
+            try:
+                compile_break(text, infos, "--break")
+            except BreakError as e:
+                raise UsageError(str(e)) from None
+
+    @property
+    def debugs(self) -> bool:
+        """Whether the run has a debugger: asked for (--paused, --break, --history,
+        --debug-prompt, --on-violation pause), for the page (it pauses, steps and keeps a
+        history), or on ROS 2's wire (other processes pause and step it, docs/debug.md)."""
+        o = self.options
+        return bool(
+            o.paused
+            or o.breaks
+            or o.history
+            or o.debug_prompt
+            or (o.on_violation == "pause" and (o.monitor or o.monitor_properties))
+            or self.web is not None
+            or o.transport != "inproc"
+        )
+
+    def _open_debugger(self, arr: Arrangement, pause_on_violation: bool) -> Debugger:
+        """The debugger (docs/debug.md): breakpoints, history, the prompt on the terminal when
+        something may pause the run and no page is there to continue it (or --debug-prompt),
+        and its services with the machines' control services."""
+        # deferred: start-up (a run without the debugger never imports it)
+        from .debug.debugger import DebugError, Debugger
+        from .debug.history import PAGE_DEFAULT
+
+        o = self.options
+        history = o.history or (PAGE_DEFAULT if self.web is not None else None)
+        debugger = Debugger(arr, history=history, say=self.say)
+        for text in o.breaks:
+            try:
+                debugger.add_break(text, where="--break")
+            except DebugError as e:  # checked before the run: this is for the record
+                raise UsageError(str(e)) from None
+        if o.paused:
+            debugger.pause("--paused")
+        pauses = o.paused or o.breaks or (pause_on_violation and o.on_violation == "pause")
+        if o.debug_prompt or (pauses and self.web is None):
+            from .debug.prompt import Prompt  # deferred: start-up (only a run with the prompt reads the terminal)
+
+            self.prompt = Prompt(debugger, alone=self.web is None)
+        if self.bus is not None:
+            self._debug_on_graph(debugger, self.bus)
+        else:  # a machine may start the bus itself (its first ros.init()): then
+            arr.ctx.on_init.append(lambda bus: self._debug_on_graph(debugger, bus))
+        return debugger
+
+    def _debug_on_graph(self, debugger: Debugger, bus: Bus) -> None:
+        """The debugger answers the bus's control services while paused, and offers its own
+        next to them as soon as the machines are on the graph, on either transport; its state
+        topic only on ROS 2's wire (in one process, a pause publishes nothing on the run's own
+        bus, so that a recorded bag stays the same)."""
+        from .debug.services import answers, offer  # deferred: start-up (with the debugger only)
+
+        debugger.attach_bus(bus, lambda: bus.spin_control(answers))
+        remote = bus.transport.remote
+        ctx = debugger.arr.ctx
+        if ctx.machine_graph is not None:
+            offer(debugger, ctx.machine_graph, topic=remote)
+        else:
+            ctx.on_init.append(lambda _bus: offer(debugger, ctx.machine_graph, topic=remote))
 
     def _open_web(self, web: WebPage, ctx: RunContext, bus: Bus, arr: Arrangement) -> Stoppable:
         """--web: the page's server on its own thread, the bus up (so the machines' control

@@ -10,6 +10,8 @@ samples of them), dds_netns.py (the private network namespace of the DDS tests),
 from __future__ import annotations
 
 import ast
+import contextlib
+import errno
 import functools
 import io
 import json
@@ -18,8 +20,10 @@ import subprocess
 import sys
 import sysconfig
 import tokenize
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
 from click.testing import CliRunner
@@ -32,6 +36,28 @@ REPO = Path(__file__).resolve().parent.parent
 MACHINES = REPO / "machines"
 
 # -- machines and runs ----------------------------------------------------------------------------
+
+
+@contextlib.contextmanager
+def disk_full_at(nth: int) -> Iterator[None]:
+    """Inside it, the disk fills up as llfsm.edit writes the `nth` file of a change (counted
+    from 1; those before it are written): how every writer of machine directories is tested
+    against a full disk (llfsm.edit stages each file beside its place, then renames them all)."""
+    from llfsm.edit import change
+
+    real, calls = change._stage, []
+
+    def staged(*args: Any) -> str:
+        calls.append(args)
+        if len(calls) == nth:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(*args)
+
+    change._stage = staged  # restored below, whatever happens
+    try:
+        yield
+    finally:
+        change._stage = real
 
 
 def write_machine(
@@ -64,6 +90,27 @@ def write_machine(
     if includes is not None:
         (d / "Includes.py").write_text(includes)
     return d
+
+
+def turning_machine(root: Path) -> Path:
+    """`w`: FORWARD until its input wall_close (bound to /turtle1/wall_close) holds, then TURN,
+    counting its turns, back to FORWARD once clear and 150 ms have passed: the machine of the
+    counterexample tests (a counterexample of `never: w.turns == 2 and state(w) == "TURN"`)."""
+    return write_machine(
+        root,
+        "w",
+        {
+            "INITIAL": [("FORWARD", "True")],
+            "FORWARD": [("TURN", "wall_close")],
+            "TURN": [("FORWARD", "not wall_close and after_ms(150)")],
+        },
+        {"TURN_OnEntry": "turns += 1"},
+        variables="turns: int = 0\n",
+        yaml_extra=(
+            "inputs:\n  wall_close:\n    type: bool\n    topic: /turtle1/wall_close\n"
+            "    msg: std_msgs/msg/Bool\n    field: data\n"
+        ),
+    )
 
 
 def driver(root: Path) -> Path:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -263,6 +264,43 @@ def test_graph_places_states_where_layout_yaml_says(tmp_path: Path) -> None:
     (m / "layout.yaml").write_text(layout.replace("x: 400, y: 100", "x: 100, y: 400"))
     c = centres()
     assert c["B"][1] - c["A"][1] == 300 and c["B"][0] == c["A"][0]  # one under the other
+
+
+def test_a_labels_box_in_the_png_is_as_wide_as_its_text(tmp_path: Path) -> None:
+    """The PNG draws labels in the font Pillow ships, narrower than the page's monospace font
+    the SVG sizes their boxes for: a box sized for the page ran past the text and hid what lay
+    beside it (here the edge A -> B, under the end of the box of a label placed beside it)."""
+    m = write_machine(
+        tmp_path, "w", {"A": [("B", "after(1)"), ("B", "ill")], "B": None}, variables="ill: bool = False\n"
+    )
+    (m / "layout.yaml").write_text(
+        "states:\n  A: {x: 100, y: 60}\n  B: {x: 100, y: 260}\nlabels:\n  A:\n    0: {x: 140, y: 100}\n"
+        "    1: {x: 60, y: 150}\n"  # "1: ill": 48.2 wide for the page, so over x = 100
+    )
+    root = ET.fromstring(llfsm("graph", m, "--format", "svg").stdout.split("\n", 1)[1])
+    ns = "{http://www.w3.org/2000/svg}"
+    edge = next(p for p in root.iter(f"{ns}path") if p.get("data-index") == "0")
+    assert edge.get("d") == "M100.0 77.0 L100.0 243.0"  # straight down at x = 100
+    [box] = [
+        g.find(f"{ns}rect") for g in root.iter(f"{ns}g") if g.get("data-index") == "1" and g.get("class") == "guard"
+    ]
+    assert box is not None and float(box.get("x")) < 100 < float(box.get("x")) + float(box.get("width"))
+    left, top = (float(v) for v in root.get("viewBox", "").split()[:2])
+    inner = next(g for g in root.iter(f"{ns}g") if g.get("transform"))  # the drawing, below the initial dot
+    dx, dy = (float(v) for v in re.findall(r"-?[\d.]+", inner.get("transform", ""))[:2])
+
+    def pixel(x: float, y: float) -> tuple[int, int]:
+        return round((x + dx - left) * 2), round((y + dy - top) * 2)
+
+    assert llfsm("graph", m, "--format", "png", "-o", tmp_path / "w.png").status == 0
+    with Image.open(tmp_path / "w.png") as img:
+        pixels = img.convert("L")
+        column = [
+            min(pixels.getpixel((pixel(100, y)[0] + d, pixel(100, y)[1])) for d in (-1, 0, 1)) for y in range(152, 165)
+        ]
+        assert max(column) < 160, column  # the edge is drawn beside the label, not hidden by its box
+        text = [pixels.getpixel(pixel(x / 2, 158)) for x in range(128, 160)]
+        assert min(text) < 100  # and the label's text is there
 
 
 def test_schema_is_json_schema_of_machine_yaml() -> None:

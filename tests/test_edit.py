@@ -9,10 +9,11 @@ import os
 import random
 import shutil
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
-from helpers import MACHINES, llfsm, write_machine
+from helpers import MACHINES, disk_full_at, llfsm, write_machine
 
 from llfsm import edit
 from llfsm.edit import change as change_module
@@ -303,6 +304,75 @@ def test_new_machine_layout_and_write_file(tmp_path: Path) -> None:
     edit.apply(edit.write_file(m, "State_PONG_OnEntry.py", "print('pong')\n"))
     assert (m / "State_PONG_OnEntry.py").read_text() == "print('pong')\n"
     assert edit.write_file(m, "State_PONG_OnEntry.py", "print('pong')\n").writes == {}
+
+
+def test_write_machine_writes_or_replaces_a_whole_machine_all_or_nothing(tmp_path: Path) -> None:
+    """What `llfsm import` writes through: a machine directory whole (SPEC 13, issue 31)."""
+    files = {f.name: f.read_text() for f in (MACHINES / "ros2_ping_pong.machine").iterdir() if f.is_file()}
+    c = edit.write_machine(tmp_path, "pp", files)
+    assert c.root == tmp_path and set(c.writes) == {f"pp.machine/{n}" for n in files}
+    edit.apply(c)
+    m = tmp_path / "pp.machine"
+    assert clean(m) == [] and {f.name for f in m.iterdir()} == set(files)
+    with pytest.raises(edit.MachineExists, match=r"pp\.machine exists"):
+        edit.write_machine(tmp_path, "pp", files)
+    (m / "State_PING_OnExit.py").write_text("print('mine')\n")  # a file the new machine does not have
+    smaller = {n: t for n, t in files.items() if n != "Includes.py"} | {
+        "Variables.py": "count: int = 0\n",
+        "State_INITIAL_OnEntry.py": "print('hello')\n",
+        "State_PUBLISH_Transition_1.expr": "# -> WAIT_AND_COUNT\nTrue\n",
+    }
+    start = tree_hash(tmp_path)
+    c = edit.write_machine(tmp_path, "pp", smaller, replace=True)
+    assert (
+        c.writes["pp.machine/State_PING_OnExit.py"] is None
+        and c.summary == f"replaced machine pp ({len(smaller)} files)"
+    )
+    with (
+        disk_full_at(2),
+        pytest.raises(edit.EditError, match=r"pp\.machine/\S+: cannot write: No space left on device; nothing was"),
+    ):
+        edit.apply(c)
+    assert tree_hash(tmp_path) == start  # the old machine, byte for byte, and nothing beside it
+    edit.apply(c)
+    assert {f.name for f in m.iterdir()} == set(smaller) and (m / "Variables.py").read_text() == "count: int = 0\n"
+    edit.apply(edit.invert(c))
+    assert tree_hash(tmp_path) == start  # undone: the old machine back, the file it had too
+    assert edit.write_machine(tmp_path, "pp", {n: (m / n).read_text() for n in files if (m / n).exists()}
+                              | {"State_PING_OnExit.py": "print('mine')\n"}, replace=True).writes == {}  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda m: (m / "machine.yaml").unlink(), "exists and is not an llfsm machine: not replaced"),
+        (lambda m: (m / "sub").mkdir(), "sub: not a plain file; .* not replaced"),
+        (lambda m: (m / "link.py").symlink_to("/etc/hostname"), "link.py: not a plain file"),
+    ],
+)
+def test_write_machine_replaces_only_an_llfsm_machine_of_plain_files(tmp_path: Path, make: Any, message: str) -> None:
+    m = write_machine(tmp_path, "m", {"A": None})
+    make(m)
+    start = tree_hash(tmp_path)
+    with pytest.raises(edit.EditError, match=message):
+        edit.write_machine(tmp_path, "m", {"machine.yaml": "states:\n  - name: A\n"}, replace=True)
+    assert tree_hash(tmp_path) == start
+
+
+def test_write_machine_never_writes_outside_its_folder(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    out.mkdir()
+    (tmp_path / "elsewhere.machine").mkdir()
+    (out / "linked.machine").symlink_to(tmp_path / "elsewhere.machine")
+    for name, files, message in [
+        ("../x", {"machine.yaml": ""}, "not a valid name"),
+        ("ok", {"../machine.yaml": ""}, "refused file name"),
+        ("ok", {"notes.txt": ""}, "not a file of a machine directory"),
+        ("linked", {"machine.yaml": ""}, "is a symlink: not replaced"),
+    ]:
+        with pytest.raises(edit.EditError, match=message):
+            edit.write_machine(out, name, files, replace=True)
+    assert [p.name for p in out.iterdir()] == ["linked.machine"] and not any((tmp_path / "elsewhere.machine").iterdir())
 
 
 # -- the commands ------------------------------------------------------------------------------------

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 import yaml
 from clfsm_writer import HOW_TO, ClfsmState, write_clfsm
-from helpers import MACHINES, llfsm, run_sim
+from helpers import MACHINES, disk_full_at, llfsm, run_sim
 
 from llfsm.importer import cxx
 
@@ -340,30 +340,19 @@ def test_check_build_and_run_never_load_the_importer_or_its_parser(how_to: Path,
         assert "LOADED []" in r.stderr, (argv, r.stderr)
 
 
-def test_a_failure_midway_leaves_no_half_written_machine_and_keeps_the_old_one(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_failure_midway_leaves_no_half_written_machine_and_keeps_the_old_one(tmp_path: Path) -> None:
     src = write_clfsm(tmp_path / "src", "M", [ClfsmState("A", [("B", "true")], {"OnEntry": "x = 1;"}), ClfsmState("B")])
     out = tmp_path / "out"
-    real = os.fdopen
-    written = []
-
-    def full_disk(fd: int, *args: object, **kw: object) -> object:
-        written.append(fd)
-        if len(written) == 3:
-            raise OSError(28, "No space left on device")
-        return real(fd, *args, **kw)  # type: ignore[call-overload]
-
-    monkeypatch.setattr(os, "fdopen", full_disk)
-    status, text, _ = import_(src, "-o", out)
-    assert status == 1 and "M.machine: not written (No space left on device)" in text
+    with disk_full_at(3):  # llfsm.edit writes the machine (SPEC 13)
+        status, text, _ = import_(src, "-o", out)
+    assert status == 1 and "M.machine/" in text and "cannot write: No space left on device; nothing was changed" in text
     assert list(out.iterdir()) == []  # neither a machine nor a temporary folder
-    monkeypatch.setattr(os, "fdopen", real)
     assert import_(src, "-o", out)[0] == 0
     before = {p.name: p.read_bytes() for p in (out / "M.machine").iterdir()}
-    written.clear()
-    monkeypatch.setattr(os, "fdopen", full_disk)
-    status, text, _ = import_(src, "-o", out, "--force")
+    more = [ClfsmState("A", [("B", "true")], {"OnEntry": "x = 2;"}), ClfsmState("B", [("C", "true")]), ClfsmState("C")]
+    write_clfsm(tmp_path / "src", "M", more)  # files to write again: an unchanged file is not written
+    with disk_full_at(3):
+        status, text, _ = import_(src, "-o", out, "--force")
     assert status == 1
     assert {p.name: p.read_bytes() for p in (out / "M.machine").iterdir()} == before
     assert sorted(p.name for p in out.iterdir()) == ["M.machine"]

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 from dds_netns import NetNamespace, finish
-from helpers import MACHINES
+from helpers import MACHINES, write_machine
 
 pytestmark = pytest.mark.dds
 
@@ -73,3 +73,33 @@ def test_the_follower_of_the_course_launch_file_moves_after_the_leader(netns: Ne
     assert re.search(r"\[INFO\] \[turtle_follower-3\]: process has finished cleanly", err), err
     assert "Traceback" not in out + err
     assert marked(mark) == []
+
+
+def test_a_nodes_log_level_in_ros_args_reaches_its_loggers(netns: NetNamespace, tmp_path: Path) -> None:
+    """`ros_args="--log-level NAME:=debug"`, as ROS 2 users set a node's verbosity in a launch
+    file: the machine's debug lines are printed (prefixed), the other node's INFO lines are not."""
+    write_machine(
+        tmp_path,
+        "talker",
+        {"A": [("END", "True")], "END": None},
+        {"A_OnEntry": "ros.init()\nnode = ros.Node('talker')\nnode.get_logger().debug('a debug line')\n"},
+        variables="node: ros.Node = None\n",
+        includes="from llfsm import ros\n",
+    )
+    f = tmp_path / "levels.launch.xml"
+    f.write_text(
+        "<launch>\n"
+        '  <arg name="log_level" default="info"/>\n'
+        '  <node pkg="llfsm" exec="run" args="$(dirname)/talker.machine" output="screen"\n'
+        '        ros_args="--log-level talker:=$(var log_level)"/>\n'
+        '  <node pkg="turtlesim" exec="turtlesim_node" output="screen" ros_args="--log-level warn"\n'
+        '        args="--duration 2s"/>\n'
+        "</launch>\n"
+    )
+    status, out, err = finish(
+        netns.llfsm("launch", f, "log_level:=debug", env={"ROS_LOG_DIR": str(tmp_path / "logs")}), 120
+    )
+    assert status == 0, err
+    assert re.search(r"^\[talker-1\] \[DEBUG\] \[[0-9.]+\] \[talker\]: a debug line$", out + err, re.M), out + err
+    assert "[turtlesim_node-2] [INFO]" not in out + err  # below its level
+    assert "Traceback" not in out + err

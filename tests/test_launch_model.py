@@ -7,8 +7,9 @@ import os
 from pathlib import Path
 
 import pytest
-from helpers import MACHINES, llfsm
+from helpers import MACHINES, llfsm, write_machine
 
+from llfsm.cli import run_args
 from llfsm.launch import LaunchError, plan
 from llfsm.launch.evaluate import ExpressionError, evaluate
 from llfsm.launch.substitutions import Context, SubstitutionError, parse, perform
@@ -626,16 +627,68 @@ def test_parameter_types_and_ros_args(tmp_path: Path) -> None:
     )
     (p,) = plan(str(f), {}, {})
     assert p.argv[8:] == [
+        "--ros-args", "-r", "a:=b", "--param", "x:=1", "--remap", "c:=d", "--",  # as written, for llfsm run
         "-p", "s:='100'", "-p", "l:=['2', '5', '8']", "-p", "n:=[2.5, 3]", "-p", "t:=True",
-        "--remap", "a:=b", "-p", "x:=1", "--remap", "c:=d",
     ]  # fmt: skip
     node = "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node'>\n    {}\n  </node>\n</launch>\n"
     f.write_text(node.format("<param name='n' value='x' type='int'/>"))
     assert refused(f) == f"llfsm: {f}:3: 'x' is not of type int"
     f.write_text(node.format("<param name='n' value='1' type='long'/>"))
     assert "'long' is not a type (one of str, bool, float" in refused(f)
-    f.write_text("<launch>\n  <node pkg='turtlesim' exec='turtlesim_node' ros_args='--log-level debug'/>\n</launch>\n")
-    assert refused(f) == (
-        f"llfsm: {f}:2: ros_args: --log-level: "
-        "llfsm run takes -r, --remap, -p, --param, --params-file with one value each"
+
+
+def test_ros_arguments_go_to_llfsm_run_as_written_and_are_checked_first(tmp_path: Path) -> None:
+    """A node's `ros_args` and the `--ros-args` of its `args` reach `llfsm run` as launch_ros
+    passes them (issue 27 made `llfsm run --ros-args ... --` take them all); what `llfsm run`
+    would refuse is refused before anything starts, at the node's line."""
+    (tmp_path / "p.yaml").write_text("/**:\n  ros__parameters:\n    a: 1\n")
+    f = write(
+        tmp_path / "levels.launch.xml",
+        """<launch>
+  <arg name="log_level" default="info"/>
+  <node pkg="turtlesim" exec="turtlesim_node" name="sim" ros_args="--log-level $(var log_level) --log-level sim:=debug">
+    <remap from="a" to="b"/>
+  </node>
+  <node pkg="llfsm" exec="run"
+        args="$(dirname)/m.machine --ros-args --log-level warn --params-file $(dirname)/p.yaml --"
+        ros_args="--enable-external-lib-logs -p gain:=2.0"/>
+  <node exec="echo" name="talker" args="hello" ros_args="--log-level debug"/>
+</launch>
+""",
     )
+    write_machine(tmp_path, "m", {"A": None})
+    sim, run, echo = plan(str(f), {"log_level": "error"}, {"PATH": os.environ["PATH"]})
+    assert sim.argv[3:] == [
+        "run", "--transport", "dds", "--node", "turtlesim",
+        "--ros-args", "--log-level", "error", "--log-level", "sim:=debug", "--",
+        "--remap", "__node:=sim", "--remap", "a:=b",
+    ]  # fmt: skip
+    assert run.argv[6:] == [
+        str(tmp_path / "m.machine"),
+        "--ros-args", "--log-level", "warn", "--params-file", str(tmp_path / "p.yaml"), "--",
+        "--ros-args", "--enable-external-lib-logs", "-p", "gain:=2.0", "--",
+    ]  # fmt: skip
+    assert echo.argv == ["echo", "hello", "--ros-args", "--log-level", "debug", "--ros-args", "-r", "__node:=talker"]
+    # what llfsm run makes of them: its own parser (the fast path, which click agrees with)
+    options = run_args.parse(sim.argv[4:])
+    assert options is not None and options["log_levels"] == ("error", "sim:=debug") and options["remaps"] == (
+        "__node:=sim", "a:=b")  # fmt: skip
+    options = run_args.parse(run.argv[4:])
+    assert options is not None and options["log_levels"] == ("warn",) and options["log_file"] is True
+    assert options["params"] == ("gain:=2.0",) and options["params_files"] == (str(tmp_path / "p.yaml"),)
+    node = "<launch>\n  <node pkg='turtlesim' exec='turtlesim_node' {}/>\n</launch>\n"
+    for attrs, message in [
+        ("ros_args='--log-level loud'", "ros_args: --log-level loud: 'loud' is not a level (debug, info, warn"),
+        ("ros_args='--log-level'", "ros_args: --log-level: takes a value (-r/--remap, -p/--param, --params-file"),
+        (
+            "ros_args='--enclave /x'",
+            "ros_args: --enclave: llfsm run takes -r/--remap, -p/--param, --params-file, --log",
+        ),
+        ("ros_args='--verbose'", "ros_args: --verbose: llfsm run takes -r/--remap"),
+        ("ros_args='-p gain'", "ros_args: -p 'gain': expected [NODE:]NAME:=VALUE"),
+        ("ros_args='-r a'", "ros_args: --remap 'a': expected FROM:=TO or NODE:FROM:=TO"),
+        ("ros_args='--params-file nowhere.yaml'", "no params file 'nowhere.yaml'"),
+        ("args='--ros-args --log-level loud --'", "args: --log-level loud: 'loud' is not a level"),
+    ]:
+        f.write_text(node.format(attrs))
+        assert refused(f).startswith(f"llfsm: {f}:2: {message}"), (attrs, refused(f))

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from click.testing import CliRunner
 from helpers import MACHINES, llfsm, write_machine
+
+from llfsm.cli import cli
 
 PING = MACHINES / "ros2_ping_pong.machine"
 
@@ -34,9 +37,28 @@ def test_stop_ends_the_run_with_status_4_and_log_does_not() -> None:
     assert r.status == 0 and "violated" not in r.stderr
 
 
-def test_pause_and_ctl_are_refused_with_the_reason() -> None:
-    r = run("--duration", "1s", PING, "--monitor-property", "always: True", "--on-violation", "pause")
-    assert r.status == 2 and "debugger" in r.stderr and "issue 30" in r.stderr
+def test_pause_pauses_the_run_where_the_property_is_violated() -> None:
+    args = [
+        "run",
+        "--clock",
+        "sim",
+        "--duration",
+        "4s",
+        str(PING),
+        "--monitor-property",
+        "never: ros2_ping_pong.count >= 2",
+    ]
+    res = CliRunner().invoke(cli, [*args, "--on-violation", "pause"], input="p ros2_ping_pong.count\nc\n")
+    assert res.exit_code == 0
+    assert (
+        "paused after ros2_ping_pong's ringlet (2.508 s): monitor: never: ros2_ping_pong.count >= 2 violated"
+        in res.stderr
+    )
+    assert "(llfsm) 2\n" in res.stderr  # read at the prompt, where it was violated
+    assert "The count is 2" in res.stderr  # then it went on
+
+
+def test_ctl_is_refused_with_the_reason() -> None:
     r = run("--duration", "1s", PING, "--monitor-property", 'ctl: AG EF state(ros2_ping_pong) == "PUBLISH"')
     assert r.status == 2 and "a run is one path" in r.stderr
 

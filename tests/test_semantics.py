@@ -282,7 +282,7 @@ def test_run_ends_when_every_machine_left_is_suspended(tmp_path: Path) -> None:
     r = run_sim(m, "--trace", tr)
     assert r.status == 0
     events = [json.loads(x)["event"] for x in tr.read_text().splitlines()]
-    assert events == ["entry", "suspend", "entry"]
+    assert events == ["machine", "entry", "suspend", "entry"]
 
 
 def test_suspended_option_loads_a_machine_suspended(tmp_path: Path) -> None:
@@ -345,7 +345,7 @@ def test_trace_file_records_every_kind_of_event_with_time_and_round(tmp_path: Pa
     run_sim(b, w, b2, "--duration", "20ms", "--trace", tr)
     events = [json.loads(x) for x in tr.read_text().splitlines()]
     kinds = {e["event"] for e in events}
-    assert kinds == {"entry", "transition", "suspend", "resume", "restart", "finish"}
+    assert kinds == {"machine", "entry", "transition", "suspend", "resume", "restart", "finish"}
     for e in events:
         assert {"t", "round", "event", "machine", "id"} <= e.keys()
     sus = next(e for e in events if e["event"] == "suspend")

@@ -505,3 +505,35 @@ def test_a_long_wait_in_a_counterexample_is_folded_in_text_and_whole_in_json() -
     steps = json.loads(full.stdout)
     text = json.dumps(steps)
     assert text.count('"round": 500,') == 2  # a folded round, once per machine
+
+
+def test_the_counterexample_writes_values_as_python_prints_them(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "s",
+        {"A": [("B", "True")], "B": None},
+        {"A_OnExit": "hits.add(3)\nnone = frozenset(none)"},
+        variables="hits: set = set()\nnone: frozenset = frozenset()\nitems: dict = {}\n",
+    )
+    out = llfsm("verify", m, "--property", 'never: state(s) == "B"').stdout
+    assert "s.hits: set() -> {3}" in out  # `{}` would read as the empty dict
+    assert "s.none:" not in out  # frozenset() is what it was
+
+
+def test_what_grew_in_size_counts_bytes_characters_and_items(tmp_path: Path) -> None:
+    m = write_machine(
+        tmp_path,
+        "g",
+        {"A": [("A", "True")]},
+        {"A_OnEntry": "blob = blob + b'x' * 1000\ntext = text + 'yz'\nitems.append('a long string of text')"},
+        variables="blob: bytes = b''\ntext: str = ''\nitems: list = []\n",
+    )
+    r = llfsm("verify", m, "--max-states", "40")
+    assert r.status == 3, r.stdout + r.stderr
+    assert "the variables that kept growing: " in r.stdout
+    grew = r.stdout.split("the variables that kept growing: ")[1].splitlines()[0].split("; ")
+    assert sorted(grew) == [
+        "g.blob (41 values, in size from 0 to 40,000 bytes)",  # not 2,500 "items" (bytes ÷ 16)
+        "g.items (41 values, in size from 0 to 40 items)",  # a string is an item of a list
+        "g.text (41 values, in size from 0 to 80 characters)",
+    ]

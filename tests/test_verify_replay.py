@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from helpers import MACHINES, llfsm, write_machine
+from helpers import MACHINES, llfsm, turning_machine, write_machine
 
 NEVER_TURN = 'never: state(wall_follower) == "TURN"'
 
@@ -21,24 +21,7 @@ def _trace(path: Path) -> list[dict]:  # type: ignore[type-arg]
 def test_a_counterexample_bag_replays_to_the_same_configuration(tmp_path: Path) -> None:
     # wall_close must be clear in round 1, then close for two rounds, then clear again: the
     # shortest way to see the turtle go FORWARD -> TURN -> FORWARD with a count of 2 turns
-    m = write_machine(
-        tmp_path,
-        "w",
-        {
-            "INITIAL": [("FORWARD", "True")],
-            "FORWARD": [("TURN", "wall_close")],
-            "TURN": [("FORWARD", "not wall_close and after_ms(150)")],
-        },
-        {"TURN_OnEntry": "turns += 1"},
-        variables="turns: int = 0\n",
-        yaml_extra="""inputs:
-  wall_close:
-    type: bool
-    topic: /turtle1/wall_close
-    msg: std_msgs/msg/Bool
-    field: data
-""",
-    )
+    m = turning_machine(tmp_path)
     bag = tmp_path / "cx"
     r = llfsm(
         "verify", m, "--period", "100ms", "--property", 'never: w.turns == 2 and state(w) == "TURN"',

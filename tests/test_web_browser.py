@@ -13,7 +13,6 @@ import os
 import re
 import shutil
 import struct
-import subprocess
 import sys
 import threading
 import time
@@ -22,87 +21,25 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from browser import ARGS, CHROMIUM, TIMEOUT_MS, Served, chromium, playwright_or_skip, until
 from dds_netns import NetNamespace, finish
 from helpers import MACHINES, REPO
 
 pytestmark = pytest.mark.browser
 
-pytest.importorskip("aiohttp")
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install -e '.[dev]')")
-
-CHROMIUM = os.environ.get("LLFSM_CHROMIUM", "/usr/bin/chromium")
-if not (Path(CHROMIUM).exists() or shutil.which(CHROMIUM)):
-    pytest.skip(
-        f"no Chromium at {CHROMIUM}: `apt-get install chromium` (make test does it as root)", allow_module_level=True
-    )
-
-ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+sync_api = playwright_or_skip()
 MACHINE = "ros2_ping_pong"
-TIMEOUT_MS = 15_000
 
 
-class LiveRun:
-    """`llfsm run ... --web` in a subprocess: its URL, and its stdout collected as it comes."""
+class LiveRun(Served):
+    """`llfsm run --clock wall MACHINE... --web` in a subprocess (120 s unless `extra` says
+    otherwise): its URL, and its stdout collected as it comes."""
 
     def __init__(self, cache: Path, *extra: str, machines: tuple[str, ...] = (MACHINE,)) -> None:
-        env = {**os.environ, "LLFSM_CACHE_DIR": str(cache), "PYTHONUNBUFFERED": "1"}
-        self.proc = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "llfsm",
-                "run",
-                "--clock",
-                "wall",
-                *(str(MACHINES / f"{m}.machine") for m in machines),
-                "--web",
-                "127.0.0.1:0",
-                "--duration",
-                "120",
-                *extra,
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            cwd=REPO,
-            env=env,
+        paths = (str(MACHINES / f"{m}.machine") for m in machines)
+        super().__init__(
+            "run", "--clock", "wall", *paths, "--duration", "120", *extra, env={"LLFSM_CACHE_DIR": str(cache)}
         )
-        self.stdout: list[str] = []
-        self.url = ""
-        deadline = time.monotonic() + 60
-        assert self.proc.stderr is not None
-        for line in self.proc.stderr:
-            m = re.search(r"http://\S+", line)
-            if m:
-                self.url = m.group(0)
-                break
-            if time.monotonic() > deadline:
-                break
-        assert self.url, "the run printed no http:// address"
-        threading.Thread(target=self._drain, args=(self.proc.stdout, self.stdout), daemon=True).start()
-        threading.Thread(target=self._drain, args=(self.proc.stderr, []), daemon=True).start()
-
-    @staticmethod
-    def _drain(stream: Any, into: list[str]) -> None:
-        for line in stream:
-            into.append(line)
-
-    def stop(self) -> None:
-        self.proc.terminate()
-        try:
-            self.proc.wait(15)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait(5)
 
 
 @pytest.fixture(scope="module")
@@ -116,12 +53,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveRun]:
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    with sync_api.sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+    yield from chromium(sync_api)
 
 
 @pytest.fixture
@@ -143,15 +75,6 @@ def _current(state: str) -> str:
 def _count(page: Any, topic: str) -> int:
     text = page.locator(f'#topics tr[data-topic="{topic}"] td.count').inner_text()
     return int(text) if text.strip().isdigit() else -1
-
-
-def _until(condition: Any, timeout: float = TIMEOUT_MS / 1000) -> None:
-    """Poll from Python: the page's Content-Security-Policy forbids evaluating strings, and so
-    Playwright's wait_for_function, which the tests do not get around."""
-    deadline = time.monotonic() + timeout
-    while not condition():
-        assert time.monotonic() < deadline, "timed out"
-        time.sleep(0.1)
 
 
 def _command(page: Any, verb: str) -> None:
@@ -184,7 +107,7 @@ def test_suspend_stops_the_machine_and_its_publishing_and_resume_goes_on(page: A
     sync_api.expect(page.locator(".command-result")).to_contain_text("already suspended")
     _command(page, "resume")
     page.wait_for_selector(f'article[data-machine="{MACHINE}"][data-status="running"]')
-    _until(lambda: _count(page, "/pingpong") > before)
+    until(lambda: _count(page, "/pingpong") > before)
 
 
 def test_a_message_published_from_the_form_is_echoed(page: Any, live: LiveRun) -> None:
@@ -422,10 +345,10 @@ def test_a_parameter_set_from_the_page_changes_the_background_and_a_bad_one_says
         row.locator("input").fill("255")
         row.locator("button").click()
         sync_api.expect(out).to_contain_text("Set parameter successful")
-        _until(lambda: _background(p).lower().startswith("#ff"))
+        until(lambda: _background(p).lower().startswith("#ff"))
         assert _background(p) != before
         # the rows are read again after the node's parameter event: the value shown is the new one
-        _until(lambda: row.locator("input").input_value() == "255")
+        until(lambda: row.locator("input").input_value() == "255")
         # a value of the right type but out of the node's range is refused with the node's reason
         row = p.locator('#nodes details[data-node="/turtlesim"] form.param[data-param="background_g"]')
         row.locator("input").fill("300")
@@ -446,7 +369,7 @@ def test_screenshot_of_the_page(turtle: LiveRun, browser: Any, tmp_path: Path, w
     try:
         p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="suspended"]')
         p.wait_for_selector('article[data-machine="ros2_blind_turtle_bot"][data-status="running"]')
-        _until(lambda: p.locator('article[data-machine="ros2_blind_turtle_bot"] .transitions li').count() >= 5)
+        until(lambda: p.locator('article[data-machine="ros2_blind_turtle_bot"] .transitions li').count() >= 5)
         p.locator('#nodes details[data-node="/turtlesim"] summary').click()
         p.locator('#nodes details[data-node="/turtlesim"] form.param[data-param="background_b"]').wait_for()
         out = _shot(p, tmp_path, f"view-{width}")

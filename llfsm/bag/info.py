@@ -16,7 +16,6 @@ a `MetadataError` naming metadata.yaml, the line and the field.
 from __future__ import annotations
 
 import math
-import os
 import stat
 import time
 from pathlib import Path, PurePath
@@ -35,6 +34,7 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
+from .. import yamlfile
 from .errors import BagError
 
 INDENT = 19  # the longest label ("Topics with Type:") and a space, as rosbag2 has it
@@ -153,60 +153,45 @@ class MetadataFile(_Model):
     rosbag2_bagfile_information: BagMetadata
 
 
-def _read_bounded(meta_path: Path) -> bytes:
-    """The bytes of metadata.yaml: a regular file (opened without blocking, so a FIFO does not
-    hang the reader) of at most MAX_METADATA_BYTES."""
-    try:
-        fd = os.open(meta_path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
-    except OSError as e:
-        raise MetadataError(meta_path, None, f"cannot read it: {e.strerror}") from None
-    with os.fdopen(fd, "rb") as f:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise MetadataError(meta_path, None, "not a regular file")
-        data = f.read(MAX_METADATA_BYTES + 1)
-    if len(data) > MAX_METADATA_BYTES:
-        raise MetadataError(meta_path, None, f"larger than {MAX_METADATA_BYTES // 2**20} MiB: not rosbag2 metadata")
-    return data
+#: metadata.yaml's words for what llfsm.yamlfile refuses; those with a line say it.
+_WORDS = {
+    "unreadable": "cannot read it: {detail}",
+    "folder": "not a regular file",
+    "not_file": "not a regular file",
+    "large": "larger than {mib} MiB: not rosbag2 metadata",
+    "encoding": "not rosbag2 metadata (not UTF-8 text)",
+    "alias": "not rosbag2 metadata (a YAML anchor or alias; rosbag2 writes none)",
+    "depth": "not rosbag2 metadata (nested deeper than {limit})",
+    "syntax": "not rosbag2 metadata (YAML: {detail})",
+}
+_AT_A_LINE = frozenset({"encoding", "alias", "depth", "syntax"})
 
 
-def _load(meta_path: Path, text: str) -> tuple[Any, yaml.Node]:
-    """The document and its YAML node tree (which knows the line of each value).  Refused
-    before anything is built from it: a YAML alias (rosbag2 writes none, and an alias bomb or
-    a self-reference is made of them) and a nesting deeper than MAX_DEPTH, found by a walk
-    without recursion that visits each node once.  libyaml caps nesting at 1000 itself, with
-    its own message; any YAML error is one line here."""
-    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)(text)
+def _load(meta_path: Path) -> tuple[Any, yaml.Node]:
+    """The document and its YAML node tree (which knows the line of each value), read as
+    untrusted (llfsm.yamlfile): a regular file (a FIFO does not hang the reader) of at most
+    MAX_METADATA_BYTES, UTF-8, no YAML anchor or alias (rosbag2 writes none, and an alias bomb
+    or a self-reference is made of them), no nesting deeper than MAX_DEPTH; any YAML error is
+    one line here."""
     try:
-        node = loader.get_single_node()
-        if node is None:
-            raise MetadataError(meta_path, None, "not rosbag2 metadata (the file is empty)")
-        seen: set[int] = set()
-        todo: list[tuple[yaml.Node, int]] = [(node, 0)]
-        while todo:
-            n, depth = todo.pop()
-            line = n.start_mark.line + 1
-            if id(n) in seen:
-                raise MetadataError(meta_path, line, "not rosbag2 metadata (a YAML alias; rosbag2 writes none)")
-            seen.add(id(n))
-            if depth > MAX_DEPTH:
-                raise MetadataError(meta_path, line, f"not rosbag2 metadata (nested deeper than {MAX_DEPTH})")
-            if isinstance(n, yaml.SequenceNode):
-                todo += [(c, depth + 1) for c in n.value]
-            elif isinstance(n, yaml.MappingNode):
-                todo += [(c, depth + 1) for kv in n.value for c in kv]
-        return loader.construct_document(node), node
-    except yaml.MarkedYAMLError as e:  # a syntax error, an unknown tag, an unhashable key
+        node = yamlfile.load(meta_path, MAX_METADATA_BYTES, MAX_DEPTH)
+    except yamlfile.Refused as e:
+        line = e.line if e.kind in _AT_A_LINE else None
+        raise MetadataError(meta_path, line, _one_line(e.say("", words=_WORDS))) from None
+    if node is None:
+        raise MetadataError(meta_path, None, "not rosbag2 metadata (the file is empty)")
+    try:
+        return yamlfile.LOADER("").construct_document(node), node
+    except yaml.MarkedYAMLError as e:  # an unknown tag, an unhashable key
         mark = e.problem_mark or e.context_mark
         what = _one_line(e.problem or e.context or type(e).__name__)
         raise MetadataError(
             meta_path, mark.line + 1 if mark else None, f"not rosbag2 metadata (YAML: {what})"
         ) from None
     except (yaml.YAMLError, RecursionError, ValueError, TypeError, OverflowError) as e:
-        # the pure-Python parser where libyaml is missing, a timestamp out of range
+        # a timestamp out of range
         what = _one_line(str(e)) or type(e).__name__
         raise MetadataError(meta_path, None, f"not rosbag2 metadata (YAML: {what})") from None
-    finally:
-        loader.dispose()
 
 
 def _node_at(node: yaml.Node, loc: tuple[Any, ...]) -> yaml.Node:
@@ -271,13 +256,7 @@ def read_metadata(path: str | Path) -> BagMetadata:
     meta_path = folder / "metadata.yaml"
     if not meta_path.exists():
         raise BagError(f"{path}: not a bag (no metadata.yaml in it)")
-    raw = _read_bounded(meta_path)
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as e:
-        line = raw[: e.start].count(b"\n") + 1
-        raise MetadataError(meta_path, line, "not rosbag2 metadata (not UTF-8 text)") from None
-    doc, node = _load(meta_path, text)
+    doc, node = _load(meta_path)
     if not isinstance(doc, dict) or not isinstance(doc.get("rosbag2_bagfile_information"), dict):
         raise MetadataError(
             meta_path, node.start_mark.line + 1, "not rosbag2 metadata (no rosbag2_bagfile_information mapping)"

@@ -96,7 +96,9 @@ class Recorder:
         # under the GIL (and cheap: no object per message).
         self.records = Spool()
         self._ids: dict[Topic, int] = {}
-        self._undescribed: list[tuple[int, Topic]] = []  # topics the writer has not heard of
+        #: Topics the writer has not heard of, with their publishers' offered QoS when it was taken
+        #: on the scheduler's thread (None: the sending thread takes it).
+        self._undescribed: list[tuple[int, Topic, list[dict[str, Any]] | None]] = []
         self.clock: Any = None
         self.wall = True
         self.error: str | None = None
@@ -106,6 +108,8 @@ class Recorder:
         self._thread: threading.Thread | None = None
         self._listener: threading.Thread | None = None
         self._taps: list[tuple[Topic, Callable[[Any], None]]] = []
+        #: Tapped topics that have had no message yet (described when the first comes, or at the end).
+        self._first: dict[Topic, int] = {}
         self._bus: Bus | None = None
         self._started = False
         self._node: Any = None  # with a remote transport: the recorder's node and subscriptions
@@ -171,17 +175,36 @@ class Recorder:
         if self._bus is not None and self._bus.transport.remote:
             self._subscribe(topic)
             return
-        deliver = self.reader(topic, wall=self.wall)
+        deliver = self.reader(topic, wall=self.wall, described=False)
         if deliver is None:
             return
+        key = self._ids[topic]
         # a transient-local topic that was there before the recorder (the --node nodes start
         # first): what its publishers keep is recorded now, as rosbag2's subscription, which
         # takes the durability offered, gets it (turtlesim's first /rosout lines)
-        for kept in list(topic.latched.values()):
-            for msg in list(kept):
+        kept = [msg for msgs in list(topic.latched.values()) for msg in list(msgs)]
+        if kept:
+            self._undescribed.append((key, topic, self._offered(topic)))
+            for msg in kept:
                 deliver(msg)
-        topic.taps.append(deliver)
-        self._taps.append((topic, deliver))
+            topic.taps.append(deliver)
+            self._taps.append((topic, deliver))
+            return
+
+        def first(msg: Any) -> None:
+            """The topic's first message: its publishers' QoS is taken now, on the scheduler's
+            thread, so that the bag is the same whenever the sending thread describes it (under
+            the sim clock, byte for byte); then the plain tap takes its place."""
+            self._undescribed.append((key, topic, self._offered(topic)))
+            self._first.pop(topic, None)
+            taps = topic.taps
+            if first in taps:
+                taps[taps.index(first)] = deliver
+            deliver(msg)
+
+        topic.taps.append(first)
+        self._first[topic] = key
+        self._taps += [(topic, first), (topic, deliver)]
 
     def _subscribe(self, topic: Topic) -> None:
         """With a transport that reaches other processes (DDS), a tap would see only what this
@@ -212,10 +235,11 @@ class Recorder:
         finally:
             activate(prev)
 
-    def reader(self, topic: Topic, wall: bool) -> Callable[[Any], None] | None:
+    def reader(self, topic: Topic, wall: bool, described: bool = True) -> Callable[[Any], None] | None:
         """What records a message of `topic` (a tap, or a subscription's callback), stamped with
         the wall clock or the run clock; None (said) if its type cannot be encoded.  The first
-        reader of a topic gives it its id in the pipe."""
+        reader of a topic gives it its id in the pipe and, unless the caller describes the
+        topic itself (`described=False`), queues it to be described."""
         try:
             cdr = self.types.serializer(topic.type)
         except BagError as e:
@@ -224,7 +248,8 @@ class Recorder:
         key = self._ids.get(topic)
         if key is None:
             key = self._ids[topic] = len(self._ids) + 1
-            self._undescribed.append((key, topic))
+            if described:
+                self._undescribed.append((key, topic, None))
         clock = _WALL if wall else self.clock  # either has the time in `now`
         stamped = self.types.stamped(topic.type)
         if stamped is not None:  # a fixed-size message: head and CDR at once
@@ -295,14 +320,14 @@ class Recorder:
         """Tell the writer about the topics it has not heard of (before their records)."""
         todo = self._undescribed[:]
         del self._undescribed[: len(todo)]
-        for key, topic in todo:
+        for key, topic, offered in todo:
             info: dict[str, Any] = {"id": key, "topic": topic.name, "type": topic.type._TYPE}
             try:
                 definition, type_hash = self.types.definition(topic.type._TYPE)
             except BagError as e:  # said by the writer when the first message comes, if one does
                 info["error"] = f"--record: {topic.name} is not recorded: {e}"
             else:
-                qos = self._offered(topic)
+                qos = offered if offered is not None else self._offered(topic)
                 info.update(definition=definition, hash=type_hash, qos=qos)
             self._send(b"T", json.dumps(info).encode())
 
@@ -368,6 +393,9 @@ class Recorder:
         message if recording failed (it was reported when it happened), else None."""
         if self._ctx is not None and self._backpressure in self._ctx.between_rounds:
             self._ctx.between_rounds.remove(self._backpressure)
+        for topic, key in sorted(self._first.items(), key=lambda item: item[1]):  # listed with no messages
+            self._undescribed.append((key, topic, self._offered(topic)))
+        self._first.clear()
         if self._thread is not None:
             self._stop.set()
             self._thread.join()

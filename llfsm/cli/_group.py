@@ -10,7 +10,9 @@ ends in a one-line-per-problem message and an exit status (1 or 2), never a trac
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, TypeVar
 
 import click
 
@@ -26,6 +28,8 @@ from ._exits import (  # noqa: F401  (shared with the click-free fast path of `l
     fail,
     output_errors,
 )
+
+F = TypeVar("F", bound=Callable[..., Any])
 
 
 class Duration(click.ParamType):
@@ -43,6 +47,22 @@ class Duration(click.ParamType):
 
 
 DURATION = Duration()
+
+
+def web_option(what: str) -> Callable[[F], F]:
+    """`--web [HOST:]PORT` of `llfsm view` and `llfsm edit` (`llfsm run` parses its own)."""
+    return click.option(
+        "--web",
+        "web",
+        default="8080",
+        show_default=True,
+        metavar="[HOST:]PORT",
+        help=f"Where to serve {what} (127.0.0.1 unless HOST is given; 0: a free port).",
+    )
+
+
+#: `--duration` of the commands that serve until Ctrl-C (`llfsm view`, `llfsm edit`).
+duration_option = click.option("--duration", type=DURATION, help="Stop after this much time (default: until Ctrl-C).")
 
 
 def write_output(path: str, data: bytes, what: str) -> None:

@@ -69,7 +69,12 @@ class RunPage(_Page):
         from ..web.source import RunSource  # deferred: optional dependency
 
         assert session.arrangement is not None and session.bus is not None
-        return RunSource(session.arrangement, session.bus, world=session.world)
+        source = RunSource(session.arrangement, session.bus, world=session.world)
+        if session.debugger is not None:
+            from ..web.debugging import RunDebug  # deferred: optional dependency, as above
+
+            source.debug = RunDebug(session.debugger)
+        return source
 
 
 class GraphPage(_Page):
@@ -78,7 +83,10 @@ class GraphPage(_Page):
     runs_alone = True
 
     def source(self, session: Session) -> object:
-        from ..web.machines import GraphSource  # deferred: optional dependency
+        from ..web.debugging import GraphDebug  # deferred: optional dependency
+        from ..web.machines import GraphSource
 
         assert session.bus is not None
-        return GraphSource(session.bus)
+        source = GraphSource(session.bus)
+        source.debug = GraphDebug(source)
+        return source

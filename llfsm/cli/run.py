@@ -9,8 +9,9 @@ from typing import Any
 
 import click
 
+from ..rosargs import RosArgsError, without_ros_args
 from ._group import DURATION, cli
-from .run_args import CHOICE, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RosArgsError, RunOption, without_ros_args
+from .run_args import CHOICE, COUNT, FILE, FLAG, FLOAT, RUN_OPTIONS, TARGETS, RunOption
 from .run_args import DURATION as DURATION_KIND
 
 _TYPES: dict[str, Callable[[RunOption], Any]] = {
@@ -18,6 +19,7 @@ _TYPES: dict[str, Callable[[RunOption], Any]] = {
     CHOICE: lambda o: click.Choice(list(o.choices)),
     DURATION_KIND: lambda o: DURATION,
     FLOAT: lambda o: float,
+    COUNT: lambda o: click.IntRange(min=1),
 }
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 import stat
 
+from ..rosargs import RosArgsError, without_ros_args
 from ._exits import duration_ns
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
@@ -26,8 +27,8 @@ if TYPE_CHECKING:
     from ..session import RunOptions
 
 #: Kinds of option: how the value is converted (click: is_flag, str, click.Path(dir_okay=False),
-#: click.Choice, Duration, float).
-FLAG, TEXT, FILE, CHOICE, DURATION, FLOAT = "flag", "text", "file", "choice", "duration", "float"
+#: click.Choice, Duration, float, click.IntRange(min=1)).
+FLAG, TEXT, FILE, CHOICE, DURATION, FLOAT, COUNT = "flag", "text", "file", "choice", "duration", "float", "count"
 
 
 class RunOption:
@@ -201,10 +202,33 @@ RUN_OPTIONS: tuple[RunOption, ...] = (
         ("--on-violation",),
         "on_violation",
         CHOICE,
-        "What a violated property does: log it, or stop the run (exit status 4); pause needs the debugger.",
+        "What a violated property does: log it, pause the run (the debugger), or stop it (exit status 4).",
         choices=("log", "pause", "stop"),
         default="log",
         show_default=True,
+    ),
+    # -- the debugger (llfsm.debug, docs/debug.md) --
+    _O(("--paused",), "paused", FLAG, "Start paused (the debugger: a prompt on the terminal, or the page)."),
+    _O(
+        ("--break",),
+        "breaks",
+        TEXT,
+        'Pause where EXPR becomes true: state(m) == "S", m.count > 3, fired(m, "S", 0)... (repeatable).',
+        multiple=True,
+        metavar="EXPR",
+    ),
+    _O(
+        ("--history",),
+        "history",
+        COUNT,
+        "Keep the last N ringlets for the debugger (the page keeps 1000).",
+        metavar="N",
+    ),
+    _O(
+        ("--debug-prompt",),
+        "debug_prompt",
+        FLAG,
+        "The debugger's (llfsm) prompt on standard input, with --web too (scripts drive it through a pipe).",
     ),
 )
 del _O
@@ -219,49 +243,6 @@ _BY_FLAG = {flag: opt for opt in RUN_OPTIONS for flag in opt.flags}
 
 class _Delegate(Exception):
     """Something `parse` leaves to click (which then reports it, or does it)."""
-
-
-#: What starts ROS arguments on a command line (`ros2 run PKG EXE --ros-args -r a:=b -p x:=1`);
-#: `--` ends them.  llfsm takes ROS's spellings as its own options (-r, -p, --params-file,
-#: --log-level), so the markers only need to go.
-ROS_ARGS = "--ros-args"
-#: ROS arguments with a spelling of llfsm's own.
-_ROS_SPELLINGS = {"--enable-external-lib-logs": "--log-file", "--disable-external-lib-logs": None}
-#: ROS arguments llfsm does not take (rcl's), named in the message that refuses them.
-_ROS_ONLY = frozenset(
-    {"-e", "--enclave", "--log-config-file", "--enable-rosout-logs", "--disable-rosout-logs"}
-    | {"--enable-stdout-logs", "--disable-stdout-logs"}
-)
-
-
-class RosArgsError(ValueError):
-    """A ROS argument `llfsm run` does not take (the message says which it takes)."""
-
-
-def without_ros_args(args: Sequence[str]) -> list[str]:
-    """`args` with the `--ros-args` markers (and the `--` that closes their block) taken out
-    and rcl's spellings of llfsm's options put in: what click and `parse` then read."""
-    if ROS_ARGS not in args:
-        return list(args)
-    out: list[str] = []
-    inside = False
-    for arg in args:
-        if arg == ROS_ARGS:
-            inside = True
-        elif inside and arg == "--":
-            inside = False
-        elif inside and arg in _ROS_SPELLINGS:
-            spelling = _ROS_SPELLINGS[arg]
-            if spelling is not None:
-                out.append(spelling)
-        elif inside and arg.partition("=")[0] in _ROS_ONLY:
-            raise RosArgsError(
-                f"--ros-args {arg}: llfsm run takes -r/--remap, -p/--param, --params-file, --log-level and "
-                "--enable-external-lib-logs"
-            )
-        else:
-            out.append(arg)
-    return out
 
 
 def _convert(opt: RunOption, text: str) -> Any:
@@ -282,6 +263,10 @@ def _convert(opt: RunOption, text: str) -> Any:
             return duration_ns(text)
         except ValueError:
             raise _Delegate from None
+    if opt.kind == COUNT:  # click.IntRange(min=1)
+        if not text.strip().lstrip("+").isdigit() or int(text) < 1:
+            raise _Delegate
+        return int(text)
     if opt.kind == FILE:  # click.Path(dir_okay=False): an existing path must be a readable non-directory
         try:
             st = os.stat(text)

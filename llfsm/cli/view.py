@@ -2,22 +2,13 @@
 
 from __future__ import annotations
 
-import click
-
 from ._exits import echo
-from ._group import DURATION, cli
+from ._group import cli, duration_option, web_option
 
 
 @cli.command()
-@click.option(
-    "--web",
-    "web",
-    default="8080",
-    show_default=True,
-    metavar="[HOST:]PORT",
-    help="Where to serve the page (127.0.0.1 unless HOST is given; 0: a free port).",
-)
-@click.option("--duration", type=DURATION, help="Stop after this much time (default: until Ctrl-C).")
+@web_option("the page")
+@duration_option
 def view(web: str, duration: int | None) -> None:
     """Watch and steer every llfsm machine on the DDS graph in a web page.
 

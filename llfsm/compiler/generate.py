@@ -457,6 +457,7 @@ def _template_context(
             ),
             # machine.yaml's `parameters:`: (variable, rclpy type name) for llfsm.ros.control
             "parameters": _parameters(m),
+            "variable_types": tuple((v.name, " ".join(v.annotation.split())) for v in m.variables),
             "enter": [enter_ringlet(v.name) for v in views],
             "steady": [steady_ringlet(v.name) for v in views],
             "includes": blocks.includes,

@@ -115,6 +115,8 @@ def _walk(
             move = re.match(r"translate\(\s*(-?[\d.]+)[\s,]+(-?[\d.]+)\s*\)", el.get("transform", ""))
             if move:
                 here = (at[0] + float(move[1]), at[1] + float(move[2]))
+            if "guard" in mine[-1]:
+                _fit_label(el, mine, k)
             _walk(draw, el, here, mine, k)
             continue
         style = _style(tag, mine, dict(el.attrib))
@@ -128,6 +130,21 @@ def _walk(
             draw.ellipse((cx - r * k, cy - r * k, cx + r * k, cy + r * k), fill=style.fill)
         elif tag == "text":
             _text(draw, el, at, style, k)
+
+
+def _fit_label(g: ET.Element, classes: list[set[str]], k: float) -> None:
+    """A transition's label: its white box as wide as its text in the font drawn here, with the
+    margins svg gave it.  svg sizes the box for the page's monospace font (llfsm.diagram.svg,
+    LABEL_CHAR_W), which is wider than the font Pillow ships: the box ran past the text, over
+    the edges and labels beside it."""
+    rect, text = g.find(f"{NS}rect"), g.find(f"{NS}text")
+    if rect is None or text is None:
+        return
+    content = "".join(text.itertext())
+    style = _style("text", [*classes, set(text.get("class", "").split())], dict(text.attrib))
+    margin = float(text.get("x", "0")) - float(rect.get("x", "0"))
+    width = _font(max(1, round(style.size * k))).getlength(content) / k + 2 * margin
+    rect.set("width", f"{width:.2f}")
 
 
 def _rect(draw: ImageDraw.ImageDraw, el: ET.Element, at: tuple[float, float], style: _Style, k: float) -> None:

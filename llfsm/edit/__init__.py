@@ -10,16 +10,17 @@ built from them, no symlink is followed, machine.yaml keeps its comments and for
 - `change`: Change, EditError, apply, invert (atomic over files);
 - `plan`: what the planners share (the directory as read, machine.yaml's round trip, names);
 - `structure`: states and transitions, guards, the initial and the suspend state;
-- `files`: a file written whole, a new machine, layout.yaml;
+- `files`: a file written whole, a new machine, a whole machine (`llfsm import`), layout.yaml;
 - `yaml_doc`: YAML files edited with their comments and indentation kept.
 """
 
 from __future__ import annotations
 
 from .change import Change, EditError, apply, invert
-from .files import new_machine, set_layout, write_file
+from .files import MachineExists, new_machine, set_layout, write_file, write_machine
 from .structure import (
     DEFAULT_GUARD,
+    set_description,
     set_guard,
     set_initial,
     set_suspend,
@@ -36,9 +37,11 @@ __all__ = [
     "DEFAULT_GUARD",
     "Change",
     "EditError",
+    "MachineExists",
     "apply",
     "invert",
     "new_machine",
+    "set_description",
     "set_guard",
     "set_initial",
     "set_layout",
@@ -51,4 +54,5 @@ __all__ = [
     "transition_remove",
     "transition_retarget",
     "write_file",
+    "write_machine",
 ]

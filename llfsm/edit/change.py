@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..lang.reader import MAX_FILE_BYTES
-from ..machinedir import refused_link
+from ..machinedir import FileTooLarge, NotRegularFile, read_regular, refused_link
 
 #: Longest file name written (bytes; the file system's NAME_MAX, less room for a temporary name).
 MAX_FILE_NAME = 230
@@ -73,28 +73,15 @@ def read_plain(root: Path, rel: str) -> bytes | None:
         if p.is_symlink():
             raise EditError(f"{p} is a symlink; llfsm edits only plain files inside the machine directory")
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
+        return read_regular(path, MAX_FILE_BYTES)
     except FileNotFoundError:
         return None
+    except NotRegularFile:
+        raise EditError(f"{path} is not a regular file") from None
+    except FileTooLarge:
+        raise EditError(f"{path} is larger than {MAX_FILE_BYTES // 1024} KiB; refused") from None
     except OSError as e:
         raise EditError(f"{path}: cannot read: {e.strerror or e}") from None
-    try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise EditError(f"{path} is not a regular file")
-        if st.st_size > MAX_FILE_BYTES:
-            raise EditError(f"{path} is larger than {MAX_FILE_BYTES // 1024} KiB; refused")
-        chunks = []
-        while True:
-            more = os.read(fd, 1 << 16)
-            if not more:
-                break
-            chunks.append(more)
-        return b"".join(chunks)
-    except OSError as e:
-        raise EditError(f"{path}: cannot read: {e.strerror or e}") from None
-    finally:
-        os.close(fd)
 
 
 def check_root(root: Path, *, exists: bool = True) -> None:
@@ -120,17 +107,19 @@ def apply(change: Change) -> None:
     staged: dict[str, str] = {}
     backups: dict[str, str] = {}
     done: list[str] = []
+    current = root  # the file being written, named if that fails (an OSError of os.write names none)
     try:
         for rel, data in items:
             if data is None:
                 continue
-            folder = (root / rel).parent
+            current = root / rel
+            folder = current.parent
             if not folder.exists():
                 folder.mkdir()  # a new machine's directory (check_relpath allows one level)
                 made_dirs.append(folder)
             staged[rel] = _stage(folder, data, root / rel)
         for rel, data in items:
-            path = root / rel
+            path = current = root / rel
             if change.before.get(rel) is not None:
                 backups[rel] = _backup(path)
             if data is None:
@@ -148,8 +137,7 @@ def apply(change: Change) -> None:
             with contextlib.suppress(OSError):
                 folder.rmdir()
         if isinstance(e, OSError):
-            where = getattr(e, "filename", None) or root
-            raise EditError(f"{where}: cannot write: {e.strerror or e}; nothing was changed") from None
+            raise EditError(f"{current}: cannot write: {e.strerror or e}; nothing was changed") from None
         raise
     finally:
         for b in backups.values():

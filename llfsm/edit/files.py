@@ -9,6 +9,7 @@ does not need machine.yaml to be valid: the editor writes machine.yaml as the us
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -20,7 +21,7 @@ from ..lang.reader import MAX_FILE_BYTES
 from ..machinedir import LAYOUT_FILE, MACHINE_SUFFIX
 from ..scaffold import ScaffoldError, machine_files
 from .change import Change, EditError, check_relpath, check_root, read_plain
-from .plan import Plan, check_name, target_of
+from .plan import MACHINE_YAML, Plan, check_name, target_of
 
 
 def write_file(machine: Path, relpath: str, text: str) -> Change:
@@ -65,21 +66,80 @@ def new_machine(
 ) -> Change:
     """A new machine NAME.machine in `folder`: `states` in a chain (default INITIAL -> END),
     as `llfsm new machine --states` writes it.  The Change's root is `folder`."""
-    root = Path(folder)
-    check_root(root)
     check_name(name, "machine name")
     try:
         files = machine_files(name, description, states)
     except ScaffoldError as e:
         raise EditError(str(e)) from None
-    target = name + MACHINE_SUFFIX
-    if (root / target).exists() or (root / target).is_symlink():
-        raise EditError(f"{root / target} already exists")
-    writes: dict[str, bytes | None] = {f"{target}/{rel}": text.encode("utf-8") for rel, text in files.items()}
+    target = Path(folder) / (name + MACHINE_SUFFIX)
+    if target.exists() or target.is_symlink():
+        raise EditError(f"{target} already exists")
+    n = len(states) if states is not None else 2
+    change = write_machine(folder, name, files)
+    return Change(change.root, change.writes, change.before, f"created machine {name} ({n} states)")
+
+
+class MachineExists(EditError):
+    """`write_machine` without `replace` found the machine directory there already (the caller
+    says how to replace it: `llfsm import --force`)."""
+
+    def __init__(self, target: Path) -> None:
+        super().__init__(f"{target} exists")
+        self.target = target
+
+
+def write_machine(folder: Path, name: str, files: Mapping[str, str], *, replace: bool = False) -> Change:
+    """NAME.machine in `folder` holding exactly `files` (file name -> text; names of the machine
+    format only, as `write_file` takes): a new machine, or with `replace` an llfsm machine that
+    is there already, its files that `files` does not name removed.  `apply` then writes the
+    whole directory or none of it (a full disk midway leaves the old machine as it was).
+
+    A machine directory holding anything but plain files (a folder, a symlink) is not replaced:
+    llfsm writes files, and removes nothing it did not write.  The Change's root is `folder` and
+    its paths NAME.machine/FILE, as `new_machine`'s."""
+    root = Path(folder)
+    check_root(root)
+    check_name(name, "machine name")
+    for rel in files:
+        if not isinstance(rel, str) or "/" in rel or not is_machine_file(rel):
+            raise EditError(f"refused file name {rel!r} for machine {name}: not a file of a machine directory")
+    dirname = name + MACHINE_SUFFIX
+    target = root / dirname
+    before: dict[str, bytes | None] = {}
+    if target.is_symlink():
+        raise EditError(f"{target} is a symlink: not replaced")
+    if target.exists():
+        if not target.is_dir() or not (target / MACHINE_YAML).is_file():
+            raise EditError(f"{target} exists and is not an llfsm machine: not replaced")
+        if not replace:
+            raise MachineExists(target)
+        for rel in _plain_files(target):
+            before[f"{dirname}/{rel}"] = read_plain(root, f"{dirname}/{rel}")
+    writes: dict[str, bytes | None] = dict.fromkeys(before)
+    for rel, text in files.items():
+        data = text.encode("utf-8", "surrogatepass")
+        if len(data) > MAX_FILE_BYTES:
+            raise EditError(f"{target / rel}: larger than {MAX_FILE_BYTES // 1024} KiB; refused")
+        writes[f"{dirname}/{rel}"] = data
     for rel in writes:
         check_relpath(rel)
-    n = len(states) if states is not None else 2
-    return Change(root, writes, dict.fromkeys(writes), f"created machine {name} ({n} states)")
+        before.setdefault(rel, None)
+    changed = {rel: data for rel, data in writes.items() if data != before[rel]}
+    summary = f"{'replaced' if replace and target.exists() else 'created'} machine {name} ({len(files)} files)"
+    return Change(root, changed, {rel: before[rel] for rel in changed}, summary)
+
+
+def _plain_files(machine: Path) -> list[str]:
+    """The names of the files in `machine`; EditError if it holds anything else."""
+    try:
+        with os.scandir(machine) as it:
+            entries = list(it)
+    except OSError as e:
+        raise EditError(f"{machine}: cannot be listed: {e.strerror or e}") from None
+    for entry in entries:
+        if entry.is_symlink() or not entry.is_file(follow_symlinks=False):
+            raise EditError(f"{machine / entry.name}: not a plain file; {machine} not replaced")
+    return sorted(entry.name for entry in entries)
 
 
 def set_layout(

@@ -222,6 +222,22 @@ def set_suspend(machine: Path, state: str | None) -> Change:
     return p.change(f"{state} is the suspend state")
 
 
+def set_description(machine: Path, text: str | None) -> Change:
+    """machine.yaml's `description:` (the editor's "Description"); None or blank removes it.
+    Several lines are written as a literal block (`description: |`), as a person would."""
+    if text is not None and (not isinstance(text, str) or "\0" in text):
+        raise EditError("a description is text without NUL characters")
+    p = Plan(machine)
+    text = (text or "").strip()
+    if not text:
+        if "description" in p.yaml.data:
+            del p.yaml.data["description"]
+            p.yaml_changed = True
+        return p.change("no description")
+    _set_key(p, "description", LiteralScalarString(text + "\n") if "\n" in text else text, after=())
+    return p.change("description written")
+
+
 # -- helpers ----------------------------------------------------------------------------------------
 
 

@@ -4,8 +4,8 @@
 - `cxx` (tree-sitter), `statements`, `expressions`, `calls`, `headers`, `terms`, `kinds`,
   `literals`: translating its C++ where the meaning is clear, keeping the rest as lines
   `llfsm check` reports (LF080);
-- `convert`: one clfsm machine to the files of an llfsm machine;
-- `write`: writing a machine directory all at once or not at all;
+- `convert`: one clfsm machine to the files of an llfsm machine, which llfsm.edit writes (as it
+  writes every machine directory: the whole directory or none of it, SPEC 13);
 - `report`: what was written, translated and left.
 
 Nothing of a clfsm machine is ever executed: its files are read as text and parsed.
@@ -18,13 +18,13 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..edit import EditError, MachineExists, apply, write_machine
 from ..lang.discover import find_machines
 from ..lang.model import MAX_MACHINE_NAME
 from .clfsm import ClfsmMachine, ReadError, is_clfsm_machine, read_clfsm
 from .convert import convert
 from .cxx import ParserMissing
 from .report import MachineReport
-from .write import WriteError, write_machine
 
 __all__ = ["ParserMissing", "import_machines", "llfsm_name"]
 
@@ -104,8 +104,11 @@ def import_machines(paths: list[Path], out: Path, force: bool = False) -> list[M
         imported = convert(f.machine, f.report.name, names, states)
         imported.report.notes = f.report.notes + imported.report.notes
         try:
-            imported.report.output = write_machine(out, imported.name, imported.files, force)
-        except WriteError as e:
+            apply(write_machine(out, imported.name, imported.files, replace=force))
+            imported.report.output = out / f"{imported.name}.machine"
+        except MachineExists as e:
+            imported.report.error = f"{e} (--force replaces it)"
+        except EditError as e:
             imported.report.error = str(e)
         f.report = imported.report
     return [f.report for f in found]

@@ -28,11 +28,10 @@ from __future__ import annotations
 import os
 import plistlib
 import re
-import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..machinedir import machine_name_of, refused_link
+from ..machinedir import FileTooLarge, NotRegularFile, machine_name_of, read_regular, refused_link
 
 #: A hand-written file of a machine comes nowhere near this; Layout.plist of a big machine may
 #: (SLAM's is about 300 KiB).
@@ -139,29 +138,16 @@ class _Dir:
         where = self.path / name
         if entry.is_symlink():
             raise ReadError(f"{where}: a symlink; llfsm import follows none")
-        flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
         try:
-            fd = os.open(where, flags)
+            return read_regular(where, limit)
+        except NotRegularFile:
+            raise ReadError(f"{where}: not a regular file") from None
+        except FileTooLarge as e:
+            if e.size is None:
+                raise ReadError(f"{where}: more than the {limit} bytes a machine file may have") from None
+            raise ReadError(f"{where}: {e.size} bytes, more than the {limit} a machine file may have") from None
         except OSError as e:
             raise ReadError(f"{where}: cannot be read ({e.strerror})") from None
-        try:
-            st = os.fstat(fd)
-            if not stat.S_ISREG(st.st_mode):
-                raise ReadError(f"{where}: not a regular file")
-            if st.st_size > limit:
-                raise ReadError(f"{where}: {st.st_size} bytes, more than the {limit} a machine file may have")
-            chunks, total = [], 0
-            while True:
-                chunk = os.read(fd, 1 << 16)
-                if not chunk:
-                    break
-                total += len(chunk)
-                if total > limit:
-                    raise ReadError(f"{where}: more than the {limit} bytes a machine file may have")
-                chunks.append(chunk)
-            return b"".join(chunks)
-        finally:
-            os.close(fd)
 
     def source(self, name: str) -> Source | None:
         text = self.read(name)

@@ -11,14 +11,22 @@ import ast
 import io
 import os
 import re
-import stat
 import tokenize
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 
-from ..machinedir import LAYOUT_FILE, machine_name_of, refused_link
+from .. import yamlfile
+from ..machinedir import (
+    LAYOUT_FILE,
+    NOFOLLOW,
+    FileTooLarge,
+    NotRegularFile,
+    machine_name_of,
+    read_regular,
+    refused_link,
+)
 from .cpp import syntax_hint
 from .diagnostics import Diagnostic, diag
 from .files import GUARD_RE, SECTION_RE, guard_file
@@ -45,14 +53,12 @@ MAX_CODE_DEPTH = 200
 #: in its fields (80,000 take seconds, a 1 MiB one minutes), so a bigger one is refused (LF039)
 #: before `ast.parse` sees it; hand-written code has a handful.
 MAX_FSTRING_FIELDS = 1000
-#: Open without blocking on a FIFO and without taking a terminal as controlling tty.
-_OPEN_FLAGS = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
 #: A form feed in the indentation resets CPython's column count: re-indented into a method,
 #: such a line would land at another nesting level than the one it was checked at.  (A form
 #: feed alone on its line, or before a comment, is harmless: such lines have no indentation.)
 _FORM_FEED_INDENT = re.compile(r"^[ \t]*\f[ \t\f]*[^\s#]", re.MULTILINE)
 #: libyaml's C parser when PyYAML has it (about ten times faster), else the pure-Python one.
-YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+YAML_LOADER = yamlfile.LOADER
 
 
 @dataclass
@@ -83,7 +89,7 @@ class _Reader:
         self.links: set[str] | frozenset[str] | None = None  # names that are symlinks, once listed
         self.inline: dict[str, Code] = {}  # inline guards by the name their file would have
         self.yaml_lines: list[str] = []
-        self.nofollow = getattr(os, "O_NOFOLLOW", 0)
+        self.nofollow = bool(NOFOLLOW)  # without O_NOFOLLOW, every file the careful way
 
     # -- files ---------------------------------------------------------------------------
     def where(self, name: str) -> str:
@@ -100,8 +106,13 @@ class _Reader:
         """The text of a file of the machine directory, or None (with a diagnostic) if unusable."""
         p = os.path.join(self.path, name)  # plain strings: this runs for every file of every machine
         try:
-            fd = self._open_plain(name, p)
-            if fd is None:  # a symlink (or not known not to be one): where does it lead?
+            data = None
+            if self._listed_plain(name):
+                try:
+                    data = read_regular(p, MAX_FILE_BYTES)  # O_NOFOLLOW: still no symlink
+                except OSError:
+                    pass  # a symlink by now, or unreadable: the careful way reports it as before
+            if data is None:  # a symlink (or not known not to be one): where does it lead?
                 if os.path.islink(p):
                     target = Path(os.path.realpath(p))
                     if not target.is_relative_to(self.real):
@@ -109,25 +120,17 @@ class _Reader:
                             "LF037", name, 1, 1, f"{name} is a symlink leading out of the machine directory; refused"
                         )
                         return None
-                # never block: a FIFO (or a device) where a file is expected would hang `llfsm check`
-                fd = os.open(p, _OPEN_FLAGS)
-            try:
-                st = os.fstat(fd)
-                if not stat.S_ISREG(st.st_mode):
-                    self.report("LF002", name, 1, 1, f"{name} is not a regular file")
-                    return None
-                # ask for what the file holds (plus one byte, to see one that grew past the limit):
-                # read(MAX) would allocate a megabyte for every three-line section
-                data = _read_fd(fd, min(st.st_size, MAX_FILE_BYTES) + 1)
-            finally:
-                os.close(fd)
+                data = read_regular(p, MAX_FILE_BYTES, follow=True)
+        except NotRegularFile:
+            self.report("LF002", name, 1, 1, f"{name} is not a regular file")
+            return None
+        except FileTooLarge:
+            self.report("LF002", name, 1, 1, f"{name} is larger than {MAX_FILE_BYTES // 1024} KiB; refused")
+            return None
         except OSError as e:
             self.report("LF002", name, 1, 1, f"cannot read {name}: {e.strerror or e}")
             return None
         self.raw[name] = data
-        if len(data) > MAX_FILE_BYTES:
-            self.report("LF002", name, 1, 1, f"{name} is larger than {MAX_FILE_BYTES // 1024} KiB; refused")
-            return None
         if b"\0" in data:
             self.report("LF002", name, 1, 1, f"{name} is a binary file (it contains NUL bytes)")
             return None
@@ -140,23 +143,18 @@ class _Reader:
         # one line ending: CPython counts \r and \r\n as line ends, and so must every later step
         return text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n")
 
-    def _open_plain(self, name: str, p: str) -> int | None:
-        """`name` opened, if the directory listed it as no symlink and it still is none
-        (O_NOFOLLOW); else None, and `read` takes the careful way.  One listing (file types
-        from the directory itself) saves a `lstat` per file of every machine."""
+    def _listed_plain(self, name: str) -> bool:
+        """Whether the directory listed `name` as no symlink (so it may be opened O_NOFOLLOW,
+        without a `lstat` first).  One listing (file types from the directory itself) saves a
+        `lstat` per file of every machine."""
         if self.links is None:
             try:
                 with os.scandir(self.path) as it:
                     self.links = {e.name for e in it if e.is_symlink()}
             except OSError:
                 self.links = frozenset({name})  # unknown: the careful way for every file
-                self.nofollow = 0
-        if not self.nofollow or name in self.links:
-            return None
-        try:
-            return os.open(p, _OPEN_FLAGS | self.nofollow)
-        except OSError:
-            return None  # a symlink by now, or unreadable: the careful way reports it as before
+                self.nofollow = False
+        return self.nofollow and name not in self.links
 
     # -- python --------------------------------------------------------------------------
     def parse(self, name: str, text: str) -> ast.Module | None:
@@ -602,20 +600,6 @@ def _huge_fstring(text: str) -> tuple[int, int] | None:
     return None
 
 
-def _read_fd(fd: int, n: int) -> bytes:
-    """Up to `n` bytes of an open file (fewer only at its end): no buffered file object, which
-    costs more than the read for a three-line section."""
-    chunks: list[bytes] = []
-    got = 0
-    while got < n:
-        more = os.read(fd, n - got)
-        if not more:
-            break
-        chunks.append(more)
-        got += len(more)
-    return chunks[0] if len(chunks) == 1 else b"".join(chunks)
-
-
 def _mark_loc(node: yaml.Node) -> Loc:
     return Loc(file="machine.yaml", line=node.start_mark.line + 1, column=node.start_mark.column + 1)
 
@@ -637,63 +621,31 @@ def _describe(stmt: ast.stmt) -> str:
 _Refusal = tuple[str, int, int, str]
 
 
+#: machine.yaml's words for what llfsm.yamlfile refuses: (rule, message).
+_YAML_WORDS = {
+    "alias": ("LF005", "anchors and aliases are not allowed in machine.yaml"),
+    "depth": ("LF004", f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels"),
+    "syntax": ("LF003", "invalid YAML: {detail}"),
+}
+
+
 def compose(text: str, loader: type | None = None) -> tuple[yaml.Node | None, _Refusal | None]:
-    """The YAML tree of `text` (machine.yaml, layout.yaml), or None and why: anchors, aliases and
-    deep nesting refused before a tree is built, the library's own limits, or LF003 where the
-    text stops being YAML.  `loader`: YAML_LOADER, as it is when called."""
-    loader = loader or YAML_LOADER
+    """The YAML tree of `text` (machine.yaml, layout.yaml), or None and why (llfsm.yamlfile:
+    anchors, aliases and deep nesting refused before a tree is built, the library's own limits,
+    LF003 where the text stops being YAML).  `loader`: YAML_LOADER, as it is when called."""
     try:
-        refusal = structure_refusal(text, loader)
-        return (yaml.compose(text, Loader=loader), None) if refusal is None else (None, refusal)
-    except yaml.MarkedYAMLError as e:
-        refusal = library_limit(text, e)
-        if refusal is not None:
-            return None, refusal
-        m = e.problem_mark or e.context_mark
-        line, col = (m.line + 1, m.column + 1) if m else (1, 1)
-        return None, ("LF003", line, col, f"invalid YAML: {e.problem or e.context}")
-    except (yaml.YAMLError, RecursionError) as e:
-        return None, ("LF003", 1, 1, f"invalid YAML: {type(e).__name__}")
+        return yamlfile.compose(text, MAX_YAML_DEPTH, loader or YAML_LOADER), None
+    except yamlfile.Refused as e:
+        return None, _refusal(e)
 
 
 def structure_refusal(text: str, loader: type) -> _Refusal | None:
     """(code, line, column, message) when machine.yaml uses anchors or nests too deep, found on
-    the event stream, before any tree is built: composing a 5,000-deep document would recurse."""
-    depth = 0
-    for ev in yaml.parse(text, Loader=loader):
-        if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
-            m = ev.start_mark
-            return "LF005", m.line + 1, m.column + 1, "anchors and aliases are not allowed in machine.yaml"
-        if isinstance(ev, yaml.CollectionStartEvent):
-            depth += 1
-            if depth > MAX_YAML_DEPTH:
-                m = ev.start_mark
-                return "LF004", m.line + 1, m.column + 1, f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels"
-        elif isinstance(ev, yaml.CollectionEndEvent):
-            depth -= 1
-    return None
+    the event stream, before any tree is built; yaml.YAMLError where it is not YAML."""
+    found = yamlfile.scan(text, MAX_YAML_DEPTH, loader)
+    return None if found is None else _refusal(found)
 
 
-def library_limit(text: str, error: yaml.MarkedYAMLError) -> _Refusal | None:
-    """Our own refusal when the YAML library refused the text first for one of its own limits;
-    None when the text is simply not YAML.
-
-    libyaml 0.2.6 (in PyYAML 6.0.4) caps nesting at 1,000 levels in its scanner, whose look-ahead
-    reads up to 1,024 characters ahead of our event count: `[[[[...` is refused there, with the
-    library's wording, before our count reaches MAX_YAML_DEPTH.  The pure-Python scanner has no
-    such cap, so it decides (only on this error path, and it stops at our limit); a library
-    whose own scanner also names a nesting or depth limit is taken at its word.
-    """
-    if YAML_LOADER is not yaml.SafeLoader:
-        try:
-            refusal = structure_refusal(text, yaml.SafeLoader)
-        except (yaml.YAMLError, RecursionError):
-            refusal = None
-        if refusal is not None:
-            return refusal
-    problem = f"{error.problem or ''} {error.context or ''}".lower()
-    if "nesting" in problem or "depth" in problem:
-        m = error.problem_mark or error.context_mark
-        line, col = (m.line + 1, m.column + 1) if m else (1, 1)
-        return "LF004", line, col, f"machine.yaml nests deeper than {MAX_YAML_DEPTH} levels"
-    return None
+def _refusal(e: yamlfile.Refused) -> _Refusal:
+    code, message = _YAML_WORDS[e.kind]
+    return code, e.line, e.column, message.format(detail=e.detail)

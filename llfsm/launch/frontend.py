@@ -22,10 +22,13 @@ from xml.parsers import expat
 
 import yaml
 
+from .. import yamlfile
+
 #: Largest launch file read, in bytes, and deepest nesting of elements.
 MAX_FILE_BYTES = 1 << 20
 MAX_DEPTH = 64
-_YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+#: What a launch file says of what llfsm.yamlfile refuses (the rest in its default words).
+_WORDS = {"large": "{where}: larger than {mib} MiB: not a launch file"}
 
 
 class FrontEndError(ValueError):
@@ -65,19 +68,9 @@ def read(path: str) -> Element:
     its first character); FrontEndError naming the file and line of what is wrong."""
     where = shown(path)
     try:
-        with open(path, "rb") as f:
-            data = f.read(MAX_FILE_BYTES + 1)
-    except IsADirectoryError:
-        raise FrontEndError(f"{where}: is a folder, not a launch file") from None
-    except OSError as e:
-        raise FrontEndError(f"{where}: cannot be read: {e.strerror or e}") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise FrontEndError(f"{where}: larger than {MAX_FILE_BYTES >> 20} MiB: not a launch file")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as e:
-        line = data[: e.start].count(b"\n") + 1
-        raise FrontEndError(f"{where}:{line}: not UTF-8 text") from None
+        text = yamlfile.read_text(path, MAX_FILE_BYTES)
+    except yamlfile.Refused as e:
+        raise FrontEndError(e.say(where, "a launch file", _WORDS)) from None
     name = path.lower()
     if name.endswith(".xml"):
         return _xml(text, path)
@@ -138,23 +131,9 @@ def _root(root: Element, where: str) -> Element:
 def _yaml(text: str, path: str) -> Element:
     where = shown(path)
     try:
-        depth = 0
-        for ev in yaml.parse(text, Loader=_YAML_LOADER):
-            if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
-                line = ev.start_mark.line + 1
-                raise FrontEndError(f"{where}:{line}: anchors and aliases are not allowed in a launch file")
-            if isinstance(ev, yaml.CollectionStartEvent):
-                depth += 1
-                if depth > MAX_DEPTH:
-                    raise FrontEndError(f"{where}:{ev.start_mark.line + 1}: nested deeper than {MAX_DEPTH} levels")
-            elif isinstance(ev, yaml.CollectionEndEvent):
-                depth -= 1
-        root = yaml.compose(text, Loader=_YAML_LOADER)
-    except yaml.MarkedYAMLError as e:
-        mark = e.problem_mark or e.context_mark
-        raise FrontEndError(f"{where}:{mark.line + 1 if mark else 1}: not YAML: {e.problem or e.context}") from None
-    except (yaml.YAMLError, RecursionError) as e:
-        raise FrontEndError(f"{where}:1: not YAML: {type(e).__name__}") from None
+        root = yamlfile.compose(text, MAX_DEPTH)
+    except yamlfile.Refused as e:
+        raise FrontEndError(e.say(where, "a launch file", _WORDS)) from None
     if not isinstance(root, yaml.MappingNode) or len(root.value) != 1:
         line = root.start_mark.line + 1 if root is not None else 1
         raise FrontEndError(f"{where}:{line}: a YAML launch file is one mapping, `launch:`, holding a list")

@@ -23,6 +23,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from types import ModuleType
 
+from .. import rosargs
 from . import executables, frontend, model
 from .model import Where
 from .substitutions import Context, SubstitutionError, Text, literal, perform, show
@@ -367,6 +368,10 @@ def _node_argv(
         raise LaunchError(f"{where}: {err}") from None
     if what.targets_in_args:
         _machines_exist(args, cwd, where)
+    if what.llfsm:  # `llfsm run` reads the ROS arguments in `args` itself: checked here first
+        for block in rosargs.blocks(args):
+            _ros_args(block, where, "args")
+    ros_args = _ros_args(split_command(e.ros_args, ctx, where), where, "ros_args") if e.ros_args is not None else []
     ros: list[str] = []
     if e.name is not None and not what.machines:
         # a node's name, as launch_ros passes it; a machine run holds several nodes (the
@@ -385,8 +390,6 @@ def _node_argv(
         ros += ["--remap", f"__ns:={_namespace(base, ns or '', where)}"]
     for p in e.params:
         ros += _param_args(p, "", ctx)
-    if e.ros_args is not None:
-        ros += _ros_args(split_command(e.ros_args, ctx, where), where)
     for r in e.remaps:
         rule = f"{_perform(r.from_, ctx, r.where)}:={_perform(r.to, ctx, r.where)}"
         names = _ros_names()
@@ -395,16 +398,19 @@ def _node_argv(
         except names.InvalidNameError as err:
             raise LaunchError(f"{r.where}: {err}") from None
         ros += ["--remap", rule]
+    # `ros_args` as launch_ros passes them: straight after `args`, before the node's own name,
+    # namespace, parameters and remaps (which therefore win, as they do under ros2 launch)
+    own = [rosargs.ROS_ARGS, *ros_args] if ros_args else []
     if not what.llfsm:  # a command on PATH: ROS 2 arguments as launch_ros passes them
         ros = ["-r" if a == "--remap" else a for a in ros]
-        argv = [_on_path(exe, scope.environment, cwd, where), *args, *(["--ros-args", *ros] if ros else [])]
+        argv = [_on_path(exe, scope.environment, cwd, where), *args, *own, *([rosargs.ROS_ARGS, *ros] if ros else [])]
         return argv, None, os.path.basename(exe)
     label = exe
     if what.machines and e.name is not None:
         label = _perform(e.name, ctx, where)
     elif what.targets_in_args:
         label = _first_machine(args) or exe
-    return [*executables.LLFSM, *what.args, *args, *ros], what.node, label
+    return [*executables.LLFSM, *what.args, *args, *([*own, "--"] if own else []), *ros], what.node, label
 
 
 def _param_args(p: model.Param, prefix: str, ctx: Context) -> list[str]:
@@ -447,22 +453,49 @@ def _typed(text: str, kind: str, p: model.Param) -> str:
     return text
 
 
-#: ROS 2's `--ros-args` options and the `llfsm run` options they are.
-_ROS_ARGS = {"-r": "--remap", "--remap": "--remap", "-p": "-p", "--param": "-p", "--params-file": "--params-file"}
-
-
-def _ros_args(words: list[str], where: Where) -> list[str]:
-    """A node's `ros_args` as `llfsm run` options (each of these options takes one value)."""
+def _ros_args(words: list[str], where: Where, attr: str) -> list[str]:
+    """ROS arguments for `llfsm run` (a node's `ros_args`, or a `--ros-args` block of its `args`),
+    checked as `llfsm run` will read them: what it takes (llfsm.rosargs), each remap a remap,
+    each parameter NAME:=VALUE, each log level a level, each params file there (its path as
+    found: beside the launch file, as `param from=`).  The words, or LaunchError at `where`."""
+    try:
+        pairs = rosargs.options(words)
+    except rosargs.RosArgsError as e:
+        raise LaunchError(f"{where}: {attr}: {e.word}: {e.why}") from None
     out: list[str] = []
-    it = iter(words)
-    for w in it:
-        option = _ROS_ARGS.get(w)
-        value = next(it, None)
-        if option is None or value is None:
-            what = f"{w} without its value" if option is not None else w
-            raise LaunchError(f"{where}: ros_args: {what}: llfsm run takes {', '.join(_ROS_ARGS)} with one value each")
+    for option, value in pairs:
+        if value is None:
+            out.append(option)
+            continue
+        if option == "--params-file":
+            value = _existing(value, where, "params file")
+        else:
+            try:
+                _check_ros_value(option, value)
+            except ValueError as err:  # its words name the option and the value
+                raise LaunchError(f"{where}: {attr}: {err}") from None
         out += [option, value]
     return out
+
+
+def _check_ros_value(option: str, value: str) -> None:
+    """ValueError when `llfsm run` would refuse `option value`."""
+    # deferred: start-up (as _ros_names: only a node with ROS arguments needs llfsm.ros)
+    if option in ("-r", "--remap"):
+        names = _ros_names()
+        try:
+            names.Remap.parse(value)
+        except names.InvalidNameError as err:
+            message = str(err)
+            raise ValueError(message if message.startswith("--remap") else f"{option} {value}: {message}") from None
+    elif option in ("-p", "--param"):
+        from ..ros.parameter_files import parse_param
+
+        parse_param(value)
+    elif option == "--log-level":
+        from ..ros.logging import parse_log_level
+
+        parse_log_level(value)
 
 
 def _machines_exist(args: list[str], cwd: str | None, where: Where) -> None:

@@ -26,7 +26,8 @@ reached in a round asks the loop to end after that round (`ctx.wake = 0`); the m
 between-round hook then numbers the boundary (`Arrangement.ringlets`) and says it: the stderr
 line, a message on `/llfsm/monitor` (llfsm_msgs/msg/MonitorEvent, llfsm.monitor.topic), and the
 listeners (the web page).  `--on-violation stop` ends the run at that boundary
-(`Arrangement.stop_at_boundary`, exit status 4).
+(`Arrangement.stop_at_boundary`, exit status 4); `pause` pauses it there (the debugger's pause,
+llfsm.debug, through `Monitor.pause`).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from typing import Any
 
 from ..props.atoms import infos_of
 from ..props.file import PropertySource
+from ..runtime.generated import become
 from ..runtime.scheduler import GO, Arrangement
 from .judge import VIOLATED, Boundary, Judge, Judged, MonitorError, Verdict, atom_reads
 from .reads import ClassReads, class_reads
@@ -58,13 +60,8 @@ class Monitor:
         say: Callable[[str], None] | None = None,
         targeted: bool = True,
     ) -> None:
-        if on_violation == "pause":
-            raise MonitorError(
-                "--on-violation pause pauses the run as the debugger does, which llfsm does not have yet "
-                "(issue 30): use log or stop"
-            )
         if on_violation not in ON_VIOLATION:
-            raise MonitorError(f"--on-violation {on_violation}: one of log, stop")
+            raise MonitorError(f"--on-violation {on_violation}: one of {', '.join(ON_VIOLATION)}")
         self.on_violation = on_violation
         self.say = say if say is not None else print
         self.judge = Judge(sources, infos_of(classes), self.say)
@@ -91,6 +88,9 @@ class Monitor:
         #: ...for these properties alone (None: all of them), the others where they can change
         self._everywhere: list[Judged] | None = None
         self._before: Callable[[Any], int] | None = None  # a watcher that was there first
+        #: `--on-violation pause`: pauses the run where a violation is reached (the debugger's,
+        #: llfsm.debug, which the session sets; called at that boundary with the verdict).
+        self.pause: Callable[[Verdict], None] | None = None
         self._watcher = self._watch  # one bound method, compared with `is`
         self._inputs: dict[int, list[object]] = {}
         self._reads_inputs = not targeted  # an input a property reads (found by _instrument)
@@ -132,7 +132,7 @@ class Monitor:
                     numeric, unstepped = self._numeric[m._id]
                     if any(k in numeric and type(v) not in NUMBERS for k, v in arr._variables[m._id].items()):
                         del self._numeric[m._id]
-                        _swap(m, unstepped())  # its checks in full from this ringlet on
+                        become(m, unstepped())  # its checks in full from this ringlet on
 
         arr._gate_fn = gate
         arr.on_release = released
@@ -216,7 +216,7 @@ class Monitor:
                 variant = unstepped()  # a stepped variable holds something else already
             elif numeric:
                 self._numeric[index] = (numeric, unstepped)
-            _swap(m, variant)
+            become(m, variant)
         return everywhere
 
     # -- judging ---------------------------------------------------------------------------------
@@ -338,6 +338,8 @@ class Monitor:
         arr.ctx.wake = 0
         if v.verdict == VIOLATED and self.on_violation == "stop":
             arr.stop_at_boundary()
+        elif v.verdict == VIOLATED and self.on_violation == "pause" and self.pause is not None:
+            self.pause(v)
 
     def _reads(self, j: Judged) -> list[str]:
         """The machines a property reads, in load order."""
@@ -421,15 +423,6 @@ class Monitor:
         where = Boundary(self.arr.ringlets if self.arr is not None else 0)
         self._unsaid = self.judge.at_end(self._now(), where)
         self._say()
-
-
-def _swap(m: Any, variant: Any) -> None:
-    """Make live machine `m` one of `variant` (a monitored variant of its own class or of the
-    class it was made from), its next ringlets the variant's."""
-    swap = {id(f): g for f, g in zip((*m.ENTER, *m.STEADY), (*variant.ENTER, *variant.STEADY), strict=True)}
-    m.__class__ = variant
-    m._run = swap.get(id(m._run), m._run)
-    m._next = swap.get(id(m._next), m._next)
 
 
 def _check(judge: Judge, j: Judged) -> Check:

@@ -29,12 +29,12 @@ from __future__ import annotations
 
 import ast
 import copy
-import types
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 from ..props.atoms import HELPERS, PURE
+from ..runtime.generated import variant_class
 from .reads import ClassReads, is_self_attr
 
 PREFIX = "_llfsm_mon_"
@@ -93,10 +93,8 @@ def make_variant(
     numeric: set[str] = set()
     for fn in (*cls.ENTER, *cls.STEADY):
         name = fn.__name__
-        if name in made:
-            continue
         wanted = checks.get(name)
-        if wanted:
+        if wanted and name not in made:
             state = _state_of(cls, fn)
             ctx = _Ringlet(own, cls, wanted, state, reads if steps else None, name, numeric)
             tree = copy.deepcopy(reads.trees[name])
@@ -105,19 +103,9 @@ def make_variant(
             ast.fix_missing_locations(module)
             exec(compile(module, reads.filename, "exec", dont_inherit=True), namespace)
             made[name] = namespace[name]
-        else:
-            made[name] = types.FunctionType(fn.__code__, namespace, name, fn.__defaults__, fn.__closure__)
-        namespace[name] = made[name]
-    attrs = {
-        "__slots__": (),
-        "__module__": cls.__module__,
-        "__qualname__": cls.__qualname__,
-        "__doc__": cls.__doc__,
-        "ENTER": tuple(made[f.__name__] for f in cls.ENTER),
-        "STEADY": tuple(made[f.__name__] for f in cls.STEADY),
-        NUMERIC: frozenset(numeric),
-    }
-    return type(cls.__name__, (cls,), attrs)
+    variant = variant_class(cls, namespace, made)
+    setattr(variant, NUMERIC, frozenset(numeric))
+    return variant
 
 
 def _state_of(cls: type[Any], fn: Any) -> int | None:

@@ -94,6 +94,8 @@ class MachineInfo:
     #: `states` are all of them (a state compared with `state(m)` is checked against them); False
     #: where only some are known (a bag without the machine's description)
     known_states: bool = True
+    #: how many transitions each state has (empty: unknown, `fired` then checks no index)
+    transitions: tuple[int, ...] = ()
 
 
 @dataclass
@@ -124,21 +126,29 @@ def infos_of(classes: Iterable[Any], variables: Callable[[Any], Iterable[str]] |
             slots += getattr(cls, "__mypyc_attrs__", ())  # a class built native (--native) has these instead
             names = tuple(dict.fromkeys(s for s in slots if not s.startswith("_") and "__" not in s))
         inputs = tuple(entry[0] for entry in getattr(cls, "INPUTS", ()))
-        out[cls.NAME] = MachineInfo(k, cls.NAME, tuple(cls.STATES), names + tuple(i for i in inputs if i not in names))
+        counts = tuple(len(ts) for ts in getattr(cls, "TRANSITIONS", ()) or ())
+        readable = names + tuple(i for i in inputs if i not in names)
+        out[cls.NAME] = MachineInfo(k, cls.NAME, tuple(cls.STATES), readable, transitions=counts)
     return out
 
 
-def compile_atom(text: str, machines: dict[str, MachineInfo], where: str = "--property") -> Atom:
-    """The atom of `text` over the arrangement `machines` (PropertyError if it is not one)."""
-    return _Compiler(machines, where).atom(text)
+def compile_atom(
+    text: str, machines: dict[str, MachineInfo], where: str = "--property", *, fired: bool = False
+) -> Atom:
+    """The atom of `text` over the arrangement `machines` (PropertyError if it is not one).
+    With `fired`, the debugger's `fired(m, "S", N)` is allowed too (transition N of m's state S
+    fired in the last ringlet): it reads `("fired", m's index, S's index, N) in E`, so the
+    caller puts that tuple among the step's events."""
+    return _Compiler(machines, where, fired).atom(text)
 
 
 class _Compiler:
     """Checks an atom's tree and compiles it (see the module's docstring)."""
 
-    def __init__(self, machines: dict[str, MachineInfo], where: str) -> None:
+    def __init__(self, machines: dict[str, MachineInfo], where: str, fired: bool = False) -> None:
         self.machines = machines
         self.where = where
+        self.fired = fired
         self.read: set[int] = set()
         self.published = False
 
@@ -264,7 +274,11 @@ class _Compiler:
         name = node.func.id
         if name in PURE:
             return ast.Call(func=node.func, args=[self._rewrite(a, text) for a in node.args], keywords=[])
+        if name == "fired" and self.fired:
+            return self._fired(node, text)
         if name not in FUNCTIONS:
+            if name == "fired":
+                raise self.fail(text, "fired(m, \"S\", N) is the debugger's (--break), not a property's")
             raise self.fail(text, f"unknown function {name} (the property language has {', '.join(FUNCTIONS)})")
         if len(node.args) != 1:
             raise self.fail(text, f"{name}() takes one argument")
@@ -283,6 +297,30 @@ class _Compiler:
                 ctx=ast.Load(),
             )
         return ast.Attribute(value=m, attr="_suspended" if name == "suspended" else "_finished", ctx=ast.Load())
+
+    def _fired(self, node: ast.Call, text: str) -> ast.expr:
+        """`fired(m, "S", N)`: ("fired", m, S, N) among the last step's events."""
+        usage = 'write fired(m, "S", N): transition N (from 0, in priority order) of state S of machine m'
+        if len(node.args) != 3:
+            raise self.fail(text, usage)
+        info = self._machine(node.args[0], text)
+        state, index = node.args[1], node.args[2]
+        if not (isinstance(state, ast.Constant) and isinstance(state.value, str)):
+            raise self.fail(text, usage)
+        if state.value not in info.states:
+            close = difflib.get_close_matches(state.value, list(info.states), n=1)
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            raise self.fail(text, f"{info.name} has no state {state.value}{hint}; its states: {', '.join(info.states)}")
+        if not (isinstance(index, ast.Constant) and type(index.value) is int):
+            raise self.fail(text, usage)
+        s = info.states.index(state.value)
+        if info.transitions and not 0 <= index.value < info.transitions[s]:
+            count = info.transitions[s]
+            has = f"transitions 0 to {count - 1}" if count else "no transitions"
+            raise self.fail(text, f"state {state.value} of {info.name} has {has}, not {index.value}")
+        self.published = True  # an event of the last step, as published() is
+        event = ast.Tuple(elts=[ast.Constant(v) for v in ("fired", info.index, s, index.value)], ctx=ast.Load())
+        return ast.Compare(left=event, ops=[ast.In()], comparators=[ast.Name(id="E", ctx=ast.Load())])
 
     def _check_states(self, node: ast.Compare, text: str) -> None:
         """`state(p) == "CRIT"`: the strings compared with a machine's state name its states."""

@@ -32,6 +32,7 @@ from typing import Any
 
 import yaml
 
+from .. import yamlfile
 from ..runtime.clock import parse_duration
 from .kinds import BY_NAME, KINDS
 
@@ -43,7 +44,11 @@ FILE_OPTIONS = ("period", "interrupt", "max_states", "max_memory")
 #: At most this many responses of one service, values of one topic.
 MAX_VALUES = 1_000
 
-_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+#: Largest verification file read, and deepest nesting (a verification file nests five deep).
+MAX_FILE_BYTES = 1 << 20
+MAX_DEPTH = 64
+#: A verification file's words for what llfsm.yamlfile refuses (the rest in its default words).
+_WORDS = {"syntax": "{where}:{line}: invalid YAML: {detail}"}
 
 
 class FileError(ValueError):
@@ -112,21 +117,9 @@ def read_verify_file(path: Path) -> VerifyFile:
         return FileError(f"{path}:{line}: {message}")
 
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise FileError(f"{path}: cannot be read: {getattr(e, 'strerror', None) or e}") from None
-    if len(text) > 1 << 20:
-        raise FileError(f"{path}: larger than 1 MiB")
-    try:
-        for ev in yaml.parse(text, Loader=_LOADER):
-            if isinstance(ev, yaml.AliasEvent) or getattr(ev, "anchor", None):
-                raise fail(None, "anchors and aliases are not allowed in a verification file")
-        root = yaml.compose(text, Loader=_LOADER)
-    except yaml.MarkedYAMLError as e:
-        mark = e.problem_mark or e.context_mark
-        raise FileError(f"{path}:{mark.line + 1 if mark else 1}: invalid YAML: {e.problem or e.context}") from None
-    except (yaml.YAMLError, RecursionError) as e:
-        raise FileError(f"{path}: invalid YAML: {type(e).__name__}") from None
+        root = yamlfile.load(path, MAX_FILE_BYTES, MAX_DEPTH)
+    except yamlfile.Refused as e:
+        raise FileError(e.say(str(path), "a verification file", _WORDS)) from None
     if not isinstance(root, yaml.MappingNode):
         raise fail(root, "a verification file is a mapping with `machines:` and `properties:`")
     keys = ("machines", "properties", "bounds", "environment", *FILE_OPTIONS)
@@ -191,7 +184,7 @@ def _mapping(node: yaml.Node, keys: tuple[str, ...], fail: Any, what: str) -> di
 
 def _construct(node: yaml.Node) -> Any:
     """A node's plain value (mappings, lists, scalars as YAML reads them)."""
-    return _LOADER("").construct_object(node, deep=True)
+    return yamlfile.LOADER("").construct_object(node, deep=True)
 
 
 def _property(item: yaml.Node, path: Path, fail: Any) -> PropertySource:

@@ -34,6 +34,7 @@ from ..msgs.std_msgs.msg import String
 from ..msgs.std_srvs.srv import Trigger
 from ..runtime.context import RunContext, activate
 from ..runtime.machine import RESTART, RESUME, SUSPEND, Machine
+from ..runtime.readout import description
 from ..runtime.trace import Tee, Tracer
 from .node import Node
 from .parameters import Parameter, ParameterDescriptor
@@ -75,47 +76,6 @@ def attach(arr: Arrangement, bus: Bus) -> MachineGraph:
         finally:
             activate(prev)
     return graph
-
-
-#: The keys of an input in a description, in the order of a class's INPUTS entries.
-_INPUT_KEYS = ("name", "type", "default", "domain", "topic", "msg", "field")
-
-
-def description(cls: type[Machine]) -> dict[str, Any]:
-    """The structure /llfsm/M/description carries, from the compiled class alone (its guard
-    text is embedded by the compiler; a module built before that has none, and says so with
-    empty transition lists)."""
-    states = cls.STATES
-    trans = cls.TRANSITIONS or ((),) * len(states)
-    return {
-        "name": cls.NAME,
-        "description": cls.DESCRIPTION,
-        "states": [
-            {
-                "name": name,
-                "transitions": [
-                    {"index": i, "target": states[target], "guard": guard} for i, (target, guard) in enumerate(ts)
-                ],
-                "accepting": i in cls.ACCEPTING,
-            }
-            for i, (name, ts) in enumerate(zip(states, trans, strict=True))
-        ],
-        "initial": states[cls.INITIAL],
-        "suspend": states[cls.SUSPENDED],
-        # SPEC 11: what the machine reads from outside (llfsm.runtime.inputs gives the positions)
-        "inputs": [
-            {
-                "name": name,
-                "type": kind,
-                "default": default,
-                "domain": list(domain),
-                "topic": topic,
-                "msg": msg,
-                "field": field,
-            }
-            for name, kind, default, domain, topic, msg, field in cls.INPUTS
-        ],
-    }
 
 
 def _with_start(desc: dict[str, Any], clock: Any) -> dict[str, Any]:

@@ -174,6 +174,31 @@ class Executor:
             self._run_last()
         self._rearm()
 
+    def spin_control(self, answers: Callable[[ServiceView], bool]) -> None:
+        """While the run is paused (llfsm.debug): take in what arrived from other processes,
+        answer the requests to the services `answers` accepts (control, parameters, the
+        debugger's) and run what other threads handed in (`call_soon_threadsafe`: the page's
+        work, which runs no machine code); everything else (callbacks of machine code and of
+        nodes, requests to their services) stays queued, in order, for when the run goes on.
+        No timer fires: the run clock stands (so the transport is asked to look whatever the
+        time says: `poll(True)`)."""
+        if self._poll is not None:
+            self._poll(True)
+        ready = self.ready
+        if not ready:
+            return
+        kept: deque[Work] = deque()
+        for _ in range(4 * len(ready) + 16):  # work a served item queues is served too, within bounds
+            if not ready:
+                break
+            work = ready.popleft()
+            server = self.services.get(getattr(work, "service", None) or "")
+            if isinstance(work, _Call) or (server is not None and answers(server)):
+                work._run()
+            else:
+                kept.append(work)
+        ready.extendleft(reversed(kept))
+
     def _rearm(self) -> None:
         """Tell the scheduler when the executor has work again (RunContext.wake).  With a
         remote transport, data from other processes arrives without telling anyone: look again

@@ -39,13 +39,23 @@ from typing import Any
 
 import yaml
 
+from .. import yamlfile
+
 #: The key under a node that holds its parameters.
 PARAMS_KEY = "ros__parameters"
 #: rcl_yaml_param_parser's words for true and false.
 TRUE = frozenset({"true", "True", "TRUE", "yes", "Yes", "YES", "on", "On", "ON", "y", "Y"})
 FALSE = frozenset({"false", "False", "FALSE", "no", "No", "NO", "off", "Off", "OFF", "n", "N"})
-#: A params file larger than this is not a params file (and would take a run long to read).
+#: A params file larger than this is not a params file (and would take a run long to read), nor
+#: one nested deeper (namespaces, nodes and nested names: a handful of levels).
 MAX_FILE_BYTES = 16 * 1024 * 1024
+MAX_DEPTH = 64
+#: A params file's words for what llfsm.yamlfile refuses (the rest in its default words; anchors
+#: and aliases are refused as rcl_yaml_param_parser refuses them).
+_WORDS = {
+    "unreadable": "--params-file {where}: cannot read: {detail}",
+    "large": "{where}: larger than {mib} MB: not a params file",
+}
 
 #: An override: the value, and where it was written (`params.yaml:3`, `-p gain:=2`).
 Override = tuple[Any, str]
@@ -181,25 +191,9 @@ def read_params_file(path: str | Path) -> list[tuple[str, dict[str, Override]]]:
     """The entries of a params file in file order: (node key, {name: (value, "FILE:LINE")})."""
     shown = str(path)
     try:
-        with open(path, "rb") as f:
-            data = f.read(MAX_FILE_BYTES + 1)
-    except OSError as e:
-        raise ParameterTextError(f"--params-file {shown}: cannot read: {e.strerror or e}") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise ParameterTextError(f"{shown}: larger than {MAX_FILE_BYTES // (1024 * 1024)} MB: not a params file")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as e:
-        line = data[: e.start].count(b"\n") + 1
-        raise ParameterTextError(f"{shown}:{line}: not UTF-8 text") from None
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.MarkedYAMLError as e:
-        mark = e.problem_mark or e.context_mark
-        line = mark.line + 1 if mark is not None else 1
-        raise ParameterTextError(f"{shown}:{line}: not YAML: {e.problem or e.context}") from None
-    except (yaml.YAMLError, RecursionError) as e:
-        raise ParameterTextError(f"{shown}:1: not YAML: {type(e).__name__}") from None
+        root = yamlfile.load(path, MAX_FILE_BYTES, MAX_DEPTH)
+    except yamlfile.Refused as e:
+        raise ParameterTextError(e.say(shown, "a params file", _WORDS)) from None
     if root is None:
         raise ParameterTextError(f"{shown}:1: the file holds no parameters")
     entries: list[tuple[str, dict[str, Override]]] = []

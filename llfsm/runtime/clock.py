@@ -90,6 +90,13 @@ class WallClock(Clock):
     def read(self) -> int:
         return time.monotonic_ns() - self._start
 
+    def exclude(self, ns: int) -> None:
+        """Leave `ns` of real time out of the run time (a pause of the debugger: `after()`
+        counts only the time the run ran), as if the run had started that much later."""
+        self._start += ns
+        if self.period:
+            self._next += ns
+
     def advance(self, fired: bool) -> None:
         if self.period:
             now = self.read()

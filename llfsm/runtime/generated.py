@@ -23,7 +23,21 @@ verify (llfsm.verify) read it.  They agree on:
 - **ringlet numbers**, for whoever stores which ringlet a machine runs next as a number (verify's
   configurations): state s's entry ringlet is `entry_number(s)` = 2s, its steady ringlet 2s + 1,
   and the scheduler's gate `gate_number(n)` = 2n for n states (`numbered_ringlets` lists them
-  in that order).
+  in that order);
+- **what a machine holds**, for whoever shows it (the trace, the debugger, llfsm.runtime.readout):
+  the class's VARIABLES names Variables.py's variables with their annotations, in order
+  (`variables_of`; a state's variables are attributes `STATE__name`, never shown); INPUTS its
+  inputs (`inputs_of`); the transitions write the current state's number into `_state`
+  (`state_of`; a command pending for the next ringlet: `pending_of`); an enter ringlet of a
+  state whose guards use after*() records the entry time in `_t0` (`time_in_state`);
+- **variants**, for whoever compiles something into some ringlets (the monitor's checks, the
+  debugger's marks on transitions): a subclass whose ENTER and STEADY are the class's ringlets,
+  the given ones replaced, all of them living in a copy of the module's namespace where each
+  ringlet's name is bound to its variant, so that `self._run = <ringlet>` in any of them
+  reaches the variant (`variant_class`); a live machine becomes one by having its class
+  changed, its next ringlets following (`become`).  A transition is written `self._state = K`
+  then `self._run = <enter ringlet of K>` then `return <index>` (`self._enter_suspend_state()`
+  for the suspend state).
 
 docs/architecture.md ("The generated module") says how to change any of it.  Light, as the
 rest of the runtime: what it reads is read only when an error or a log is reported.
@@ -224,3 +238,83 @@ def numbered_ringlets(
     out = [f for pair in zip(enter, steady, strict=True) for f in pair]
     out.append(gate)
     return out
+
+
+# -- what a machine holds ----------------------------------------------------------------------
+
+
+def variables_of(cls: type[Any]) -> tuple[tuple[str, str], ...]:
+    """Variables.py's variables of a compiled class, each (name, annotation as written), in order.
+    A module built before VARIABLES existed: the class's slots that are neither the runtime's,
+    a state variable's (`STATE__name`) nor an input's, annotated "" (unknown)."""
+    declared: tuple[tuple[str, str], ...] = cls.VARIABLES
+    if declared:
+        return declared
+    inputs = {entry[0] for entry in cls.INPUTS}
+    slots = [s for c in type.mro(cls) for s in vars(c).get("__slots__", ())]
+    return tuple((s, "") for s in slots if not s.startswith("_") and "__" not in s and s not in inputs)
+
+
+def inputs_of(cls: type[Any]) -> tuple[str, ...]:
+    """The names of machine.yaml's inputs of a compiled class, in order."""
+    return tuple(entry[0] for entry in cls.INPUTS)
+
+
+def state_of(m: Any) -> str:
+    """The name of machine `m`'s current state."""
+    return str(m.STATES[m._state])
+
+
+def pending_of(m: Any) -> str | None:
+    """The control command pending for `m`'s next ringlet (suspend, resume, restart), if any."""
+    pending: str | None = m._pending
+    return pending
+
+
+def time_in_state(m: Any, now: int) -> int | None:
+    """Run time (ns) since machine `m` entered its current state, when the state keeps it (its
+    enter ringlet records `_t0`, as a state whose guards use after*() does); None otherwise."""
+    if m._entered:
+        return 0  # entered, its entry ringlet still to run (which records the time)
+    enter = m.ENTER[m._state]
+    if "_t0" not in getattr(getattr(enter, "__code__", None), "co_names", ("_t0",)):
+        return None
+    return max(0, now - int(m._t0))
+
+
+# -- variants ----------------------------------------------------------------------------------
+
+
+def variant_class(cls: type[Any], namespace: dict[str, Any], replaced: Mapping[str, Callable[..., Any]]) -> type[Any]:
+    """A subclass of `cls` whose ringlets are the `replaced` functions (by name) and, for the
+    others, `cls`'s own code rebound to `namespace` (a copy of the module's, which gets every
+    ringlet under its name).  No slot of its own: a live machine can become one (`become`)."""
+    import types  # deferred: start-up (the monitor and the debugger only)
+
+    made: dict[str, Callable[..., Any]] = {}
+    for fn in (*cls.ENTER, *cls.STEADY):
+        name = fn.__name__
+        if name not in made:
+            made[name] = replaced.get(name) or types.FunctionType(
+                fn.__code__, namespace, name, fn.__defaults__, fn.__closure__
+            )
+            namespace[name] = made[name]
+    attrs = {
+        "__slots__": (),
+        "__module__": cls.__module__,
+        "__qualname__": cls.__qualname__,
+        "__doc__": cls.__doc__,
+        "ENTER": tuple(made[f.__name__] for f in cls.ENTER),
+        "STEADY": tuple(made[f.__name__] for f in cls.STEADY),
+    }
+    return type(cls.__name__, (cls,), attrs)
+
+
+def become(m: Any, cls: type[Any]) -> None:
+    """Machine `m` becomes a `cls` (a variant of its class, or its class again): the same slots,
+    its next ringlets (`_run`, `_next`) those of `cls` for the same states."""
+    old = type(m)
+    swap = {id(f): g for f, g in zip((*old.ENTER, *old.STEADY), (*cls.ENTER, *cls.STEADY), strict=True)}
+    m.__class__ = cls
+    m._run = swap.get(id(m._run), m._run)
+    m._next = swap.get(id(m._next), m._next)

@@ -95,6 +95,9 @@ class Machine:
     #: ...): parameters of the node /llfsm/NAME (llfsm.ros.control), set between ringlets
     #: (Arrangement.set_variables).
     PARAMETERS: ClassVar[tuple[tuple[str, str], ...]] = ()
+    #: Variables.py's variables, each (name, annotation as written), in order: what the
+    #: debugger shows and how it types a value set while paused (llfsm.debug).
+    VARIABLES: ClassVar[tuple[tuple[str, str], ...]] = ()
 
     # Slots make attribute access on the hot path as cheap as CPython allows; generated classes
     # add their variables to them.

@@ -131,7 +131,19 @@ class Arrangement:
         #: never look at it.
         self.watcher: Callable[[Machine], int] | None = None
         self.stop_status = EXIT_MONITOR
-        self.on_pause: Callable[[Machine], None] | None = None
+        #: What the watcher may read of the boundary it is told of: the state the machine's
+        #: ringlet ran in and the transition that fired (None and None: no ringlet ran, the
+        #: machine was suspended or a suspend was applied; the state and None: nothing fired).
+        #: Stored by the watched round only (the debugger's history and `fired()`).
+        self.ran: int | None = None
+        self.fired: int | None = None
+        #: Called where the run stands for the debugger (llfsm.debug): after m's ringlet (a
+        #: watcher's PAUSE, or the debugger's own marks and gate), or between rounds (None, when
+        #: `pause_asked`); the run goes on when it returns.
+        self.on_pause: Callable[[Machine | None], None] | None = None
+        #: Pause at the next round boundary (`on_pause(None)`), asked from anywhere (another
+        #: thread too: `ask_pause`); the round loops see it through the attention they raise.
+        self.pause_asked = False
         #: Told of each machine the gate is about to release (a command, parameters or an input
         #: to apply, before they are applied), when set: what changes a machine outside its
         #: ringlets, for a monitor.  The gate is a rare path; a run without it pays nothing.
@@ -334,6 +346,17 @@ class Arrangement:
             _hold(m)  # the rest of the round meets the gate, which lets nothing through now
         self._attention = True
 
+    def hold(self, m: Machine) -> None:
+        """Send m's next turn through the gate (and `on_release`): the debugger's pause before
+        a turn.  The gate lets it go on as before once passed."""
+        _hold(m)
+
+    def ask_pause(self) -> None:
+        """Pause at the next round boundary (the debugger's; a watcher pauses sooner, at the next
+        ringlet boundary).  Two plain stores: safe from any thread."""
+        self.pause_asked = True
+        self._attention = True
+
     def hold_all(self) -> None:
         """Put the gate in front of every machine's next ringlet, so that whoever wraps the gate
         (`_gate_fn`: a monitor) is called at the next boundary, even inside a plain loop.  The
@@ -347,7 +370,10 @@ class Arrangement:
         while one is set (read after each ringlet: set during the round, it is called at once),
         told of each ringlet boundary."""
         fired = False
+        values = tr is not None and tr.records_values
         for m in live:
+            s: int | None = None
+            r: int | None = None
             if m._run is not m._held or self._release(m):
                 s = m._state
                 if tr is not None and m._entered:
@@ -358,8 +384,11 @@ class Arrangement:
                     if tr is not None:
                         tr.transition(m, s, m._state, r)
             # else a suspend applied, or the run stopped: for a watcher the boundary is still one
+            if values:
+                tr.values(m)  # type: ignore[union-attr]  # values is true only with a tracer
             watch = self.watcher
             if watch is not None:
+                self.ran, self.fired = s, r
                 asked = watch(m)
                 if asked == STOP:
                     self.stop_at_boundary()
@@ -371,6 +400,10 @@ class Arrangement:
     def _attend(self, now: int, grace: int) -> RunResult | None:
         """Whatever changed since the last round: unloads, suspensions, interrupts."""
         self._attention = False
+        if self.pause_asked and self.on_pause is not None and not self._interrupts and self._stopped is None:
+            self.pause_asked = False
+            self.on_pause(None)  # between rounds: the run stands until it returns
+            self._rehold()  # what was asked for while it stood (commands, variables)
         if self._stopped is not None:
             return self._result("stopped", self._stopped)
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
@@ -402,6 +435,8 @@ class Arrangement:
         self.ctx.deadline = duration_ns
         self._grace_ns = grace_ns
         self.running = True
+        if self.tracer is not None:
+            self.tracer.begin(self.machines)
         try:
             result = self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
             result.rounds = self.rounds  # the loop keeps its count in a local until it ends
@@ -532,7 +567,7 @@ class Arrangement:
         round.  So the run clock lags only during a stretch of firing rounds, by at most
         BATCH - 1 rounds, and a round in which nothing fires always reads it."""
         ctx = self.ctx
-        read, start = time.monotonic_ns, clock._start
+        read = time.monotonic_ns
         idle = clock.idle / 1e9
         idle_ns = clock.idle
         waiter = clock.waiter if idle_ns else None
@@ -558,7 +593,7 @@ class Arrangement:
                 left = 1
             left -= 1
             if not left:
-                t = read() - start
+                t = read() - clock._start  # read each time: a pause of the debugger moves the start
                 if t - now >= FAST:
                     every = 1
                 elif every < BATCH:

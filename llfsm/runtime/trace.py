@@ -1,7 +1,11 @@
 """Tracing: clfsm's `-v` lines and the `--trace FILE.jsonl` event log.
 
 Only the instrumented scheduler loop calls a tracer, so a run without `-v`/`--trace` pays
-nothing for this module.
+nothing for this module.  The event log opens with a `machine` event per machine (its
+description, as /llfsm/M/description carries it, and its variables' first values), so that a
+trace alone can be replayed on the diagrams (`llfsm replay`, docs/debug.md); after each ringlet
+that changed a variable or an input, a `variables` event gives each change as [old, new]
+(plain values, bounded: llfsm.runtime.readout).
 """
 
 from __future__ import annotations
@@ -10,16 +14,42 @@ import sys
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from .machine import Machine
     from .protocols import TextSink
+    from .readout import Changes
 
 
 class Tracer:
+    #: Whether the scheduler calls `values` after each ringlet (the event log records changes).
+    records_values = False
+
     def __init__(self, verbose: TextSink | None = None, jsonl: TextSink | None = None) -> None:
         self.verbose = verbose
         self.jsonl = jsonl
         self.round = 0
         self.now = 0
+        self.records_values = jsonl is not None
+        self._changes: Changes | None = None
+
+    def begin(self, machines: Sequence[Machine]) -> None:
+        """The run starts: the event log names each machine, its diagram and its first values."""
+        if self.jsonl is None or self._changes is not None:
+            return
+        from .readout import Changes, description  # deferred: start-up (only when tracing to a file)
+
+        self._changes = Changes()
+        for m in machines:
+            self._event("machine", m, description=description(type(m)), variables=self._changes.first(m))
+
+    def values(self, m: Machine) -> None:
+        """After m's turn: its variables and inputs that changed, if any."""
+        if self._changes is None:
+            return
+        changed = self._changes.changed(m)
+        if changed:
+            self._event("variables", m, changed=changed)
 
     def _event(self, kind: str, m: Machine, **fields: object) -> None:
         if self.jsonl is not None:
@@ -70,6 +100,15 @@ class Tee(Tracer):
     def __init__(self, *tracers: Tracer) -> None:
         self.tracers = tracers
         self._round = self._now = 0
+        self.records_values = any(t.records_values for t in tracers)
+
+    def begin(self, machines: Sequence[Machine]) -> None:
+        for t in self.tracers:
+            t.begin(machines)
+
+    def values(self, m: Machine) -> None:
+        for t in self.tracers:
+            t.values(m)
 
     @property
     def round(self) -> int:

@@ -345,21 +345,30 @@ def growing_variables(explorer: Explorer) -> list[str]:
                 continue
             nums = [v for v in values if isinstance(v, int | float) and not isinstance(v, bool)]
             span = f", from {min(nums)} to {max(nums)}" if len(nums) == len(values) else ""
-            sizes = [_size(v) for v in values]
+            unit, sizes = _sizes(values)
             grew = max(sizes) - min(sizes)
             if grew > 4:  # in size as well as in value: a list that keeps growing
-                span += f", in size from {min(sizes):,} to {max(sizes):,} items"
+                span += f", in size from {min(sizes):,} to {max(sizes):,} {unit}"
             out.append((len(values), f"{explorer.machines[i].NAME}.{name} ({len(values):,} values{span})"))
     out.sort(key=lambda x: -x[0])
     return [text for _n, text in out[:5]]
 
 
-def _size(value: Any) -> int:
-    """How many items a frozen value holds, all the way down (a scalar: 1)."""
+def _sizes(values: set[Any]) -> tuple[str, list[int]]:
+    """The sizes of a variable's values and what they count: the characters of text, the bytes
+    of bytes (a 12 MB blob is 12,000,000 bytes), else the items of what it holds (None aside)."""
+    kinds = {type(v) for v in values if v is not None}
+    if kinds == {str}:
+        return "characters", [len(v) for v in values if v is not None]
+    if kinds == {bytes}:
+        return "bytes", [len(v) for v in values if v is not None]
+    return "items", [_items(v) for v in values]
+
+
+def _items(value: Any) -> int:
+    """How many items a frozen value holds, all the way down (a scalar, a text, bytes: 1)."""
     if isinstance(value, tuple):  # tuples and Frozen (lists, dicts, messages: their kind first)
-        return sum(_size(v) for v in value[1:]) if type(value) is not tuple else sum(_size(v) for v in value)
-    if isinstance(value, str | bytes):
-        return max(1, len(value) // 16)
+        return sum(_items(v) for v in value[1:]) if type(value) is not tuple else sum(_items(v) for v in value)
     return 1
 
 

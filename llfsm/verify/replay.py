@@ -15,6 +15,12 @@ What a bag cannot carry is refused with the reason: an input bound to no topic t
 gives another value than its default, two values of one field in one round, `ros.ok()`
 falling (a signal, not a message).
 
+Beside the bag, `steps.jsonl` holds the path itself in `--trace`'s format (llfsm.runtime.trace):
+each machine's description and first values, then per step the states entered, the commands,
+the transition, the variables that changed, and a `step` event with the inputs, the topics
+published and the environment's choices; `llfsm replay DIR` steps through it on the diagrams
+(docs/debug.md, "Replay").
+
 The suggested `--duration` covers one round more than the path when its last step fired a
 transition: `-v` prints a state's line before the ringlet that enters it, so only then does the
 replayed trace show the state the counterexample ends in.
@@ -22,6 +28,7 @@ replayed trace show the state the counterexample ends in.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 from pathlib import Path
@@ -29,7 +36,14 @@ from typing import Any
 
 from ..props.parse import duration_text
 from ..runtime.inputs import DEFAULT, FIELD, MSG, NAME, TOPIC
+from ..runtime.readout import description, plain
+from .explorer import Explorer
 from .judge import Trace, Verification
+from .snapshot import STATE
+from .values import shown as value_text
+
+#: The file of the path's steps beside the bag.
+STEPS = "steps.jsonl"
 
 
 class ReplayError(Exception):
@@ -142,6 +156,10 @@ def write_counterexample(v: Verification, folder: str) -> str:
             shutil.rmtree(folder, ignore_errors=True)  # never a half-written bag
         why = f"{e2.name} cannot be imported: pip install 'llfsm[bag]'" if isinstance(e2, ImportError) else str(e2)
         raise ReplayError(why) from None
+    try:
+        (Path(folder) / STEPS).write_text("".join(json.dumps(ev) + "\n" for ev in steps_events(e, trace)))
+    except OSError as e3:
+        raise ReplayError(f"{folder}: {STEPS} could not be written: {e3.strerror}") from None
     period = e.period
     last = next((step for _config, step in reversed(trace.steps) if step is not None), None)
     shown = rounds + 1 if last is not None and last.transition is not None else rounds
@@ -151,3 +169,53 @@ def write_counterexample(v: Verification, folder: str) -> str:
         f"{rounds} round{'s' if rounds != 1 else ''}); replay it with: llfsm run --clock sim --period "
         f"{duration_text(period)} --play {folder} --duration {duration_text(shown * period)} {targets}"
     )
+
+
+def _value(x: Any) -> Any:
+    """A configuration's value as plain data (a message or a frozen value as verify shows it)."""
+    return x if isinstance(x, bool | int | float | str) or x is None else value_text(x)
+
+
+def steps_events(e: Explorer, trace: Trace) -> list[dict[str, Any]]:
+    """The path as `--trace` events (see the module's docstring), under --period's timing."""
+    period = e.period or 0
+    names = [m.NAME for m in e.machines]
+    config0 = trace.steps[0][0]
+    out: list[dict[str, Any]] = []
+    for k, m in enumerate(e.machines):
+        first = e.codecs[k].variables_of(e.part(config0, k))
+        values = {n: plain(_value(v)) for n, v in first.items()}
+        out.append(_event(0, 0, "machine", names, k, description=description(type(m)), variables=values))
+    loop_start = None if trace.loop is None else trace.loop + 1
+    for n, (config, step) in enumerate(trace.steps[1:], start=1):
+        if n == loop_start:
+            out.append({"event": "loop"})
+        if step is None:
+            out.append({"event": "ended"})
+            continue
+        i, t, r = step.machine, step.round * period, step.round
+        states = e.machines[i].STATES
+        for command, k, state in step.commands:
+            out.append(_event(t, r, command, names, k, state=e.machines[k].STATES[state]))
+        for k, state in step.entered:
+            out.append(_event(t, r, "entry", names, k, state=e.machines[k].STATES[state]))
+        after = states[e.part(config, i)[STATE]]
+        if step.transition is not None:
+            fired = {"source": states[step.state], "target": after, "index": step.transition}
+            out.append(_event(t, r, "transition", names, i, **fired))
+        by_machine: dict[str, dict[str, list[Any]]] = {}
+        for name, (old, new) in step.changed.items():
+            machine, _, var = name.partition(".")
+            by_machine.setdefault(machine, {})[var] = [plain(_value(old)), plain(_value(new))]
+        for machine, changed in by_machine.items():
+            out.append(_event(t, r, "variables", names, names.index(machine), changed=changed))
+        inputs = {k: plain(_value(v)) for k, v in step.inputs.items()}
+        seen = {"inputs": inputs, "published": sorted(step.published), "time": step.interval}
+        out.append(_event(t, r, "step", names, i, state=after, environment=step.environment, **seen))
+        if step.finished:
+            out.append(_event(t, r, "finish", names, i, state=after))
+    return out
+
+
+def _event(t: int, round_: int, kind: str, names: list[str], k: int, **fields: Any) -> dict[str, Any]:
+    return {"t": t / 1e9, "round": round_, "event": kind, "machine": names[k], "id": k, **fields}

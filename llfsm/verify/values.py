@@ -169,6 +169,8 @@ def shown(value: Any) -> str:
         items = value[1:]
         return "{" + ", ".join(f"{shown(items[i])}: {shown(items[i + 1])}" for i in range(0, len(items), 2)) + "}"
     if kind in ("set", "frozenset"):
+        if not value[1]:
+            return f"{kind}()"  # as Python prints an empty one: `{}` is an empty dict
         inner = ", ".join(sorted(shown(v) for v in value[1]))
         return f"{{{inner}}}" if kind == "set" else f"frozenset({{{inner}}})"
     if kind == "message":

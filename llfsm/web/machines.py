@@ -254,8 +254,13 @@ class GraphSource(Source):
 
     def _follow(self, name: str) -> None:
         """Read machine `name`'s description and state, each run's apart when DDS says which
-        run sent what (a transport with a participant), else as one machine."""
+        run sent what (a transport with a participant), else as one machine; and its run's
+        debugger state (llfsm.web.debugging)."""
         self._followed.add(name)
+        if self.debug is not None:
+            follow = getattr(self.debug, "follow", None)
+            if follow is not None:
+                follow(name)
         dp = getattr(self.bus.transport, "dp", None)
         if dp is not None:
             readers = _Readers(dp, name, lambda text: self.warn(text))
@@ -406,6 +411,11 @@ class GraphSource(Source):
 
     def has_machine(self, name: str) -> bool:
         return name in self._order
+
+    def machine_name(self, key: str) -> str:
+        """The machine's own name for the page's name of it (NAME@xxxxxxxx for a twin)."""
+        m = self._by_key.get(key)
+        return m.name if m is not None else key
 
     async def command(self, machine: str, verb: str) -> dict[str, Any]:
         """A command to `machine` (the page's name for it).  The control services are named by

@@ -25,6 +25,7 @@ description itself.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import hmac
 import ipaddress
 import secrets
@@ -38,7 +39,7 @@ from typing import Any
 from aiohttp import WSMsgType, web
 
 from ..diagram import svg as diagram
-from . import rosgraph
+from . import debugging, rosgraph
 from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
@@ -49,6 +50,11 @@ HELLO_PERIOD = 1.0
 COOKIE = "llfsm_token"
 LOOPBACK_NAMES = {"localhost", "127.0.0.1", "::1", "[::1]"}
 _STATIC = {"app.js": "text/javascript", "style.css": "text/css"}
+#: What the front end's build (frontend/, `make`) writes into static/app/.
+_APP = {"app.js": "text/javascript", "app.css": "text/css"}
+#: The debugger's page (the application, at /debug: llfsm.web.debugging).
+DEBUG_PAGE = "debug.html"
+APP_MISSING = "llfsm/web/static/app/app.js is missing"
 
 
 class AddressError(Exception):
@@ -81,7 +87,14 @@ def is_loopback(host: str) -> bool:
 
 
 class WebServer:
-    """Serves a source (llfsm.web.source.RunSource, or a graph source) on a background thread."""
+    """Serves a source (llfsm.web.source.RunSource, or a graph source) on a background thread.
+    llfsm.web.edit_server.EditServer serves `llfsm edit` with the same lifecycle and security,
+    its own page (`PAGE`) and routes (`_routes`)."""
+
+    #: The page's HTML (in static/).
+    PAGE = "index.html"
+    #: The largest request body accepted (a bigger one is refused, 413, before it is read).
+    MAX_BODY = 256 * 1024
 
     def __init__(self, source: Any, host: str = "127.0.0.1", port: int = 0, token: str | None = None) -> None:
         self.source = source
@@ -99,6 +112,7 @@ class WebServer:
         self._ready = threading.Event()
         self._error: BaseException | None = None
         self._wake: asyncio.Event | None = None
+        self._nudged: asyncio.Event | None = None
         self._pusher: asyncio.Task[None] | None = None
         #: Lays diagrams out off the event loop (one at a time: they share a cache).
         self._drawer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="llfsm-web-draw")
@@ -172,25 +186,39 @@ class WebServer:
             loop.close()
 
     async def _start(self, sock: socket.socket) -> None:
-        app = web.Application(middlewares=[self._guard], client_max_size=256 * 1024)
+        app = web.Application(middlewares=[self._guard], client_max_size=self.MAX_BODY)
         app.router.add_get("/", self._index)
+        app.router.add_get("/debug", self._debug_page)
+        app.router.add_get("/static/app/{name}", self._app_asset)
         app.router.add_get("/static/{name}", self._static)
         app.router.add_get("/ws", self._ws)
         app.router.add_get("/favicon.ico", _no_icon)
-        app.router.add_post("/api/command", self._command)
-        app.router.add_post("/api/publish", self._publish)
-        app.router.add_post("/api/call", self._call)
-        app.router.add_post("/api/parameters", self._parameters)
-        app.router.add_post("/api/parameter", self._set_parameter)
+        self._routes(app)
         self._runner = web.AppRunner(app, access_log=None, handle_signals=False, shutdown_timeout=1.0)
         await self._runner.setup()
         await web.SockSite(self._runner, sock).start()
         self._wake = asyncio.Event()
         self._pusher = asyncio.get_running_loop().create_task(self._push())
+        debug = getattr(self.source, "debug", None)
+        if debug is not None and hasattr(debug, "on_change"):
+            debug.on_change = self.nudge
+
+    def _routes(self, app: web.Application) -> None:
+        """The view's requests (the editor's server has its own)."""
+        app.router.add_post("/api/command", self._command)
+        app.router.add_post("/api/publish", self._publish)
+        app.router.add_post("/api/call", self._call)
+        app.router.add_post("/api/parameters", self._parameters)
+        app.router.add_post("/api/parameter", self._set_parameter)
+        debugging.routes(app, lambda: getattr(self.source, "debug", None), self._answer)
+
+    async def _farewell(self) -> None:
+        """The last message to the pages as the server stops (the view's: the run ended)."""
+        await self._broadcast(self._snapshot())
 
     async def _shutdown(self) -> None:
         try:
-            await self._broadcast(self._snapshot())
+            await self._farewell()
         except Exception:
             pass
         if self._pusher is not None:
@@ -224,8 +252,13 @@ class WebServer:
             response.set_cookie(COOKIE, self.token, httponly=True, samesite="Strict", path="/")
         if not isinstance(response, web.WebSocketResponse):
             host = request.host
+            # the editor's code editors (CodeMirror) add their style sheets with the page's nonce,
+            # and the browser's own editing of their text may write style attributes (never
+            # markup of ours: the page sets no style attribute and strips them from diagrams)
+            nonce = request.get("csp_nonce")
+            styles = f"'self' 'nonce-{nonce}'; style-src-attr 'unsafe-inline'" if nonce else "'self'"
             response.headers["Content-Security-Policy"] = (
-                "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; "
+                f"default-src 'self'; img-src 'self' data:; style-src {styles}; script-src 'self'; "
                 f"connect-src 'self' ws://{host}; frame-ancestors 'none'; base-uri 'none'; form-action 'self'"
             )
             response.headers["X-Content-Type-Options"] = "nosniff"
@@ -235,8 +268,33 @@ class WebServer:
 
     # -- the page --------------------------------------------------------------------------------------------
     async def _index(self, request: web.Request) -> web.Response:
-        text = (resources.files(__package__) / "static" / "index.html").read_text(encoding="utf-8")
+        # a source may have a page of its own (`llfsm replay`: the debugger's page)
+        return self._page(request, getattr(self.source, "page", None) or self.PAGE)
+
+    async def _debug_page(self, request: web.Request) -> web.Response:
+        """The debugger's page (docs/debug.md), beside the live view of a run or of the graph."""
+        if getattr(self.source, "debug", None) is None:
+            raise web.HTTPNotFound()
+        return self._page(request, DEBUG_PAGE)
+
+    def _page(self, request: web.Request, name: str) -> web.Response:
+        text = (resources.files(__package__) / "static" / name).read_text(encoding="utf-8")
+        if "{{nonce}}" in text:  # a page that adds style sheets from script: a fresh nonce each time
+            request["csp_nonce"] = nonce = secrets.token_urlsafe(16)
+            text = text.replace("{{nonce}}", nonce)
         return web.Response(text=text, content_type="text/html", charset="utf-8")
+
+    async def _app_asset(self, request: web.Request) -> web.Response:
+        """The application built from frontend/ (`make`): only the names the build writes."""
+        name = request.match_info["name"]
+        kind = _APP.get(name)
+        if kind is None:
+            raise web.HTTPNotFound()
+        try:
+            data = (resources.files(__package__) / "static" / "app" / name).read_bytes()
+        except OSError:
+            return _refuse(503, f"the page was not built: run `make` in llfsm's checkout ({APP_MISSING})")
+        return web.Response(body=data, content_type=kind, charset="utf-8")
 
     async def _static(self, request: web.Request) -> web.Response:
         name = request.match_info["name"]
@@ -379,8 +437,13 @@ class WebServer:
         graph = self._graph()
         graph_task: asyncio.Task[None] | None = None
         graph_at = -HELLO_PERIOD
+        nudged = self._nudged = asyncio.Event()
         while True:
-            await asyncio.sleep(1 / self.rate)
+            # at most `rate` times a second, or at once when the run says something changed
+            # (the debugger paused or went on: a step shows without waiting for the next sample)
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(nudged.wait(), 1 / self.rate)
+            nudged.clear()
             if not self.clients:
                 self._wake.clear()
                 await self._wake.wait()
@@ -410,6 +473,13 @@ class WebServer:
                 continue
             except Exception as e:  # said once; the next round goes on
                 self._warn(f"the page's update failed: {type(e).__name__}: {e}", "push")
+
+    def nudge(self) -> None:
+        """Push a snapshot now, not at the next sample (any thread: the run's debugger calls it
+        when it pauses or goes on)."""
+        loop, nudged = self._loop, self._nudged
+        if loop is not None and nudged is not None:
+            loop.call_soon_threadsafe(nudged.set)
 
     async def _send_hello(self) -> None:
         try:

@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from ..ros.bus import Bus
     from ..runtime.scheduler import Arrangement
     from ..sim.world import TurtleWorld
+    from .debugging import PageDebug
 
 #: Transitions kept for the page, per machine.
 HISTORY = 12
@@ -129,6 +130,8 @@ class Source:
         self._graph_at = -GRAPH_PERIOD
         #: The DDS graph beyond this process, read on the scheduler's thread (None in process).
         self.remote_graph: RosGraph | None = None
+        #: The debugger's part of the page (llfsm.web.debugging), when the source has one.
+        self.debug: PageDebug | None = None
 
     def warn(self, text: str, key: str | None = None) -> None:
         """A problem with what a peer sent or with drawing it: one line in the run's log, once
@@ -189,6 +192,7 @@ class Source:
             "param_events": dict(self.param_events),
             "world": self.world(),
             "monitor": self.verdicts.sample(),
+            "debug": self.debug.state() if self.debug is not None else None,
         }
 
     def graph(self) -> RosGraph:

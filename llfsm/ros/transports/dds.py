@@ -349,6 +349,11 @@ class _RemoteRequest:
     def __init__(self, server: _Server, guid: int | None, seq: int, request: Message, writer_handle: int) -> None:
         self.server, self.guid, self.seq, self.request, self.writer_handle = server, guid, seq, request, writer_handle
 
+    @property
+    def service(self) -> str:
+        """The service asked (the executor's spin_control tells control requests from others)."""
+        return str(self.server.srv.srv_name)
+
     def _run(self) -> None:
         if self.server.closed:
             return

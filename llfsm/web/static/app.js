@@ -369,6 +369,12 @@ function snapshot(s) {
   fillList("service-names", s.services.map((x) => x.name));
   parameterEvents(s.param_events);
   updateMonitor(s.monitor);
+  // the debugger's page (docs/debug.md): pause, step, breakpoints, variables, history
+  const debugLink = document.getElementById("debug-link");
+  if (s.debug && debugLink.hidden) {
+    debugLink.href = "/debug" + location.search; // the token, if the page has one
+    debugLink.hidden = false;
+  }
   const panel = document.getElementById("world-panel");
   if (s.world) {
     panel.hidden = false;

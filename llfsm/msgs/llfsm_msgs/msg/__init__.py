@@ -11,6 +11,114 @@ _DEFAULT = _m.DEFAULT
 _new = object.__new__
 
 
+class DebugState(_m.Message):
+    """llfsm_msgs/msg/DebugState"""
+
+    _TYPE = "llfsm_msgs/msg/DebugState"
+    _FIELDS = (
+        ("paused", "bool"),
+        ("where", "string"),
+        ("reason", "string"),
+        ("machine", "string"),
+        ("round", "uint64"),
+        ("time", "float64"),
+        ("breakpoints", "string[]"),
+    )
+    __slots__ = ("_breakpoints", "_machine", "_paused", "_reason", "_round", "_time", "_where")
+
+    def __init__(
+        self,
+        *,
+        paused: bool = False,
+        where: str = "",
+        reason: str = "",
+        machine: str = "",
+        round: int = 0,
+        time: float = 0.0,
+        breakpoints: list[str] = _DEFAULT,
+    ) -> None:
+        self.paused = paused
+        self.where = where
+        self.reason = reason
+        self.machine = machine
+        self.round = round
+        self.time = time
+        self._breakpoints = (
+            [] if breakpoints is _DEFAULT else _m.check_array(breakpoints, self, "breakpoints", "string")
+        )
+
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    @paused.setter
+    def paused(self, value: bool) -> None:
+        self._paused = value if value.__class__ is bool else _m.check_bool(value, self, "paused")
+
+    @property
+    def where(self) -> str:
+        return self._where
+
+    @where.setter
+    def where(self, value: str) -> None:
+        self._where = value if value.__class__ is str else _m.check_string(value, self, "where")
+
+    @property
+    def reason(self) -> str:
+        return self._reason
+
+    @reason.setter
+    def reason(self, value: str) -> None:
+        self._reason = value if value.__class__ is str else _m.check_string(value, self, "reason")
+
+    @property
+    def machine(self) -> str:
+        return self._machine
+
+    @machine.setter
+    def machine(self, value: str) -> None:
+        self._machine = value if value.__class__ is str else _m.check_string(value, self, "machine")
+
+    @property
+    def round(self) -> int:
+        return self._round
+
+    @round.setter
+    def round(self, value: int) -> None:
+        self._round = (
+            value
+            if value.__class__ is int and 0 <= value <= 18446744073709551615
+            else _m.check_int(value, self, "round", "uint64")
+        )
+
+    @property
+    def time(self) -> float:
+        return self._time
+
+    @time.setter
+    def time(self, value: float) -> None:
+        self._time = value if value.__class__ is float else _m.check_float64(value, self, "time")
+
+    @property
+    def breakpoints(self) -> list[str]:
+        return self._breakpoints
+
+    @breakpoints.setter
+    def breakpoints(self, value: list[str]) -> None:
+        self._breakpoints = _m.check_array(value, self, "breakpoints", "string")
+
+    def _copy(self) -> DebugState:
+        new = _new(DebugState)
+        new._paused = self._paused
+        new._where = self._where
+        new._reason = self._reason
+        new._machine = self._machine
+        new._round = self._round
+        new._time = self._time
+        new._breakpoints = self._breakpoints.copy()
+        return new
+
+
 class MonitorEvent(_m.Message):
     """llfsm_msgs/msg/MonitorEvent"""
 

@@ -16,9 +16,130 @@ import llfsm.msgs.llfsm_msgs.msg as _classes
 _new = object.__new__
 _HDR = b"\x00\x01\x00\x00"  # encapsulation: CDR, little endian
 _Z = tuple(bytes(n) for n in range(8))
-_S0 = _Struct("<iII")
+_S0 = _Struct("<?3xI")
 _S1 = _Struct("<I")
-_S2 = _Struct("<QI")
+_S2 = _Struct("<QdI")
+_S3 = _Struct("<iII")
+_S4 = _Struct("<QI")
+
+
+# -- llfsm_msgs/msg/DebugState
+
+_c_DebugState = _classes.DebugState
+
+
+@_dataclass
+class DebugState_(_IdlStruct, typename="llfsm_msgs::msg::dds_::DebugState_"):
+    paused: bool
+    where: str
+    reason: str
+    machine: str
+    round: _t.uint64
+    time: _t.float64
+    breakpoints: _t.sequence[str]
+
+
+def _mk_DebugState(a0, a1, a2, a3, a4, a5, a6):
+    m = _new(_c_DebugState)
+    m._paused = a0
+    m._where = a1
+    m._reason = a2
+    m._machine = a3
+    m._round = a4
+    m._time = a5
+    m._breakpoints = a6
+    return m
+
+
+def _cdr_DebugState(m):
+    b = bytearray(_HDR)
+    s1 = m._where.encode()
+    b += _S0.pack(m._paused, len(s1) + 1)
+    b += s1
+    b.append(0)
+    s2 = m._reason.encode()
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(s2) + 1)
+    b += s2
+    b.append(0)
+    s3 = m._machine.encode()
+    b += _Z[(4 - len(b)) & 3]
+    b += _S1.pack(len(s3) + 1)
+    b += s3
+    b.append(0)
+    b += _Z[(4 - len(b)) & 7]
+    v4 = m._breakpoints
+    b += _S2.pack(m._round, m._time, len(v4))
+    for e5 in v4:
+        s6 = e5.encode()
+        b += _Z[(4 - len(b)) & 3]
+        b += _S1.pack(len(s6) + 1)
+        b += s6
+        b.append(0)
+    return bytes(b)
+
+
+def _msg_DebugState(d):
+    o = 4
+    t1 = _S0.unpack_from(d, o)
+    o += 8
+    n2 = t1[1]
+    s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
+    o += n2
+    o += (4 - o) & 3
+    t4 = _S1.unpack_from(d, o)
+    o += 4
+    n5 = t4[0]
+    s6 = str(d[o : o + n5 - 1], "utf-8") if n5 else ""
+    o += n5
+    o += (4 - o) & 3
+    t7 = _S1.unpack_from(d, o)
+    o += 4
+    n8 = t7[0]
+    s9 = str(d[o : o + n8 - 1], "utf-8") if n8 else ""
+    o += n8
+    o += (4 - o) & 7
+    t10 = _S2.unpack_from(d, o)
+    o += 20
+    n11 = t10[2]
+    if n11 > len(d) - o:
+        raise ValueError(f"{n11} elements announced, {len(d) - o} bytes left")
+    v12 = []
+    for _ in range(n11):
+        o += (4 - o) & 3
+        t14 = _S1.unpack_from(d, o)
+        o += 4
+        n15 = t14[0]
+        s16 = str(d[o : o + n15 - 1], "utf-8") if n15 else ""
+        o += n15
+        e13 = s16
+        v12.append(e13)
+    m = _mk_DebugState(t1[0], s3, s6, s9, t10[0], t10[1], v12)
+    return m, o
+
+
+def _to_DebugState(m):
+    return DebugState_(
+        paused=m._paused,
+        where=m._where,
+        reason=m._reason,
+        machine=m._machine,
+        round=m._round,
+        time=m._time,
+        breakpoints=list(m._breakpoints),
+    )
+
+
+def _from_DebugState(s):
+    m = _new(_c_DebugState)
+    m._paused = s.paused
+    m._where = s.where
+    m._reason = s.reason
+    m._machine = s.machine
+    m._round = s.round
+    m._time = s.time
+    m._breakpoints = list(s.breakpoints)
+    return m
 
 
 # -- llfsm_msgs/msg/MonitorEvent
@@ -60,7 +181,7 @@ def _mk_MonitorEvent(a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
 def _cdr_MonitorEvent(m):
     b = bytearray(_HDR)
     s1 = m._name.encode()
-    b += _S0.pack(m._stamp._sec, m._stamp._nanosec, len(s1) + 1)
+    b += _S3.pack(m._stamp._sec, m._stamp._nanosec, len(s1) + 1)
     b += s1
     b.append(0)
     s2 = m._kind.encode()
@@ -80,7 +201,7 @@ def _cdr_MonitorEvent(m):
     b.append(0)
     b += _Z[(4 - len(b)) & 7]
     v5 = m._machines
-    b += _S2.pack(m._ringlet, len(v5))
+    b += _S4.pack(m._ringlet, len(v5))
     for e6 in v5:
         s7 = e6.encode()
         b += _Z[(4 - len(b)) & 3]
@@ -120,7 +241,7 @@ def _cdr_MonitorEvent(m):
 
 def _msg_MonitorEvent(d):
     o = 4
-    t1 = _S0.unpack_from(d, o)
+    t1 = _S3.unpack_from(d, o)
     o += 12
     n2 = t1[2]
     s3 = str(d[o : o + n2 - 1], "utf-8") if n2 else ""
@@ -144,7 +265,7 @@ def _msg_MonitorEvent(d):
     s12 = str(d[o : o + n11 - 1], "utf-8") if n11 else ""
     o += n11
     o += (4 - o) & 7
-    t13 = _S2.unpack_from(d, o)
+    t13 = _S4.unpack_from(d, o)
     o += 12
     n14 = t13[1]
     if n14 > len(d) - o:
@@ -242,6 +363,7 @@ def _from_MonitorEvent(s):
 # name -> (IdlStruct, cdr, from cdr, to sample, from sample, read CDR after the request header or
 #          None, stamped records or None, the C tap's layout or None): llfsm.msgs._dds.Codec
 CODECS = {
+    "DebugState": (DebugState_, _cdr_DebugState, _msg_DebugState, _to_DebugState, _from_DebugState, None, None, None),
     "MonitorEvent": (
         MonitorEvent_,
         _cdr_MonitorEvent,
@@ -255,5 +377,6 @@ CODECS = {
 }
 # RIHS01 type hashes (REP 2011), as ROS 2 puts them in endpoints' USER_DATA (`typehash=...;`)
 TYPE_HASHES = {
+    "DebugState": "RIHS01_2de0b23e0deaecc18cca30aba89ccfd18916f1f4114b94e933730db8b0a306d8",
     "MonitorEvent": "RIHS01_e05793e89d3835296a8509b8e0d9786f943601492e0fcd4c32da3783f3445a0c",
 }
