@@ -295,3 +295,79 @@ def test_variables_made_one_object_by_their_initial_values(tmp_path: Path) -> No
         every = _run_set(cls, src, False, {})[0]
         shared.clear()
         assert every and _run_set(cls, src, True, {})[0] == every
+
+
+# -- bounds of one number merged into one test ---------------------------------------------------
+
+BOUNDS = [
+    ("always", "s.up < 4"),
+    ("always", "s.up <= 5"),
+    ("never", "s.up > 7"),
+    ("always", "9 > s.up"),
+    ("always", "s.down > -3"),
+    ("always", "s.down >= -20"),
+    ("never", "s.down < -25.5"),
+    ("always", "s.down <= 10"),
+    ("always", "not s.hits >= 6"),
+    ("always", "s.hits < 8"),
+    ("always", "s.up % 7 != 6"),  # `*` and `%` of numbers as operators, not the bounded helpers
+    ("always", "s.hits * 3 < s.down * 2 + 30"),
+]
+
+
+def test_bounds_of_one_number_merged_into_one_test_give_the_same_verdicts(stepper: Any) -> None:
+    """Several constant bounds of one number at one return are tested as one comparison each way
+    first (`-3 < down <= 10`): which fail, when, and in which order must not change."""
+    src = [PropertySource(k, t) for k, t in BOUNDS]
+    sets: dict[int, dict[str, object]] = {23_000_000: {"up": -1}, 41_000_000: {"up": 2.5, "down": 12}}
+    every, _m = _run_set(stepper, src, False, sets)
+    assert sum("violated" in line for line in every) >= 5
+    targeted, m = _run_set(stepper, src, True, sets)
+    assert targeted == every
+    assert "hits" in type(m)._llfsm_mon_numeric  # merged (its checks are never left out: it only grows)
+
+
+class Liar(int):
+    """An int that says it is below 1000 always, and below anything else only while under 3: the
+    tightest bound no longer implies the others, so a merged test must not stand for them."""
+
+    def __lt__(self, other: object) -> bool:
+        return other == 1000 or int(self) < 3
+
+    def __add__(self, other: object) -> Liar:
+        return Liar(int(self) + int(other))  # type: ignore[call-overload]
+
+
+def test_merged_bounds_of_a_variable_set_to_something_else_than_a_number_are_checked_one_by_one(
+    tmp_path: Path,
+) -> None:
+    cls = load(str(write_machine(tmp_path, "s", {"A": [("A", "True")]}, code={"A_OnEntry": "up += 1\n"},
+                                 variables="up: int = 0\n")))  # fmt: skip
+    src = [PropertySource("always", "s.up < 1000"), PropertySource("always", "s.up < 2000")]
+    every, _m = _run_set(cls, src, False, {5_000_000: {"up": Liar(0)}})
+    assert any("s.up < 2000 violated" in line for line in every), every
+    targeted, m = _run_set(cls, src, True, {5_000_000: {"up": Liar(0)}})
+    assert targeted == every
+    assert type(m)._llfsm_mon_numeric == set()
+
+
+class Text(str):
+    """Text that machine code can step (`up += 2` keeps it): set from outside, it reaches the
+    checks of `%` and `*`, which the bounded helpers refuse for text."""
+
+    def __add__(self, other: object) -> Text:
+        return self
+
+
+def test_arithmetic_of_a_variable_set_to_text_is_bounded_as_in_an_atom(tmp_path: Path) -> None:
+    """`s.up % 2` of a number is Python's `%` in the ringlet's check; set to text from outside,
+    the bounded helper refuses it (violated, saying why) exactly where judging every boundary
+    does."""
+    cls = load(str(write_machine(tmp_path, "s", {"A": [("A", "True")]}, code={"A_OnEntry": "up += 2\n"},
+                                 variables="up: int = 0\n")))  # fmt: skip
+    src = [PropertySource("always", "s.up % 2 == 0"), PropertySource("always", "s.up * 2 != 5")]
+    every, _m = _run_set(cls, src, False, {5_000_000: {"up": Text("%d")}})
+    assert sum("violated" in line for line in every) == 1, every
+    targeted, m = _run_set(cls, src, True, {5_000_000: {"up": Text("%d")}})
+    assert targeted == every
+    assert type(m)._llfsm_mon_numeric == set()

@@ -189,6 +189,8 @@ def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.st
         cond = _violated(c, own, state)
         if not isinstance(cond, ast.Constant) and _cannot_fail(cond, c, ctx):
             continue
+        if not isinstance(cond, ast.Constant):
+            cond = _Arithmetic(ctx).visit(cond)
         if isinstance(cond, ast.Constant):
             if cond.value:
                 body.append(_call(VIOLATED, c.index))  # violated whenever it returns here
@@ -213,7 +215,8 @@ def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.st
     if last is not None and constant and len(holding) > 1 and not ids and len(body) == len(holding):
         # several checks: one test of them all returns at once when all hold (atoms are pure, so
         # the checks one by one below, which say which failed, may evaluate them again)
-        all_hold = _Shared().share(ast.BoolOp(op=ast.And(), values=holding))
+        terms = _merge_bounds(holding, ctx)
+        all_hold = _Shared().share(terms[0] if len(terms) == 1 else ast.BoolOp(op=ast.And(), values=terms))
         fast = ast.If(test=all_hold, body=[copy.deepcopy(ret)], orelse=[])
         quiet = ast.ExceptHandler(type=ast.Name(id="Exception", ctx=ast.Load()), name=None, body=[ast.Pass()])
         body.insert(0, ast.Try(body=[fast], handlers=[quiet], orelse=[], finalbody=[]))
@@ -271,6 +274,115 @@ def _cannot_fail(cond: ast.expr, c: Check, ctx: _Ringlet) -> bool:
         stepped.add(attr)
     ctx.numeric |= stepped
     return True
+
+
+class _Arithmetic(ast.NodeTransformer):
+    """`*` and `%` of numbers as Python's own operators: an atom calls the bounded `_repeat` and
+    `_format` (llfsm.props.atoms, SPEC 18) since either side may be a sequence or text there, a
+    call per ringlet; where both sides of `*` (the left of `%`) are numeric constants or
+    variables the machine's code keeps numbers (`ClassReads.numeric`, which join NUMERIC as in
+    `_merge_bounds`), the helper would only do the operation itself."""
+
+    HELPERS = {PREFIX + "_repeat": 2, PREFIX + "_format": 1}  # how many operands must be numbers
+
+    def __init__(self, ctx: _Ringlet) -> None:
+        self.ctx = ctx
+
+    def visit_Call(self, node: ast.Call) -> ast.AST:
+        node = self.generic_visit(node)  # type: ignore[assignment]
+        cr, numeric = self.ctx.reads, self.ctx.numeric
+        f = node.func
+        need = self.HELPERS.get(f.id) if isinstance(f, ast.Name) else None
+        if need is None or cr is None or numeric is None or len(node.args) != 2 or node.keywords:
+            return node
+        attrs: set[str] = set()
+        for arg in node.args[:need]:
+            if isinstance(arg, ast.Constant) and type(arg.value) in (int, float):
+                continue
+            if _self_attr_load(arg) and cr.numeric(arg.attr):  # type: ignore[attr-defined]
+                attrs.add(arg.attr)  # type: ignore[attr-defined]
+                continue
+            return node
+        numeric |= attrs
+        op = ast.Mult() if f.id == PREFIX + "_repeat" else ast.Mod()  # type: ignore[attr-defined]
+        return ast.BinOp(left=node.args[0], op=op, right=node.args[1])
+
+
+#: A comparison the other way round (`c < x` is `x > c`), and its negation for numbers (NaN
+#: aside: `not x < c` holds for NaN where `x >= c` does not, which only sends the test that
+#: merges bounds to the checks one by one).
+_FLIP: dict[type[ast.cmpop], type[ast.cmpop]] = {ast.Lt: ast.Gt, ast.LtE: ast.GtE, ast.Gt: ast.Lt, ast.GtE: ast.LtE}
+_NEGATE: dict[type[ast.cmpop], type[ast.cmpop]] = {ast.Lt: ast.GtE, ast.LtE: ast.Gt, ast.Gt: ast.LtE, ast.GtE: ast.Lt}
+
+
+def _merge_bounds(holding: list[ast.expr], ctx: _Ringlet) -> list[ast.expr]:
+    """The terms of the test that all checks hold, with the constant bounds of one number merged
+    into one comparison each way: `x < 5 and x < 7 and x >= 0` tests `0 <= x < 5`.  The merged
+    test implies each bound only where x is a number (an int, a float, a bool: ordered, so the
+    tightest bound implies the others), so it is made only for variables the machine's code
+    keeps a number (`ClassReads.numeric`), which join NUMERIC: the monitor checks they hold one
+    at the start and wherever the gate sets them, and rewrites without merging otherwise.  Where
+    the merged test fails, the checks one by one decide, as before."""
+    cr = ctx.reads
+    if cr is None or ctx.numeric is None:
+        return holding
+    bounds: dict[str, list[tuple[type[ast.cmpop], int | float, int]]] = {}
+    for k, term in enumerate(holding):
+        b = _bound(term)
+        if b is not None and cr.numeric(b[0]):
+            bounds.setdefault(b[0], []).append((b[1], b[2], k))
+    merged = {attr: found for attr, found in bounds.items() if len(found) > 1}
+    if not merged:
+        return holding
+    out: list[ast.expr] = []
+    done: set[str] = set()
+    placed = {found[0][2]: attr for attr, found in merged.items()}  # where each attr's first bound was
+    dropped = {k for found in merged.values() for _op, _c, k in found}
+    for k, term in enumerate(holding):
+        attr = placed.get(k)
+        if attr is not None and attr not in done:
+            done.add(attr)
+            out.append(_interval(attr, merged[attr]))
+        elif k not in dropped:
+            out.append(term)
+    ctx.numeric |= set(merged)
+    return out
+
+
+def _bound(term: ast.expr) -> tuple[str, type[ast.cmpop], int | float] | None:
+    """`self.x OP c` (OP one of < <= > >=, c an int or float constant, not NaN), read either way
+    round and under `not`, as (x, OP with x on the left, c)."""
+    negate = isinstance(term, ast.UnaryOp) and isinstance(term.op, ast.Not)
+    node = term.operand if negate else term  # type: ignore[attr-defined]
+    if not (isinstance(node, ast.Compare) and len(node.ops) == 1 and type(node.ops[0]) in _FLIP):
+        return None
+    op, left, right = type(node.ops[0]), node.left, node.comparators[0]
+    if isinstance(left, ast.Constant) and _self_attr_load(right):
+        op, left, right = _FLIP[op], right, left
+    if not (_self_attr_load(left) and isinstance(right, ast.Constant)):
+        return None
+    c = right.value
+    if not isinstance(c, int | float) or isinstance(c, bool) or c != c:
+        return None
+    return left.attr, (_NEGATE[op] if negate else op), c  # type: ignore[attr-defined]
+
+
+def _interval(attr: str, found: list[tuple[type[ast.cmpop], int | float, int]]) -> ast.expr:
+    """The tightest bound each way of `self.attr` among `found`, as one comparison (`lo <= x < hi`)."""
+    upper = [(c, op is ast.Lt) for op, c, _k in found if op in (ast.Lt, ast.LtE)]
+    lower = [(c, op is ast.Gt) for op, c, _k in found if op in (ast.Gt, ast.GtE)]
+    ops: list[ast.cmpop] = []
+    values: list[ast.expr] = []
+    if lower:
+        c, strict = max(lower)  # the largest; strict before not at the same value
+        ops.append(ast.Lt() if strict else ast.LtE())
+        values.append(ast.Constant(c))
+    values.append(ast.Attribute(value=ast.Name(id="self", ctx=ast.Load()), attr=attr, ctx=ast.Load()))
+    if upper:
+        c, strict = min(upper, key=lambda b: (b[0], not b[1]))  # the smallest; strict first
+        ops.append(ast.Lt() if strict else ast.LtE())
+        values.append(ast.Constant(c))
+    return ast.Compare(left=values[0], ops=ops, comparators=values[1:])
 
 
 #: How a comparison `x OP c` changes as x grows: +1 (false to true at most), -1 (true to false at most).
