@@ -181,7 +181,11 @@ class _Asked:
             return  # cancelled before the executor came to it: no answer, no choice
         d = server.oracle.decide(server.choices, server._said)
         if d < len(server.responses):
-            future.set_result(server.responses[d]._copy())
+            if future._callbacks:
+                future.set_result(server.responses[d]._copy())
+            else:  # as set_result, with no callback to run: the usual case, a call to wait on
+                future._result = server.responses[d]._copy()
+                future._done = True
         # else: no answer (may_fail); the future stays pending
 
 

@@ -298,7 +298,7 @@ class Explorer(Stepper):
                 names = input_names[turn]
                 for base, (values, tm, intr) in enumerate(choices):
                     if oracle is not None and (oracle.made or oracle.forced):  # else as start() leaves it
-                        oracle.start(())
+                        oracle.forced, oracle.made = (), []  # start(()) with no code nor description
                     while True:  # each sequence of the environment's choices (one without an environment)
                         c = base
                         # the configuration into the objects (what the previous choice changed)
@@ -437,6 +437,13 @@ class Explorer(Stepper):
                                 edge_choice.append(c)
                         if oracle is None or not oracle.made:
                             break
+                        chosen = oracle.made
+                        if len(chosen) == 1:  # next_forced() and start() of the usual case, one choice
+                            d, nd = chosen[0]
+                            if d + 1 >= nd:
+                                break
+                            oracle.forced, oracle.made = (d + 1,), []
+                            continue
                         forced = oracle.next_forced()
                         if forced is None:
                             break

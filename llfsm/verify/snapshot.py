@@ -74,7 +74,7 @@ class Codec:
             lines.append(f"    v{k} = m.{name}")
             lines.append(f"    if v{k}.__class__ not in S:")
             lines.append(f"        h = P(id(v{k}))")  # a handle: its token, without a call
-            lines.append(f"        v{k} = h[1] if h is not None and h[0] is v{k} else F(v{k}, {k})")
+            lines.append(f"        v{k} = h if h is not None else F(v{k}, {k})")
             values.append(f"v{k}")
         parts = ["K[r]", "K[m._next] if r is G else 0", "m._state", "m._pending", "m._suspended"]
         parts += ["m._resume_to", "m._finished"]

@@ -40,9 +40,10 @@ class Handles:
         #: each object's token by its id, with the object (kept alive, so the id is its own):
         #: what a handle is never changes, and a configuration is frozen at every step
         self.known: dict[int, tuple[Any, Frozen]] = {}
-        #: the same for the handles frozen as their token alone (all but readers): what a
-        #: machine's snapshot looks up first (llfsm.verify.snapshot), a dict look-up per handle
-        self.plain: dict[int, tuple[Any, Frozen]] = {}
+        #: the tokens of the handles frozen as their token alone (all but readers), by id: what
+        #: a machine's snapshot looks up first (llfsm.verify.snapshot), one dict look-up per
+        #: handle; `known` keeps each object alive, so no other object can have its id
+        self.plain: dict[int, Frozen] = {}
 
     def token(self, obj: Any) -> Frozen | None:
         hit = self.known.get(id(obj))
@@ -58,7 +59,7 @@ class Handles:
         token = Frozen(("handle", index, *key))
         self.known[id(obj)] = (obj, token)
         if key[0] != "subscription":
-            self.plain[id(obj)] = (obj, token)
+            self.plain[id(obj)] = token
         return token
 
 
