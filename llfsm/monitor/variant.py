@@ -16,7 +16,7 @@ another's; at a `return` where the ringlet's target state is written just before
 machine's own `state(m)` is that state's name as a constant, and the comparisons it takes part
 in are folded: a check that cannot fail there is left out.  So is a check that held at the
 boundary before the ringlet and that the ringlet cannot make fail (`_cannot_fail`): everything it
-reads is as it was, but for numbers the ringlet steps one way (llfsm.monitor.reads,
+reads is as it was, but for numbers the ringlet steps one way (llfsm.runtime.reads,
 `ClassReads.step`) that it bounds on the other side (`always: m.count >= 0` in a ringlet whose
 only change is `count += 1`).  That rests on the variable holding a number (an int, a float or a
 bool), which its machine's code keeps (`ClassReads.numeric`) and the monitor checks where
