@@ -29,7 +29,6 @@ machine's state and values as they are, then each newer record undone.
 
 from __future__ import annotations
 
-import ast
 import sys
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -42,7 +41,7 @@ from ..runtime.generated import variables_of
 from ..runtime.machine import Machine
 from ..runtime.readout import plain
 from ..runtime.reads import ClassReads
-from .recording import AFTER_AT_END, COPIED, DIRECT, FIRED_AT_END, MESSAGE, namespace_of, record_ringlet, taken_by
+from .recording import AFTER_AT_END, COPIED, DIRECT, FIRED_AT_END, MESSAGE, RingletRecorder, namespace_of, taken_by
 from .traps import TRAP
 
 #: One record: (number, run time ns, code, values...); a set's number is the one of the boundary
@@ -420,18 +419,14 @@ def _diff(old: Sequence[Any] | None, new: Sequence[Any] | None) -> list[tuple[in
     return [(k, a, b) for k, (a, b) in enumerate(zip(old, new, strict=True)) if a != b]
 
 
-def recorder(
-    h: History, m: Machine, reads: ClassReads
-) -> tuple[Callable[[ast.FunctionDef, int], ast.FunctionDef], dict[str, Any]]:
+def recorder(h: History, m: Machine, reads: ClassReads) -> tuple[RingletRecorder, dict[str, Any]]:
     """What compiles machine m's ringlets to record themselves into `h` (traps.Recorder): each
     ringlet takes the values `reads` says it can change."""
     cls = type(m)
     v = h.values[m._id]
     taken = taken_by(reads, v.names, v.kinds, {e[0] for e in cls.INPUTS}, v.replaced_only)
-
-    def record(node: ast.FunctionDef, state: int) -> ast.FunctionDef:
-        return record_ringlet(node, m._id, state, cls.SUSPENDED, taken.get(node.name, ()), v.names, TRAP)
-
     first = len(v.names) - len(v.slow) - len(v.messages)
     messages = {first + j: c for j, (_name, c) in enumerate(v.messages)}
-    return record, namespace_of(h.ring.append, h.counter, h.cache[m._id], _encode, plain, messages)
+    return RingletRecorder(m._id, cls.SUSPENDED, taken, v.names, TRAP), namespace_of(
+        h.ring.append, h.counter, h.cache[m._id], _encode, plain, messages
+    )

@@ -71,47 +71,41 @@ def taken_by(
     return out
 
 
-def record_ringlet(
-    node: ast.FunctionDef,
-    machine: int,
-    state: int,
-    suspended: int,
-    taken: tuple[tuple[int, int], ...],
-    names: tuple[str, ...],
-    trap: str,
-) -> ast.FunctionDef:
-    """The ringlet `node` (of machine index `machine`'s `state`) with a record appended before
-    each return (and before the breakpoints' trap calls just before it, so that a pause there
-    shows this ringlet)."""
-    starts = [
-        _assign(_LOCAL + f"o{k}", _self(names[k])) for k, how in taken if how == DIRECT
-    ]  # the old values of immutables: read before anything runs
-    body = list(node.body)
-    doc = body[:1] if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) else []
-    rec = _Recorder(machine, state, suspended, taken, names, trap)
-    new_body, known, ends = rec.block(body[len(doc) :], state)
-    if not ends:  # falls off its end: returns None there
-        new_body = rec.returning(new_body, ast.Return(value=None), known)
-    node.body = [*doc, *starts, *new_body]
-    return node
+class RingletRecorder:
+    """What compiles one machine's ringlets to record themselves (traps.Recorder's first half):
+    `taken`, by ringlet name, the values each takes (`taken_by`); `names`, the machine's values'
+    names; `trap`, the name of the breakpoints' trap call."""
 
-
-class _Recorder:
     def __init__(
         self,
         machine: int,
-        state: int,
         suspended: int,
-        taken: tuple[tuple[int, int], ...],
+        taken: dict[str, tuple[tuple[int, int], ...]],
         names: tuple[str, ...],
         trap: str,
     ) -> None:
         self.machine = machine
-        self.state = state
         self.suspended = suspended
-        self.taken = taken
+        self.by_ringlet = taken
         self.names = names
         self.trap = trap
+        self.state = 0
+        self.taken: tuple[tuple[int, int], ...] = ()
+
+    def __call__(self, node: ast.FunctionDef, state: int) -> ast.FunctionDef:
+        """The ringlet `node` (of `state`) with a record appended before each return (and before
+        the breakpoints' trap calls just before it, so that a pause there shows this ringlet)."""
+        self.state, self.taken = state, self.by_ringlet.get(node.name, ())
+        starts = [
+            _assign(_LOCAL + f"o{k}", _self(self.names[k])) for k, how in self.taken if how == DIRECT
+        ]  # the old values of immutables: read before anything runs
+        body = list(node.body)
+        doc = body[:1] if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) else []
+        new_body, known, ends = self.block(body[len(doc) :], state)
+        if not ends:  # falls off its end: returns None there
+            new_body = self.returning(new_body, ast.Return(value=None), known)
+        node.body = [*doc, *starts, *new_body]
+        return node
 
     def block(self, stmts: list[ast.stmt], known: int | None) -> tuple[list[ast.stmt], int | None, bool]:
         """The block with records before its returns; the state known after it (None: not
