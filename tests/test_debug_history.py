@@ -14,12 +14,22 @@ from helpers import MACHINES, write_machine
 
 import llfsm.debug.debugger as debugger_module
 from llfsm.debug.debugger import Debugger
+from llfsm.ros.inputs import bind
 from llfsm.runtime import Arrangement, RunContext, SimClock
 from llfsm.runtime.context import activate
+from llfsm.runtime.inputs import TOPIC
 from llfsm.targets import load
 
 
-def _history(classes: list[type], compiled: bool, size: int, ms: int, turtlesim: bool, monkeypatch: Any) -> Any:
+def _history(
+    classes: list[type],
+    compiled: bool,
+    size: int,
+    ms: int,
+    turtlesim: bool,
+    monkeypatch: Any,
+    nodes: tuple[str, ...] = (),
+) -> Any:
     """Run `classes` for `ms` rounds of 1 ms with a history of `size`, recorded by the ringlets
     (compiled) or by the watcher at every boundary (as where the ringlets cannot be compiled
     again: a native build, a machine the monitor compiled its checks into)."""
@@ -34,7 +44,8 @@ def _history(classes: list[type], compiled: bool, size: int, ms: int, turtlesim:
             bus = bus_of(ctx)
             bus.log_stream = io.StringIO()
             bus.init()
-            start("turtlesim", ctx, NodeOptions())
+            for node in ("turtlesim", *nodes):
+                start(node, ctx, NodeOptions())
         finally:
             activate(prev)
     arr = Arrangement(classes, context=ctx)
@@ -45,6 +56,8 @@ def _history(classes: list[type], compiled: bool, size: int, ms: int, turtlesim:
     assert d.history is not None and d.history.compiled is compiled
     if bus is not None:
         d.attach_bus(bus, lambda: None)
+        if any(e[TOPIC] for c in classes for e in c.INPUTS):
+            bind(arr, bus)  # inputs from their topics, as `llfsm run` binds them
     arr.run(duration_ns=ms * 1_000_000)
     return d.history
 
@@ -75,6 +88,16 @@ def test_the_how_to_pair_with_turtlesim_records_the_same_history_compiled(monkey
     assert any(r["changed"].get("msg", [None, None])[1] == {
         "linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": -2.0}
     } for r in records)  # fmt: skip
+
+
+def test_a_machine_with_an_input_from_a_sensor_records_the_same_history_compiled(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    wall = [load(str(MACHINES / "wall_follower.machine"))]
+    compiled = _history(wall, True, 4000, 12000, True, monkeypatch, ("wall_sensor",))
+    watched = _history(wall, False, 4000, 12000, True, monkeypatch, ("wall_sensor",))
+    _same(compiled, watched)
+    assert any(r["changed"].get("wall_close") == [False, True] for r in compiled.last())  # the gate's snapshot
 
 
 def _lists(tmp_path: Path) -> list[type]:

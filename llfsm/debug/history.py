@@ -284,7 +284,13 @@ class History:
     @property
     def records(self) -> list[tuple[int, Record]]:
         """The kept records, oldest first: (number, the record after its number)."""
-        return [(r[0], r[1:]) for r in list(self.ring)]
+        return self._newest(None)
+
+    def _newest(self, n: int | None) -> list[tuple[int, Record]]:
+        recs = list(self.ring)  # one C call: atomic for a reader on another thread
+        if n is not None:
+            recs = recs[-n:] if n > 0 else []
+        return [(r[0], r[1:]) for r in recs]
 
     def round_of(self, number: int) -> int:
         rounds = self._rounds
@@ -352,9 +358,7 @@ class History:
 
     def last(self, n: int | None = None) -> list[dict[str, Any]]:
         """The newest n records (all kept ones when n is None), oldest first."""
-        recs = self.records
-        if n is not None:
-            recs = recs[-n:] if n > 0 else []
+        recs = self._newest(n)
         published = dict(self.published)
         return [self.as_dict(number, r, published) for number, r in recs]
 

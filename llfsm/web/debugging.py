@@ -78,7 +78,7 @@ class RunDebug:
         h = d.history
         if h is not None:  # the values the scheduler's thread took last
             variables = h.snapshot()
-            status["records"] = len(h.records)
+            status["records"] = len(h.ring)
         else:
             variables = {}
         return {**status, "variables": variables}
