@@ -144,6 +144,34 @@ def test_values_changed_in_place_read_back_the_same_and_large_ones_say_they_are_
     assert compiled.frame(len(compiled.records))["machines"][0]["values"]["quiet"] == 7
 
 
+def test_a_variable_a_callback_changes_between_rounds_records_the_same_compiled(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A subscription's callback appends to a list between rounds (escaped: every ringlet of the
+    machine takes it, and the change shows in the next one's record)."""
+    d = write_machine(
+        tmp_path,
+        "heard",
+        {"INITIAL": [("TALK", "True")], "TALK": [("TALK", "True")]},
+        {
+            "INITIAL_OnEntry": "ros.init()\nnode = ros.Node('heard')\n"
+            "sub = node.create_subscription(String, '/said', lambda m: got.append(m.data), 10)\n"
+            "pub = node.create_publisher(String, '/said', 10)\n",
+            "TALK_OnEntry": "n += 1\nif n % 3 == 0:\n    pub.publish(String(data=str(n)))\n",
+        },
+        variables="n: int = 0\ngot: list = []\nnode: ros.Node = None\nsub: ros.Subscription = None\n"
+        "pub: ros.Publisher = None\n",
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import String\n",
+    )
+    classes = [load(str(d))]
+    compiled = _history(classes, True, 500, 200, True, monkeypatch)
+    watched = _history(classes, False, 500, 200, True, monkeypatch)
+    _same(compiled, watched)
+    heard = [r for r in compiled.last() if "got" in r["changed"]]
+    assert heard and heard[0]["changed"]["got"] == [[], ["3"]]
+    assert any("/said" in r["published"] for r in compiled.last())
+
+
 @pytest.mark.parametrize("rounds", [30, 101, 1234])
 def test_the_history_keeps_the_last_n_records_and_memory_bounded_by_n(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, rounds: int
