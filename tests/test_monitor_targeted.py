@@ -5,6 +5,7 @@ other, publish, take parameters from outside, and finish."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -12,10 +13,10 @@ import pytest
 from helpers import write_machine
 
 from llfsm.monitor import Monitor
-from llfsm.monitor.reads import class_reads
 from llfsm.props.file import PropertySource
 from llfsm.runtime import SimClock
 from llfsm.runtime.context import RunContext
+from llfsm.runtime.reads import class_reads
 from llfsm.runtime.scheduler import Arrangement
 from llfsm.targets import load
 
@@ -137,3 +138,236 @@ def test_what_a_ringlet_can_change_is_read_from_its_code(classes: list[Any]) -> 
     assert a.changers("seen") == {"_llfsm_enter_WAIT"}
     assert a.changers("quiet") == set()  # nothing of a's own changes it: a parameter from outside does
     assert a.is_escaped("box") and not a.is_escaped("quiet")
+
+
+# -- numbers stepped by a constant, and several checks at one return -----------------------------
+
+
+class Wrap(int):
+    """An int that wraps at 127 as a byte does (numpy.int8 would): stepping it up can make it
+    smaller, so a check left out because `x += 1` cannot lower x must come back for it."""
+
+    def __add__(self, other: object) -> Wrap:
+        return Wrap((int(self) + int(other) + 128) % 256 - 128)  # type: ignore[call-overload]
+
+    def __sub__(self, other: object) -> Wrap:
+        return self + -int(other)  # type: ignore[call-overload]
+
+
+def _stepper(root: Path) -> Any:
+    """up and down stepped by constants (up in UP, down in DOWN, both the other way elsewhere),
+    set back in RESET; items only read."""
+    return load(
+        str(
+            write_machine(
+                root,
+                "s",
+                {
+                    "INIT": [("UP", "True")],
+                    "UP": [("DOWN", "after_ms(3)")],
+                    "DOWN": [("RESET", "after_ms(2) and down < -15"), ("UP", "after_ms(2)")],
+                    "RESET": [("UP", "True")],
+                },
+                code={
+                    "UP_OnEntry": "up += 1\ndown -= 2\n",
+                    "UP_Internal": "up += 1\nhits += 1\n",
+                    "DOWN_OnEntry": "down += -1\nup -= 3\n",
+                    "RESET_OnEntry": "up = 0\ndown = 10\n",
+                },
+                variables="up: int = 0\ndown: int = 10\nhits: int = 0\nitems: list = [1]\n",
+            )
+        )
+    )
+
+
+STEPPED = [
+    ("always", "s.up >= 0"),  # left out where up only grows
+    ("never", "s.up > 6"),  # left out where up only falls
+    ("always", "not (s.up > 6 and s.down < 100)"),  # the same, under `not`
+    ("always", "s.up <= 6 and s.up >= -100"),  # bounded both ways: never left out
+    ("always", "s.down <= 10"),
+    ("never", 's.down < 0 and state(s) == "DOWN"'),
+    ("always", 'state(s) != "UP" or s.up >= 1'),  # the state moves: never left out on entering UP
+    ("always", "s.items[3] > 0 or s.up >= -100"),  # raises: violated at the first boundary
+    ("never", "s.hits >= 4 and s.up < 2"),
+    ("leads_to", "[s.up > 3, s.down > 5]"),
+    ("ltl", "G (s.up >= 0 -> F s.down <= 10)"),
+]
+
+
+def _run_set(
+    cls: Any,
+    sources: list[PropertySource],
+    targeted: bool,
+    sets: dict[int, dict[str, object]],
+    start: dict[str, object] | None = None,
+) -> tuple[list[str], Any]:
+    """A run of `cls` whose variables are set from outside (the scheduler's gate) as `sets` says
+    when, after starting with the values `start` gives."""
+    lines: list[str] = []
+    ctx = RunContext(SimClock(1_000_000))
+    arr = Arrangement([cls], context=ctx)
+    for name, value in (start or {}).items():
+        setattr(arr.machines[0], name, value)
+    Monitor(sources, [cls], "log", lines.append, targeted=targeted).attach(arr)
+    pending = dict(sets)
+
+    def parameters() -> None:
+        for t in [t for t in pending if ctx.clock.now >= t]:
+            arr.set_variables("s", pending.pop(t))
+        if pending:
+            ctx.wake_at(min(pending))
+
+    ctx.between_rounds.append(parameters)
+    ctx.wake_at(0)
+    arr.run(90_000_000)
+    return lines, arr.machines[0]
+
+
+@pytest.fixture(scope="module")
+def stepper(tmp_path_factory: pytest.TempPathFactory) -> Any:
+    return _stepper(tmp_path_factory.mktemp("s"))
+
+
+@pytest.mark.parametrize("kind, text", STEPPED, ids=[f"{k}-{n}" for n, (k, _) in enumerate(STEPPED)])
+def test_checks_left_out_where_a_ringlet_steps_a_number_give_the_same_verdicts(
+    stepper: Any, kind: str, text: str
+) -> None:
+    src = [PropertySource(kind, text)]
+    sets: dict[int, dict[str, object]] = {23_000_000: {"up": -1}, 41_000_000: {"up": 2.5, "down": 12}}
+    every, _m = _run_set(stepper, src, False, sets)
+    assert every
+    assert _run_set(stepper, src, True, sets)[0] == every
+
+
+def test_all_stepped_properties_checked_together_at_each_return(stepper: Any) -> None:
+    """Several safety checks at one return are one test first (each variable read once), then
+    one by one where that test fails: which fail, and in which order, must not change."""
+    src = [PropertySource(k, t) for k, t in STEPPED] + [
+        PropertySource("never", "s.up >= 5 and s.down < 0"),
+        PropertySource("always", "s.down > -30 and s.hits < 40"),
+        PropertySource("never", "s.up == 3"),
+    ]
+    every, _m = _run_set(stepper, src, False, {30_000_000: {"up": 4}})
+    assert sum("violated" in line for line in every) >= 6
+    targeted, m = _run_set(stepper, src, True, {30_000_000: {"up": 4}})
+    assert targeted == every
+    assert type(m)._llfsm_mon_numeric == {"up", "down"}  # checks were left out
+
+
+def test_a_stepped_variable_set_to_something_else_than_a_number_is_checked_again(stepper: Any) -> None:
+    """`up += 1` cannot lower an int, but it can lower a byte that wraps: a value of another type
+    set from outside brings the left-out checks back for the rest of the run."""
+    src = [PropertySource("always", "s.up >= 0")]
+    every, _m = _run_set(stepper, src, False, {23_000_000: {"up": Wrap(120)}})
+    assert any("violated" in line and "s.up=-" in line for line in every), every
+    targeted, m = _run_set(stepper, src, True, {23_000_000: {"up": Wrap(120)}})
+    assert targeted == every
+    assert type(m)._llfsm_mon_numeric == set()
+
+
+def test_a_stepped_variable_that_starts_as_something_else_than_a_number_is_checked(stepper: Any) -> None:
+    src = [PropertySource("always", "s.up >= 0")]
+    every, _m = _run_set(stepper, src, False, {}, start={"up": Wrap(120)})
+    assert any("violated" in line and "s.up=-" in line for line in every), every
+    targeted, m = _run_set(stepper, src, True, {}, start={"up": Wrap(120)})
+    assert targeted == every
+    assert type(m)._llfsm_mon_numeric == set()
+
+
+def test_variables_made_one_object_by_their_initial_values(tmp_path: Path) -> None:
+    """`alias: list = items` in Variables.py: a ringlet appending to alias changes items; `box:
+    list = SHARED`: a helper module's function changes box without the ringlet naming it."""
+    d = write_machine(
+        tmp_path,
+        "h",
+        {"A": [("A", "True")]},
+        code={"A_OnEntry": "alias.append(1)\ngrow()\n"},
+        variables="items: list = []\nalias: list = items\nbox: list = SHARED\n",
+        includes="from monitor_shared import SHARED, grow\n",
+    )
+    (tmp_path / "monitor_shared.py").write_text("SHARED = []\ndef grow():\n    SHARED.append(0)\n")
+    cls = load(str(d))
+    shared = sys.modules["monitor_shared"].SHARED
+    for text in ("len(h.items) >= 3", "len(h.box) >= 4"):
+        src = [PropertySource("never", text)]
+        shared.clear()
+        every = _run_set(cls, src, False, {})[0]
+        shared.clear()
+        assert every and _run_set(cls, src, True, {})[0] == every
+
+
+# -- bounds of one number merged into one test ---------------------------------------------------
+
+BOUNDS = [
+    ("always", "s.up < 4"),
+    ("always", "s.up <= 5"),
+    ("never", "s.up > 7"),
+    ("always", "9 > s.up"),
+    ("always", "s.down > -3"),
+    ("always", "s.down >= -20"),
+    ("never", "s.down < -25.5"),
+    ("always", "s.down <= 10"),
+    ("always", "not s.hits >= 6"),
+    ("always", "s.hits < 8"),
+    ("always", "s.up % 7 != 6"),  # `*` and `%` of numbers as operators, not the bounded helpers
+    ("always", "s.hits * 3 < s.down * 2 + 30"),
+]
+
+
+def test_bounds_of_one_number_merged_into_one_test_give_the_same_verdicts(stepper: Any) -> None:
+    """Several constant bounds of one number at one return are tested as one comparison each way
+    first (`-3 < down <= 10`): which fail, when, and in which order must not change."""
+    src = [PropertySource(k, t) for k, t in BOUNDS]
+    sets: dict[int, dict[str, object]] = {23_000_000: {"up": -1}, 41_000_000: {"up": 2.5, "down": 12}}
+    every, _m = _run_set(stepper, src, False, sets)
+    assert sum("violated" in line for line in every) >= 5
+    targeted, m = _run_set(stepper, src, True, sets)
+    assert targeted == every
+    assert "hits" in type(m)._llfsm_mon_numeric  # merged (its checks are never left out: it only grows)
+
+
+class Liar(int):
+    """An int that says it is below 1000 always, and below anything else only while under 3: the
+    tightest bound no longer implies the others, so a merged test must not stand for them."""
+
+    def __lt__(self, other: object) -> bool:
+        return other == 1000 or int(self) < 3
+
+    def __add__(self, other: object) -> Liar:
+        return Liar(int(self) + int(other))  # type: ignore[call-overload]
+
+
+def test_merged_bounds_of_a_variable_set_to_something_else_than_a_number_are_checked_one_by_one(
+    tmp_path: Path,
+) -> None:
+    cls = load(str(write_machine(tmp_path, "s", {"A": [("A", "True")]}, code={"A_OnEntry": "up += 1\n"},
+                                 variables="up: int = 0\n")))  # fmt: skip
+    src = [PropertySource("always", "s.up < 1000"), PropertySource("always", "s.up < 2000")]
+    every, _m = _run_set(cls, src, False, {5_000_000: {"up": Liar(0)}})
+    assert any("s.up < 2000 violated" in line for line in every), every
+    targeted, m = _run_set(cls, src, True, {5_000_000: {"up": Liar(0)}})
+    assert targeted == every
+    assert type(m)._llfsm_mon_numeric == set()
+
+
+class Text(str):
+    """Text that machine code can step (`up += 2` keeps it): set from outside, it reaches the
+    checks of `%` and `*`, which the bounded helpers refuse for text."""
+
+    def __add__(self, other: object) -> Text:
+        return self
+
+
+def test_arithmetic_of_a_variable_set_to_text_is_bounded_as_in_an_atom(tmp_path: Path) -> None:
+    """`s.up % 2` of a number is Python's `%` in the ringlet's check; set to text from outside,
+    the bounded helper refuses it (violated, saying why) exactly where judging every boundary
+    does."""
+    cls = load(str(write_machine(tmp_path, "s", {"A": [("A", "True")]}, code={"A_OnEntry": "up += 2\n"},
+                                 variables="up: int = 0\n")))  # fmt: skip
+    src = [PropertySource("always", "s.up % 2 == 0"), PropertySource("always", "s.up * 2 != 5")]
+    every, _m = _run_set(cls, src, False, {5_000_000: {"up": Text("%d")}})
+    assert sum("violated" in line for line in every) == 1, every
+    targeted, m = _run_set(cls, src, True, {5_000_000: {"up": Text("%d")}})
+    assert targeted == every
+    assert type(m)._llfsm_mon_numeric == set()

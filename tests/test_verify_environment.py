@@ -137,15 +137,60 @@ def test_a_push_callback_runs_with_the_topics_values(tmp_path: Path) -> None:
     assert r.status == 2 and "State_WAIT_OnEntry.py:3" in r.stdout
 
 
-@pytest.mark.parametrize("case", ["services", "push topic"])
+def _caller(tmp_path: Path) -> Path:
+    """A verification file whose machine calls a service of the environment in every way the
+    executor orders: a call spun for at once, one behind a callback its own publish queued, one
+    cancelled before the spin, one never spun for (answered after the ringlet), with Ctrl-C."""
+    m = write_machine(
+        tmp_path,
+        "caller",
+        {"INIT": [("ASK", "True")], "ASK": [("ASK", "True")]},
+        {
+            "INIT_OnEntry": 'ros.init()\nnode = ros.Node("caller")\n'
+            'client = node.create_client(TurtlePosition, "/where")\n'
+            'pub = node.create_publisher(Bool, "/ping", 10)\n'
+            'sub = node.create_subscription(Bool, "/ping", lambda msg: heard.append(msg.data), 10)\n',
+            "ASK_OnEntry": "heard.clear()\n"
+            "if count == 1:\n    pub.publish(Bool(data=True))\n"
+            "f = client.call_async(TurtlePosition.Request())\n"
+            "early = f.done() or f.result() is not None\n"
+            "if count == 2:\n    f.cancel()\n"
+            "if count != 3:\n    code = str(ros.spin_until_future_complete(node, f))\n"
+            "x = f.result().x if f.result() is not None else -1.0\n"
+            "spun = len(heard)\n"  # the callback ahead of the request ran in the spin
+            "count = (count + 1) % 5\n",
+        },
+        variables="node: ros.Node\nclient: object = None\npub: object = None\nsub: object = None\n"
+        "heard: list = []\nspun: int = 0\nx: float = 0.0\nearly: bool = False\ncount: int = 0\n"
+        "code: str = ''\nf: object = None\n",
+        includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n"
+        "from llfsm.msgs.turtle_sensor_interface.srv import TurtlePosition\n",
+    )
+    f = tmp_path / "caller.verify.yaml"
+    f.write_text(
+        f"machines: [{m}]\ninterrupt: true\nenvironment:\n  services:\n    /where:\n"
+        "      type: turtle_sensor_interface/srv/TurtlePosition\n"
+        "      responses: [{x: 1.0}, {x: 2.0}]\n      may_fail: true\n"
+        "  topics:\n    /ping:\n      type: std_msgs/msg/Bool\n      values: [{data: false}]\n"
+        "properties:\n  - never: caller.x == 2.0 and caller.count == 0\n  - always: not caller.early\n"
+    )
+    return f
+
+
+@pytest.mark.parametrize("case", ["services", "push topic", "services in every order"])
 def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_alike(case: str, tmp_path: Path) -> None:
+    """The generic step runs each service call through the bus's own executor; the specialised
+    loop answers a request next in the queue directly (llfsm.verify.environment, World)."""
     from llfsm.props.file import read_verify_file
     from llfsm.verify.explorer import Options
     from llfsm.verify.judge import verify
     from llfsm.verify.load import load_arrangement
+    from llfsm.verify.store import GLOBALS
 
     if case == "services":
         vf = read_verify_file(_wall_file(tmp_path, True, '  - never: state(ros2_wall_turtle_bot) == "BACK"\n'))
+    elif case == "services in every order":
+        vf = read_verify_file(_caller(tmp_path))
     else:
         m = _reader(tmp_path, push=True)
         f = tmp_path / "p.verify.yaml"
@@ -157,10 +202,17 @@ def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_a
         vf = read_verify_file(f)
     loaded = load_arrangement(vf.machines, vf.environment)
     shapes = []
+    contents = []
     for hash_compact, generic in ((False, False), (False, True), (True, False)):
-        r = verify(loaded, vf.properties, Options(hash_compact=hash_compact, generic=generic), keep_graph=True)
+        options = Options(hash_compact=hash_compact, generic=generic, interrupt=bool(vf.options.get("interrupt")))
+        r = verify(loaded, vf.properties, options, keep_graph=True)
         e = r.explorer
         assert r.error is None and r.partial is None
         shapes.append((r.configurations, r.steps, list(e.edges), list(e.edge_choice), list(e.labels), list(e.choice)))
+        if not hash_compact:  # what each configuration holds: every variable, the bus's flags, the time
+            contents.append(
+                [(c[:GLOBALS], e.globals_of(c), e.times_of(c), [e.part(c, k) for k in range(e.n)]) for c in e.configs]
+            )
     assert shapes[0] == shapes[1] == shapes[2]
+    assert contents[0] == contents[1]
     assert shapes[0][0] > 4 and shapes[0][3]

@@ -4,7 +4,7 @@ FILE.verify.yaml` and `--monitor-property KIND:TEXT`.
 **Where it judges.**  A property's value can change only where what it reads changes, so the
 monitor judges it only there, and the semantics stay "judged at every ringlet boundary":
 
-- in the ringlets that can change what it reads (llfsm.monitor.reads), by a check compiled
+- in the ringlets that can change what it reads (llfsm.runtime.reads), by a check compiled
   into a monitored variant of the machine's ringlets (llfsm.monitor.variant); every other
   ringlet runs as compiled, in the scheduler's plain loops;
 - at the boundaries after something the ringlets' code does not show: a command, a parameter or
@@ -38,11 +38,11 @@ from typing import Any
 from ..props.atoms import infos_of
 from ..props.file import PropertySource
 from ..runtime.generated import become
+from ..runtime.reads import ClassReads, class_reads
 from ..runtime.scheduler import GO, Arrangement
 from .judge import VIOLATED, Boundary, Judge, Judged, MonitorError, Verdict, atom_reads
-from .reads import ClassReads, class_reads
 from .topic import MonitorTopic
-from .variant import FAILED, JUDGE, MACHINES, PUBLISHED, Check, make_variant
+from .variant import FAILED, JUDGE, MACHINES, NUMBERS, NUMERIC, PUBLISHED, Check, make_variant
 from .variant import VIOLATED as VIOLATED_FN
 
 #: What `--on-violation` may say.
@@ -83,8 +83,10 @@ class Monitor:
         self._once = False
         #: the last boundary judged in full had something published: the next one has not
         self._fall = False
-        #: every boundary is judged (see the module's docstring)
+        #: every boundary is judged (see the module's docstring)...
         self.always = False
+        #: ...for these properties alone (None: all of them), the others where they can change
+        self._everywhere: list[Judged] | None = None
         self._before: Callable[[Any], int] | None = None  # a watcher that was there first
         #: `--on-violation pause`: pauses the run where a violation is reached (the debugger's,
         #: llfsm.debug, which the session sets; called at that boundary with the verdict).
@@ -92,6 +94,9 @@ class Monitor:
         self._watcher = self._watch  # one bound method, compared with `is`
         self._inputs: dict[int, list[object]] = {}
         self._reads_inputs = not targeted  # an input a property reads (found by _instrument)
+        #: by machine: the variables its variant relies on holding numbers, and the variant
+        #: that does not (llfsm.monitor.variant, NUMERIC), made if one is set to anything else
+        self._numeric: dict[int, tuple[frozenset[str], Callable[[], type]]] = {}
         self.ended = False
 
     # -- attaching ------------------------------------------------------------------------------
@@ -100,7 +105,12 @@ class Monitor:
         verdicts go to /llfsm/monitor too once the run has a bus (llfsm.monitor.topic)."""
         self.arr = arr
         self.machines = arr.machines
-        self.always = not self.targeted or not self._instrument(arr)
+        if self.targeted:
+            everywhere = self._instrument(arr)
+            self.always = bool(everywhere)
+            self._everywhere = everywhere if len(everywhere) < len(self.judge.judged) else None
+        else:
+            self.always = True
         orig_gate = arr._gate_fn
 
         def gate(m: Any) -> int | None:
@@ -118,6 +128,11 @@ class Monitor:
             if m._pending is not None or m._id in arr._variables or (inputs is not None and inputs.fresh):
                 self._once = True  # a command, a parameter, an input: judge the boundary after it
                 self._watch_on()
+                if m._id in self._numeric and m._id in arr._variables:
+                    numeric, unstepped = self._numeric[m._id]
+                    if any(k in numeric and type(v) not in NUMBERS for k, v in arr._variables[m._id].items()):
+                        del self._numeric[m._id]
+                        become(m, unstepped())  # its checks in full from this ringlet on
 
         arr._gate_fn = gate
         arr.on_release = released
@@ -141,15 +156,16 @@ class Monitor:
         if self.always:
             self._watch_on()
 
-    def _instrument(self, arr: Arrangement) -> bool:
-        """Compile each property's checks into the ringlets that can change what it reads; False
-        if some property must be judged at every boundary instead."""
+    def _instrument(self, arr: Arrangement) -> list[Judged]:
+        """Compile each property's checks into the ringlets that can change what it reads; the
+        properties that must be judged at every boundary instead (none compiled in)."""
         judge = self.judge
         reads: dict[int, ClassReads | None] = {}
         checks: dict[int, dict[str, list[Check]]] = {}
-        every = False
+        everywhere: list[Judged] = []
         self._reads_inputs = False
         for j in judge.judged:
+            every = False
             places: set[tuple[int, str]] = set()
             for k in j.atoms:
                 for r in atom_reads(judge.atoms[k]):
@@ -172,11 +188,12 @@ class Monitor:
                         self._reads_inputs = True
             if j.counts_steps:
                 every = True
+            if every:
+                everywhere.append(j)
+                continue
             check = _check(judge, j)
             for machine, name in places:
                 checks.setdefault(machine, {}).setdefault(name, []).append(check)
-        if every:
-            return False
         helpers: dict[str, Any] = {
             VIOLATED_FN: self._violated,
             FAILED: self._failed,
@@ -188,8 +205,19 @@ class Monitor:
             m = arr.machines[index]
             cr = reads[index]
             assert cr is not None
-            become(m, make_variant(type(m), cr, index, by_ringlet, helpers))
-        return True
+            cls = type(m)
+
+            def unstepped(cls: type = cls, cr: ClassReads = cr, index: int = index, by: Any = by_ringlet) -> type:
+                return make_variant(cls, cr, index, by, helpers, steps=False)
+
+            variant = make_variant(cls, cr, index, by_ringlet, helpers)
+            numeric: frozenset[str] = getattr(variant, NUMERIC)
+            if any(type(getattr(m, v, None)) not in NUMBERS for v in numeric):
+                variant = unstepped()  # a stepped variable holds something else already
+            elif numeric:
+                self._numeric[index] = (numeric, unstepped)
+            become(m, variant)
+        return everywhere
 
     # -- judging ---------------------------------------------------------------------------------
     def _where(self, m: Any, offset: int) -> Boundary:
@@ -226,13 +254,15 @@ class Monitor:
 
     def _watch(self, m: Any) -> int:
         """The watcher: the boundary after m's ringlet."""
-        if self.always:  # watching for good: the judging alone
+        every = self._everywhere
+        if self.always and (every is None or not self._called_for()):  # watching for good: the judging alone
             self._pending = self._once = False
             arr = self.arr
             assert arr is not None
             if arr._stopped is None:
-                found = self.judge.boundary(self.machines, self.published, arr.clock.now, lambda: self._where(m, 1))
-                if self.published:
+                now = arr.clock.now
+                found = self.judge.boundary(self.machines, self.published, now, lambda: self._where(m, 1), every)
+                if self.published and every is None:
                     self.published.clear()
                 for v in found:
                     self._record(v)
@@ -241,9 +271,13 @@ class Monitor:
         before = self._before
         return before(m) if before is not None else GO
 
+    def _called_for(self) -> bool:
+        """Whether the next boundary is to be judged in full (see the module's docstring)."""
+        return self._fall or self._once or self._pending or bool(self.judge.deadlines_open)
+
     def _update(self) -> None:
         """Keep watching while something calls for it."""
-        if self.always or self._fall or self._once or self._pending or self.judge.deadlines_open:
+        if self.always or self._called_for():
             self._watch_on()
         else:
             self._watch_off()

@@ -1,6 +1,6 @@
 """A monitored variant of a compiled machine class: the same ringlets, with a property's check
 compiled in before each `return` of the ringlets that can change what the property reads
-(llfsm.monitor.reads), and nothing added anywhere else (docs/monitor.md, "Cost").
+(llfsm.runtime.reads), and nothing added anywhere else (docs/monitor.md, "Cost").
 
 The variant is made from the generated module's own text and compiled under its file name, so
 tracebacks, the source map and the watchdog read it as the original.  Its ringlets run in a
@@ -14,8 +14,15 @@ A safety property's check is its atom inlined, `self` for its own machine, `_llf
 another's; at a `return` where the ringlet's target state is written just before it (every
 `return` the compiler writes: `self._state = K ... return i`, or no transition at all), the
 machine's own `state(m)` is that state's name as a constant, and the comparisons it takes part
-in are folded: a check that cannot fail there is left out.  Other kinds call the monitor with
-the properties to judge.  Names start with `_llfsm_mon_`, which machine code cannot use (LF013).
+in are folded: a check that cannot fail there is left out.  So is a check that held at the
+boundary before the ringlet and that the ringlet cannot make fail (`_cannot_fail`): everything it
+reads is as it was, but for numbers the ringlet steps one way (llfsm.runtime.reads,
+`ClassReads.step`) that it bounds on the other side (`always: m.count >= 0` in a ringlet whose
+only change is `count += 1`).  That rests on the variable holding a number (an int, a float or a
+bool), which its machine's code keeps (`ClassReads.numeric`) and the monitor checks where
+anything else could set it (llfsm.monitor.run): the variant names those variables in
+`NUMERIC`.  Other kinds call the monitor with the properties to judge.  Names start with
+`_llfsm_mon_`, which machine code cannot use (LF013).
 """
 
 from __future__ import annotations
@@ -28,13 +35,18 @@ from typing import Any
 
 from ..props.atoms import HELPERS, PURE
 from ..runtime.generated import variant_class
-from .reads import ClassReads, is_self_attr
+from ..runtime.reads import ClassReads, is_self_attr
 
 PREFIX = "_llfsm_mon_"
 #: The names a variant's namespace gets from the monitor.
 VIOLATED, FAILED, JUDGE = PREFIX + "v", PREFIX + "x", PREFIX + "j"
 #: ...and the arrangement's machines and the topics published since the last boundary.
 MACHINES, PUBLISHED = PREFIX + "M", PREFIX + "E"
+#: The class attribute of a variant naming the variables whose checks it left out because the
+#: ringlets step them as numbers (they must hold numbers for that to stand).
+NUMERIC = PREFIX + "numeric"
+#: The types a stepped variable keeps its order under (`x + 1 >= x`, NaN staying NaN).
+NUMBERS = (int, float, bool)
 
 
 @dataclass
@@ -47,40 +59,59 @@ class Check:
     violated_when: bool = False
 
 
+@dataclass
+class _Ringlet:
+    """What a rewrite knows of the ringlet it rewrites: the machine, the state it runs in
+    (None: more than one), and what it may change (None: no fold by what it steps)."""
+
+    own: int
+    cls: type[Any]
+    checks: list[Check]
+    entered_in: int | None = None
+    reads: ClassReads | None = None
+    name: str = ""
+    #: the variables the checks left out rely on being numbers (filled in as they are left out)
+    numeric: set[str] | None = None
+
+
 def make_variant(
     cls: type[Any],
     reads: ClassReads,
     own: int,
     checks: dict[str, list[Check]],
     helpers: dict[str, Callable[..., Any]],
+    steps: bool = True,
 ) -> type[Any]:
     """The monitored variant of `cls` (the machine at load index `own`): `checks` by ringlet
-    function name."""
+    function name; with `steps`, a check a ringlet cannot make fail by stepping numbers is
+    left out (the variables this relies on are the variant's NUMERIC)."""
     namespace = dict(reads.namespace)
     namespace.update(helpers)
     namespace.update({PREFIX + k: v for k, v in PURE.items()})
     namespace.update({PREFIX + k: v for k, v in HELPERS.items()})
     made: dict[str, Any] = {}
+    numeric: set[str] = set()
     for fn in (*cls.ENTER, *cls.STEADY):
         name = fn.__name__
         wanted = checks.get(name)
         if wanted and name not in made:
             state = _state_of(cls, fn)
+            ctx = _Ringlet(own, cls, wanted, state, reads if steps else None, name, numeric)
             tree = copy.deepcopy(reads.trees[name])
-            tree.body = _rewrite_block(tree.body, state, own, cls, wanted)[0]
+            tree.body = _rewrite_block(tree.body, state, ctx)[0]
             module = ast.Module(body=[tree], type_ignores=[])
             ast.fix_missing_locations(module)
             exec(compile(module, reads.filename, "exec", dont_inherit=True), namespace)
             made[name] = namespace[name]
-    return variant_class(cls, namespace, made)
+    variant = variant_class(cls, namespace, made)
+    setattr(variant, NUMERIC, frozenset(numeric))
+    return variant
 
 
 def _state_of(cls: type[Any], fn: Any) -> int | None:
-    """The state whose ringlet `fn` is."""
-    for s, (e, st) in enumerate(zip(cls.ENTER, cls.STEADY, strict=True)):
-        if fn is e or fn is st:
-            return s
-    return None
+    """The state whose ringlet `fn` is (None: it is the ringlet of more than one)."""
+    states = {s for s, (e, st) in enumerate(zip(cls.ENTER, cls.STEADY, strict=True)) if fn is e or fn is st}
+    return states.pop() if len(states) == 1 else None
 
 
 def _sets_state(node: ast.stmt) -> int | bool | None:
@@ -105,19 +136,17 @@ def _changes_state(stmts: list[ast.stmt]) -> bool:
     return False
 
 
-def _rewrite_block(
-    stmts: list[ast.stmt], known: int | None, own: int, cls: type[Any], checks: list[Check]
-) -> tuple[list[ast.stmt], int | None]:
+def _rewrite_block(stmts: list[ast.stmt], known: int | None, ctx: _Ringlet) -> tuple[list[ast.stmt], int | None]:
     """The block with the checks before each of its returns (nested blocks too, never inside a
     nested function), and the state known after it (None: unknown)."""
     out: list[ast.stmt] = []
     for st in stmts:
         if isinstance(st, ast.Return):
-            out.extend(_returning(st, known, own, cls, checks))
+            out.extend(_returning(st, known, ctx))
             return out, known
         sets = _sets_state(st)
         if sets is True:
-            known = cls.SUSPENDED
+            known = ctx.cls.SUSPENDED
         elif sets is not False:
             known = sets
         elif isinstance(st, ast.If | ast.For | ast.AsyncFor | ast.While | ast.With | ast.AsyncWith | ast.Try):
@@ -126,14 +155,14 @@ def _rewrite_block(
             for attr in ("body", "orelse", "finalbody"):
                 block = getattr(st, attr, None)
                 if block:
-                    setattr(st, attr, _rewrite_block(block, known, own, cls, checks)[0])
+                    setattr(st, attr, _rewrite_block(block, known, ctx)[0])
                     changed = changed or _changes_state(block)
             if isinstance(st, ast.Try):
                 handlers = []
                 for h in st.handlers:
                     h = copy.copy(h)
                     changed = changed or _changes_state(h.body)
-                    h.body = _rewrite_block(h.body, known, own, cls, checks)[0]
+                    h.body = _rewrite_block(h.body, known, ctx)[0]
                     handlers.append(h)
                 st.handlers = handlers
             if changed:
@@ -143,22 +172,25 @@ def _rewrite_block(
     return out, known
 
 
-def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], checks: list[Check]) -> list[ast.stmt]:
+def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.stmt]:
     """The checks, then the return (its value kept first when it is not a constant).  A
     constant return after a last inline check returns from inside it when the property holds
     (`if holds: return 0`): the common case then costs the test alone."""
+    own, cls = ctx.own, ctx.cls
     state = cls.STATES[known] if known is not None else None
     body: list[ast.stmt] = []
     ids: list[int] = []
     last: tuple[ast.Try, ast.expr, int] | None = None
     holding: list[ast.expr] = []  # what each inline check's holding is, for the fast path below
-    for c in checks:
+    for c in ctx.checks:
         if c.tree is None:
             ids.append(c.index)
             continue
-        cond = _fold(_Inline(own, state).visit(copy.deepcopy(c.tree)))
-        if not c.violated_when:
-            cond = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+        cond = _violated(c, own, state)
+        if not isinstance(cond, ast.Constant) and _cannot_fail(cond, c, ctx):
+            continue
+        if not isinstance(cond, ast.Constant):
+            cond = _Arithmetic(ctx).visit(cond)
         if isinstance(cond, ast.Constant):
             if cond.value:
                 body.append(_call(VIOLATED, c.index))  # violated whenever it returns here
@@ -183,7 +215,8 @@ def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], che
     if last is not None and constant and len(holding) > 1 and not ids and len(body) == len(holding):
         # several checks: one test of them all returns at once when all hold (atoms are pure, so
         # the checks one by one below, which say which failed, may evaluate them again)
-        all_hold = _Shared().share(ast.BoolOp(op=ast.And(), values=holding))
+        terms = _merge_bounds(holding, ctx)
+        all_hold = _Shared().share(terms[0] if len(terms) == 1 else ast.BoolOp(op=ast.And(), values=terms))
         fast = ast.If(test=all_hold, body=[copy.deepcopy(ret)], orelse=[])
         quiet = ast.ExceptHandler(type=ast.Name(id="Exception", ctx=ast.Load()), name=None, body=[ast.Pass()])
         body.insert(0, ast.Try(body=[fast], handlers=[quiet], orelse=[], finalbody=[]))
@@ -198,6 +231,194 @@ def _returning(ret: ast.Return, known: int | None, own: int, cls: type[Any], che
     keep = ast.Assign(targets=[ast.Name(id=PREFIX + "r", ctx=ast.Store())], value=ret.value)
     new_ret = ast.Return(value=ast.Name(id=PREFIX + "r", ctx=ast.Load()))
     return [_locate(keep, ret), *body, _locate(new_ret, ret)]
+
+
+def _violated(c: Check, own: int, state: str | None) -> ast.expr:
+    """When check `c` is violated, as code of a ringlet of machine `own` whose own state is
+    `state` (None: unknown), folded."""
+    assert c.tree is not None  # an inline check's
+    cond = _fold(_Inline(own, state).visit(copy.deepcopy(c.tree)))
+    if not c.violated_when:
+        cond = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+    return cond
+
+
+def _cannot_fail(cond: ast.expr, c: Check, ctx: _Ringlet) -> bool:
+    """Whether a safety property's check (`cond`: when it is violated here) cannot fail at this
+    return, given that it held at the boundary before the ringlet: what it reads is as it was,
+    or a number the ringlet only steps one way (`ClassReads.step`) that the property bounds on the
+    other side.  A property violated before is said already; one that raised then counted as
+    violated.  What the gate changes at the start of a ringlet (a command, a parameter, an input)
+    makes the monitor judge the boundary after it in full (llfsm.monitor.run)."""
+    cr = ctx.reads
+    if cr is None or ctx.entered_in is None or ctx.numeric is None:
+        return False
+    before = _violated(c, ctx.own, ctx.cls.STATES[ctx.entered_in])
+    if ast.dump(before) != ast.dump(cond):  # the state it reads moves in this ringlet
+        return False
+    ringlet = cr.ringlets[ctx.name]
+    moved = {"_state", "_suspended"} if ringlet.moves else set()
+    if ringlet.finishes:
+        moved.add("_finished")
+    changed = {cr.group.get(t, t) for t in ringlet.touches}
+    holds = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
+    stepped: set[str] = set()
+    for attr in {n.attr for n in ast.walk(holds) if _self_attr_load(n)}:  # type: ignore[attr-defined]
+        if attr in moved:
+            return False
+        if cr.group.get(attr, attr) not in changed or attr not in cr.variables:
+            continue  # as it was before the ringlet
+        step = cr.step(ctx.name, attr)
+        if not step or _polarity(holds, attr) not in (0, step):
+            return False
+        stepped.add(attr)
+    ctx.numeric |= stepped
+    return True
+
+
+class _Arithmetic(ast.NodeTransformer):
+    """`*` and `%` of numbers as Python's own operators: an atom calls the bounded `_repeat` and
+    `_format` (llfsm.props.atoms, SPEC 18) since either side may be a sequence or text there, a
+    call per ringlet; where both sides of `*` (the left of `%`) are numeric constants or
+    variables the machine's code keeps numbers (`ClassReads.numeric`, which join NUMERIC as in
+    `_merge_bounds`), the helper would only do the operation itself."""
+
+    HELPERS = {PREFIX + "_repeat": 2, PREFIX + "_format": 1}  # how many operands must be numbers
+
+    def __init__(self, ctx: _Ringlet) -> None:
+        self.ctx = ctx
+
+    def visit_Call(self, node: ast.Call) -> ast.AST:
+        node = self.generic_visit(node)  # type: ignore[assignment]
+        cr, numeric = self.ctx.reads, self.ctx.numeric
+        f = node.func
+        need = self.HELPERS.get(f.id) if isinstance(f, ast.Name) else None
+        if need is None or cr is None or numeric is None or len(node.args) != 2 or node.keywords:
+            return node
+        attrs: set[str] = set()
+        for arg in node.args[:need]:
+            if isinstance(arg, ast.Constant) and type(arg.value) in (int, float):
+                continue
+            if _self_attr_load(arg) and cr.numeric(arg.attr):  # type: ignore[attr-defined]
+                attrs.add(arg.attr)  # type: ignore[attr-defined]
+                continue
+            return node
+        numeric |= attrs
+        op = ast.Mult() if f.id == PREFIX + "_repeat" else ast.Mod()  # type: ignore[attr-defined]
+        return ast.BinOp(left=node.args[0], op=op, right=node.args[1])
+
+
+#: A comparison the other way round (`c < x` is `x > c`), and its negation for numbers (NaN
+#: aside: `not x < c` holds for NaN where `x >= c` does not, which only sends the test that
+#: merges bounds to the checks one by one).
+_FLIP: dict[type[ast.cmpop], type[ast.cmpop]] = {ast.Lt: ast.Gt, ast.LtE: ast.GtE, ast.Gt: ast.Lt, ast.GtE: ast.LtE}
+_NEGATE: dict[type[ast.cmpop], type[ast.cmpop]] = {ast.Lt: ast.GtE, ast.LtE: ast.Gt, ast.Gt: ast.LtE, ast.GtE: ast.Lt}
+
+
+def _merge_bounds(holding: list[ast.expr], ctx: _Ringlet) -> list[ast.expr]:
+    """The terms of the test that all checks hold, with the constant bounds of one number merged
+    into one comparison each way: `x < 5 and x < 7 and x >= 0` tests `0 <= x < 5`.  The merged
+    test implies each bound only where x is a number (an int, a float, a bool: ordered, so the
+    tightest bound implies the others), so it is made only for variables the machine's code
+    keeps a number (`ClassReads.numeric`), which join NUMERIC: the monitor checks they hold one
+    at the start and wherever the gate sets them, and rewrites without merging otherwise.  Where
+    the merged test fails, the checks one by one decide, as before."""
+    cr = ctx.reads
+    if cr is None or ctx.numeric is None:
+        return holding
+    bounds: dict[str, list[tuple[type[ast.cmpop], int | float, int]]] = {}
+    for k, term in enumerate(holding):
+        b = _bound(term)
+        if b is not None and cr.numeric(b[0]):
+            bounds.setdefault(b[0], []).append((b[1], b[2], k))
+    merged = {attr: found for attr, found in bounds.items() if len(found) > 1}
+    if not merged:
+        return holding
+    out: list[ast.expr] = []
+    done: set[str] = set()
+    placed = {found[0][2]: attr for attr, found in merged.items()}  # where each attr's first bound was
+    dropped = {k for found in merged.values() for _op, _c, k in found}
+    for k, term in enumerate(holding):
+        attr = placed.get(k)
+        if attr is not None and attr not in done:
+            done.add(attr)
+            out.append(_interval(attr, merged[attr]))
+        elif k not in dropped:
+            out.append(term)
+    ctx.numeric |= set(merged)
+    return out
+
+
+def _bound(term: ast.expr) -> tuple[str, type[ast.cmpop], int | float] | None:
+    """`self.x OP c` (OP one of < <= > >=, c an int or float constant, not NaN), read either way
+    round and under `not`, as (x, OP with x on the left, c)."""
+    negate = isinstance(term, ast.UnaryOp) and isinstance(term.op, ast.Not)
+    node = term.operand if negate else term  # type: ignore[attr-defined]
+    if not (isinstance(node, ast.Compare) and len(node.ops) == 1 and type(node.ops[0]) in _FLIP):
+        return None
+    op, left, right = type(node.ops[0]), node.left, node.comparators[0]
+    if isinstance(left, ast.Constant) and _self_attr_load(right):
+        op, left, right = _FLIP[op], right, left
+    if not (_self_attr_load(left) and isinstance(right, ast.Constant)):
+        return None
+    c = right.value
+    if not isinstance(c, int | float) or isinstance(c, bool) or c != c:
+        return None
+    return left.attr, (_NEGATE[op] if negate else op), c  # type: ignore[attr-defined]
+
+
+def _interval(attr: str, found: list[tuple[type[ast.cmpop], int | float, int]]) -> ast.expr:
+    """The tightest bound each way of `self.attr` among `found`, as one comparison (`lo <= x < hi`)."""
+    upper = [(c, op is ast.Lt) for op, c, _k in found if op in (ast.Lt, ast.LtE)]
+    lower = [(c, op is ast.Gt) for op, c, _k in found if op in (ast.Gt, ast.GtE)]
+    ops: list[ast.cmpop] = []
+    values: list[ast.expr] = []
+    if lower:
+        c, strict = max(lower)  # the largest; strict before not at the same value
+        ops.append(ast.Lt() if strict else ast.LtE())
+        values.append(ast.Constant(c))
+    values.append(ast.Attribute(value=ast.Name(id="self", ctx=ast.Load()), attr=attr, ctx=ast.Load()))
+    if upper:
+        c, strict = min(upper, key=lambda b: (b[0], not b[1]))  # the smallest; strict first
+        ops.append(ast.Lt() if strict else ast.LtE())
+        values.append(ast.Constant(c))
+    return ast.Compare(left=values[0], ops=ops, comparators=values[1:])
+
+
+#: How a comparison `x OP c` changes as x grows: +1 (false to true at most), -1 (true to false at most).
+_GROWS: dict[type[ast.cmpop], int] = {ast.Gt: 1, ast.GtE: 1, ast.Lt: -1, ast.LtE: -1}
+
+
+def _polarity(e: ast.expr, attr: str) -> int | None:
+    """How the truth of `e` moves as `self.attr` grows, the rest kept: 0 (it does not read it),
+    +1 (it can only turn true), -1 (only false), None (either, or not known): comparisons of
+    `self.attr` itself with what does not read it, under `not`, `and`, `or`."""
+    if not _reads(e, attr):
+        return 0
+    if isinstance(e, ast.UnaryOp) and isinstance(e.op, ast.Not):
+        p = _polarity(e.operand, attr)
+        return None if p is None else -p
+    if isinstance(e, ast.BoolOp):
+        ps = {_polarity(v, attr) for v in e.values} - {0}
+        return ps.pop() if len(ps) == 1 else None
+    if isinstance(e, ast.Compare) and len(e.ops) == 1:
+        grows = _GROWS.get(type(e.ops[0]))
+        left, right = e.left, e.comparators[0]
+        if grows is None:
+            return None
+        if _is_attr(left, attr) and not _reads(right, attr):
+            return grows
+        if _is_attr(right, attr) and not _reads(left, attr):
+            return -grows
+    return None
+
+
+def _is_attr(node: ast.AST, attr: str) -> bool:
+    return _self_attr_load(node) and node.attr == attr  # type: ignore[attr-defined]
+
+
+def _reads(e: ast.AST, attr: str) -> bool:
+    return any(_is_attr(n, attr) for n in ast.walk(e))
 
 
 class _Shared(ast.NodeTransformer):

@@ -195,14 +195,22 @@ class Automaton:
 class Verdict3:
     """LTL3 over a finite run, position by position: `step(label)` reads one position (atoms as
     a bit mask over `atoms`) and returns True (satisfied whatever follows), False (violated
-    whatever follows) or None (pending)."""
+    whatever follows) or None (pending).
+
+    The two automata are followed as sets of states, the subset construction made as the run
+    goes; each (sets, label) seen is kept with its outcome, so a monitor that judges a formula at
+    every boundary pays a dict look-up for a step taken before (at most MEMO of them are kept)."""
+
+    #: The most steps kept (a set of states is a few small ints: a few MB at most).
+    MEMO = 4096
 
     def __init__(self, f: Formula, text: str = "") -> None:
         self.yes = Automaton(core(f), text=text)
         self.no = Automaton(core(neg(f)), text=text)
         self.atoms = sorted(set(self.yes.atoms) | set(self.no.atoms))
-        self._now: tuple[list[int], list[int]] | None = None
+        self._now: tuple[tuple[int, ...], tuple[int, ...]] | None = None
         self._alive: dict[tuple[int, int], bool] = {}
+        self._memo: dict[tuple[object, int], tuple[tuple[tuple[int, ...], tuple[int, ...]], bool | None]] = {}
 
     def _local(self, aut: Automaton, label: int) -> int:
         """A label over all the atoms as the automaton's own (its atoms are a subset)."""
@@ -213,19 +221,28 @@ class Verdict3:
         return out
 
     def step(self, label: int) -> bool | None:
+        key = (self._now, label)
+        hit = self._memo.get(key)
+        if hit is not None:
+            self._now = hit[0]
+            return hit[1]
         if self._now is None:
-            yes = self.yes.initial(self._local(self.yes, label))
-            no = self.no.initial(self._local(self.no, label))
+            yes = tuple(self.yes.initial(self._local(self.yes, label)))
+            no = tuple(self.no.initial(self._local(self.no, label)))
         else:
             ly, ln = self._local(self.yes, label), self._local(self.no, label)
-            yes = sorted({r for q in self._now[0] for r in self.yes.successors(q, ly)})
-            no = sorted({r for q in self._now[1] for r in self.no.successors(q, ln)})
+            yes = tuple(sorted({r for q in self._now[0] for r in self.yes.successors(q, ly)}))
+            no = tuple(sorted({r for q in self._now[1] for r in self.no.successors(q, ln)}))
         self._now = (yes, no)
         if not any(self._goes_on(self.yes, 0, q) for q in yes):
-            return False
-        if not any(self._goes_on(self.no, 1, q) for q in no):
-            return True
-        return None
+            out: bool | None = False
+        elif not any(self._goes_on(self.no, 1, q) for q in no):
+            out = True
+        else:
+            out = None
+        if len(self._memo) < self.MEMO:
+            self._memo[key] = (self._now, out)
+        return out
 
     def _goes_on(self, aut: Automaton, which: int, q: int) -> bool:
         """Whether some infinite word is accepted from state q: a cycle reachable from it that

@@ -38,46 +38,65 @@ class EnvironmentError_(ValueError):
 
 
 class Oracle:
-    """The environment's choices inside one step, in the order the step asks for them."""
+    """The environment's choices inside one step, in the order the step asks for them.  Asked
+    at every step of an exploration with an environment, so each method is kept to a few
+    operations (docs/verify.md, "Performance")."""
+
+    __slots__ = ("code", "describe", "forced", "made", "said")
 
     def __init__(self) -> None:
-        self.forced: list[int] = []
+        self.forced: Sequence[int] = ()
         self.made: list[tuple[int, int]] = []
         self.code: int | None = None  # replaying: the choices as one number
         self.said: list[str] = []
         self.describe = False
 
     def start(self, forced: Sequence[int] = (), code: int | None = None, describe: bool = False) -> None:
-        self.forced, self.code, self.describe = list(forced), code, describe
+        """A step begins: make the choices `forced` (the first ones; 0 after them), or those
+        numbered `code`; with `describe`, say each in `said` (which is kept as it was otherwise)."""
+        self.forced, self.code, self.describe = forced, code, describe
         self.made = []
-        self.said = []
+        if describe:
+            self.said = []
 
     def decide(self, n: int, what: Callable[[int], str]) -> int:
         """One of n alternatives (0 first)."""
+        made = self.made
         if self.code is not None:
             self.code, d = divmod(self.code, n)
         else:
-            k = len(self.made)
-            d = self.forced[k] if k < len(self.forced) else 0
-        self.made.append((d, n))
+            k = len(made)
+            forced = self.forced
+            d = forced[k] if k < len(forced) else 0
+        made.append((d, n))
         if self.describe:
             self.said.append(what(d))
         return d
 
     def number(self) -> int:
         """The choices made, as one number (the first choice varying fastest)."""
+        made = self.made
+        if len(made) < 2:
+            return made[0][0] if made else 0
         code = 0
-        for d, n in reversed(self.made):
+        for d, n in reversed(made):
             code = code * n + d
         return code
 
     def next_forced(self) -> list[int] | None:
         """The choices of the next sequence to try (the last one with an alternative left moved
         on, those after it dropped), or None when every sequence has been tried."""
-        for j in range(len(self.made) - 1, -1, -1):
-            d, n = self.made[j]
+        made = self.made
+        j = len(made) - 1
+        while j >= 0:
+            d, n = made[j]
             if d + 1 < n:
-                return [x for x, _n in self.made[:j]] + [d + 1]
+                if not j:
+                    return [d + 1]  # one choice in the step, the usual case: no comprehension
+                forced = [x for x, _n in made[:j]]
+                forced.append(d + 1)
+                return forced
+            j -= 1
         return None
 
 
@@ -113,10 +132,10 @@ class EnvService:
         self.texts = texts
         self.may_fail = may_fail
         self.oracle = oracle
+        self.choices = len(responses) + int(may_fail)
 
     def _answer(self, request: Any) -> Any:
-        n = len(self.responses) + int(self.may_fail)
-        d = self.oracle.decide(n, self._said)
+        d = self.oracle.decide(self.choices, self._said)
         if d == len(self.responses):
             return Future(self.srv_name)  # never done: the call gets no answer
         return self.responses[d]  # the bus hands the caller a copy (bus._Request)
@@ -136,11 +155,58 @@ class EnvTopic:
         self.values = values
         self.texts = texts
 
+    def said(self, d: int) -> str:
+        return f"{self.name}: nothing new" if d == 0 else f"{self.name}: a message {self.texts[d - 1]}"
+
+
+class _Asked:
+    """A request to a service of the environment, waiting in the executor's queue as the bus's
+    own request (`llfsm.ros.bus._Request`) does, and answered as it is when the executor runs it:
+    the oracle's choice, a copy of that response (or no answer), for the same future."""
+
+    __slots__ = ("bus", "future", "request", "server", "service")
+
+    def __init__(self, bus: Any, service: str, request: Any, future: Future, server: EnvService) -> None:
+        self.bus, self.service, self.request, self.future, self.server = bus, service, request, future, server
+
+    def _run(self) -> None:
+        future = self.future
+        server = self.server
+        if self.bus.services.get(self.service) is not server:  # pragma: no cover (verify refuses create_service)
+            from ..ros.bus import _Request  # deferred: start-up (only once the bus exists)
+
+            _Request(self.bus, self.service, self.request, future)._run()
+            return
+        if future._done:
+            return  # cancelled before the executor came to it: no answer, no choice
+        d = server.oracle.decide(server.choices, server._said)
+        if d < len(server.responses):
+            if future._callbacks:
+                future.set_result(server.responses[d]._copy())
+            else:  # as set_result, with no callback to run: the usual case, a call to wait on
+                future._result = server.responses[d]._copy()
+                future._done = True
+        # else: no answer (may_fail); the future stays pending
+
 
 class World:
-    """The declared environment on verify's bus, with the oracle that makes its choices."""
+    """The declared environment on verify's bus, with the oracle that makes its choices.
 
-    def __init__(self, declared: Declared, bus: Any) -> None:
+    **Its services' requests, without the executor's loop.**  A service call of machine code is
+    most of what a step with an environment does, and the executor's general machinery (a
+    request queued, the spin loop's checks, the server looked up, its answer tested for a
+    future) would be most of that.  So on verify's bus (never a run's) `call` queues a
+    request to a declared service as `_Asked`, and `spin_until`, when the executor's next work is
+    that very request, runs it at once: what the executor's loop would do first, since verify's
+    bus has no timers (verify refuses them), no transport and nothing else ahead of it in the
+    queue.  Otherwise (anything queued ahead, `ros.ok()` false, a request left pending, a call
+    to any other service) the bus's own methods run, so what machine code sees (a pending future
+    until the executor's turn, INTERRUPTED, TIMEOUT, the order of callbacks and answers, hence
+    the order of the oracle's choices) is unchanged.  `direct=False` (verify's generic step,
+    `Options.generic`) leaves the bus as it is: tests/test_verify_environment.py compares the two.
+    """
+
+    def __init__(self, declared: Declared, bus: Any, direct: bool = True) -> None:
         self.oracle = Oracle()
         self.services: dict[str, EnvService] = {}
         self.topics: dict[str, EnvTopic] = {}
@@ -160,6 +226,43 @@ class World:
             except (LookupError, ValuesError) as e:
                 raise EnvironmentError_(f"{t.where}: topic {name}: {e}") from None
             self.topics[name] = EnvTopic(name, cls, values, [_shown(v) for v in t.values])
+        if self.services and direct:
+            self._take_requests(bus)
+        from ..ros.subscription import Subscription  # deferred: start-up (the bus exists by now)
+
+        self._subscription = Subscription
+
+    def _take_requests(self, bus: Any) -> None:
+        """`call` and `spin_until` of verify's bus, for the declared services (see the class)."""
+        services, ready, ctx = bus.services, bus.ready, bus.ctx
+        call, spin_until = bus.call, bus.spin_until
+        from ..ros.executor import FutureReturnCode  # deferred: start-up (the bus exists by now)
+
+        success = FutureReturnCode.SUCCESS
+
+        def call_env(service: str, request: Any) -> Future:
+            server = services.get(service)
+            if server.__class__ is not EnvService:
+                return call(service, request)
+            future = Future(service)
+            ready.append(_Asked(bus, service, request, future, server))  # as Executor.queue
+            ctx.wake = 0
+            return future
+
+        def spin_env(future: Future, timeout_ns: int | None) -> Any:
+            if ready and not future._done:
+                first = ready[0]
+                if first.__class__ is _Asked and first.future is future and not bus.timers and bus.ok():
+                    ready.popleft()  # as Executor._run_ready
+                    first._run()
+                    if bus.last:
+                        bus._run_last()
+                    if future._done:
+                        return success
+            return spin_until(future, timeout_ns)
+
+        bus.call = call_env
+        bus.spin_until = spin_env
 
     def before_ringlet(self, m: Any, names: Sequence[str]) -> None:
         """New messages on the declared topics, for the subscriptions the machine's variables hold
@@ -167,19 +270,16 @@ class World:
         if not self.topics:
             return
         seen: set[int] = set()
+        subscription = self._subscription
         for name in names:
             sub = getattr(m, name, None)
-            topic = getattr(sub, "topic_name", None)
-            if topic is None or id(sub) in seen or not hasattr(sub, "_deliver"):
+            if not isinstance(sub, subscription) or id(sub) in seen:
                 continue
+            topic = sub.topic_name
             seen.add(id(sub))
             env = self.topics.get(topic)
             if env is None:
                 continue
-
-            def said(d: int, env: EnvTopic = env) -> str:
-                return f"{env.name}: nothing new" if d == 0 else f"{env.name}: a message {env.texts[d - 1]}"
-
-            d = self.oracle.decide(len(env.values) + 1, said)
-            if d and sub is not None:
+            d = self.oracle.decide(len(env.values) + 1, env.said)
+            if d:
                 sub._deliver(env.values[d - 1]._copy())  # a PUSH one queues it: the step runs it first

@@ -197,6 +197,9 @@ class Explorer(Stepper):
         bounded = bool(self.bounds)
         world = self.world
         oracle = world.oracle if world is not None else None
+        topics = world if world is not None and world.topics else None  # messages before each ringlet
+        if oracle is not None:
+            oracle.start(())  # in the loop below, only its choices and `forced` change
         variables = [c.variables for c in codecs]
         drain = self._drain
         edge_choice = self.edge_choice
@@ -296,8 +299,8 @@ class Explorer(Stepper):
                 m = machines[turn]
                 names = input_names[turn]
                 for base, (values, tm, intr) in enumerate(choices):
-                    if oracle is not None:
-                        oracle.start(())
+                    if oracle is not None and (oracle.made or oracle.forced):  # else as start() leaves it
+                        oracle.forced, oracle.made = (), []  # start(()) with no code nor description
                     while True:  # each sequence of the environment's choices (one without an environment)
                         c = base
                         # the configuration into the objects (what the previous choice changed)
@@ -316,8 +319,8 @@ class Explorer(Stepper):
                         if names:
                             for name, v in zip(names, values, strict=True):
                                 setattr(m, name, v)
-                        if world is not None:  # the environment's messages, before the ringlet
-                            world.before_ringlet(m, variables[turn])
+                        if topics is not None:  # the environment's messages, before the ringlet
+                            topics.before_ringlet(m, variables[turn])
                             if bus.ready:
                                 drain()
                         now = reps[turn][m._state][tm] if period is None else tm
@@ -338,7 +341,9 @@ class Explorer(Stepper):
                         if oracle is not None:
                             if bus.ready:  # the answers and callbacks it left, as between rounds
                                 drain()
-                            c += len(choices) * oracle.number()
+                            chosen = oracle.made
+                            if chosen:
+                                c += len(choices) * (chosen[0][0] if len(chosen) == 1 else oracle.number())
                         steps += 1
                         # the machine's new part (and those its commands touched)
                         part = snaps[turn](m)
@@ -432,8 +437,15 @@ class Explorer(Stepper):
                             edges.append(j)
                             if oracle is not None:
                                 edge_choice.append(c)
-                        if oracle is None:
+                        if oracle is None or not oracle.made:
                             break
+                        chosen = oracle.made
+                        if len(chosen) == 1:  # next_forced() and start() of the usual case, one choice
+                            d, nd = chosen[0]
+                            if d + 1 >= nd:
+                                break
+                            oracle.forced, oracle.made = (d + 1,), []
+                            continue
                         forced = oracle.next_forced()
                         if forced is None:
                             break

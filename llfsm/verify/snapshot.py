@@ -73,7 +73,8 @@ class Codec:
         for k, name in enumerate(self.variables):
             lines.append(f"    v{k} = m.{name}")
             lines.append(f"    if v{k}.__class__ not in S:")
-            lines.append(f"        v{k} = F(v{k}, {k})")
+            lines.append(f"        h = P(id(v{k}))")  # a handle: its token, without a call
+            lines.append(f"        v{k} = h if h is not None else F(v{k}, {k})")
             values.append(f"v{k}")
         parts = ["K[r]", "K[m._next] if r is G else 0", "m._state", "m._pending", "m._suspended"]
         parts += ["m._resume_to", "m._finished"]
@@ -86,7 +87,9 @@ class Codec:
             lines.append(f"    m.{name} = t[{FIRST_INPUT + k}]")
         for k, name in enumerate(self.variables):
             lines.append(f"    v = t[{self.first_variable + k}]")
-            lines.append(f"    m.{name} = T(v, H) if v.__class__ is Z else v")
+            lines.append("    if v.__class__ is Z:")
+            lines.append('        v = O[v[1]] if v[0] == "handle" else T(v, H)')  # a handle: no call
+            lines.append(f"    m.{name} = v")
         scope: dict[str, Any] = {
             "S": SCALARS,
             "K": kinds,
@@ -95,6 +98,8 @@ class Codec:
             "F": self._freeze,
             "T": thaw,
             "H": self.handles,
+            "P": self.handles.plain.get,
+            "O": self.handles.objects,
             "Z": Frozen,
         }
         # llfsm's own text (attribute names are identifiers the checker accepted): no user code

@@ -229,7 +229,7 @@ class Stepper(Store):
         self.arr = arr
         self.machines: list[Machine] = arr.machines
         #: the environment a verification file declares (llfsm.verify.environment), on the bus
-        self.world = World(loaded.environment, self.bus) if loaded.environment else None
+        self.world = World(loaded.environment, self.bus, direct=not options.generic) if loaded.environment else None
         self.edge_choice = array("L")  # with an environment: each edge's choice number
         # the bus as the machines found it (nodes their initialisers made stay, as in a run)
         self.base_nodes = list(self.bus.nodes)

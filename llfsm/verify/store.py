@@ -75,8 +75,9 @@ class Options:
     hash_compact: bool = False
     #: keep every edge (liveness, CTL, exports need the graph; safety alone does not)
     graph: bool = False
-    #: explore with the generic step (as replay does) rather than the specialised loop: the two
-    #: must explore alike (a test compares them)
+    #: explore with the generic step rather than the specialised loop, and an environment's
+    #: services answered by the bus's own executor rather than directly (llfsm.verify.environment,
+    #: World): each pair must explore alike (tests compare them)
     generic: bool = False
 
 

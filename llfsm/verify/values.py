@@ -40,6 +40,10 @@ class Handles:
         #: each object's token by its id, with the object (kept alive, so the id is its own):
         #: what a handle is never changes, and a configuration is frozen at every step
         self.known: dict[int, tuple[Any, Frozen]] = {}
+        #: the tokens of the handles frozen as their token alone (all but readers), by id: what
+        #: a machine's snapshot looks up first (llfsm.verify.snapshot), one dict look-up per
+        #: handle; `known` keeps each object alive, so no other object can have its id
+        self.plain: dict[int, Frozen] = {}
 
     def token(self, obj: Any) -> Frozen | None:
         hit = self.known.get(id(obj))
@@ -54,6 +58,8 @@ class Handles:
             self.objects.append(obj)
         token = Frozen(("handle", index, *key))
         self.known[id(obj)] = (obj, token)
+        if key[0] != "subscription":
+            self.plain[id(obj)] = token
         return token
 
 
@@ -114,6 +120,8 @@ def thaw(value: Any, handles: Handles) -> Any:
     if type(value) is not Frozen:
         return value
     kind = value[0]
+    if kind == "handle":  # first: every machine on the bus holds some, thawed at every step
+        return handles.objects[value[1]]
     if kind == "list":
         return [thaw(v, handles) for v in value[1:]]
     if kind == "tuple":
@@ -131,8 +139,6 @@ def thaw(value: Any, handles: Handles) -> Any:
         for (name, _), v in zip(cls._FIELDS, value[2:], strict=True):
             setattr(msg, name, thaw(v, handles))
         return msg
-    if kind == "handle":
-        return handles.objects[value[1]]
     if kind == "future":
         from ..ros.task import Future  # deferred: start-up (only a machine that calls a service)
 

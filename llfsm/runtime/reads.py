@@ -26,6 +26,13 @@ run by the bus) touches.  (Functions of Python's library, installed packages and
 methods, are taken to keep no reference to what they are handed beyond the object they are
 called on, which joins the group.)
 Such a variable is *escaped*: a property reading it is judged at every boundary.
+
+**A number stepped by a constant.**  A variable that every ringlet changes only by a numeric
+literal (`n += 1`, `n -= 2`, `n = 0`) and no OnSuspend/OnResume hook touches stays a number
+once it is one (the monitor checks that it is, at the start and wherever the scheduler's gate
+sets it from outside): in a ringlet that only steps it one way (`Ringlet.steps`), a bound the
+property holds it to on the other side cannot be crossed (llfsm.monitor.variant folds that check
+away).
 """
 
 from __future__ import annotations
@@ -62,6 +69,9 @@ class Ringlet:
     moves: bool = False
     #: it may finish the machine (an accepting state's ringlet)
     finishes: bool = False
+    #: how it changes each variable it touches, each way: "up" (`x += 1`, `x -= -0.5`),
+    #: "down", "set" (`x = 3`: a numeric literal), "other" (anything else)
+    changes: dict[str, set[str]] = field(default_factory=dict)
 
 
 @dataclass
@@ -78,6 +88,8 @@ class ClassReads:
     trees: dict[str, ast.FunctionDef]
     filename: str
     namespace: dict[str, Any]
+    #: variables an OnSuspend or OnResume hook may change (the gate runs those)
+    hooked: set[str] = field(default_factory=set)
 
     def changers(self, variable: str) -> set[str]:
         """The ringlets that may change `variable`'s value; None-like empty set if none."""
@@ -86,6 +98,26 @@ class ClassReads:
 
     def is_escaped(self, variable: str) -> bool:
         return self.group.get(variable, variable) in self.escaped
+
+    def numeric(self, variable: str) -> bool:
+        """Whether the machine's own code keeps `variable` a number once it is one: it shares
+        its object with no other variable, nothing hands it on, and every ringlet changes it by
+        numeric literals alone (see the module's docstring)."""
+        if variable not in self.variables or variable in self.hooked or self.is_escaped(variable):
+            return False
+        if any(v != variable and g == self.group[variable] for v, g in self.group.items()):
+            return False
+        return all(r.changes.get(variable, set()) <= {"up", "down", "set"} for r in self.ringlets.values())
+
+    def step(self, ringlet: str, variable: str) -> int:
+        """+1 if the ringlet only steps `variable` up by literals (and it is numeric), -1 if only
+        down, 0 otherwise (it sets it, changes it otherwise, or does not change it)."""
+        kinds = self.ringlets[ringlet].changes.get(variable)
+        if kinds == {"up"} and self.numeric(variable):
+            return 1
+        if kinds == {"down"} and self.numeric(variable):
+            return -1
+        return 0
 
 
 def class_reads(cls: type[Any]) -> ClassReads | None:
@@ -104,9 +136,11 @@ def class_reads(cls: type[Any]) -> ClassReads | None:
         return None
     defs = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef)}
     namespace = vars(module)
-    for f in funcs:
-        d = defs.get(f.__name__)
-        if d is None or d.lineno != f.__code__.co_firstlineno or f.__code__.co_filename != filename:
+    hooks = [f for f in (*getattr(cls, "ON_SUSPEND", ()), *getattr(cls, "ON_RESUME", ())) if f is not None]
+    for f in (*funcs, *hooks):
+        d = defs.get(getattr(f, "__name__", ""))
+        code = getattr(f, "__code__", None)
+        if d is None or code is None or d.lineno != code.co_firstlineno or code.co_filename != filename:
             return None  # the text on disk is not what was compiled
     slots = [s for c in type.mro(cls) for s in vars(c).get("__slots__", ())]
     variables = tuple(s for s in slots if not s.startswith("_") and "__" not in s)
@@ -128,17 +162,46 @@ def class_reads(cls: type[Any]) -> ClassReads | None:
             continue
         scan = _Scan(names, own, namespace)
         scan.visit(defs[f.__name__])
-        r = Ringlet(f.__name__, scan.touched, scan.moves, scan.finishes)
+        r = Ringlet(f.__name__, scan.touched, scan.moves, scan.finishes, scan.changes)
         ringlets[f.__name__] = r
-        touched = sorted(scan.touched)
+        # one group of what the ringlet may make share an object; a numeric literal stepped or
+        # set makes no other name for anything (`x += 1` on a shared object is an "other" change
+        # of it: a ringlet that joined them, `alias = x`, put them in one group already)
+        touched = sorted(v for v in scan.touched if "other" in scan.changes.get(v, {"other"}))
         for a in touched[1:]:
             parent[find(a)] = find(touched[0])
         if scan.escapes:
             escaped_vars |= scan.touched
         escaped_vars |= scan.in_callbacks
+    # the initial values (Variables.py, run once by `_initialise`): `alias: list = items` makes
+    # one object of two variables, `box: list = SHARED` one a module-level object can change
+    for st in _initialiser(tree, cls.__name__):
+        scan = _Scan(names, own, namespace)
+        scan.visit(st)
+        joined = sorted(v for v in scan.touched if "other" in scan.changes.get(v, {"other"}))
+        for a in joined[1:]:
+            parent[find(a)] = find(joined[0])
+        if scan.escapes:
+            escaped_vars |= scan.touched
+    hooked: set[str] = set()
+    for f in hooks:
+        scan = _Scan(names, own, namespace)
+        scan.visit(defs[f.__name__])
+        hooked |= scan.touched
     group = {v: find(v) for v in names}
     escaped = {group[v] for v in escaped_vars if v in group}
-    return ClassReads(ringlets, variables, group, escaped, {n: defs[n] for n in ringlets}, filename, namespace)
+    trees = {n: defs[n] for n in ringlets}
+    return ClassReads(ringlets, variables, group, escaped, trees, filename, namespace, hooked)
+
+
+def _initialiser(tree: ast.Module, name: str) -> list[ast.stmt]:
+    """The statements of class `name`'s `_initialise` in the generated module."""
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef) and node.name == name:
+            for item in node.body:
+                if isinstance(item, ast.FunctionDef) and item.name == "_initialise":
+                    return item.body
+    return []
 
 
 def _own_definitions(namespace: dict[str, Any]) -> set[str]:
@@ -176,6 +239,8 @@ class _Scan(ast.NodeVisitor):
         self.escapes = False
         self.depth = 0  # inside a nested function or lambda (a callback)
         self.parents: list[ast.AST] = []
+        self.changes: dict[str, set[str]] = {}
+        self._stepped: set[int] = set()  # targets of a numeric step or set (the kinds above)
 
     def generic_visit(self, node: ast.AST) -> None:
         self.parents.append(node)
@@ -199,7 +264,27 @@ class _Scan(ast.NodeVisitor):
         for t in node.targets:
             if is_self_attr(t, "_state"):
                 self.moves = True
+        if len(node.targets) == 1 and _number(node.value) is not None:
+            self._numeric_change(node.targets[0], "set")
         self.generic_visit(node)
+
+    def visit_AnnAssign(self, node: ast.AnnAssign) -> None:
+        if node.value is not None and _number(node.value) is not None:
+            self._numeric_change(node.target, "set")
+        self.generic_visit(node)
+
+    def visit_AugAssign(self, node: ast.AugAssign) -> None:
+        value = _number(node.value)
+        if value and isinstance(node.op, ast.Add | ast.Sub):
+            self._numeric_change(node.target, "up" if (value > 0) == isinstance(node.op, ast.Add) else "down")
+        self.generic_visit(node)
+
+    def _numeric_change(self, target: ast.expr, kind: str) -> None:
+        """`self.x` changed by a numeric literal, in the ringlet's own code (not a callback)."""
+        own = isinstance(target, ast.Attribute) and is_self_attr(target, target.attr)
+        if own and not self.depth and target.attr in self.names:  # type: ignore[attr-defined]
+            self.changes.setdefault(target.attr, set()).add(kind)  # type: ignore[attr-defined]
+            self._stepped.add(id(target))
 
     def visit_Call(self, node: ast.Call) -> None:
         f = node.func
@@ -223,8 +308,11 @@ class _Scan(ast.NodeVisitor):
             if self.depth:
                 self.in_callbacks.add(node.attr)
                 self.touched.add(node.attr)
+                self.changes.setdefault(node.attr, set()).add("other")
             elif not self._plain_read(node):
                 self.touched.add(node.attr)
+                if id(node) not in self._stepped:
+                    self.changes.setdefault(node.attr, set()).add("other")
         self.generic_visit(node)
 
     def _plain_read(self, node: ast.AST) -> bool:
@@ -256,6 +344,18 @@ class _Scan(ast.NodeVisitor):
             name = up.func.id if isinstance(up.func, ast.Name) else ""
             return name in _VALUE_BUILTINS and name in vars(builtins) and name not in self.namespace
         return False
+
+
+def _number(node: ast.expr) -> int | float | None:
+    """The value of a numeric literal (`3`, `-0.5`; not a bool), else None."""
+    sign = 1
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
+        sign = -1 if isinstance(node.op, ast.USub) else 1
+        node = node.operand
+    value = node.value if isinstance(node, ast.Constant) else None
+    if type(value) is int or type(value) is float:  # not a bool, which is an int too
+        return sign * value
+    return None
 
 
 def _root_name(node: ast.AST) -> str | None:
