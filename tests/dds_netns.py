@@ -9,10 +9,13 @@ machine does not allow unshare (no root, no user namespaces) the fixture skips w
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
 import sys
+import textwrap
+import threading
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -28,6 +31,40 @@ ISOLATED = (
     "ROS_LOCALHOST_ONLY",
 )
 SETUP = "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo"
+
+#: The prologue of a hostile peer (a `python -c` script): a participant, raw writers of llfsm's
+#: DDS types (`writer(topic, cls, *qos)`, `write(w, payload)`: bytes of the peer's own making,
+#: as a peer of any vendor could put on the wire), and CDR helpers (`string`, `HEAD`).
+RAW_PEER = textwrap.dedent(
+    """
+    import struct, sys, time
+    from cyclonedds._clayer import ddspy_write
+    from cyclonedds.core import Policy, Qos
+    from cyclonedds.domain import DomainParticipant
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.topic import Topic
+    from llfsm.msgs._dds import dds_type
+    from llfsm.msgs.std_msgs.msg import String
+    from llfsm.msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
+
+    dp = DomainParticipant(0)
+    XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
+
+    def writer(name, cls, *extra):
+        qos = Qos(Policy.Reliability.Reliable(max_blocking_time=10**8), XCDR1, *extra)
+        return DataWriter(dp, Topic(dp, name, dds_type(cls)), qos=qos)
+
+    def write(w, payload):
+        payload = bytes(payload)
+        payload += bytes(-len(payload) % 4)
+        ddspy_write(w._ref, payload)
+
+    def string(raw):
+        return struct.pack("<I", len(raw) + 1) + raw + b"\\0"
+
+    HEAD = b"\\0\\1\\0\\0"
+    """
+)
 
 
 class NetNamespace:
@@ -93,6 +130,26 @@ def finish(p: subprocess.Popen[str], timeout: float) -> tuple[int, str, str]:
         out, err = p.communicate(timeout=10)
         err += f"\n[killed after {timeout} s]"
     return p.returncode, out, err
+
+
+def start_view(ns: NetNamespace, *args: str) -> tuple[subprocess.Popen[str], str, list[str]]:
+    """`llfsm view` in the namespace (`args` after `--web 127.0.0.1:0`): the process, its page's
+    URL, and its stderr as it comes (read on, and stdout drained, by threads)."""
+    view = ns.llfsm("view", "--web", "127.0.0.1:0", *args, env={"PYTHONUNBUFFERED": "1"})
+    assert view.stderr is not None
+    err: list[str] = []
+    url = ""
+    for line in view.stderr:
+        err.append(line)
+        m = re.search(r"http://\S+", line)
+        if m:
+            url = m.group(0)
+            break
+    assert url, "llfsm view printed no address: " + "".join(err)
+    threading.Thread(target=lambda: err.extend(view.stderr or []), daemon=True).start()
+    if view.stdout is not None:
+        threading.Thread(target=lambda: [None for _ in view.stdout or []], daemon=True).start()
+    return view, url, err
 
 
 def interrupt(p: subprocess.Popen[str], after: float, sig: int = signal.SIGINT) -> None:

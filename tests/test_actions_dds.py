@@ -119,6 +119,25 @@ def test_turtle_rotator_ends_with_a_line_when_turtlesim_dies_mid_goal(netns: Net
 
 
 @pytest.mark.dds
+def test_topic_hz_and_echo_read_an_actions_hidden_feedback_topic(netns: NetNamespace) -> None:
+    """Its type is the action's `RotateAbsolute_FeedbackMessage` (`turtlesim/action/...`), which
+    `topic hz` and `topic echo` take from discovery as `ros2 topic` does."""
+    sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "30")
+    feedback = "/turtle1/rotate_absolute/_action/feedback"
+    goal = netns.llfsm("action", "send_goal", *ROTATE, "{theta: 3.1}")
+    wait_for_line(goal, r"^Goal accepted with ID", 20)
+    hz = netns.llfsm("topic", "hz", feedback, "--duration", "2")
+    echo = netns.llfsm("topic", "echo", feedback, "--once")
+    status, out, err = finish(hz, 30)
+    assert status == 0 and "average rate: " in out, err
+    status, out, err = finish(echo, 30)
+    assert status == 0 and "feedback:\n  remaining: " in out, err
+    finish(goal, 30)
+    sim.send_signal(signal.SIGINT)
+    finish(sim, 20)
+
+
+@pytest.mark.dds
 def test_ctrl_c_during_send_goal_cancels_the_goal(netns: NetNamespace) -> None:
     sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "25")
     goal = netns.llfsm("action", "send_goal", *ROTATE, "{theta: 3.0}")

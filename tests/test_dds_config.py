@@ -12,7 +12,9 @@ def test_defaults_are_domain_0_on_the_subnet() -> None:
     d = c.settings({})
     assert (d.domain_id, d.range, d.static_peers) == (0, "SUBNET", ())
     xml = c.config_xml({})
-    assert "<ParticipantIndex>auto</ParticipantIndex>" in xml
+    # Cyclone chooses: none (no limit per host) with multicast and no peers, else auto (max 119)
+    assert "ParticipantIndex>" not in xml.replace("MaxAutoParticipantIndex>", "")
+    assert "<MaxAutoParticipantIndex>119</MaxAutoParticipantIndex>" in xml
     assert "AllowMulticast" not in xml
     assert "<IgnoreTypeInformation>1.15</IgnoreTypeInformation>" in xml
 
@@ -24,7 +26,7 @@ def test_localhost_turns_multicast_off_and_peers_with_localhost() -> None:
     assert (
         '<Peers><Peer address="localhost"/><Peer address="192.168.1.7"/><Peer address="robot.local"/></Peers>' in frag
     )
-    assert "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>" in frag
+    assert "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>119</MaxAutoParticipantIndex>" in frag
 
 
 def test_off_uses_a_private_tag_and_ignores_peers() -> None:

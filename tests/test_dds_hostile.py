@@ -25,44 +25,13 @@ import time
 from pathlib import Path
 
 import pytest
+from dds_netns import RAW_PEER as PRELUDE
 from dds_netns import NetNamespace, finish
 from helpers import REPO, Run
 
 pytest.importorskip("cyclonedds", reason="the DDS transport needs the cyclonedds package")
 
 from llfsm.ros.transports.dds import MAX_INCOMPATIBLE_WARNINGS  # after the skip: it needs cyclonedds
-
-#: The prologue of every hostile peer: a participant, a raw writer, and the CDR helpers.
-PRELUDE = textwrap.dedent(
-    """
-    import struct, sys, time
-    from cyclonedds._clayer import ddspy_write
-    from cyclonedds.core import Policy, Qos
-    from cyclonedds.domain import DomainParticipant
-    from cyclonedds.pub import DataWriter
-    from cyclonedds.topic import Topic
-    from llfsm.msgs._dds import dds_type
-    from llfsm.msgs.std_msgs.msg import String
-    from llfsm.msgs.rmw_dds_common.msg import ParticipantEntitiesInfo
-
-    dp = DomainParticipant(0)
-    XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
-
-    def writer(name, cls, *extra):
-        qos = Qos(Policy.Reliability.Reliable(max_blocking_time=10**8), XCDR1, *extra)
-        return DataWriter(dp, Topic(dp, name, dds_type(cls)), qos=qos)
-
-    def write(w, payload):
-        payload = bytes(payload)
-        payload += bytes(-len(payload) % 4)
-        ddspy_write(w._ref, payload)
-
-    def string(raw):
-        return struct.pack("<I", len(raw) + 1) + raw + b"\\0"
-
-    HEAD = b"\\0\\1\\0\\0"
-    """
-)
 
 #: Bad and good Strings on /chatter, and a latched ros_discovery_info naming two nodes, one of
 #: them with a name that is not UTF-8 (the sample as a whole cannot be decoded).

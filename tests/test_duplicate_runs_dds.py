@@ -53,8 +53,10 @@ def test_each_run_warns_that_another_runs_the_same_machine(netns: NetNamespace, 
 
 CLIENT = r"""
 import asyncio, json, aiohttp
+from llfsm.web.channel import Mirror
 async def main(url):
     rows = {}
+    mirror = Mirror()
     async with aiohttp.ClientSession() as s:
         async with s.ws_connect(url.replace("http://", "ws://") + "ws") as ws:
             loop = asyncio.get_running_loop()
@@ -67,8 +69,8 @@ async def main(url):
                 data = json.loads(msg.data)
                 if data["type"] == "hello":
                     names = [m["name"] for m in data["machines"]]
-                    data = data["snapshot"]
-                elif data["type"] != "snapshot":  # the graph of nodes and topics
+                data = mirror.apply(data)
+                if data is None:  # the graph of nodes and topics
                     continue
                 for m in data["machines"]:
                     rows[m["name"]] = m

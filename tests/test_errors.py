@@ -190,6 +190,31 @@ def test_machines_see_the_interrupt_and_finish_within_the_grace_time(tmp_path: P
     assert p.returncode == 0 and out.strip() == "bye"
 
 
+def test_a_run_whose_machines_left_ends_0_though_its_closing_outlasted_the_stop_timer(tmp_path: Path) -> None:
+    """Sixty DDS runs sent SIGINT at once on two cores (issue 28 item 9): a run's machines reach
+    END, then destroying their nodes while a hundred peers leave takes longer than the stop
+    timer allows, and the timer stops the run between rounds.  Its machines all left in time, so
+    it ends 0, as it would have (a machine still running makes it 130, as before:
+    tests/test_hardening_run.py's long wait between rounds)."""
+    from llfsm.runtime import Arrangement, RunContext, SimClock
+    from llfsm.runtime.errors import RunStopped
+    from llfsm.targets import load
+
+    cls = load(str(write_machine(tmp_path, "leaver", {"A": [("END", "True")], "END": None})))
+    ctx = RunContext(SimClock())
+    arr = Arrangement([cls], context=ctx)
+
+    def closing_outlasts_the_timer() -> None:  # what signals_handled's timer raises, between rounds
+        ctx.wake = 0
+        if arr.machines[0]._finished:
+            arr.interrupt(signal.SIGINT)
+            raise RunStopped(signal.SIGINT, "stopped by SIGINT", in_machine_code=False)
+
+    ctx.between_rounds.append(closing_outlasts_the_timer)
+    result = arr.run(duration_ns=10_000_000_000)
+    assert (result.reason, result.status) == ("finished", 0)
+
+
 def test_stdout_closed_early_ends_quietly(tmp_path: Path) -> None:
     m = write_machine(tmp_path, "chatty", {"A": [("A", "True")]}, {"A_OnEntry": "print('line ' * 20)"})
     ping = REPO / "machines" / "ros2_ping_pong.machine"

@@ -5,6 +5,7 @@ and a timeout, so that a case that would eat the machine fails instead of taking
 from __future__ import annotations
 
 import json
+import re
 import resource
 import sys
 from pathlib import Path
@@ -114,18 +115,36 @@ def test_max_memory_stops_the_exploration_naming_what_grew_in_size(tmp_path: Pat
     assert "memory" in r.stdout and "grow.items" in r.stdout and "in size" in r.stdout
 
 
-def test_the_default_memory_bound_is_half_of_what_the_process_may_use(tmp_path: Path) -> None:
-    # no --max-memory: under a 400 MiB address-space limit the exploration stops at about half of
-    # it with status 3, not with a MemoryError, a traceback or a kill; a value that grows by
-    # 200 kB a step gets there in about sixty configurations (a second or two)
-    blob = write_machine(
+def _growing_blob(tmp_path: Path) -> Path:
+    """A value 200 kB longer at every step: the configurations take memory in the square of the
+    steps (256 of them, 6.5 GB)."""
+    return write_machine(
         tmp_path,
         "blob",
         {"A": [("A", "True")]},
         {"A_OnEntry": 'blob = blob + b"x" * 200_000'},
         variables='blob: bytes = b""\n',
     )
-    r = verify_process(blob, timeout=120, limit=400 << 20)
+
+
+def test_max_memory_stops_a_value_growing_megabytes_a_step_near_the_bound(tmp_path: Path) -> None:
+    # verify looked every 256 new configurations: with --max-memory 100 MB it stopped at 6.67 GB
+    # in use (or, under this test's 1 GiB address space, at 100 configurations by a MemoryError);
+    # it now looks sooner as the configurations grow, and stops about where the bound is passed
+    # (the 32nd configuration holds 6.4 MB; 100 MB is reached by about the 25th)
+    r = verify_process(_growing_blob(tmp_path), "--max-memory", "100MB", timeout=120)
+    assert r.status == 3, (r.status, r.stderr[-2000:])
+    said = re.search(r"\(([\d.]+) (MB|GB) in use, --max-memory 100 MB; ([\d,]+) configurations", r.stdout)
+    assert said is not None, r.stdout
+    in_use = float(said.group(1)) * (1000 if said.group(2) == "GB" else 1)
+    assert in_use < 150 and int(said.group(3).replace(",", "")) <= 40, said.group(0)
+
+
+def test_the_default_memory_bound_is_half_of_what_the_process_may_use(tmp_path: Path) -> None:
+    # no --max-memory: under a 400 MiB address-space limit the exploration stops at about half of
+    # it with status 3, not with a MemoryError, a traceback or a kill; a value that grows by
+    # 200 kB a step gets there in about sixty configurations (a second or two)
+    r = verify_process(_growing_blob(tmp_path), timeout=120, limit=400 << 20)
     assert r.status == 3, (r.status, r.stderr[-2000:])
     assert "Traceback" not in r.stderr
     assert "stopped at the memory bound" in r.stdout and "--max-memory 210 MB" in r.stdout and "blob.blob" in r.stdout

@@ -25,6 +25,8 @@ from browser import ARGS, CHROMIUM, TIMEOUT_MS, Served, chromium, playwright_or_
 from dds_netns import NetNamespace, finish
 from helpers import MACHINES, REPO
 
+from llfsm.web.channel import state_of
+
 pytestmark = pytest.mark.browser
 
 sync_api = playwright_or_skip()
@@ -434,7 +436,7 @@ class TwoRuns:
             (Action("/turtle1/rotate_absolute", "turtlesim/action/RotateAbsolute", ("/turtlesim",), ("/teleop",)),),
         )
 
-    def sample(self) -> dict[str, Any]:
+    def state(self) -> dict[str, Any]:
         rows = [
             {
                 "name": d["name"],
@@ -451,17 +453,7 @@ class TwoRuns:
             }
             for d, state in zip(self.descs, ("PUBLISH", "WAIT_AND_COUNT"), strict=True)
         ]
-        return {
-            "t": 2.0,
-            "clock": "wall",
-            "source": "view",
-            "ended": False,
-            "machines": rows,
-            "topics": [],
-            "services": [],
-            "param_events": {},
-            "world": None,
-        }
+        return state_of(t=2.0, source="view", machines=rows)
 
 
 def test_two_runs_of_one_machine_are_two_cards_saying_which_run_and_that_commands_reach_both(

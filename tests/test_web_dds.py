@@ -67,8 +67,10 @@ def test_state_and_control_of_a_machine_in_another_process(netns: NetNamespace, 
 
 CLIENT = r"""
 import asyncio, json, sys, aiohttp
+from llfsm.web.channel import Mirror
 async def main(url):
     out = {"machines": [], "states": [], "statuses": []}
+    mirror = Mirror()
     async with aiohttp.ClientSession() as s:
         async with s.ws_connect(url.replace("http://", "ws://") + "ws") as ws:
             loop = asyncio.get_running_loop()
@@ -80,8 +82,8 @@ async def main(url):
                 if data["type"] == "hello":
                     out["machines"] = [m["name"] for m in data["machines"]]
                     out["svg"] = any('data-state="WAIT_AND_COUNT"' in m["svg"] for m in data["machines"])
-                    data = data["snapshot"]
-                elif data["type"] != "snapshot":  # the graph of nodes and topics
+                data = mirror.apply(data)
+                if data is None:  # the graph of nodes and topics
                     continue
                 for m in data["machines"]:
                     if m["name"] == "ros2_ping_pong":
@@ -126,8 +128,10 @@ def test_llfsm_view_finds_shows_and_steers_a_machine_of_another_run(netns: NetNa
 
 VIEW_CLIENT = r"""
 import asyncio, json, sys, aiohttp
+from llfsm.web.channel import Mirror
 async def main(url):
     out = {"machines": {}, "graph": None, "first": None}
+    mirror = Mirror()
     async with aiohttp.ClientSession() as s:
         async with s.ws_connect(url.replace("http://", "ws://") + "ws") as ws:
             loop = asyncio.get_running_loop()
@@ -136,10 +140,10 @@ async def main(url):
                 data = json.loads((await asyncio.wait_for(ws.receive(), end - loop.time())).data)
                 if data["type"] == "hello":
                     out["graph"] = data["graph"]
-                    data = data["snapshot"]
                 elif data["type"] == "graph":
                     out["graph"] = data
                     continue
+                data = mirror.apply(data)
                 rows = [m for m in data["machines"] if m["transitions"]]
                 if out["first"] is None and rows:
                     out["first"] = {"t": data["t"], "source": data["source"], "rows": rows}
@@ -225,17 +229,18 @@ def test_llfsm_view_shows_two_runs_their_own_times_the_graph_and_parameters_over
 
 GONE_CLIENT = r"""
 import asyncio, json, sys, aiohttp
+from llfsm.web.channel import Mirror
 async def main(url):
     seen = []
+    mirror = Mirror()
     async with aiohttp.ClientSession() as s:
         async with s.ws_connect(url.replace("http://", "ws://") + "ws") as ws:
             loop = asyncio.get_running_loop()
             end = loop.time() + 40
             while loop.time() < end:
                 data = json.loads((await asyncio.wait_for(ws.receive(), end - loop.time())).data)
-                if data["type"] == "hello":
-                    data = data["snapshot"]
-                elif data["type"] != "snapshot":
+                data = mirror.apply(data)
+                if data is None:
                     continue
                 for m in data["machines"]:
                     if not seen or seen[-1] != m["ended"]:

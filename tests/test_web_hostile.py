@@ -36,12 +36,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from dds_netns import NetNamespace, finish
+from dds_netns import NetNamespace, finish, start_view
 from helpers import MACHINES, REPO
 
 pytest.importorskip("aiohttp")
 
 from llfsm.diagram import svg as diagram
+from llfsm.web.channel import state_of
 from llfsm.web.server import WebServer
 
 MACHINE = "ros2_ping_pong"
@@ -187,12 +188,12 @@ class FakeSource:
     def machines(self) -> list[Any]:
         return self.descriptions
 
-    def sample(self) -> dict[str, Any]:
+    def state(self) -> dict[str, Any]:
         self.samples += 1
         if self.samples in self.fail_at:
             raise AttributeError("'int' object has no attribute 'get'")
-        rows = [{"name": "ok", "state": "A" if self.samples % 2 else "B", "status": "running", "pending": None}]
-        return {"t": self.samples / 10, "clock": "wall", "ended": False, "machines": rows, "topics": [], "services": []}
+        row = {"name": "ok", "state": "A" if self.samples % 2 else "B", "status": "running", "pending": None}
+        return state_of(t=self.samples / 10, machines=[row])
 
 
 @pytest.fixture
@@ -230,9 +231,9 @@ def test_one_machine_that_cannot_be_drawn_stops_neither_the_others_nor_the_push_
     assert "ok" in names
     ok = next(m for m in hello["machines"] if m["name"] == "ok")
     assert 'data-state="A"' in ok["svg"]
-    assert all(m["type"] == "snapshot" for m in got[1:])
+    assert all(m["type"] == "delta" for m in got[1:])
     again = asyncio.run(_messages(srv.port, 3))  # a new page is served too
-    assert again[0]["type"] == "hello" and [m["type"] for m in again[1:]] == ["snapshot", "snapshot"]
+    assert again[0]["type"] == "hello" and [m["type"] for m in again[1:]] == ["delta", "delta"]
 
 
 def test_the_layout_runs_off_the_event_loop(
@@ -300,7 +301,7 @@ def test_a_replaced_description_is_redrawn_but_pages_are_not_rebuilt_at_a_peers_
     kinds = asyncio.run(watch())
     hellos = kinds.count("hello")
     assert 2 <= hellos <= 5, kinds  # the first, then about one a second
-    assert kinds.count("snapshot") >= 10, kinds
+    assert kinds.count("delta") >= 10, kinds
 
 
 def test_a_discovery_sample_that_cannot_be_read_is_dropped_alone() -> None:
@@ -396,31 +397,14 @@ def start_peer(ns: NetNamespace) -> subprocess.Popen[str]:
     return p
 
 
-def start_view(ns: NetNamespace) -> tuple[subprocess.Popen[str], str, list[str]]:
-    """`llfsm view` in the namespace: the process, its page's URL, and its stderr as it comes."""
-    view = ns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "120", env={"PYTHONUNBUFFERED": "1"})
-    assert view.stderr is not None
-    err: list[str] = []
-    url = ""
-    for line in view.stderr:
-        err.append(line)
-        m = re.search(r"http://\S+", line)
-        if m:
-            url = m.group(0)
-            break
-    assert url, "llfsm view printed no address: " + "".join(err)
-    threading.Thread(target=lambda: err.extend(view.stderr or []), daemon=True).start()
-    if view.stdout is not None:
-        threading.Thread(target=lambda: [None for _ in view.stdout or []], daemon=True).start()
-    return view, url, err
-
-
 #: A page's WebSocket in the namespace: it waits for the machines, and checks what it is sent
 #: while the ping-pong goes on (each run of it is a new page: the first hello of every one).
 CLIENT = r"""
 import asyncio, json, sys, time, aiohttp
+from llfsm.web.channel import Mirror
 async def main(url, want, seconds):
     out = {"hellos": [], "states": [], "svg": {}, "bytes": 0}
+    mirror = Mirror()
     async with aiohttp.ClientSession() as s:
         async with s.ws_connect(url.replace("http://", "ws://") + "ws", max_msg_size=64 << 20) as ws:
             loop = asyncio.get_running_loop()
@@ -438,8 +422,8 @@ async def main(url, want, seconds):
                 if data["type"] == "hello":
                     out["hellos"].append(sorted(m["name"] for m in data["machines"]))
                     out["svg"] = {m["name"]: m["svg"] for m in data["machines"]}
-                    data = data["snapshot"]
-                elif data["type"] != "snapshot":  # the graph of nodes and topics
+                data = mirror.apply(data)
+                if data is None:  # the graph of nodes and topics
                     continue
                 for m in data["machines"]:
                     if m["name"] == "ros2_ping_pong" and (not out["states"] or out["states"][-1] != m["state"]):
@@ -462,7 +446,7 @@ def page_client(ns: NetNamespace, url: str, want: list[str], seconds: float = 40
 @pytest.mark.dds
 def test_llfsm_view_keeps_serving_and_following_a_real_run_beside_a_hostile_peer(netns: NetNamespace) -> None:
     run = netns.llfsm("run", "--transport", "dds", MACHINES / f"{MACHINE}.machine", "--duration", "120")
-    view, url, err = start_view(netns)
+    view, url, err = start_view(netns, "--duration", "120")
     peer = start_peer(netns)
     try:
         got = page_client(netns, url, [MACHINE, "evil_text", "huge"], err=err)
@@ -547,7 +531,7 @@ def test_the_page_in_chromium_follows_a_real_run_while_hostile_peers_publish(
         pytest.skip(f"no Chromium at {CHROMIUM}: `apt-get install chromium`")
     shot = tmp_path / "hostile.png"
     run = netns.llfsm("run", "--transport", "dds", MACHINES / f"{MACHINE}.machine", "--duration", "150")
-    view, url, err = start_view(netns)
+    view, url, err = start_view(netns, "--duration", "120")
     watcher = netns.popen([sys.executable, "-c", WATCH, url, CHROMIUM, ARGS, MACHINE, str(shot)], stdin=subprocess.PIPE)
     peer = None
     try:

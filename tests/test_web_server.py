@@ -222,22 +222,23 @@ def test_the_run_is_sampled_only_while_a_page_is_connected(server: WebServer) ->
     import aiohttp
 
     calls = {"n": 0}
-    sample = server.source.sample
+    sample = server.source.state
 
     def counting() -> dict:
         calls["n"] += 1
         return sample()
 
-    server.source.sample = counting  # type: ignore[method-assign]
+    server.source.state = counting  # type: ignore[method-assign]
 
     async def visit() -> list[str]:
         kinds = []
         async with aiohttp.ClientSession() as s, s.ws_connect(f"ws://127.0.0.1:{server.port}/ws") as ws:
-            for _ in range(2):
-                kinds.append(json.loads((await ws.receive()).data)["type"])
+            kinds.append(json.loads((await ws.receive()).data)["type"])
+            await asyncio.sleep(0.3)  # sampled meanwhile: a delta only if something changed
         return kinds
 
     assert asyncio.run(visit())[0] == "hello"
+    assert calls["n"] > 1
     time.sleep(0.3)  # the server notices the page has gone
     after_close = calls["n"]
     time.sleep(0.6)  # a dozen push periods

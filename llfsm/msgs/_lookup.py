@@ -172,8 +172,19 @@ def _import(pkg: str, kind: str, name: str, text: str) -> object:
     return cls
 
 
+#: The messages rosidl makes of an action's definition (`turtlesim/action/RotateAbsolute_Goal`):
+#: topics carry them, as an action's hidden feedback topic carries `Name_FeedbackMessage`.
+ACTION_MESSAGES = ("_Goal", "_Result", "_Feedback", "_FeedbackMessage")
+
+
 def message_class(text: str) -> type[Message]:
-    """The message class that TYPE names (`std_msgs/msg/String`, `std_msgs/String`)."""
+    """The message class that TYPE names (`std_msgs/msg/String`, `std_msgs/String`, and the
+    messages of an action: `turtlesim/action/RotateAbsolute_FeedbackMessage`)."""
+    parts = text.split("/")
+    if len(parts) == 3 and parts[1] == "action" and _PACKAGE.match(parts[0]):
+        for suffix in ACTION_MESSAGES:
+            if parts[2].endswith(suffix) and _NAME.match(parts[2].removesuffix(suffix)):
+                return _import(parts[0], "action", parts[2], text)  # type: ignore[return-value]  # a message
     pkg, kind, name = split_type(text, "msg")
     if kind != "msg":
         raise TypeNameError(f"'{text}' is {_a(kind)} type; a topic carries a message type (pkg/msg/Name)")

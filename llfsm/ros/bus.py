@@ -16,7 +16,6 @@ executor also takes what arrived and waits on it instead of sleeping blindly.  S
 from __future__ import annotations
 
 import os
-import re
 import sys
 import time
 from collections import deque
@@ -33,6 +32,7 @@ from .transports.inproc import InProcess
 
 if TYPE_CHECKING:
     from ..msgs._message import Message
+    from .parameter_files import NodeKey
 
 
 class GraphNode(NodeView, Protocol):
@@ -107,7 +107,7 @@ class Bus(Executor):
         #: Where each of `parameters` was written (`-p gain:=2`), for the message that refuses it.
         self.parameter_origins: dict[tuple[str | None, str], str] = {}
         #: --params-file entries in order: (pattern over node names, {name: (value, "FILE:LINE")}).
-        self.parameter_files: list[tuple[re.Pattern[str], dict[str, tuple[Any, str]]]] = []
+        self.parameter_files: list[tuple[NodeKey, dict[str, tuple[Any, str]]]] = []
         #: Called with each new topic whose name is a key here (`--echo` waits for its topic).
         self.watchers: dict[str, list[Callable[[Topic], None]]] = {}
         #: Called with every topic, those made later too (`add_tap`: `--record` puts its taps on them).

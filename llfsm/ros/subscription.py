@@ -38,6 +38,7 @@ class Subscription:
         "msg_type",
         "node",
         "reliability",
+        "screen",
         "topic_name",
         "transient_local",
     )
@@ -65,6 +66,11 @@ class Subscription:
         self._queue: deque[Any] = deque(maxlen=depth)
         self._scheduled = False
         self._destroyed = False
+        #: For a reader of other processes' samples: `screen(payload)` looks at a sample's CDR
+        #: before it is decoded: False drops it unread, True decodes it as usual, a message is
+        #: delivered instead (an action client reads only its own goals out of a peer's status
+        #: array, transports/base.py SubscriptionView).  None: every sample is decoded.
+        self.screen: Callable[[bytes], Any] | None = None
         topic = self._topic
         for fn in topic.on_readers:  # before joining: a latched value can still be brought up to date
             fn(topic, True)

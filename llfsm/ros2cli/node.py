@@ -25,8 +25,7 @@ DUPLICATE_NAMES = (
 
 def list_(*, include_hidden: bool = False, count: bool = False, spin_time: float = SPIN_TIME) -> tuple[str, str | None]:
     """What `ros2 node list` prints, and the warning it prints on stderr first (or None)."""
-    with discovered(spin_time) as graph:
-        graph.settle()  # the nodes of participants already seen
+    with discovered(spin_time) as graph:  # settled: the nodes of every participant seen
         names = sorted(n.full_name for n in graph.nodes(include_hidden=include_hidden))
         every_name = [n.full_name for n in graph.nodes(include_hidden=True)]
     warning = DUPLICATE_NAMES if len(every_name) != len(set(every_name)) and not count else None

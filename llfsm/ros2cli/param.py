@@ -174,7 +174,11 @@ def set_(node_name: str, parameter: str, value: str, *, timeout: float = TIMEOUT
     `2.0` a double, `true` a boolean, `[1, 2]` an integer array, else a string).  Returns
     `Set parameter successful`; a refusal is a CliError with rclpy's reason (exit 1)."""
     full = absolute_node_name(node_name)
-    msg = ParameterMsg(name=parameter, value=Parameter(parameter, value=guess_value(value)).get_parameter_value())
+    try:
+        guessed = guess_value(value)
+    except ParameterTextError as e:
+        raise CliError(f"param set {parameter} VALUE: {e}") from None
+    msg = ParameterMsg(name=parameter, value=Parameter(parameter, value=guessed).get_parameter_value())
     with hidden_node("_llfsm_cli_param") as (node, graph):
         s = _Session(node, graph, timeout)
         s.wait_for_node(full)

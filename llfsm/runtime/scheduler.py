@@ -34,6 +34,10 @@ EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_MONITOR = 0, 1, 2, 4
 GO, STOP, PAUSE = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal killed.
 EXIT_SIGNAL: dict[int | None, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
+#: Rounds the machines get after an interrupt before the grace time can end the run: on a host
+#: with more runnable processes than cores (sixty runs stopped at once on two) a run may wait
+#: for the CPU longer than its grace time, and its machines must still see `ros.ok()` turn false.
+GRACE_ROUNDS = 3
 
 
 #: Back-to-back firing rounds read the wall clock every BATCH rounds at most, while BATCH
@@ -101,6 +105,8 @@ class Arrangement:
         self._signal: int | None = None
         self._grace_end: int | None = None
         self._interrupted_at = 0.0  # time.monotonic() of the first interrupt: grace is real time too
+        self._grace_rounds = 0  # rounds since the interrupt was seen (GRACE_ROUNDS)
+        self._cpu_wait = (0.0, 0.0)  # the main thread's CPU time and time waited for it (signals.py)
         self._grace_ns = 1_000_000_000
         self.running = False  # inside run(): a stop may be raised into the running code
         #: The between-round hooks (the bus) are running: no ringlet is, so a new input value can
@@ -437,9 +443,13 @@ class Arrangement:
                 self._grace_end = now + grace
                 if self.on_interrupt is not None:
                     self.on_interrupt(grace)
-            elif now >= self._grace_end or time.monotonic() - self._interrupted_at >= grace / 1e9:
-                # run time or real time, whichever passes first: under `--clock sim --period 1ns`
-                # a second of run time is a billion rounds
+                return None
+            self._grace_rounds += 1
+            if self._grace_rounds >= GRACE_ROUNDS and (
+                now >= self._grace_end or time.monotonic() - self._interrupted_at >= grace / 1e9
+            ):
+                # run time or real time, whichever passes first (under `--clock sim --period 1ns`
+                # a second of run time is a billion rounds), once the machines have had rounds
                 return self._result("interrupted", status)
         return None
 
@@ -460,6 +470,11 @@ class Arrangement:
             status = EXIT_SIGNAL.get(exc.signum, 130)
             rep = report_for(exc) if exc.in_machine_code else None
             if rep is None:  # stopped between rounds or in the bus: nothing of the user's to show
+                if self._interrupts == 1 and self.machines and all(m._finished for m in self.machines):
+                    # every machine left in time; only the run's own work after them (a finished
+                    # machine's nodes destroyed while a hundred DDS peers leave at once, on a
+                    # starved host) outlasted the stop timer: the run ends as it would have
+                    return RunResult("finished", self.rounds, self.clock.now, EXIT_OK)
                 reason = "killed" if self._interrupts > 1 else "interrupted"
                 return RunResult(reason, self.rounds, self.clock.now, status)
             if self.tracer is not None:
@@ -479,6 +494,11 @@ class Arrangement:
             return RunResult("error", self.rounds, self.clock.now, EXIT_ERROR, rep)
         finally:
             self.running = False  # from here on a signal is only counted: at_end runs whole
+            # no machine code runs any more, so no section can hold the run: the timer that
+            # would stop one must not fire in the middle of at_end (closing DDS can take
+            # seconds while many peers leave at once), where its handler cannot answer the
+            # watchdog until the call returns
+            signal.setitimer(signal.ITIMER_REAL, 0)
             try:
                 for fn in self.ctx.at_end:
                     fn()

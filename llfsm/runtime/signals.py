@@ -6,9 +6,13 @@ them.)"""
 from __future__ import annotations
 
 import _signal as signal  # the signal module without its enums: enum is a tenth of a run's start-up
+import os
+import time
 
+from .clock import WallClock
 from .errors import RunStopped, signal_name
 from .generated import is_generated
+from .watchdog import cpu_and_wait
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
@@ -26,6 +30,9 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: After a first interrupt, machine code that still holds the run this long (seconds of real
 #: time) beyond the grace time is stopped where it is, as a second interrupt would stop it.
 STUCK_SLACK_S = 0.5
+#: A run not held by a section when the grace time and the slack have passed (_not_held) is
+#: given this much longer to end by its rounds.
+STARVED_S = 10.0
 
 
 def _in_machine_code(frame: FrameType | None) -> bool:
@@ -35,6 +42,35 @@ def _in_machine_code(frame: FrameType | None) -> bool:
             return True
         frame = frame.f_back
     return False
+
+
+def _not_held(arr: Arrangement, frame: FrameType | None) -> bool:
+    """Whether a run still running after its grace time and slack is not held by a section:
+    its own work is under way (unloading a finished machine's node can take seconds when many
+    DDS peers leave at once), or it was waiting for the CPU, not running, since the interrupt
+    (many runs stopped at once on few cores).  Then its rounds end it, and the timer waits on."""
+    ran, waited = cpu_and_wait(os.getpid())
+    if waited - arr._cpu_wait[1] >= STUCK_SLACK_S and ran - arr._cpu_wait[0] < STUCK_SLACK_S:
+        return True  # starved: whatever it was in, it had no time to finish it
+    return not _in_machine_code(frame) and not _waits_for_a_far_round(frame)
+
+
+def _waits_for_a_far_round(frame: FrameType | None) -> bool:
+    """Whether the scheduler sleeps until a round further off than the slack (the wall clock's
+    period, a timer far ahead): a run found there when the grace time has passed ends at once,
+    not after the wait.  A short sleep between rounds (the idle time) is no such wait."""
+    if frame is None:
+        return False
+    clock = frame.f_locals.get("self")
+    if not isinstance(clock, WallClock):
+        return False
+    if frame.f_code is WallClock.advance.__code__ and clock.period:
+        until = clock._next
+    elif frame.f_code is WallClock.sleep_until.__code__:
+        until = frame.f_locals.get("t", 0)
+    else:
+        return False
+    return isinstance(until, int) and until - clock.read() > STUCK_SLACK_S * 1e9
 
 
 def signals_handled(arr: Arrangement) -> _SignalsHandled:
@@ -58,7 +94,10 @@ def signals_handled(arr: Arrangement) -> _SignalsHandled:
         first = not arr._interrupts
         arr.interrupt(signum)
         if first:
+            arr._cpu_wait = cpu_and_wait(os.getpid())  # _not_held counts from here
             signal.setitimer(signal.ITIMER_REAL, arr._grace_ns / 1e9 + STUCK_SLACK_S)
+            if arr.watchdog is not None:
+                arr.watchdog.keep_answering(arr._grace_ns / 1e9 + STARVED_S)
         else:
             stop(frame, f"stopped by a second {signal_name(signum)}")
 
@@ -67,8 +106,12 @@ def signals_handled(arr: Arrangement) -> _SignalsHandled:
             arr.watchdog.answer()
         if arr._interrupts:
             grace = arr._grace_ns / 1e9
+            waited = time.monotonic() - arr._interrupted_at
+            if waited < grace + STARVED_S and _not_held(arr, frame):
+                signal.setitimer(signal.ITIMER_REAL, STUCK_SLACK_S)  # the rounds will end the run
+                return
             sig = signal_name(arr._signal or 0)
-            held = grace + STUCK_SLACK_S
+            held = grace + STUCK_SLACK_S if waited < grace + STARVED_S else round(waited, 1)
             stop(frame, f"stopped by {sig}: still running {held:g} s after it (grace time {grace:g} s)")
 
     return _SignalsHandled(handler, alarm, arr.watchdog)

@@ -15,7 +15,10 @@ run's Python handlers write a byte to a second pipe each time they run (`answer`
 watchdog knows whether the run can still act on its signals.  When the run has owed an answer
 for half a second (ANSWER_S), its grace time has passed, and either a second stop signal has
 come or the grace time plus half a second (the slack the run itself gives a section that loops
-in Python) has passed, the run cannot stop by itself: the watchdog asks it for its stacks
+in Python) has passed, the run cannot stop by itself, unless it was only waiting for the CPU
+(its main thread waited, runnable, half a second and ran less since the signal: many runs
+stopped at once on few cores; `cpu_and_wait`), which gets it up to STARVED_S more: the watchdog
+asks it for its stacks
 (SIGUSR2, which faulthandler answers from its C handler into a third pipe), turns the innermost
 frame in a machine module into the usual report (machine, state, section, the user's file, line
 and text: `locate` in llfsm.runtime.errors, as for an exception), prints it on stderr and kills
@@ -57,6 +60,7 @@ TYPE_CHECKING = False  # not typing's own: importing typing would cost every run
 if TYPE_CHECKING:
     from _signal import _Handler
     from collections.abc import Sequence
+    from threading import Event, Thread
     from types import FrameType
 
     from .machine import Machine
@@ -67,6 +71,11 @@ ANSWER_S = 0.5
 #: A run with a single interrupt is stuck once it still runs this long after its grace time, as
 #: in signals_handled (llfsm.runtime.signals.STUCK_SLACK_S).
 SLACK_S = 0.5
+#: A run that owes an answer but was waiting for the CPU (sixty runs stopped at once on two
+#: cores) is not stuck; it is given up to this much longer after its grace time to answer.
+STARVED_S = 10.0
+#: How often an interrupted run's thread answers while its main thread ends it (keep_answering).
+PROBE_S = 0.2
 #: Seconds to wait for the run's stacks once asked for (they come from a C signal handler, at
 #: once unless the machine is very loaded); the report is printed without a place after that.
 DUMP_S = 3.0
@@ -103,6 +112,7 @@ class Watchdog:
         self._old_wakeup = -1
         self._dump_registered = False
         self._old_dump_handler: _Handler = None
+        self._answering: tuple[Event, Thread] | None = None  # keep_answering's stop and thread
 
     @classmethod
     def start(cls, grace_ns: int, machines: Sequence[type[Machine]]) -> Watchdog | None:
@@ -168,9 +178,40 @@ class Watchdog:
         """The run's handlers are going: from now on its signals are not the watchdog's business.
         The stack dump stays registered until `close` has seen the watchdog end, so that a
         request already on its way never meets the signal's default action (the end of the run)."""
+        self._stop_answering()
         if self.armed:
             signal.set_wakeup_fd(self._old_wakeup)
             self.armed = False
+
+    def keep_answering(self, seconds: float) -> None:
+        """After a first interrupt, while the run ends: a thread answers every PROBE_S for up to
+        `seconds`, which it can only do while the main thread lets Python run.  So a main thread
+        in a long call that releases the GIL (closing DDS while many peers leave at once: each
+        writer waits up to a second for acknowledgements) is not taken for one stuck in a call
+        that holds it, which is what the watchdog is for."""
+        if self._answering is not None or self.closed:
+            return
+        # deferred: start-up (only an interrupted run answers from a thread)
+        import threading
+        import time
+
+        stop = threading.Event()
+        until = time.monotonic() + seconds
+
+        def answer_meanwhile() -> None:
+            while not stop.wait(PROBE_S) and time.monotonic() < until:
+                self.answer()
+
+        self._answering = (stop, threading.Thread(target=answer_meanwhile, name="llfsm-answer", daemon=True))
+        self._answering[1].start()
+
+    def _stop_answering(self) -> None:
+        """Stop keep_answering's thread before the pipe it writes to can close."""
+        if self._answering is not None:
+            stop, thread = self._answering
+            self._answering = None
+            stop.set()
+            thread.join()
 
     def answer(self) -> None:
         """Called by the run's Python signal handlers: the run can still act on its signals."""
@@ -260,10 +301,12 @@ def _watch(
     first: float | None = None  # when the first stop signal came
     stops: list[int] = []
     owed: float | None = None  # since when the run owes an answer to a signal
+    owed_at = (0.0, 0.0)  # the CPU time the run's main thread had used then, and waited for
+    patience = 0.0  # not before then: the run was waiting for the CPU (STARVED_S)
     while True:
         due = None
         if first is not None and owed is not None:
-            due = max(owed + ANSWER_S, first + grace + (0 if len(stops) > 1 else SLACK_S))
+            due = max(owed + ANSWER_S, first + grace + (0 if len(stops) > 1 else SLACK_S), patience)
         if due is not None:
             wait: int | None = max(0, int((due - time.monotonic()) * 1000) + 1)
         else:
@@ -282,16 +325,42 @@ def _watch(
                     first = now if first is None else first
                 elif signum != signal.SIGALRM or first is None:
                     continue  # not a signal the run's handlers answer
-                owed = now if owed is None else owed
+                if owed is None:
+                    owed, owed_at = now, cpu_and_wait(parent)
         if answers in ready:
             if not os.read(answers, 512):
                 return
             owed = None
         if due is not None and owed is not None and time.monotonic() >= due:
             assert first is not None
+            ran, waited = cpu_and_wait(parent)
+            starved = waited - owed_at[1] >= ANSWER_S and ran - owed_at[0] < ANSWER_S
+            if starved and time.monotonic() < first + grace + STARVED_S:
+                patience = time.monotonic() + ANSWER_S  # it waited for the CPU, not in a call
+                continue
             held = time.monotonic() - first
             _kill(parent, pidfd, main, machines, wake, dump, stops, held, grace, package_root)
             return
+
+
+def cpu_and_wait(pid: int) -> tuple[float, float]:
+    """Seconds the main thread of process `pid` has run on a CPU, and seconds its threads have
+    waited, runnable, for one (their schedstat in /proc: the time a loaded host kept them
+    waiting; a thread, keep_answering's, may wait for the CPU while the main thread waits in a
+    call); (0.0, 0.0) where the kernel keeps none."""
+    try:
+        with open(f"/proc/{pid}/task/{pid}/schedstat", "rb") as f:
+            ran = int(f.read().split()[0])
+        waited = 0
+        for tid in os.listdir(f"/proc/{pid}/task"):
+            try:
+                with open(f"/proc/{pid}/task/{tid}/schedstat", "rb") as f:
+                    waited += int(f.read().split()[1])
+            except (OSError, ValueError, IndexError):  # a thread that ended meanwhile
+                continue
+        return ran / 1e9, waited / 1e9
+    except (OSError, ValueError, IndexError):
+        return 0.0, 0.0
 
 
 def _pidfd(pid: int) -> int | None:

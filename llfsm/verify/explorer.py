@@ -93,6 +93,7 @@ class Explorer(Stepper):
             return
         pos = 0
         limit = self.options.max_states
+        look_at = 1  # the configurations at which to look at the memory in use next
         oracle = self.world.oracle if self.world is not None else None
         while True:
             if hc:
@@ -148,8 +149,8 @@ class Explorer(Stepper):
                             return
                         if len(self.parent) > limit:
                             raise StateLimit()
-                        if not len(self.parent) & 0xFF:
-                            self.check_memory()
+                        if len(self.parent) >= look_at:
+                            look_at = self.check_memory(len(self.parent))
             if self.progress is not None and self.steps & 0x3FF == 0:
                 now = time.monotonic()
                 if now - last >= 1.0:
@@ -192,6 +193,7 @@ class Explorer(Stepper):
         progress = self.progress
         probe, insert = self._probe, self._insert
         check_memory = self.check_memory
+        look_at = 1  # the configurations at which to look at the memory in use next
         bounded = bool(self.bounds)
         world = self.world
         oracle = world.oracle if world is not None else None
@@ -429,8 +431,8 @@ class Explorer(Stepper):
                                 return
                             if j >= limit:
                                 raise StateLimit()
-                            if not j & 0xFF:
-                                check_memory()
+                            if j >= look_at:
+                                look_at = check_memory(j)
                         if graph:
                             edges.append(j)
                             if oracle is not None:

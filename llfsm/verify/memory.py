@@ -1,8 +1,11 @@
 """How much memory an exploration may use (SPEC 18; docs/verify.md, "Limits"): `--max-memory
 SIZE`, by default half of what this process may use, its own limits included: the smallest of
 the machine's memory, the cgroup's limit (v2 `memory.max`, v1 `memory.limit_in_bytes`) and
-RLIMIT_AS / RLIMIT_DATA.  The exploration looks every few hundred new configurations (a read of
-/proc/self/statm, a few microseconds) and stops like the state limit: status 3."""
+RLIMIT_AS / RLIMIT_DATA.  The exploration looks at most every MAX_GAP new configurations (a
+read of /proc/self/statm, a few microseconds), sooner as the configurations grow: the next look
+comes before the memory they have been taking per configuration could use half of the room left
+(`Meter.next_look`), so that a value growing megabytes a step (a list, a blob) is stopped near
+the bound, not hundreds of configurations past it.  Then it stops like the state limit: status 3."""
 
 from __future__ import annotations
 
@@ -70,6 +73,10 @@ def default_bound() -> int:
     return may_use() // 2
 
 
+#: New configurations between two looks at the memory in use, at most.
+MAX_GAP = 256
+
+
 class Meter:
     """Whether the process stays within `bound` bytes of memory in use (resident), and, under an
     address-space limit, within three quarters of it (the address space runs out first)."""
@@ -80,6 +87,9 @@ class Meter:
         limit = _address_limit()
         self.address = None if limit is None else limit * 3 // 4
         self.used = 0
+        self.size = 0  # the address space in use at the last look
+        self.ok()
+        self._last = (0, self.used)  # (configurations, bytes in use) at the last look
 
     def ok(self) -> bool:
         try:
@@ -87,5 +97,25 @@ class Meter:
                 size, resident = (int(x) * self.page for x in f.read().split()[:2])
         except (OSError, ValueError):
             size = resident = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-        self.used = resident
+        self.used, self.size = resident, size
         return resident < self.bound and (self.address is None or size < self.address)
+
+    def next_look(self, count: int) -> int:
+        """After a look (`ok`) at `count` configurations: the count at which to look again.  At
+        most twice as far on as the last look was from the one before (configurations that grow
+        grow faster: a value longer by a step each step takes memory in the square of the
+        steps), at most MAX_GAP, and near enough that at the rate memory grew since the last
+        look at most half of the room left is used before then."""
+        last_count, last_used = self._last
+        self._last = (count, self.used)
+        gap = count - last_count
+        if gap <= 0:
+            return count + 1
+        per = (self.used - last_used) / gap
+        nxt = min(2 * gap, MAX_GAP)
+        if per > 0:
+            room = self.bound - self.used
+            if self.address is not None:
+                room = min(room, self.address - self.size)
+            nxt = min(nxt, int(room / (2 * per)))
+        return count + max(1, nxt)

@@ -205,10 +205,12 @@ class Store:
         """Whether the process is still within the exploration's memory bound (--max-memory)."""
         return self.meter.ok()
 
-    def check_memory(self) -> None:
-        """MemoryLimit past the bound: called every few hundred new configurations."""
+    def check_memory(self, count: int) -> int:
+        """MemoryLimit past the bound; else the number of configurations at which to look again
+        (llfsm.verify.memory.Meter.next_look: sooner as the configurations grow)."""
         if not self.meter.ok():
             raise MemoryLimit(self.meter.used)
+        return self.meter.next_look(count)
 
     # -- paths ----------------------------------------------------------------------------------------
     def path_to(self, idx: int) -> list[int]:

@@ -26,6 +26,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any, Protocol
 
 from ..debug.debugger import CONTINUE, ROUND, STEP, DebugError, Debugger
+from .channel import state_of
 from .replay import Replay
 from .source import CommandError
 
@@ -184,7 +185,8 @@ class ReplaySource:
     def has_machine(self, name: str) -> bool:
         return name in self.replay.names
 
-    def sample(self) -> dict[str, Any]:
+    def state(self) -> dict[str, Any]:
+        """The page's state at the record shown (llfsm.web.channel: the server sends deltas)."""
         frame = self.replay.frame(self.debug.at)
         record = frame["record"]
         rows = [
@@ -192,19 +194,14 @@ class ReplaySource:
              "state": m["state"], "status": "running", "pending": None, "since": 0, "transitions": []}
             for m in frame["machines"]
         ]  # fmt: skip
-        return {
-            "t": record["t"] if record is not None else 0,
-            "clock": "replay",
-            "source": self.kind,
-            "ended": self.ended,
-            "machines": rows,
-            "topics": [],
-            "services": [],
-            "param_events": {},
-            "world": None,
-            "monitor": [],
-            "debug": {**self.debug.state(), "variables": {m["machine"]: m["values"] for m in frame["machines"]}},
-        }
+        return state_of(
+            t=record["t"] if record is not None else 0,
+            clock="replay",
+            source=self.kind,
+            ended=self.ended,
+            machines=rows,
+            debug={**self.debug.state(), "variables": {m["machine"]: m["values"] for m in frame["machines"]}},
+        )
 
 
 class GraphDebug:

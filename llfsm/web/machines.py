@@ -51,6 +51,12 @@ MAX_MACHINES = 256
 #: States and transitions of all the descriptions kept, together: what a crowd of peers each
 #: publishing a description within the model's bounds can make the view hold (some 40 MB).
 MAX_TOTAL = 100_000
+#: Endpoints of other participants the view keeps track of at most (a topic or a service is
+#: listed while one of its endpoints lives; a peer could make them by the hundred thousand).
+MAX_ENDPOINTS = 200_000
+#: Discovery samples taken per look (DISCOVERY_PERIOD): a peer making and deleting topics by the
+#: thousand is followed within seconds, and a look stays short.
+DISCOVERY_BATCH = 1024
 #: A machine's name, as a ROS name token (what a run's `/llfsm/M/...` topics can carry).
 _MACHINE = re.compile(rf"[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME - 1}}}")
 
@@ -172,12 +178,19 @@ class GraphSource(Source):
         super().__init__(bus, "llfsm_view")
         # deferred: optional dependency (cyclonedds), only for `llfsm view`'s graph
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication, BuiltinTopicDcpsSubscription
+        from cyclonedds.core import InstanceState
 
         dp = bus.transport.dp  # type: ignore[attr-defined]  # the view of a DDS graph runs on a DDS bus
         self._pubs = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
         self._subs = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)
-        self._topics_seen: dict[str, Any] = {}
+        self._topics_seen: dict[str, Any] = {}  # topics with endpoints (the page's own left out): their class
         self._services_seen: dict[str, Any] = {}
+        self._own = dp.get_guid().bytes
+        self._alive_state = InstanceState.Alive
+        #: Endpoints of other participants: GID -> ("topic" or "service", name); and how many
+        #: each topic and service has (the last one gone, it is forgotten).
+        self._endpoints: dict[bytes, tuple[str, str]] = {}
+        self._ends: dict[str, dict[str, int]] = {"topic": {}, "service": {}}
         self._machines: dict[tuple[str, str], _Machine] = {}  # (name, participant) -> the machine of that run
         self._by_key: dict[str, _Machine] = {}  # the page's name for each
         self._order: list[str] = []  # keys, in the order their descriptions came
@@ -195,7 +208,7 @@ class GraphSource(Source):
         (a peer's name that is not UTF-8) is dropped alone, with one warning, and the rest of the
         round is read (taken as a batch, they would all be lost with it)."""
         out = []
-        for _ in range(256):
+        for _ in range(DISCOVERY_BATCH):
             try:
                 got = reader.take(N=1)
             except Exception as e:
@@ -232,25 +245,67 @@ class GraphSource(Source):
 
     def _discover_once(self) -> None:
         for s in self._take(self._pubs):
-            name, type_name = getattr(s, "topic_name", "") or "", getattr(s, "type_name", "") or ""
-            if not name.startswith("rt/"):
-                continue
-            topic = name[2:]
-            if topic not in self._topics_seen:
-                self._topics_seen[topic] = message_class(type_name)
-            if topic.startswith(NAMESPACE + "/") and topic.endswith(_SUFFIX):
-                machine = topic[len(NAMESPACE) + 1 : -len(_SUFFIX)]
-                if machine not in self._followed and _MACHINE.fullmatch(machine):
-                    if len(self._followed) < MAX_MACHINES:
-                        self._follow(machine)
-                    else:
-                        self.warn(f"more than {MAX_MACHINES} machines on the graph: {topic} not followed", "machines")
+            self._endpoint(s, "publisher")
         for s in self._take(self._subs):
-            name, type_name = getattr(s, "topic_name", "") or "", getattr(s, "type_name", "") or ""
-            if name.startswith("rq/") and name.endswith("Request") and len(name) > len("rq/Request"):
-                service = name[2 : -len("Request")]
-                if service not in self._services_seen:
-                    self._services_seen[service] = service_class(type_name)
+            self._endpoint(s, "subscription")
+
+    def _endpoint(self, s: Any, kind: str) -> None:
+        """One discovery sample: an endpoint that came (a topic or a service is known while it
+        has one, the page's own left out) or went (the last one gone: the topic or service is
+        forgotten, and the page's reader or client of it deleted)."""
+        gid = s.key.bytes
+        if s.sample_info.instance_state != self._alive_state:
+            known = self._endpoints.pop(gid, None)
+            if known is not None:
+                self._lose(*known)
+            return
+        if gid in self._endpoints or s.participant_key.bytes == self._own:
+            return
+        name, type_name = getattr(s, "topic_name", "") or "", getattr(s, "type_name", "") or ""
+        if name.startswith("rt/"):
+            what, topic = "topic", name[2:]
+        elif name.startswith("rq/") and name.endswith("Request") and len(name) > len("rq/Request"):
+            what, topic = "service", name[2 : -len("Request")]
+        else:
+            return
+        if len(self._endpoints) >= MAX_ENDPOINTS:
+            self.warn(f"more than {MAX_ENDPOINTS:,} endpoints on the graph: the view follows no more", "endpoints")
+            return
+        self._endpoints[gid] = (what, topic)
+        ends = self._ends[what]
+        ends[topic] = ends.get(topic, 0) + 1
+        if what == "service":
+            if kind == "subscription" and self._services_seen.get(topic) is None:  # its server names the type
+                self._services_seen[topic] = service_class(type_name)
+            self._services_seen.setdefault(topic, None)
+            return
+        if topic not in self._topics_seen:
+            self._topics_seen[topic] = message_class(type_name)
+        if kind == "publisher" and topic.startswith(NAMESPACE + "/") and topic.endswith(_SUFFIX):
+            machine = topic[len(NAMESPACE) + 1 : -len(_SUFFIX)]
+            if machine not in self._followed and _MACHINE.fullmatch(machine):
+                if len(self._followed) < MAX_MACHINES:
+                    self._follow(machine)
+                else:
+                    self.warn(f"more than {MAX_MACHINES} machines on the graph: {topic} not followed", "machines")
+
+    def _lose(self, what: str, name: str) -> None:
+        ends = self._ends[what]
+        left = ends.get(name, 0) - 1
+        if left > 0:
+            ends[name] = left
+            return
+        ends.pop(name, None)
+        if what == "service":
+            self._services_seen.pop(name, None)
+            for key in [k for k in self._clients if k[0] == name]:
+                self.node.destroy_client(self._clients.pop(key))
+            return
+        self._topics_seen.pop(name, None)
+        self._counts.pop(name, None)
+        self._asked.discard(name)
+        self._stats.pop(name, None)
+        self._unwatch(name)
 
     def _follow(self, name: str) -> None:
         """Read machine `name`'s description and state, each run's apart when DDS says which

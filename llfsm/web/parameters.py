@@ -17,10 +17,11 @@ the page (a peer on a DDS domain may answer anything).
 from __future__ import annotations
 
 import math
+import struct
 from typing import Any
 
 from ..msgs.rcl_interfaces.msg import Parameter as ParameterMsg
-from ..msgs.rcl_interfaces.msg import ParameterType
+from ..msgs.rcl_interfaces.msg import ParameterEvent, ParameterType
 from ..ros.names import InvalidNameError, normalise_namespace, validate_node_name
 from ..ros.parameter import TYPE_NAMES
 from ..ros.parameter_files import guess_value
@@ -135,3 +136,23 @@ def result_text(result: Any) -> tuple[bool, str]:
     if result.successful:
         return True, "Set parameter successful" + said
     return False, "Setting parameter failed" + said
+
+
+#: A node name longer than this in a parameter event is no node's (a ROS name is far shorter):
+#: the event is not counted, and its name never held (llfsm.web.source).
+MAX_EVENT_NAME = 256
+
+
+def event_node(payload: bytes) -> Any:
+    """A peer's rcl_interfaces/msg/ParameterEvent as the page needs it (a screen of the DDS
+    reader: llfsm.ros.subscription.Subscription.screen): its node's name, read from the CDR
+    without decoding the parameters (a peer's event may list thousands), or False for a name
+    longer than MAX_EVENT_NAME; ValueError for a payload that holds no name."""
+    if len(payload) < 16 or payload[0] != 0 or payload[1] not in (0, 1):
+        raise ValueError("not a plain CDR ParameterEvent")
+    (size,) = struct.unpack_from("<I" if payload[1] else ">I", payload, 12)  # after the stamp
+    if size == 0 or size - 1 > MAX_EVENT_NAME:
+        return False
+    if 16 + size > len(payload):
+        raise ValueError("a node name longer than its sample")
+    return ParameterEvent(node=payload[16 : 16 + size - 1].decode("utf-8"))

@@ -40,6 +40,10 @@ DEBUG_TOPICS = frozenset({"/rosout", "/parameter_events", "/clock", "/statistics
 #: Nodes and topics drawn at most (the graph of a whole domain can be big, and a peer can make it
 #: so): nodes first, then the topics with the most connections.
 MAX_DRAWN = 150
+#: Nodes and actions listed beside the drawing at most (the parameters panel, the actions table):
+#: the rest are counted (`nodes_total`, `actions_total`).
+MAX_LISTED_NODES = 300
+MAX_LISTED_ACTIONS = 100
 #: Characters of a name shown in the drawing (the whole name is in its tooltip).
 NAME_MAX = 48
 CHAR_W = 7.3  # DejaVu Sans Mono at 12 px (0.602 em), style.css
@@ -89,13 +93,16 @@ class RosGraph:
         )
 
     def data(self) -> dict[str, Any]:
-        """What the page is sent besides the drawing: nodes and actions, for its lists."""
+        """What the page is sent besides the drawing: nodes and actions for its lists, each
+        bounded (MAX_LISTED_NODES, MAX_LISTED_ACTIONS), with how many there are."""
         return {
-            "nodes": list(self.nodes),
+            "nodes": list(self.nodes[:MAX_LISTED_NODES]),
+            "nodes_total": len(self.nodes),
             "actions": [
-                {"name": a.name, "type": a.type, "servers": list(a.servers), "clients": list(a.clients)}
-                for a in self.actions
+                {"name": a.name, "type": a.type, "servers": list(a.servers[:20]), "clients": list(a.clients[:20])}
+                for a in self.actions[:MAX_LISTED_ACTIONS]
             ],
+            "actions_total": len(self.actions),
         }
 
 

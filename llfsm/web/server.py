@@ -1,9 +1,10 @@
 """The web view's server: aiohttp on a thread of its own, one page, one WebSocket (docs/view.md).
 
 The server thread has its own event loop; the scheduler never waits on it.  While at least one
-page is connected, the server samples its source at most `RATE` times a second and pushes the
-snapshot if it changed (a closed tab stops the sampling; a page that reads slowly is dropped,
-never waited for).  What the page asks for (commands, publishing, service calls) arrives as
+page is connected, the server samples its source at most `RATE` times a second and pushes what
+changed, as the channel's protocol says (llfsm.web.channel: a hello with everything, then
+deltas; docs/view.md, "The page's channel"); a closed tab stops the sampling; a page that reads
+slowly is dropped, never waited for.  What the page asks for (commands, publishing, service calls) arrives as
 JSON POSTs and goes to the source, which hands it to the scheduler's thread.
 
 Security: it binds 127.0.0.1 unless told otherwise; on any other address every request must
@@ -40,6 +41,7 @@ from aiohttp import WSMsgType, web
 
 from ..diagram import svg as diagram
 from . import debugging, rosgraph
+from .channel import PROTOCOL, Channel, full
 from .source import CommandError, dumps
 
 #: Snapshots pushed per second at most.
@@ -117,6 +119,9 @@ class WebServer:
         #: Lays diagrams out off the event loop (one at a time: they share a cache).
         self._drawer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="llfsm-web-draw")
         self._warned: set[str] = set()
+        #: The deltas every page is sent, from one baseline (llfsm.web.channel).
+        self.channel = Channel()
+        self._locks: dict[web.WebSocketResponse, asyncio.Lock] = {}  # each page's, for its order
 
     # -- lifecycle (caller's thread) -----------------------------------------------------------------
     def start(self) -> str:
@@ -214,7 +219,9 @@ class WebServer:
 
     async def _farewell(self) -> None:
         """The last message to the pages as the server stops (the view's: the run ended)."""
-        await self._broadcast(self._snapshot())
+        delta = self.channel.delta(self._state())
+        if delta is not None:
+            await self._broadcast(delta)
 
     async def _shutdown(self) -> None:
         try:
@@ -304,18 +311,21 @@ class WebServer:
         data = (resources.files(__package__) / "static" / name).read_bytes()
         return web.Response(body=data, content_type=kind, charset="utf-8")
 
-    async def _hello(self) -> dict[str, Any]:
-        """The page's first message (and every one after the machines changed): the machines'
-        diagrams, drawn on the worker thread, and a snapshot taken once they are."""
+    async def _hello(self, fresh: bool = True) -> dict[str, Any]:
+        """A hello (the page's first message, and every one after the machines changed): the
+        machines' diagrams, drawn on the worker thread, the graph, and the whole state.  A fresh
+        one (to every page) samples the source and makes that the channel's baseline; one for a
+        page that joins is sent the baseline the other pages have, so the next delta fits."""
         descriptions = self._descriptions()
         loop = asyncio.get_running_loop()
         machines = await loop.run_in_executor(self._drawer, self._draw, descriptions)
         graph = await self._graph_message(self._graph())
-        snap = self._snapshot()
-        current = {m.get("name"): m.get("state") for m in snap.get("machines", []) if isinstance(m, dict)}
+        base = self.channel.baseline
+        snapshot = self.channel.reset(self._state()) if fresh or base is None else full(base, self.channel.seq)
+        current = {m.get("name"): m.get("state") for m in snapshot["machines"]["upsert"] if isinstance(m, dict)}
         for m in machines:
             m["svg"] = diagram.mark(m["svg"], current.get(m["name"]))
-        return {"type": "hello", "machines": machines, "graph": graph, "snapshot": snap}
+        return {"type": "hello", "protocol": PROTOCOL, "machines": machines, "graph": graph, "snapshot": snapshot}
 
     def _graph(self) -> rosgraph.RosGraph | None:
         """The source's graph of nodes and topics (None for a source that has none)."""
@@ -382,10 +392,11 @@ class WebServer:
             self._warn(f"the machines could not be listed: {type(e).__name__}: {e}", "machines")
             return []
 
-    def _snapshot(self) -> dict[str, Any]:
+    def _state(self) -> dict[str, Any]:
         try:
-            return {"type": "snapshot", **self.source.sample()}
-        except Exception as e:  # this snapshot is skipped; the next one is taken as usual
+            state: dict[str, Any] = self.source.state()
+            return state
+        except Exception as e:  # this sample is skipped; the next one is taken as usual
             self._warn(f"a snapshot failed: {type(e).__name__}: {e}", "snapshot")
             raise _NoSnapshot from None
 
@@ -401,7 +412,7 @@ class WebServer:
                 if msg.type == WSMsgType.ERROR:
                     break
         finally:
-            self.clients.discard(ws)
+            self._drop(ws)
         return ws
 
     async def _greet(self, ws: web.WebSocketResponse, request: web.Request) -> bool:
@@ -410,17 +421,24 @@ class WebServer:
         await ws.prepare(request)
         for _ in range(max(1, int(5 * self.rate))):  # five seconds of tries (a bench sets a float rate)
             try:
-                hello = await self._hello()
+                hello = await self._hello(fresh=False)
                 break
             except _NoSnapshot:  # the source failed to be sampled just now: try again soon
                 await asyncio.sleep(1 / self.rate)
         else:  # said already (once); the page shows itself closed, and may reconnect
             await ws.close()
             return False
-        await ws.send_str(dumps(hello))
-        self.clients.add(ws)
-        if self._wake is not None:
-            self._wake.set()
+        # one of the pages from here on: the next delta is computed from the baseline its hello
+        # holds, and its lock, taken before any broadcast can see it, sends the hello first
+        async with self._locks.setdefault(ws, asyncio.Lock()):
+            self.clients.add(ws)
+            if self._wake is not None:
+                self._wake.set()
+            try:
+                await ws.send_str(dumps(hello))
+            except BaseException:
+                self._drop(ws)
+                raise
         return True
 
     async def _push(self) -> None:
@@ -428,7 +446,6 @@ class WebServer:
         the machines change (`llfsm view`: a run started, a description was replaced), the
         pages are sent a new hello once its diagrams are drawn, snapshots going on meanwhile.
         Nothing that goes wrong in one round ends the loop."""
-        last = ""
         assert self._wake is not None
         machines = self._descriptions()
         hello: asyncio.Task[None] | None = None
@@ -447,7 +464,6 @@ class WebServer:
             if not self.clients:
                 self._wake.clear()
                 await self._wake.wait()
-                last = ""
                 continue
             try:
                 now = self._descriptions()
@@ -465,10 +481,9 @@ class WebServer:
                 ):
                     graph, graph_at = g, loop.time()
                     graph_task = loop.create_task(self._send_graph(g))
-                text = dumps(self._snapshot())
-                if text != last:
-                    last = text
-                    await self._broadcast_text(text)
+                delta = self.channel.delta(self._state())
+                if delta is not None:
+                    await self._broadcast(delta)
             except _NoSnapshot:
                 continue
             except Exception as e:  # said once; the next round goes on
@@ -501,12 +516,22 @@ class WebServer:
         await self._broadcast_text(dumps(data))
 
     async def _broadcast_text(self, text: str) -> None:
+        """To every page, in the order messages were made (each page's lock keeps it)."""
+        for gone in [ws for ws in self._locks if ws not in self.clients and not self._locks[ws].locked()]:
+            del self._locks[gone]  # a page a subclass dropped itself (the editor's)
         for ws in list(self.clients):
-            try:
-                await asyncio.wait_for(ws.send_str(text), 2)
-            except Exception:  # a page gone or too slow: drop it, never wait for it
-                self.clients.discard(ws)
-                asyncio.get_running_loop().create_task(ws.close())
+            async with self._locks.setdefault(ws, asyncio.Lock()):
+                if ws not in self.clients:
+                    continue
+                try:
+                    await asyncio.wait_for(ws.send_str(text), 2)
+                except Exception:  # a page gone or too slow: drop it, never wait for it
+                    self._drop(ws)
+                    asyncio.get_running_loop().create_task(ws.close())
+
+    def _drop(self, ws: web.WebSocketResponse) -> None:
+        self.clients.discard(ws)
+        self._locks.pop(ws, None)
 
     # -- what the page asks for --------------------------------------------------------------------------------
     async def _json(self, request: web.Request) -> dict[str, Any]:
@@ -529,7 +554,12 @@ class WebServer:
         return web.json_response(result)
 
     async def _command(self, request: web.Request) -> web.Response:
-        return await self._answer(request, lambda d: self.source.command(_text(d, "machine"), _text(d, "command")))
+        async def command(d: dict[str, Any]) -> dict[str, Any]:
+            answer: dict[str, Any] = await self.source.command(_text(d, "machine"), _text(d, "command"))
+            # the last delta sent before this answer: the page knows a later one was sampled after it
+            return {**answer, "seq": self.channel.seq}
+
+        return await self._answer(request, command)
 
     async def _publish(self, request: web.Request) -> web.Response:
         return await self._answer(
@@ -551,7 +581,7 @@ class WebServer:
 
 
 class _NoSnapshot(Exception):
-    """The source could not be sampled this time (said once by WebServer._snapshot)."""
+    """The source could not be sampled this time (said once by WebServer._state)."""
 
 
 async def _no_icon(request: web.Request) -> web.Response:

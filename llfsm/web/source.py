@@ -34,7 +34,8 @@ from ..ros.names import expand
 from ..ros.node import Node
 from ..ros.transports.dds_graph import is_hidden
 from . import parameters as params
-from .rosgraph import RosGraph, from_bus, from_dds, robust_graph
+from .channel import MAX_SERVICE_ROWS, MAX_TOPIC_ROWS, ROW_PERIOD, bounded_text, state_of
+from .rosgraph import MAX_LISTED_NODES, RosGraph, from_bus, from_dds, robust_graph
 from .verdicts import Verdicts
 
 if TYPE_CHECKING:
@@ -116,6 +117,7 @@ class Source:
         self._readers: dict[str, Any] = {}
         self._asked: set[str] = set()
         self._stats: dict[str, _TopicStats] = {}
+        self._rows: dict[str, tuple[float, dict[str, Any]]] = {}  # each topic row shown, and when it was read
         self._publishers: dict[str, Any] = {}
         self._clients: dict[tuple[str, str], Any] = {}
         self._warned: set[str] = set()
@@ -123,7 +125,8 @@ class Source:
         #: Parameter events seen per node: the page reads an open node's parameters again when
         #: its count moves (a set from the page, `param set` or the node itself).
         self.param_events: dict[str, int] = {}
-        self.node.create_subscription(ParameterEvent, "/parameter_events", self._on_parameter_event, 100)
+        events = self.node.create_subscription(ParameterEvent, "/parameter_events", self._on_parameter_event, 100)
+        events.screen = params.event_node  # over DDS: the node's name alone is read of a peer's event
         #: What monitors said on /llfsm/monitor (this run's, or any run's on the domain).
         self.verdicts = Verdicts(self.node)
         self._graph = RosGraph()
@@ -178,22 +181,32 @@ class Source:
         return any(d["name"] == name for d in self.machines())
 
     # -- what the page is sent ---------------------------------------------------------------------
-    def sample(self) -> dict[str, Any]:
-        """A snapshot (on the server's thread)."""
+    def state(self) -> dict[str, Any]:
+        """What the page shows now (server thread), each part bounded, keyed for the channel's
+        deltas (llfsm.web.channel.Channel)."""
+        topics, topics_total = self._topics()
         services = self.service_types()
-        return {
-            "t": round(self.clock.now / 1e9, 3),
-            "clock": self.clock.kind,
-            "source": self.kind,
-            "ended": self.ended,
-            "machines": self.machine_rows(),
-            "topics": self._topics(),
-            "services": [{"name": n, "type": t._TYPE if t is not None else ""} for n, t in sorted(services.items())],
-            "param_events": dict(self.param_events),
-            "world": self.world(),
-            "monitor": self.verdicts.sample(),
-            "debug": self.debug.state() if self.debug is not None else None,
-        }
+        names = sorted(services)
+        shown = set(self._graph.nodes[:MAX_LISTED_NODES])
+        events = self.param_events
+        return state_of(
+            t=round(self.clock.now / 1e9, 3),
+            clock=self.clock.kind,
+            source=self.kind,
+            ended=self.ended,
+            machines=self.machine_rows(),
+            topics=topics,
+            topics_total=topics_total,
+            services=[
+                {"name": n, "type": t._TYPE if (t := services[n]) is not None else ""} for n in names[:MAX_SERVICE_ROWS]
+            ],
+            services_total=len(names),
+            # only for nodes the page lists: a peer naming thousands of nodes costs the page nothing
+            param_events={node: events[node] for node in shown if node in events},
+            world=self.world(),
+            monitor=self.verdicts.sample(),
+            debug=self.debug.state() if self.debug is not None else None,
+        )
 
     def graph(self) -> RosGraph:
         """Nodes, topics and actions (server thread): this process's read now and then, merged
@@ -208,7 +221,9 @@ class Source:
 
     def _on_parameter_event(self, event: Any) -> None:
         node = event.node
-        if node in self.param_events or len(self.param_events) < MAX_EVENT_NODES:
+        if len(node) <= params.MAX_EVENT_NAME and (
+            node in self.param_events or len(self.param_events) < MAX_EVENT_NODES
+        ):
             self.param_events[node] = self.param_events.get(node, 0) + 1
 
     # -- what the page asks for ------------------------------------------------------------------------
@@ -375,12 +390,23 @@ class Source:
             raise CommandError("the run has ended")
         self.bus.call_soon_threadsafe(fn)
 
-    def _topics(self) -> list[dict[str, Any]]:
+    def _topics(self) -> tuple[list[dict[str, Any]], int]:
+        """The rows of the topics table, the first MAX_TOPIC_ROWS by name, and how many topics
+        there are.  The page's own readers are made for the rows shown only, and deleted (on
+        the scheduler's thread) for a topic no longer shown or no longer on the graph: a reader
+        of the view's would otherwise keep a dead topic alive for every other tool."""
         wall = time.monotonic()
+        types = self.topic_types()
+        names = sorted(n for n in types if not is_hidden(n) and self._alive(n))  # as `ros2 topic list`
+        shown = names[:MAX_TOPIC_ROWS]
         out = []
-        for name, type_ in sorted(self.topic_types().items()):
-            if is_hidden(name):  # as `ros2 topic list`: an action's _action/ topics are under Actions
+        rows = self._rows
+        for name in shown:
+            kept = rows.get(name)
+            if kept is not None and wall - kept[0] < ROW_PERIOD:
+                out.append(kept[1])  # the same row object: no change for the channel to send
                 continue
+            type_ = types[name]
             entry: dict[str, Any] = {"name": name, "type": type_._TYPE if type_ is not None else ""}
             machine = self._machine_topic(name)
             if machine is not None:
@@ -388,6 +414,7 @@ class Source:
                 stats = self._stats.setdefault(name, _TopicStats())
                 stats.update(wall, count)
                 entry.update(count=count, rate=round(stats.rate, 2), last=last, machine=True)
+                rows[name] = (wall, entry)
                 out.append(entry)
                 continue
             reader = self._readers.get(name)
@@ -403,10 +430,22 @@ class Source:
                 if count != stats.last_count:
                     stats.last_count = count
                     latest = reader.latest
-                    stats.text = to_yaml(latest) if latest is not None else ""
+                    stats.text = bounded_text(to_yaml(latest)) if latest is not None else ""
                 entry.update(count=count, rate=round(stats.rate, 2), last=stats.text)
+            rows[name] = (wall, entry)
             out.append(entry)
-        return out
+        keep = set(shown)
+        for name in [n for n in rows if n not in keep]:
+            del rows[name]
+        for name in [n for n in self._asked if n not in keep]:
+            self._asked.discard(name)
+            self._stats.pop(name, None)
+            self.bus.call_soon_threadsafe(partial(self._unwatch, name))
+        return out, len(names)
+
+    def _alive(self, name: str) -> bool:
+        """Whether a topic has endpoints besides the page's own (a source that knows better says)."""
+        return True
 
     def _machine_topic(self, name: str) -> tuple[int, str] | None:
         """For a machine's /llfsm/M/state or /description: (messages, what the row says), which
@@ -423,7 +462,17 @@ class Source:
 
     def _watch(self, name: str, type_: Any) -> None:
         """(scheduler thread) A PULL reader for the page: counts messages, keeps the newest."""
+        if name not in self._asked:
+            return  # no longer shown meanwhile
         self._readers[name] = self.node.create_subscription(type_, name, None, 1)
+
+    def _unwatch(self, name: str) -> None:
+        """(scheduler thread) The page's reader of a topic it no longer shows, deleted."""
+        if name in self._asked:
+            return  # shown again meanwhile
+        reader = self._readers.pop(name, None)
+        if reader is not None:
+            self.node.destroy_subscription(reader)
 
 
 class RunSource(Source):
@@ -441,6 +490,7 @@ class RunSource(Source):
         self._world_key: object = None
         self._world_at = 0.0
         self._world_svg: str | None = None
+        self._remote_topics: frozenset[str] = frozenset()  # the DDS graph's topics beyond this process
         self._dds_graph = self._read_dds_graph()
 
     def _read_dds_graph(self) -> Any:
@@ -455,6 +505,7 @@ class RunSource(Source):
             try:
                 graph.update()
                 self.remote_graph = from_dds(graph)
+                self._remote_topics = frozenset(t for t, _ in self.remote_graph.topics)
             except Exception as e:  # never into the bus executor: the page shows the last graph
                 self.warn(f"the graph could not be read: {type(e).__name__}: {e}", "graph")
 
@@ -487,6 +538,16 @@ class RunSource(Source):
 
     def topic_types(self) -> dict[str, Any]:
         return {name: topic.type for name, topic in list(self.bus.topics.items())}
+
+    def _alive(self, name: str) -> bool:
+        """A topic of this process with a publisher, a tap or a reader that is not the page's,
+        or one the DDS graph beyond this process shows: the bus keeps every topic it ever had."""
+        topic = self.bus.topics.get(name)
+        if topic is None:
+            return False
+        if topic.publishers or topic.taps or any(r.node is not self.node for r in list(topic.readers)):
+            return True
+        return name in self._remote_topics
 
     def service_types(self) -> dict[str, Any]:
         return {name: server.type for name, server in list(self.bus.services.items())}

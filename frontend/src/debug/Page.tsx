@@ -26,8 +26,9 @@ const connection = signal("connecting");
 
 export function receive(m: Message): void {
   if (m.type === "hello") drawn.value = (m.machines as Drawn[]) ?? [];
-  const snap = m.type === "hello" ? (m.snapshot as Record<string, unknown> | undefined) : m.type === "snapshot" ? m : undefined;
-  if (snap) source.value = String(snap.source ?? "");
+  const part = m.type === "hello" ? (m.snapshot as Record<string, unknown> | undefined) : m.type === "delta" ? m : undefined;
+  const header = part?.header as Record<string, unknown> | undefined;
+  if (header?.source !== undefined) source.value = String(header.source);
   live.value = reduce(live.value, m as Record<string, unknown>);
   reduceDebug(m as Record<string, unknown>);
 }

@@ -12,16 +12,30 @@ describe("breakpoints on the diagram", () => {
   });
 });
 
-describe("the debugger's part of a snapshot", () => {
-  it("is read from hellos and snapshots alike, and gives each machine's values", () => {
+describe("the debugger's part of the channel", () => {
+  it("is read from a hello's snapshot and from deltas (protocol 1), and gives each machine's values", () => {
     reduceDebug({
       type: "hello",
+      protocol: 1,
       snapshot: { debug: { paused: true, where: "paused before the first round", breaks: ['state(ping) == "END"'], variables: { ping: { count: 2 } }, records: 5 } },
     });
     expect(debug.value.paused).toBe(true);
     expect(debug.value.records).toBe(5);
     expect(shownMachine("ping", "PUBLISH")).toEqual({ state: "PUBLISH", values: { count: 2 } });
-    reduceDebug({ type: "snapshot", debug: null });
-    expect(debug.value.paused).toBe(true); // a snapshot without a debugger changes nothing
+    reduceDebug({ type: "delta", seq: 1, header: { t: 0.2 } });
+    expect(debug.value.paused).toBe(true); // a delta without the part: the debugger did not change
+    reduceDebug({ type: "delta", seq: 2, debug: { paused: false, where: "", breaks: [], variables: { ping: { count: 3 }, pong: { n: 1 } }, records: 6 } });
+    expect(debug.value.paused).toBe(false);
+    expect(shownMachine("ping", "WAIT")).toEqual({ state: "WAIT", values: { count: 3 } });
+    // a delta names only the machines whose values changed; null: a machine gone
+    reduceDebug({ type: "delta", seq: 3, debug: { paused: false, where: "", breaks: [], variables: { pong: { n: 2 } }, records: 7 } });
+    expect(debug.value.variables).toEqual({ ping: { count: 3 }, pong: { n: 2 } });
+    reduceDebug({ type: "delta", seq: 4, debug: { paused: false, where: "", breaks: [], variables: { ping: null }, records: 8 } });
+    expect(debug.value.variables).toEqual({ pong: { n: 2 } });
+    // a hello replaces them all
+    reduceDebug({ type: "hello", protocol: 1, snapshot: { debug: { paused: false, variables: { ping: { count: 0 } }, records: 6 } } });
+    expect(debug.value.variables).toEqual({ ping: { count: 0 } });
+    reduceDebug({ type: "delta", seq: 5, debug: null });
+    expect(debug.value.records).toBe(6); // a run without a debugger changes nothing
   });
 });

@@ -62,18 +62,32 @@ export const said = signal<{ text: string; ok: boolean }>({ text: "", ok: true }
 
 type Msg = Record<string, unknown>;
 
-/** A snapshot's `debug` part into the state (hello messages carry a snapshot too). */
+/** Variables after a delta's: the machines it names replaced (null: gone), the others kept. */
+function mergeVariables(was: DebugState["variables"], changed: Record<string, Record<string, unknown> | null>): DebugState["variables"] {
+  const out = { ...was };
+  for (const [m, values] of Object.entries(changed)) {
+    if (values === null) delete out[m];
+    else out[m] = values;
+  }
+  return out;
+}
+
+/** The channel's `debug` part (docs/view.md, "The page's channel": a hello's snapshot holds it
+ * whole; a delta only when it changed, with the variables of the machines whose values changed)
+ * into the state. */
 export function reduceDebug(msg: Msg): void {
-  const snap = msg.type === "hello" ? (msg.snapshot as Msg | undefined) : msg.type === "snapshot" ? msg : undefined;
-  const d = snap?.debug as Msg | null | undefined;
+  const hello = msg.type === "hello";
+  const part = hello ? (msg.snapshot as Msg | undefined) : msg.type === "delta" ? msg : undefined;
+  const d = part?.debug as Msg | null | undefined;
   if (!d) return;
+  const changed = (d.variables as Record<string, Record<string, unknown> | null> | undefined) ?? {};
   const next: DebugState = {
     paused: Boolean(d.paused),
     where: String(d.where ?? ""),
     reason: String(d.reason ?? ""),
     machine: typeof d.machine === "string" ? d.machine : null,
     breaks: Array.isArray(d.breaks) ? d.breaks.map(String) : [],
-    variables: (d.variables as DebugState["variables"]) ?? {},
+    variables: mergeVariables(hello ? {} : debug.value.variables, changed),
     records: Number(d.records ?? 0),
     replay: typeof d.replay === "string" ? d.replay : undefined,
     runs: (d.runs as DebugState["runs"]) ?? undefined,

@@ -12,11 +12,19 @@ handles follow the server's status topic.  With a Fast DDS server, whose replies
 to requests by their order (docs/transports.md), a result is asked for only once the status
 says the goal has finished: the server then answers at once, so the replies of one client
 cannot overtake each other.
+
+Over DDS any process can publish on the action's status and feedback topics.  The client looks
+at each sample's bytes before it decodes it (`Subscription.screen`): feedback is decoded only
+for a goal of this client that asked for it, and a status array is read for this client's
+goals only, without making a message of each entry, so a peer's array of a million entries
+costs one pass over its bytes and no memory beyond them.  A status value that names no goal
+state is ignored.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import struct
+from collections.abc import Callable, Collection, Iterator
 from typing import TYPE_CHECKING, Any
 from weakref import WeakKeyDictionary
 
@@ -32,6 +40,60 @@ if TYPE_CHECKING:
     from ...msgs._message import Action
     from ..bus import Bus
     from ..node import Node
+
+
+#: One GoalStatus of action_msgs/msg/GoalStatusArray in CDR after the first: the goal id (16
+#: bytes), 3 bytes padding, the stamp (8 bytes, not read), the status (int8).  The first entry
+#: starts 4-aligned, right after the array's length, so it has no padding after its id.
+_ENTRY = struct.Struct("16s3x8xb")
+_FIRST, _NEXT = 4, 29  # where the first and second entries start, counted from the CDR body
+#: Up to this many goals, statuses_of searches the bytes for each; beyond, it reads every entry.
+_SEARCHED = 8
+
+
+def status_entries(payload: bytes) -> Iterator[tuple[bytes, int]]:
+    """(goal id, status) of each entry of a GoalStatusArray's CDR payload (encapsulation header
+    first), in order, without decoding the rest; ValueError for a payload that is not one."""
+    body, n = _status_body(payload)
+    if n == 0:
+        return
+    yield bytes(body[_FIRST : _FIRST + 16]), struct.unpack_from("b", body, _FIRST + 24)[0]
+    yield from _ENTRY.iter_unpack(body[_NEXT : _NEXT + _ENTRY.size * (n - 1)])
+
+
+def statuses_of(payload: bytes, wanted: Collection[bytes]) -> list[tuple[bytes, int]]:
+    """(goal id, status) of the first entry of each goal in `wanted` that a GoalStatusArray's
+    CDR payload lists: for a few goals each is searched for in the bytes (a pass in C per goal, a
+    hit counts only where an entry starts), for many the entries are read in one pass."""
+    if len(wanted) > _SEARCHED:
+        seen: dict[bytes, int] = {}
+        for goal_id, value in status_entries(payload):
+            if goal_id in wanted and goal_id not in seen:
+                seen[goal_id] = value
+        return list(seen.items())
+    _, n = _status_body(payload)
+    found = []
+    first, nxt = 4 + _FIRST, 4 + _NEXT  # counted from the payload's start, header included
+    last = nxt + _ENTRY.size * (n - 2) if n > 1 else first  # where the last entry starts
+    for goal_id in wanted:
+        at = payload.find(goal_id, first, last + 16) if n else -1
+        while at != -1:
+            if at == first or (at >= nxt and (at - nxt) % _ENTRY.size == 0):
+                found.append((goal_id, struct.unpack_from("b", payload, at + (24 if at == first else 27))[0]))
+                break
+            at = payload.find(goal_id, at + 1, last + 16)
+    return found
+
+
+def _status_body(payload: bytes) -> tuple[memoryview, int]:
+    """A GoalStatusArray payload's CDR body and its number of entries, checked to fit."""
+    if len(payload) < 8 or payload[0] != 0 or payload[1] not in (0, 1):
+        raise ValueError("not a plain CDR GoalStatusArray")
+    (n,) = struct.unpack_from("<I" if payload[1] else ">I", payload, 4)
+    body = memoryview(payload)[4:]
+    if n and len(body) < _NEXT + _ENTRY.size * (n - 1):
+        raise ValueError(f"a status array that declares {n} entries holds fewer")
+    return body, n
 
 
 #: Action clients made so far on each bus, per (node, action): under the sim clock the n-th one
@@ -143,6 +205,8 @@ class ActionClient:
         self._status_sub = node.create_subscription(
             impl.GoalStatusMessage, name + STATUS, self._on_status, qos_profile_action_status_default
         )
+        self._feedback_sub.screen = self._screen_feedback
+        self._status_sub.screen = self._screen_status
         self._parts: list[Any] = [
             self._goal_client,
             self._cancel_client,
@@ -308,8 +372,34 @@ class ActionClient:
         if callback is not None:
             callback(message)
 
+    def _screen_feedback(self, payload: bytes) -> bool:
+        """Over DDS: decode a feedback message only for a goal of this client that asked for
+        feedback (the goal id leads the message, after the 4 bytes of encapsulation)."""
+        return bytes(payload[4:20]) in self._feedback_callbacks
+
+    def _screen_status(self, payload: bytes) -> Any:
+        """Over DDS: the server's status array, cut down to this client's goals (module
+        docstring); nothing to deliver when none of them is in it."""
+        handles, sent = self._handles, self._sent
+        if not (handles or sent):
+            return False
+        mine = statuses_of(payload, handles.keys() | sent.keys())
+        if not mine:
+            return False
+        # deferred: start-up (a run that calls no action never loads action_msgs)
+        from ...msgs.action_msgs.msg import GoalStatus
+
+        entries = []
+        for goal_id, value in mine:
+            entry = GoalStatus(status=value)
+            entry.goal_info.goal_id.uuid = list(goal_id)
+            entries.append(entry)
+        return self._type.Impl.GoalStatusMessage(status_list=entries)
+
     def _on_status(self, array: Any) -> None:
         for entry in array.status_list:
+            if entry.status not in status.KNOWN:
+                continue  # a peer's array may hold anything: only a goal state moves a goal
             goal_id = bytes(entry.goal_info.goal_id.uuid)
             handle = self._handles.get(goal_id)
             if handle is None:

@@ -23,6 +23,8 @@ UNKNOWN, ACCEPTED, EXECUTING, CANCELING, SUCCEEDED, CANCELED, ABORTED = range(7)
 NAMES = ("UNKNOWN", "ACCEPTED", "EXECUTING", "CANCELING", "SUCCEEDED", "CANCELED", "ABORTED")
 ACTIVE = frozenset((ACCEPTED, EXECUTING, CANCELING))
 TERMINAL = frozenset((SUCCEEDED, CANCELED, ABORTED))
+#: The states a goal can be in, as a server's status array names them.
+KNOWN = ACTIVE | TERMINAL
 
 #: rcl_action's goal state machine: (state, event) -> new state.
 TRANSITIONS = {

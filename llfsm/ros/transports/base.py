@@ -88,6 +88,12 @@ class SubscriptionView(Protocol):
     def transient_local(self) -> bool: ...
     @property
     def reliability(self) -> int: ...
+    @property
+    def screen(self) -> Callable[[bytes], Any] | None:
+        """Looks at a sample's CDR before it is decoded (None: decode every sample): False
+        drops it unread, True decodes it, a message is delivered as it is.  What a reader
+        needs of a peer's sample may be a small part of it (an action client's own goals in
+        a status array of any length): this is how it never pays for the rest."""
 
     def _deliver(self, msg: Any) -> None:
         """A message from another process, delivered as a local publisher's copy is."""

@@ -316,9 +316,7 @@ class _Reader(_Endpoint):
         )
         self.readers = (self.reader,)
         cls = sub.msg_type
-        self.samples = Samples(
-            self.reader, lambda data: _dds.from_cdr(data, cls), sub.topic_name, f"a {cls._TYPE}", t.warn
-        )
+        self.samples = Samples(self.reader, self._decode, sub.topic_name, f"a {cls._TYPE}", t.warn)
         self.cond = ReadCondition(self.reader, ANY)
         self.token = t.waits.attach(self.cond, self)
         self.reader.set_status_mask(DDSStatus.RequestedIncompatibleQos)
@@ -326,10 +324,22 @@ class _Reader(_Endpoint):
         self.status_token = t.waits.attach(self.reader, incompatible)
         t.add_endpoint(self)
 
+    def _decode(self, data: bytes) -> Any:
+        """A sample's message, or None for one the subscription's screen drops unread."""
+        screen = self.sub.screen
+        if screen is not None:
+            seen = screen(data)
+            if seen is False:
+                return None
+            if seen is not True:
+                return seen
+        return _dds.from_cdr(data, self.msg_type)
+
     def on_trigger(self) -> None:
         deliver = self.sub._deliver
         for msg, _info in self.samples.take():
-            deliver(msg)
+            if msg is not None:
+                deliver(msg)
 
     def publisher_count(self) -> int:
         return int(self.reader.get_subscription_matched_status().current_count)

@@ -8,10 +8,19 @@ other with the same settings:
 
 | range | multicast | peers | participant index |
 |---|---|---|---|
-| SUBNET (default) | Cyclone's default | ROS_STATIC_PEERS | auto (max 32) |
-| LOCALHOST | off | `localhost` + ROS_STATIC_PEERS | auto (max 32) |
+| SUBNET (default) | Cyclone's default | ROS_STATIC_PEERS | Cyclone's: none (multicast, no peers), else auto, max 119 |
+| LOCALHOST | off | `localhost` + ROS_STATIC_PEERS | auto (max 119) |
 | OFF | off | none | none, with a per-process domain tag |
 | SYSTEM_DEFAULT | Cyclone's default | none (Cyclone's own config only) | Cyclone's default |
+
+The participant index is where llfsm parts from rmw_cyclonedds_cpp 1.6+ (Iron on), which asks
+for `auto` with at most 32 on every range but OFF, so that a host holds at most 33 ROS processes
+(Humble's rmw left Cyclone's defaults: no limit with multicast).  An index only matters to
+unicast discovery (it fixes the ports a peer tries), so llfsm leaves SUBNET's to Cyclone, which
+takes `none` (no limit: the kernel picks the ports) when every interface multicasts and no peer
+is named, and allows 120 (Cyclone's own bound, indices 0-119) wherever unicast discovery needs
+one.  A participant that finds every index taken fails with one line saying so
+(`participant`).
 
 `ROS_LOCALHOST_ONLY=1` (deprecated in ROS 2, still honoured by rcl) means LOCALHOST and
 ignores the other two variables.
@@ -27,7 +36,10 @@ was made from (the CLI's graph reader shares them).
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+import sys
+import tempfile
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
@@ -36,8 +48,9 @@ if TYPE_CHECKING:
     from cyclonedds.domain import DomainParticipant
 
 RANGES = ("SUBNET", "LOCALHOST", "OFF", "SYSTEM_DEFAULT")
-#: rmw_cyclonedds_cpp's MaxAutoParticipantIndex: how many ROS processes one host may hold.
-MAX_AUTO_PARTICIPANT_INDEX = 32
+#: The highest participant index Cyclone gives a participant where discovery is unicast (its
+#: own bound: ports are computed from it): 120 processes of one host on one domain.
+MAX_AUTO_PARTICIPANT_INDEX = 119
 #: Vendor ids whose discovery type information Cyclone ignores (1.15: eProsima Fast DDS).
 IGNORE_TYPE_INFORMATION = "1.15"
 #: Participant USER_DATA, as rmw sets it (the security enclave; llfsm runs in the root one).
@@ -103,9 +116,11 @@ def ros_fragment(d: Discovery, pid: int | None = None) -> str:
         # only a participant with this exact tag (down to the process id) could discover us
         out.append("<Discovery><ParticipantIndex>none</ParticipantIndex>")
         out.append(f"<Tag>ros_discovery_off_{os.getpid() if pid is None else pid}</Tag>")
-    else:
+    elif localhost:
         out.append("<Discovery><ParticipantIndex>auto</ParticipantIndex>")
         out.append(f"<MaxAutoParticipantIndex>{MAX_AUTO_PARTICIPANT_INDEX}</MaxAutoParticipantIndex>")
+    else:  # SUBNET: Cyclone picks none (multicast, no peers) or auto (module docstring)
+        out.append(f"<Discovery><MaxAutoParticipantIndex>{MAX_AUTO_PARTICIPANT_INDEX}</MaxAutoParticipantIndex>")
     peers = (["localhost"] if localhost else []) + list(d.static_peers)
     if peers:
         out.append("<Peers>" + "".join(f"<Peer address={quoteattr(p)}/>" for p in peers) + "</Peers>")
@@ -152,10 +167,51 @@ def participant(domain_id: int | None = None, env: Mapping[str, str] | None = No
     d = settings(env)
     did = d.domain_id if domain_id is None else domain_id
     if did not in _domains:
-        try:
-            _domains[did] = Domain(did, config_xml(env, d))
-        except DDSException as e:
+        with _cyclone_log() as said:
+            try:
+                _domains[did] = Domain(did, config_xml(env, d))
+                failed = None
+            except DDSException as e:
+                failed = e
+        if failed is not None:
+            if "free participant index" in said.text:
+                raise DiscoveryError(
+                    f"no free participant index on this host for ROS domain {did}: Cyclone DDS numbers the "
+                    "processes of a host where discovery is unicast (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST or "
+                    "ROS_STATIC_PEERS) up to Discovery/MaxAutoParticipantIndex (llfsm's default "
+                    f"{MAX_AUTO_PARTICIPANT_INDEX}, Cyclone's most; CYCLONEDDS_URI may set it lower); with "
+                    "multicast discovery (range SUBNET, no static peers) there is no limit, or give every "
+                    "process <Discovery><ParticipantIndex>none</ParticipantIndex></Discovery> in CYCLONEDDS_URI"
+                ) from None
             raise DiscoveryError(
-                f"Cyclone DDS refused its configuration (check CYCLONEDDS_URI and the ROS_* variables): {e}"
+                f"Cyclone DDS refused its configuration (check CYCLONEDDS_URI and the ROS_* variables): {failed}"
             ) from None
+        sys.stderr.write(said.text)
     return DomainParticipant(did, qos=Qos(Policy.Userdata(ENCLAVE_USER_DATA)))
+
+
+class _Said:
+    text = ""
+
+
+@contextmanager
+def _cyclone_log() -> Iterator[_Said]:
+    """What Cyclone writes on stderr (file descriptor 2) meanwhile, in `.text` afterwards: the
+    reason a domain could not be made is only said there.  The caller shows it, or says it
+    better.  Where fd 2 cannot be borrowed, nothing is caught and Cyclone speaks for itself."""
+    said = _Said()
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):
+        yield said
+        return
+    with tempfile.TemporaryFile() as caught:
+        os.dup2(caught.fileno(), 2)
+        try:
+            yield said
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            caught.seek(0)
+            said.text = caught.read().decode("utf-8", "replace")

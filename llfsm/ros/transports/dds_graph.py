@@ -41,6 +41,10 @@ SETTLE_S = 5.0
 #: How long after its first endpoint a participant with no ros_discovery_info writer yet is
 #: waited for (Graph.settle).
 PARTICIPANT_GRACE_S = 0.5
+#: How long after a participant's first ros_discovery_info the endpoints it names are waited
+#: for (Graph.settle): they were made before the sample was written, so they come within the
+#: time discovery takes; a peer naming endpoints that never appear delays a verb this much.
+ENDPOINT_GRACE_S = 1.0
 INFINITE_NS = 0x7FFFFFFFFFFFFFFF  # Cyclone's DDS_INFINITY
 #: ros_discovery_info entries kept for participants not (yet) seen alive: a sample can come
 #: before its participant's, but a peer can also write gids of participants that never exist.
@@ -216,6 +220,8 @@ class Graph:
         #: participant -> time.monotonic() its first endpoint was seen (Graph._nodes_known)
         self._first_endpoint: dict[bytes, float] = {}
         self._nodes: dict[bytes, list[tuple[NodeName, list[bytes], list[bytes]]]] = {}
+        #: participant -> time.monotonic() its first ros_discovery_info was read (_nodes_known)
+        self._told: dict[bytes, float] = {}
         self._info = self._discovery_info_reader(say)
 
     def _discovery_info_reader(self, say: Callable[[str], None] | None) -> Samples[Any]:
@@ -262,6 +268,7 @@ class Graph:
             else:
                 self._participants.discard(key)
                 self._nodes.pop(key, None)
+                self._told.pop(key, None)
                 self._first_endpoint.pop(key, None)
                 for gid in [g for g, e in self._endpoints.items() if e.participant == key]:
                     del self._endpoints[gid]
@@ -289,6 +296,8 @@ class Graph:
             # a peer naming participants that do not exist (any gid can be written): forget those
             for key in [k for k in self._nodes if k not in self._participants]:
                 del self._nodes[key]
+                self._told.pop(key, None)
+        self._told.setdefault(participant, time.monotonic())
         self._nodes[participant] = [
             (
                 NodeName(n.node_namespace, n.node_name),
@@ -319,12 +328,14 @@ class Graph:
 
     def _nodes_known(self) -> bool:
         """Every participant seen has told its nodes, and every endpoint those nodes name has
-        been seen.  A participant with a ros_discovery_info writer is waited for until its
-        sample is read, and one with no endpoint seen yet until one is (a ROS 2 participant has
-        endpoints: a Fast DDS one announces them up to a second after itself).  One with
-        endpoints but no ros_discovery_info writer is waited for PARTICIPANT_GRACE_S after its
-        first endpoint (the writer may come in a later announcement; a plain DDS participant
-        never has one, and is then not waited for)."""
+        been seen (or ENDPOINT_GRACE_S has passed since the participant first told them: a peer
+        may name endpoints that never appear, and must not hold a verb up for longer).  A
+        participant with a ros_discovery_info writer is waited for until its sample is read,
+        and one with no endpoint seen yet until one is (a ROS 2 participant has endpoints: a
+        Fast DDS one announces them up to a second after itself).  One with endpoints but no
+        ros_discovery_info writer is waited for PARTICIPANT_GRACE_S after its first endpoint
+        (the writer may come in a later announcement; a plain DDS participant never has one,
+        and is then not waited for)."""
         now = time.monotonic()
         informing = {
             e.participant for e in self._endpoints.values() if e.kind == "publisher" and e.topic == DISCOVERY_TOPIC
@@ -337,6 +348,8 @@ class Graph:
                 first = self._first_endpoint.get(p)
                 if p in informing or first is None or now - first < PARTICIPANT_GRACE_S:
                     return False
+                continue
+            if now - self._told.get(p, now) >= ENDPOINT_GRACE_S:
                 continue
             for _name, readers, writers in nodes:
                 if any(g not in self._endpoints for g in readers) or any(g not in self._endpoints for g in writers):

@@ -1,5 +1,6 @@
-// llfsm view: live over one WebSocket; commands, publishing, service calls and parameters as JSON
-// POSTs (docs/view.md).  Everything user-provided is set with textContent; the only markup
+// llfsm view: live over one WebSocket (protocol 1, docs/view.md "The page's channel": a hello with
+// everything, then deltas: only the rows that changed are touched); commands, publishing, service
+// calls and parameters as JSON POSTs (docs/view.md).  Everything user-provided is set with textContent; the only markup
 // inserted is the SVG the server generated (diagrams, the graph of nodes and topics, the turtle
 // world), parsed as SVG, never as HTML.  The server escapes every text of a peer's in that SVG
 // (llfsm view shows what any DDS peer publishes); the page also keeps only the elements a drawing
@@ -7,9 +8,14 @@
 // element or script into the page.
 "use strict";
 
+const PROTOCOL = 1; // the channel's version this page speaks (llfsm/web/channel.py)
 const cards = new Map(); // machine key -> {el, states: Map(state -> <g>), current, asked}
-let lastWorld = null;
 let ended = false;
+// What the channel's messages described so far (a hello replaces it all, a delta changes parts).
+const view = { seq: -1, header: {}, machines: new Map(), topics: new Map(), services: new Map() };
+const topicRows = new Map(); // topic -> its <tbody> (its row, and the row of its last message)
+// How much the page has received and how long applying it took (read by the benchmark).
+window.llfsmStats = { messages: 0, bytes: 0, applyMs: 0, maxApplyMs: 0, totalApplyMs: 0 };
 const token = new URLSearchParams(location.search).get("token");
 const openNodes = new Map(); // node -> the parameter events count its rows were read at
 let lastEvents = {}; // node -> parameter events seen (the snapshot's count)
@@ -91,7 +97,9 @@ function buildMachines(machines) {
         entry.asked = null;
         const result = await post("/api/command", { machine: m.name, command: b.dataset.command });
         show(out, result);
-        if (result.success) entry.asked = { verb: b.dataset.command, seen: false, after: 0 };
+        // the answer says which delta had been sent when it was given: a later one was sampled after
+        if (result.success) entry.asked = { verb: b.dataset.command, seq: result.seq ?? view.seq };
+        settleCommands();
       });
     }
     box.append(card);
@@ -134,26 +142,25 @@ function updateMachine(m, s) {
   const list = el_.querySelector(".transitions");
   const items = m.transitions.map((t) => el("li", `${t.t.toFixed(3)} s  ${t.from} → ${t.to}`));
   list.replaceChildren(...items);
-  // A command the run took is "pending until its next ringlet" until the run shows it applied:
-  // no longer pending in a snapshot that was surely sampled after the answer (the second one
-  // after it: the first may have been on its way when the answer came).
-  const asked = card.asked;
-  if (asked) {
-    const out = el_.querySelector(".command-result");
-    asked.after += 1;
-    if (m.pending) {
-      asked.seen = true;
-    } else if (asked.seen || asked.after >= 2) {
-      out.dataset.ok = "true";
-      out.textContent = `${asked.verb} applied: ${m.machine || m.name} is ${status} in ${m.state}`;
-      card.asked = null;
-    }
-  }
   if (over) {
     const out = el_.querySelector(".command-result");
     if (card.asked) { out.textContent = ""; card.asked = null; }
   }
   card.status = status;
+}
+
+// A command the run took is "pending until its next ringlet" until the run shows it applied: no
+// longer pending in a delta sampled after the answer (one after the delta the answer names).
+function settleCommands() {
+  for (const [name, card] of cards) {
+    const asked = card.asked;
+    const m = view.machines.get(name);
+    if (!asked || !m || view.seq <= asked.seq || m.pending) continue;
+    const out = card.el.querySelector(".command-result");
+    out.dataset.ok = "true";
+    out.textContent = `${asked.verb} applied: ${m.machine || m.name} is ${card.status} in ${m.state}`;
+    card.asked = null;
+  }
 }
 
 // Which run a card is: the digits the view keys another run by (NAME@xxxxxxxx: its participant's
@@ -205,30 +212,62 @@ function updateMonitor(mon) {
 
 // -- topics, services ------------------------------------------------------------------------------
 
-function updateTopics(topics) {
-  const body = document.querySelector("#topics tbody");
-  const rows = [];
-  const names = [];
-  for (const t of topics) {
-    names.push(t.name);
-    const tr = el("tr", null, "topic");
-    tr.dataset.topic = t.name;
-    tr.append(breakable("td", t.name, "name"), breakable("td", t.type, "type"),
-      el("td", t.count === null ? "—" : String(t.count), "num count"),
-      el("td", t.rate === null ? "—" : `${t.rate.toFixed(1)} Hz`, "num rate"));
-    rows.push(tr);
-    if (!t.last) { tr.className = "topic bare"; continue; } // nothing received yet: no empty row under it
-    const last = el("tr", null, "last");
-    last.dataset.topic = t.name;
-    const td = el("td");
-    td.colSpan = 4;
-    td.append(el("pre", t.last || "", t.machine ? "yaml note" : "yaml"));
-    last.append(td);
-    rows.push(last);
+function topicBody(t) {
+  const body = el("tbody");
+  body.dataset.topic = t.name;
+  const tr = el("tr", null, "topic");
+  tr.dataset.topic = t.name;
+  tr.append(breakable("td", t.name, "name"), breakable("td", t.type, "type"), el("td", "", "num count"),
+    el("td", "", "num rate"));
+  const last = el("tr", null, "last");
+  last.dataset.topic = t.name;
+  const td = el("td");
+  td.colSpan = 4;
+  td.append(el("pre", "", t.machine ? "yaml note" : "yaml"));
+  last.append(td);
+  body.append(tr, last);
+  return body;
+}
+
+function fillTopic(body, t) {
+  const [tr, last] = body.children;
+  if (tr.querySelector(".type").textContent !== t.type) tr.children[1].replaceWith(breakable("td", t.type, "type"));
+  tr.querySelector(".count").textContent = t.count === null ? "—" : String(t.count);
+  tr.querySelector(".rate").textContent = t.rate === null ? "—" : `${t.rate.toFixed(1)} Hz`;
+  tr.className = t.last ? "topic" : "topic bare"; // nothing received yet: no empty row under it
+  last.hidden = !t.last;
+  const pre = last.querySelector("pre");
+  if (pre.textContent !== t.last) pre.textContent = t.last || "";
+}
+
+// One topic's rows changed, came or went: only those rows are touched, in name order.
+function applyTopics(change) {
+  const table = document.getElementById("topics");
+  for (const name of change.remove || []) {
+    view.topics.delete(name);
+    topicRows.get(name)?.remove();
+    topicRows.delete(name);
   }
-  body.replaceChildren(...rows);
+  for (const t of change.upsert || []) {
+    view.topics.set(t.name, t);
+    let body = topicRows.get(t.name);
+    if (!body) {
+      body = topicBody(t);
+      topicRows.set(t.name, body);
+      let next = null; // the first row after it by name (the table stays sorted)
+      for (const b of table.tBodies) if (b.dataset.topic > t.name && (!next || b.dataset.topic < next.dataset.topic)) next = b;
+      table.insertBefore(body, next);
+    }
+    fillTopic(body, t);
+  }
+  const more = (change.total ?? view.topics.size) - view.topics.size;
+  const note = document.getElementById("topics-more");
+  note.hidden = more <= 0;
+  note.textContent = more > 0 ? `${more.toLocaleString("en")} more topics not listed (the table shows at most ` +
+    `${view.topics.size})` : "";
+  const names = [...view.topics.keys()].sort(); // fillList touches the lists only when they change
   fillList("topic-names", names);
-  fillList("msg-types", [...new Set(topics.map((t) => t.type))]);
+  fillList("msg-types", [...new Set(names.map((n) => view.topics.get(n).type))]);
 }
 
 function fillList(id, names) {
@@ -273,8 +312,17 @@ function updateGraph(g) {
     }
     list.push(d);
   }
-  for (const [name, d] of have) if (!g.nodes.includes(name)) openNodes.delete(name);
+  const listed = new Set(g.nodes);
+  for (const [name] of have) if (!listed.has(name)) openNodes.delete(name);
   nodes.replaceChildren(...list);
+  const more = (g.nodes_total ?? g.nodes.length) - g.nodes.length;
+  const note = document.getElementById("nodes-more");
+  note.hidden = more <= 0;
+  note.textContent = more > 0 ? `${more.toLocaleString("en")} more nodes not listed (at most ${g.nodes.length})` : "";
+  const moreActions = (g.actions_total ?? g.actions.length) - g.actions.length;
+  const actionsNote = document.getElementById("actions-more");
+  actionsNote.hidden = moreActions <= 0;
+  actionsNote.textContent = moreActions > 0 ? `${moreActions.toLocaleString("en")} more actions not listed` : "";
 }
 
 function openNode(name) {
@@ -357,36 +405,62 @@ function parameterEvents(events) {
   }
 }
 
-// -- the whole page -------------------------------------------------------------------------------
+// -- the whole page: the channel's messages -------------------------------------------------------
 
-function snapshot(s) {
-  ended = !!s.ended;
-  document.getElementById("run-time").textContent =
-    (s.source === "view" ? `view time ${s.t.toFixed(3)} s` : `run time ${s.t.toFixed(3)} s (${s.clock} clock)`) +
-    (s.ended ? " — the run has ended" : "");
-  for (const m of s.machines) updateMachine(m, s);
-  updateTopics(s.topics);
-  fillList("service-names", s.services.map((x) => x.name));
-  parameterEvents(s.param_events);
-  updateMonitor(s.monitor);
+// A hello's snapshot or a delta (protocol 1): only what it names changes on the page.
+function applyDelta(d) {
+  view.seq = d.seq ?? view.seq;
+  const header = view.header;
+  const wasEnded = !!header.ended;
+  if (d.header) Object.assign(header, d.header);
+  ended = !!header.ended;
+  if (d.header) {
+    document.getElementById("run-time").textContent =
+      (header.source === "view" ? `view time ${header.t.toFixed(3)} s` :
+        `run time ${header.t.toFixed(3)} s (${header.clock} clock)`) + (header.ended ? " — the run has ended" : "");
+  }
+  if (d.machines) {
+    for (const name of d.machines.remove || []) view.machines.delete(name);
+    for (const m of d.machines.upsert || []) {
+      view.machines.set(m.name, m);
+      updateMachine(m, header);
+    }
+  }
+  if (ended !== wasEnded) for (const m of view.machines.values()) updateMachine(m, header);
+  if (d.topics) applyTopics(d.topics);
+  if (d.services) {
+    for (const name of d.services.remove || []) view.services.delete(name);
+    for (const x of d.services.upsert || []) view.services.set(x.name, x);
+    fillList("service-names", [...view.services.keys()].sort());
+  }
+  if (d.param_events) parameterEvents({ ...lastEvents, ...d.param_events });
+  if ("monitor" in d) updateMonitor(d.monitor);
   // the debugger's page (docs/debug.md): pause, step, breakpoints, variables, history
   const debugLink = document.getElementById("debug-link");
-  if (s.debug && debugLink.hidden) {
+  if (d.debug && debugLink.hidden) {
     debugLink.href = "/debug" + location.search; // the token, if the page has one
     debugLink.hidden = false;
   }
-  const panel = document.getElementById("world-panel");
-  if (s.world) {
-    panel.hidden = false;
-    if (s.world !== lastWorld) {
-      lastWorld = s.world;
-      document.getElementById("world").replaceChildren(svgNode(s.world));
-    }
+  if ("world" in d && d.world) {
+    document.getElementById("world-panel").hidden = false;
+    document.getElementById("world").replaceChildren(svgNode(d.world));
   }
-  if (s.ended) {
+  if (ended) {
     setConnection("ended");
     for (const b of document.querySelectorAll("form button")) b.disabled = true;
   }
+  settleCommands();
+}
+
+// A hello replaces everything the page held.
+function reset() {
+  view.header = {};
+  view.machines.clear();
+  view.services.clear();
+  for (const body of topicRows.values()) body.remove();
+  topicRows.clear();
+  view.topics.clear();
+  lastEvents = {};
 }
 
 function setConnection(status) {
@@ -406,16 +480,29 @@ function connect() {
     for (const b of document.querySelectorAll("button")) b.disabled = true;
   };
   ws.onmessage = (ev) => {
+    const started = performance.now();
     const msg = JSON.parse(ev.data);
     if (msg.type === "hello") {
+      if (msg.protocol !== PROTOCOL) {
+        setConnection(`protocol ${msg.protocol}: this page speaks ${PROTOCOL}; reload it`);
+        ws.close();
+        return;
+      }
+      reset();
       buildMachines(msg.machines);
       updateGraph(msg.graph);
-      snapshot(msg.snapshot);
-    } else if (msg.type === "snapshot") {
-      snapshot(msg);
+      applyDelta(msg.snapshot);
+    } else if (msg.type === "delta") {
+      applyDelta(msg);
     } else if (msg.type === "graph") {
       updateGraph(msg);
     }
+    const stats = window.llfsmStats;
+    stats.messages += 1;
+    stats.bytes += ev.data.length;
+    stats.applyMs = performance.now() - started;
+    stats.maxApplyMs = Math.max(stats.maxApplyMs, stats.applyMs);
+    stats.totalApplyMs += stats.applyMs;
   };
 }
 
