@@ -183,10 +183,18 @@ class EnvFuture(Future):
         self._cancelled = False
         self._result = None
         self._exception = None
-        self._callbacks = []
+        self._callbacks = ()  # type: ignore[assignment]  # a list once a callback is added
         self._service = service
         self._request = request
         self._server = server
+
+    def add_done_callback(self, fn: Callable[[Future], None]) -> None:
+        if self._done:
+            fn(self)
+        elif self._callbacks:
+            self._callbacks.append(fn)
+        else:
+            self._callbacks = [fn]
 
     def _run(self) -> None:
         if self._done:
@@ -228,10 +236,22 @@ class EnvClient(Client):
         server = bus.services.get(service)
         if server.__class__ is not EnvService or type(request) is not self.srv_type.Request:
             return Client.call_async(self, request)
-        future = EnvFuture(service, request, server)
+        future = _new(EnvFuture)  # EnvFuture(service, request, server), without the call
+        future._remote = None
+        future._done = False
+        future._cancelled = False
+        future._result = None
+        future._exception = None
+        future._callbacks = ()  # type: ignore[assignment]
+        future._service = service
+        future._request = request
+        future._server = server
         bus.ready.append(future)  # as Executor.queue
         bus.ctx.wake = 0
         return future
+
+
+_new = object.__new__
 
 
 class Declaring(InProcess):

@@ -14,6 +14,7 @@ left suspended) steps to itself, with nothing published, forever.
 from __future__ import annotations
 
 import bisect
+import gc
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -76,6 +77,9 @@ class Explorer(Stepper):
         finally:
             sys.stdout = saved
             activate(prev)
+            if self.frozen:  # the collector's again (Store.check_memory)
+                gc.unfreeze()
+                self.frozen = False
 
     def _explore(self) -> None:
         if not self.options.generic:
