@@ -140,6 +140,7 @@ class EnvService:
         self.texts = texts
         self.may_fail = may_fail
         self.oracle = oracle
+        self.answers = len(responses)
         self.choices = len(responses) + int(may_fail)
 
     def _answer(self, request: Any) -> Any:
@@ -312,7 +313,7 @@ class World:
 
     def _take_requests(self, bus: Any) -> None:
         """`call` and `spin_until` of verify's bus, for the declared services (see the class)."""
-        services, ready, ctx = bus.services, bus.ready, bus.ctx
+        services, ready, ctx, oracle = bus.services, bus.ready, bus.ctx, self.oracle
         call, spin_until = bus.call, bus.spin_until
         success = FutureReturnCode.SUCCESS
 
@@ -325,13 +326,31 @@ class World:
             ctx.wake = 0
             return future
 
-        def spin_env(future: Future, timeout_ns: int | None) -> Any:
+        def spin_env(future: Any, timeout_ns: int | None) -> Any:
             # the request is the executor's next work, and its loop would run it first: no timer
-            # (verify refuses them), ros.ok() (Executor.ok, written out)
-            if ready and ready[0] is future and not bus.timers and bus.initialised and not bus.shut:
-                if not ctx.interrupted and not future._done:
+            # (verify refuses them), ros.ok() (Executor.ok, written out); then EnvFuture._run,
+            # written out for the usual case (exploring, the server of the environment on the bus)
+            if ready and ready[0] is future and bus.initialised and not bus.shut and not ctx.interrupted:
+                server = future._server
+                if (
+                    not future._done
+                    and not bus.timers
+                    and services.get(future._service) is server
+                    and oracle.code is None
+                    and not oracle.describe
+                ):
                     ready.popleft()  # as Executor._run_ready
-                    future._run()  # type: ignore[attr-defined]  # an EnvFuture: it is queued
+                    made = oracle.made
+                    forced = oracle.forced
+                    k = len(made)
+                    d = forced[k] if k < len(forced) else 0
+                    made.append((d, server.choices))
+                    if d < server.answers:
+                        if future._callbacks:
+                            future.set_result(server.responses[d]._copy())
+                        else:
+                            future._result = server.responses[d]._copy()
+                            future._done = True
                     if bus.last:
                         bus._run_last()
                     if future._done:

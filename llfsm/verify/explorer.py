@@ -340,12 +340,20 @@ class Explorer(Stepper):
                             if isinstance(exc, KeyboardInterrupt | MemoryError | VariableValueError):
                                 raise
                             raise MachineError(exc, idx, c) from exc
+                        again = -1  # the environment's next choice of the usual case (one), or -1, or -2
                         if oracle is not None:
                             if bus.ready:  # the answers and callbacks it left, as between rounds
                                 drain()
                             chosen = oracle.made
                             if chosen:
-                                c += len(choices) * (chosen[0][0] if len(chosen) == 1 else oracle.number())
+                                if len(chosen) == 1:  # next_forced() of the usual case, one choice
+                                    d, nd = chosen[0]
+                                    c += len(choices) * d
+                                    if d + 1 < nd:
+                                        again = d + 1
+                                else:
+                                    c += len(choices) * oracle.number()
+                                    again = -2
                         steps += 1
                         # the machine's new part (and those its commands touched)
                         part = snaps[turn](m)
@@ -439,16 +447,12 @@ class Explorer(Stepper):
                             edges.append(j)
                             if oracle is not None:
                                 edge_choice.append(c)
-                        if oracle is None or not oracle.made:
-                            break
-                        chosen = oracle.made
-                        if len(chosen) == 1:  # next_forced() and start() of the usual case, one choice
-                            d, nd = chosen[0]
-                            if d + 1 >= nd:
-                                break
-                            oracle.forced, oracle.made = (d + 1,), []
+                        if again >= 0:  # start() of the usual case
+                            oracle.forced, oracle.made = (again,), []  # type: ignore[union-attr]
                             continue
-                        forced = oracle.next_forced()
+                        if again == -1:
+                            break
+                        forced = oracle.next_forced()  # type: ignore[union-attr]
                         if forced is None:
                             break
                         oracle.start(forced)
