@@ -171,7 +171,8 @@ def _caller(tmp_path: Path) -> Path:
             "count = (count + 1) % 5\n",
         },
         variables="node: ros.Node\nclient: object = None\nclient2: object = None\npub: object = None\n"
-        "sub: object = None\nheard: list = []\nseen: list = []\nspun: int = 0\nx: float = 0.0\nearly: bool = False\ncount: int = 0\n"
+        "sub: object = None\nheard: list = []\nseen: list = []\nspun: int = 0\nx: float = 0.0\n"
+        "early: bool = False\ncount: int = 0\n"
         "code: str = ''\nf: object = None\n",
         includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n"
         "from llfsm.msgs.turtle_sensor_interface.srv import TurtlePosition\n",
@@ -236,9 +237,9 @@ def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_a
         if not hash_compact and not generic:
             fast = [e.codecs[0].variables_of(e.part(c, 0)) for c in e.configs]
         if not hash_compact:  # what each configuration holds: every variable, the bus's flags, the time
+            parts = [[_by_value(e.part(c, k)) for k in range(e.n)] for c in e.configs]
             contents.append(
-                [(c[:GLOBALS], e.globals_of(c), e.times_of(c), [_by_value(e.part(c, k)) for k in range(e.n)])
-                 for c in e.configs]  # fmt: skip
+                [(c[:GLOBALS], e.globals_of(c), e.times_of(c), p) for c, p in zip(e.configs, parts, strict=True)]
             )
     assert shapes[0] == shapes[1] == shapes[2]
     assert contents[0] == contents[1]

@@ -202,7 +202,7 @@ class EnvFuture(Future):
             return  # cancelled before the executor came to it: no answer, no choice
         server = self._server
         if server.bus.services.get(self._service) is not server:  # pragma: no cover (verify refuses create_service)
-            _Request(server.bus, self._service, self._request, self)._run()
+            _Request(server.bus, self._service or "", self._request, self)._run()
             return
         oracle = server.oracle
         if oracle.code is None and not oracle.describe:  # Oracle.decide, exploring
@@ -243,7 +243,7 @@ class EnvClient(Client):
         future._cancelled = False
         future._result = None
         future._exception = None
-        future._callbacks = ()  # type: ignore[assignment]
+        future._callbacks = ()
         future._service = service
         future._request = request
         future._server = server
@@ -280,8 +280,9 @@ class World:
     `call_async` queues the request as an `EnvFuture` (so does `call`, for a client made before
     the world was), and `spin_until`, when the executor's next work is that very request, runs
     it at once: what the executor's loop would do first, since verify's bus has no timers
-    (verify refuses them), no transport and nothing else ahead of it in the queue.  Otherwise (anything queued ahead, `ros.ok()` false, a request left pending, a call
-    to any other service) the bus's own methods run, so what machine code sees (a pending future
+    (verify refuses them), no transport and nothing else ahead of it in the queue.  Otherwise
+    (anything queued ahead, `ros.ok()` false, a request left pending, a call to any other
+    service) the bus's own methods run, so what machine code sees (a pending future
     until the executor's turn, INTERRUPTED, TIMEOUT, the order of callbacks and answers, hence
     the order of the oracle's choices) is unchanged.  `direct=False` (verify's generic step,
     `Options.generic`) leaves the bus as it is: tests/test_verify_environment.py compares the two.

@@ -447,12 +447,12 @@ class Explorer(Stepper):
                             edges.append(j)
                             if oracle is not None:
                                 edge_choice.append(c)
-                        if again >= 0:  # start() of the usual case
-                            oracle.forced, oracle.made = (again,), []  # type: ignore[union-attr]
-                            continue
-                        if again == -1:
+                        if again == -1 or oracle is None:  # (again is -1 without an environment)
                             break
-                        forced = oracle.next_forced()  # type: ignore[union-attr]
+                        if again >= 0:  # start() of the usual case
+                            oracle.forced, oracle.made = (again,), []
+                            continue
+                        forced = oracle.next_forced()
                         if forced is None:
                             break
                         oracle.start(forced)

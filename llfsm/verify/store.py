@@ -216,15 +216,16 @@ class Store:
     def check_memory(self) -> None:
         """MemoryLimit past the bound: called every few hundred new configurations.  Every
         SETTLE calls, what the exploration keeps is set aside from Python's cycle collector
-        (`gc.freeze`, after a collection, so no garbage is kept): the configurations and their
-        parts are kept to the end, and a part that holds a bus handle or a frozen list stays
-        tracked, so each of the collector's full passes would walk every one found so far
-        again (a tenth to a fifth of an exploration's time).  `explore` gives them back."""
+        (`gc.freeze`, after a collection of the young generations, so little garbage is kept
+        until the end; a full collection would walk the whole process, modules and all): the
+        configurations and their parts are kept to the end, and a part that holds a bus handle
+        or a frozen list stays tracked, so each of the collector's full passes would walk every
+        one found so far again.  `explore` gives them back."""
         if not self.meter.ok():
             raise MemoryLimit(self.meter.used)
         self.checks += 1
         if not self.checks % SETTLE:
-            gc.collect()
+            gc.collect(1)
             gc.freeze()
             self.frozen = True
 
