@@ -13,10 +13,10 @@ import pytest
 from helpers import write_machine
 
 from llfsm.monitor import Monitor
-from llfsm.monitor.reads import class_reads
 from llfsm.props.file import PropertySource
 from llfsm.runtime import SimClock
 from llfsm.runtime.context import RunContext
+from llfsm.runtime.reads import class_reads
 from llfsm.runtime.scheduler import Arrangement
 from llfsm.targets import load
 

@@ -3,7 +3,8 @@
 the graph (services.py) all drive this one object.
 
 **Where it pauses.**  Between two ringlets, never inside one: after a ringlet of a watched round
-(`Arrangement.watcher`: breakpoints, history, a step in progress), at the end of a ringlet that
+(`Arrangement.watcher`: breakpoints, a step in progress, the history where the ringlets cannot
+record themselves: history.py), at the end of a ringlet that
 took a marked transition (a breakpoint on a state: traps.py), before a held machine's turn
 (`Arrangement.on_release`: a step inside a plain round, a command reaching a breakpoint's
 state), where the monitor reached a violation (`--on-violation pause`), or between rounds
@@ -36,9 +37,10 @@ from typing import Any
 from ..runtime.clock import WallClock
 from ..runtime.generated import pending_of, state_of
 from ..runtime.machine import RESTART, RESUME, Machine
+from ..runtime.reads import ClassReads, class_reads
 from ..runtime.scheduler import GO, PAUSE, STOP, Arrangement
 from .breakpoints import Breakpoint, Breakpoints
-from .history import History
+from .history import History, recorder
 from .traps import Traps, true_states
 from .variables import SetError, assign, read
 
@@ -84,7 +86,7 @@ class Debugger:
         self.pauses = 0
         self.at: Machine | None = None
         self.reason = ""
-        #: Counted boundaries, while a watcher is installed (the history numbers its records so).
+        #: Counted boundaries, while a watcher is installed.
         self.boundaries = 0
         self._resume: str | None = None  # what the pause loop was asked to do when it ends
         self._stop_after: str | None = None  # STEP or ROUND while a step is under way
@@ -97,13 +99,17 @@ class Debugger:
         self._notifying = self._again = False
         #: Topics published since the last boundary (a tap on the bus, when something reads them).
         self.published: list[str] = []
-        self._tapped = False
+        self._tapped = self._history_tapped = False
         #: Serves the bus's control, parameter and debug services while paused (set by the
         #: session when the run has a bus: Executor.spin_control with services.answers).
         self.serve: Callable[[], None] | None = None
         self.bus: Any = None
         #: Breakpoints on states, marked on the machines' transitions (traps.py): no watcher.
         self.traps = Traps(self._trapped)
+        if self.history is not None:
+            reads = [class_reads(type(m)) if _own_class(m) else None for m in arr.machines]
+            if all(r is not None for r in reads):
+                self._compile_history(self.history, reads)  # type: ignore[arg-type]  # none is None
         self._trapped_breaks: dict[int, tuple[int, frozenset[int]]] = {}  # breakpoint -> (machine, states)
         #: A pause before this machine's next turn (a step where the round is not watched),
         #: which follows the ringlet of `_gate_after`.
@@ -118,6 +124,17 @@ class Debugger:
         arr.ctx.between_rounds.append(self._drain)
         self._update_watcher()
 
+    def _compile_history(self, h: History, reads: list[ClassReads]) -> None:
+        """The history recorded by the machines' own ringlets (recording.py), compiled with the
+        marks (traps.py) from each machine's module (`reads`: what each ringlet can change): no
+        watcher for it.  Otherwise (a native build, a machine the monitor compiled its checks
+        into) the watcher records."""
+        h.compiled = True
+        self.traps.recorder = lambda m: recorder(h, m, reads[m._id])
+        self.arr.around_release = h.around_release
+        h.waiting = self.arr._variables
+        self.arr.on_live = h.on_live
+
     # -- what the session sets up -----------------------------------------------------------------
     def attach_bus(self, bus: Any, serve: Callable[[], None]) -> None:
         """The run's bus: taps for what is published (history, published() breakpoints) and the
@@ -127,18 +144,26 @@ class Debugger:
         self._tap()
 
     def _tap(self) -> None:
-        if self._tapped or self.bus is None:
+        if self.bus is None:
             return
-        if self.history is None and not self.breaks.reads_published:
+        h = self.history
+        if h is not None and h.compiled and not self._history_tapped:
+            self._history_tapped = True
+            self._add_tap(h.tap)
+        if self._tapped or not (self.breaks.reads_published or (h is not None and not h.compiled)):
             return
         self._tapped = True
-        published = self.published
+        self._add_tap(self.published.append)
+
+    def _add_tap(self, told: Callable[[str], None]) -> None:
+        """`told(name)` of each publish on a topic (the machines' own state topics left out)."""
 
         def tap(topic: Any) -> None:
             name = topic.name
             if not name.startswith("/llfsm/"):  # the machines' own state topics are not theirs to publish
-                topic.taps.append(lambda _msg: published.append(name))
+                topic.taps.append(lambda _msg: told(name))
 
+        assert self.bus is not None
         self.bus.add_tap(tap)
 
     def _update_watcher(self) -> None:
@@ -155,7 +180,8 @@ class Debugger:
         arr = self.arr
         judged = any(b.number not in self._trapped_breaks for b in self.breaks.items)
         want = judged or self._stop_after is not None
-        mine = self._after if want else self._recorder if self.history is not None else None
+        watched = self.history is not None and not self.history.compiled
+        mine = self._after if want else self._recorder if watched else None
         if not any(arr.watcher is w for w in self._watchers):
             self.inner = arr.watcher  # another's (the monitor's): called first by ours, or left as it is
         if mine is not None:
@@ -256,7 +282,7 @@ class Debugger:
         arr = self.arr
         self.boundaries += 1
         published = self.published
-        self.history.record(m, arr.ran, arr.fired, self.boundaries, arr.ctx.round, arr.clock.now, published)  # type: ignore[union-attr]
+        self.history.record(m, arr.ran, arr.fired, arr.ctx.round, arr.clock.now, published)  # type: ignore[union-attr]
         if published:
             published.clear()
         if self._same_boundary:
@@ -272,9 +298,9 @@ class Debugger:
             self._pause_reason = "a monitored property was violated"
         self.boundaries += 1
         published = self.published
-        if self.history is not None:
-            ctx = self.arr.ctx
-            self.history.record(m, ran, fired, self.boundaries, ctx.round, self.arr.clock.now, published)
+        h = self.history
+        if h is not None and not h.compiled:
+            h.record(m, ran, fired, self.arr.ctx.round, self.arr.clock.now, published)
         if self.breaks.items:
             events: Any = ()
             if self.breaks.reads_published:
@@ -333,6 +359,8 @@ class Debugger:
         self.pauses += 1
         self.reason, self._pause_reason = self._pause_reason or "pause asked", ""
         self._resume = None
+        if self.history is not None and self.history.compiled:
+            self.history.refresh()  # the values the page shows while paused
         clock = arr.clock
         started = time.monotonic_ns()
         self._notify()
@@ -391,7 +419,11 @@ class Debugger:
             self.serve()
 
     def _drain(self) -> None:
-        """Between rounds while running: what other threads handed in (`submit`)."""
+        """Between rounds while running: what other threads handed in (`submit`), and the values
+        the page asked for."""
+        h = self.history
+        if h is not None and h.wanted:
+            h.refresh()
         if self.inbox.empty():
             return  # the common case, without raising queue.Empty
         while True:
@@ -455,23 +487,33 @@ class Debugger:
         """Each machine (or the one named) as it is now: state, pending command, time in state,
         variables, inputs."""
         now = self.arr.clock.now
-        entered = self.history.entered if self.history is not None else None
+        h = self.history
         ms = [self.machine(name)] if name is not None else self.arr.machines
-        return {m.NAME: read(m, now, entered[m._id] if entered is not None else None) for m in ms}
+        return {m.NAME: read(m, now, h.entered(m._id) if h is not None else None) for m in ms}
 
     def set_value(self, name: str, variable: str, text: str) -> str:
         """Set machine `name`'s variable or input (paused only): the line to show."""
         if not self.paused:
             raise DebugError("pause the run first: values are set between ringlets")
         m = self.machine(name)
+        h = self.history
+        old = h.values[m._id].take(m) if h is not None else ()
         try:
             value = assign(m, variable, text)
         except SetError as e:
             raise DebugError(str(e)) from None
-        if self.history is not None:
-            self.history.record_set(m, self.boundaries, self.arr.ctx.round, self.arr.clock.now)
+        if h is not None:
+            h.record_set(m, old, self._set_round(h), self.arr.clock.now)
         self._notify()
         return f"{m.NAME}.{variable} = {value!r}"
+
+    def _set_round(self, h: History) -> int:
+        """The round a set while paused belongs to: where the pause stands."""
+        if not h.compiled:
+            return self.arr.ctx.round  # watched rounds keep it
+        if self._origin == ROUND_END or not h.ring:
+            return self.arr.rounds  # between rounds: before the next one
+        return h.round_of(h.count - h.sets)  # after a ringlet: its round
 
     def add_break(self, text: str, where: str = "break") -> Breakpoint:
         try:

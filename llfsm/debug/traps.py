@@ -122,18 +122,26 @@ class _Mark(ast.NodeTransformer):
         return node
 
 
+#: What compiles the history into a machine's ringlets (History's side of recording.py): for a
+#: machine, each ringlet node and its state to the node recording it, and what its namespace needs.
+Recorder = Callable[[Machine], tuple[Callable[[ast.FunctionDef, int], ast.FunctionDef], dict[str, Any]]]
+
+
 class Traps:
-    """The machines given marked ringlets, and how to give them back their own."""
+    """The machines given marked ringlets (and, with `recorder`, recording ones: the debugger's
+    history), and how to give them back their own."""
 
     def __init__(self, hit: Callable[[Machine, int, int], None]) -> None:
         self.hit = hit
         self.own: dict[int, type[Machine]] = {}  # machine id -> its class before it was marked
+        self.recorder: Recorder | None = None
 
     def mark(self, m: Machine, edges: set[tuple[int, int]]) -> bool:
         """Give `m` ringlets that call `hit(m, X, S)` after each transition X -> S of `edges`
-        (its own back first); False if its module cannot be compiled again (native)."""
+        (its own back first), and that record themselves when there is a recorder; False if its
+        module cannot be compiled again (native)."""
         self.unmark(m)
-        if not edges:
+        if not edges and self.recorder is None:
             return True
         cls = type(m)
         tree = _source_tree(cls)
@@ -143,14 +151,25 @@ class Traps:
         wanted = {}  # ringlet name -> its source state
         for x, _ in edges:
             wanted[enter_ringlet(states[x])] = wanted[steady_ringlet(states[x])] = x
+        record, extra = self.recorder(m) if self.recorder is not None else (None, {})
+        ringlets = {}  # ringlet name -> its state, for the recorder: every state's but the suspend state's
+        if record is not None:
+            for s, name in enumerate(states):
+                if s != cls.SUSPENDED:
+                    ringlets[enter_ringlet(name)] = ringlets[steady_ringlet(name)] = s
         marked = []
         for node in tree.body:
-            if isinstance(node, ast.FunctionDef) and node.name in wanted:
-                x = wanted[node.name]
-                targets = {enter_ringlet(states[s]): s for src, s in edges if src == x}
-                marked.append(_Mark(x, targets).visit(node))
+            if isinstance(node, ast.FunctionDef) and (node.name in wanted or node.name in ringlets):
+                if node.name in wanted:
+                    x = wanted[node.name]
+                    targets = {enter_ringlet(states[s]): s for src, s in edges if src == x}
+                    node = _Mark(x, targets).visit(node)
+                if record is not None and node.name in ringlets:
+                    node = record(node, ringlets[node.name])
+                marked.append(node)
         namespace = dict(vars(sys.modules[cls.__module__]))
         namespace[TRAP] = self.hit
+        namespace.update(extra)
         module = ast.fix_missing_locations(ast.Module(body=marked, type_ignores=[]))
         exec(compile(module, tree_file(cls), "exec", dont_inherit=True), namespace)  # the marked ringlets
         become(m, variant_class(cls, namespace, {node.name: namespace[node.name] for node in marked}))

@@ -4,7 +4,7 @@ FILE.verify.yaml` and `--monitor-property KIND:TEXT`.
 **Where it judges.**  A property's value can change only where what it reads changes, so the
 monitor judges it only there, and the semantics stay "judged at every ringlet boundary":
 
-- in the ringlets that can change what it reads (llfsm.monitor.reads), by a check compiled
+- in the ringlets that can change what it reads (llfsm.runtime.reads), by a check compiled
   into a monitored variant of the machine's ringlets (llfsm.monitor.variant); every other
   ringlet runs as compiled, in the scheduler's plain loops;
 - at the boundaries after something the ringlets' code does not show: a command, a parameter or
@@ -38,9 +38,9 @@ from typing import Any
 from ..props.atoms import infos_of
 from ..props.file import PropertySource
 from ..runtime.generated import become
+from ..runtime.reads import ClassReads, class_reads
 from ..runtime.scheduler import GO, Arrangement
 from .judge import VIOLATED, Boundary, Judge, Judged, MonitorError, Verdict, atom_reads
-from .reads import ClassReads, class_reads
 from .topic import MonitorTopic
 from .variant import FAILED, JUDGE, MACHINES, NUMBERS, NUMERIC, PUBLISHED, Check, make_variant
 from .variant import VIOLATED as VIOLATED_FN

@@ -1,6 +1,6 @@
 """A monitored variant of a compiled machine class: the same ringlets, with a property's check
 compiled in before each `return` of the ringlets that can change what the property reads
-(llfsm.monitor.reads), and nothing added anywhere else (docs/monitor.md, "Cost").
+(llfsm.runtime.reads), and nothing added anywhere else (docs/monitor.md, "Cost").
 
 The variant is made from the generated module's own text and compiled under its file name, so
 tracebacks, the source map and the watchdog read it as the original.  Its ringlets run in a
@@ -16,7 +16,7 @@ another's; at a `return` where the ringlet's target state is written just before
 machine's own `state(m)` is that state's name as a constant, and the comparisons it takes part
 in are folded: a check that cannot fail there is left out.  So is a check that held at the
 boundary before the ringlet and that the ringlet cannot make fail (`_cannot_fail`): everything it
-reads is as it was, but for numbers the ringlet steps one way (llfsm.monitor.reads,
+reads is as it was, but for numbers the ringlet steps one way (llfsm.runtime.reads,
 `ClassReads.step`) that it bounds on the other side (`always: m.count >= 0` in a ringlet whose
 only change is `count += 1`).  That rests on the variable holding a number (an int, a float or a
 bool), which its machine's code keeps (`ClassReads.numeric`) and the monitor checks where
@@ -35,7 +35,7 @@ from typing import Any
 
 from ..props.atoms import HELPERS, PURE
 from ..runtime.generated import variant_class
-from .reads import ClassReads, is_self_attr
+from ..runtime.reads import ClassReads, is_self_attr
 
 PREFIX = "_llfsm_mon_"
 #: The names a variant's namespace gets from the monitor.

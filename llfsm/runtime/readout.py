@@ -46,20 +46,31 @@ def plain(value: object, depth: int = 0) -> Any:
         return value if value == value and value not in (float("inf"), float("-inf")) else repr(value)
     if t is str:
         s: str = value  # type: ignore[assignment]
-        return s if len(s) <= TEXT else f"{s[:TEXT]}… ({len(s):,} characters, {CUT})"
+        if len(s) <= TEXT or _was_cut(s, TEXT, " characters"):
+            return s  # whole, or cut already (plain data shown again says its own length)
+        return f"{s[:TEXT]}… ({len(s):,} characters, {CUT})"
     if depth >= DEPTH:
         return f"… (nested deeper than {DEPTH}, {CUT})"
     if t is list or t is tuple or t is set or t is frozenset:
         items: list[Any] | tuple[Any, ...] = value if t is list or t is tuple else sorted(value, key=repr)  # type: ignore[assignment, call-overload]
         out = [plain(v, depth + 1) for v in items[:ITEMS]]
         if len(items) > ITEMS:
-            out.append(f"… ({len(items):,} items, {CUT})")
+            last = items[-1]
+            cut = (
+                len(items) == ITEMS + 1
+                and type(last) is str
+                and last.startswith("… (")
+                and last.endswith(f" items, {CUT})")
+            )
+            out.append(last if cut else f"… ({len(items):,} items, {CUT})")  # cut already: as it says
         return out
     if t is dict:
         d: dict[Any, Any] = value  # type: ignore[assignment]
         res = {str(k): plain(v, depth + 1) for k, v in list(d.items())[:ITEMS]}
         if len(d) > ITEMS:
-            res["…"] = f"{len(d):,} items, {CUT}"
+            said = d.get("…")
+            cut = len(d) == ITEMS + 1 and type(said) is str and said.endswith(f" items, {CUT}")
+            res["…"] = said if cut else f"{len(d):,} items, {CUT}"  # cut already: as it says
         return res
     if t is bytes or t is bytearray:
         b: bytes = value  # type: ignore[assignment]
@@ -71,6 +82,11 @@ def plain(value: object, depth: int = 0) -> Any:
         if isinstance(value, base):
             return plain(base(value), depth)
     return f"<{t.__name__}>"
+
+
+def _was_cut(s: str, keep: int, unit: str) -> bool:
+    """Whether `s` is a text `plain` cut: `keep` characters, then what it says of the whole."""
+    return s.endswith(f"{unit}, {CUT})") and s[keep : keep + 3] == "… (" and len(s) <= keep + 40
 
 
 def values_of(m: Machine, names: tuple[str, ...]) -> dict[str, Any]:

@@ -148,6 +148,13 @@ class Arrangement:
         #: to apply, before they are applied), when set: what changes a machine outside its
         #: ringlets, for a monitor.  The gate is a rare path; a run without it pays nothing.
         self.on_release: Callable[[Machine], None] | None = None
+        #: Wraps each release by the gate, when set: called as `around_release(m, let_go)`, it
+        #: calls `let_go(m)` and returns what that returns (whether m's ringlet runs now); the
+        #: debugger's history sees there what a command, parameters or inputs changed.
+        self.around_release: Callable[[Machine, Callable[[Machine], bool]], bool] | None = None
+        #: Told of the live machines each time they are worked out (between rounds), with the
+        #: rounds run so far: the debugger's history numbers its records' rounds by it.
+        self.on_live: Callable[[int, list[Machine]], None] | None = None
         self._stopped: int | None = None
         #: Ringlets run before the current round loop (its rounds times its live machines),
         #: counted once per loop, never per ringlet: with the loop's live list, what numbers a
@@ -276,6 +283,11 @@ class Arrangement:
         return True
 
     def _release(self, m: Machine) -> bool:
+        """The turn of a held machine: `_let_go`, through `around_release` when one is set."""
+        around = self.around_release
+        return self._let_go(m) if around is None else around(m, self._let_go)
+
+    def _let_go(self, m: Machine) -> bool:
         """The turn of a held machine (a new input value to take, new variable values, a command
         pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
         True if the ringlet goes on."""
@@ -407,6 +419,8 @@ class Arrangement:
         if self._stopped is not None:
             return self._result("stopped", self._stopped)
         self._live = [m for m in self.machines if not m._finished or m._pending is not None]
+        if self.on_live is not None:
+            self.on_live(self.rounds, self._live)
         if not self._live:
             if not self.serve_forever:
                 return self._result("finished", EXIT_OK)
@@ -487,6 +501,7 @@ class Arrangement:
             while True:
                 now = clock.now
                 if self._attn:
+                    self.rounds = rounds  # what on_live is told
                     self._rehold()
                     done = self._attend(now, grace)
                     if done is not None:

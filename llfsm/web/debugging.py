@@ -26,7 +26,6 @@ from collections.abc import Awaitable, Callable
 from typing import Any, Protocol
 
 from ..debug.debugger import CONTINUE, ROUND, STEP, DebugError, Debugger
-from ..debug.history import shown
 from .replay import Replay
 from .source import CommandError
 
@@ -77,12 +76,9 @@ class RunDebug:
         d = self.debugger
         status = d.status()
         h = d.history
-        if h is not None:  # the values the scheduler's thread took at each machine's last boundary
-            variables = {
-                m.NAME: {n: shown(v) for n, v in zip(h.values[m._id].names, h.current[m._id], strict=True)}
-                for m in d.arr.machines
-            }
-            status["records"] = len(h.records)
+        if h is not None:  # the values the scheduler's thread took last
+            variables = h.snapshot()
+            status["records"] = len(h.ring)
         else:
             variables = {}
         return {**status, "variables": variables}

@@ -1,37 +1,5 @@
-"""The session of one `llfsm run` (docs/cli.md, `llfsm run`): its options, everything that opens beside
-the machines, opened in one place, in one order, and closed whatever happens.
-
-- `RunOptions`: the options of `llfsm run` as one frozen value; both parsers build it (the
-  click command, llfsm.cli.run, and the start-up fast path, llfsm.cli.run_args, from the same
-  table of options: its fields are that table's keywords).  Defaults are those of `llfsm run`
-  given no option, so a test names only what it changes:
-  `RunOptions(("hello.machine",), clock="sim", duration=2_000_000_000)`.
-- `Session`: loads the machines and opens the rest, in this order:
-  1. the options are checked (`Session(...)`: before anything is loaded);
-  2. the machines are loaded (a machine that fails validation is reported before anything opens);
-  3. the outputs and the web address are checked (a usage error still costs nothing);
-  4. the watchdog starts (llfsm.runtime.watchdog): with the machines loaded and before any of
-     the below starts a thread;
-  5. the transport, the bags (a bad bag to play must fail before a bag to record is created),
-     the bus with its remaps, parameters and `--echo` readers, the `--node` nodes, and the
-     bags' taps on it (set up before any machine runs, so that turtle1 exists and no message
-     is missed); the `--trace` file and the tracer;
-  6. the arrangement, the machines' state topics and control services (docs/view.md: with the bus,
-     now if it is up, else at its first `ros.init()`), the web view (docs/view.md);
-  7. the run; then, whatever happened: the web view stops, the trace file and the bag are
-     closed, a transport the run never used is closed, and the watchdog ends.
-- `SessionError` and its kinds: what a session raises instead of ending the process, so that a
-  test can open one, see what went wrong and carry on; llfsm.cli._run prints them and exits
-  with their status (docs/cli.md, "Exit statuses": 1 for an error in machine code or a lost output, 2 for bad input),
-  byte for byte as `llfsm run` always has.
-
-Start-up: one module, and plain classes rather than dataclasses (`dataclasses` imports
-`inspect`, a fifth of a warm run's start-up; bench/run.py startup measures it).  A plain run
-(no bus, no bag, no page) imports none of the bus, the messages, the bags, the nodes or the web
-view: those imports sit in the steps that open them, and say so.  The other verbs never import
-this module (the click command imports it when it runs).  The web view is a layer above the
-session (llfsm.web): the command line hands it in as a `WebPage`, so the session names no
-module of it.
+"""`Session`: one `llfsm run`, everything that opens beside the machines opened in one place, in
+one order, and closed whatever happens (the order: llfsm.session's docstring).
 """
 
 from __future__ import annotations
@@ -39,31 +7,31 @@ from __future__ import annotations
 import os
 import sys
 
-from .interface_path import add_search_path
-from .runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
-from .runtime.context import activate
-from .runtime.errors import passes_through, report_for
-from .runtime.inputs import TOPIC
-from .runtime.scheduler import EXIT_ERROR, EXIT_USAGE, check_names
-from .runtime.watchdog import Watchdog
-from .targets import InvalidMachine, MachineLoadError, TargetError, load
+from ..interface_path import add_search_path
+from ..runtime import Arrangement, ArrangementError, RunContext, SimClock, Tracer, WallClock, signals_handled
+from ..runtime.context import activate
+from ..runtime.errors import passes_through, report_for
+from ..runtime.inputs import TOPIC
+from ..runtime.scheduler import check_names
+from ..runtime.watchdog import Watchdog
+from ..targets import InvalidMachine, MachineLoadError, TargetError, load
+from .errors import MachineFailed, OutputFailed, RunOutcome, UsageError
+from .options import RunOptions
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
 if TYPE_CHECKING:
     from collections.abc import Callable
-    from typing import Any, NoReturn, Protocol
+    from typing import Any, Protocol
 
-    from .bag import RunBags
-    from .debug.debugger import Debugger
-    from .debug.prompt import Prompt
-    from .outputs import StreamedOutput
-    from .ros.bus import Bus
-    from .ros.logging import LogSettings
-    from .ros.transports.base import Transport
-    from .runtime.errors import ErrorReport
-    from .runtime.machine import Machine
-    from .runtime.scheduler import RunResult
-    from .sim.world import TurtleWorld
+    from ..bag import RunBags
+    from ..debug.debugger import Debugger
+    from ..debug.prompt import Prompt
+    from ..outputs import StreamedOutput
+    from ..ros.bus import Bus
+    from ..ros.logging import LogSettings
+    from ..ros.transports.base import Transport
+    from ..runtime.machine import Machine
+    from ..sim.world import TurtleWorld
 
     class Stoppable(Protocol):
         def stop(self) -> None: ...
@@ -85,232 +53,9 @@ if TYPE_CHECKING:
             """Start serving on a thread, and tell the user where; UsageError if it cannot."""
 
 
-# -- the options ---------------------------------------------------------------------------------
-#: The targets, then the options in the order `llfsm run --help` lists them.
-FIELDS = (
-    "targets",
-    "verbose",
-    "trace_file",
-    "clock",
-    "period",
-    "idle",
-    "duration",
-    "grace",
-    "suspended",
-    "keep_accepting",
-    "nodes",
-    "remaps",
-    "params",
-    "params_files",
-    "log_levels",
-    "log_file",
-    "echoes",
-    "image",
-    "view",
-    "introspect",
-    "web",
-    "transport",
-    "record",
-    "record_topics",
-    "storage",
-    "play",
-    "play_topics",
-    "play_rate",
-    "native",
-    "monitor",
-    "monitor_properties",
-    "on_violation",
-    "paused",
-    "breaks",
-    "history",
-    "debug_prompt",
-)
-
-
-class RunOptions:
-    """What `llfsm run` was asked to do: the machines, the clock, and what opens beside them
-    (transport, nodes, bags, web view).  Immutable: the session reads it, never changes it."""
-
-    __slots__ = FIELDS
-
-    targets: tuple[str, ...]
-    verbose: bool
-    trace_file: str | None
-    clock: str  # wall | sim
-    period: int | None  # ns
-    idle: int  # ns
-    duration: int | None  # ns
-    grace: int  # ns
-    suspended: tuple[str, ...]
-    keep_accepting: bool
-    nodes: tuple[str, ...]
-    remaps: tuple[str, ...]
-    params: tuple[str, ...]
-    params_files: tuple[str, ...]
-    log_levels: tuple[str, ...]
-    log_file: bool
-    echoes: tuple[str, ...]
-    image: str | None
-    view: bool
-    introspect: bool
-    web: str | None
-    transport: str  # inproc | dds
-    record: str | None
-    record_topics: tuple[str, ...]
-    storage: str  # mcap | sqlite3
-    play: str | None
-    play_topics: tuple[str, ...]
-    play_rate: float
-    native: bool
-    monitor: str | None
-    monitor_properties: tuple[str, ...]
-    on_violation: str  # log | pause | stop
-    paused: bool
-    breaks: tuple[str, ...]
-    history: int | None  # ringlets kept
-    debug_prompt: bool
-
-    def __init__(
-        self,
-        targets: tuple[str, ...] = (),
-        *,
-        verbose: bool = False,
-        trace_file: str | None = None,
-        clock: str = "wall",
-        period: int | None = None,
-        idle: int = 10_000_000,
-        duration: int | None = None,
-        grace: int = 1_000_000_000,
-        suspended: tuple[str, ...] = (),
-        keep_accepting: bool = False,
-        nodes: tuple[str, ...] = (),
-        remaps: tuple[str, ...] = (),
-        params: tuple[str, ...] = (),
-        params_files: tuple[str, ...] = (),
-        log_levels: tuple[str, ...] = (),
-        log_file: bool = False,
-        echoes: tuple[str, ...] = (),
-        image: str | None = None,
-        view: bool = False,
-        introspect: bool = False,
-        web: str | None = None,
-        transport: str = "inproc",
-        record: str | None = None,
-        record_topics: tuple[str, ...] = (),
-        storage: str = "mcap",
-        play: str | None = None,
-        play_topics: tuple[str, ...] = (),
-        play_rate: float = 1.0,
-        native: bool = False,
-        monitor: str | None = None,
-        monitor_properties: tuple[str, ...] = (),
-        on_violation: str = "log",
-        paused: bool = False,
-        breaks: tuple[str, ...] = (),
-        history: int | None = None,
-        debug_prompt: bool = False,
-    ) -> None:
-        given = locals()  # every parameter by name: one loop instead of 34 assignments
-        for name in FIELDS:
-            object.__setattr__(self, name, given[name])
-
-    def replace(self, **changes: Any) -> RunOptions:
-        """A copy with some options changed (as dataclasses.replace)."""
-        return RunOptions(**{**self.as_dict(), **changes})
-
-    def as_dict(self) -> dict[str, Any]:
-        """The options as the keywords they were given with."""
-        return {name: getattr(self, name) for name in FIELDS}
-
-    def __setattr__(self, name: str, value: object) -> NoReturn:
-        raise AttributeError(f"RunOptions is frozen: cannot set {name}")
-
-    def __delattr__(self, name: str) -> NoReturn:
-        raise AttributeError(f"RunOptions is frozen: cannot delete {name}")
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, RunOptions):
-            return NotImplemented
-        return self.as_dict() == other.as_dict()
-
-    def __hash__(self) -> int:
-        return hash(tuple(self.as_dict().values()))
-
-    def __repr__(self) -> str:
-        fields = ", ".join(f"{name}={value!r}" for name, value in self.as_dict().items())
-        return f"RunOptions({fields})"
-
-
-# -- what goes wrong ------------------------------------------------------------------------------
-class SessionError(Exception):
-    """What to print, in order: `details` as is (a machine's diagnostics or error report, each
-    line ending in a newline), then `message` on a line of its own after `llfsm: ` (when there
-    is one); and the exit status."""
-
-    status = EXIT_USAGE
-
-    def __init__(self, message: str = "", *, details: str = "") -> None:
-        super().__init__(message or details)
-        self.message = message
-        self.details = details
-
-
-class UsageError(SessionError):
-    """Bad input: an option, a machine that fails validation, a node or bag that cannot open."""
-
-    status = EXIT_USAGE
-
-
-class OutputFailed(SessionError):
-    """A file the user named for output cannot be written (`--trace`): the run would lose it."""
-
-    status = EXIT_ERROR
-
-
-class MachineFailed(SessionError):
-    """Machine code raised before the run began (importing its module, a variable's initial
-    value): the report says where, as the user wrote it."""
-
-    status = EXIT_ERROR
-
-    def __init__(self, report: ErrorReport) -> None:
-        super().__init__(details=report.format())
-        self.report = report
-
-
-# -- the session ----------------------------------------------------------------------------------
 def _stderr_line(text: str) -> None:
     sys.stderr.write(text + "\n")
     sys.stderr.flush()
-
-
-class RunOutcome:
-    """How a session ended, for the command line to report: the run's result, the outputs that
-    could not be written whole, and the graph (`--introspect`).  (A plain class: dataclasses
-    would cost a run's start-up.)"""
-
-    def __init__(
-        self,
-        result: RunResult,
-        failed_outputs: list[str],
-        bag_error: str | None = None,
-        graph: dict[str, Any] | None = None,
-    ) -> None:
-        self.result = result
-        #: Messages about named outputs (`--trace`, `--image`) not written whole.
-        self.failed_outputs = failed_outputs
-        #: Why the recorded bag failed (it was reported when it happened), or None.
-        self.bag_error = bag_error
-        #: The bus's nodes, topics and services after the run, when `--introspect` asked.
-        self.graph = graph
-
-    @property
-    def status(self) -> int:
-        """The exit status: the run's own, or 1 when it succeeded but lost an output (a named
-        output that could not be written whole is an error, never a silent success)."""
-        if self.result.status or not (self.failed_outputs or self.bag_error):
-            return self.result.status
-        return EXIT_ERROR
 
 
 class Session:
@@ -361,7 +106,7 @@ class Session:
                 "nothing to run: give a machine (TARGET), or --node NAME / --echo TOPIC to run on their own"
             )
         if o.log_levels or o.log_file:
-            from .ros.logging import LogSettings  # deferred: start-up (only a run given them reads them)
+            from ..ros.logging import LogSettings  # deferred: start-up (only a run given them reads them)
 
             try:
                 self.log_settings = LogSettings(o.log_levels, o.log_file)
@@ -390,7 +135,7 @@ class Session:
             except TargetError as e:
                 raise UsageError(str(e)) from None
             except InvalidMachine as e:
-                from .lang.diagnostics import format_text  # deferred: start-up (error path only)
+                from ..lang.diagnostics import format_text  # deferred: start-up (error path only)
 
                 raise UsageError(
                     f"{t}: the machine has errors; nothing was run", details=format_text(e.diagnostics)
@@ -504,7 +249,7 @@ class Session:
     def _open_transport(self) -> Transport:
         """A missing package or a bad ROS_* variable is a usage error."""
         # deferred: start-up (the factory is only needed beside the in-process bus; dds is heavy)
-        from .ros.transports import make
+        from ..ros.transports import make
 
         try:
             return make(self.options.transport)
@@ -513,7 +258,7 @@ class Session:
 
     def _open_bags(self) -> RunBags:
         """The bag to play (read and checked now) and the bag to record (created now)."""
-        from .bag import BagError, RunBags  # deferred: start-up (a run without bags never imports them)
+        from ..bag import BagError, RunBags  # deferred: start-up (a run without bags never imports them)
 
         o = self.options
         try:
@@ -535,10 +280,10 @@ class Session:
         # deferred: start-up (a run that never uses the bus never imports it, nor the messages)
         from pathlib import Path
 
-        from .nodes import NodeError, NodeOptions, start
-        from .nodes.echo import echo as echo_topic
-        from .ros import InvalidNameError, Remap, bus_of
-        from .ros.parameters import ParameterException
+        from ..nodes import NodeError, NodeOptions, start
+        from ..nodes.echo import echo as echo_topic
+        from ..ros import InvalidNameError, Remap, bus_of
+        from ..ros.parameters import ParameterException
 
         o = self.options
         prev = activate(ctx)
@@ -576,7 +321,7 @@ class Session:
         if not (o.params or o.params_files):
             return
         # deferred: start-up (only a run given parameters reads their text, with yaml)
-        from .ros.parameter_files import ParameterTextError, node_pattern, parse_param, read_params_file
+        from ..ros.parameter_files import ParameterTextError, node_pattern, parse_param, read_params_file
 
         try:
             for path in o.params_files:
@@ -591,7 +336,7 @@ class Session:
             raise UsageError(str(e)) from None
 
     def _attach_bags(self, bags: RunBags, bus: Bus) -> None:
-        from .bag import BagError  # deferred: start-up (loaded with the bags already)
+        from ..bag import BagError  # deferred: start-up (loaded with the bags already)
 
         try:
             bags.attach(bus)
@@ -599,7 +344,7 @@ class Session:
             raise UsageError(f"--play {e}") from None
 
     def _open_trace(self, path: str) -> StreamedOutput:
-        from .outputs import OutputError, StreamedOutput  # deferred: start-up (only with --trace)
+        from ..outputs import OutputError, StreamedOutput  # deferred: start-up (only with --trace)
 
         try:
             return StreamedOutput(path, what="--trace")  # write errors kept, not raised mid-run
@@ -634,7 +379,7 @@ class Session:
     def _bind_inputs(self, arr: Arrangement, bus: Bus) -> None:
         """SPEC 11: each input bound to a topic reads its field from the newest message there,
         through a PULL reader on the machine's node, opened before the first round."""
-        from .ros.inputs import BindError, bind  # deferred: start-up (only machines with bound inputs)
+        from ..ros.inputs import BindError, bind  # deferred: start-up (only machines with bound inputs)
 
         prev = activate(arr.ctx)
         try:
@@ -651,8 +396,8 @@ class Session:
         # deferred: start-up (a run without a monitor never imports the property language)
         from pathlib import Path
 
-        from .monitor import Monitor, MonitorError, property_source
-        from .props.file import FileError, read_verify_file
+        from ..monitor import Monitor, MonitorError, property_source
+        from ..props.file import FileError, read_verify_file
 
         o = self.options
         try:
@@ -670,8 +415,8 @@ class Session:
         if not self.options.breaks:
             return
         # deferred: start-up (a run without breakpoints never imports the property language)
-        from .debug.breakpoints import BreakError, compile_break
-        from .props.atoms import infos_of
+        from ..debug.breakpoints import BreakError, compile_break
+        from ..props.atoms import infos_of
 
         infos = infos_of(self.classes)
         for text in self.options.breaks:
@@ -701,8 +446,8 @@ class Session:
         something may pause the run and no page is there to continue it (or --debug-prompt),
         and its services with the machines' control services."""
         # deferred: start-up (a run without the debugger never imports it)
-        from .debug.debugger import DebugError, Debugger
-        from .debug.history import PAGE_DEFAULT
+        from ..debug.debugger import DebugError, Debugger
+        from ..debug.history import PAGE_DEFAULT
 
         o = self.options
         history = o.history or (PAGE_DEFAULT if self.web is not None else None)
@@ -716,7 +461,7 @@ class Session:
             debugger.pause("--paused")
         pauses = o.paused or o.breaks or (pause_on_violation and o.on_violation == "pause")
         if o.debug_prompt or (pauses and self.web is None):
-            from .debug.prompt import Prompt  # deferred: start-up (only a run with the prompt reads the terminal)
+            from ..debug.prompt import Prompt  # deferred: start-up (only a run with the prompt reads the terminal)
 
             self.prompt = Prompt(debugger, alone=self.web is None)
         if self.bus is not None:
@@ -730,7 +475,7 @@ class Session:
         next to them as soon as the machines are on the graph, on either transport; its state
         topic only on ROS 2's wire (in one process, a pause publishes nothing on the run's own
         bus, so that a recorded bag stays the same)."""
-        from .debug.services import answers, offer  # deferred: start-up (with the debugger only)
+        from ..debug.services import answers, offer  # deferred: start-up (with the debugger only)
 
         debugger.attach_bus(bus, lambda: bus.spin_control(answers))
         remote = bus.transport.remote
@@ -811,8 +556,8 @@ def _machine_yaml_of(m: Machine, targets: tuple[str, ...]) -> str:
 
 def _enable(ctx: RunContext) -> None:
     # deferred: start-up (a run that never uses the bus never imports it)
-    from .ros.control import enable
-    from .ros.parameters import ParameterException
+    from ..ros.control import enable
+    from ..ros.parameters import ParameterException
 
     try:
         enable(ctx)

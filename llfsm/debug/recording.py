@@ -1,0 +1,240 @@
+"""The history compiled into a machine's ringlets (docs/debug.md, "History", "What it costs").
+
+A watcher called after every ringlet costs a run several times its plain speed (a Python call
+alone is three times a toggle's ringlet).  So, as the debugger's marks on transitions are
+(traps.py), the history is compiled in: each ringlet of the machine is compiled again from its
+generated module with, before each `return`, one append of a small tuple to the history's ring:
+
+    _llfsm_h_append((_llfsm_h_next(_llfsm_h_count), self._clock.now, (M, S, K, i, taken, 0), old, new, ...))
+
+(numbered by a counter, a C call; a tuple of numbers, which the garbage collector soon stops
+following), where the code `(M, S, K, i, taken, 0)` is a constant: the machine (each machine of a run has
+ringlets of its own), the state the ringlet ran in, the state it
+leaves the machine in (the compiler writes `self._state = K` just before), the transition it
+fired, and which values follow.  Only the values the ringlet can change are taken
+(llfsm.runtime.reads, the monitor's analysis: what it assigns, mutates or hands on), as old and
+new pairs: a number, a flag or a handle read at the ringlet's start and at its end (the object
+itself, which cannot change under it); a message, a list or anything else that can change in
+place taken as the history's bounded copy (history.Values) and compared with the copy the
+history took last (`_llfsm_h_cache`, which the record updates); a variable that may change
+outside its ringlets (a callback's, one handed to a helper module of the user's) and the
+inputs likewise, in every ringlet of the machine.  What changed, name by name, is worked out
+when a record is read.  The scheduler runs its plain loops meanwhile: nothing is called between
+ringlets.
+
+The suspend state's ringlets are left as they are: they run inside a command (the gate's, or a
+transition into the suspend state), never as a turn of their own.
+"""
+
+from __future__ import annotations
+
+import ast
+from typing import Any
+
+from ..runtime.reads import ClassReads, is_self_attr
+
+#: Names in a recording variant's namespace (machine code cannot use `_llfsm_` names: LF013).
+APPEND, NEXT, COUNT, CACHE, ENCODE, PLAIN = (
+    f"_llfsm_h_{n}" for n in ("append", "next", "count", "cache", "encode", "plain")
+)
+_LOCAL = "_llfsm_h_"
+#: Flags of a record's code: the state after, or the transition, is not a constant where the
+#: ringlet returns, and ends the record instead.
+AFTER_AT_END, FIRED_AT_END = 1, 2
+#: How a value is taken: read at the start and at the end (an immutable value or a handle);
+#: compared with the history's last take (`CACHE`) as it is, as a message's copy, as plain data.
+DIRECT, CACHED, MESSAGE, COPIED = range(4)
+
+
+def message_name(k: int) -> str:
+    """The namespace name of the message class of value k."""
+    return f"{_LOCAL}m{k}"
+
+
+def taken_by(
+    reads: ClassReads, names: tuple[str, ...], kinds: tuple[int, ...], inputs: set[str], replaced_only: frozenset[str]
+) -> dict[str, tuple[tuple[int, int], ...]]:
+    """For each ringlet (by function name): (index into `names`, how it is taken) of each value
+    it may change.  `kinds`: each value's kind (DIRECT for an immutable one or a handle, MESSAGE,
+    COPIED), as history.Values sorts them.  A value in `replaced_only` (a number, a string, a
+    handle shown by its type) changes only where the ringlet assigns the variable, whatever else
+    it does with it (`is_running(bot)` hands `bot` on, and cannot change it)."""
+    always = {v for v in names if v in inputs or reads.is_escaped(v)}
+    out: dict[str, tuple[tuple[int, int], ...]] = {}
+    for fn, ringlet in reads.ringlets.items():
+        groups = {reads.group.get(t, t) for t in ringlet.touches}
+        assigned = _assigned(reads.trees[fn])
+        mine = {v for v in names if (v in assigned if v in replaced_only else reads.group.get(v, v) in groups)} | always
+        out[fn] = tuple(
+            (k, CACHED if kinds[k] == DIRECT and v in always else kinds[k]) for k, v in enumerate(names) if v in mine
+        )
+    return out
+
+
+class RingletRecorder:
+    """What compiles one machine's ringlets to record themselves (traps.Recorder's first half):
+    `taken`, by ringlet name, the values each takes (`taken_by`); `names`, the machine's values'
+    names; `trap`, the name of the breakpoints' trap call."""
+
+    def __init__(
+        self,
+        machine: int,
+        suspended: int,
+        taken: dict[str, tuple[tuple[int, int], ...]],
+        names: tuple[str, ...],
+        trap: str,
+    ) -> None:
+        self.machine = machine
+        self.suspended = suspended
+        self.by_ringlet = taken
+        self.names = names
+        self.trap = trap
+        self.state = 0
+        self.taken: tuple[tuple[int, int], ...] = ()
+
+    def __call__(self, node: ast.FunctionDef, state: int) -> ast.FunctionDef:
+        """The ringlet `node` (of `state`) with a record appended before each return (and before
+        the breakpoints' trap calls just before it, so that a pause there shows this ringlet)."""
+        self.state, self.taken = state, self.by_ringlet.get(node.name, ())
+        starts = [
+            _assign(_LOCAL + f"o{k}", _self(self.names[k])) for k, how in self.taken if how == DIRECT
+        ]  # the old values of immutables: read before anything runs
+        body = list(node.body)
+        doc = body[:1] if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) else []
+        new_body, known, ends = self.block(body[len(doc) :], state)
+        if not ends:  # falls off its end: returns None there
+            new_body = self.returning(new_body, ast.Return(value=None), known)
+        node.body = [*doc, *starts, *new_body]
+        return node
+
+    def block(self, stmts: list[ast.stmt], known: int | None) -> tuple[list[ast.stmt], int | None, bool]:
+        """The block with records before its returns; the state known after it (None: not
+        known), and whether it ends in a return."""
+        out: list[ast.stmt] = []
+        for st in stmts:
+            if isinstance(st, ast.Return):
+                return self.returning(out, st, known), known, True
+            sets = _sets_state(st, self.suspended)
+            if sets is not None:
+                known = sets if sets >= 0 else None
+            elif isinstance(st, ast.If | ast.For | ast.AsyncFor | ast.While | ast.With | ast.AsyncWith | ast.Try):
+                for attr in ("body", "orelse", "finalbody"):
+                    inner = getattr(st, attr, None)
+                    if inner:
+                        setattr(st, attr, self.block(inner, known)[0])
+                for h in getattr(st, "handlers", ()):
+                    h.body = self.block(h.body, known)[0]
+                if any(_sets_state(n, self.suspended) is not None for n in ast.walk(st) if isinstance(n, ast.stmt)):
+                    known = None
+            out.append(st)
+        return out, known, False
+
+    def returning(self, out: list[ast.stmt], ret: ast.Return, known: int | None) -> list[ast.stmt]:
+        """`out` (what came before the return), the record, then the return."""
+        traps: list[ast.stmt] = []
+        while out and _is_trap(out[-1], self.trap):
+            traps.insert(0, out.pop())
+        flags = 0
+        extra: list[ast.expr] = []
+        stmts: list[ast.stmt] = []
+        if known is None:
+            flags |= AFTER_AT_END
+            extra.append(_self("_state"))
+        value = ret.value
+        if value is None or isinstance(value, ast.Constant):
+            fired = None if value is None else value.value
+        else:  # not what the compiler writes; kept in a local, returned after the record
+            flags |= FIRED_AT_END
+            stmts.append(_assign(_LOCAL + "r", value))
+            extra.append(_load(_LOCAL + "r"))
+            ret = ast.Return(value=_load(_LOCAL + "r"))
+            fired = None
+        items: list[ast.expr] = [
+            ast.Call(func=_load(NEXT), args=[_load(COUNT)], keywords=[]),
+            ast.Attribute(value=_self("_clock"), attr="now", ctx=ast.Load()),
+            # a tuple of constants is a constant to the compiler (typeshed's Constant lists scalars only)
+            ast.Constant((self.machine, self.state, known, fired, tuple(k for k, _ in self.taken), flags)),  # type: ignore[arg-type]
+        ]
+        after: list[ast.stmt] = []
+        for k, how in self.taken:
+            if how == DIRECT:
+                items += [_load(_LOCAL + f"o{k}"), _self(self.names[k])]
+                continue
+            new = _LOCAL + f"n{k}"
+            value_now: ast.expr = _self(self.names[k])
+            if how == MESSAGE:
+                value_now = ast.Call(func=_load(ENCODE), args=[value_now, _load(message_name(k))], keywords=[])
+            elif how == COPIED:
+                value_now = ast.Call(func=_load(PLAIN), args=[value_now], keywords=[])
+            stmts.append(_assign(new, value_now))
+            cached = ast.Subscript(value=_load(CACHE), slice=ast.Constant(k), ctx=ast.Load())
+            items += [cached, _load(new)]
+            after.append(
+                ast.Assign(
+                    targets=[ast.Subscript(value=_load(CACHE), slice=ast.Constant(k), ctx=ast.Store())],
+                    value=_load(new),
+                )
+            )
+        items += extra
+        call = ast.Call(func=_load(APPEND), args=[ast.Tuple(elts=items, ctx=ast.Load())], keywords=[])
+        made = [*stmts, ast.Expr(value=call), *after, *traps, ret]
+        for n in made:
+            ast.copy_location(n, ret)
+        return [*out, *made]
+
+
+def _assigned(tree: ast.FunctionDef) -> set[str]:
+    """The names `self.NAME` is assigned, augmented or deleted as in a ringlet."""
+    return {
+        n.attr
+        for n in ast.walk(tree)
+        if isinstance(n, ast.Attribute)
+        and isinstance(n.ctx, ast.Store | ast.Del)
+        and isinstance(n.value, ast.Name)
+        and n.value.id == "self"
+    }
+
+
+def _sets_state(node: ast.AST, suspended: int) -> int | None:
+    """The state a statement makes current: `self._state = K` (K; -1 when K is not a constant),
+    `self._enter_suspend_state()` (the suspend state); None for any other statement."""
+    if isinstance(node, ast.Assign) and len(node.targets) == 1 and is_self_attr(node.targets[0], "_state"):
+        v = node.value
+        return v.value if isinstance(v, ast.Constant) and isinstance(v.value, int) else -1
+    if (
+        isinstance(node, ast.Expr)
+        and isinstance(node.value, ast.Call)
+        and is_self_attr(node.value.func, "_enter_suspend_state")
+    ):
+        return suspended
+    return None
+
+
+def _is_trap(st: ast.stmt, trap: str) -> bool:
+    return (
+        isinstance(st, ast.Expr)
+        and isinstance(st.value, ast.Call)
+        and isinstance(st.value.func, ast.Name)
+        and st.value.func.id == trap
+    )
+
+
+def _load(name: str) -> ast.Name:
+    return ast.Name(id=name, ctx=ast.Load())
+
+
+def _self(attr: str) -> ast.Attribute:
+    return ast.Attribute(value=_load("self"), attr=attr, ctx=ast.Load())
+
+
+def _assign(name: str, value: ast.expr) -> ast.Assign:
+    return ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())], value=value)
+
+
+def namespace_of(
+    append: Any, counter: Any, cache: list[Any], encode: Any, plain: Any, messages: dict[int, type]
+) -> dict[str, Any]:
+    """What a recording variant's ringlets find in their namespace."""
+    ns: dict[str, Any] = {APPEND: append, NEXT: next, COUNT: counter, CACHE: cache, ENCODE: encode, PLAIN: plain}
+    ns.update({message_name(k): cls for k, cls in messages.items()})
+    return ns
