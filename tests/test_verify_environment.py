@@ -140,7 +140,9 @@ def test_a_push_callback_runs_with_the_topics_values(tmp_path: Path) -> None:
 def _caller(tmp_path: Path) -> Path:
     """A verification file whose machine calls a service of the environment in every way the
     executor orders: a call spun for at once, one behind a callback its own publish queued, one
-    cancelled before the spin, one never spun for (answered after the ringlet), with Ctrl-C."""
+    cancelled before the spin, one never spun for (answered after the ringlet), with Ctrl-C; and
+    after waiting for the service, through a second client of the same name, a call whose
+    future has a done callback and a synchronous `call` (three choices in one step)."""
     m = write_machine(
         tmp_path,
         "caller",
@@ -148,6 +150,7 @@ def _caller(tmp_path: Path) -> Path:
         {
             "INIT_OnEntry": 'ros.init()\nnode = ros.Node("caller")\n'
             'client = node.create_client(TurtlePosition, "/where")\n'
+            'client2 = node.create_client(TurtlePosition, "/where")\n'
             'pub = node.create_publisher(Bool, "/ping", 10)\n'
             'sub = node.create_subscription(Bool, "/ping", lambda msg: heard.append(msg.data), 10)\n',
             "ASK_OnEntry": "heard.clear()\n"
@@ -157,11 +160,19 @@ def _caller(tmp_path: Path) -> Path:
             "if count == 2:\n    f.cancel()\n"
             "if count != 3:\n    code = str(ros.spin_until_future_complete(node, f))\n"
             "x = f.result().x if f.result() is not None else -1.0\n"
+            "seen.clear()\n"
+            "if count == 4 and client2.wait_for_service(timeout_sec=1.0) and client2.service_is_ready():\n"
+            "    g = client2.call_async(TurtlePosition.Request())\n"
+            "    g.add_done_callback(lambda fut: seen.append(fut.result().y))\n"
+            "    ros.spin_until_future_complete(node, g, timeout_sec=0.5)\n"
+            "    try:\n        x = x + client2.call(TurtlePosition.Request(), timeout_sec=0.5).x\n"
+            "    except TimeoutError:\n        x = x - 10.0\n"
             "spun = len(heard)\n"  # the callback ahead of the request ran in the spin
             "count = (count + 1) % 5\n",
         },
-        variables="node: ros.Node\nclient: object = None\npub: object = None\nsub: object = None\n"
-        "heard: list = []\nspun: int = 0\nx: float = 0.0\nearly: bool = False\ncount: int = 0\n"
+        variables="node: ros.Node\nclient: object = None\nclient2: object = None\npub: object = None\n"
+        "sub: object = None\nheard: list = []\nseen: list = []\nspun: int = 0\nx: float = 0.0\n"
+        "early: bool = False\ncount: int = 0\n"
         "code: str = ''\nf: object = None\n",
         includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import Bool\n"
         "from llfsm.msgs.turtle_sensor_interface.srv import TurtlePosition\n",
@@ -170,11 +181,25 @@ def _caller(tmp_path: Path) -> Path:
     f.write_text(
         f"machines: [{m}]\ninterrupt: true\nenvironment:\n  services:\n    /where:\n"
         "      type: turtle_sensor_interface/srv/TurtlePosition\n"
-        "      responses: [{x: 1.0}, {x: 2.0}]\n      may_fail: true\n"
+        "      responses: [{x: 1.0}, {x: 2.0, y: 3.0}]\n      may_fail: true\n"
         "  topics:\n    /ping:\n      type: std_msgs/msg/Bool\n      values: [{data: false}]\n"
         "properties:\n  - never: caller.x == 2.0 and caller.count == 0\n  - always: not caller.early\n"
     )
     return f
+
+
+def _by_value(value: object) -> object:
+    """A part with each bus handle (its own object in each exploration, compared by identity)
+    as what it is, its kind and name, so two explorations' parts compare."""
+    from enum import Enum
+
+    from llfsm.verify.values import SCALARS, shown
+
+    if isinstance(value, tuple):
+        return tuple(_by_value(v) for v in value)
+    if type(value) in SCALARS or isinstance(value, Enum | type | frozenset):
+        return value
+    return shown(value)
 
 
 @pytest.mark.parametrize("case", ["services", "push topic", "services in every order"])
@@ -209,10 +234,17 @@ def test_with_an_environment_the_specialised_loop_and_the_generic_step_explore_a
         e = r.explorer
         assert r.error is None and r.partial is None
         shapes.append((r.configurations, r.steps, list(e.edges), list(e.edge_choice), list(e.labels), list(e.choice)))
+        if not hash_compact and not generic:
+            fast = [e.codecs[0].variables_of(e.part(c, 0)) for c in e.configs]
         if not hash_compact:  # what each configuration holds: every variable, the bus's flags, the time
+            parts = [[_by_value(e.part(c, k)) for k in range(e.n)] for c in e.configs]
             contents.append(
-                [(c[:GLOBALS], e.globals_of(c), e.times_of(c), [e.part(c, k) for k in range(e.n)]) for c in e.configs]
+                [(c[:GLOBALS], e.globals_of(c), e.times_of(c), p) for c, p in zip(e.configs, parts, strict=True)]
             )
     assert shapes[0] == shapes[1] == shapes[2]
     assert contents[0] == contents[1]
     assert shapes[0][0] > 4 and shapes[0][3]
+    if case == "services in every order":  # the step of three choices (count 4), each way
+        after = {(v["x"], v["seen"]) for v in fast if v["count"] == 0}
+        assert (4.0, ("list", 3.0)) in after  # both answered 2.0 (the callback saw y), the call too
+        assert (-11.0, ("list",)) in after  # none answered: TIMEOUT, TimeoutError

@@ -323,7 +323,7 @@ def spin_until_future_complete(node: OnBus, future: Future, timeout_sec: float |
     this process could ever answer it, so it never hangs."""
     if not isinstance(future, Future):
         raise TypeError(f"spin_until_future_complete(): expected a Future, not {type(future).__name__}")
-    return node._bus.spin_until(future, _ns(timeout_sec))
+    return node._bus.spin_until(future, None if timeout_sec is None else _ns(timeout_sec))
 
 
 def spin(node: OnBus) -> None:

@@ -30,7 +30,12 @@ from typing import Any
 
 from ..msgs._yaml import ValuesError, set_fields
 from ..props.file import Environment as Declared
+from ..ros.bus import _Request
+from ..ros.client import Client
+from ..ros.executor import FutureReturnCode
+from ..ros.subscription import Subscription
 from ..ros.task import Future
+from ..ros.transports.inproc import InProcess
 
 
 class EnvironmentError_(ValueError):
@@ -124,14 +129,18 @@ def _shown(values: dict[str, Any]) -> str:
 class EnvService:
     """A server of the environment: answers with the oracle's choice of its responses."""
 
-    def __init__(self, name: str, srv: Any, responses: list[Any], texts: list[str], may_fail: bool, oracle: Oracle):
+    def __init__(
+        self, name: str, srv: Any, responses: list[Any], texts: list[str], may_fail: bool, oracle: Oracle, bus: Any
+    ) -> None:
         self.srv_name = name
         self.type = srv
         self.node = None
+        self.bus = bus
         self.responses = responses
         self.texts = texts
         self.may_fail = may_fail
         self.oracle = oracle
+        self.answers = len(responses)
         self.choices = len(responses) + int(may_fail)
 
     def _answer(self, request: Any) -> Any:
@@ -159,34 +168,105 @@ class EnvTopic:
         return f"{self.name}: nothing new" if d == 0 else f"{self.name}: a message {self.texts[d - 1]}"
 
 
-class _Asked:
-    """A request to a service of the environment, waiting in the executor's queue as the bus's
-    own request (`llfsm.ros.bus._Request`) does, and answered as it is when the executor runs it:
-    the oracle's choice, a copy of that response (or no answer), for the same future."""
+class EnvFuture(Future):
+    """A request to a service of the environment and the future its caller waits on, as one
+    object: it waits in the executor's queue as the bus's own request (`llfsm.ros.bus._Request`)
+    does, and is answered as that is when the executor runs it (`_run`): the oracle's choice, a
+    copy of that response (or no answer, when `may_fail`).  One object instead of two, and the
+    oracle's usual case (exploring: no replay, no description) written out, because a step of a
+    machine that asks at every ringlet is mostly this (docs/verify.md, "The environment")."""
 
-    __slots__ = ("bus", "future", "request", "server", "service")
+    __slots__ = ("_request", "_server")
 
-    def __init__(self, bus: Any, service: str, request: Any, future: Future, server: EnvService) -> None:
-        self.bus, self.service, self.request, self.future, self.server = bus, service, request, future, server
+    def __init__(self, service: str, request: Any, server: EnvService) -> None:
+        self._remote = None
+        self._done = False
+        self._cancelled = False
+        self._result = None
+        self._exception = None
+        self._callbacks = ()  # type: ignore[assignment]  # a list once a callback is added
+        self._service = service
+        self._request = request
+        self._server = server
+
+    def add_done_callback(self, fn: Callable[[Future], None]) -> None:
+        if self._done:
+            fn(self)
+        elif self._callbacks:
+            self._callbacks.append(fn)
+        else:
+            self._callbacks = [fn]
 
     def _run(self) -> None:
-        future = self.future
-        server = self.server
-        if self.bus.services.get(self.service) is not server:  # pragma: no cover (verify refuses create_service)
-            from ..ros.bus import _Request  # deferred: start-up (only once the bus exists)
-
-            _Request(self.bus, self.service, self.request, future)._run()
-            return
-        if future._done:
+        if self._done:
             return  # cancelled before the executor came to it: no answer, no choice
-        d = server.oracle.decide(server.choices, server._said)
-        if d < len(server.responses):
-            if future._callbacks:
-                future.set_result(server.responses[d]._copy())
+        server = self._server
+        if server.bus.services.get(self._service) is not server:  # pragma: no cover (verify refuses create_service)
+            _Request(server.bus, self._service or "", self._request, self)._run()
+            return
+        oracle = server.oracle
+        if oracle.code is None and not oracle.describe:  # Oracle.decide, exploring
+            made = oracle.made
+            forced = oracle.forced
+            k = len(made)
+            d = forced[k] if k < len(forced) else 0
+            made.append((d, server.choices))
+        else:
+            d = oracle.decide(server.choices, server._said)
+        responses = server.responses
+        if d < len(responses):
+            if self._callbacks:
+                self.set_result(responses[d]._copy())
             else:  # as set_result, with no callback to run: the usual case, a call to wait on
-                future._result = server.responses[d]._copy()
-                future._done = True
+                self._result = responses[d]._copy()
+                self._done = True
         # else: no answer (may_fail); the future stays pending
+
+
+class EnvClient(Client):
+    """A client of a declared service on verify's bus: `call_async` queues an `EnvFuture`.  The
+    request is not copied (a server of the environment never reads it; the bus copies it for a
+    server of this process that does).  Anything else (a request of the wrong type, a name no
+    server of the environment holds now) goes to the bus's own `call_async`."""
+
+    __slots__ = ()
+
+    def call_async(self, request: Any) -> Future:
+        bus = self._bus
+        service = self.srv_name
+        server = bus.services.get(service)
+        if server.__class__ is not EnvService or type(request) is not self.srv_type.Request:
+            return Client.call_async(self, request)
+        future = _new(EnvFuture)  # EnvFuture(service, request, server), without the call
+        future._remote = None
+        future._done = False
+        future._cancelled = False
+        future._result = None
+        future._exception = None
+        future._callbacks = ()
+        future._service = service
+        future._request = request
+        future._server = server
+        bus.ready.append(future)  # as Executor.queue
+        bus.ctx.wake = 0
+        return future
+
+
+_new = object.__new__
+
+
+class Declaring(InProcess):
+    """verify's transport when the specialised loop explores with declared services: the
+    in-process one, which also makes each client of a declared name an `EnvClient` as it is
+    created (the transport is what a client asks about reaching servers)."""
+
+    def __init__(self, names: set[str]) -> None:
+        self.names = names
+
+    def client(self, cli: Any) -> None:
+        if cli.__class__ is Client and cli.srv_name in self.names:
+            cli.__class__ = EnvClient
+        return None
 
 
 class World:
@@ -195,12 +275,14 @@ class World:
     **Its services' requests, without the executor's loop.**  A service call of machine code is
     most of what a step with an environment does, and the executor's general machinery (a
     request queued, the spin loop's checks, the server looked up, its answer tested for a
-    future) would be most of that.  So on verify's bus (never a run's) `call` queues a
-    request to a declared service as `_Asked`, and `spin_until`, when the executor's next work is
-    that very request, runs it at once: what the executor's loop would do first, since verify's
-    bus has no timers (verify refuses them), no transport and nothing else ahead of it in the
-    queue.  Otherwise (anything queued ahead, `ros.ok()` false, a request left pending, a call
-    to any other service) the bus's own methods run, so what machine code sees (a pending future
+    future) would be most of that.  So on verify's bus (never a run's) a client of a declared
+    service is an `EnvClient` (made so by the bus's transport, `Declaring`, as it is created) whose
+    `call_async` queues the request as an `EnvFuture` (so does `call`, for a client made before
+    the world was), and `spin_until`, when the executor's next work is that very request, runs
+    it at once: what the executor's loop would do first, since verify's bus has no timers
+    (verify refuses them), no transport and nothing else ahead of it in the queue.  Otherwise
+    (anything queued ahead, `ros.ok()` false, a request left pending, a call to any other
+    service) the bus's own methods run, so what machine code sees (a pending future
     until the executor's turn, INTERRUPTED, TIMEOUT, the order of callbacks and answers, hence
     the order of the oracle's choices) is unchanged.  `direct=False` (verify's generic step,
     `Options.generic`) leaves the bus as it is: tests/test_verify_environment.py compares the two.
@@ -217,7 +299,7 @@ class World:
             except (LookupError, ValuesError, AttributeError) as e:
                 raise EnvironmentError_(f"{s.where}: service {name}: {e}") from None
             texts = [_shown(v) for v in s.responses]
-            self.services[name] = EnvService(name, srv, responses, texts, s.may_fail, self.oracle)
+            self.services[name] = EnvService(name, srv, responses, texts, s.may_fail, self.oracle, bus)
             bus.services[name] = self.services[name]
         for name, t in declared.topics.items():
             try:
@@ -228,33 +310,48 @@ class World:
             self.topics[name] = EnvTopic(name, cls, values, [_shown(v) for v in t.values])
         if self.services and direct:
             self._take_requests(bus)
-        from ..ros.subscription import Subscription  # deferred: start-up (the bus exists by now)
-
         self._subscription = Subscription
 
     def _take_requests(self, bus: Any) -> None:
         """`call` and `spin_until` of verify's bus, for the declared services (see the class)."""
-        services, ready, ctx = bus.services, bus.ready, bus.ctx
+        services, ready, ctx, oracle = bus.services, bus.ready, bus.ctx, self.oracle
         call, spin_until = bus.call, bus.spin_until
-        from ..ros.executor import FutureReturnCode  # deferred: start-up (the bus exists by now)
-
         success = FutureReturnCode.SUCCESS
 
-        def call_env(service: str, request: Any) -> Future:
+        def call_env(service: str, request: Any) -> Future:  # a client made before the world was
             server = services.get(service)
             if server.__class__ is not EnvService:
                 return call(service, request)
-            future = Future(service)
-            ready.append(_Asked(bus, service, request, future, server))  # as Executor.queue
+            future = EnvFuture(service, request, server)
+            ready.append(future)  # as Executor.queue
             ctx.wake = 0
             return future
 
-        def spin_env(future: Future, timeout_ns: int | None) -> Any:
-            if ready and not future._done:
-                first = ready[0]
-                if first.__class__ is _Asked and first.future is future and not bus.timers and bus.ok():
+        def spin_env(future: Any, timeout_ns: int | None) -> Any:
+            # the request is the executor's next work, and its loop would run it first: no timer
+            # (verify refuses them), ros.ok() (Executor.ok, written out); then EnvFuture._run,
+            # written out for the usual case (exploring, the server of the environment on the bus)
+            if ready and ready[0] is future and bus.initialised and not bus.shut and not ctx.interrupted:
+                server = future._server
+                if (
+                    not future._done
+                    and not bus.timers
+                    and services.get(future._service) is server
+                    and oracle.code is None
+                    and not oracle.describe
+                ):
                     ready.popleft()  # as Executor._run_ready
-                    first._run()
+                    made = oracle.made
+                    forced = oracle.forced
+                    k = len(made)
+                    d = forced[k] if k < len(forced) else 0
+                    made.append((d, server.choices))
+                    if d < server.answers:
+                        if future._callbacks:
+                            future.set_result(server.responses[d]._copy())
+                        else:
+                            future._result = server.responses[d]._copy()
+                            future._done = True
                     if bus.last:
                         bus._run_last()
                     if future._done:

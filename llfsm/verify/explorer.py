@@ -14,6 +14,7 @@ left suspended) steps to itself, with nothing published, forever.
 from __future__ import annotations
 
 import bisect
+import gc
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -76,6 +77,9 @@ class Explorer(Stepper):
         finally:
             sys.stdout = saved
             activate(prev)
+            if self.frozen:  # the collector's again (Store.check_memory)
+                gc.unfreeze()
+                self.frozen = False
 
     def _explore(self) -> None:
         if not self.options.generic:
@@ -338,12 +342,20 @@ class Explorer(Stepper):
                             if isinstance(exc, KeyboardInterrupt | MemoryError | VariableValueError):
                                 raise
                             raise MachineError(exc, idx, c) from exc
+                        again = -1  # the environment's next choice of the usual case (one), or -1, or -2
                         if oracle is not None:
                             if bus.ready:  # the answers and callbacks it left, as between rounds
                                 drain()
                             chosen = oracle.made
                             if chosen:
-                                c += len(choices) * (chosen[0][0] if len(chosen) == 1 else oracle.number())
+                                if len(chosen) == 1:  # next_forced() of the usual case, one choice
+                                    d, nd = chosen[0]
+                                    c += len(choices) * d
+                                    if d + 1 < nd:
+                                        again = d + 1
+                                else:
+                                    c += len(choices) * oracle.number()
+                                    again = -2
                         steps += 1
                         # the machine's new part (and those its commands touched)
                         part = snaps[turn](m)
@@ -437,14 +449,10 @@ class Explorer(Stepper):
                             edges.append(j)
                             if oracle is not None:
                                 edge_choice.append(c)
-                        if oracle is None or not oracle.made:
+                        if again == -1 or oracle is None:  # (again is -1 without an environment)
                             break
-                        chosen = oracle.made
-                        if len(chosen) == 1:  # next_forced() and start() of the usual case, one choice
-                            d, nd = chosen[0]
-                            if d + 1 >= nd:
-                                break
-                            oracle.forced, oracle.made = (d + 1,), []
+                        if again >= 0:  # start() of the usual case
+                            oracle.forced, oracle.made = (again,), []
                             continue
                         forced = oracle.next_forced()
                         if forced is None:

@@ -68,13 +68,19 @@ class Codec:
 
     def _compile(self, gate: Callable[..., Any]) -> tuple[Callable[[Any], tuple[Any, ...]], Callable[[Any, Any], None]]:
         kinds = {f: i for i, f in enumerate(self.ringlets)}
-        lines = ["def snapshot(m):", "    r = m._run"]
+        lines = ["def snapshot(m):"]
+        if self.variables:  # L{k}: the canonical handle variable k held last (what it holds again)
+            lines.append(f"    global {', '.join(f'L{k}' for k in range(len(self.variables)))}")
+        lines.append("    r = m._run")
         values = []
         for k, name in enumerate(self.variables):
             lines.append(f"    v{k} = m.{name}")
-            lines.append(f"    if v{k}.__class__ not in S:")
-            lines.append(f"        h = P(id(v{k}))")  # a handle: its token, without a call
-            lines.append(f"        v{k} = h if h is not None else F(v{k}, {k})")
+            lines.append(f"    if v{k}.__class__ not in S and v{k} is not L{k}:")
+            lines.append(f"        h = P(id(v{k}))")  # a handle: its canonical one, without a call
+            lines.append("        if h is None:")
+            lines.append(f"            v{k} = F(v{k}, {k})")
+            lines.append("        else:")
+            lines.append(f"            v{k} = L{k} = h")
             values.append(f"v{k}")
         parts = ["K[r]", "K[m._next] if r is G else 0", "m._state", "m._pending", "m._suspended"]
         parts += ["m._resume_to", "m._finished"]
@@ -87,8 +93,8 @@ class Codec:
             lines.append(f"    m.{name} = t[{FIRST_INPUT + k}]")
         for k, name in enumerate(self.variables):
             lines.append(f"    v = t[{self.first_variable + k}]")
-            lines.append("    if v.__class__ is Z:")
-            lines.append('        v = O[v[1]] if v[0] == "handle" else T(v, H)')  # a handle: no call
+            lines.append("    if v.__class__ is Z:")  # a handle is itself: put back as a number is
+            lines.append("        v = T(v, H)")
             lines.append(f"    m.{name} = v")
         scope: dict[str, Any] = {
             "S": SCALARS,
@@ -99,9 +105,9 @@ class Codec:
             "T": thaw,
             "H": self.handles,
             "P": self.handles.plain.get,
-            "O": self.handles.objects,
             "Z": Frozen,
         }
+        scope.update((f"L{k}", None) for k in range(len(self.variables)))  # None: no handle yet
         # llfsm's own text (attribute names are identifiers the checker accepted): no user code
         exec(compile("\n".join(lines) + "\n", f"<verify codec of {self.cls.NAME}>", "exec"), scope)
         return scope["snapshot"], scope["restore"]

@@ -40,7 +40,7 @@ from ..runtime.inputs import DEFAULT, TOPIC
 from ..runtime.machine import RESUME, Machine
 from ..runtime.scheduler import Arrangement
 from ..runtime.trace import Tracer
-from .environment import World
+from .environment import Declaring, World
 from .snapshot import FINISHED, PENDING, STATE, SUSPENDED, Codec
 from .store import (
     FIRST_ROUND,
@@ -214,6 +214,8 @@ class Stepper(Store):
         Store.__init__(self, options, len(loaded.classes), len(atoms))
         self.ctx = RunContext(SimClock(options.period or 1_000_000))
         self.clock = self.ctx.clock
+        if loaded.environment and loaded.environment.services and not options.generic:
+            self.ctx.transport = Declaring(set(loaded.environment.services))  # clients of declared services
         self.stdout = _Null()
         prev = activate(self.ctx)
         try:

@@ -22,6 +22,7 @@ the narrowest item that holds them; and the edges when they are kept (liveness, 
 
 from __future__ import annotations
 
+import gc
 from array import array
 from collections import deque
 from collections.abc import Sequence
@@ -36,6 +37,11 @@ TURN, LIVE, GLOBALS, PUBLISHED, TIMES = range(5)
 PARTS = 5
 #: Positions in the globals part.
 INITIALISED, SHUT, INTERRUPTED, FIRST_ROUND, NODES = range(5)
+
+
+#: How many new configurations between two settlings of what the exploration keeps
+#: (`Store.check_memory`).
+SETTLE = 16_384
 
 
 class StateLimit(Exception):
@@ -88,6 +94,8 @@ class Store:
         self.options = options
         self.n = n
         self.meter = Meter(options.max_memory if options.max_memory is not None else default_bound())
+        self.settle_at = SETTLE
+        self.frozen = False  # what is kept was set aside from the cycle collector (check_memory)
         # the structure: per configuration (numbered in breadth-first order, so by depth) its
         # parent in the BFS tree, the choice that reached it, its atoms' values, its fairness
         # bits, in arrays of the narrowest item that holds them; the edges if kept
@@ -207,9 +215,21 @@ class Store:
 
     def check_memory(self, count: int) -> int:
         """MemoryLimit past the bound; else the number of configurations at which to look again
-        (llfsm.verify.memory.Meter.next_look: sooner as the configurations grow)."""
+        (llfsm.verify.memory.Meter.next_look: sooner as the configurations grow).
+
+        Every SETTLE configurations, what the exploration keeps is set aside from Python's cycle
+        collector (`gc.freeze`, after a collection of the young generations, so little garbage
+        is kept until the end; a full collection would walk the whole process, modules and all):
+        the configurations and their parts are kept to the end, and a part that holds a bus
+        handle or a frozen list stays tracked, so each of the collector's full passes would walk
+        every one found so far again.  `explore` gives them back."""
         if not self.meter.ok():
             raise MemoryLimit(self.meter.used)
+        if count >= self.settle_at:
+            self.settle_at = count + SETTLE
+            gc.collect(1)
+            gc.freeze()
+            self.frozen = True
         return self.meter.next_look(count)
 
     # -- paths ----------------------------------------------------------------------------------------

@@ -4,8 +4,10 @@ A configuration holds each machine's variables as values that compare and hash a
 they stand for: numbers, strings, bytes, None and tuples of those as they are (Python compares
 `1 == 1.0 == True`, and so does verify); a list, dict, set or message as a `Frozen` tuple of its
 kind and its frozen parts (messages by their fields); a handle to a bus entity (a node, a
-publisher) as an opaque token of what it is, its kind and name, standing for the first such
-handle made (later ones of the same kind and name behave alike: publishing on the same topic).
+publisher, a client) as the first such handle made of its kind and name (later ones behave
+alike: publishing on the same topic), itself: one object per kind and name, so it compares and
+hashes by identity, as cheaply as a small integer, and a step puts it back as it is (a
+subscription's reader is frozen with what it holds, its newest message).
 
 `thaw` gives the ringlet a value it may change in place: a new list, a new message.  Anything
 else (an object of a class of the user's, a function, a file) cannot be compared by value:
@@ -32,39 +34,36 @@ class Unfreezable(TypeError):
 
 
 class Handles:
-    """The bus entities the machines made, by token: the first of each kind and name."""
+    """The bus entities the machines made: the first of each kind and name stands for them all
+    in a configuration (its canonical handle)."""
 
     def __init__(self) -> None:
-        self.objects: list[Any] = []
-        self.tokens: dict[tuple[str, ...], int] = {}
-        #: each object's token by its id, with the object (kept alive, so the id is its own):
-        #: what a handle is never changes, and a configuration is frozen at every step
-        self.known: dict[int, tuple[Any, Frozen]] = {}
-        #: the tokens of the handles frozen as their token alone (all but readers), by id: what
-        #: a machine's snapshot looks up first (llfsm.verify.snapshot), one dict look-up per
-        #: handle; `known` keeps each object alive, so no other object can have its id
-        self.plain: dict[int, Frozen] = {}
+        self.canonical: dict[tuple[str, ...], Any] = {}
+        #: each handle's canonical one by its id, with the handle (kept alive, so the id is its
+        #: own): what a handle is never changes, and a configuration is frozen at every step
+        self.known: dict[int, tuple[Any, Any]] = {}
+        #: the canonical handle of each handle frozen as that alone (all but readers), by id:
+        #: what a machine's snapshot looks up first (llfsm.verify.snapshot), one dict look-up
+        #: per handle; `known` keeps each object alive, so no other object can have its id
+        self.plain: dict[int, Any] = {}
 
-    def token(self, obj: Any) -> Frozen | None:
+    def of(self, obj: Any) -> Any:
+        """The canonical handle standing for `obj`, or None when `obj` is no handle."""
         hit = self.known.get(id(obj))
         if hit is not None and hit[0] is obj:
             return hit[1]
         key = _handle_key(obj)
         if key is None:
             return None
-        index = self.tokens.get(key)
-        if index is None:
-            index = self.tokens[key] = len(self.objects)
-            self.objects.append(obj)
-        token = Frozen(("handle", index, *key))
-        self.known[id(obj)] = (obj, token)
+        first = self.canonical.setdefault(key, obj)
+        self.known[id(obj)] = (obj, first)
         if key[0] != "subscription":
-            self.plain[id(obj)] = token
-        return token
+            self.plain[id(obj)] = first
+        return first
 
 
 def _handle_key(obj: Any) -> tuple[str, ...] | None:
-    """What a handle is, for `Handles.token`: (kind, name...), or None for no handle."""
+    """What a handle is, for `Handles.of`: (kind, name...), or None for no handle."""
     # deferred: start-up of `llfsm verify` without the bus (a machine that never uses it)
     from ..ros.client import Client
     from ..ros.node import Node
@@ -103,16 +102,23 @@ def freeze(value: Any, handles: Handles) -> Any:
         return Frozen(("message", t, *(freeze(getattr(value, f), handles) for f, _ in fields)))
     if isinstance(value, Enum):  # immutable, compared by identity: FutureReturnCode.SUCCESS
         return value
-    if t.__name__ == "Future" and hasattr(value, "_service"):  # a service call: by what it came to
+    if hasattr(value, "_service") and hasattr(value, "_callbacks") and _is_future(value):  # by what it came to
         if value._exception is not None or value._callbacks or value._remote is not None:
             raise Unfreezable("a future with callbacks, an exception or a remote server")
         return Frozen(("future", value._service, value._done, freeze(value._result, handles)))
-    token = handles.token(value)
-    if token is not None:
-        if token[2] == "subscription":  # a reader: what it holds is part of the configuration
-            return Frozen(("reader", token, freeze(value.latest, handles), value._fresh))
-        return token
+    first = handles.of(value)
+    if first is not None:
+        if id(value) in handles.plain:
+            return first
+        return Frozen(("reader", first, freeze(value.latest, handles), value._fresh))  # what it holds counts too
     raise Unfreezable(f"a {t.__module__}.{t.__qualname__}")
+
+
+def _is_future(value: Any) -> bool:
+    """A service call's future (the environment's own, llfsm.verify.environment.EnvFuture, too)."""
+    from ..ros.task import Future  # deferred: start-up (only a machine that calls a service)
+
+    return isinstance(value, Future)
 
 
 def thaw(value: Any, handles: Handles) -> Any:
@@ -120,8 +126,6 @@ def thaw(value: Any, handles: Handles) -> Any:
     if type(value) is not Frozen:
         return value
     kind = value[0]
-    if kind == "handle":  # first: every machine on the bus holds some, thawed at every step
-        return handles.objects[value[1]]
     if kind == "list":
         return [thaw(v, handles) for v in value[1:]]
     if kind == "tuple":
@@ -147,7 +151,7 @@ def thaw(value: Any, handles: Handles) -> Any:
             future.set_result(thaw(value[3], handles))
         return future
     if kind == "reader":
-        sub = handles.objects[value[1][1]]
+        sub = value[1]
         sub.latest = thaw(value[2], handles)
         sub._fresh = value[3]
         return sub
@@ -159,7 +163,8 @@ def shown(value: Any) -> str:
     if isinstance(value, Enum):
         return f"{type(value).__name__}.{value.name}"
     if type(value) is not Frozen:
-        return repr(value)
+        key = None if type(value) in SCALARS or type(value) is tuple else _handle_key(value)
+        return f"<{key[0]} {key[1]}>" if key is not None else repr(value)
     kind = value[0]
     if kind == "list":
         return "[" + ", ".join(shown(v) for v in value[1:]) + "]"
@@ -178,10 +183,8 @@ def shown(value: Any) -> str:
         cls = value[1]
         fields = ", ".join(f"{name}={shown(v)}" for (name, _), v in zip(cls._FIELDS, value[2:], strict=True))
         return f"{cls.__name__}({fields})"
-    if kind == "handle":
-        return f"<{value[2]} {value[3]}>"
     if kind == "future":
         return f"<future {'done: ' + shown(value[3]) if value[2] else 'pending'}>"
     if kind == "reader":
-        return f"<subscription {value[1][3]}, latest {shown(value[2])}>"
+        return f"<subscription {value[1].topic_name}, latest {shown(value[2])}>"
     return repr(value)  # pragma: no cover
