@@ -8,7 +8,7 @@ import json
 import textwrap
 
 import pytest
-from dds_netns import NetNamespace, finish
+from dds_netns import NetNamespace, finish, start_view
 from helpers import MACHINES
 
 pytestmark = pytest.mark.dds
@@ -118,14 +118,8 @@ VIEW_CLIENT = textwrap.dedent(
 
 def test_llfsm_view_pauses_reads_sets_and_continues_a_run_of_another_process(netns: NetNamespace) -> None:
     run = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "40")
-    view = netns.llfsm("view", "--web", "127.0.0.1:0", "--duration", "40")
-    assert view.stderr is not None
-    port = ""
-    for line in view.stderr:
-        if "web view at " in line:
-            port = line.split("web view at ", 1)[1].strip().rstrip("/").rsplit(":", 1)[1]
-            break
-    assert port, "llfsm view printed no address"
+    view, url, _err = start_view(netns, "--duration", "40")
+    port = url.rstrip("/").rsplit(":", 1)[1]
     client = netns.python(VIEW_CLIENT.replace("sys.argv[1]", repr(port)))
     status, out, err = finish(client, 90)
     view.terminate()
