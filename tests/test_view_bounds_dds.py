@@ -79,8 +79,10 @@ CLIENT = textwrap.dedent(
                         out["up"] = summary
                         print("seen", flush=True)
                     elif out["up"] is not None and state["topics_total"] < 50:
+                        # the endpoints leave one by one: keep watching until the last has gone
                         out["after"] = summary
-                        break
+                        if not churn:
+                            break
         print(json.dumps(out), flush=True)
     asyncio.run(main(sys.argv[1], int(sys.argv[2])))
     """
