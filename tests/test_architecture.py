@@ -326,8 +326,11 @@ GOVERNED: dict[str, tuple[str, dict[str, str]]] = {
         {
             "llfsm.ros.transports.base": "what every transport implements and sees of the bus",
             "llfsm.ros.transports.dds_config": "a part of the dds transport",
+            "llfsm.ros.transports.dds_entities": "a part of the dds transport",
             "llfsm.ros.transports.dds_graph": "a part of the dds transport",
             "llfsm.ros.transports.dds_read": "a part of the dds transport",
+            "llfsm.ros.transports.dds_services": "a part of the dds transport",
+            "llfsm.ros.transports.dds_topics": "a part of the dds transport",
         },
     ),
     "verb-groups": (
