@@ -360,6 +360,7 @@ GOVERNED: dict[str, tuple[str, dict[str, str]]] = {
         {
             "llfsm.diagram.description": "what a published description must be before it is drawn",
             "llfsm.diagram.layout": "where svg places what it draws (and the web's graph)",
+            "llfsm.diagram.ordering": "a part of layout: the order within its ranks",
             "llfsm.diagram.text": "labels shared by mermaid and dot: not a drawing",
         },
     ),
