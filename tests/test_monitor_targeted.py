@@ -483,14 +483,13 @@ _VALUES: list[object] = [-1, 0, 2, 3, 7, 9, 2.5, float(2**53), True, -4.0]
 def test_folded_checks_give_the_verdicts_of_judging_every_boundary(tmp_path_factory: Any, data: Any) -> None:
     step = data.draw(st.sampled_from([1, 2, 3, -2]))
     cls = _counter(tmp_path_factory.mktemp("r"), step=step, start=data.draw(st.sampled_from([0, 2, 5])))
-    n = st.integers(-6, 40)
     src = []
     for _ in range(data.draw(st.integers(2, 7))):
-        text = " and ".join(
-            data.draw(st.sampled_from(_TERMS)).format(c=data.draw(n), m=data.draw(st.sampled_from([2, 3])), r=data.draw(st.integers(0, 2)))
-            for _ in range(data.draw(st.integers(1, 2)))
-        )
-        src.append(PropertySource(data.draw(st.sampled_from(["always", "never"])), text))
-    times = data.draw(st.lists(st.integers(1, 40), max_size=3, unique=True))
-    sets = {t * 1_000_000: {data.draw(st.sampled_from(["up", "lim", "scale"])): data.draw(st.sampled_from(_VALUES))} for t in times}
+        terms = [data.draw(st.sampled_from(_TERMS)) for _ in range(data.draw(st.integers(1, 2)))]
+        c, m, r = data.draw(st.integers(-6, 40)), data.draw(st.sampled_from([2, 3])), data.draw(st.integers(0, 2))
+        kind = data.draw(st.sampled_from(["always", "never"]))
+        src.append(PropertySource(kind, " and ".join(terms).format(c=c, m=m, r=r)))
+    sets: dict[int, dict[str, object]] = {}
+    for t in data.draw(st.lists(st.integers(1, 40), max_size=3, unique=True)):
+        sets[t * 1_000_000] = {data.draw(st.sampled_from(["up", "lim", "scale"])): data.draw(st.sampled_from(_VALUES))}
     assert _run_set(cls, src, True, sets)[0] == _run_set(cls, src, False, sets)[0]

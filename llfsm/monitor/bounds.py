@@ -75,8 +75,8 @@ def self_attr_load(node: ast.AST) -> bool:
 def _number(node: ast.AST) -> int | float | None:
     """A numeric constant's value (not a bool, not NaN; `-3` is a minus and a constant), else None."""
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
-        c = _number(node.operand)
-        return None if c is None else -c if isinstance(node.op, ast.USub) else c
+        inner = _number(node.operand)
+        return None if inner is None else -inner if isinstance(node.op, ast.USub) else inner
     if not isinstance(node, ast.Constant):
         return None
     c = node.value

@@ -117,7 +117,9 @@ def make_variant(
         wanted = checks.get(name)
         if wanted and name not in made:
             state = _state_of(cls, fn)
-            ctx = _Ringlet(own, cls, wanted, state, reads if steps else None, name, numeric, pins if steps else None, pinned, integral)
+            ctx = _Ringlet(own, cls, wanted, state, name=name, numeric=numeric, pinned=pinned, integral=integral)
+            if steps:  # what the folds rest on
+                ctx.reads, ctx.pins = reads, pins
             tree = copy.deepcopy(reads.trees[name])
             tree.body = _rewrite_block(tree.body, state, ctx)[0]
             module = ast.Module(body=[tree], type_ignores=[])
@@ -199,7 +201,7 @@ def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.st
     """The checks, then the return (its value kept first when it is not a constant).  A
     constant return after a last inline check returns from inside it when the property holds
     (`if holds: return 0`): the common case then costs the test alone."""
-    own, cls = ctx.own, ctx.cls
+    cls = ctx.cls
     state = cls.STATES[known] if known is not None else None
     body: list[ast.stmt] = []
     ids: list[int] = []
