@@ -21,8 +21,13 @@ reads is as it was, but for numbers the ringlet steps one way (llfsm.runtime.rea
 only change is `count += 1`).  That rests on the variable holding a number (an int, a float or a
 bool), which its machine's code keeps (`ClassReads.numeric`) and the monitor checks where
 anything else could set it (llfsm.monitor.run): the variant names those variables in
-`NUMERIC`.  Other kinds call the monitor with the properties to judge.  Names start with
-`_llfsm_mon_`, which machine code cannot use (LF013).
+`NUMERIC`; likewise for numbers read only modulo what the ringlet steps them by (`count % 2`
+where `count += 2`), which must hold ints (`INTEGRAL`).  A number of the machine's own that
+nothing in it changes is compiled in as its value when the run starts (`PINS`, which the
+monitor checks wherever the gate sets it), so `count < limit * 10` is a constant bound, and the
+bounds at one return are one comparison per number, leaving out the terms they decide
+(llfsm.monitor.bounds).  Other kinds call the monitor with the properties to judge.  Names
+start with `_llfsm_mon_`, which machine code cannot use (LF013).
 """
 
 from __future__ import annotations
