@@ -502,6 +502,11 @@ class Debugger:
             value = assign(m, variable, text)
         except SetError as e:
             raise DebugError(str(e)) from None
+        if variable not in {entry[0] for entry in type(m).INPUTS}:
+            # set now, and again by the scheduler's gate before the machine's next ringlet, where
+            # the monitor sees what is set from outside (its checks may have compiled the old
+            # value in: llfsm.monitor.variant, PINS)
+            self.arr.set_variables(m.NAME, {variable: value})
         if h is not None:
             h.record_set(m, old, self._set_round(h), self.arr.clock.now)
         self._notify()
