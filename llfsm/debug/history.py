@@ -31,17 +31,27 @@ from __future__ import annotations
 
 import sys
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from itertools import count
 from operator import attrgetter
 from typing import Any
 
 from ..msgs._message import is_message_class
 from ..runtime.generated import variables_of
+from ..runtime.clock import SimClock
 from ..runtime.machine import Machine
 from ..runtime.readout import plain
 from ..runtime.reads import ClassReads
-from .recording import AFTER_AT_END, COPIED, DIRECT, FIRED_AT_END, MESSAGE, RingletRecorder, namespace_of, taken_by
+from .recording import (
+    AFTER_AT_END,
+    COPIED,
+    DIRECT,
+    FIRED_AT_END,
+    MESSAGE,
+    RingletRecorder,
+    namespace_of,
+    taken_by,
+)
 from .traps import TRAP
 
 #: One record: (number, run time ns, code, values...); a set's number is the one of the boundary
@@ -130,6 +140,21 @@ def _encode(value: Any, cls: type[Any]) -> Any:
     return value._copy() if type(value) is cls else plain(value)
 
 
+class _Turn:
+    """A turn in which no ringlet ran (compiled; the gate's record): the machine, its state
+    before and after, and its values before and after (None and None: unchanged)."""
+
+    __slots__ = ("after", "before", "i", "new", "old")
+
+    def __init__(self, i: int, before: int, after: int, old: Any, new: Any) -> None:
+        self.i, self.before, self.after, self.old, self.new = i, before, after, old, new
+
+
+#: A record as read back: (number, run time ns, a set?, machine index, state before, state its
+#: ringlet ran in (None: none ran), state after, transition, round, [(value index, old, new)]).
+Part = tuple[int, int, bool, int, int, "int | None", int, "int | None", int, list[tuple[int, Any, Any]]]
+
+
 class History:
     """The last `size` ringlet boundaries of an arrangement's machines."""
 
@@ -138,11 +163,6 @@ class History:
             raise ValueError("--history must keep at least 1 ringlet")
         self.machines = list(machines)
         self.size = size
-        #: The records, oldest first, the newest `size` kept: a deque, which frees the oldest
-        #: record as it takes a new one (so a long run makes no work for the garbage collector).
-        self.ring: deque[Record] = deque(maxlen=size)
-        #: What numbers the boundaries' records (a C call in each compiled ringlet: `next`).
-        self.counter = count(1)
         self.values = [Values(type(m)) for m in machines]
         #: Each machine's values as the history last took them: what the page shows (taken
         #: again on the scheduler's thread when it asks, `refresh`), and, watched, what the next
@@ -153,33 +173,113 @@ class History:
         self.cache: list[list[Any]] = [list(c) for c in self.current]
         self.states = [m._state for m in machines]  # watched: each machine's state at its last boundary
         self.sets = 0
-        #: Whether the ringlets record themselves (set by the debugger once they are compiled).
+        #: Whether the ringlets record themselves (`attach`, once they are compiled).
         self.compiled = False
         #: Topics published, by the number of the boundary they belong to (the next one when
         #: published): (number, [topic, ...]), at most one entry per record.
         self.published: deque[tuple[int, list[str]]] = deque(maxlen=size)
-        #: What the gate did before a ringlet (compiled): by the ringlet's record's number,
-        #: (state before, values before, values after).
-        self._gated: dict[int, tuple[int, tuple[Any, ...], tuple[Any, ...]]] = {}
-        #: Rounds (compiled): (first number, its round, live machines a round), in order.
-        self._rounds: list[tuple[int, int, int]] = [(1, 0, len(self.machines))]
         #: The page asked for the values (`snapshot`): `refresh` takes them again.
         self.wanted = False
         #: Values waiting for their machine's next turn (the arrangement's, by machine id: set by
         #: the debugger when the ringlets record themselves).
         self.waiting: dict[int, Any] = {}
+        # -- watched: the records as tuples, (number, run time, code, values...), the newest N
+        self._watched: deque[Record] = deque(maxlen=size)
+        self._counter = count(1)
+        # -- compiled (see "How it is recorded" in docs/debug.md) --
+        #: One item a boundary, in order: a ringlet's code, a tuple of its code and values, the
+        #: old value alone (`meanings`), or a turn of the gate's; the boundary numbered by its
+        #: place (`_dropped` + index + 1).  Cut back between rounds once it holds 2N.
+        self._items: list[Any] = []
+        self._dropped = 0
+        #: Per machine: state after -> (state it ran in, transition, value index) of its
+        #: records that are the value alone (claimed as the ringlets are compiled).
+        self.meanings: list[dict[int, tuple[int, int | None, int]]] = [{} for _ in machines]
+        #: The ringlets' record codes (plain tuples of numbers, which the garbage collector stops
+        #: following), by id: a record is a code, or a tuple that starts with one, only if it is
+        #: that very object (machine code cannot reach them).
+        self._codes: dict[int, tuple[Any, ...]] = {}
+        #: Sets while paused: (number of the boundary before, run time, machine, state, round,
+        #: values before, values after).
+        self._sets: list[tuple[int, int, int, int, int, tuple[Any, ...], tuple[Any, ...]]] = []
+        #: What the gate did before a ringlet: by the ringlet's record's number, (state before,
+        #: values before, values after).
+        self._gated: dict[int, tuple[int, tuple[Any, ...], tuple[Any, ...]]] = {}
+        #: Rounds: (first number, its round, the live machines' indices in turn order), in order.
+        self._rounds: list[tuple[int, int, tuple[int, ...]]] = [(1, 0, tuple(range(len(self.machines))))]
+        #: Run times: (first number, its run time), in order; a later round of the sim clock is
+        #: `period` later for each round since.
+        self._times: list[tuple[int, int]] = [(1, 0)]
+        self._period = 0
+        self._arr: Any = None
 
     # -- made on the scheduler's thread ------------------------------------------------------------
+    def attach(self, arr: Any) -> None:
+        """The ringlets record themselves (compiled): number the boundaries from the scheduler's
+        rounds, time them from its clock, and cut the items back between rounds."""
+        self.compiled = True
+        self._arr = arr
+        arr.around_release = self.around_release
+        arr.on_live = self.on_live
+        self.waiting = arr._variables
+        clock = arr.clock
+        self._period = clock.period if type(clock) is SimClock else 0
+        self._times = [(1, clock.now)]
+        chained = clock.on_jump
+
+        def jumped() -> None:  # a wait moved the time (a spin call): from the next record on
+            self._time_from(self._next_number())
+            if chained is not None:
+                chained()
+
+        clock.on_jump = jumped
+        arr.ctx.between_rounds.append(self._between)
+
+    def _time_from(self, first: int) -> None:
+        t = (first, self._arr.clock.now)
+        times = self._times
+        if times[-1][0] == first:
+            times[-1] = t
+        elif self._time_of(first) != t[1]:
+            times.append(t)
+
+    def _between(self) -> None:
+        """Between rounds (a hook of the run's context, and `on_live`): cut back, note the time,
+        and come back before the items reach 2N (sim clock), or after the next round (any other
+        clock, whose rounds are timed one by one)."""
+        self.trim()
+        self._time_from(self._next_number())
+        ctx = self._arr.ctx
+        if self._period:
+            live = len(self._rounds[-1][2]) or 1
+            ctx.wake_at(self._arr.clock.now + max(1, self.size // live) * self._period)
+        else:
+            ctx.wake = 0
+
     def _next_number(self) -> int:
-        """The number the next boundary's record will have (without taking it from the counter:
-        the newest record's, a boundary's or a set's, is the one before it)."""
-        ring = self.ring
+        """The number the next boundary's record will have (watched: without taking it from the
+        counter; the newest record's, a boundary's or a set's, is the one before it)."""
+        if self.compiled:
+            return self._dropped + len(self._items) + 1
+        ring = self._watched
         return int(ring[-1][0]) + 1 if ring else 1
 
     @property
     def count(self) -> int:
         """Records made since the start (numbers of the dropped ones are below the first kept)."""
         return self._next_number() - 1 + self.sets
+
+    @property
+    def kept(self) -> int:
+        """How many records are kept (any thread)."""
+        if self.compiled:
+            return min(self.size, len(self._items) + len(self._sets))
+        return len(self._watched)
+
+    @property
+    def ring(self) -> list[Part]:
+        """The kept records, oldest first, as read back (scheduler's thread)."""
+        return self._view(None)
 
     def record(
         self, m: Machine, ran: int | None, fired: int | None, round_: int, now: int, published: list[str]
@@ -194,10 +294,10 @@ class History:
             old = new = None
         else:
             self.current[i] = new  # type: ignore[assignment]  # a take, never None here
-        number = next(self.counter)
+        number = next(self._counter)
         if published:
             self.published.append((number, list(published)))
-        self.ring.append((number, now, (FULL, i, before, ran, after, fired, round_), old, new))
+        self._watched.append((number, now, (FULL, i, before, ran, after, fired, round_), old, new))
 
     def tap(self, topic: str) -> None:
         """A topic published (compiled): it belongs to the next boundary's record."""
@@ -217,9 +317,7 @@ class History:
         inputs = m._inputs
         if m._suspended and m._pending is None and i not in self.waiting and (inputs is None or not inputs.fresh):
             let_go(m)  # nothing to apply: it stays suspended, and nothing of it changes
-            self.ring.append(
-                (next(self.counter), m._clock.now, (FULL, i, before, None, before, None, None), None, None)
-            )
+            self._items.append(_Turn(i, before, before, None, None))
             return False
         take = self.values[i].take
         old = take(m)
@@ -229,23 +327,20 @@ class History:
         if goes:
             if new != old or m._state != before:
                 self._gated[self._next_number()] = (before, old, new)
-                self.trim()
         else:
-            changed = (old, new) if new != old else (None, None)
-            self.ring.append(
-                (next(self.counter), m._clock.now, (FULL, i, before, None, m._state, None, None), *changed)
-            )
+            self._items.append(_Turn(i, before, m._state, *((old, new) if new != old else (None, None))))
         return goes
 
     def on_live(self, rounds: int, live: list[Machine]) -> None:
-        """Arrangement.on_live (compiled): from the next record on, `len(live)` records a round."""
-        first, n = self._next_number(), len(live)
+        """Arrangement.on_live (compiled): from the next record on, a record of each of `live`,
+        in turn, a round."""
+        first, ids = self._next_number(), tuple(m._id for m in live)
         last = self._rounds[-1]
         if last[0] == first:
-            self._rounds[-1] = (first, rounds, n)
-        elif last[2] != n or self.round_of(first) != rounds:
-            self._rounds.append((first, rounds, n))
-        self.trim()
+            self._rounds[-1] = (first, rounds, ids)
+        elif last[2] != ids or self.round_of(first) != rounds:
+            self._rounds.append((first, rounds, ids))
+        self._between()
 
     def record_set(self, m: Machine, old: tuple[Any, ...], round_: int, now: int) -> dict[str, list[Any]]:
         """A value set from the debugger (paused; `old`: the values before): a record of its
@@ -255,7 +350,11 @@ class History:
         self.current[i] = new
         self.cache[i][:] = new
         self.sets += 1
-        self.ring.append((self._next_number() - 1, now, (SET, i, m._state, round_), old, new))
+        number = self._next_number() - 1
+        if self.compiled:
+            self._sets.append((number, now, i, m._state, round_, old, new))
+        else:
+            self._watched.append((number, now, (SET, i, m._state, round_), old, new))
         return self._named(i, _diff(old, new))
 
     def refresh(self) -> None:
@@ -265,88 +364,161 @@ class History:
         self.current = [v.take(m) for v, m in zip(self.values, self.machines, strict=True)]
 
     def trim(self) -> None:
-        """Forget what belongs to records no longer kept."""
-        ring = self.ring
-        if len(ring) < self.size:
+        """Compiled, between rounds: once the items reach 2N, forget all but the newest N and
+        what belongs to them (the list is cut at once: one C call for N records)."""
+        items = self._items
+        if len(items) < 2 * self.size:
             return
-        oldest = ring[0][0]
+        cut = len(items) - self.size
+        del items[:cut]
+        self._dropped += cut
+        oldest = self._dropped + 1
         gated = self._gated
         while gated:
             first = next(iter(gated))
             if first >= oldest:
                 break
             del gated[first]
-        rounds = self._rounds
-        while len(rounds) > 1 and rounds[1][0] <= oldest:
-            del rounds[0]
+        self._sets = [s for s in self._sets if s[0] >= oldest]
+        for table in (self._rounds, self._times):
+            while len(table) > 1 and table[1][0] <= oldest:
+                del table[0]
 
     # -- reading (on the scheduler's thread) ------------------------------------------------------
     @property
-    def records(self) -> list[tuple[int, Record]]:
-        """The kept records, oldest first: (number, the record after its number)."""
-        return self._newest(None)
+    def records(self) -> list[Part]:
+        """The kept records, oldest first."""
+        return self._view(None)
 
-    def _newest(self, n: int | None) -> list[tuple[int, Record]]:
-        recs = list(self.ring)  # one C call: atomic for a reader on another thread
-        if n is not None:
-            recs = recs[-n:] if n > 0 else []
-        return [(r[0], r[1:]) for r in recs]
+    def _view(self, n: int | None) -> list[Part]:
+        """The newest n kept records (all when None), oldest first."""
+        n = self.size if n is None else min(max(n, 0), self.size)
+        if not self.compiled:
+            recs = list(self._watched)  # one C call: atomic for a reader on another thread
+            return [self._parts(r[0], r[1:]) for r in (recs[-n:] if n else [])]
+        out: list[Part] = []
+        for part in self._walk():
+            if len(out) >= n:
+                break
+            out.append(part)
+        out.reverse()
+        return out
 
-    def round_of(self, number: int) -> int:
+    def _round_entry(self, number: int) -> tuple[int, int, tuple[int, ...]]:
         rounds = self._rounds
         k = len(rounds) - 1
         while k > 0 and rounds[k][0] > number:
             k -= 1
-        first, r, n = rounds[k]
-        return r + (number - first) // n if n else r
+        return rounds[k]
 
-    def _parts(
-        self, number: int, rec: Record
-    ) -> tuple[int, int, int | None, int, int | None, int | None, list[tuple[int, Any, Any]]]:
-        """(machine index, state before, state it ran in, state after, transition, round (None:
-        from the table), [(value index, old, new) of each value that changed])."""
-        code = rec[1]
-        kind = code[0]
-        if kind == FULL:
+    def round_of(self, number: int) -> int:
+        if not self.compiled:
+            return 0
+        first, r, ids = self._round_entry(number)
+        return r + (number - first) // len(ids) if ids else r
+
+    def _time_of(self, number: int) -> int:
+        times = self._times
+        k = len(times) - 1
+        while k > 0 and times[k][0] > number:
+            k -= 1
+        first, t = times[k]
+        return t + (self.round_of(number) - self.round_of(first)) * self._period if self._period else t
+
+    def _walk(self) -> Iterator[Part]:
+        """The compiled records, newest first, read back from each machine's state and values as
+        they are now, undoing each record in turn (a record that is the old value alone takes
+        its meaning from the state after it; a value's new value is the one undone last)."""
+        states = [m._state for m in self.machines]
+        values = [list(v.take(m)) for v, m in zip(self.values, self.machines, strict=True)]
+        items, base, sets, gated, codes = self._items, self._dropped, self._sets, self._gated, self._codes
+        s = len(sets) - 1
+        j = len(items) - 1
+        while j >= 0 or s >= 0:
+            number = base + j + 1
+            if s >= 0 and (j < 0 or sets[s][0] >= number):
+                n_set, t, i, state, round_, old, new = sets[s]
+                changed = _diff(old, new)
+                yield n_set, t, True, i, state, None, state, None, round_, changed
+                values[i][:] = old
+                s -= 1
+                continue
+            item = items[j]
+            j -= 1
+            first, r0, ids = self._round_entry(number)
+            i = ids[(number - first) % len(ids)]
+            round_ = r0 + (number - first) // len(ids)
+            t = self._time_of(number)
+            if type(item) is _Turn:
+                changed = _diff(item.old, item.new)
+                yield number, t, False, i, item.before, None, item.after, None, round_, changed
+                states[i] = item.before
+                for k, a, _b in changed:
+                    values[i][k] = a
+                continue
+            now = values[i]
+            if codes.get(id(item)) is item:
+                _i, ran, after, fired, taken, flags = item
+                olds: list[tuple[int, Any, Any]] = []
+            elif type(item) is tuple and item and codes.get(id(item[0])) is item[0]:
+                _i, ran, after, fired, taken, flags = item[0]
+                olds = []
+                p = 1
+                for k, how in taken:
+                    if how == DIRECT:
+                        olds.append((k, item[p], now[k]))
+                        p += 1
+                    else:
+                        olds.append((k, item[p], item[p + 1]))
+                        p += 2
+                if flags & AFTER_AT_END:
+                    after = item[p]
+                    p += 1
+                if flags & FIRED_AT_END:
+                    fired = item[p]
+            else:  # the old value alone: its meaning follows from the state after
+                after = states[i]
+                ran, fired, k = self.meanings[i][after]
+                olds = [(k, item, now[k])]
+            g = gated.get(number) if gated else None
+            if g is None:
+                changed = [c for c in olds if c[1] != c[2]]
+                yield number, t, False, i, ran, ran, after, fired, round_, changed
+                states[i] = ran
+                for k, a, _b in changed:
+                    now[k] = a
+                continue
+            before, old, mid = g
+            full = list(mid)
+            for k, _a, b in olds:
+                full[k] = b
+            yield number, t, False, i, before, ran, after, fired, round_, _diff(old, full)
+            states[i] = before
+            now[:] = old
+
+    def _parts(self, number: int, rec: Record) -> Part:
+        """A watched record read back."""
+        t, code, old, new = rec
+        if code[0] == FULL:
             _, i, before, ran, after, fired, round_ = code
-            return i, before, ran, after, fired, round_, _diff(rec[2], rec[3])
-        if kind == SET:
-            return code[1], code[2], None, code[2], None, code[3], _diff(rec[2], rec[3])
-        i, ran, after, fired, taken, flags = code
-        if flags:
-            extra = list(rec[2 + 2 * len(taken) :])
-            if flags & AFTER_AT_END:
-                after = extra.pop(0)
-            if flags & FIRED_AT_END:
-                fired = extra.pop(0)
-        gated = self._gated.get(number) if self._gated else None
-        if gated is None:
-            changed = [
-                (k, rec[2 + 2 * t], rec[3 + 2 * t]) for t, k in enumerate(taken) if rec[2 + 2 * t] != rec[3 + 2 * t]
-            ]
-            return i, ran, ran, after, fired, None, changed
-        before, old, mid = gated
-        new = list(mid)
-        for t, k in enumerate(taken):
-            new[k] = rec[3 + 2 * t]
-        return i, before, ran, after, fired, None, _diff(old, new)
+            return number, t, False, i, before, ran, after, fired, round_, _diff(old, new)
+        _, i, state, round_ = code
+        return number, t, True, i, state, None, state, None, round_, _diff(old, new)
 
     def _named(self, i: int, changed: list[tuple[int, Any, Any]]) -> dict[str, list[Any]]:
         names = self.values[i].names
         return {names[k]: [shown(a), shown(b)] for k, a, b in changed}
 
-    def as_dict(self, number: int, rec: Record, published: dict[int, list[str]] | None = None) -> dict[str, Any]:
-        i, before, ran, after, fired, round_, changed = self._parts(number, rec)
-        m = self.machines[i]
-        states = m.STATES
-        set_ = rec[1][0] == SET
+    def as_dict(self, part: Part, published: dict[int, list[str]] | None = None) -> dict[str, Any]:
+        number, t, set_, i, before, ran, after, fired, round_, changed = part
+        states = self.machines[i].STATES
         if published is None:
             published = dict(self.published)
         return {
             "ringlet": number,
-            "round": self.round_of(number) if round_ is None else round_,
-            "t": round(rec[0] / 1e9, 9),
-            "machine": m.NAME,
+            "round": round_,
+            "t": round(t / 1e9, 9),
+            "machine": self.machines[i].NAME,
             "kind": "set" if set_ else "ringlet",
             "before": states[before],
             "state": None if ran is None else states[ran],
@@ -358,23 +530,17 @@ class History:
 
     def last(self, n: int | None = None) -> list[dict[str, Any]]:
         """The newest n records (all kept ones when n is None), oldest first."""
-        recs = self._newest(n)
         published = dict(self.published)
-        return [self.as_dict(number, r, published) for number, r in recs]
+        return [self.as_dict(p, published) for p in self._view(n)]
 
     def entered(self, i: int) -> int:
         """The run time machine i entered its current state, as far as the kept records tell (the
         oldest kept record's time when they do not)."""
         recs = self.records
-        for number, rec in reversed(recs):
-            if rec[1][0] == SET:
-                continue
-            j, before, _ran, after, fired, _round, _changed = self._parts(number, rec)
-            if j != i:
-                continue
-            if after != before or fired is not None:
-                return int(rec[0])
-        return int(recs[0][1][0]) if recs and self.count > self.size else 0
+        for _n, t, set_, j, before, _ran, after, fired, _round, _changed in reversed(recs):
+            if not set_ and j == i and (after != before or fired is not None):
+                return t
+        return recs[0][1] if recs and self.count > self.size else 0
 
     def snapshot(self) -> dict[str, dict[str, Any]]:
         """Each machine's values as the history last took them, as plain data (any thread)."""
@@ -398,13 +564,13 @@ class History:
             states = list(self.states)
             values = [list(c) for c in self.current]
         for k in range(len(recs) - 1, len(recs) - 1 - back, -1):
-            i, before, _ran, _after, _fired, _round, changed = self._parts(*recs[k])
+            _n, _t, _set, i, before, _ran, _after, _fired, _round, changed = recs[k]
             states[i] = before
             for j, old, _new in changed:
                 values[i][j] = old
         at = recs[len(recs) - 1 - back] if back < len(recs) else None
         return {
-            "record": None if at is None else self.as_dict(*at),
+            "record": None if at is None else self.as_dict(at),
             "machines": [
                 {
                     "machine": m.NAME,
@@ -431,6 +597,14 @@ def recorder(h: History, m: Machine, reads: ClassReads) -> tuple[RingletRecorder
     taken = taken_by(reads, v.names, v.kinds, {e[0] for e in cls.INPUTS}, v.replaced_only)
     first = len(v.names) - len(v.slow) - len(v.messages)
     messages = {first + j: c for j, (_name, c) in enumerate(v.messages)}
-    return RingletRecorder(m._id, cls.SUSPENDED, taken, v.names, TRAP), namespace_of(
-        h.ring.append, h.counter, h.cache[m._id], _encode, plain, messages
-    )
+    namespace = namespace_of(h._items.append, h.cache[m._id], _encode, plain, messages)
+    meanings = h.meanings[m._id]
+
+    def claim(after: int, meaning: tuple[int, int | None, int]) -> bool:
+        return meanings.setdefault(after, meaning) == meaning
+
+    def register(code: tuple[Any, ...]) -> tuple[Any, ...]:
+        h._codes[id(code)] = code
+        return code
+
+    return RingletRecorder(m._id, cls.SUSPENDED, taken, v.names, TRAP, namespace, register, claim), namespace
