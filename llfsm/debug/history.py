@@ -140,14 +140,11 @@ def _encode(value: Any, cls: type[Any]) -> Any:
     return value._copy() if type(value) is cls else plain(value)
 
 
-class _Turn:
-    """A turn in which no ringlet ran (compiled; the gate's record): the machine, its state
-    before and after, and its values before and after (None and None: unchanged)."""
-
-    __slots__ = ("after", "before", "i", "new", "old")
-
-    def __init__(self, i: int, before: int, after: int, old: Any, new: Any) -> None:
-        self.i, self.before, self.after, self.old, self.new = i, before, after, old, new
+#: Marks a turn in which no ringlet ran (compiled; the gate's record): (TURN, machine, state
+#: before, state after, values before, values after (None and None: unchanged)).  Known by
+#: identity: a plain tuple, which the garbage collector stops following.
+TURN = ("turn",)
+_NO_CODE = object()  # what `_codes` answers for a value that is not a code (None included)
 
 
 #: A record as read back: (number, run time ns, a set?, machine index, state before, state its
@@ -199,6 +196,7 @@ class History:
         #: following), by id: a record is a code, or a tuple that starts with one, only if it is
         #: that very object (machine code cannot reach them).
         self._codes: dict[int, tuple[Any, ...]] = {}
+        self._still: dict[int, tuple[Any, ...]] = {}  # each suspended machine's turn that changes nothing
         #: Sets while paused: (number of the boundary before, run time, machine, state, round,
         #: values before, values after).
         self._sets: list[tuple[int, int, int, int, int, tuple[Any, ...], tuple[Any, ...]]] = []
@@ -211,6 +209,7 @@ class History:
         #: `period` later for each round since.
         self._times: list[tuple[int, int]] = [(1, 0)]
         self._period = 0
+        self._every = 0  # sim clock: the run time after which the items may reach 2N
         self._arr: Any = None
 
     # -- made on the scheduler's thread ------------------------------------------------------------
@@ -244,17 +243,17 @@ class History:
             times.append(t)
 
     def _between(self) -> None:
-        """Between rounds (a hook of the run's context, and `on_live`): cut back, note the time,
-        and come back before the items reach 2N (sim clock), or after the next round (any other
-        clock, whose rounds are timed one by one)."""
-        self.trim()
-        self._time_from(self._next_number())
-        ctx = self._arr.ctx
+        """Between rounds (a hook of the run's context, and `on_live`): cut back, and come back
+        before the items reach 2N (sim clock: a jump of its time notes itself), or after the
+        next round (any other clock, whose rounds are timed one by one)."""
+        if len(self._items) >= 2 * self.size:
+            self.trim()
+        arr = self._arr
         if self._period:
-            live = len(self._rounds[-1][2]) or 1
-            ctx.wake_at(self._arr.clock.now + max(1, self.size // live) * self._period)
+            arr.ctx.wake_at(arr.clock.now + self._every)
         else:
-            ctx.wake = 0
+            self._time_from(self._next_number())
+            arr.ctx.wake = 0
 
     def _next_number(self) -> int:
         """The number the next boundary's record will have (watched: without taking it from the
@@ -317,7 +316,10 @@ class History:
         inputs = m._inputs
         if m._suspended and m._pending is None and i not in self.waiting and (inputs is None or not inputs.fresh):
             let_go(m)  # nothing to apply: it stays suspended, and nothing of it changes
-            self._items.append(_Turn(i, before, before, None, None))
+            still = self._still.get(i)
+            if still is None or still[2] != before:
+                still = self._still[i] = (TURN, i, before, before, None, None)
+            self._items.append(still)
             return False
         take = self.values[i].take
         old = take(m)
@@ -328,7 +330,7 @@ class History:
             if new != old or m._state != before:
                 self._gated[self._next_number()] = (before, old, new)
         else:
-            self._items.append(_Turn(i, before, m._state, *((old, new) if new != old else (None, None))))
+            self._items.append((TURN, i, before, m._state, *((old, new) if new != old else (None, None))))
         return goes
 
     def on_live(self, rounds: int, live: list[Machine]) -> None:
@@ -340,6 +342,8 @@ class History:
             self._rounds[-1] = (first, rounds, ids)
         elif last[2] != ids or self.round_of(first) != rounds:
             self._rounds.append((first, rounds, ids))
+        self._every = max(1, self.size // (len(ids) or 1)) * self._period
+        self._time_from(first)
         self._between()
 
     def record_set(self, m: Machine, old: tuple[Any, ...], round_: int, now: int) -> dict[str, list[Any]]:
@@ -449,18 +453,19 @@ class History:
             i = ids[(number - first) % len(ids)]
             round_ = r0 + (number - first) // len(ids)
             t = self._time_of(number)
-            if type(item) is _Turn:
-                changed = _diff(item.old, item.new)
-                yield number, t, False, i, item.before, None, item.after, None, round_, changed
-                states[i] = item.before
+            if type(item) is tuple and item and item[0] is TURN:
+                _turn, _i, before, after, old, new = item
+                changed = _diff(old, new)
+                yield number, t, False, i, before, None, after, None, round_, changed
+                states[i] = before
                 for k, a, _b in changed:
                     values[i][k] = a
                 continue
             now = values[i]
-            if codes.get(id(item)) is item:
+            if codes.get(id(item), _NO_CODE) is item:
                 _i, ran, after, fired, taken, flags = item
                 olds: list[tuple[int, Any, Any]] = []
-            elif type(item) is tuple and item and codes.get(id(item[0])) is item[0]:
+            elif type(item) is tuple and item and codes.get(id(item[0]), _NO_CODE) is item[0]:
                 _i, ran, after, fired, taken, flags = item[0]
                 olds = []
                 p = 1
