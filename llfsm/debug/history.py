@@ -30,10 +30,11 @@ machine's state and values as they are, then each newer record undone.
 from __future__ import annotations
 
 import sys
+from bisect import bisect_right
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from itertools import count
-from operator import attrgetter
+from operator import attrgetter, itemgetter
 from typing import Any
 
 from ..msgs._message import is_message_class
@@ -144,7 +145,8 @@ def _encode(value: Any, cls: type[Any]) -> Any:
 #: before, state after, values before, values after (None and None: unchanged)).  Known by
 #: identity: a plain tuple, which the garbage collector stops following.
 TURN = ("turn",)
-_NO_CODE = object()  # what `_codes` answers for a value that is not a code (None included)
+_NO_CODE = object()
+_first = itemgetter(0)  # what `_codes` answers for a value that is not a code (None included)
 
 
 #: A record as read back: (number, run time ns, a set?, machine index, state before, state its
@@ -223,6 +225,8 @@ class History:
         self.waiting = arr._variables
         clock = arr.clock
         self._period = clock.period if type(clock) is SimClock else 0
+        if not self._period:
+            arr.note_time = self.note_time
         self._times = [(1, clock.now)]
         chained = clock.on_jump
 
@@ -243,9 +247,9 @@ class History:
             times.append(t)
 
     def _between(self) -> None:
-        """Between rounds (a hook of the run's context, and `on_live`): cut back, and come back
-        before the items reach 2N (sim clock: a jump of its time notes itself), or after the
-        next round (any other clock, whose rounds are timed one by one)."""
+        """Between rounds (a hook of the run's context, and `on_live`): cut back; the sim clock:
+        come back before the items reach 2N (a jump of its time notes itself); any other clock
+        is timed as its loops read it (`note_time`)."""
         if len(self._items) >= 2 * self.size:
             self.trim()
         arr = self._arr
@@ -253,7 +257,18 @@ class History:
             arr.ctx.wake_at(arr.clock.now + self._every)
         else:
             self._time_from(self._next_number())
-            arr.ctx.wake = 0
+
+    def note_time(self, now: int) -> None:
+        """Arrangement.note_time (any clock but the sim clock; between rounds): the next
+        records are at `now`; cut back once the items reach 2N."""
+        first = self._dropped + len(self._items) + 1
+        times = self._times
+        if times[-1][0] == first:  # no record since (no live machine)
+            times[-1] = (first, now)
+        else:
+            times.append((first, now))
+        if len(self._items) >= 2 * self.size:
+            self.trim()
 
     def _next_number(self) -> int:
         """The number the next boundary's record will have (watched: without taking it from the
@@ -385,8 +400,7 @@ class History:
             del gated[first]
         self._sets = [s for s in self._sets if s[0] >= oldest]
         for table in (self._rounds, self._times):
-            while len(table) > 1 and table[1][0] <= oldest:
-                del table[0]
+            del table[: max(0, bisect_right(table, oldest, key=_first) - 1)]  # keep the one covering `oldest`
 
     # -- reading (on the scheduler's thread) ------------------------------------------------------
     @property
@@ -410,10 +424,7 @@ class History:
 
     def _round_entry(self, number: int) -> tuple[int, int, tuple[int, ...]]:
         rounds = self._rounds
-        k = len(rounds) - 1
-        while k > 0 and rounds[k][0] > number:
-            k -= 1
-        return rounds[k]
+        return rounds[max(0, bisect_right(rounds, number, key=_first) - 1)]
 
     def round_of(self, number: int) -> int:
         if not self.compiled:
@@ -423,10 +434,7 @@ class History:
 
     def _time_of(self, number: int) -> int:
         times = self._times
-        k = len(times) - 1
-        while k > 0 and times[k][0] > number:
-            k -= 1
-        first, t = times[k]
+        first, t = times[max(0, bisect_right(times, number, key=_first) - 1)]
         return t + (self.round_of(number) - self.round_of(first)) * self._period if self._period else t
 
     def _walk(self) -> Iterator[Part]:
