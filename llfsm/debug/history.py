@@ -9,19 +9,23 @@ topics it published.  A value set from the debugger while paused is a record too
 Records are made in one of two ways, which read back the same:
 
 - **compiled** (recording.py), where every machine's ringlets can be compiled again from their
-  generated module: each ringlet appends its own record, a small tuple, with the old and new
-  values of only what it can change; the scheduler's gate (`Arrangement.around_release`) adds
-  what a command, parameters or inputs changed, and records a turn in which no ringlet ran;
-  rounds are numbered from the live machines the scheduler tells of (`on_live`: every live
-  machine has one boundary a round);
+  generated module: each ringlet appends one item to a list, one a boundary (its code, the
+  old value of the one number it changes, or a tuple of its code and what it can change), and
+  the gate (`Arrangement.around_release`) adds what a command, parameters or inputs changed,
+  and a turn in which no ringlet ran.  A record's number is its item's place; its machine and
+  round follow from the live machines the scheduler tells of (`on_live`: every live machine
+  has one boundary a round, in turn), its run time from the clock (the sim clock: a period a
+  round, and its jumps; any other: each time the loops read it, `note_time`).  The list is cut
+  back to N between rounds once it holds 2N;
 - **watched**, otherwise (a native build, a machine the monitor compiled its checks into): the
   debugger's watcher calls `record` after every ringlet, which takes all of a machine's values
-  as one tuple (`Values.take`) and compares it with the take before.
+  as one tuple (`Values.take`) and compares it with the take before; the records are tuples in
+  a deque of N.
 
 Values are taken as bounded plain data (llfsm.runtime.readout: a long string or a large list is
 cut, and says so), messages as their generated copies, numbers, flags and handles as they are;
-what changed, name by name, is worked out when a record is read.  Records are tuples in a deque
-of N, and what they refer to is bounded per record: memory is bounded by N whatever the run does.
+what changed, name by name, is worked out when a record is read.  What a record refers to is
+bounded per record: memory is bounded by N whatever the run does.
 
 The arrangement at record k (the page's "History" slider) is rebuilt backwards from now: every
 machine's state and values as they are, then each newer record undone.
@@ -29,124 +33,37 @@ machine's state and values as they are, then each newer record undone.
 
 from __future__ import annotations
 
-import sys
 from bisect import bisect_right
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from itertools import count
-from operator import attrgetter, itemgetter
+from operator import itemgetter
 from typing import Any
 
-from ..msgs._message import is_message_class
-from ..runtime.generated import variables_of
 from ..runtime.clock import SimClock
 from ..runtime.machine import Machine
 from ..runtime.readout import plain
 from ..runtime.reads import ClassReads
-from .recording import (
-    AFTER_AT_END,
-    COPIED,
-    DIRECT,
-    FIRED_AT_END,
-    MESSAGE,
-    RingletRecorder,
-    namespace_of,
-    taken_by,
-)
+from .recording import AFTER_AT_END, DIRECT, FIRED_AT_END, RingletRecorder, namespace_of, taken_by
 from .traps import TRAP
+from .values import Values, taken_copy, shown
 
-#: One record: (number, run time ns, code, values...); a set's number is the one of the boundary
-#: it follows.  (Read back without its number: `records`.)  The code says what the values are:
-#: - a ringlet's own record (recording.py), a constant: (machine index, state it ran in, state
-#:   after, transition fired, indices of the values taken, flags); the values are old and new
-#:   pairs of those, then the state after and the transition where the flags say they are not
-#:   in the code;
+#: A watched record: (number, run time ns, code, values before, values after); a set's number is
+#: the one of the boundary it follows.  The code says what the record is:
 #: - (FULL, machine index, state before, state its ringlet ran in (None: none ran), state after,
-#:   transition, round (None: from the rounds' table)); then every value before and after, or
-#:   None and None when nothing changed;
-#: - (SET, machine index, state, round): a value set while paused; every value before and after.
+#:   transition, round); the values None and None when nothing changed;
+#: - (SET, machine index, state, round): a value set while paused.
 Record = tuple[Any, ...]
 FULL, SET = "full", "set"
 
 
 #: What `--history` keeps when the page asks for history and the command line did not say.
 PAGE_DEFAULT = 1000
-#: Annotations (and input types) whose values are taken as they are: immutable scalars.
-_SCALARS = frozenset({"bool", "int", "float"})
-#: ...and other annotations of values that cannot change in place.
-_IMMUTABLE_TEXT = frozenset({"str", "bytes"})
-_NONE: tuple[str, ...] = ()
-
-
-def _named(annotation: str, namespace: dict[str, Any]) -> Any:
-    """The class a dotted annotation names in the machine module's globals, if any."""
-    first, *rest = annotation.split(".")
-    if not first.isidentifier() or not all(p.isidentifier() for p in rest):
-        return None  # list[int], X | None ...
-    obj = namespace.get(first)
-    for part in rest:
-        obj = getattr(obj, part, None)
-    return obj if isinstance(obj, type) else None
-
-
-def shown(value: Any) -> Any:
-    """A taken value as a person reads it (plain data)."""
-    return plain(value)
-
-
-class Values:
-    """How one machine's variables and inputs are taken (see the module's docstring)."""
-
-    __slots__ = ("fast", "kinds", "messages", "names", "replaced_only", "single", "slow")
-
-    def __init__(self, cls: type[Machine]) -> None:
-        variables = list(variables_of(cls))
-        declared = {n for n, _ in variables}
-        variables += [(e[0], e[1]) for e in cls.INPUTS if e[0] not in declared]
-        namespace = vars(sys.modules[cls.__module__]) if cls.__module__ in sys.modules else {}
-        fast, messages, slow = [], [], []
-        for name, annotation in variables:
-            named = None if annotation.strip() in _SCALARS else _named(annotation.strip(), namespace)
-            if named is not None and is_message_class(named):
-                messages.append((name, named))  # a copy (generated), compared field by field
-            elif annotation.strip() in _SCALARS or (named is not None and named.__module__ != "builtins"):
-                fast.append(name)  # a scalar, or a handle (a node, a publisher) shown as <Type>
-            else:
-                slow.append(name)
-        self.messages = tuple(messages)
-        self.slow = tuple(slow)
-        self.names = tuple(fast) + tuple(n for n, _ in messages) + self.slow
-        #: one C call for the scalars (attrgetter of one name gives the value, not a tuple)
-        self.fast: Any = attrgetter(*fast) if fast else None
-        self.single = len(fast) == 1
-        #: how each value is taken, for a ringlet that records it (recording.py)
-        self.kinds = (DIRECT,) * len(fast) + (MESSAGE,) * len(messages) + (COPIED,) * len(slow)
-        #: values whose shown value changes only when the variable is assigned: immutable ones,
-        #: and handles (shown by their type)
-        self.replaced_only = frozenset(fast) | {n for n, a in variables if a.strip() in _IMMUTABLE_TEXT}
-
-    def take(self, m: Machine) -> tuple[Any, ...]:
-        """The machine's values now, in `names` order."""
-        fast = self.fast
-        out: tuple[Any, ...] = (fast(m),) if self.single else fast(m) if fast is not None else ()
-        if self.messages:
-            out += tuple(_encode(getattr(m, n, None), c) for n, c in self.messages)
-        if self.slow:
-            out += tuple(plain(getattr(m, n, None)) for n in self.slow)
-        return out
-
-
-def _encode(value: Any, cls: type[Any]) -> Any:
-    """A message as it was (its generated copy, compared field by field); else plain data."""
-    return value._copy() if type(value) is cls else plain(value)
-
-
 #: Marks a turn in which no ringlet ran (compiled; the gate's record): (TURN, machine, state
 #: before, state after, values before, values after (None and None: unchanged)).  Known by
 #: identity: a plain tuple, which the garbage collector stops following.
 TURN = ("turn",)
-_NO_CODE = object()
-_first = itemgetter(0)  # what `_codes` answers for a value that is not a code (None included)
+_first = itemgetter(0)
 
 
 #: A record as read back: (number, run time ns, a set?, machine index, state before, state its
@@ -470,11 +387,13 @@ class History:
                     values[i][k] = a
                 continue
             now = values[i]
-            if codes.get(id(item), _NO_CODE) is item:
-                _i, ran, after, fired, taken, flags = item
+            code = codes.get(id(item))
+            head = codes.get(id(item[0])) if code is None and type(item) is tuple and item else None
+            if code is not None and code is item:  # (None is no code: a value may be None)
+                _i, ran, after, fired, taken, flags = code
                 olds: list[tuple[int, Any, Any]] = []
-            elif type(item) is tuple and item and codes.get(id(item[0]), _NO_CODE) is item[0]:
-                _i, ran, after, fired, taken, flags = item[0]
+            elif head is not None and head is item[0]:
+                _i, ran, after, fired, taken, flags = head
                 olds = []
                 p = 1
                 for k, how in taken:
@@ -610,7 +529,7 @@ def recorder(h: History, m: Machine, reads: ClassReads) -> tuple[RingletRecorder
     taken = taken_by(reads, v.names, v.kinds, {e[0] for e in cls.INPUTS}, v.replaced_only)
     first = len(v.names) - len(v.slow) - len(v.messages)
     messages = {first + j: c for j, (_name, c) in enumerate(v.messages)}
-    namespace = namespace_of(h._items.append, h.cache[m._id], _encode, plain, messages)
+    namespace = namespace_of(h._items.append, h.cache[m._id], taken_copy, plain, messages)
     meanings = h.meanings[m._id]
 
     def claim(after: int, meaning: tuple[int, int | None, int]) -> bool:

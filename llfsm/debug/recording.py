@@ -3,24 +3,27 @@
 A watcher called after every ringlet costs a run several times its plain speed (a Python call
 alone is three times a toggle's ringlet).  So, as the debugger's marks on transitions are
 (traps.py), the history is compiled in: each ringlet of the machine is compiled again from its
-generated module with, before each `return`, one append of a small tuple to the history's ring:
+generated module with, before each `return`, one append to the history's list of items, one
+item a boundary (its number is its place; its round and run time follow from the scheduler's
+rounds and clock: history.py).  The item is the cheapest that tells the ringlet apart:
 
-    _llfsm_h_append((_llfsm_h_next(_llfsm_h_count), self._clock.now, (M, S, K, i, taken, 0), old, new, ...))
+- a ringlet that changes nothing: its code, `_llfsm_h_append(_llfsm_h_c3)`, a constant tuple
+  (machine index, state it ran in, state after, transition fired, values taken, flags) held as
+  a global of the variant, known to the history by its identity;
+- a ringlet that can change one number, flag or handle only (`count += 1`): that value as it
+  was at the ringlet's start, alone, `_llfsm_h_append(_llfsm_h_o0)`, where the state after
+  tells which ringlet it was (the first such return into each state claims it; `claim`);
+- otherwise a tuple of the code and, of each value it can change, the old value (a number, a
+  flag or a handle: read at the start, its new value is the next record's old one, or the
+  value now) or the old and new copies (a message, a list, anything that can change in place,
+  a variable that may change outside its ringlets, an input: compared with the copy the history
+  took last, `_llfsm_h_cache`, which the record updates), then the state after and the
+  transition where they are not constants there.
 
-(numbered by a counter, a C call; a tuple of numbers, which the garbage collector soon stops
-following), where the code `(M, S, K, i, taken, 0)` is a constant: the machine (each machine of a run has
-ringlets of its own), the state the ringlet ran in, the state it
-leaves the machine in (the compiler writes `self._state = K` just before), the transition it
-fired, and which values follow.  Only the values the ringlet can change are taken
-(llfsm.runtime.reads, the monitor's analysis: what it assigns, mutates or hands on), as old and
-new pairs: a number, a flag or a handle read at the ringlet's start and at its end (the object
-itself, which cannot change under it); a message, a list or anything else that can change in
-place taken as the history's bounded copy (history.Values) and compared with the copy the
-history took last (`_llfsm_h_cache`, which the record updates); a variable that may change
-outside its ringlets (a callback's, one handed to a helper module of the user's) and the
-inputs likewise, in every ringlet of the machine.  What changed, name by name, is worked out
-when a record is read.  The scheduler runs its plain loops meanwhile: nothing is called between
-ringlets.
+Which values a ringlet can change is the monitor's analysis (llfsm.runtime.reads: what it
+assigns, mutates or hands on).  What changed, name by name, is worked out when the history is
+read, backwards from now.  No item but a copy is a new object the garbage collector follows,
+and the scheduler runs its plain loops meanwhile: nothing is called between ringlets.
 
 The suspend state's ringlets are left as they are: they run inside a command (the gate's, or a
 transition into the suspend state), never as a turn of their own.
