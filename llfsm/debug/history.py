@@ -115,6 +115,7 @@ class History:
         #: following), by id: a record is a code, or a tuple that starts with one, only if it is
         #: that very object (machine code cannot reach them).
         self._codes: dict[int, tuple[Any, ...]] = {}
+        self._interned: dict[tuple[Any, ...], tuple[Any, ...]] = {}
         self._still: dict[int, tuple[Any, ...]] = {}  # each suspended machine's turn that changes nothing
         #: Sets while paused: (number of the boundary before, run time, machine, state, round,
         #: values before, values after).
@@ -390,10 +391,10 @@ class History:
             code = codes.get(id(item))
             head = codes.get(id(item[0])) if code is None and type(item) is tuple and item else None
             if code is not None and code is item:  # (None is no code: a value may be None)
-                _i, ran, after, fired, taken, flags = code
+                ran, after, fired, taken, flags = code
                 olds: list[tuple[int, Any, Any]] = []
             elif head is not None and head is item[0]:
-                _i, ran, after, fired, taken, flags = head
+                ran, after, fired, taken, flags = head
                 olds = []
                 p = 1
                 for k, how in taken:
@@ -536,7 +537,8 @@ def recorder(h: History, m: Machine, reads: ClassReads) -> tuple[RingletRecorder
         return meanings.setdefault(after, meaning) == meaning
 
     def register(code: tuple[Any, ...]) -> tuple[Any, ...]:
+        code = h._interned.setdefault(code, code)  # one object for equal codes: fewer to keep warm
         h._codes[id(code)] = code
         return code
 
-    return RingletRecorder(m._id, cls.SUSPENDED, taken, v.names, TRAP, namespace, register, claim), namespace
+    return RingletRecorder(cls.SUSPENDED, taken, v.names, TRAP, namespace, register, claim), namespace

@@ -8,8 +8,8 @@ item a boundary (its number is its place; its round and run time follow from the
 rounds and clock: history.py).  The item is the cheapest that tells the ringlet apart:
 
 - a ringlet that changes nothing: its code, `_llfsm_h_append(_llfsm_h_c3)`, a constant tuple
-  (machine index, state it ran in, state after, transition fired, values taken, flags) held as
-  a global of the variant, known to the history by its identity;
+  (state it ran in, state after, transition fired, values taken, flags) held as a global of the
+  variant, known to the history by its identity, one object for equal codes of any machine;
 - a ringlet that can change one number, flag or handle only (`count += 1`): that value as it
   was at the ringlet's start, alone, `_llfsm_h_append(_llfsm_h_o0)`, where the state after
   tells which ringlet it was (the first such return into each state claims it; `claim`);
@@ -85,7 +85,6 @@ class RingletRecorder:
 
     def __init__(
         self,
-        machine: int,
         suspended: int,
         taken: dict[str, tuple[tuple[int, int], ...]],
         names: tuple[str, ...],
@@ -94,7 +93,6 @@ class RingletRecorder:
         register: Callable[[tuple[Any, ...]], tuple[Any, ...]],
         claim: Claim,
     ) -> None:
-        self.machine = machine
         #: the variant's namespace: each record's code goes in as a global, the object the
         #: history registered (`register`), by which it knows a code from a value
         self.namespace = namespace
@@ -176,7 +174,7 @@ class RingletRecorder:
             extra.append(_load(_LOCAL + "r"))
             ret = ast.Return(value=_load(_LOCAL + "r"))
             fired = None
-        code = (self.machine, self.state, known, fired, self.taken, flags)
+        code = (self.state, known, fired, self.taken, flags)  # whose: its place tells
         name = f"{CODE}{len(self.namespace)}"
         self.namespace[name] = code = self.register(code)
         item: ast.expr = _load(name)
