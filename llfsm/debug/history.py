@@ -487,9 +487,10 @@ class History:
     def frame(self, back: int) -> dict[str, Any]:
         """The arrangement `back` records ago (0: now, as of the newest record): each machine's
         state and values, and the record it is seen at (None for `back` = all kept records)."""
-        recs = self.records
-        if not 0 <= back <= len(recs):
-            raise IndexError(f"the history keeps {len(recs)} records; {back} back is not one of them")
+        kept = self.kept
+        if not 0 <= back <= kept:
+            raise IndexError(f"the history keeps {kept} records; {back} back is not one of them")
+        recs = self._view(back + 1)  # read back no further than the record asked for
         if self.compiled:  # as they are now (on the scheduler's thread)
             states = [m._state for m in self.machines]
             values = [list(v.take(m)) for v, m in zip(self.values, self.machines, strict=True)]
