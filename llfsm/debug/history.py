@@ -46,7 +46,7 @@ from ..runtime.readout import plain
 from ..runtime.reads import ClassReads
 from .recording import AFTER_AT_END, DIRECT, FIRED_AT_END, RingletRecorder, namespace_of, taken_by
 from .traps import TRAP
-from .values import Values, taken_copy, shown
+from .values import Values, shown, taken_copy
 
 #: A watched record: (number, run time ns, code, values before, values after); a set's number is
 #: the one of the boundary it follows.  The code says what the record is:
