@@ -208,11 +208,6 @@ class History:
             return min(self.size, len(self._items) + len(self._sets))
         return len(self._watched)
 
-    @property
-    def ring(self) -> list[Part]:
-        """The kept records, oldest first, as read back (scheduler's thread)."""
-        return self._view(None)
-
     def record(
         self, m: Machine, ran: int | None, fired: int | None, round_: int, now: int, published: list[str]
     ) -> None:
@@ -323,8 +318,10 @@ class History:
     # -- reading (on the scheduler's thread) ------------------------------------------------------
     @property
     def records(self) -> list[Part]:
-        """The kept records, oldest first."""
+        """The kept records, oldest first (scheduler's thread; `kept` counts them anywhere)."""
         return self._view(None)
+
+    ring = records
 
     def _view(self, n: int | None) -> list[Part]:
         """The newest n kept records (all when None), oldest first."""
