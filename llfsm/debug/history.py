@@ -359,6 +359,9 @@ class History:
         states = [m._state for m in self.machines]
         values = [list(v.take(m)) for v, m in zip(self.values, self.machines, strict=True)]
         items, base, sets, gated, codes = self._items, self._dropped, self._sets, self._gated, self._codes
+        rounds, times, period = self._rounds, self._times, self._period
+        rk, tk = len(rounds) - 1, len(times) - 1  # the entries that cover `number`, moving down with it
+        t_round = self.round_of(times[tk][0])
         s = len(sets) - 1
         j = len(items) - 1
         while j >= 0 or s >= 0:
@@ -372,10 +375,16 @@ class History:
                 continue
             item = items[j]
             j -= 1
-            first, r0, ids = self._round_entry(number)
+            while rk > 0 and rounds[rk][0] > number:
+                rk -= 1
+            first, r0, ids = rounds[rk]
             i = ids[(number - first) % len(ids)]
             round_ = r0 + (number - first) // len(ids)
-            t = self._time_of(number)
+            if tk > 0 and times[tk][0] > number:
+                while tk > 0 and times[tk][0] > number:
+                    tk -= 1
+                t_round = self.round_of(times[tk][0])
+            t = times[tk][1] + (round_ - t_round) * period
             if type(item) is tuple and item and item[0] is TURN:
                 _turn, _i, before, after, old, new = item
                 changed = _diff(old, new)
