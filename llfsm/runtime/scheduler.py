@@ -163,6 +163,9 @@ class Arrangement(Gated):
         #: Told of the live machines each time they are worked out (between rounds), with the
         #: rounds run so far: the debugger's history numbers its records' rounds by it.
         self.on_live: Callable[[int, list[Machine]], None] | None = None
+        #: Told of the run time each time a round loop of any clock but the sim clock reads it
+        #: (between rounds), when set: the debugger's history times its records by it.
+        self.note_time: Callable[[int], None] | None = None
         self._stopped: int | None = None
         #: Ringlets run before the current round loop (its rounds times its live machines),
         #: counted once per loop, never per ringlet: with the loop's live list, what numbers a
@@ -382,12 +385,14 @@ class Arrangement(Gated):
                         sim.now += sim.period
                     else:
                         clock.advance(fired)
+                        if self.note_time is not None:
+                            self.note_time(clock.now)
                 elif sim is not None:
                     n = self._sim_rounds(live, sim)
                 elif wall is not None:
-                    n = self._wall_rounds(live, wall)
+                    n = self._wall_rounds(live, wall, self.note_time)
                 else:
-                    n = self._rounds(live)
+                    n = self._rounds(live, self.note_time)
                 rounds += n
                 self.ringlets += n * len(live)
                 if clock.now >= ctx.wake:
@@ -434,13 +439,14 @@ class Arrangement(Gated):
         clock.now += period  # the last round's step (from the jump, if there was one)
         return (now - start) // period
 
-    def _wall_rounds(self, live: list[Machine], clock: WallClock) -> int:
+    def _wall_rounds(self, live: list[Machine], clock: WallClock, note: Callable[[int], None] | None) -> int:
         """The wall clock without a period: sleep `idle` after a round in which no transition
         fired, then read the clock.  Rounds that each fire a transition, back to back, read it
         in batches (a clock read costs as much as a whole plain ringlet): every 2, 4, ... up to
         BATCH rounds while the rounds since the last read took less than FAST, else every
         round.  So the run clock lags only during a stretch of firing rounds, by at most
-        BATCH - 1 rounds, and a round in which nothing fires always reads it."""
+        BATCH - 1 rounds, and a round in which nothing fires always reads it.  `note`
+        (`note_time`) is told of each read."""
         ctx = self.ctx
         read = time.monotonic_ns
         idle = clock.idle / 1e9
@@ -476,12 +482,15 @@ class Arrangement(Gated):
                 left = every
                 now = t
                 clock.now = t
+                if note is not None:
+                    note(t)
             if now >= ctx.wake:
                 break
         return n
 
-    def _rounds(self, live: list[Machine]) -> int:
-        """Any other clock (the wall clock with a period): the clock decides how to advance."""
+    def _rounds(self, live: list[Machine], note: Callable[[int], None] | None) -> int:
+        """Any other clock (the wall clock with a period): the clock decides how to advance;
+        `note` (`note_time`) is told of the time after each round."""
         clock, ctx = self.clock, self.ctx
         n = 0
         while True:
@@ -492,6 +501,8 @@ class Arrangement(Gated):
                     fired = True
             clock.advance(fired)
             now = clock.now
+            if note is not None:
+                note(now)
             if now >= ctx.wake:
                 break
         return n
