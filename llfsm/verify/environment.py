@@ -237,7 +237,7 @@ class EnvClient(Client):
         bus = self._bus
         service = self.srv_name
         server = bus.services.get(service)
-        if server.__class__ is not EnvService or type(request) is not self.srv_type.Request:
+        if server.__class__ is not EnvService or request.__class__ is not self.srv_type.Request:
             return Client.call_async(self, request)
         future = _new(EnvFuture)  # EnvFuture(service, request, server), without the call
         future._remote = None
