@@ -142,6 +142,8 @@ class EnvService:
         self.oracle = oracle
         self.answers = len(responses)
         self.choices = len(responses) + int(may_fail)
+        #: what the oracle records of each choice, made once (`Oracle.made`'s items)
+        self.made = tuple((d, self.choices) for d in range(self.choices))
 
     def _answer(self, request: Any) -> Any:
         d = self.oracle.decide(self.choices, self._said)
@@ -210,7 +212,7 @@ class EnvFuture(Future):
             forced = oracle.forced
             k = len(made)
             d = forced[k] if k < len(forced) else 0
-            made.append((d, server.choices))
+            made.append(server.made[d])
         else:
             d = oracle.decide(server.choices, server._said)
         responses = server.responses
@@ -235,7 +237,7 @@ class EnvClient(Client):
         bus = self._bus
         service = self.srv_name
         server = bus.services.get(service)
-        if server.__class__ is not EnvService or type(request) is not self.srv_type.Request:
+        if server.__class__ is not EnvService or request.__class__ is not self.srv_type.Request:
             return Client.call_async(self, request)
         future = _new(EnvFuture)  # EnvFuture(service, request, server), without the call
         future._remote = None
@@ -328,30 +330,38 @@ class World:
             return future
 
         def spin_env(future: Any, timeout_ns: int | None) -> Any:
-            # the request is the executor's next work, and its loop would run it first: no timer
-            # (verify refuses them), ros.ok() (Executor.ok, written out); then EnvFuture._run,
-            # written out for the usual case (exploring, the server of the environment on the bus)
-            if ready and ready[0] is future and bus.initialised and not bus.shut and not ctx.interrupted:
+            # the request is the executor's next work (so an EnvFuture: nothing else of the bus's
+            # queue is a future), and its loop would run it first: no timer (verify refuses
+            # them), ros.ok() (Executor.ok, written out); then EnvFuture._run, written out for the
+            # usual case (exploring, the server of the environment on the bus); the cheapest
+            # tests first, since every step of a machine that asks makes them all
+            if (
+                ready
+                and ready[0] is future
+                and not future._done
+                and oracle.code is None
+                and not oracle.describe
+                and bus.initialised
+                and not bus.shut
+                and not ctx.interrupted
+                and not bus.timers
+            ):
                 server = future._server
-                if (
-                    not future._done
-                    and not bus.timers
-                    and services.get(future._service) is server
-                    and oracle.code is None
-                    and not oracle.describe
-                ):
+                if services.get(future._service) is server:
                     ready.popleft()  # as Executor._run_ready
                     made = oracle.made
                     forced = oracle.forced
                     k = len(made)
                     d = forced[k] if k < len(forced) else 0
-                    made.append((d, server.choices))
+                    made.append(server.made[d])
                     if d < server.answers:
                         if future._callbacks:
                             future.set_result(server.responses[d]._copy())
                         else:
                             future._result = server.responses[d]._copy()
                             future._done = True
+                            if not bus.last:
+                                return success
                     if bus.last:
                         bus._run_last()
                     if future._done:
