@@ -20,8 +20,8 @@ def test_the_wall_follower_reads_its_sensor_from_another_process(netns: NetNames
     # Ctrl-C once it has turned (a time counted from its start raced with a start-up that takes
     # seconds under load); the sensor's message is what makes it turn
     bot.wait_for(r"- wall_follower +- TURN\b")
-    bot_status, _, bot_err = bot.finish(40, signal.SIGINT)
-    sim_status, _, sim_err = sim.finish(40, signal.SIGINT)
+    bot_status, _, bot_err = bot.finish(120, signal.SIGINT)
+    sim_status, _, sim_err = sim.finish(120, signal.SIGINT)
     assert bot_status == 0 and sim_status == 0, bot_err + sim_err
     assert "Traceback" not in bot_err + sim_err
     states = re.findall(r"- wall_follower +- (\w+)", bot_err)

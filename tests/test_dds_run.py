@@ -61,9 +61,9 @@ def test_wall_turtle_in_one_process_backs_off_the_walls_of_turtlesim_in_another(
     # inside a pose request would cut that request short (TIMEOUT, then SERVICE_FAILS), as it
     # does in process; after Ctrl-C the bot takes its `not ros.ok()` transitions to END
     bot.wait_for(r"- ros2_wall_turtle_bot - BACK\b")
-    bot_status, _, bot_err = bot.finish(40, signal.SIGINT)
-    _, echo_out, echo_err = echo.finish(40, signal.SIGINT)
-    sim_status, _, sim_err = sim.finish(40, signal.SIGINT)
+    bot_status, _, bot_err = bot.finish(120, signal.SIGINT)
+    _, echo_out, echo_err = echo.finish(120, signal.SIGINT)
+    sim_status, _, sim_err = sim.finish(120, signal.SIGINT)
     assert bot_status == 0 and sim_status == 0, bot_err + sim_err  # END reached: a normal end
     assert "Traceback" not in bot_err + sim_err + echo_err
     states = re.findall(r"- ros2_wall_turtle_bot - (\w+)", bot_err)
@@ -86,8 +86,8 @@ def test_ping_pong_is_heard_by_another_process(netns: NetNamespace) -> None:
     listener.wait_for(
         r"^data: The count is", stream="out", count=2
     )  # both ends up: a start-up takes seconds under load
-    t_status, _, t_err = talker.finish(30, signal.SIGINT)
-    l_status, out, l_err = listener.finish(30, signal.SIGINT)
+    t_status, _, t_err = talker.finish(120, signal.SIGINT)
+    l_status, out, l_err = listener.finish(120, signal.SIGINT)
     assert t_status == 0 and l_status == 0, t_err + l_err
     counts = [int(n) for n in re.findall(r"^data: The count is (\d+)$", out, re.M)]
     assert len(counts) >= 2, out + l_err
@@ -118,8 +118,8 @@ def test_a_service_call_across_processes(netns: NetNamespace, tmp_path: Path) ->
     sim = Watched(netns.llfsm("run", "--transport", "dds", "--node", "turtlesim"))
     sim.wait_for(r"Spawning turtle \[turtle1\]")  # the client waits 8 s for /spawn: count them from here
     client = netns.llfsm("run", "--transport", "dds", m, "--duration", "30")
-    c_status, _, c_err = finish(client, 40)
-    s_status, _, s_err = sim.finish(20, signal.SIGINT)
+    c_status, _, c_err = finish(client, 120)
+    s_status, _, s_err = sim.finish(120, signal.SIGINT)
     assert c_status == 0, c_err
     assert "ready=True code=SUCCESS name=visitor" in c_err
     assert "Spawning turtle [visitor] at x=[2.000000], y=[3.000000], theta=[0.500000]" in s_err
@@ -168,8 +168,8 @@ def test_no_server_and_a_server_that_dies_mid_call_end_in_timeout_not_a_hang(
     )
     srv = netns.llfsm("run", "--transport", "dds", server, "--duration", "20", env=SHORT_LEASE)
     cli = netns.llfsm("run", "--transport", "dds", caller, "--duration", "20", env=SHORT_LEASE)
-    status, _, err = finish(cli, 40)
-    s_status, _, _ = finish(srv, 20)
+    status, _, err = finish(cli, 120)
+    s_status, _, _ = finish(srv, 120)
     assert status == 0, err
     assert s_status == -signal.SIGKILL  # the server really died inside its callback
     nobody = re.search(r"nobody: (\w+) after ([\d.]+) s", err)
@@ -208,8 +208,8 @@ def test_a_machine_publishing_while_the_transport_shuts_down_ends_cleanly(netns:
     flood = netns.llfsm("run", "--transport", "dds", m, "--duration", "120")
     listener.wait_for(r"^data: flood", stream="out")
     interrupt(flood, 0.5)  # Ctrl-C while it publishes as fast as it can
-    status, _, err = finish(flood, 30)
-    l_status, _, l_err = listener.finish(30, signal.SIGINT)
+    status, _, err = finish(flood, 120)
+    l_status, _, l_err = listener.finish(120, signal.SIGINT)
     assert status == 130, err  # the machine never reaches END; after the grace the run stops
     assert "Traceback" not in err and "Error" not in err, err
     assert l_status == 0 and "Traceback" not in l_err  # nodes on their own: an interrupt is their end
@@ -228,7 +228,7 @@ def test_a_node_on_its_own_runs_until_interrupted(netns: NetNamespace, node: str
     until_shown(netns, "node", "list", needle=NODE_NAMES[node])
     assert p.poll() is None, f"--node {node} on its own ended by itself"
     p.send_signal(signal.SIGTERM)
-    status, _, err = finish(p, 15)
+    status, _, err = finish(p, 120)
     assert status == 0, err  # as `ros2 run turtlesim turtlesim_node` and machine runs end (issue 27, item 10)
     assert "Traceback" not in err
 
@@ -306,7 +306,7 @@ def test_discovery_follows_the_ros_variables(
     if hears:
         listener.wait_for(r"^data: The count is", stream="out")
     stop = signal.SIGINT if hears else None
-    t_status, _, t_err = talker.finish(30, stop)
-    l_status, out, l_err = listener.finish(30, stop)
+    t_status, _, t_err = talker.finish(120, stop)
+    l_status, out, l_err = listener.finish(120, stop)
     assert t_status == 0 and l_status == 0, t_err + l_err
     assert ("data: The count is" in out) is hears, out + l_err

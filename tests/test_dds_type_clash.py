@@ -40,7 +40,7 @@ def test_a_type_clash_over_dds_names_both_types(netns: NetNamespace, tmp_path: P
     pub.wait_for(r"\[chatty\]: cannot publish /turtle1/cmd_vel")
     sim.wait_for(r"\[turtlesim\]: cannot subscribe to /turtle1/cmd_vel")
     status, _, pub_err = pub.finish(60, signal.SIGINT)
-    _, _, sim_err = sim.finish(30, signal.SIGTERM)
+    _, _, sim_err = sim.finish(120, signal.SIGTERM)
     assert status == 0, pub_err
     assert (
         "[chatty]: cannot publish /turtle1/cmd_vel as std_msgs/msg/String: a subscription elsewhere takes "
