@@ -36,9 +36,9 @@ MACHINE = "ros2_ping_pong"
 
 class LiveRun(Served):
     """`llfsm run --clock wall MACHINE... --web` in a subprocess, stopped by the test (the 15
-    minutes are a net, not a window: a module's tests took more than 2 minutes under load, and
-    a run shared by them must not end under the later ones): its URL, and its stdout collected
-    as it comes."""
+    minutes are a net, not a window: a module's tests can take minutes under load, and a run
+    shared by them must not end under the later ones, as 120 s could): its URL, and its stdout
+    collected as it comes."""
 
     def __init__(self, cache: Path, *extra: str, machines: tuple[str, ...] = (MACHINE,)) -> None:
         paths = (str(MACHINES / f"{m}.machine") for m in machines)
