@@ -18,8 +18,9 @@ arrangement and the monitor are made before the timer starts.  Rows:
   of what grows, compared after every ringlet), one and ten (ten bounds of one number: tested
   as one comparison first, llfsm.monitor.variant `_merge_bounds`), and ten different properties
   of the toggle's state and variables (MIXED: comparisons with constants and with the other
-  variable, arithmetic, the state): the rows SPEC 16's targets are read for, since a check runs
-  at every ringlet there;
+  variable, arithmetic, the state; `limit` pinned to its value, terms the bounds decide left out
+  and the residue `count % 1` kept by `count += 1`, llfsm.monitor.bounds and variant): the rows
+  SPEC 16's targets are read for, since a check runs at every ringlet there;
 - `state(toggle)`, which every ringlet changes, in a property whose check folds away at each
   return (`always: state(toggle) in ("A", "B")`) and in one that cannot (`never: state(toggle) ==
   "B" and toggle.count < 0`: the count is compared after each ringlet that enters B);

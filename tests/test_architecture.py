@@ -326,8 +326,11 @@ GOVERNED: dict[str, tuple[str, dict[str, str]]] = {
         {
             "llfsm.ros.transports.base": "what every transport implements and sees of the bus",
             "llfsm.ros.transports.dds_config": "a part of the dds transport",
+            "llfsm.ros.transports.dds_entities": "a part of the dds transport",
             "llfsm.ros.transports.dds_graph": "a part of the dds transport",
             "llfsm.ros.transports.dds_read": "a part of the dds transport",
+            "llfsm.ros.transports.dds_services": "a part of the dds transport",
+            "llfsm.ros.transports.dds_topics": "a part of the dds transport",
         },
     ),
     "verb-groups": (
@@ -357,6 +360,7 @@ GOVERNED: dict[str, tuple[str, dict[str, str]]] = {
         {
             "llfsm.diagram.description": "what a published description must be before it is drawn",
             "llfsm.diagram.layout": "where svg places what it draws (and the web's graph)",
+            "llfsm.diagram.ordering": "a part of layout: the order within its ranks",
             "llfsm.diagram.text": "labels shared by mermaid and dot: not a drawing",
         },
     ),

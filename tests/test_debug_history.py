@@ -186,3 +186,34 @@ def test_the_history_keeps_the_last_n_records_and_memory_bounded_by_n(
     assert [r["round"] for r in kept[-2:]] == [rounds - 1, rounds - 1]
     assert len(h.ring) == 50  # the oldest freed as each new one comes
     assert len(h.published) <= 50 and len(h._gated) <= 50
+
+
+def test_a_spin_call_that_moves_the_sim_clock_records_the_same_times_compiled(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A ringlet that waits in a spin call moves the sim clock on in the middle of a round: its
+    own record and those after it in that round carry the new time, as the watcher sees it."""
+    waiter = write_machine(
+        tmp_path,
+        "waiter",
+        {"INITIAL": [("WAIT", "True")], "WAIT": [("WAIT", "True")]},
+        {
+            "INITIAL_OnEntry": "ros.init()\nnode = ros.Node('waiter')\n",
+            "WAIT_OnEntry": "n += 1\nif n % 4 == 0:\n    ros.spin_once(node, timeout_sec=0.0025)\n",
+        },
+        variables="n: int = 0\nnode: ros.Node = None\n",
+        includes="from llfsm import ros\n",
+    )
+    after = write_machine(
+        tmp_path, "after", {"S": [("S", "k % 3 == 0")]}, {"S_Internal": "k += 1\n"}, variables="k: int = 0\n"
+    )
+    classes = [load(str(waiter)), load(str(after))]
+    compiled = _history(classes, True, 300, 100, True, monkeypatch)
+    watched = _history(classes, False, 300, 100, True, monkeypatch)
+    _same(compiled, watched)
+    records = compiled.last()
+    # the waiter's 4th WAIT (round 4, due at 4 ms) waits 2.5 ms: its record and the other
+    # machine's after it in that round are at 6.5 ms, the next round at 7.5 ms
+    assert [(r["machine"], r["round"], r["t"]) for r in records[7:11]] == [
+        ("after", 3, 0.003), ("waiter", 4, 0.0065), ("after", 4, 0.0065), ("waiter", 5, 0.0075)
+    ]  # fmt: skip

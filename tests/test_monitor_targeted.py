@@ -5,14 +5,20 @@ other, publish, take parameters from outside, and finish."""
 
 from __future__ import annotations
 
+import ast
 import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
+from click.testing import CliRunner
 from helpers import write_machine
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
+from llfsm.cli import cli
 from llfsm.monitor import Monitor
+from llfsm.monitor.bounds import merge_bounds
 from llfsm.props.file import PropertySource
 from llfsm.runtime import SimClock
 from llfsm.runtime.context import RunContext
@@ -214,7 +220,7 @@ def _run_set(
 
     def parameters() -> None:
         for t in [t for t in pending if ctx.clock.now >= t]:
-            arr.set_variables("s", pending.pop(t))
+            arr.set_variables(arr.machines[0].NAME, pending.pop(t))
         if pending:
             ctx.wake_at(min(pending))
 
@@ -371,3 +377,119 @@ def test_arithmetic_of_a_variable_set_to_text_is_bounded_as_in_an_atom(tmp_path:
     targeted, m = _run_set(cls, src, True, {5_000_000: {"up": Text("%d")}})
     assert targeted == every
     assert type(m)._llfsm_mon_numeric == set()
+
+
+# -- pinned variables, terms the bounds decide, residues kept ------------------------------------
+
+
+def _counter(root: Path, step: int = 1, start: int = 0) -> Any:
+    """One state entered again each ringlet, stepping `up`; `lim` and `scale` only read."""
+    d = write_machine(root, "p", {"A": [("A", "True")]}, code={"A_OnEntry": f"up += {step}\n"},
+                      variables=f"up: int = {start}\nlim: int = 3\nscale: float = 2.0\n")  # fmt: skip
+    return load(str(d))
+
+
+PINNED = [
+    ("always", "p.up < p.lim * 4"),  # lim pinned to 3: the bound up < 12, merged with the others
+    ("always", "p.up <= p.lim * p.scale + 100"),
+    ("never", "p.up == -1"),  # decided by up >= 0 where the test passes: left out of it
+    ("always", "p.up >= 0"),
+]
+
+
+@pytest.mark.parametrize(
+    "sets, pins",
+    [
+        ({}, {"lim": 3, "scale": 2.0}),
+        ({5_000_000: {"lim": 2}}, {}),  # a parameter from outside: the variant that pins nothing
+        ({5_000_000: {"lim": 3.0}}, {}),  # equal, but a float: pinned as the int it was
+        ({4_000_000: {"up": -1}}, {"lim": 3, "scale": 2.0}),  # what the bounds decide, violated
+    ],
+    ids=["as-started", "lim-set", "lim-set-to-float", "up-set-below"],
+)
+def test_pinned_variables_and_decided_terms_give_the_same_verdicts(
+    tmp_path: Path, sets: dict[int, dict[str, object]], pins: dict[str, object]
+) -> None:
+    """Numbers no ringlet changes are compiled into the checks as their values (`up < lim * 4`
+    is `up < 12`) and terms the bounds decide are left out of the test that all hold: a value
+    set from outside must still be judged where judging every boundary judges it."""
+    cls = _counter(tmp_path)
+    src = [PropertySource(k, t) for k, t in PINNED]
+    every, _m = _run_set(cls, src, False, sets)
+    assert any("p.up < p.lim * 4 violated" in line for line in every), every
+    targeted, m = _run_set(cls, src, True, sets)
+    assert targeted == every
+    assert type(m)._llfsm_mon_pins == pins
+
+
+def test_a_pinned_variable_set_in_the_debugger_reaches_the_checks(tmp_path: Path) -> None:
+    """`set p.lim = 0` at the debugger's prompt while paused: the check compiled with lim = 3
+    must not stand for the rest of the run (the next ringlet violates `up < lim * 100`)."""
+    d = write_machine(tmp_path, "p", {"A": [("A", "True")]}, code={"A_OnEntry": "up += 1\n"},
+                      variables="up: int = 0\nlim: int = 3\n")  # fmt: skip
+    args = ["run", "--clock", "sim", "--duration", "20ms", str(d), "--on-violation", "pause"]
+    props = ["--monitor-property", "never: p.up == 4", "--monitor-property", "always: p.up < p.lim * 100"]
+    res = CliRunner().invoke(cli, [*args, *props], input="set p.lim = 0\nc\nc\n")
+    assert res.exit_code == 0, res.output
+    violated = [x for x in res.stderr.splitlines() if "violated at" in x]
+    assert len(violated) == 2, res.stderr
+    assert "always: p.up < p.lim * 100 violated" in violated[1] and "ringlet 5: p A; p.lim=0, p.up=5" in violated[1]
+
+
+@pytest.mark.parametrize(
+    "sets",
+    [{}, {5_000_000: {"up": 4}}, {5_000_000: {"up": float(2**53)}}, {5_000_000: {"up": 5}}],
+    ids=["as-started", "set-off-residue", "set-to-a-float-that-rounds", "set-on-residue"],
+)
+def test_a_residue_the_ringlets_keep_is_left_out_and_comes_back_for_a_float(
+    tmp_path: Path, sets: dict[int, dict[str, object]]
+) -> None:
+    """`up += 3` keeps `up % 3` of an int, so `always: up % 3 == 2` is not checked there; a float
+    (2**53 + 3 rounds to 2**53 + 4) brings the check back for the rest of the run."""
+    cls = _counter(tmp_path, step=3, start=2)
+    src = [PropertySource("always", "p.up % 3 == 2"), PropertySource("always", "p.up % 2 == 0 or p.up > -5")]
+    every, _m = _run_set(cls, src, False, sets)
+    targeted, m = _run_set(cls, src, True, sets)
+    assert targeted == every
+    if sets and 5 not in sets[5_000_000].values():
+        assert any("p.up % 3 == 2 violated" in line for line in every), every
+    expected = set() if sets and type(next(iter(sets.values()))["up"]) is float else {"up"}
+    assert type(m)._llfsm_mon_integral == expected
+
+
+def test_bounds_decide_the_equalities_they_exclude() -> None:
+    def terms(*texts: str) -> tuple[list[str], set[str]]:
+        out, used = merge_bounds([ast.parse(t, mode="eval").body for t in texts], lambda _v: True)
+        return [ast.unparse(t) for t in out], used
+
+    assert terms("self.x >= 0", "self.x < 50", "self.x != -1", "not self.x == 50") == (["0 <= self.x < 50"], {"x"})
+    assert terms("self.x > 0", "self.x != 0") == (["self.x > 0"], {"x"})  # strict: 0 is outside
+    assert terms("self.x >= 0", "self.x != 0", "self.x != 7") == (["self.x >= 0", "self.x != 0", "self.x != 7"], set())
+    assert terms("self.x == 3", "self.x <= 3", "self.x >= 3")[0] == ["3 <= self.x <= 3"]  # c <= x <= c: x == c
+    assert terms("self.y != -1", "self.x >= 0") == (["self.y != -1", "self.x >= 0"], set())  # another number
+
+
+# a random table: properties drawn from the kinds of term the variant folds, values set from outside
+_TERMS = [
+    "p.up < {c}", "p.up >= {c}", "p.up == {c}", "p.up != {c}", "not p.up > {c}", "p.up % {m} == {r}",
+    "p.up % {m} != {r}", "p.up < p.lim * {c}", "p.up > p.lim - {c}", "p.up * p.scale < {c} + p.lim",
+    'state(p) != "A" or p.up > {c}', "p.lim == 3 and p.up != {c}",
+]  # fmt: skip
+_VALUES: list[object] = [-1, 0, 2, 3, 7, 9, 2.5, float(2**53), True, -4.0]
+
+
+@settings(max_examples=12, derandomize=True, deadline=None, suppress_health_check=list(HealthCheck))
+@given(st.data())
+def test_folded_checks_give_the_verdicts_of_judging_every_boundary(tmp_path_factory: Any, data: Any) -> None:
+    step = data.draw(st.sampled_from([1, 2, 3, -2]))
+    cls = _counter(tmp_path_factory.mktemp("r"), step=step, start=data.draw(st.sampled_from([0, 2, 5])))
+    src = []
+    for _ in range(data.draw(st.integers(2, 7))):
+        terms = [data.draw(st.sampled_from(_TERMS)) for _ in range(data.draw(st.integers(1, 2)))]
+        c, m, r = data.draw(st.integers(-6, 40)), data.draw(st.sampled_from([2, 3])), data.draw(st.integers(0, 2))
+        kind = data.draw(st.sampled_from(["always", "never"]))
+        src.append(PropertySource(kind, " and ".join(terms).format(c=c, m=m, r=r)))
+    sets: dict[int, dict[str, object]] = {}
+    for t in data.draw(st.lists(st.integers(1, 40), max_size=3, unique=True)):
+        sets[t * 1_000_000] = {data.draw(st.sampled_from(["up", "lim", "scale"])): data.draw(st.sampled_from(_VALUES))}
+    assert _run_set(cls, src, True, sets)[0] == _run_set(cls, src, False, sets)[0]

@@ -3,9 +3,9 @@ with mypyc, in one compile, into the llfsm cache.
 
 The generated modules and the runtime stay plain, typed Python; mypyc turns them into C
 extension modules that do the same thing faster.  One build is one mypyc invocation: every
-machine module of the build plus the runtime modules on the hot path (machine, scheduler,
-clock, context) make one group, so a machine class and the scheduler that calls its ringlets
-are compiled against each other.  A machine whose code mypyc cannot compile (its type checker
+machine module of the build plus the runtime modules on the hot path (machine, gate,
+scheduler, clock, context) make one group, so a machine class and the scheduler that calls its
+ringlets are compiled against each other.  A machine whose code mypyc cannot compile (its type checker
 refuses it, usually) is dropped from the group with one warning naming the user's file and
 line, and runs as plain Python beside the compiled ones.
 
@@ -39,7 +39,7 @@ from ..runtime.generated import HEADER_LINES, SOURCE_LINE, map_line, source_dir_
 from ..templating import comment_text
 
 #: The runtime modules a native build compiles: everything a round touches.
-RUNTIME_MODULES = ("machine", "scheduler", "clock", "context")
+RUNTIME_MODULES = ("machine", "gate", "scheduler", "clock", "context")
 #: Environment variable naming the native build a process runs with.
 ENV = "LLFSM_NATIVE"
 MANIFEST = "manifest.json"

@@ -129,11 +129,8 @@ class Debugger:
         marks (traps.py) from each machine's module (`reads`: what each ringlet can change): no
         watcher for it.  Otherwise (a native build, a machine the monitor compiled its checks
         into) the watcher records."""
-        h.compiled = True
         self.traps.recorder = lambda m: recorder(h, m, reads[m._id])
-        self.arr.around_release = h.around_release
-        h.waiting = self.arr._variables
-        self.arr.on_live = h.on_live
+        h.attach(self.arr)
 
     # -- what the session sets up -----------------------------------------------------------------
     def attach_bus(self, bus: Any, serve: Callable[[], None]) -> None:
@@ -502,6 +499,11 @@ class Debugger:
             value = assign(m, variable, text)
         except SetError as e:
             raise DebugError(str(e)) from None
+        if variable not in {entry[0] for entry in type(m).INPUTS}:
+            # set now, and again by the scheduler's gate before the machine's next ringlet, where
+            # the monitor sees what is set from outside (its checks may have compiled the old
+            # value in: llfsm.monitor.variant, PINS)
+            self.arr.set_variables(m.NAME, {variable: value})
         if h is not None:
             h.record_set(m, old, self._set_round(h), self.arr.clock.now)
         self._notify()
@@ -511,7 +513,7 @@ class Debugger:
         """The round a set while paused belongs to: where the pause stands."""
         if not h.compiled:
             return self.arr.ctx.round  # watched rounds keep it
-        if self._origin == ROUND_END or not h.ring:
+        if self._origin == ROUND_END or not h.kept:
             return self.arr.rounds  # between rounds: before the next one
         return h.round_of(h.count - h.sets)  # after a ringlet: its round
 

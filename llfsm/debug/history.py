@@ -9,19 +9,23 @@ topics it published.  A value set from the debugger while paused is a record too
 Records are made in one of two ways, which read back the same:
 
 - **compiled** (recording.py), where every machine's ringlets can be compiled again from their
-  generated module: each ringlet appends its own record, a small tuple, with the old and new
-  values of only what it can change; the scheduler's gate (`Arrangement.around_release`) adds
-  what a command, parameters or inputs changed, and records a turn in which no ringlet ran;
-  rounds are numbered from the live machines the scheduler tells of (`on_live`: every live
-  machine has one boundary a round);
+  generated module: each ringlet appends one item to a list, one a boundary (its code, the
+  old value of the one number it changes, or a tuple of its code and what it can change), and
+  the gate (`Arrangement.around_release`) adds what a command, parameters or inputs changed,
+  and a turn in which no ringlet ran.  A record's number is its item's place; its machine and
+  round follow from the live machines the scheduler tells of (`on_live`: every live machine
+  has one boundary a round, in turn), its run time from the clock (the sim clock: a period a
+  round, and its jumps; any other: each time the loops read it, `note_time`).  The list is cut
+  back to N between rounds once it holds 2N;
 - **watched**, otherwise (a native build, a machine the monitor compiled its checks into): the
   debugger's watcher calls `record` after every ringlet, which takes all of a machine's values
-  as one tuple (`Values.take`) and compares it with the take before.
+  as one tuple (`Values.take`) and compares it with the take before; the records are tuples in
+  a deque of N.
 
 Values are taken as bounded plain data (llfsm.runtime.readout: a long string or a large list is
 cut, and says so), messages as their generated copies, numbers, flags and handles as they are;
-what changed, name by name, is worked out when a record is read.  Records are tuples in a deque
-of N, and what they refer to is bounded per record: memory is bounded by N whatever the run does.
+what changed, name by name, is worked out when a record is read.  What a record refers to is
+bounded per record: memory is bounded by N whatever the run does.
 
 The arrangement at record k (the page's "History" slider) is rebuilt backwards from now: every
 machine's state and values as they are, then each newer record undone.
@@ -29,105 +33,42 @@ machine's state and values as they are, then each newer record undone.
 
 from __future__ import annotations
 
-import sys
+from bisect import bisect_right
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from itertools import count
-from operator import attrgetter
+from operator import itemgetter
 from typing import Any
 
-from ..msgs._message import is_message_class
-from ..runtime.generated import variables_of
+from ..runtime.clock import SimClock
 from ..runtime.machine import Machine
 from ..runtime.readout import plain
 from ..runtime.reads import ClassReads
-from .recording import AFTER_AT_END, COPIED, DIRECT, FIRED_AT_END, MESSAGE, RingletRecorder, namespace_of, taken_by
+from .recording import AFTER_AT_END, DIRECT, FIRED_AT_END, RingletRecorder, namespace_of, taken_by
 from .traps import TRAP
+from .values import Values, shown, taken_copy
 
-#: One record: (number, run time ns, code, values...); a set's number is the one of the boundary
-#: it follows.  (Read back without its number: `records`.)  The code says what the values are:
-#: - a ringlet's own record (recording.py), a constant: (machine index, state it ran in, state
-#:   after, transition fired, indices of the values taken, flags); the values are old and new
-#:   pairs of those, then the state after and the transition where the flags say they are not
-#:   in the code;
+#: A watched record: (number, run time ns, code, values before, values after); a set's number is
+#: the one of the boundary it follows.  The code says what the record is:
 #: - (FULL, machine index, state before, state its ringlet ran in (None: none ran), state after,
-#:   transition, round (None: from the rounds' table)); then every value before and after, or
-#:   None and None when nothing changed;
-#: - (SET, machine index, state, round): a value set while paused; every value before and after.
+#:   transition, round); the values None and None when nothing changed;
+#: - (SET, machine index, state, round): a value set while paused.
 Record = tuple[Any, ...]
 FULL, SET = "full", "set"
 
 
 #: What `--history` keeps when the page asks for history and the command line did not say.
 PAGE_DEFAULT = 1000
-#: Annotations (and input types) whose values are taken as they are: immutable scalars.
-_SCALARS = frozenset({"bool", "int", "float"})
-#: ...and other annotations of values that cannot change in place.
-_IMMUTABLE_TEXT = frozenset({"str", "bytes"})
-_NONE: tuple[str, ...] = ()
+#: Marks a turn in which no ringlet ran (compiled; the gate's record): (TURN, machine, state
+#: before, state after, values before, values after (None and None: unchanged)).  Known by
+#: identity: a plain tuple, which the garbage collector stops following.
+TURN = ("turn",)
+_first = itemgetter(0)
 
 
-def _named(annotation: str, namespace: dict[str, Any]) -> Any:
-    """The class a dotted annotation names in the machine module's globals, if any."""
-    first, *rest = annotation.split(".")
-    if not first.isidentifier() or not all(p.isidentifier() for p in rest):
-        return None  # list[int], X | None ...
-    obj = namespace.get(first)
-    for part in rest:
-        obj = getattr(obj, part, None)
-    return obj if isinstance(obj, type) else None
-
-
-def shown(value: Any) -> Any:
-    """A taken value as a person reads it (plain data)."""
-    return plain(value)
-
-
-class Values:
-    """How one machine's variables and inputs are taken (see the module's docstring)."""
-
-    __slots__ = ("fast", "kinds", "messages", "names", "replaced_only", "single", "slow")
-
-    def __init__(self, cls: type[Machine]) -> None:
-        variables = list(variables_of(cls))
-        declared = {n for n, _ in variables}
-        variables += [(e[0], e[1]) for e in cls.INPUTS if e[0] not in declared]
-        namespace = vars(sys.modules[cls.__module__]) if cls.__module__ in sys.modules else {}
-        fast, messages, slow = [], [], []
-        for name, annotation in variables:
-            named = None if annotation.strip() in _SCALARS else _named(annotation.strip(), namespace)
-            if named is not None and is_message_class(named):
-                messages.append((name, named))  # a copy (generated), compared field by field
-            elif annotation.strip() in _SCALARS or (named is not None and named.__module__ != "builtins"):
-                fast.append(name)  # a scalar, or a handle (a node, a publisher) shown as <Type>
-            else:
-                slow.append(name)
-        self.messages = tuple(messages)
-        self.slow = tuple(slow)
-        self.names = tuple(fast) + tuple(n for n, _ in messages) + self.slow
-        #: one C call for the scalars (attrgetter of one name gives the value, not a tuple)
-        self.fast: Any = attrgetter(*fast) if fast else None
-        self.single = len(fast) == 1
-        #: how each value is taken, for a ringlet that records it (recording.py)
-        self.kinds = (DIRECT,) * len(fast) + (MESSAGE,) * len(messages) + (COPIED,) * len(slow)
-        #: values whose shown value changes only when the variable is assigned: immutable ones,
-        #: and handles (shown by their type)
-        self.replaced_only = frozenset(fast) | {n for n, a in variables if a.strip() in _IMMUTABLE_TEXT}
-
-    def take(self, m: Machine) -> tuple[Any, ...]:
-        """The machine's values now, in `names` order."""
-        fast = self.fast
-        out: tuple[Any, ...] = (fast(m),) if self.single else fast(m) if fast is not None else ()
-        if self.messages:
-            out += tuple(_encode(getattr(m, n, None), c) for n, c in self.messages)
-        if self.slow:
-            out += tuple(plain(getattr(m, n, None)) for n in self.slow)
-        return out
-
-
-def _encode(value: Any, cls: type[Any]) -> Any:
-    """A message as it was (its generated copy, compared field by field); else plain data."""
-    return value._copy() if type(value) is cls else plain(value)
+#: A record as read back: (number, run time ns, a set?, machine index, state before, state its
+#: ringlet ran in (None: none ran), state after, transition, round, [(value index, old, new)]).
+Part = tuple[int, int, bool, int, int, "int | None", int, "int | None", int, list[tuple[int, Any, Any]]]
 
 
 class History:
@@ -138,11 +79,6 @@ class History:
             raise ValueError("--history must keep at least 1 ringlet")
         self.machines = list(machines)
         self.size = size
-        #: The records, oldest first, the newest `size` kept: a deque, which frees the oldest
-        #: record as it takes a new one (so a long run makes no work for the garbage collector).
-        self.ring: deque[Record] = deque(maxlen=size)
-        #: What numbers the boundaries' records (a C call in each compiled ringlet: `next`).
-        self.counter = count(1)
         self.values = [Values(type(m)) for m in machines]
         #: Each machine's values as the history last took them: what the page shows (taken
         #: again on the scheduler's thread when it asks, `refresh`), and, watched, what the next
@@ -153,33 +89,124 @@ class History:
         self.cache: list[list[Any]] = [list(c) for c in self.current]
         self.states = [m._state for m in machines]  # watched: each machine's state at its last boundary
         self.sets = 0
-        #: Whether the ringlets record themselves (set by the debugger once they are compiled).
+        #: Whether the ringlets record themselves (`attach`, once they are compiled).
         self.compiled = False
         #: Topics published, by the number of the boundary they belong to (the next one when
         #: published): (number, [topic, ...]), at most one entry per record.
         self.published: deque[tuple[int, list[str]]] = deque(maxlen=size)
-        #: What the gate did before a ringlet (compiled): by the ringlet's record's number,
-        #: (state before, values before, values after).
-        self._gated: dict[int, tuple[int, tuple[Any, ...], tuple[Any, ...]]] = {}
-        #: Rounds (compiled): (first number, its round, live machines a round), in order.
-        self._rounds: list[tuple[int, int, int]] = [(1, 0, len(self.machines))]
         #: The page asked for the values (`snapshot`): `refresh` takes them again.
         self.wanted = False
         #: Values waiting for their machine's next turn (the arrangement's, by machine id: set by
         #: the debugger when the ringlets record themselves).
         self.waiting: dict[int, Any] = {}
+        # -- watched: the records as tuples, (number, run time, code, values...), the newest N
+        self._watched: deque[Record] = deque(maxlen=size)
+        self._counter = count(1)
+        # -- compiled (see "How it is recorded" in docs/debug.md) --
+        #: One item a boundary, in order: a ringlet's code, a tuple of its code and values, the
+        #: old value alone (`meanings`), or a turn of the gate's; the boundary numbered by its
+        #: place (`_dropped` + index + 1).  Cut back between rounds once it holds 2N.
+        self._items: list[Any] = []
+        self._dropped = 0
+        #: Per machine: state after -> (state it ran in, transition, value index) of its
+        #: records that are the value alone (claimed as the ringlets are compiled).
+        self.meanings: list[dict[int, tuple[int, int | None, int]]] = [{} for _ in machines]
+        #: The ringlets' record codes (plain tuples of numbers, which the garbage collector stops
+        #: following), by id: a record is a code, or a tuple that starts with one, only if it is
+        #: that very object (machine code cannot reach them).
+        self._codes: dict[int, tuple[Any, ...]] = {}
+        self._interned: dict[tuple[Any, ...], tuple[Any, ...]] = {}
+        self._still: dict[int, tuple[Any, ...]] = {}  # each suspended machine's turn that changes nothing
+        #: Sets while paused: (number of the boundary before, run time, machine, state, round,
+        #: values before, values after).
+        self._sets: list[tuple[int, int, int, int, int, tuple[Any, ...], tuple[Any, ...]]] = []
+        #: What the gate did before a ringlet: by the ringlet's record's number, (state before,
+        #: values before, values after).
+        self._gated: dict[int, tuple[int, tuple[Any, ...], tuple[Any, ...]]] = {}
+        #: Rounds: (first number, its round, the live machines' indices in turn order), in order.
+        self._rounds: list[tuple[int, int, tuple[int, ...]]] = [(1, 0, tuple(range(len(self.machines))))]
+        #: Run times: (first number, its run time), in order; a later round of the sim clock is
+        #: `period` later for each round since.
+        self._times: list[tuple[int, int]] = [(1, 0)]
+        self._period = 0
+        self._every = 0  # sim clock: the run time after which the items may reach 2N
+        self._arr: Any = None
 
     # -- made on the scheduler's thread ------------------------------------------------------------
+    def attach(self, arr: Any) -> None:
+        """The ringlets record themselves (compiled): number the boundaries from the scheduler's
+        rounds, time them from its clock, and cut the items back between rounds."""
+        self.compiled = True
+        self._arr = arr
+        arr.around_release = self.around_release
+        arr.on_live = self.on_live
+        self.waiting = arr._variables
+        clock = arr.clock
+        self._period = clock.period if type(clock) is SimClock else 0
+        if not self._period:
+            arr.note_time = self.note_time
+        self._times = [(1, clock.now)]
+        chained = clock.on_jump
+
+        def jumped() -> None:  # a wait moved the time (a spin call): from the next record on
+            self._time_from(self._next_number())
+            if chained is not None:
+                chained()
+
+        clock.on_jump = jumped
+        arr.ctx.between_rounds.append(self._between)
+
+    def _time_from(self, first: int) -> None:
+        t = (first, self._arr.clock.now)
+        times = self._times
+        if times[-1][0] == first:
+            times[-1] = t
+        elif self._time_of(first) != t[1]:
+            times.append(t)
+
+    def _between(self) -> None:
+        """Between rounds (a hook of the run's context, and `on_live`): cut back; the sim clock:
+        come back before the items reach 2N (a jump of its time notes itself); any other clock
+        is timed as its loops read it (`note_time`)."""
+        if len(self._items) >= 2 * self.size:
+            self.trim()
+        arr = self._arr
+        if self._period:
+            arr.ctx.wake_at(arr.clock.now + self._every)
+        else:
+            self._time_from(self._next_number())
+
+    def note_time(self, now: int) -> None:
+        """Arrangement.note_time (any clock but the sim clock; between rounds): the next
+        records are at `now`; cut back once the items reach 2N."""
+        first = self._dropped + len(self._items) + 1
+        times = self._times
+        if times[-1][0] == first:  # no record since (no live machine)
+            times[-1] = (first, now)
+        else:
+            times.append((first, now))
+        if len(self._items) >= 2 * self.size:
+            self.trim()
+
     def _next_number(self) -> int:
-        """The number the next boundary's record will have (without taking it from the counter:
-        the newest record's, a boundary's or a set's, is the one before it)."""
-        ring = self.ring
+        """The number the next boundary's record will have (watched: without taking it from the
+        counter; the newest record's, a boundary's or a set's, is the one before it)."""
+        if self.compiled:
+            return self._dropped + len(self._items) + 1
+        ring = self._watched
         return int(ring[-1][0]) + 1 if ring else 1
 
     @property
     def count(self) -> int:
         """Records made since the start (numbers of the dropped ones are below the first kept)."""
         return self._next_number() - 1 + self.sets
+
+    @property
+    def kept(self) -> int:
+        """How many records are kept (any thread)."""
+        if self.compiled:
+            return min(self.size, len(self._items) + len(self._sets))
+        return len(self._watched)
 
     def record(
         self, m: Machine, ran: int | None, fired: int | None, round_: int, now: int, published: list[str]
@@ -194,10 +221,10 @@ class History:
             old = new = None
         else:
             self.current[i] = new  # type: ignore[assignment]  # a take, never None here
-        number = next(self.counter)
+        number = next(self._counter)
         if published:
             self.published.append((number, list(published)))
-        self.ring.append((number, now, (FULL, i, before, ran, after, fired, round_), old, new))
+        self._watched.append((number, now, (FULL, i, before, ran, after, fired, round_), old, new))
 
     def tap(self, topic: str) -> None:
         """A topic published (compiled): it belongs to the next boundary's record."""
@@ -217,9 +244,10 @@ class History:
         inputs = m._inputs
         if m._suspended and m._pending is None and i not in self.waiting and (inputs is None or not inputs.fresh):
             let_go(m)  # nothing to apply: it stays suspended, and nothing of it changes
-            self.ring.append(
-                (next(self.counter), m._clock.now, (FULL, i, before, None, before, None, None), None, None)
-            )
+            still = self._still.get(i)
+            if still is None or still[2] != before:
+                still = self._still[i] = (TURN, i, before, before, None, None)
+            self._items.append(still)
             return False
         take = self.values[i].take
         old = take(m)
@@ -229,23 +257,22 @@ class History:
         if goes:
             if new != old or m._state != before:
                 self._gated[self._next_number()] = (before, old, new)
-                self.trim()
         else:
-            changed = (old, new) if new != old else (None, None)
-            self.ring.append(
-                (next(self.counter), m._clock.now, (FULL, i, before, None, m._state, None, None), *changed)
-            )
+            self._items.append((TURN, i, before, m._state, *((old, new) if new != old else (None, None))))
         return goes
 
     def on_live(self, rounds: int, live: list[Machine]) -> None:
-        """Arrangement.on_live (compiled): from the next record on, `len(live)` records a round."""
-        first, n = self._next_number(), len(live)
+        """Arrangement.on_live (compiled): from the next record on, a record of each of `live`,
+        in turn, a round."""
+        first, ids = self._next_number(), tuple(m._id for m in live)
         last = self._rounds[-1]
         if last[0] == first:
-            self._rounds[-1] = (first, rounds, n)
-        elif last[2] != n or self.round_of(first) != rounds:
-            self._rounds.append((first, rounds, n))
-        self.trim()
+            self._rounds[-1] = (first, rounds, ids)
+        elif last[2] != ids or self.round_of(first) != rounds:
+            self._rounds.append((first, rounds, ids))
+        self._every = max(1, self.size // (len(ids) or 1)) * self._period
+        self._time_from(first)
+        self._between()
 
     def record_set(self, m: Machine, old: tuple[Any, ...], round_: int, now: int) -> dict[str, list[Any]]:
         """A value set from the debugger (paused; `old`: the values before): a record of its
@@ -255,7 +282,11 @@ class History:
         self.current[i] = new
         self.cache[i][:] = new
         self.sets += 1
-        self.ring.append((self._next_number() - 1, now, (SET, i, m._state, round_), old, new))
+        number = self._next_number() - 1
+        if self.compiled:
+            self._sets.append((number, now, i, m._state, round_, old, new))
+        else:
+            self._watched.append((number, now, (SET, i, m._state, round_), old, new))
         return self._named(i, _diff(old, new))
 
     def refresh(self) -> None:
@@ -265,88 +296,168 @@ class History:
         self.current = [v.take(m) for v, m in zip(self.values, self.machines, strict=True)]
 
     def trim(self) -> None:
-        """Forget what belongs to records no longer kept."""
-        ring = self.ring
-        if len(ring) < self.size:
+        """Compiled, between rounds: once the items reach 2N, forget all but the newest N and
+        what belongs to them (the list is cut at once: one C call for N records)."""
+        items = self._items
+        if len(items) < 2 * self.size:
             return
-        oldest = ring[0][0]
+        cut = len(items) - self.size
+        del items[:cut]
+        self._dropped += cut
+        oldest = self._dropped + 1
         gated = self._gated
         while gated:
             first = next(iter(gated))
             if first >= oldest:
                 break
             del gated[first]
-        rounds = self._rounds
-        while len(rounds) > 1 and rounds[1][0] <= oldest:
-            del rounds[0]
+        self._sets = [s for s in self._sets if s[0] >= oldest]
+        for table in (self._rounds, self._times):
+            del table[: max(0, bisect_right(table, oldest, key=_first) - 1)]  # keep the one covering `oldest`
 
     # -- reading (on the scheduler's thread) ------------------------------------------------------
     @property
-    def records(self) -> list[tuple[int, Record]]:
-        """The kept records, oldest first: (number, the record after its number)."""
-        return self._newest(None)
+    def records(self) -> list[Part]:
+        """The kept records, oldest first (scheduler's thread; `kept` counts them anywhere)."""
+        return self._view(None)
 
-    def _newest(self, n: int | None) -> list[tuple[int, Record]]:
-        recs = list(self.ring)  # one C call: atomic for a reader on another thread
-        if n is not None:
-            recs = recs[-n:] if n > 0 else []
-        return [(r[0], r[1:]) for r in recs]
+    ring = records
+
+    def _view(self, n: int | None) -> list[Part]:
+        """The newest n kept records (all when None), oldest first."""
+        n = self.size if n is None else min(max(n, 0), self.size)
+        if not self.compiled:
+            recs = list(self._watched)  # one C call: atomic for a reader on another thread
+            return [self._parts(r[0], r[1:]) for r in (recs[-n:] if n else [])]
+        out: list[Part] = []
+        for part in self._walk():
+            if len(out) >= n:
+                break
+            out.append(part)
+        out.reverse()
+        return out
+
+    def _round_entry(self, number: int) -> tuple[int, int, tuple[int, ...]]:
+        rounds = self._rounds
+        return rounds[max(0, bisect_right(rounds, number, key=_first) - 1)]
 
     def round_of(self, number: int) -> int:
-        rounds = self._rounds
-        k = len(rounds) - 1
-        while k > 0 and rounds[k][0] > number:
-            k -= 1
-        first, r, n = rounds[k]
-        return r + (number - first) // n if n else r
+        if not self.compiled:
+            return 0
+        first, r, ids = self._round_entry(number)
+        return r + (number - first) // len(ids) if ids else r
 
-    def _parts(
-        self, number: int, rec: Record
-    ) -> tuple[int, int, int | None, int, int | None, int | None, list[tuple[int, Any, Any]]]:
-        """(machine index, state before, state it ran in, state after, transition, round (None:
-        from the table), [(value index, old, new) of each value that changed])."""
-        code = rec[1]
-        kind = code[0]
-        if kind == FULL:
+    def _time_of(self, number: int) -> int:
+        times = self._times
+        first, t = times[max(0, bisect_right(times, number, key=_first) - 1)]
+        return t + (self.round_of(number) - self.round_of(first)) * self._period if self._period else t
+
+    def _walk(self) -> Iterator[Part]:
+        """The compiled records, newest first, read back from each machine's state and values as
+        they are now, undoing each record in turn (a record that is the old value alone takes
+        its meaning from the state after it; a value's new value is the one undone last)."""
+        states = [m._state for m in self.machines]
+        values = [list(v.take(m)) for v, m in zip(self.values, self.machines, strict=True)]
+        items, base, sets, gated, codes = self._items, self._dropped, self._sets, self._gated, self._codes
+        rounds, times, period = self._rounds, self._times, self._period
+        rk, tk = len(rounds) - 1, len(times) - 1  # the entries that cover `number`, moving down with it
+        t_round = self.round_of(times[tk][0])
+        s = len(sets) - 1
+        j = len(items) - 1
+        while j >= 0 or s >= 0:
+            number = base + j + 1
+            if s >= 0 and (j < 0 or sets[s][0] >= number):
+                n_set, t, i, state, round_, old, new = sets[s]
+                changed = _diff(old, new)
+                yield n_set, t, True, i, state, None, state, None, round_, changed
+                values[i][:] = old
+                s -= 1
+                continue
+            item = items[j]
+            j -= 1
+            while rk > 0 and rounds[rk][0] > number:
+                rk -= 1
+            first, r0, ids = rounds[rk]
+            i = ids[(number - first) % len(ids)]
+            round_ = r0 + (number - first) // len(ids)
+            if tk > 0 and times[tk][0] > number:
+                while tk > 0 and times[tk][0] > number:
+                    tk -= 1
+                t_round = self.round_of(times[tk][0])
+            t = times[tk][1] + (round_ - t_round) * period
+            if type(item) is tuple and item and item[0] is TURN:
+                _turn, _i, before, after, old, new = item
+                changed = _diff(old, new)
+                yield number, t, False, i, before, None, after, None, round_, changed
+                states[i] = before
+                for k, a, _b in changed:
+                    values[i][k] = a
+                continue
+            now = values[i]
+            code = codes.get(id(item))
+            head = codes.get(id(item[0])) if code is None and type(item) is tuple and item else None
+            if code is not None and code is item:  # (None is no code: a value may be None)
+                ran, after, fired, taken, flags = code
+                olds: list[tuple[int, Any, Any]] = []
+            elif head is not None and head is item[0]:
+                ran, after, fired, taken, flags = head
+                olds = []
+                p = 1
+                for k, how in taken:
+                    if how == DIRECT:
+                        olds.append((k, item[p], now[k]))
+                        p += 1
+                    else:
+                        olds.append((k, item[p], item[p + 1]))
+                        p += 2
+                if flags & AFTER_AT_END:
+                    after = item[p]
+                    p += 1
+                if flags & FIRED_AT_END:
+                    fired = item[p]
+            else:  # the old value alone: its meaning follows from the state after
+                after = states[i]
+                ran, fired, k = self.meanings[i][after]
+                olds = [(k, item, now[k])]
+            g = gated.get(number) if gated else None
+            if g is None:
+                changed = [c for c in olds if c[1] != c[2]]
+                yield number, t, False, i, ran, ran, after, fired, round_, changed
+                states[i] = ran
+                for k, a, _b in changed:
+                    now[k] = a
+                continue
+            before, old, mid = g
+            full = list(mid)
+            for k, _a, b in olds:
+                full[k] = b
+            yield number, t, False, i, before, ran, after, fired, round_, _diff(old, full)
+            states[i] = before
+            now[:] = old
+
+    def _parts(self, number: int, rec: Record) -> Part:
+        """A watched record read back."""
+        t, code, old, new = rec
+        if code[0] == FULL:
             _, i, before, ran, after, fired, round_ = code
-            return i, before, ran, after, fired, round_, _diff(rec[2], rec[3])
-        if kind == SET:
-            return code[1], code[2], None, code[2], None, code[3], _diff(rec[2], rec[3])
-        i, ran, after, fired, taken, flags = code
-        if flags:
-            extra = list(rec[2 + 2 * len(taken) :])
-            if flags & AFTER_AT_END:
-                after = extra.pop(0)
-            if flags & FIRED_AT_END:
-                fired = extra.pop(0)
-        gated = self._gated.get(number) if self._gated else None
-        if gated is None:
-            changed = [
-                (k, rec[2 + 2 * t], rec[3 + 2 * t]) for t, k in enumerate(taken) if rec[2 + 2 * t] != rec[3 + 2 * t]
-            ]
-            return i, ran, ran, after, fired, None, changed
-        before, old, mid = gated
-        new = list(mid)
-        for t, k in enumerate(taken):
-            new[k] = rec[3 + 2 * t]
-        return i, before, ran, after, fired, None, _diff(old, new)
+            return number, t, False, i, before, ran, after, fired, round_, _diff(old, new)
+        _, i, state, round_ = code
+        return number, t, True, i, state, None, state, None, round_, _diff(old, new)
 
     def _named(self, i: int, changed: list[tuple[int, Any, Any]]) -> dict[str, list[Any]]:
         names = self.values[i].names
         return {names[k]: [shown(a), shown(b)] for k, a, b in changed}
 
-    def as_dict(self, number: int, rec: Record, published: dict[int, list[str]] | None = None) -> dict[str, Any]:
-        i, before, ran, after, fired, round_, changed = self._parts(number, rec)
-        m = self.machines[i]
-        states = m.STATES
-        set_ = rec[1][0] == SET
+    def as_dict(self, part: Part, published: dict[int, list[str]] | None = None) -> dict[str, Any]:
+        number, t, set_, i, before, ran, after, fired, round_, changed = part
+        states = self.machines[i].STATES
         if published is None:
             published = dict(self.published)
         return {
             "ringlet": number,
-            "round": self.round_of(number) if round_ is None else round_,
-            "t": round(rec[0] / 1e9, 9),
-            "machine": m.NAME,
+            "round": round_,
+            "t": round(t / 1e9, 9),
+            "machine": self.machines[i].NAME,
             "kind": "set" if set_ else "ringlet",
             "before": states[before],
             "state": None if ran is None else states[ran],
@@ -358,23 +469,17 @@ class History:
 
     def last(self, n: int | None = None) -> list[dict[str, Any]]:
         """The newest n records (all kept ones when n is None), oldest first."""
-        recs = self._newest(n)
         published = dict(self.published)
-        return [self.as_dict(number, r, published) for number, r in recs]
+        return [self.as_dict(p, published) for p in self._view(n)]
 
     def entered(self, i: int) -> int:
         """The run time machine i entered its current state, as far as the kept records tell (the
         oldest kept record's time when they do not)."""
         recs = self.records
-        for number, rec in reversed(recs):
-            if rec[1][0] == SET:
-                continue
-            j, before, _ran, after, fired, _round, _changed = self._parts(number, rec)
-            if j != i:
-                continue
-            if after != before or fired is not None:
-                return int(rec[0])
-        return int(recs[0][1][0]) if recs and self.count > self.size else 0
+        for _n, t, set_, j, before, _ran, after, fired, _round, _changed in reversed(recs):
+            if not set_ and j == i and (after != before or fired is not None):
+                return t
+        return recs[0][1] if recs and self.count > self.size else 0
 
     def snapshot(self) -> dict[str, dict[str, Any]]:
         """Each machine's values as the history last took them, as plain data (any thread)."""
@@ -388,9 +493,10 @@ class History:
     def frame(self, back: int) -> dict[str, Any]:
         """The arrangement `back` records ago (0: now, as of the newest record): each machine's
         state and values, and the record it is seen at (None for `back` = all kept records)."""
-        recs = self.records
-        if not 0 <= back <= len(recs):
-            raise IndexError(f"the history keeps {len(recs)} records; {back} back is not one of them")
+        kept = self.kept
+        if not 0 <= back <= kept:
+            raise IndexError(f"the history keeps {kept} records; {back} back is not one of them")
+        recs = self._view(back + 1)  # read back no further than the record asked for
         if self.compiled:  # as they are now (on the scheduler's thread)
             states = [m._state for m in self.machines]
             values = [list(v.take(m)) for v, m in zip(self.values, self.machines, strict=True)]
@@ -398,13 +504,13 @@ class History:
             states = list(self.states)
             values = [list(c) for c in self.current]
         for k in range(len(recs) - 1, len(recs) - 1 - back, -1):
-            i, before, _ran, _after, _fired, _round, changed = self._parts(*recs[k])
+            _n, _t, _set, i, before, _ran, _after, _fired, _round, changed = recs[k]
             states[i] = before
             for j, old, _new in changed:
                 values[i][j] = old
         at = recs[len(recs) - 1 - back] if back < len(recs) else None
         return {
-            "record": None if at is None else self.as_dict(*at),
+            "record": None if at is None else self.as_dict(at),
             "machines": [
                 {
                     "machine": m.NAME,
@@ -431,6 +537,15 @@ def recorder(h: History, m: Machine, reads: ClassReads) -> tuple[RingletRecorder
     taken = taken_by(reads, v.names, v.kinds, {e[0] for e in cls.INPUTS}, v.replaced_only)
     first = len(v.names) - len(v.slow) - len(v.messages)
     messages = {first + j: c for j, (_name, c) in enumerate(v.messages)}
-    return RingletRecorder(m._id, cls.SUSPENDED, taken, v.names, TRAP), namespace_of(
-        h.ring.append, h.counter, h.cache[m._id], _encode, plain, messages
-    )
+    namespace = namespace_of(h._items.append, h.cache[m._id], taken_copy, plain, messages)
+    meanings = h.meanings[m._id]
+
+    def claim(after: int, meaning: tuple[int, int | None, int]) -> bool:
+        return meanings.setdefault(after, meaning) == meaning
+
+    def register(code: tuple[Any, ...]) -> tuple[Any, ...]:
+        code = h._interned.setdefault(code, code)  # one object for equal codes: fewer to keep warm
+        h._codes[id(code)] = code
+        return code
+
+    return RingletRecorder(cls.SUSPENDED, taken, v.names, TRAP, namespace, register, claim), namespace

@@ -3,24 +3,27 @@
 A watcher called after every ringlet costs a run several times its plain speed (a Python call
 alone is three times a toggle's ringlet).  So, as the debugger's marks on transitions are
 (traps.py), the history is compiled in: each ringlet of the machine is compiled again from its
-generated module with, before each `return`, one append of a small tuple to the history's ring:
+generated module with, before each `return`, one append to the history's list of items, one
+item a boundary (its number is its place; its round and run time follow from the scheduler's
+rounds and clock: history.py).  The item is the cheapest that tells the ringlet apart:
 
-    _llfsm_h_append((_llfsm_h_next(_llfsm_h_count), self._clock.now, (M, S, K, i, taken, 0), old, new, ...))
+- a ringlet that changes nothing: its code, `_llfsm_h_append(_llfsm_h_c3)`, a constant tuple
+  (state it ran in, state after, transition fired, values taken, flags) held as a global of the
+  variant, known to the history by its identity, one object for equal codes of any machine;
+- a ringlet that can change one number, flag or handle only (`count += 1`): that value as it
+  was at the ringlet's start, alone, `_llfsm_h_append(_llfsm_h_o0)`, where the state after
+  tells which ringlet it was (the first such return into each state claims it; `claim`);
+- otherwise a tuple of the code and, of each value it can change, the old value (a number, a
+  flag or a handle: read at the start, its new value is the next record's old one, or the
+  value now) or the old and new copies (a message, a list, anything that can change in place,
+  a variable that may change outside its ringlets, an input: compared with the copy the history
+  took last, `_llfsm_h_cache`, which the record updates), then the state after and the
+  transition where they are not constants there.
 
-(numbered by a counter, a C call; a tuple of numbers, which the garbage collector soon stops
-following), where the code `(M, S, K, i, taken, 0)` is a constant: the machine (each machine of a run has
-ringlets of its own), the state the ringlet ran in, the state it
-leaves the machine in (the compiler writes `self._state = K` just before), the transition it
-fired, and which values follow.  Only the values the ringlet can change are taken
-(llfsm.runtime.reads, the monitor's analysis: what it assigns, mutates or hands on), as old and
-new pairs: a number, a flag or a handle read at the ringlet's start and at its end (the object
-itself, which cannot change under it); a message, a list or anything else that can change in
-place taken as the history's bounded copy (history.Values) and compared with the copy the
-history took last (`_llfsm_h_cache`, which the record updates); a variable that may change
-outside its ringlets (a callback's, one handed to a helper module of the user's) and the
-inputs likewise, in every ringlet of the machine.  What changed, name by name, is worked out
-when a record is read.  The scheduler runs its plain loops meanwhile: nothing is called between
-ringlets.
+Which values a ringlet can change is the monitor's analysis (llfsm.runtime.reads: what it
+assigns, mutates or hands on).  What changed, name by name, is worked out when the history is
+read, backwards from now.  No item but a copy is a new object the garbage collector follows,
+and the scheduler runs its plain loops meanwhile: nothing is called between ringlets.
 
 The suspend state's ringlets are left as they are: they run inside a command (the gate's, or a
 transition into the suspend state), never as a turn of their own.
@@ -29,14 +32,13 @@ transition into the suspend state), never as a turn of their own.
 from __future__ import annotations
 
 import ast
+from collections.abc import Callable
 from typing import Any
 
 from ..runtime.reads import ClassReads, is_self_attr
 
 #: Names in a recording variant's namespace (machine code cannot use `_llfsm_` names: LF013).
-APPEND, NEXT, COUNT, CACHE, ENCODE, PLAIN = (
-    f"_llfsm_h_{n}" for n in ("append", "next", "count", "cache", "encode", "plain")
-)
+APPEND, CODE, CACHE, ENCODE, PLAIN = (f"_llfsm_h_{n}" for n in ("append", "c", "cache", "encode", "plain"))
 _LOCAL = "_llfsm_h_"
 #: Flags of a record's code: the state after, or the transition, is not a constant where the
 #: ringlet returns, and ends the record instead.
@@ -44,6 +46,11 @@ AFTER_AT_END, FIRED_AT_END = 1, 2
 #: How a value is taken: read at the start and at the end (an immutable value or a handle);
 #: compared with the history's last take (`CACHE`) as it is, as a message's copy, as plain data.
 DIRECT, CACHED, MESSAGE, COPIED = range(4)
+
+
+#: Claims a value-only record: (machine's state after, (state it ran in, transition, value
+#: index)) -> whether records of that meaning may be the value alone (History.claim).
+Claim = Callable[[int, tuple[int, int | None, int]], bool]
 
 
 def message_name(k: int) -> str:
@@ -78,13 +85,19 @@ class RingletRecorder:
 
     def __init__(
         self,
-        machine: int,
         suspended: int,
         taken: dict[str, tuple[tuple[int, int], ...]],
         names: tuple[str, ...],
         trap: str,
+        namespace: dict[str, Any],
+        register: Callable[[tuple[Any, ...]], tuple[Any, ...]],
+        claim: Claim,
     ) -> None:
-        self.machine = machine
+        #: the variant's namespace: each record's code goes in as a global, the object the
+        #: history registered (`register`), by which it knows a code from a value
+        self.namespace = namespace
+        self.register = register
+        self.claim = claim
         self.suspended = suspended
         self.by_ringlet = taken
         self.names = names
@@ -111,13 +124,25 @@ class RingletRecorder:
         """The block with records before its returns; the state known after it (None: not
         known), and whether it ends in a return."""
         out: list[ast.stmt] = []
-        for st in stmts:
+        for n, st in enumerate(stmts):
             if isinstance(st, ast.Return):
                 return self.returning(out, st, known), known, True
             sets = _sets_state(st, self.suspended)
             if sets is not None:
                 known = sets if sets >= 0 else None
-            elif isinstance(st, ast.If | ast.For | ast.AsyncFor | ast.While | ast.With | ast.AsyncWith | ast.Try):
+            elif isinstance(st, ast.If):  # the state after it: the one its branches that go on leave
+                st.body, k_body, ends_body = self.block(st.body, known)
+                st.orelse, k_else, ends_else = self.block(st.orelse, known) if st.orelse else ([], known, False)
+                going = {k for k, ends in ((k_body, ends_body), (k_else, ends_else)) if not ends}
+                if len(going) > 1 or None in going:
+                    known = None
+                elif going:
+                    known = going.pop()
+                out.append(st)
+                if ends_body and ends_else:
+                    return [*out, *stmts[n + 1 :]], known, True  # what follows is never reached
+                continue
+            elif isinstance(st, ast.For | ast.AsyncFor | ast.While | ast.With | ast.AsyncWith | ast.Try):
                 for attr in ("body", "orelse", "finalbody"):
                     inner = getattr(st, attr, None)
                     if inner:
@@ -149,34 +174,41 @@ class RingletRecorder:
             extra.append(_load(_LOCAL + "r"))
             ret = ast.Return(value=_load(_LOCAL + "r"))
             fired = None
-        items: list[ast.expr] = [
-            ast.Call(func=_load(NEXT), args=[_load(COUNT)], keywords=[]),
-            ast.Attribute(value=_self("_clock"), attr="now", ctx=ast.Load()),
-            # a tuple of constants is a constant to the compiler (typeshed's Constant lists scalars only)
-            ast.Constant((self.machine, self.state, known, fired, tuple(k for k, _ in self.taken), flags)),  # type: ignore[arg-type]
-        ]
+        code = (self.state, known, fired, self.taken, flags)  # whose: its place tells
+        name = f"{CODE}{len(self.namespace)}"
+        self.namespace[name] = code = self.register(code)
+        item: ast.expr = _load(name)
         after: list[ast.stmt] = []
-        for k, how in self.taken:
-            if how == DIRECT:
-                items += [_load(_LOCAL + f"o{k}"), _self(self.names[k])]
-                continue
-            new = _LOCAL + f"n{k}"
-            value_now: ast.expr = _self(self.names[k])
-            if how == MESSAGE:
-                value_now = ast.Call(func=_load(ENCODE), args=[value_now, _load(message_name(k))], keywords=[])
-            elif how == COPIED:
-                value_now = ast.Call(func=_load(PLAIN), args=[value_now], keywords=[])
-            stmts.append(_assign(new, value_now))
-            cached = ast.Subscript(value=_load(CACHE), slice=ast.Constant(k), ctx=ast.Load())
-            items += [cached, _load(new)]
-            after.append(
-                ast.Assign(
-                    targets=[ast.Subscript(value=_load(CACHE), slice=ast.Constant(k), ctx=ast.Store())],
-                    value=_load(new),
+        if (
+            not flags
+            and len(self.taken) == 1
+            and self.taken[0][1] == DIRECT
+            and self.claim(known, (self.state, fired, self.taken[0][0]))  # type: ignore[arg-type]  # flags: known
+        ):
+            item = _load(_LOCAL + f"o{self.taken[0][0]}")  # the old value alone: the state after tells the rest
+        elif self.taken or extra:
+            items: list[ast.expr] = [item]
+            for k, how in self.taken:
+                if how == DIRECT:
+                    items.append(_load(_LOCAL + f"o{k}"))  # the new value is the next record's old, or now's
+                    continue
+                new = _LOCAL + f"n{k}"
+                value_now: ast.expr = _self(self.names[k])
+                if how == MESSAGE:
+                    value_now = ast.Call(func=_load(ENCODE), args=[value_now, _load(message_name(k))], keywords=[])
+                elif how == COPIED:
+                    value_now = ast.Call(func=_load(PLAIN), args=[value_now], keywords=[])
+                stmts.append(_assign(new, value_now))
+                cached = ast.Subscript(value=_load(CACHE), slice=ast.Constant(k), ctx=ast.Load())
+                items += [cached, _load(new)]
+                after.append(
+                    ast.Assign(
+                        targets=[ast.Subscript(value=_load(CACHE), slice=ast.Constant(k), ctx=ast.Store())],
+                        value=_load(new),
+                    )
                 )
-            )
-        items += extra
-        call = ast.Call(func=_load(APPEND), args=[ast.Tuple(elts=items, ctx=ast.Load())], keywords=[])
+            item = ast.Tuple(elts=[*items, *extra], ctx=ast.Load())
+        call = ast.Call(func=_load(APPEND), args=[item], keywords=[])
         made = [*stmts, ast.Expr(value=call), *after, *traps, ret]
         for n in made:
             ast.copy_location(n, ret)
@@ -231,10 +263,9 @@ def _assign(name: str, value: ast.expr) -> ast.Assign:
     return ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())], value=value)
 
 
-def namespace_of(
-    append: Any, counter: Any, cache: list[Any], encode: Any, plain: Any, messages: dict[int, type]
-) -> dict[str, Any]:
-    """What a recording variant's ringlets find in their namespace."""
-    ns: dict[str, Any] = {APPEND: append, NEXT: next, COUNT: counter, CACHE: cache, ENCODE: encode, PLAIN: plain}
+def namespace_of(append: Any, cache: list[Any], encode: Any, plain: Any, messages: dict[int, type]) -> dict[str, Any]:
+    """What a recording variant's ringlets find in their namespace (their codes join it as
+    they are compiled)."""
+    ns: dict[str, Any] = {APPEND: append, CACHE: cache, ENCODE: encode, PLAIN: plain}
     ns.update({message_name(k): cls for k, cls in messages.items()})
     return ns

@@ -42,7 +42,7 @@ from ..runtime.reads import ClassReads, class_reads
 from ..runtime.scheduler import GO, Arrangement
 from .judge import VIOLATED, Boundary, Judge, Judged, MonitorError, Verdict, atom_reads
 from .topic import MonitorTopic
-from .variant import FAILED, JUDGE, MACHINES, NUMBERS, NUMERIC, PUBLISHED, Check, make_variant
+from .variant import FAILED, INTEGERS, INTEGRAL, JUDGE, MACHINES, NUMBERS, NUMERIC, PINS, PUBLISHED, Check, make_variant
 from .variant import VIOLATED as VIOLATED_FN
 
 #: What `--on-violation` may say.
@@ -94,9 +94,10 @@ class Monitor:
         self._watcher = self._watch  # one bound method, compared with `is`
         self._inputs: dict[int, list[object]] = {}
         self._reads_inputs = not targeted  # an input a property reads (found by _instrument)
-        #: by machine: the variables its variant relies on holding numbers, and the variant
-        #: that does not (llfsm.monitor.variant, NUMERIC), made if one is set to anything else
-        self._numeric: dict[int, tuple[frozenset[str], Callable[[], type]]] = {}
+        #: by machine: what its variant relies on the variables holding (llfsm.monitor.variant:
+        #: NUMERIC, INTEGRAL, PINS), and the variant that relies on none of it, made if one is
+        #: set to anything else
+        self._numeric: dict[int, tuple[_Relies, Callable[[], type]]] = {}
         self.ended = False
 
     # -- attaching ------------------------------------------------------------------------------
@@ -129,8 +130,8 @@ class Monitor:
                 self._once = True  # a command, a parameter, an input: judge the boundary after it
                 self._watch_on()
                 if m._id in self._numeric and m._id in arr._variables:
-                    numeric, unstepped = self._numeric[m._id]
-                    if any(k in numeric and type(v) not in NUMBERS for k, v in arr._variables[m._id].items()):
+                    relies, unstepped = self._numeric[m._id]
+                    if not all(relies.kept(k, v) for k, v in arr._variables[m._id].items()):
                         del self._numeric[m._id]
                         become(m, unstepped())  # its checks in full from this ringlet on
 
@@ -210,12 +211,12 @@ class Monitor:
             def unstepped(cls: type = cls, cr: ClassReads = cr, index: int = index, by: Any = by_ringlet) -> type:
                 return make_variant(cls, cr, index, by, helpers, steps=False)
 
-            variant = make_variant(cls, cr, index, by_ringlet, helpers)
-            numeric: frozenset[str] = getattr(variant, NUMERIC)
-            if any(type(getattr(m, v, None)) not in NUMBERS for v in numeric):
+            variant = make_variant(cls, cr, index, by_ringlet, helpers, pins=_pinnable(m, cr))
+            relies = _Relies(getattr(variant, NUMERIC), getattr(variant, INTEGRAL), getattr(variant, PINS))
+            if not all(relies.kept(v, getattr(m, v, None)) for v in relies.names()):
                 variant = unstepped()  # a stepped variable holds something else already
-            elif numeric:
-                self._numeric[index] = (numeric, unstepped)
+            elif relies.names():
+                self._numeric[index] = (relies, unstepped)
             become(m, variant)
         return everywhere
 
@@ -423,6 +424,46 @@ class Monitor:
         where = Boundary(self.arr.ringlets if self.arr is not None else 0)
         self._unsaid = self.judge.at_end(self._now(), where)
         self._say()
+
+
+def _pinnable(m: Any, cr: ClassReads) -> dict[str, Any]:
+    """The variables of machine `m` a variant may compile in as constants, with their values:
+    numbers (immutable: an int, a float, a bool, not NaN) that no ringlet, OnSuspend/OnResume hook
+    or anything the machine hands them to can change.  What else sets one goes through the
+    scheduler's gate (a parameter, the debugger's set), where the monitor checks it kept its value."""
+    inputs = {entry[0] for entry in getattr(type(m), "INPUTS", ())}
+    out = {}
+    for v in cr.variables:
+        value = getattr(m, v, None)
+        if type(value) not in NUMBERS or value != value or v in inputs or v in cr.hooked:
+            continue
+        if not cr.is_escaped(v) and not cr.changers(v):
+            out[v] = value
+    return out
+
+
+class _Relies:
+    """What a variant relies on its machine's variables holding (llfsm.monitor.variant): numbers
+    (NUMERIC), ints (INTEGRAL), the values it compiled in (PINS)."""
+
+    def __init__(self, numeric: frozenset[str], integral: frozenset[str], pins: dict[str, Any]) -> None:
+        self.numeric, self.integral, self.pins = numeric, integral, pins
+
+    def names(self) -> set[str]:
+        return set(self.numeric) | set(self.integral) | set(self.pins)
+
+    def kept(self, name: str, value: Any) -> bool:
+        """Whether `name` holding `value` keeps the variant right (`1 == 1.0 == True`: a pin's
+        type too)."""
+        if name in self.numeric and type(value) not in NUMBERS:
+            return False
+        if name in self.integral and type(value) not in INTEGERS:
+            return False
+        pinned = self.pins.get(name, _NONE)
+        return pinned is _NONE or (type(value) is type(pinned) and value == pinned)
+
+
+_NONE = object()
 
 
 def _check(judge: Judge, j: Judged) -> Check:

@@ -21,8 +21,13 @@ reads is as it was, but for numbers the ringlet steps one way (llfsm.runtime.rea
 only change is `count += 1`).  That rests on the variable holding a number (an int, a float or a
 bool), which its machine's code keeps (`ClassReads.numeric`) and the monitor checks where
 anything else could set it (llfsm.monitor.run): the variant names those variables in
-`NUMERIC`.  Other kinds call the monitor with the properties to judge.  Names start with
-`_llfsm_mon_`, which machine code cannot use (LF013).
+`NUMERIC`; likewise for numbers read only modulo what the ringlet steps them by (`count % 2`
+where `count += 2`), which must hold ints (`INTEGRAL`).  A number of the machine's own that
+nothing in it changes is compiled in as its value when the run starts (`PINS`, which the
+monitor checks wherever the gate sets it), so `count < limit * 10` is a constant bound, and the
+bounds at one return are one comparison per number, leaving out the terms they decide
+(llfsm.monitor.bounds).  Other kinds call the monitor with the properties to judge.  Names
+start with `_llfsm_mon_`, which machine code cannot use (LF013).
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ from typing import Any
 from ..props.atoms import HELPERS, PURE
 from ..runtime.generated import variant_class
 from ..runtime.reads import ClassReads, is_self_attr
+from .bounds import fold_arithmetic, merge_bounds, self_attr_load
 
 PREFIX = "_llfsm_mon_"
 #: The names a variant's namespace gets from the monitor.
@@ -45,6 +51,14 @@ MACHINES, PUBLISHED = PREFIX + "M", PREFIX + "E"
 #: The class attribute of a variant naming the variables whose checks it left out because the
 #: ringlets step them as numbers (they must hold numbers for that to stand).
 NUMERIC = PREFIX + "numeric"
+#: ...and the variables whose values it compiled in as constants (`pins` of make_variant), with
+#: those values: a variant stands only while each still has its value.
+PINS = PREFIX + "pins"
+#: ...and the variables whose checks it left out because the ringlets step them by multiples of
+#: what the property takes them modulo (they must hold ints for that to stand).
+INTEGRAL = PREFIX + "integral"
+#: The types a variable keeps `(x + k * m) % m == x % m` under.
+INTEGERS = (int, bool)
 #: The types a stepped variable keeps its order under (`x + 1 >= x`, NaN staying NaN).
 NUMBERS = (int, float, bool)
 
@@ -72,6 +86,12 @@ class _Ringlet:
     name: str = ""
     #: the variables the checks left out rely on being numbers (filled in as they are left out)
     numeric: set[str] | None = None
+    #: variables of its own machine compiled in as constants (make_variant's `pins`)...
+    pins: dict[str, Any] | None = None
+    #: ...and those the checks read (filled in as they are inlined)
+    pinned: set[str] | None = None
+    #: the variables the checks left out rely on being ints (filled in as they are left out)
+    integral: set[str] | None = None
 
 
 def make_variant(
@@ -81,22 +101,30 @@ def make_variant(
     checks: dict[str, list[Check]],
     helpers: dict[str, Callable[..., Any]],
     steps: bool = True,
+    pins: dict[str, Any] | None = None,
 ) -> type[Any]:
     """The monitored variant of `cls` (the machine at load index `own`): `checks` by ringlet
     function name; with `steps`, a check a ringlet cannot make fail by stepping numbers is
-    left out (the variables this relies on are the variant's NUMERIC)."""
+    left out (the variables this relies on are the variant's NUMERIC), and the variables of
+    `pins` (numbers that no ringlet of the machine changes, with their values now) are read as
+    those constants, folded into the bounds (`count < limit * 10` is `count < 30`); the
+    variant's PINS names those the checks read, with their values."""
     namespace = dict(reads.namespace)
     namespace.update(helpers)
     namespace.update({PREFIX + k: v for k, v in PURE.items()})
     namespace.update({PREFIX + k: v for k, v in HELPERS.items()})
     made: dict[str, Any] = {}
     numeric: set[str] = set()
+    pinned: set[str] = set()
+    integral: set[str] = set()
     for fn in (*cls.ENTER, *cls.STEADY):
         name = fn.__name__
         wanted = checks.get(name)
         if wanted and name not in made:
             state = _state_of(cls, fn)
-            ctx = _Ringlet(own, cls, wanted, state, reads if steps else None, name, numeric)
+            ctx = _Ringlet(own, cls, wanted, state, name=name, numeric=numeric, pinned=pinned, integral=integral)
+            if steps:  # what the folds rest on
+                ctx.reads, ctx.pins = reads, pins
             tree = copy.deepcopy(reads.trees[name])
             tree.body = _rewrite_block(tree.body, state, ctx)[0]
             module = ast.Module(body=[tree], type_ignores=[])
@@ -105,6 +133,8 @@ def make_variant(
             made[name] = namespace[name]
     variant = variant_class(cls, namespace, made)
     setattr(variant, NUMERIC, frozenset(numeric))
+    setattr(variant, PINS, {k: pins[k] for k in pinned} if pins else {})
+    setattr(variant, INTEGRAL, frozenset(integral))
     return variant
 
 
@@ -176,7 +206,7 @@ def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.st
     """The checks, then the return (its value kept first when it is not a constant).  A
     constant return after a last inline check returns from inside it when the property holds
     (`if holds: return 0`): the common case then costs the test alone."""
-    own, cls = ctx.own, ctx.cls
+    cls = ctx.cls
     state = cls.STATES[known] if known is not None else None
     body: list[ast.stmt] = []
     ids: list[int] = []
@@ -186,11 +216,11 @@ def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.st
         if c.tree is None:
             ids.append(c.index)
             continue
-        cond = _violated(c, own, state)
+        cond = _violated(c, ctx, state)
         if not isinstance(cond, ast.Constant) and _cannot_fail(cond, c, ctx):
             continue
         if not isinstance(cond, ast.Constant):
-            cond = _Arithmetic(ctx).visit(cond)
+            cond = _fold(_Arithmetic(ctx).visit(cond))
         if isinstance(cond, ast.Constant):
             if cond.value:
                 body.append(_call(VIOLATED, c.index))  # violated whenever it returns here
@@ -215,7 +245,10 @@ def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.st
     if last is not None and constant and len(holding) > 1 and not ids and len(body) == len(holding):
         # several checks: one test of them all returns at once when all hold (atoms are pure, so
         # the checks one by one below, which say which failed, may evaluate them again)
-        terms = _merge_bounds(holding, ctx)
+        terms = holding
+        if ctx.reads is not None and ctx.numeric is not None:
+            terms, used = merge_bounds(holding, ctx.reads.numeric)
+            ctx.numeric |= used
         all_hold = _Shared().share(terms[0] if len(terms) == 1 else ast.BoolOp(op=ast.And(), values=terms))
         fast = ast.If(test=all_hold, body=[copy.deepcopy(ret)], orelse=[])
         quiet = ast.ExceptHandler(type=ast.Name(id="Exception", ctx=ast.Load()), name=None, body=[ast.Pass()])
@@ -233,11 +266,11 @@ def _returning(ret: ast.Return, known: int | None, ctx: _Ringlet) -> list[ast.st
     return [_locate(keep, ret), *body, _locate(new_ret, ret)]
 
 
-def _violated(c: Check, own: int, state: str | None) -> ast.expr:
-    """When check `c` is violated, as code of a ringlet of machine `own` whose own state is
-    `state` (None: unknown), folded."""
+def _violated(c: Check, ctx: _Ringlet, state: str | None) -> ast.expr:
+    """When check `c` is violated, as code of a ringlet of machine `ctx.own` whose own state
+    is `state` (None: unknown), its pinned variables read as constants, folded."""
     assert c.tree is not None  # an inline check's
-    cond = _fold(_Inline(own, state).visit(copy.deepcopy(c.tree)))
+    cond = _fold(_Inline(ctx.own, state, ctx.pins, ctx.pinned).visit(copy.deepcopy(c.tree)))
     if not c.violated_when:
         cond = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
     return cond
@@ -251,9 +284,9 @@ def _cannot_fail(cond: ast.expr, c: Check, ctx: _Ringlet) -> bool:
     violated.  What the gate changes at the start of a ringlet (a command, a parameter, an input)
     makes the monitor judge the boundary after it in full (llfsm.monitor.run)."""
     cr = ctx.reads
-    if cr is None or ctx.entered_in is None or ctx.numeric is None:
+    if cr is None or ctx.entered_in is None or ctx.numeric is None or ctx.integral is None:
         return False
-    before = _violated(c, ctx.own, ctx.cls.STATES[ctx.entered_in])
+    before = _violated(c, ctx, ctx.cls.STATES[ctx.entered_in])
     if ast.dump(before) != ast.dump(cond):  # the state it reads moves in this ringlet
         return False
     ringlet = cr.ringlets[ctx.name]
@@ -263,17 +296,48 @@ def _cannot_fail(cond: ast.expr, c: Check, ctx: _Ringlet) -> bool:
     changed = {cr.group.get(t, t) for t in ringlet.touches}
     holds = _fold(ast.UnaryOp(op=ast.Not(), operand=cond))
     stepped: set[str] = set()
-    for attr in {n.attr for n in ast.walk(holds) if _self_attr_load(n)}:  # type: ignore[attr-defined]
+    integral: set[str] = set()
+    for attr in {n.attr for n in ast.walk(holds) if self_attr_load(n)}:  # type: ignore[attr-defined]
         if attr in moved:
             return False
         if cr.group.get(attr, attr) not in changed or attr not in cr.variables:
             continue  # as it was before the ringlet
         step = cr.step(ctx.name, attr)
-        if not step or _polarity(holds, attr) not in (0, step):
+        if step and _polarity(holds, attr) in (0, step):
+            stepped.add(attr)
+        elif _residue_kept(holds, attr, cr, ctx.name):
+            integral.add(attr)
+        else:
             return False
-        stepped.add(attr)
     ctx.numeric |= stepped
+    ctx.integral |= integral
     return True
+
+
+def _residue_kept(holds: ast.expr, attr: str, cr: ClassReads, ringlet: str) -> bool:
+    """Whether the ringlet keeps what `holds` reads of `self.attr`: it reads it only as `attr % m`
+    (m a nonzero int constant), the ringlet only steps it by multiples of m (`count += 2` keeps
+    `count % 2`), and the machine's code keeps it an int (for an int, `(x + k * m) % m == x % m`;
+    a float's sum can round)."""
+    kinds = cr.ringlets[ringlet].changes.get(attr)
+    if not kinds or not kinds <= {"up", "down"} or not cr.integral(attr):
+        return False
+    moduli: list[int] = []
+    for n in ast.walk(holds):
+        if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == PREFIX + "_format":
+            args = n.args
+        elif isinstance(n, ast.BinOp) and isinstance(n.op, ast.Mod):
+            args = [n.left, n.right]
+        else:
+            continue
+        if len(args) == 2 and _is_attr(args[0], attr) and isinstance(args[1], ast.Constant):
+            m = args[1].value
+            if type(m) is int and m != 0:
+                moduli.append(m)
+    reads = sum(1 for n in ast.walk(holds) if _is_attr(n, attr))
+    if not moduli or len(moduli) != reads:
+        return False  # read otherwise as well
+    return all(type(d) is int and d % m == 0 for d in cr.ringlets[ringlet].literals[attr] for m in moduli)
 
 
 class _Arithmetic(ast.NodeTransformer):
@@ -299,90 +363,17 @@ class _Arithmetic(ast.NodeTransformer):
         for arg in node.args[:need]:
             if isinstance(arg, ast.Constant) and type(arg.value) in (int, float):
                 continue
-            if _self_attr_load(arg) and cr.numeric(arg.attr):  # type: ignore[attr-defined]
+            if self_attr_load(arg) and cr.numeric(arg.attr):  # type: ignore[attr-defined]
                 attrs.add(arg.attr)  # type: ignore[attr-defined]
                 continue
             return node
         numeric |= attrs
         op = ast.Mult() if f.id == PREFIX + "_repeat" else ast.Mod()  # type: ignore[attr-defined]
-        return ast.BinOp(left=node.args[0], op=op, right=node.args[1])
+        return fold_arithmetic(ast.BinOp(left=node.args[0], op=op, right=node.args[1]))
 
-
-#: A comparison the other way round (`c < x` is `x > c`), and its negation for numbers (NaN
-#: aside: `not x < c` holds for NaN where `x >= c` does not, which only sends the test that
-#: merges bounds to the checks one by one).
-_FLIP: dict[type[ast.cmpop], type[ast.cmpop]] = {ast.Lt: ast.Gt, ast.LtE: ast.GtE, ast.Gt: ast.Lt, ast.GtE: ast.LtE}
-_NEGATE: dict[type[ast.cmpop], type[ast.cmpop]] = {ast.Lt: ast.GtE, ast.LtE: ast.Gt, ast.Gt: ast.LtE, ast.GtE: ast.Lt}
-
-
-def _merge_bounds(holding: list[ast.expr], ctx: _Ringlet) -> list[ast.expr]:
-    """The terms of the test that all checks hold, with the constant bounds of one number merged
-    into one comparison each way: `x < 5 and x < 7 and x >= 0` tests `0 <= x < 5`.  The merged
-    test implies each bound only where x is a number (an int, a float, a bool: ordered, so the
-    tightest bound implies the others), so it is made only for variables the machine's code
-    keeps a number (`ClassReads.numeric`), which join NUMERIC: the monitor checks they hold one
-    at the start and wherever the gate sets them, and rewrites without merging otherwise.  Where
-    the merged test fails, the checks one by one decide, as before."""
-    cr = ctx.reads
-    if cr is None or ctx.numeric is None:
-        return holding
-    bounds: dict[str, list[tuple[type[ast.cmpop], int | float, int]]] = {}
-    for k, term in enumerate(holding):
-        b = _bound(term)
-        if b is not None and cr.numeric(b[0]):
-            bounds.setdefault(b[0], []).append((b[1], b[2], k))
-    merged = {attr: found for attr, found in bounds.items() if len(found) > 1}
-    if not merged:
-        return holding
-    out: list[ast.expr] = []
-    done: set[str] = set()
-    placed = {found[0][2]: attr for attr, found in merged.items()}  # where each attr's first bound was
-    dropped = {k for found in merged.values() for _op, _c, k in found}
-    for k, term in enumerate(holding):
-        attr = placed.get(k)
-        if attr is not None and attr not in done:
-            done.add(attr)
-            out.append(_interval(attr, merged[attr]))
-        elif k not in dropped:
-            out.append(term)
-    ctx.numeric |= set(merged)
-    return out
-
-
-def _bound(term: ast.expr) -> tuple[str, type[ast.cmpop], int | float] | None:
-    """`self.x OP c` (OP one of < <= > >=, c an int or float constant, not NaN), read either way
-    round and under `not`, as (x, OP with x on the left, c)."""
-    negate = isinstance(term, ast.UnaryOp) and isinstance(term.op, ast.Not)
-    node = term.operand if negate else term  # type: ignore[attr-defined]
-    if not (isinstance(node, ast.Compare) and len(node.ops) == 1 and type(node.ops[0]) in _FLIP):
-        return None
-    op, left, right = type(node.ops[0]), node.left, node.comparators[0]
-    if isinstance(left, ast.Constant) and _self_attr_load(right):
-        op, left, right = _FLIP[op], right, left
-    if not (_self_attr_load(left) and isinstance(right, ast.Constant)):
-        return None
-    c = right.value
-    if not isinstance(c, int | float) or isinstance(c, bool) or c != c:
-        return None
-    return left.attr, (_NEGATE[op] if negate else op), c  # type: ignore[attr-defined]
-
-
-def _interval(attr: str, found: list[tuple[type[ast.cmpop], int | float, int]]) -> ast.expr:
-    """The tightest bound each way of `self.attr` among `found`, as one comparison (`lo <= x < hi`)."""
-    upper = [(c, op is ast.Lt) for op, c, _k in found if op in (ast.Lt, ast.LtE)]
-    lower = [(c, op is ast.Gt) for op, c, _k in found if op in (ast.Gt, ast.GtE)]
-    ops: list[ast.cmpop] = []
-    values: list[ast.expr] = []
-    if lower:
-        c, strict = max(lower)  # the largest; strict before not at the same value
-        ops.append(ast.Lt() if strict else ast.LtE())
-        values.append(ast.Constant(c))
-    values.append(ast.Attribute(value=ast.Name(id="self", ctx=ast.Load()), attr=attr, ctx=ast.Load()))
-    if upper:
-        c, strict = min(upper, key=lambda b: (b[0], not b[1]))  # the smallest; strict first
-        ops.append(ast.Lt() if strict else ast.LtE())
-        values.append(ast.Constant(c))
-    return ast.Compare(left=values[0], ops=ops, comparators=values[1:])
+    def visit_BinOp(self, node: ast.BinOp) -> ast.AST:
+        """`+` and `-` of constants (pinned variables) done once."""
+        return fold_arithmetic(self.generic_visit(node))  # type: ignore[arg-type]
 
 
 #: How a comparison `x OP c` changes as x grows: +1 (false to true at most), -1 (true to false at most).
@@ -414,7 +405,7 @@ def _polarity(e: ast.expr, attr: str) -> int | None:
 
 
 def _is_attr(node: ast.AST, attr: str) -> bool:
-    return _self_attr_load(node) and node.attr == attr  # type: ignore[attr-defined]
+    return self_attr_load(node) and node.attr == attr  # type: ignore[attr-defined]
 
 
 def _reads(e: ast.AST, attr: str) -> bool:
@@ -430,7 +421,7 @@ class _Shared(ast.NodeTransformer):
     def share(self, node: ast.expr) -> ast.expr:
         counts: dict[str, int] = {}
         for n in ast.walk(node):
-            if _self_attr_load(n):
+            if self_attr_load(n):
                 counts[n.attr] = counts.get(n.attr, 0) + 1  # type: ignore[attr-defined]
         self.shared = {a for a, c in counts.items() if c > 1}
         self.seen: set[str] = set()
@@ -439,22 +430,13 @@ class _Shared(ast.NodeTransformer):
         return out
 
     def visit_Attribute(self, node: ast.Attribute) -> ast.AST:
-        if not _self_attr_load(node) or node.attr not in self.shared:
+        if not self_attr_load(node) or node.attr not in self.shared:
             return self.generic_visit(node)
         local = PREFIX + "a_" + node.attr
         if node.attr in self.seen:
             return ast.Name(id=local, ctx=ast.Load())
         self.seen.add(node.attr)
         return ast.NamedExpr(target=ast.Name(id=local, ctx=ast.Store()), value=node)
-
-
-def _self_attr_load(node: ast.AST) -> bool:
-    return (
-        isinstance(node, ast.Attribute)
-        and isinstance(node.ctx, ast.Load)
-        and isinstance(node.value, ast.Name)
-        and node.value.id == "self"
-    )
 
 
 def _locate(node: ast.AST, at: ast.AST) -> Any:
@@ -478,9 +460,19 @@ def _call(fn: str, *args: Any) -> ast.stmt:
 class _Inline(ast.NodeTransformer):
     """An atom's tree (over `M` and `E`) as code of a ringlet of machine `own`."""
 
-    def __init__(self, own: int, state: str | None) -> None:
+    def __init__(
+        self, own: int, state: str | None, pins: dict[str, Any] | None = None, pinned: set[str] | None = None
+    ) -> None:
         self.own = own
         self.state = state
+        self.pins = pins or {}
+        self.pinned = pinned if pinned is not None else set()
+
+    def visit_Attribute(self, node: ast.Attribute) -> ast.AST:
+        if node.attr in self.pins and _is_own(node, node.attr, self.own):
+            self.pinned.add(node.attr)
+            return ast.Constant(self.pins[node.attr])
+        return self.generic_visit(node)
 
     def visit_Subscript(self, node: ast.Subscript) -> ast.AST:
         if self.state is not None and node.value is not None and _is_own(node.value, "STATES", self.own):
@@ -519,12 +511,17 @@ _COMPARE: dict[type[ast.cmpop], Callable[[Any, Any], bool]] = {
     ast.NotEq: lambda a, b: a != b,
     ast.In: lambda a, b: a in b,
     ast.NotIn: lambda a, b: a not in b,
+    ast.Lt: lambda a, b: a < b,
+    ast.LtE: lambda a, b: a <= b,
+    ast.Gt: lambda a, b: a > b,
+    ast.GtE: lambda a, b: a >= b,
 }
 
 
 def _fold(node: ast.expr) -> ast.expr:
-    """Comparisons of constants (a state's name with the names it is compared with), `not` and
-    `and`/`or` over them, folded to constants; anything else as it is."""
+    """Comparisons of constants (a state's name with the names it is compared with, a pinned
+    number with a bound), `not` and `and`/`or` over them, folded to constants; anything else as
+    it is."""
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not):
         inner = _fold(node.operand)
         if isinstance(inner, ast.Constant):

@@ -36,6 +36,9 @@ class Clock:
 
     kind = "abstract"
     now: int = 0
+    #: Called when a wait moves the time on (`sleep_until`, inside a spin call): the sim clock's
+    #: run context raises the scheduler's attention; the debugger's history notes the time.
+    on_jump: Callable[[], None] | None = None
 
     def start(self) -> None:
         """The rounds begin (Arrangement.run): a clock of real time counts from here."""
@@ -129,3 +132,5 @@ class WallClock(Clock):
         if t > now:
             time.sleep((t - now) / 1e9)
         self.now = self.read()
+        if self.on_jump is not None:
+            self.on_jump()

@@ -72,6 +72,8 @@ class Ringlet:
     #: how it changes each variable it touches, each way: "up" (`x += 1`, `x -= -0.5`),
     #: "down", "set" (`x = 3`: a numeric literal), "other" (anything else)
     changes: dict[str, set[str]] = field(default_factory=dict)
+    #: the literals of those changes: what `x += 2` adds (2), `x -= 1` (-1), `x = 3` sets (3)
+    literals: dict[str, set[int | float]] = field(default_factory=dict)
 
 
 @dataclass
@@ -108,6 +110,13 @@ class ClassReads:
         if any(v != variable and g == self.group[variable] for v, g in self.group.items()):
             return False
         return all(r.changes.get(variable, set()) <= {"up", "down", "set"} for r in self.ringlets.values())
+
+    def integral(self, variable: str) -> bool:
+        """Whether the machine's own code keeps `variable` an int once it is one (an int or a
+        bool): it keeps it a number, by int literals alone."""
+        if not self.numeric(variable):
+            return False
+        return all(type(v) is int for r in self.ringlets.values() for v in r.literals.get(variable, ()))
 
     def step(self, ringlet: str, variable: str) -> int:
         """+1 if the ringlet only steps `variable` up by literals (and it is numeric), -1 if only
@@ -162,7 +171,7 @@ def class_reads(cls: type[Any]) -> ClassReads | None:
             continue
         scan = _Scan(names, own, namespace)
         scan.visit(defs[f.__name__])
-        r = Ringlet(f.__name__, scan.touched, scan.moves, scan.finishes, scan.changes)
+        r = Ringlet(f.__name__, scan.touched, scan.moves, scan.finishes, scan.changes, scan.literals)
         ringlets[f.__name__] = r
         # one group of what the ringlet may make share an object; a numeric literal stepped or
         # set makes no other name for anything (`x += 1` on a shared object is an "other" change
@@ -240,6 +249,7 @@ class _Scan(ast.NodeVisitor):
         self.depth = 0  # inside a nested function or lambda (a callback)
         self.parents: list[ast.AST] = []
         self.changes: dict[str, set[str]] = {}
+        self.literals: dict[str, set[int | float]] = {}
         self._stepped: set[int] = set()  # targets of a numeric step or set (the kinds above)
 
     def generic_visit(self, node: ast.AST) -> None:
@@ -264,26 +274,30 @@ class _Scan(ast.NodeVisitor):
         for t in node.targets:
             if is_self_attr(t, "_state"):
                 self.moves = True
-        if len(node.targets) == 1 and _number(node.value) is not None:
-            self._numeric_change(node.targets[0], "set")
+        value = _number(node.value)
+        if len(node.targets) == 1 and value is not None:
+            self._numeric_change(node.targets[0], "set", value)
         self.generic_visit(node)
 
     def visit_AnnAssign(self, node: ast.AnnAssign) -> None:
-        if node.value is not None and _number(node.value) is not None:
-            self._numeric_change(node.target, "set")
+        value = _number(node.value) if node.value is not None else None
+        if value is not None:
+            self._numeric_change(node.target, "set", value)
         self.generic_visit(node)
 
     def visit_AugAssign(self, node: ast.AugAssign) -> None:
         value = _number(node.value)
         if value and isinstance(node.op, ast.Add | ast.Sub):
-            self._numeric_change(node.target, "up" if (value > 0) == isinstance(node.op, ast.Add) else "down")
+            delta = value if isinstance(node.op, ast.Add) else -value
+            self._numeric_change(node.target, "up" if delta > 0 else "down", delta)
         self.generic_visit(node)
 
-    def _numeric_change(self, target: ast.expr, kind: str) -> None:
+    def _numeric_change(self, target: ast.expr, kind: str, value: int | float) -> None:
         """`self.x` changed by a numeric literal, in the ringlet's own code (not a callback)."""
         own = isinstance(target, ast.Attribute) and is_self_attr(target, target.attr)
         if own and not self.depth and target.attr in self.names:  # type: ignore[attr-defined]
             self.changes.setdefault(target.attr, set()).add(kind)  # type: ignore[attr-defined]
+            self.literals.setdefault(target.attr, set()).add(value)  # type: ignore[attr-defined]
             self._stepped.add(id(target))
 
     def visit_Call(self, node: ast.Call) -> None:

@@ -17,7 +17,8 @@ import time
 from .clock import Clock, SimClock, WallClock
 from .context import FOREVER, RunContext, activate
 from .errors import ErrorReport, RunStopped, passes_through, report_for
-from .machine import RESTART, RESUME, SUSPEND, Machine, UnknownMachineError
+from .gate import Gated, _hold
+from .machine import Machine
 from .trace import Tracer
 
 TYPE_CHECKING = False  # not typing's own: importing typing would cost every run's start-up
@@ -80,8 +81,9 @@ def check_names(classes: Sequence[type[Machine]], suspended: Sequence[str] = ())
             raise ArrangementError(f"--suspended {n}: no machine named {n} is loaded")
 
 
-class Arrangement:
-    """Machines in load order, the clock they share, and the round-robin that runs them."""
+class Arrangement(Gated):
+    """Machines in load order, the clock they share, and the round-robin that runs them (the gate
+    in front of their ringlets: `Gated`, gate.py)."""
 
     def __init__(
         self,
@@ -161,6 +163,9 @@ class Arrangement:
         #: Told of the live machines each time they are worked out (between rounds), with the
         #: rounds run so far: the debugger's history numbers its records' rounds by it.
         self.on_live: Callable[[int, list[Machine]], None] | None = None
+        #: Told of the run time each time a round loop of any clock but the sim clock reads it
+        #: (between rounds), when set: the debugger's history times its records by it.
+        self.note_time: Callable[[int], None] | None = None
         self._stopped: int | None = None
         #: Ringlets run before the current round loop (its rounds times its live machines),
         #: counted once per loop, never per ringlet: with the loop's live list, what numbers a
@@ -186,162 +191,12 @@ class Arrangement:
         #: machine's next ringlet (set_variables).
         self._variables: dict[int, dict[str, object]] = {}
 
-    @property
-    def _attention(self) -> bool:
-        """Something to look at before the next round: a command, an unload, an interrupt."""
-        return self._attn
-
-    @_attention.setter
-    def _attention(self, value: bool) -> None:
-        self._attn = value
-        if value:
-            self.ctx.wake = 0  # the round loops watch only the context's wake time
-
-    # -- what machines call --------------------------------------------------------------
-    def machine(self, name: str) -> Machine:
-        try:
-            return self.by_name[name]
-        except (KeyError, TypeError):
-            loaded = ", ".join(self.by_name) or "none"
-            raise UnknownMachineError(f"no machine named {name!r} is loaded (loaded: {loaded})") from None
-
-    def command(self, name: str, cmd: str) -> None:
-        """Schedule a control command; it is applied at the start of the target's next ringlet."""
-        m = self.machine(name)
-        if m._finished and cmd != RESTART:
-            return  # a finished machine can only be restarted; it stays finished until then
-        m._pending = cmd  # a later command replaces an earlier pending one
-        _hold(m)  # a machine commanding itself may still fire a transition: _rehold fixes that
-        self._attention = True
-
-    def hold_for_inputs(self, m: Machine) -> None:
-        """A new input value came for `m` (llfsm.runtime.inputs): its next ringlet starts at the
-        gate, which takes the snapshot first.  (Called during m's own ringlet, the ringlet may
-        still point `_run` past the gate: `_rehold` puts it back after the round.)"""
-        _hold(m)
-        self._attention = True
-
-    def set_variables(self, name: str, values: dict[str, object]) -> None:
-        """Give machine variables new values (a machine's parameters set from outside,
-        llfsm.ros.control): they take effect at the start of the machine's next ringlet, before
-        a pending command, never in the middle of a ringlet.  Later values replace earlier ones."""
-        m = self.machine(name)
-        self._variables.setdefault(m._id, {}).update(values)
-        _hold(m)  # the gate sets them; a machine setting its own may still fire: _rehold fixes that
-        self._attention = True
-
-    def suspend_now(self, m: Machine, remember: int | None) -> None:
-        """Move `m` to its suspend state and run that state's OnEntry (no OnExit anywhere)."""
-        m._resume_to = remember
-        m._state = m.SUSPENDED
-        m._suspended = True
-        if self.tracer is not None:
-            self.tracer.command("suspend", m, m.SUSPENDED)
-            self.tracer.entry(m, m.SUSPENDED)
-        enter = m.ENTER[m.SUSPENDED]
-        m._run = enter
-        enter(m)  # the suspend state's ringlet is its OnEntry only
-        _hold(m)
-        self._attention = True
-
     def set_tracer(self, tracer: Tracer | None) -> None:
         """Change the tracer during a run (from the scheduler's thread): the round loop picks
         it up before its next round.  How state topics get their events only while someone
         listens: the plain loop runs otherwise."""
         self.tracer = tracer
         self._attention = True
-
-    # -- control commands -------------------------------------------------------------------
-    def _apply(self, m: Machine) -> bool:
-        """Apply m's pending command; True if the ringlet goes on (step 2), False if it ends."""
-        cmd, m._pending = m._pending, None
-        self._attention = True
-        tr = self.tracer
-        if cmd == SUSPEND:
-            if not m._suspended:
-                hook = m.ON_SUSPEND[m._state]
-                if hook is not None:
-                    hook(m)
-                self.suspend_now(m, remember=m._state)
-            return False
-        if cmd == RESUME:
-            if not m._suspended:
-                return True  # nothing to resume: an ordinary ringlet
-            hook = m.ON_RESUME[m.SUSPENDED]
-            if hook is not None:
-                hook(m)
-            target = m.INITIAL if m._resume_to is None else m._resume_to
-            m._state, m._suspended, m._resume_to = target, False, None
-            _regate(m, self._variables)
-            hook = m.ON_RESUME[target]
-            if hook is not None:
-                hook(m)
-            m._entered = True
-            if tr is not None:
-                tr.command("resume", m, target)
-            return True
-        # RESTART (which also brings a finished machine back)
-        m._state, m._suspended, m._resume_to, m._entered = m.INITIAL, False, None, True
-        m._finished = False
-        _regate(m, self._variables)
-        if tr is not None:
-            tr.command("restart", m, m.INITIAL)
-        return True
-
-    def _release(self, m: Machine) -> bool:
-        """The turn of a held machine: `_let_go`, through `around_release` when one is set."""
-        around = self.around_release
-        return self._let_go(m) if around is None else around(m, self._let_go)
-
-    def _let_go(self, m: Machine) -> bool:
-        """The turn of a held machine (a new input value to take, new variable values, a command
-        pending, or suspended): take the inputs' snapshot, set the variables, apply the command;
-        True if the ringlet goes on."""
-        if self._stopped is not None:
-            return False  # the run ends at this boundary (stop_at_boundary)
-        if self.on_release is not None:
-            self.on_release(m)
-        inputs = m._inputs
-        if inputs is not None and inputs.fresh:
-            inputs.snapshot()
-        if self._variables:
-            values = self._variables.pop(m._id, None)
-            if values is not None:
-                for name, value in values.items():
-                    setattr(m, name, value)
-        if m._pending is not None:
-            if not self._apply(m):
-                return False  # the command (suspend) ended the ringlet
-        elif m._suspended:
-            return False  # suspended: no ringlet
-        _regate(m, self._variables)
-        return True
-
-    def _gate(self, m: Machine) -> int | None:
-        """Stands in for the ringlet of a held machine: release it, then run the real ringlet
-        if that lets it go on."""
-        return m._run(m) if self._release(m) else None
-
-    def finish(self, m: Machine) -> None:
-        """The machine has finished: unload it.  The hook generated code calls, from the ringlet
-        of an accepting state, unless the run keeps accepting machines (`keep_accepting`)."""
-        if self.tracer is not None:
-            self.tracer.finish(m)
-        m._finished = True
-        m._suspended = False
-        _regate(m, self._variables)
-        self._attention = True
-        self.ctx.references_dropped = True  # what it held is released between rounds
-        self.ctx.wake = 0
-
-    def _rehold(self) -> None:
-        """Between rounds: a machine that commanded itself and then fired a transition in the
-        same ringlet pointed `_run` past its gate; put the gate back in front."""
-        for m in self.machines:
-            inputs = m._inputs
-            fresh = inputs is not None and inputs.fresh  # a new input value for its snapshot
-            if m._pending is not None or m._suspended or m._id in self._variables or fresh:
-                _hold(m)
 
     def interrupt(self, signum: int = signal.SIGINT) -> None:
         """Ctrl-C / SIGTERM / SIGHUP: `ros.ok()` turns false, rounds go on for the grace time (run
@@ -364,23 +219,11 @@ class Arrangement:
             _hold(m)  # the rest of the round meets the gate, which lets nothing through now
         self._attention = True
 
-    def hold(self, m: Machine) -> None:
-        """Send m's next turn through the gate (and `on_release`): the debugger's pause before
-        a turn.  The gate lets it go on as before once passed."""
-        _hold(m)
-
     def ask_pause(self) -> None:
         """Pause at the next round boundary (the debugger's; a watcher pauses sooner, at the next
         ringlet boundary).  Two plain stores: safe from any thread."""
         self.pause_asked = True
         self._attention = True
-
-    def hold_all(self) -> None:
-        """Put the gate in front of every machine's next ringlet, so that whoever wraps the gate
-        (`_gate_fn`: a monitor) is called at the next boundary, even inside a plain loop.  The
-        gate lets a machine held for nothing else through at once."""
-        for m in self.machines:
-            _hold(m)
 
     # -- rounds ----------------------------------------------------------------------------
     def _watched_round(self, live: list[Machine], tr: Tracer | None) -> bool:
@@ -543,12 +386,14 @@ class Arrangement:
                         sim.now += sim.period
                     else:
                         clock.advance(fired)
+                        if self.note_time is not None:
+                            self.note_time(clock.now)
                 elif sim is not None:
                     n = self._sim_rounds(live, sim)
                 elif wall is not None:
-                    n = self._wall_rounds(live, wall)
+                    n = self._wall_rounds(live, wall, self.note_time)
                 else:
-                    n = self._rounds(live)
+                    n = self._rounds(live, self.note_time)
                 rounds += n
                 self.ringlets += n * len(live)
                 if clock.now >= ctx.wake:
@@ -595,13 +440,14 @@ class Arrangement:
         clock.now += period  # the last round's step (from the jump, if there was one)
         return (now - start) // period
 
-    def _wall_rounds(self, live: list[Machine], clock: WallClock) -> int:
+    def _wall_rounds(self, live: list[Machine], clock: WallClock, note: Callable[[int], None] | None) -> int:
         """The wall clock without a period: sleep `idle` after a round in which no transition
         fired, then read the clock.  Rounds that each fire a transition, back to back, read it
         in batches (a clock read costs as much as a whole plain ringlet): every 2, 4, ... up to
         BATCH rounds while the rounds since the last read took less than FAST, else every
         round.  So the run clock lags only during a stretch of firing rounds, by at most
-        BATCH - 1 rounds, and a round in which nothing fires always reads it."""
+        BATCH - 1 rounds, and a round in which nothing fires always reads it.  `note`
+        (`note_time`) is told of each read."""
         ctx = self.ctx
         read = time.monotonic_ns
         idle = clock.idle / 1e9
@@ -637,12 +483,15 @@ class Arrangement:
                 left = every
                 now = t
                 clock.now = t
+                if note is not None:
+                    note(t)
             if now >= ctx.wake:
                 break
         return n
 
-    def _rounds(self, live: list[Machine]) -> int:
-        """Any other clock (the wall clock with a period): the clock decides how to advance."""
+    def _rounds(self, live: list[Machine], note: Callable[[int], None] | None) -> int:
+        """Any other clock (the wall clock with a period): the clock decides how to advance;
+        `note` (`note_time`) is told of the time after each round."""
         clock, ctx = self.clock, self.ctx
         n = 0
         while True:
@@ -653,24 +502,11 @@ class Arrangement:
                     fired = True
             clock.advance(fired)
             now = clock.now
+            if note is not None:
+                note(now)
             if now >= ctx.wake:
                 break
         return n
 
     def _result(self, reason: str, status: int) -> RunResult:
         return RunResult(reason, self.rounds, self.clock.now, status)
-
-
-def _hold(m: Machine) -> None:
-    """Put the gate in front of the machine's next ringlet (kept in `_next`)."""
-    if m._run is not m._held:
-        m._next, m._run = m._run, m._held
-
-
-def _regate(m: Machine, variables: dict[int, dict[str, object]]) -> None:
-    """Point the machine's `_run` at the gate while it is held (a command, suspended, new values
-    for its variables waiting: `variables`, the arrangement's), at its next ringlet otherwise."""
-    if m._pending is not None or m._suspended or m._id in variables:
-        _hold(m)
-    elif m._run is m._held:
-        m._run = m._next

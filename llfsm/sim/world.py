@@ -26,6 +26,9 @@ coordinates, colour, width) and rasterised into an RGBA image only when a colour
 asked for, and then only the strokes added since the last time.  The path image starts
 transparent white, qRgba(255, 255, 255, 0), as in turtlesim, and the background colour is
 painted under it at display time from the current parameters.
+
+turtle.py holds turtlesim's numbers and one turtle's state, paint.py the painter of the path
+image; this module is the world that moves the turtles, draws their paths and answers the node.
 """
 
 from __future__ import annotations
@@ -33,15 +36,34 @@ from __future__ import annotations
 import math
 import re
 import struct
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from typing import NamedTuple
+from collections.abc import Callable
 
-_c_fill_stroke: Callable[[bytearray, float, float, float, float, bytes, int], bool] | None
-try:  # the stroke painter in C (setup.py builds it where a C compiler is; optional)
-    from ._paint import fill_stroke as _c_fill_stroke
-except ImportError:  # pragma: no cover - installs without a compiler
-    _c_fill_stroke = None
+from .paint import _TRANSPARENT, _c_fill_stroke, _fill_stroke, _qround
+from .turtle import (
+    _PI,
+    _TWO_PI,
+    BACKGROUND,
+    CANVAS_PX,
+    CENTRE,
+    COMMAND_TIMEOUT_NS,
+    PEN_COLOR,
+    PEN_WIDTH,
+    PIXELS_PER_METRE,
+    UPDATE_DT,
+    UPDATE_PERIOD_NS,
+    WORLD_SIZE,
+    Pose,
+    RotationEvent,
+    Segment,
+    TurtleError,
+    _check_rgb,
+    _check_u8,
+    _normalise,
+    _Rotation,
+    _Stroke,
+    _Turtle,
+    f32,
+)
 
 __all__ = [
     "BACKGROUND",
@@ -62,152 +84,10 @@ __all__ = [
     "f32",
 ]
 
-_F32 = struct.Struct("<f")
 _POSE32 = struct.Struct("<5f")
 
-
-def f32(value: float) -> float:
-    """Round to float32, as storing into a `float` field or variable does in turtlesim."""
-    try:
-        rounded: float = _F32.unpack(_F32.pack(value))[0]
-    except OverflowError:
-        return math.copysign(math.inf, value)
-    return rounded
-
-
-CANVAS_PX = 500
-"""Width and height of turtlesim's window and path image, in pixels."""
-PIXELS_PER_METRE = 45.0
-"""turtlesim's `meter_`: the height of its turtle images."""
-WORLD_SIZE = f32((CANVAS_PX - 1) / PIXELS_PER_METRE)
-"""`width_in_meters_` = `(width() - 1) / meter_`, a float: 11.088889122009277."""
-CENTRE = f32(WORLD_SIZE / 2.0)
-"""Where turtle1 is spawned on start and on reset: 5.544444561004639 (x and y)."""
-UPDATE_PERIOD_NS = 16_000_000
-"""turtlesim's update timer interval (16 ms)."""
-UPDATE_DT = 0.001 * 16
-"""The dt turtlesim integrates with: `0.001 * update_timer_->interval()`."""
-COMMAND_TIMEOUT_NS = 1_000_000_000
-"""A velocity command lapses when more than this has passed since it arrived."""
-BACKGROUND = (0x45, 0x56, 0xFF)
-"""Default background_r/g/b parameters."""
-PEN_COLOR = (0xB3, 0xB8, 0xFF)
-"""Default pen colour of every new turtle."""
-PEN_WIDTH = 3
-"""Default pen width of every new turtle, in pixels."""
-
-# turtle.hpp: `#define PI 3.14159265` (not math.pi) -- theta is normalised with this value.
-_PI = 3.14159265
-_TWO_PI = 2.0 * _PI
-_TRANSPARENT = b"\xff\xff\xff\x00"
 _WALL = "Oh no! I hit the wall! (Clamping from [x=%f, y=%f])"
 _NAME_RE = re.compile(r"/?[A-Za-z_][A-Za-z0-9_]*(?:/[A-Za-z_][A-Za-z0-9_]*)*")
-
-
-class TurtleError(Exception):
-    """A request turtlesim refuses.  For spawn and kill the message is turtlesim's own ERROR log
-    line, so the node can log `str(err)` and answer as turtlesim does (spawn: empty name)."""
-
-
-class RotationEvent(NamedTuple):
-    """What an update did to a turtle's rotate_absolute goal: "feedback" (value: the remaining
-    rotation), "succeeded" or "canceled" (value: the delta turned, the goal's result), all
-    rounded to float32 as the action's fields hold them."""
-
-    turtle: str
-    kind: str
-    value: float
-
-
-class _Rotation:
-    """One rotate_absolute goal: its heading, where the turtle started, a cancel request, and
-    the delta turned so far (the result turtlesim keeps updating)."""
-
-    __slots__ = ("canceling", "delta", "start", "theta")
-
-    def __init__(self, theta: float, start: float) -> None:
-        self.theta = theta
-        self.start = start
-        self.canceling = False
-        self.delta = 0.0
-
-
-class Pose(NamedTuple):
-    """The fields of turtlesim/msg/Pose, already rounded to float32 as the message holds them."""
-
-    x: float
-    y: float
-    theta: float
-    linear_velocity: float
-    angular_velocity: float
-
-
-@dataclass(frozen=True, slots=True)
-class Segment:
-    """One pen stroke in pixel coordinates (y down), drawn with a square cap like a QPen."""
-
-    x0: float
-    y0: float
-    x1: float
-    y1: float
-    color: tuple[int, int, int]
-    width: int
-
-
-# A stored stroke: x0, y0, x1, y1 (px), RGBA bytes, width (px).  Tuples keep `update` cheap.
-_Stroke = tuple[float, float, float, float, bytes, int]
-
-
-class _Turtle:
-    """turtlesim's `Turtle`: position in the Qt frame (metres), heading, velocities, pen."""
-
-    __slots__ = (
-        "ang",
-        "last_cmd",
-        "last_stroke",
-        "lin_x",
-        "lin_y",
-        "name",
-        "orient",
-        "pen_on",
-        "pen_rgba",
-        "pen_width",
-        "qx",
-        "qy",
-        "rotation",
-        "sensed",
-        "sensed_at",
-        "sensed_bg",
-        "sensed_version",
-        "sensed_x",
-        "sensed_y",
-        "teleports",
-    )
-
-    def __init__(self, name: str, qx: float, qy: float, orient: float) -> None:
-        self.name = name
-        self.qx = qx
-        self.qy = qy
-        self.orient = orient
-        self.lin_x = 0.0
-        self.lin_y = 0.0
-        self.ang = 0.0
-        self.last_cmd = 0
-        self.pen_on = True
-        self.pen_rgba = bytes((*PEN_COLOR, 255))
-        self.pen_width = PEN_WIDTH
-        # (relative, x_or_linear, y, theta): applied in order at the start of the next update.
-        self.teleports: list[tuple[bool, float, float, float]] = []
-        self.rotation: _Rotation | None = None
-        # Index in the stroke list of this turtle's last motion stroke (to extend straight lines).
-        self.last_stroke = -1
-        self.sensed: tuple[int, int, int] = (255, 255, 255)
-        self.sensed_at = -1
-        # where `sensed` was read, and what the picture was then: a turtle standing still on a
-        # picture that has not changed reads the same pixel again
-        self.sensed_x = self.sensed_y = math.nan
-        self.sensed_version = -1
-        self.sensed_bg: tuple[int, int, int] | None = None
 
 
 class TurtleWorld:
@@ -616,112 +496,3 @@ class TurtleWorld:
         if raster[k + 3] == 0 and self._sensor_sees_background:
             return self._background
         return (raster[k], raster[k + 1], raster[k + 2])
-
-
-def _normalise(angle: float) -> float:
-    """turtlesim's normalizeAngle: into [-PI, PI), with its PI."""
-    return angle - _TWO_PI * math.floor((angle + _PI) / _TWO_PI)
-
-
-def _qround(v: float) -> int:
-    """Qt's qRound for doubles: halves away from zero."""
-    return int(v + 0.5) if v >= 0.0 else int(v - 0.5)
-
-
-def _check_u8(value: int, what: str) -> int:
-    if isinstance(value, bool):
-        value = int(value)
-    if not isinstance(value, int) or not 0 <= value <= 255:
-        raise TurtleError(f"{what} must be an integer from 0 to 255, not {value!r}")
-    return value
-
-
-def _check_rgb(rgb: Sequence[int], what: str) -> tuple[int, int, int]:
-    if len(rgb) != 3:
-        raise TurtleError(f"{what} must be three integers (r, g, b), not {rgb!r}")
-    r, g, b = (_check_u8(v, what) for v in rgb)
-    return (r, g, b)
-
-
-def _fill_stroke(buf: bytearray, x0: float, y0: float, x1: float, y1: float, rgba: bytes, width: int) -> None:
-    """Paint one stroke as an aliased QPainter line with a square cap: the rectangle around the
-    segment, `width` wide and extended `width/2` past both ends.  A pixel is painted when its
-    centre lies inside; each pixel row is the intersection of the rectangle's two slabs.
-
-    The colour sensor paints a stroke per turtle per update, so the common case (a slanted
-    stroke) has its own branch: each slab's two edges come out of its division in an order
-    fixed by the signs of the direction (rounding is monotonic), so it divides without the
-    comparisons and swaps; the operations and their order are the general branch's, so every
-    pixel is the same."""
-    if not (math.isfinite(x0) and math.isfinite(y0) and math.isfinite(x1) and math.isfinite(y1)):
-        return
-    half = width / 2.0
-    dx = x1 - x0
-    dy = y1 - y0
-    length = math.hypot(dx, dy)
-    if length > 0.0:
-        ux = dx / length
-        uy = dy / length
-    else:  # a zero-length line still paints its square cap
-        ux, uy = 1.0, 0.0
-    cx = (x0 + x1) / 2.0
-    cy = (y0 + y1) / 2.0
-    along = length / 2.0 + half  # half extent along the line, caps included
-    # Vertical extent of the rectangle, then one span per row of pixel centres inside it.
-    ey = abs(uy) * along + abs(ux) * half
-    j0 = max(0, math.ceil(cy - ey - 0.5))
-    j1 = min(CANVAS_PX - 1, math.ceil(cy + ey - 0.5) - 1)
-    last = CANVAS_PX - 1
-    ceil = math.ceil
-    # Slab 1: |(x - cx) * ux + d * uy| <= along, edges (-along - d * uy) / ux and
-    # (along - d * uy) / ux; slab 2: |-(x - cx) * uy + d * ux| <= half, edges
-    # (half - d * ux) / -uy and (-half - d * ux) / -uy.
-    slanted = ux != 0.0 and uy != 0.0
-    if slanted:  # which edge of each slab is the lower one: lo1/hi1, lo2/hi2
-        nuy = -uy
-        lo1, hi1 = (-along, along) if ux > 0.0 else (along, -along)
-        lo2, hi2 = (-half, half) if nuy > 0.0 else (half, -half)
-    for j in range(j0, j1 + 1):
-        d = j + 0.5 - cy
-        if slanted:
-            t1 = d * uy
-            t2 = d * ux
-            xl = (lo1 - t1) / ux
-            a = (lo2 - t2) / nuy
-            if a > xl:
-                xl = a
-            xr = (hi1 - t1) / ux
-            b = (hi2 - t2) / nuy
-            if b < xr:
-                xr = b
-        else:  # along an axis: one slab may hold every column, or none of this row
-            xl = -math.inf
-            xr = math.inf
-            if ux != 0.0:
-                a = (-along - d * uy) / ux
-                b = (along - d * uy) / ux
-                if a > b:
-                    a, b = b, a
-                xl, xr = a, b
-            elif abs(d * uy) > along:
-                continue
-            if uy != 0.0:
-                a = (half - d * ux) / -uy
-                b = (-half - d * ux) / -uy
-                if a > b:
-                    a, b = b, a
-                if a > xl:
-                    xl = a
-                if b < xr:
-                    xr = b
-            elif abs(d * ux) > half:
-                continue
-        i0 = ceil(cx + xl - 0.5)
-        i1 = ceil(cx + xr - 0.5) - 1
-        if i0 < 0:
-            i0 = 0
-        if i1 > last:
-            i1 = last
-        if i0 <= i1:
-            base = j * CANVAS_PX
-            buf[(base + i0) * 4 : (base + i1 + 1) * 4] = rgba * (i1 - i0 + 1)

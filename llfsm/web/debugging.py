@@ -79,7 +79,7 @@ class RunDebug:
         h = d.history
         if h is not None:  # the values the scheduler's thread took last
             variables = h.snapshot()
-            status["records"] = len(h.ring)
+            status["records"] = h.kept
         else:
             variables = {}
         return {**status, "variables": variables}
