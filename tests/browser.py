@@ -66,6 +66,9 @@ def playwright_or_skip() -> Any:
             f"no Chromium at {CHROMIUM}: `apt-get install chromium` (make test does it as root)",
             allow_module_level=True,
         )
+    # `expect` does not take the page's default timeout: its own is 5 s, which a loaded machine
+    # overran (a run's debugger status, a command's answer); the same wait as every other here
+    sync_api.expect.set_options(timeout=TIMEOUT_MS)
     return sync_api
 
 

@@ -152,6 +152,86 @@ def start_view(ns: NetNamespace, *args: str) -> tuple[subprocess.Popen[str], str
     return view, url, err
 
 
+class Watched:
+    """A process's stdout and stderr read by threads as they come, so that a test waits for the
+    line that says a thing happened (a state entered, a message echoed) instead of a fixed time,
+    and never blocks on a full pipe.  Under load a process takes seconds to start: a test that
+    counts time from its start races with it."""
+
+    def __init__(self, p: subprocess.Popen[str]) -> None:
+        self.p = p
+        self.out: list[str] = []
+        self.err: list[str] = []
+        self._changed = threading.Condition()
+        self._readers = [
+            threading.Thread(target=self._read, args=(stream, into), daemon=True)
+            for stream, into in ((p.stdout, self.out), (p.stderr, self.err))
+            if stream is not None
+        ]
+        for t in self._readers:
+            t.start()
+
+    def _read(self, stream: Iterator[str], into: list[str]) -> None:
+        for line in stream:
+            with self._changed:
+                into.append(line)
+                self._changed.notify_all()
+        with self._changed:
+            self._changed.notify_all()
+
+    def wait_for(self, pattern: str, *, stream: str = "err", count: int = 1, timeout: float = 90) -> str:
+        """Until `count` lines of `stream` ("out" or "err") match `pattern` (a regular
+        expression): the last of them.  Fails saying what the process wrote if it ends first
+        or `timeout` seconds pass."""
+        lines = self.out if stream == "out" else self.err
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while True:
+                hits = [line for line in lines if re.search(pattern, line)]
+                if len(hits) >= count:
+                    return hits[count - 1]
+                gone = self.p.poll() is not None and not any(t.is_alive() for t in self._readers)
+                left = deadline - time.monotonic()
+                if gone or left <= 0:
+                    why = f"ended ({self.p.returncode})" if gone else f"not within {timeout} s"
+                    raise AssertionError(
+                        f"{count} line(s) of std{stream} matching {pattern!r}: {why}; it wrote:\n"
+                        + "".join(self.out)[-3000:]
+                        + "\n-- stderr --\n"
+                        + "".join(self.err)[-3000:]
+                    )
+                self._changed.wait(min(left, 0.5))
+
+    def finish(self, timeout: float, sig: int | None = None) -> tuple[int, str, str]:
+        """(`sig` sent first, if any) Wait for the process (killed after `timeout` s): its
+        status, stdout and stderr."""
+        if sig is not None and self.p.poll() is None:
+            self.p.send_signal(sig)
+        try:
+            self.p.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.p.kill()
+            self.p.wait(10)
+            self.err.append(f"\n[killed after {timeout} s]")
+        for t in self._readers:
+            t.join(10)
+        return self.p.returncode, "".join(self.out), "".join(self.err)
+
+
+def until_shown(ns: NetNamespace, *args: str, needle: str, timeout: float = 60) -> str:
+    """Repeat `llfsm ARGS` in the namespace until its standard output holds `needle` (discovery
+    takes its time, the more so under load): that output.  Fails with the last one."""
+    deadline = time.monotonic() + timeout
+    while True:
+        _status, out, err = finish(ns.llfsm(*args), timeout)
+        if needle in out:
+            return out
+        assert time.monotonic() < deadline, (
+            f"`llfsm {' '.join(args)}` never showed {needle!r} in {timeout} s: {out}{err}"
+        )
+        time.sleep(0.2)
+
+
 def interrupt(p: subprocess.Popen[str], after: float, sig: int = signal.SIGINT) -> None:
     time.sleep(after)
     if p.poll() is None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -15,7 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from dds_netns import NetNamespace, finish, netns  # noqa: F401  (netns is a fixture)
+from dds_netns import NetNamespace, Watched, finish, netns  # noqa: F401  (netns is a fixture)
 from helpers import MACHINES, REPO, llfsm, on_pty, run_sim
 from rosbags.highlevel import AnyReader
 
@@ -236,7 +237,8 @@ def _status_lines(shown: str) -> list[str]:
 @pytest.mark.dds
 def test_bag_record_and_play_say_what_they_do_on_a_terminal(netns: NetNamespace, tmp_path: Path) -> None:
     runner: Callable[..., subprocess.Popen[str]]
-    run = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "8")
+    run = Watched(netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine"))
+    run.wait_for(r"Publishing: ")  # publishing before the recording starts (a start-up takes seconds under load)
     bag = tmp_path / "rec"
     cmd = ["nsenter", f"--net=/proc/{netns.holder.pid}/ns/net", sys.executable, "-m", "llfsm"]
     status, _out, shown = on_pty([*cmd, "bag", "record", "/pingpong", "-o", str(bag), "--duration", "4"], cwd=REPO)
@@ -245,7 +247,7 @@ def test_bag_record_and_play_say_what_they_do_on_a_terminal(netns: NetNamespace,
     assert any(re.fullmatch(r"recording 1 topic to .*rec: \d+ messages? \(/pingpong \d+\), \d+ s", s) for s in lines), (
         lines
     )
-    finish(run, 60)
+    run.finish(60, signal.SIGINT)
     listener = netns.llfsm("run", "--transport", "dds", "--echo", "/pingpong", "--duration", "6")
     time.sleep(1)
     status, _out, shown = on_pty([*cmd, "bag", "play", str(bag), "--delay", "1"], cwd=REPO)

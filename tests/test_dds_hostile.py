@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -26,7 +27,7 @@ from pathlib import Path
 
 import pytest
 from dds_netns import RAW_PEER as PRELUDE
-from dds_netns import NetNamespace, finish
+from dds_netns import NetNamespace, Watched, finish
 from helpers import REPO, Run
 
 pytest.importorskip("cyclonedds", reason="the DDS transport needs the cyclonedds package")
@@ -86,10 +87,10 @@ def wait_until_seen(ns: NetNamespace, topic: str, timeout: float = 40) -> None:
 def test_echo_drops_samples_that_are_not_utf8_and_prints_the_good_ones(netns: NetNamespace) -> None:
     peer(netns, PEER)
     wait_until_seen(netns, "/chatter")
-    p = netns.popen([sys.executable, "-m", "llfsm", "topic", "echo", "/chatter", "--timeout", "20"], cwd=REPO)
-    time.sleep(3)
-    p.send_signal(2)
-    status, out, err = finish(p, 30)
+    p = Watched(netns.popen([sys.executable, "-m", "llfsm", "topic", "echo", "/chatter", "--timeout", "20"], cwd=REPO))
+    p.wait_for(r"^data: good", stream="out", count=5)  # not a fixed time: a start-up takes seconds under load
+    p.wait_for(r"/chatter: dropped")
+    status, out, err = p.finish(30, signal.SIGINT)
     assert status in (0, 130), err
     assert "Traceback" not in err, err
     assert out.count("data: good") >= 5, (out, err)
@@ -123,7 +124,7 @@ def test_graph_verbs_survive_a_discovery_info_that_is_not_utf8(
     netns: NetNamespace, args: tuple[str, ...], needle: str | None
 ) -> None:
     peer(netns, PEER, "info")
-    time.sleep(3)  # discovery (`topic list` is what is tested here: it cannot tell when)
+    wait_until_seen(netns, "/chatter")  # discovery (its time is not what is tested here)
     r = llfsm(netns, *args)
     assert r.status in (0, 1), r.stderr  # 1: nothing to list (the peer has no service)
     assert "Traceback" not in r.stderr, r.stderr
@@ -142,7 +143,7 @@ def test_node_list_still_lists_the_good_nodes(netns: NetNamespace) -> None:
     )
     wait_until_seen(netns, "/turtle1/pose")
     peer(netns, PEER, "info")
-    time.sleep(3)
+    wait_until_seen(netns, "/chatter")
     r = llfsm(netns, "node", "list")
     assert r.status == 0, r.stderr
     assert "/turtlesim" in r.stdout.splitlines(), (r.stdout, r.stderr)
@@ -154,10 +155,10 @@ def test_node_list_still_lists_the_good_nodes(netns: NetNamespace) -> None:
 def test_hz_counts_the_good_samples(netns: NetNamespace) -> None:
     peer(netns, PEER)
     wait_until_seen(netns, "/chatter")
-    p = netns.popen([sys.executable, "-m", "llfsm", "topic", "hz", "/chatter"], cwd=REPO)
-    time.sleep(4)
-    p.send_signal(2)
-    status, out, err = finish(p, 30)
+    p = Watched(netns.popen([sys.executable, "-m", "llfsm", "topic", "hz", "/chatter"], cwd=REPO))
+    p.wait_for(r"^average rate:", stream="out")  # not a fixed time: a start-up takes seconds under load
+    p.wait_for(r"/chatter: dropped")
+    status, out, err = p.finish(30, signal.SIGINT)
     assert status in (0, 130), err
     assert "Traceback" not in err, err
     assert "average rate:" in out, (out, err)
@@ -169,10 +170,9 @@ def test_bag_record_keeps_the_good_samples(netns: NetNamespace, tmp_path: Path) 
     peer(netns, PEER)
     wait_until_seen(netns, "/chatter")
     bag = tmp_path / "bag"
-    p = netns.popen([sys.executable, "-m", "llfsm", "bag", "record", "/chatter", "-o", bag], cwd=REPO)
-    time.sleep(4)
-    p.send_signal(2)
-    status, _out, err = finish(p, 30)
+    p = Watched(netns.popen([sys.executable, "-m", "llfsm", "bag", "record", "/chatter", "-o", bag], cwd=REPO))
+    p.wait_for(r"/chatter: dropped")  # it has heard the peer (a fixed time raced with its start-up under load)
+    status, _out, err = p.finish(30, signal.SIGINT)
     assert status in (0, 130), err
     assert "Traceback" not in err, err
     assert err.count("/chatter: dropped") == 1, err
@@ -312,7 +312,7 @@ def test_a_flooding_peer_neither_stalls_a_run_nor_grows_its_memory(netns: NetNam
     )
     first = count_now(netns)
     hz = netns.popen(
-        [sys.executable, "-m", "llfsm", "topic", "hz", "/flood", "std_msgs/msg/String", "--timeout", "60"],
+        [sys.executable, "-m", "llfsm", "topic", "hz", "/flood", "--timeout", "60"],  # TOPIC...: no type
         cwd=REPO,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,

@@ -5,21 +5,23 @@ private network namespace (dds_netns.py)."""
 from __future__ import annotations
 
 import re
-import time
+import signal
 
 import pytest
-from dds_netns import NetNamespace, finish, interrupt
+from dds_netns import NetNamespace, Watched
 from helpers import MACHINES
 
 
 @pytest.mark.dds
 def test_the_wall_follower_reads_its_sensor_from_another_process(netns: NetNamespace) -> None:
-    sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--node", "wall_sensor", "--duration", "16")
-    time.sleep(0.5)  # across processes: turtlesim's participant up first
-    bot = netns.llfsm("run", "--transport", "dds", MACHINES / "wall_follower.machine", "-v")
-    interrupt(bot, 13.0)
-    bot_status, _, bot_err = finish(bot, 40)
-    sim_status, _, sim_err = finish(sim, 40)
+    sim = Watched(netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--node", "wall_sensor"))
+    sim.wait_for(r"Spawning turtle \[turtle1\]")  # turtlesim's participant up first
+    bot = Watched(netns.llfsm("run", "--transport", "dds", MACHINES / "wall_follower.machine", "-v"))
+    # Ctrl-C once it has turned (a time counted from its start raced with a start-up that takes
+    # seconds under load); the sensor's message is what makes it turn
+    bot.wait_for(r"- wall_follower +- TURN\b")
+    bot_status, _, bot_err = bot.finish(120, signal.SIGINT)
+    sim_status, _, sim_err = sim.finish(120, signal.SIGINT)
     assert bot_status == 0 and sim_status == 0, bot_err + sim_err
     assert "Traceback" not in bot_err + sim_err
     states = re.findall(r"- wall_follower +- (\w+)", bot_err)

@@ -21,7 +21,7 @@ rclpy.init()
 node = rclpy.create_node("rclpy_listener")
 heard = []
 node.create_subscription(String, "/pingpong", lambda m: heard.append(m.data), 10)
-end = time.monotonic() + 7
+end = time.monotonic() + 90  # until heard: under load each side takes seconds to start
 graph_nodes = graph_topics = None
 while time.monotonic() < end and len(heard) < 3:
     rclpy.spin_once(node, timeout_sec=0.1)
@@ -37,9 +37,9 @@ def test_an_rclpy_subscriber_hears_llfsm_ping_pong_and_sees_it_in_the_graph() ->
     rclpy_sub, llfsm_pub = run_together(
         [
             ros_command(LISTENER),
-            llfsm_command(["run", "--transport", "dds", str(MACHINES / "ros2_ping_pong.machine"), "--duration", "9"]),
+            llfsm_command(["run", "--transport", "dds", str(MACHINES / "ros2_ping_pong.machine"), "--duration", "150"]),
         ],
-        timeout=40,
+        timeout=180,  # a net: the run is stopped when the listener has heard (stop_after_first)
         stop_after_first=0,
     )
     assert rclpy_sub.returncode == 0, rclpy_sub.stderr
@@ -55,7 +55,7 @@ from geometry_msgs.msg import Twist
 rclpy.init()
 node = rclpy.create_node("rclpy_driver")
 pub = node.create_publisher(Twist, "/turtle1/cmd_vel", 10)
-end = time.monotonic() + 8
+end = time.monotonic() + 90  # until matched: under load each side takes seconds to start
 while time.monotonic() < end and pub.get_subscription_count() == 0:
     rclpy.spin_once(node, timeout_sec=0.1)
 print("MATCHED", pub.get_subscription_count(), flush=True)
@@ -76,10 +76,10 @@ def test_an_rclpy_publisher_drives_llfsm_turtlesim() -> None:
         [
             ros_command(TELEOP),
             llfsm_command(
-                ["run", "--transport", "dds", "--node", "turtlesim", "--echo", "/turtle1/pose", "--duration", "14"]
+                ["run", "--transport", "dds", "--node", "turtlesim", "--echo", "/turtle1/pose", "--duration", "150"]
             ),
         ],
-        timeout=40,
+        timeout=180,  # a net: turtlesim is stopped when the driver is done (stop_after_first)
         stop_after_first=0,
     )
     assert driver.returncode == 0, driver.stderr
@@ -101,7 +101,7 @@ def greet(request, response):
     response.message = "hello from rclpy"
     return response
 node.create_service(Trigger, "/greet", greet)
-end = time.monotonic() + 15
+end = time.monotonic() + 150  # a net: stopped when the caller is done (stop_after_first)
 while time.monotonic() < end:
     rclpy.spin_once(node, timeout_sec=0.1)
 """
@@ -110,7 +110,7 @@ CALLER = """\
 ros.init()
 node = ros.Node("llfsm_caller")
 client = node.create_client(Trigger, "/greet")
-ready = client.wait_for_service(timeout_sec=8.0)
+ready = client.wait_for_service(timeout_sec=90.0)  # until the rclpy server is up (seconds under load)
 future = client.call_async(Trigger.Request())
 code = ros.spin_until_future_complete(node, future, timeout_sec=5.0)
 answer = future.result()
@@ -129,10 +129,10 @@ def test_an_llfsm_client_gets_an_answer_from_an_rclpy_service(tmp_path: Path) ->
     )
     caller, _server = run_together(
         [
-            llfsm_command(["run", "--transport", "dds", str(m), "--duration", "14"]),
+            llfsm_command(["run", "--transport", "dds", str(m), "--duration", "150"]),
             ros_command(SERVER),
         ],
-        timeout=40,
+        timeout=180,  # a net: both end once the call is answered
         stop_after_first=0,
     )
     assert caller.returncode == 0, caller.stderr
@@ -151,7 +151,7 @@ from std_srvs.srv import Trigger
 rclpy.init()
 node = rclpy.create_node("rclpy_poker")
 client = node.create_client(Trigger, "/poke")
-print("READY", client.wait_for_service(timeout_sec=10.0), flush=True)
+print("READY", client.wait_for_service(timeout_sec=90.0), flush=True)  # seconds under load
 future = client.call_async(Trigger.Request())
 rclpy.spin_until_future_complete(node, future, timeout_sec=3.0)
 print("ANSWERED", future.done(), flush=True)
@@ -170,8 +170,8 @@ def test_a_fast_dds_client_runs_an_llfsm_service_but_gets_no_answer(tmp_path: Pa
         includes="from llfsm import ros\nfrom llfsm.msgs.std_srvs.srv import Trigger\n",
     )
     client, server = run_together(
-        [ros_command(FAST_CLIENT), llfsm_command(["run", "--transport", "dds", str(m), "--duration", "20"])],
-        timeout=40,
+        [ros_command(FAST_CLIENT), llfsm_command(["run", "--transport", "dds", str(m), "--duration", "150"])],
+        timeout=180,  # a net: the run is stopped when the client is done (stop_after_first)
         stop_after_first=0,
     )
     assert client.returncode == 0, client.stderr
@@ -220,9 +220,9 @@ def test_a_fast_dds_request_sent_right_after_wait_for_service_is_served(tmp_path
     client, server = run_together(
         [
             ros_command(FRESH_CLIENTS.format(n=n)),
-            llfsm_command(["run", "--transport", "dds", str(m), "--duration", "100"]),
+            llfsm_command(["run", "--transport", "dds", str(m), "--duration", "250"]),
         ],
-        timeout=120,
+        timeout=300,  # a net: the run is stopped when the clients are done (stop_after_first)
         stop_after_first=0,
     )
     assert client.returncode == 0, client.stderr

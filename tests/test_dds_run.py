@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
-from dds_netns import NetNamespace, finish, interrupt
+from dds_netns import NetNamespace, Watched, finish, interrupt, until_shown
 from helpers import MACHINES, llfsm_process, write_machine
 
 #: Peers that vanish without saying goodbye are noticed after the lease: 1 s instead of 10 s.
@@ -52,19 +52,18 @@ def test_llfsm_transport_variable_chooses_the_transport() -> None:
 
 @pytest.mark.dds
 def test_wall_turtle_in_one_process_backs_off_the_walls_of_turtlesim_in_another(netns: NetNamespace) -> None:
-    sim = netns.llfsm(
-        "run", "--transport", "dds", "--node", "turtlesim", "--node", "turtle_sensor_poster", "--duration", "14"
-    )
-    echo = netns.llfsm("run", "--transport", "dds", "--echo", "/turtle1/pose", "--node", "teleop", "--duration", "13")
-    time.sleep(0.5)
-    bot = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_wall_turtle_bot.machine", "-v")
-    # Ctrl-C rather than --duration: a --duration ending inside a pose request would cut that
-    # request short (TIMEOUT, then SERVICE_FAILS), as it does in process; after Ctrl-C the bot
-    # takes its `not ros.ok()` transitions to END
-    interrupt(bot, 11.0)
-    bot_status, _, bot_err = finish(bot, 40)
-    _, echo_out, echo_err = finish(echo, 40)
-    sim_status, _, sim_err = finish(sim, 40)
+    sim = Watched(netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--node", "turtle_sensor_poster"))
+    echo = Watched(netns.llfsm("run", "--transport", "dds", "--echo", "/turtle1/pose", "--node", "teleop"))
+    echo.wait_for(r"^theta: ", stream="out")  # turtlesim is up and the echo hears it
+    bot = Watched(netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_wall_turtle_bot.machine", "-v"))
+    # Ctrl-C once it has backed off a wall (counted from its start, a time would race with a
+    # start-up that takes seconds under load); Ctrl-C rather than --duration: a --duration ending
+    # inside a pose request would cut that request short (TIMEOUT, then SERVICE_FAILS), as it
+    # does in process; after Ctrl-C the bot takes its `not ros.ok()` transitions to END
+    bot.wait_for(r"- ros2_wall_turtle_bot - BACK\b")
+    bot_status, _, bot_err = bot.finish(120, signal.SIGINT)
+    _, echo_out, echo_err = echo.finish(120, signal.SIGINT)
+    sim_status, _, sim_err = sim.finish(120, signal.SIGINT)
     assert bot_status == 0 and sim_status == 0, bot_err + sim_err  # END reached: a normal end
     assert "Traceback" not in bot_err + sim_err + echo_err
     states = re.findall(r"- ros2_wall_turtle_bot - (\w+)", bot_err)
@@ -82,10 +81,13 @@ def test_wall_turtle_in_one_process_backs_off_the_walls_of_turtlesim_in_another(
 
 @pytest.mark.dds
 def test_ping_pong_is_heard_by_another_process(netns: NetNamespace) -> None:
-    listener = netns.llfsm("run", "--transport", "dds", "--echo", "/pingpong", "--node", "teleop", "--duration", "6")
-    talker = netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "5.5")
-    t_status, _, t_err = finish(talker, 30)
-    l_status, out, l_err = finish(listener, 30)
+    listener = Watched(netns.llfsm("run", "--transport", "dds", "--echo", "/pingpong", "--node", "teleop"))
+    talker = Watched(netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine"))
+    listener.wait_for(
+        r"^data: The count is", stream="out", count=2
+    )  # both ends up: a start-up takes seconds under load
+    t_status, _, t_err = talker.finish(120, signal.SIGINT)
+    l_status, out, l_err = listener.finish(120, signal.SIGINT)
     assert t_status == 0 and l_status == 0, t_err + l_err
     counts = [int(n) for n in re.findall(r"^data: The count is (\d+)$", out, re.M)]
     assert len(counts) >= 2, out + l_err
@@ -113,11 +115,11 @@ def test_a_service_call_across_processes(netns: NetNamespace, tmp_path: Path) ->
         code={"INITIAL_OnEntry": SPAWNER},
         includes="from llfsm import ros\nfrom llfsm.msgs.turtlesim.srv import Spawn\n",
     )
-    sim = netns.llfsm("run", "--transport", "dds", "--node", "turtlesim", "--duration", "12")
-    client = netns.llfsm("run", "--transport", "dds", m, "--duration", "11")
-    c_status, _, c_err = finish(client, 40)
-    sim.send_signal(signal.SIGINT)
-    s_status, _, s_err = finish(sim, 20)
+    sim = Watched(netns.llfsm("run", "--transport", "dds", "--node", "turtlesim"))
+    sim.wait_for(r"Spawning turtle \[turtle1\]")  # the client waits 8 s for /spawn: count them from here
+    client = netns.llfsm("run", "--transport", "dds", m, "--duration", "30")
+    c_status, _, c_err = finish(client, 120)
+    s_status, _, s_err = sim.finish(120, signal.SIGINT)
     assert c_status == 0, c_err
     assert "ready=True code=SUCCESS name=visitor" in c_err
     assert "Spawning turtle [visitor] at x=[2.000000], y=[3.000000], theta=[0.500000]" in s_err
@@ -166,8 +168,8 @@ def test_no_server_and_a_server_that_dies_mid_call_end_in_timeout_not_a_hang(
     )
     srv = netns.llfsm("run", "--transport", "dds", server, "--duration", "20", env=SHORT_LEASE)
     cli = netns.llfsm("run", "--transport", "dds", caller, "--duration", "20", env=SHORT_LEASE)
-    status, _, err = finish(cli, 40)
-    s_status, _, _ = finish(srv, 20)
+    status, _, err = finish(cli, 120)
+    s_status, _, _ = finish(srv, 120)
     assert status == 0, err
     assert s_status == -signal.SIGKILL  # the server really died inside its callback
     nobody = re.search(r"nobody: (\w+) after ([\d.]+) s", err)
@@ -202,27 +204,31 @@ def test_a_machine_publishing_while_the_transport_shuts_down_ends_cleanly(netns:
         includes="from llfsm import ros\nfrom llfsm.msgs.std_msgs.msg import String\n",
         variables="count: int = 0\nmessage: String = String()\nnode: ros.Node\npublisher_: ros.Publisher\n",
     )
-    listener = netns.llfsm("run", "--transport", "dds", "--echo", "/flood", "--node", "teleop", "--duration", "20")
-    flood = netns.llfsm("run", "--transport", "dds", m, "--duration", "25")
-    first = listener.stdout.readline() if listener.stdout else ""  # blocks until the flood is heard
-    assert first.startswith("data: flood"), first
+    listener = Watched(netns.llfsm("run", "--transport", "dds", "--echo", "/flood", "--node", "teleop"))
+    flood = netns.llfsm("run", "--transport", "dds", m, "--duration", "120")
+    listener.wait_for(r"^data: flood", stream="out")
     interrupt(flood, 0.5)  # Ctrl-C while it publishes as fast as it can
-    status, _, err = finish(flood, 30)
-    listener.send_signal(signal.SIGINT)
-    l_status, _, l_err = finish(listener, 30)
+    status, _, err = finish(flood, 120)
+    l_status, _, l_err = listener.finish(120, signal.SIGINT)
     assert status == 130, err  # the machine never reaches END; after the grace the run stops
     assert "Traceback" not in err and "Error" not in err, err
     assert l_status == 0 and "Traceback" not in l_err  # nodes on their own: an interrupt is their end
 
 
+#: The node each `--node` starts, as `node list` shows it.
+NODE_NAMES = {"turtlesim": "/turtlesim", "turtle_sensor_poster": "/turtle_sensor_poster", "teleop": "/teleop_turtle"}
+
+
 @pytest.mark.dds
-@pytest.mark.parametrize("node", ["turtlesim", "turtle_sensor_poster", "teleop"])
+@pytest.mark.parametrize("node", list(NODE_NAMES))
 def test_a_node_on_its_own_runs_until_interrupted(netns: NetNamespace, node: str) -> None:
     p = netns.llfsm("run", "--transport", "dds", "--node", node)
-    time.sleep(2.0)
+    # on the graph, so past its start-up: a SIGTERM before the run is under way is Python's own
+    # (-15), and a fixed time raced with a start-up that takes seconds under load
+    until_shown(netns, "node", "list", needle=NODE_NAMES[node])
     assert p.poll() is None, f"--node {node} on its own ended by itself"
     p.send_signal(signal.SIGTERM)
-    status, _, err = finish(p, 15)
+    status, _, err = finish(p, 120)
     assert status == 0, err  # as `ros2 run turtlesim turtlesim_node` and machine runs end (issue 27, item 10)
     assert "Traceback" not in err
 
@@ -255,11 +261,16 @@ def test_ctrl_c_ends_a_long_wait_for_a_service_on_dds(netns: NetNamespace, tmp_p
         code={"INITIAL_OnEntry": WAITER},
         includes="from llfsm import ros\nfrom llfsm.msgs.std_srvs.srv import Trigger\n",
     )
-    p = netns.llfsm("run", "--transport", "dds", m)
-    interrupt(p, 3.0)
+    p = Watched(netns.llfsm("run", "--transport", "dds", m, "-v"))
+    p.wait_for(r"- patient +- INITIAL\b")  # under way (a time from its start races with a slow start-up)
+    time.sleep(1.0)  # across processes: into the wait
     t0 = time.monotonic()
-    status, _, err = finish(p, 60)
+    p.p.send_signal(signal.SIGINT)
+    # the wait's own answer, not the process's end (closing DDS took 20 s under load): long
+    # before its 120 s
+    p.wait_for(r"found=")
     assert time.monotonic() - t0 < 20, "the wait ignored Ctrl-C"
+    status, _, err = p.finish(60)
     assert "found=False ok=False" in err, err
     assert status == 0 and "Traceback" not in err  # the machine took its `not ros.ok()` to END
 
@@ -285,11 +296,17 @@ NO_MULTICAST = {
 def test_discovery_follows_the_ros_variables(
     netns: NetNamespace, talker_env: dict[str, str], listener_env: dict[str, str], hears: bool
 ) -> None:
-    listener = netns.llfsm("run", "--transport", "dds", "--echo", "/pingpong", "--duration", "6", env=listener_env)
-    talker = netns.llfsm(
-        "run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", "--duration", "5", env=talker_env
+    # a listener that hears is stopped once it has (its start-up takes seconds under load: a
+    # window counted from it raced); one that must not hear listens for a window of the talker's
+    windows = () if hears else ("--duration", "6")
+    listener = Watched(netns.llfsm("run", "--transport", "dds", "--echo", "/pingpong", *windows, env=listener_env))
+    talker = Watched(
+        netns.llfsm("run", "--transport", "dds", MACHINES / "ros2_ping_pong.machine", *windows, env=talker_env)
     )
-    t_status, _, t_err = finish(talker, 30)
-    l_status, out, l_err = finish(listener, 30)
+    if hears:
+        listener.wait_for(r"^data: The count is", stream="out")
+    stop = signal.SIGINT if hears else None
+    t_status, _, t_err = talker.finish(120, stop)
+    l_status, out, l_err = listener.finish(120, stop)
     assert t_status == 0 and l_status == 0, t_err + l_err
     assert ("data: The count is" in out) is hears, out + l_err

@@ -4,12 +4,12 @@ the in-process bus tells it; not as an incompatible QoS."""
 
 from __future__ import annotations
 
+import signal
 import sys
-import time
 from pathlib import Path
 
 import pytest
-from dds_netns import NetNamespace, finish
+from dds_netns import NetNamespace, Watched, until_shown
 from helpers import REPO, write_machine
 
 pytestmark = pytest.mark.dds
@@ -19,7 +19,7 @@ def chatty(root: Path) -> Path:
     return write_machine(
         root,
         "chatty",
-        {"INITIAL": [("SAY", "True")], "SAY": [("SAY", "after_ms(100)")]},
+        {"INITIAL": [("SAY", "True")], "SAY": [("END", "not ros.ok()"), ("SAY", "after_ms(100)")], "END": None},
         {
             "INITIAL_OnEntry": (
                 "ros.init()\nnode = ros.Node('chatty')\npub = node.create_publisher(String, '/turtle1/cmd_vel', 10)\n"
@@ -33,12 +33,14 @@ def chatty(root: Path) -> Path:
 
 def test_a_type_clash_over_dds_names_both_types(netns: NetNamespace, tmp_path: Path) -> None:
     llfsm = [sys.executable, "-m", "llfsm", "run", "--transport", "dds"]
-    sim = netns.popen([*llfsm, "--node", "turtlesim", "--duration", "12"], cwd=REPO)
-    time.sleep(1.0)  # across processes: turtlesim's subscription exists before the publisher comes
-    pub = netns.popen([*llfsm, chatty(tmp_path), "--duration", "5"], cwd=REPO)
-    status, _, pub_err = finish(pub, 60)
-    sim.terminate()
-    _, _, sim_err = finish(sim, 30)
+    sim = Watched(netns.popen([*llfsm, "--node", "turtlesim"], cwd=REPO))
+    # turtlesim's subscription is on the graph before the publisher comes
+    until_shown(netns, "topic", "info", "/turtle1/cmd_vel", needle="Subscription count: 1")
+    pub = Watched(netns.popen([*llfsm, chatty(tmp_path)], cwd=REPO))
+    pub.wait_for(r"\[chatty\]: cannot publish /turtle1/cmd_vel")
+    sim.wait_for(r"\[turtlesim\]: cannot subscribe to /turtle1/cmd_vel")
+    status, _, pub_err = pub.finish(60, signal.SIGINT)
+    _, _, sim_err = sim.finish(120, signal.SIGTERM)
     assert status == 0, pub_err
     assert (
         "[chatty]: cannot publish /turtle1/cmd_vel as std_msgs/msg/String: a subscription elsewhere takes "

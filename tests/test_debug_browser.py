@@ -5,6 +5,7 @@ move the History slider back and see the old state highlighted, continue."""
 
 from __future__ import annotations
 
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -113,7 +114,14 @@ def test_a_replay_steps_through_a_trace_on_the_diagram(browser: Any, tmp_path: P
 
 
 def test_edit_runs_with_the_debugger_in_its_run_bar(browser: Any, tmp_path: Path) -> None:
-    served = Served("edit", str(MACHINES / "counter.machine"), env={"LLFSM_CACHE_DIR": str(tmp_path / "cache")})
+    # the counter counting far (its five counts end the run in a second: under load the page saw
+    # it ended, never running, before it could pause it)
+    counter = tmp_path / "counter.machine"
+    shutil.copytree(MACHINES / "counter.machine", counter)
+    (counter / "Variables.py").write_text(
+        (counter / "Variables.py").read_text().replace("limit: int = 5", "limit: int = 10**6")
+    )
+    served = Served("edit", str(counter), env={"LLFSM_CACHE_DIR": str(tmp_path / "cache")})
     page = browser.new_page(viewport={"width": 1280, "height": 860})
     page.set_default_timeout(TIMEOUT_MS)
     try:

@@ -53,10 +53,17 @@ def test_a_restart_over_dds_leaves_one_node_and_one_publisher(netns: NetNamespac
     for _ in range(2):
         r = llfsm(netns, "service", "call", "/llfsm/bot/restart", "std_srvs/srv/Trigger", "--timeout", "20")
         assert r.status == 0 and "success=True" in r.stdout, r.stderr
-    time.sleep(1.0)  # across processes: the restarted INITIAL ran and the old node's goodbye was sent
-    nodes = llfsm(netns, "node", "list")
+    # the restarted INITIAL runs and the old node's goodbye crosses in their own time (a second
+    # was too short under load): until one node and one publisher, or a minute
+    deadline = time.monotonic() + 60
+    while True:
+        nodes = llfsm(netns, "node", "list")
+        info = llfsm(netns, "topic", "info", "/turtle1/cmd_vel")
+        one = nodes.stdout.splitlines().count("/wall_bot") == 1 and "Publisher count: 1\n" in info.stdout
+        if one or time.monotonic() > deadline:
+            break
+        time.sleep(0.2)
     assert nodes.stdout.splitlines().count("/wall_bot") == 1, nodes.stdout
-    info = llfsm(netns, "topic", "info", "/turtle1/cmd_vel")
     assert "Publisher count: 1\n" in info.stdout, info.stdout
     run.terminate()
     _, _, err = finish(run, 20)

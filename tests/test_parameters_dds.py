@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from dds_netns import NetNamespace, finish
+from dds_netns import NetNamespace, Watched, finish
 from helpers import REPO, Run, write_machine
 from interop.ros2env import ROS_PYTHON, ros_installed
 
@@ -96,7 +96,7 @@ def test_a_machine_tuned_live_over_dds(netns: NetNamespace, tmp_path: Path) -> N
     out = tmp_path / "echo.txt"
     with open(out, "w") as f:
         run = netns.popen(
-            [sys.executable, "-m", "llfsm", "run", "--transport", "dds", m, "--echo", "/gain", "--duration", "10s"],
+            [sys.executable, "-m", "llfsm", "run", "--transport", "dds", m, "--echo", "/gain"],
             cwd=REPO,
             stdout=f,
         )
@@ -109,7 +109,13 @@ def test_a_machine_tuned_live_over_dds(netns: NetNamespace, tmp_path: Path) -> N
         )
         assert llfsm(netns, "param", "set", "/llfsm/gainer", "gain", "2.5").status == 0
         assert llfsm(netns, "param", "get", "/llfsm/gainer", "gain").stdout == "Double value is: 2.5\n"
-        finish(run, 30)
+        # Ctrl-C once the new gain is published (a --duration of 10 s ended the run before five
+        # verbs of seconds each had run under load)
+        deadline = time.monotonic() + 60
+        while "data: 2.5" not in out.read_text() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        run.send_signal(signal.SIGINT)
+        finish(run, 120)
     gains = [d["data"] for d in yaml.safe_load_all(out.read_text()) if d]
     assert gains[0] == 1.0 and gains[-1] == 2.5 and sorted(set(gains)) == [1.0, 2.5]
 
@@ -124,13 +130,16 @@ def test_a_machine_with_parameters_and_no_bus_code_is_a_node_on_dds(netns: NetNa
         variables="gain: float = 1.0\n",
         yaml_extra="parameters: [gain]\n",
     )
-    run = netns.popen([sys.executable, "-m", "llfsm", "run", "--transport", "dds", m, "--duration", "8s"], cwd=REPO)
+    run = Watched(netns.popen([sys.executable, "-m", "llfsm", "run", "--transport", "dds", m], cwd=REPO))
     wait_for_node(netns, "/llfsm/tuned")
     assert llfsm(netns, "param", "get", "/llfsm/tuned", "gain").stdout == "Double value is: 1.0\n"
     r = llfsm(netns, "param", "set", "/llfsm/tuned", "gain", "2.5")
     assert r.stdout == "Set parameter successful\n", r.stderr
-    status, out, err = finish(run, 30)
-    assert status == 0, err
+    # Ctrl-C once it runs with the new gain (a --duration of 8 s ended the run before the verbs,
+    # seconds each under load, were done); its machine has no END: Ctrl-C's status is 130
+    run.wait_for(r"^gain 2\.5$", stream="out")
+    status, out, err = run.finish(120, signal.SIGINT)
+    assert status == 130 and "Traceback" not in err, err
     assert out.splitlines()[0] == "gain 1.0" and out.splitlines()[-1] == "gain 2.5"
 
 

@@ -398,6 +398,22 @@ def test_wall_clock_sleeps_when_no_transition_fires_even_with_a_suspended_machin
     assert 5 <= rounds <= 12, rounds  # ~200 ms / 20 ms; without the idle sleep: hundreds of thousands
 
 
+def test_wall_clock_run_time_begins_with_the_rounds_not_the_start_up(tmp_path: Path) -> None:
+    """A run's start-up (the transport, the nodes, the page; 20 s on a loaded machine was seen)
+    is not run time: counted from the clock's making, the first round saw 0, the next one the
+    whole start-up, so a `--duration` ended a run after one round and a wait in INITIAL
+    (`wait_for_service(timeout_sec=8.0)`) gave up at once."""
+    from llfsm.runtime import Arrangement, WallClock
+    from llfsm.targets import load
+
+    m = write_machine(tmp_path, "m", {"INITIAL": [("END", "True")], "END": None})
+    clock = WallClock(1_000_000)
+    clock._start -= 30_000_000_000  # as if the start-up after the clock's making had taken 30 s
+    result = Arrangement([load(str(m))], clock=clock).run(duration_ns=10_000_000_000)
+    assert result.reason == "finished", result  # INITIAL, then END: two rounds, not ended by --duration
+    assert result.time_ns < 10_000_000_000, result
+
+
 def test_wall_clock_period_is_time_triggered(tmp_path: Path) -> None:
     m = write_machine(tmp_path, "tick", {"A": [("A", "True")]}, {"A_OnEntry": "print('tick')"})
     r = llfsm("run", m, "--period", "25ms", "--duration", "200ms")

@@ -143,9 +143,9 @@ def test_a_peers_text_never_becomes_markup_and_a_bad_index_is_refused() -> None:
 
 def test_a_huge_description_is_drawn_bounded_and_says_what_was_left_out() -> None:
     desc = chain(4000, extra=2)
-    t0 = time.perf_counter()
+    t0 = time.thread_time()  # this thread's CPU: the wall clock of a loaded machine counts others' work
     svg = diagram.svg(desc, current="S1")
-    took = time.perf_counter() - t0
+    took = time.thread_time() - t0
     assert took < 3.0, took
     drawn = drawn_states(svg)
     assert 0 < drawn <= diagram.MAX_DRAWN_STATES
@@ -243,29 +243,32 @@ def test_the_layout_runs_off_the_event_loop(
 
     srv, source = fake
     real = diagram.layout
+    drawing, served = threading.Event(), threading.Event()
+    held: list[bool] = []
 
     def slow(desc: Any) -> Any:
-        time.sleep(2.0)
+        # the layout holds until the page is served: on the event loop it never would be (an
+        # order, not a time: "answered within 1 s" failed under load)
+        drawing.set()
+        held.append(served.wait(60))
         return real(desc)
 
     monkeypatch.setattr(diagram, "layout", slow)
     source.descriptions = [small("slow_one")]
-    answered: list[float] = []
 
     def ask() -> None:
-        time.sleep(0.5)  # while the page's hello is being drawn
-        t0 = time.monotonic()
-        conn = http.client.HTTPConnection("127.0.0.1", srv.port, timeout=10)
+        drawing.wait(60)  # while the page's hello is being drawn
+        conn = http.client.HTTPConnection("127.0.0.1", srv.port, timeout=60)
         conn.request("GET", "/")
-        assert conn.getresponse().status == 200
-        answered.append(time.monotonic() - t0)
+        if conn.getresponse().status == 200:
+            served.set()
 
     t = threading.Thread(target=ask)
     t.start()
     got = asyncio.run(_messages(srv.port, 1))
     t.join()
     assert got[0]["type"] == "hello" and 'data-machine="slow_one"' in got[0]["machines"][0]["svg"]
-    assert answered and answered[0] < 1.0, answered  # the page was served while the diagram was laid out
+    assert held[:1] == [True], held  # the page was served while the diagram was laid out
 
 
 def test_a_replaced_description_is_redrawn_but_pages_are_not_rebuilt_at_a_peers_pace(

@@ -304,6 +304,7 @@ class Arrangement(Gated):
         self.running = True
         if self.tracer is not None:
             self.tracer.begin(self.machines)
+        self.clock.start()
         try:
             result = self._run(FOREVER if duration_ns is None else duration_ns, grace_ns)
             result.rounds = self.rounds  # the loop keeps its count in a local until it ends
