@@ -30,21 +30,31 @@ COUNT_ACTION = "# count up to target, a number every 100 ms\nint32 target\n---\n
 
 
 def wait_for_line(p: object, pattern: str, timeout: float) -> str:
-    """Read the process's stdout until a line matches (the lines read so far are returned)."""
+    """Read the process's stdout until a line matches (the lines read so far are returned).  The
+    pipe is read a byte at a time from its descriptor, past the text wrapper: a `readline()` after
+    `select` takes a whole chunk into the wrapper's buffer, where a line that came with the one
+    before it waits unseen by `select` until the process writes again (the cancel test then saw
+    "Goal accepted" only once the goal's result had come).  What is left stays in the pipe for
+    `finish`."""
+    import os
     import select
 
-    out = p.stdout  # type: ignore[attr-defined]
-    seen = ""
+    fd = p.stdout.fileno()  # type: ignore[attr-defined]
+    seen, line = "", b""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        ready, _, _ = select.select([out], [], [], 0.2)
-        if ready:
-            line = out.readline()
-            if not line:
-                break
-            seen += line
-            if re.search(pattern, line):
+        if not select.select([fd], [], [], 0.2)[0]:
+            continue
+        byte = os.read(fd, 1)
+        if not byte:
+            break
+        line += byte
+        if byte == b"\n":
+            text, line = line.decode(), b""
+            seen += text
+            if re.search(pattern, text):
                 return seen
+    seen += line.decode(errors="replace")
     raise AssertionError(f"no line matching {pattern!r} within {timeout} s; got:\n{seen}")
 
 
