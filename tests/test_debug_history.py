@@ -184,7 +184,7 @@ def test_the_history_keeps_the_last_n_records_and_memory_bounded_by_n(
     assert len(kept) == len(h.records) == min(50, total)
     assert [r["ringlet"] for r in kept] == list(range(total - len(kept) + 1, total + 1))
     assert [r["round"] for r in kept[-2:]] == [rounds - 1, rounds - 1]
-    assert len(h.ring) == 50  # the oldest freed as each new one comes
+    assert len(h.records) == 50  # the oldest freed as each new one comes
     assert len(h.published) <= 50 and len(h._gated) <= 50
 
 

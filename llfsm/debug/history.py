@@ -149,20 +149,21 @@ class History:
         chained = clock.on_jump
 
         def jumped() -> None:  # a wait moved the time (a spin call): from the next record on
-            self._time_from(self._next_number())
+            self._time_from(self._next_number(), clock.now)
             if chained is not None:
                 chained()
 
         clock.on_jump = jumped
         arr.ctx.between_rounds.append(self._between)
 
-    def _time_from(self, first: int) -> None:
-        t = (first, self._arr.clock.now)
+    def _time_from(self, first: int, now: int) -> None:
+        """Records from number `first` on are at run time `now` (the last entry replaced when no
+        record came since it; nothing added when the table already says so)."""
         times = self._times
         if times[-1][0] == first:
-            times[-1] = t
-        elif self._time_of(first) != t[1]:
-            times.append(t)
+            times[-1] = (first, now)
+        elif self._time_of(first) != now:
+            times.append((first, now))
 
     def _between(self) -> None:
         """Between rounds (a hook of the run's context, and `on_live`): cut back; the sim clock:
@@ -174,17 +175,12 @@ class History:
         if self._period:
             arr.ctx.wake_at(arr.clock.now + self._every)
         else:
-            self._time_from(self._next_number())
+            self._time_from(self._next_number(), arr.clock.now)
 
     def note_time(self, now: int) -> None:
         """Arrangement.note_time (any clock but the sim clock; between rounds): the next
         records are at `now`; cut back once the items reach 2N."""
-        first = self._dropped + len(self._items) + 1
-        times = self._times
-        if times[-1][0] == first:  # no record since (no live machine)
-            times[-1] = (first, now)
-        else:
-            times.append((first, now))
+        self._time_from(self._dropped + len(self._items) + 1, now)
         if len(self._items) >= 2 * self.size:
             self.trim()
 
@@ -271,7 +267,7 @@ class History:
         elif last[2] != ids or self.round_of(first) != rounds:
             self._rounds.append((first, rounds, ids))
         self._every = max(1, self.size // (len(ids) or 1)) * self._period
-        self._time_from(first)
+        self._time_from(first, self._arr.clock.now)
         self._between()
 
     def record_set(self, m: Machine, old: tuple[Any, ...], round_: int, now: int) -> dict[str, list[Any]]:
@@ -320,8 +316,6 @@ class History:
     def records(self) -> list[Part]:
         """The kept records, oldest first (scheduler's thread; `kept` counts them anywhere)."""
         return self._view(None)
-
-    ring = records
 
     def _view(self, n: int | None) -> list[Part]:
         """The newest n kept records (all when None), oldest first."""
