@@ -21,6 +21,8 @@ import operator
 from collections.abc import Callable
 from typing import Any
 
+from ..runtime.reads import number_literal
+
 #: A comparison the other way round (`c < x` is `x > c`), and its negation for numbers (NaN
 #: aside: `not x < c` holds for NaN where `x >= c` does not, which only sends the test that
 #: merges bounds to the checks one by one).
@@ -72,17 +74,6 @@ def self_attr_load(node: ast.AST) -> bool:
     )
 
 
-def _number(node: ast.AST) -> int | float | None:
-    """A numeric constant's value (not a bool, not NaN; `-3` is a minus and a constant), else None."""
-    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
-        inner = _number(node.operand)
-        return None if inner is None else -inner if isinstance(node.op, ast.USub) else inner
-    if not isinstance(node, ast.Constant):
-        return None
-    c = node.value
-    return c if isinstance(c, int | float) and not isinstance(c, bool) and c == c else None
-
-
 def _bound(term: ast.expr) -> tuple[str, type[ast.cmpop], int | float] | None:
     """`self.x OP c` (OP one of < <= > >=, c an int or float constant, not NaN), read either way
     round and under `not`, as (x, OP with x on the left, c)."""
@@ -93,7 +84,7 @@ def _bound(term: ast.expr) -> tuple[str, type[ast.cmpop], int | float] | None:
     op, left, right = type(node.ops[0]), node.left, node.comparators[0]
     if self_attr_load(right):
         op, left, right = _FLIP[op], right, left
-    c = _number(right)
+    c = number_literal(right)
     if not self_attr_load(left) or c is None:
         return None
     return left.attr, (_NEGATE[op] if negate else op), c  # type: ignore[attr-defined]
@@ -109,7 +100,7 @@ def _equality(term: ast.expr) -> tuple[str, bool, int | float] | None:
     left, right = node.left, node.comparators[0]
     if self_attr_load(right):
         left, right = right, left
-    c = _number(right)
+    c = number_literal(right)
     if not self_attr_load(left) or c is None:
         return None
     return left.attr, isinstance(node.ops[0], ast.Eq) != negate, c  # type: ignore[attr-defined]
@@ -163,7 +154,7 @@ def fold_arithmetic(node: ast.BinOp) -> ast.expr:
     """`a OP b` of two numeric constants (+ - * %) as the constant it makes, where it is a
     finite number; anything else (a division by zero, NaN, huge ints) as it is, to run as
     written."""
-    a, b = _number(node.left), _number(node.right)
+    a, b = number_literal(node.left), number_literal(node.right)
     fn = _ARITHMETIC.get(type(node.op))
     if a is None or b is None or fn is None:
         return node

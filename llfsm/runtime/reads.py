@@ -274,19 +274,19 @@ class _Scan(ast.NodeVisitor):
         for t in node.targets:
             if is_self_attr(t, "_state"):
                 self.moves = True
-        value = _number(node.value)
+        value = number_literal(node.value)
         if len(node.targets) == 1 and value is not None:
             self._numeric_change(node.targets[0], "set", value)
         self.generic_visit(node)
 
     def visit_AnnAssign(self, node: ast.AnnAssign) -> None:
-        value = _number(node.value) if node.value is not None else None
+        value = number_literal(node.value) if node.value is not None else None
         if value is not None:
             self._numeric_change(node.target, "set", value)
         self.generic_visit(node)
 
     def visit_AugAssign(self, node: ast.AugAssign) -> None:
-        value = _number(node.value)
+        value = number_literal(node.value)
         if value and isinstance(node.op, ast.Add | ast.Sub):
             delta = value if isinstance(node.op, ast.Add) else -value
             self._numeric_change(node.target, "up" if delta > 0 else "down", delta)
@@ -360,7 +360,7 @@ class _Scan(ast.NodeVisitor):
         return False
 
 
-def _number(node: ast.expr) -> int | float | None:
+def number_literal(node: ast.expr) -> int | float | None:
     """The value of a numeric literal (`3`, `-0.5`; not a bool), else None."""
     sign = 1
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
